@@ -1,0 +1,57 @@
+// Fixture kinematics (CONTRACTS §2).
+//
+// Rotation/declination fixture: the part is mounted with its frame on the
+// turntable frame; the turntable rotates about `rotationAxis`, and the whole
+// turntable tilts about `declinationAxis`, both through the fixture origin:
+//   camera_from_part = camera_from_fixture * Rot(declination_axis, declination)
+//                                          * Rot(rotation_axis, rotation)
+// Rail: the part travels along `railAxis`:
+//   camera_from_part = camera_from_fixture * Trans(rail_axis * rail_mm)
+#pragma once
+
+#include <string>
+
+#include "hullgauge/geometry/transform.h"
+
+namespace hg::geometry {
+
+enum class FixtureType { RotationDeclination, Rail };
+
+/// A commanded fixture position. A rotation/declination fixture uses the two
+/// angles (degrees), a rail uses `railMm`; the other fields stay zero.
+struct FixturePose {
+    double rotationDeg = 0.0;
+    double declinationDeg = 0.0;
+    double railMm = 0.0;
+
+    bool operator==(const FixturePose&) const = default;
+};
+
+std::string toString(const FixturePose& pose, FixtureType type);
+
+struct Range {
+    double min = 0.0;
+    double max = 0.0;
+    bool contains(double v, double tol = 1e-9) const { return v >= min - tol && v <= max + tol; }
+};
+
+class FixtureKinematics {
+public:
+    FixtureType type = FixtureType::RotationDeclination;
+    RigidTransform cameraFromFixture;
+    Vec3 rotationAxis = Vec3::UnitZ();
+    Vec3 declinationAxis = Vec3::UnitX();
+    Range rotationRangeDeg{-180.0, 180.0};
+    Range declinationRangeDeg{0.0, 60.0};
+    Vec3 railAxis = Vec3::UnitZ();
+    Range railRangeMm{0.0, 300.0};
+
+    /// The pose of the part in the camera frame at a fixture position.
+    RigidTransform cameraFromPart(const FixturePose& pose) const;
+    /// True when the fixture can reach `pose` (within its ranges).
+    bool reachable(const FixturePose& pose) const;
+    /// Camera centre in the part frame at `pose`.
+    Vec3 cameraCentreInPart(const FixturePose& pose) const;
+};
+
+}  // namespace hg::geometry

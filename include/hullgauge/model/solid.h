@@ -1,0 +1,75 @@
+// Exact queries on the ideal CAD solid — the representation map of
+// dissertation 5.3.3 and the labels of the octree inspection map (3.3.1).
+//
+// Built once per part from a closed, outward-oriented mesh (an AABB tree over
+// its triangles); every query is evaluated lazily, only for the voxels and
+// rays asked for. Thread-safe for concurrent const queries.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "hullgauge/model/mesh.h"
+
+namespace hg::model {
+
+/// Where an axis-aligned box lies relative to the solid, decided exactly
+/// (exact triangle–box intersection, then a point-in-solid test).
+enum class Occupancy { Outside, Inside, Boundary };
+
+/// Inside volume fraction of a box, bracketed: the true fraction lies in
+/// [lower, upper]; `estimate` is the best single value.
+struct InsideFraction {
+    double lower = 0.0;
+    double upper = 1.0;
+    double estimate = 0.5;
+};
+
+struct SurfacePoint {
+    Eigen::Vector3d point;
+    Eigen::Vector3d normal;  // outward unit normal of the nearest triangle
+    std::size_t triangle = 0;
+    double distance = 0.0;   // from the query point
+};
+
+struct RayHit {
+    double distance = 0.0;   // along the unit ray direction
+    Eigen::Vector3d point;
+    std::size_t triangle = 0;
+};
+
+class Solid {
+public:
+    /// `mesh` must be closed and outward oriented (see mesh_io.h checkClosed).
+    explicit Solid(TriangleMesh mesh);
+    ~Solid();
+    Solid(Solid&&) noexcept;
+    Solid& operator=(Solid&&) noexcept;
+
+    const TriangleMesh& mesh() const;
+
+    bool contains(const Eigen::Vector3d& point) const;
+    Occupancy classify(const Eigen::AlignedBox3d& box) const;
+    /// Inside volume fraction, refined until the bracket is narrower than
+    /// `tolerance` or decides the 50 % question, whichever comes first when
+    /// `decideHalf` is set.
+    InsideFraction insideFraction(const Eigen::AlignedBox3d& box, double tolerance = 1e-3,
+                                  bool decideHalf = false) const;
+    /// The inspection-map label: object when at least 50 % of the box is inside (5.3.3).
+    bool isObjectVoxel(const Eigen::AlignedBox3d& box) const;
+
+    SurfacePoint closestPoint(const Eigen::Vector3d& point) const;
+    /// First intersection of the ray origin + s * direction (s > 0) with the surface.
+    std::optional<RayHit> firstHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
+    /// True when the open segment a-b meets the surface.
+    bool segmentHits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hg::model

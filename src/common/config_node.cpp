@@ -1,0 +1,233 @@
+#include "hullgauge/common/config_node.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "hullgauge/common/error.h"
+
+namespace hg {
+namespace {
+
+std::string describe(const YAML::Node& n)
+{
+    if (!n) return "nothing";
+    switch (n.Type()) {
+    case YAML::NodeType::Null: return "null";
+    case YAML::NodeType::Scalar: return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Sequence: return "a sequence";
+    case YAML::NodeType::Map: return "a map";
+    default: return "an undefined value";
+    }
+}
+
+std::string fmtNumber(double v)
+{
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+}  // namespace
+
+ConfigNode ConfigNode::loadFile(const std::filesystem::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file.string(), "", "cannot open file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse(ss.str(), file.string());
+}
+
+ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)
+{
+    auto fileName = std::make_shared<const std::string>(name);
+    try {
+        YAML::Node root = YAML::Load(text);
+        if (!root || root.IsNull()) throw InputError(name, "", "file is empty");
+        return ConfigNode(root, fileName, "");
+    } catch (const YAML::Exception& e) {
+        throw InputError(name, "", "YAML syntax error: " + e.msg, e.mark.is_null() ? std::nullopt : std::optional<int>(e.mark.line + 1));
+    }
+}
+
+ConfigNode::ConfigNode(YAML::Node node, std::shared_ptr<const std::string> file, std::string path)
+    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path))
+{
+}
+
+int ConfigNode::line() const
+{
+    if (!node_) return 0;
+    auto m = node_.Mark();
+    return m.is_null() ? 0 : m.line + 1;
+}
+
+void ConfigNode::fail(const std::string& problem) const
+{
+    int l = line();
+    throw InputError(*file_, path_.empty() ? std::string("(document)") : path_, problem,
+                     l > 0 ? std::optional<int>(l) : std::nullopt);
+}
+
+bool ConfigNode::has(std::string_view key) const
+{
+    return node_.IsMap() && node_[std::string(key)] && !node_[std::string(key)].IsNull();
+}
+
+ConfigNode ConfigNode::operator[](std::string_view key) const
+{
+    if (!node_.IsMap()) fail("expected a map with key '" + std::string(key) + "', found " + describe(node_));
+    auto child = node_[std::string(key)];
+    std::string childPath = path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+    if (!child || child.IsNull()) fail("missing required key '" + std::string(key) + "'");
+    return ConfigNode(child, file_, childPath);
+}
+
+std::optional<ConfigNode> ConfigNode::optional(std::string_view key) const
+{
+    if (!has(key)) {
+        if (!isNull() && !node_.IsMap()) fail("expected a map, found " + describe(node_));
+        return std::nullopt;
+    }
+    return (*this)[key];
+}
+
+std::vector<std::string> ConfigNode::keys() const
+{
+    if (!node_.IsMap()) fail("expected a map, found " + describe(node_));
+    std::vector<std::string> out;
+    for (auto it = node_.begin(); it != node_.end(); ++it) out.push_back(it->first.as<std::string>());
+    return out;
+}
+
+std::vector<ConfigNode> ConfigNode::items() const
+{
+    if (!node_.IsSequence()) fail("expected a sequence, found " + describe(node_));
+    std::vector<ConfigNode> out;
+    std::size_t i = 0;
+    for (auto it = node_.begin(); it != node_.end(); ++it, ++i)
+        out.emplace_back(*it, file_, path_ + "[" + std::to_string(i) + "]");
+    return out;
+}
+
+std::size_t ConfigNode::size() const
+{
+    if (!node_.IsSequence() && !node_.IsMap()) fail("expected a sequence or map, found " + describe(node_));
+    return node_.size();
+}
+
+double ConfigNode::asDouble() const
+{
+    if (!node_.IsScalar()) fail("expected a number, found " + describe(node_));
+    double v = 0;
+    if (!YAML::convert<double>::decode(node_, v) || !std::isfinite(v))
+        fail("expected a finite number, found " + describe(node_));
+    return v;
+}
+
+double ConfigNode::asDoubleIn(double lo, double hi) const
+{
+    double v = asDouble();
+    if (v < lo || v > hi) fail("value " + fmtNumber(v) + " is outside [" + fmtNumber(lo) + ", " + fmtNumber(hi) + "]");
+    return v;
+}
+
+double ConfigNode::asPositive() const
+{
+    double v = asDouble();
+    if (!(v > 0)) fail("expected a positive number, found " + fmtNumber(v));
+    return v;
+}
+
+long long ConfigNode::asInt() const
+{
+    if (!node_.IsScalar()) fail("expected an integer, found " + describe(node_));
+    long long v = 0;
+    if (!YAML::convert<long long>::decode(node_, v)) fail("expected an integer, found " + describe(node_));
+    return v;
+}
+
+long long ConfigNode::asIntIn(long long lo, long long hi) const
+{
+    long long v = asInt();
+    if (v < lo || v > hi)
+        fail("value " + std::to_string(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return v;
+}
+
+bool ConfigNode::asBool() const
+{
+    bool v = false;
+    if (!node_.IsScalar() || !YAML::convert<bool>::decode(node_, v))
+        fail("expected true or false, found " + describe(node_));
+    return v;
+}
+
+std::string ConfigNode::asString() const
+{
+    if (!node_.IsScalar()) fail("expected a string, found " + describe(node_));
+    return node_.Scalar();
+}
+
+std::vector<double> ConfigNode::asDoubles(std::size_t expectedSize) const
+{
+    auto what = expectedSize ? "a sequence of " + std::to_string(expectedSize) + " numbers" : std::string("a sequence of numbers");
+    if (!node_.IsSequence()) fail("expected " + what + ", found " + describe(node_));
+    if ((expectedSize && node_.size() != expectedSize) || node_.size() == 0)
+        fail("expected " + what + ", found " + std::to_string(node_.size()) + " elements");
+    std::vector<double> out;
+    for (const auto& item : items()) out.push_back(item.asDouble());
+    return out;
+}
+
+Eigen::Vector2d ConfigNode::asVector2() const
+{
+    auto v = asDoubles(2);
+    return {v[0], v[1]};
+}
+
+Eigen::Vector3d ConfigNode::asVector3() const
+{
+    auto v = asDoubles(3);
+    return {v[0], v[1], v[2]};
+}
+
+Eigen::Matrix3d ConfigNode::asMatrix3() const
+{
+    if (!node_.IsSequence() || node_.size() != 3) fail("expected a 3x3 matrix (three rows of three numbers)");
+    Eigen::Matrix3d m;
+    auto rows = items();
+    for (int r = 0; r < 3; ++r) {
+        auto row = rows[r].asDoubles(3);
+        for (int c = 0; c < 3; ++c) m(r, c) = row[c];
+    }
+    return m;
+}
+
+Eigen::Matrix<double, 3, 4> ConfigNode::asMatrix34() const
+{
+    if (!node_.IsSequence() || node_.size() != 3) fail("expected a 3x4 matrix (three rows of four numbers)");
+    Eigen::Matrix<double, 3, 4> m;
+    auto rows = items();
+    for (int r = 0; r < 3; ++r) {
+        auto row = rows[r].asDoubles(4);
+        for (int c = 0; c < 4; ++c) m(r, c) = row[c];
+    }
+    return m;
+}
+
+void ConfigNode::allowOnlyKeys(std::initializer_list<std::string_view> allowed) const
+{
+    for (const auto& key : keys()) {
+        if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+        std::string list;
+        for (auto a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        auto child = node_[key];
+        ConfigNode(child, file_, path_.empty() ? key : path_ + "." + key)
+            .fail("unknown key '" + key + "' (allowed here: " + list + ")");
+    }
+}
+
+}  // namespace hg

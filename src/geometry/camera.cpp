@@ -1,0 +1,158 @@
+#include "hullgauge/geometry/camera.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/LU>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+namespace hg::geometry {
+
+bool Intrinsics::hasDistortion() const
+{
+    for (double d : dist)
+        if (d != 0.0) return true;
+    return false;
+}
+
+void Intrinsics::validate() const
+{
+    if (!(K(0, 0) > 0) || !(K(1, 1) > 0)) throw std::invalid_argument("K: fx and fy must be positive");
+    if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
+        throw std::invalid_argument("K: must be upper triangular with K[2][2] = 1");
+    switch (dist.size()) {
+    case 0: case 4: case 5: case 8: case 12: break;
+    case 14: throw std::invalid_argument("dist: the 14-coefficient tilted-sensor model is not supported");
+    default:
+        throw std::invalid_argument("dist: expected 4, 5, 8 or 12 OpenCV coefficients, found " +
+                                    std::to_string(dist.size()));
+    }
+    if (imageSize.width <= 0 || imageSize.height <= 0) throw std::invalid_argument("image_size: must be positive");
+}
+
+CameraModel::CameraModel(Intrinsics intrinsics, RigidTransform cameraFromPart)
+    : intrinsics_(std::move(intrinsics)), cameraFromPart_(cameraFromPart),
+      centre_(-(cameraFromPart.R.transpose() * cameraFromPart.t)), distorted_(intrinsics_.hasDistortion())
+{
+}
+
+CameraModel CameraModel::fromProjectionMatrix(const Eigen::Matrix<double, 3, 4>& P, cv::Size imageSize)
+{
+    cv::Mat Pcv, Kcv, Rcv, Ccv;
+    cv::eigen2cv(P, Pcv);
+    cv::decomposeProjectionMatrix(Pcv, Kcv, Rcv, Ccv);
+    Mat3 K, R;
+    Eigen::Vector4d Ch;
+    cv::cv2eigen(Kcv, K);
+    cv::cv2eigen(Rcv, R);
+    cv::cv2eigen(Ccv, Ch);
+    if (std::abs(Ch(3)) < 1e-15) throw std::invalid_argument("P: camera centre at infinity (affine camera)");
+    // RQ leaves the signs of K's diagonal free: make fx, fy > 0 by moving the
+    // sign into R (K R is unchanged), then scale K so that K[2][2] = 1.
+    for (int i = 0; i < 3; ++i)
+        if (K(i, i) < 0) {
+            K.col(i) *= -1.0;
+            R.row(i) *= -1.0;
+        }
+    K /= K(2, 2);
+    if (R.determinant() < 0) throw std::invalid_argument("P: left-handed camera (det R < 0)");
+    Vec3 C = Ch.head<3>() / Ch(3);
+    Intrinsics in;
+    in.K = K;
+    in.K(1, 0) = in.K(2, 0) = in.K(2, 1) = 0.0;
+    in.imageSize = imageSize;
+    return CameraModel(in, RigidTransform{R, -(R * C)});
+}
+
+CameraModel CameraModel::fromDissertation(double fOverDph, double fOverDpv, double mc, double nc, const Vec3& C,
+                                          const Vec3& h, const Vec3& v, const Vec3& a, cv::Size imageSize)
+{
+    Mat3 R;
+    R.row(0) = h.normalized().transpose();
+    R.row(1) = v.normalized().transpose();
+    R.row(2) = a.normalized().transpose();
+    if (!isRotation(R, 1e-6)) {
+        // The dissertation measured n from the lower-left corner of the
+        // display (v up): a left-handed h, v, a. Flip v and count rows from
+        // the top so the model stays a proper rotation: row = (H-1) - n.
+        R.row(1) *= -1.0;
+        nc = (imageSize.height - 1) - nc;
+        if (!isRotation(R, 1e-6)) throw std::invalid_argument("camera axes h, v, a must be orthonormal");
+    }
+    Intrinsics in;
+    in.K << fOverDph, 0, mc, 0, fOverDpv, nc, 0, 0, 1;
+    in.imageSize = imageSize;
+    return CameraModel(in, RigidTransform{R, -(R * C)});
+}
+
+Vec2 CameraModel::distortNormalised(const Vec2& xy) const
+{
+    // cv::projectPoints' model; missing coefficients are zero.
+    const auto& d = intrinsics_.dist;
+    auto k = [&](std::size_t i) { return i < d.size() ? d[i] : 0.0; };
+    const double x = xy.x(), y = xy.y();
+    const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
+    const double radial = (1 + k(0) * r2 + k(1) * r4 + k(4) * r6) / (1 + k(5) * r2 + k(6) * r4 + k(7) * r6);
+    const double p1 = k(2), p2 = k(3);
+    return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + k(8) * r2 + k(9) * r4,
+            y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + k(10) * r2 + k(11) * r4};
+}
+
+std::optional<Vec2> CameraModel::projectCameraPoint(const Vec3& pc) const
+{
+    if (!(pc.z() > 0)) return std::nullopt;
+    Vec2 xy(pc.x() / pc.z(), pc.y() / pc.z());
+    if (distorted_) xy = distortNormalised(xy);
+    const Mat3& K = intrinsics_.K;
+    return Vec2(K(0, 0) * xy.x() + K(0, 1) * xy.y() + K(0, 2), K(1, 1) * xy.y() + K(1, 2));
+}
+
+std::optional<Vec2> CameraModel::project(const Vec3& partPoint) const
+{
+    return projectCameraPoint(cameraFromPart_.apply(partPoint));
+}
+
+Vec2 CameraModel::undistortPixel(const Vec2& pixel) const
+{
+    const Mat3& K = intrinsics_.K;
+    // Invert K exactly (upper triangular).
+    const double yn = (pixel.y() - K(1, 2)) / K(1, 1);
+    const double xn = (pixel.x() - K(0, 2) - K(0, 1) * yn) / K(0, 0);
+    Vec2 distortedTarget(xn, yn);
+    if (!distorted_) return distortedTarget;
+    // Newton iterations on distort(xy) = target, started at the target; the
+    // Jacobian by central differences is plenty at this scale. Matches
+    // project() to ~1e-12 rather than cv::undistortPoints' default tolerance.
+    Vec2 xy = distortedTarget;
+    for (int it = 0; it < 30; ++it) {
+        Vec2 r = distortNormalised(xy) - distortedTarget;
+        if (r.norm() < 1e-15) break;
+        const double h = 1e-7;
+        Eigen::Matrix2d J;
+        J.col(0) = (distortNormalised(xy + Vec2(h, 0)) - distortNormalised(xy - Vec2(h, 0))) / (2 * h);
+        J.col(1) = (distortNormalised(xy + Vec2(0, h)) - distortNormalised(xy - Vec2(0, h))) / (2 * h);
+        xy -= J.partialPivLu().solve(r);
+    }
+    return xy;
+}
+
+Ray CameraModel::backProject(const Vec2& pixel) const
+{
+    Vec2 xy = undistortPixel(pixel);
+    Vec3 dirCam(xy.x(), xy.y(), 1.0);
+    return {centre_, (cameraFromPart_.R.transpose() * dirCam).normalized()};
+}
+
+Eigen::Matrix<double, 3, 4> CameraModel::projectionMatrix() const
+{
+    return intrinsics_.K * cameraFromPart_.matrix();
+}
+
+Vec2 CameraModel::millimetresPerPixelAt(double depthMm) const
+{
+    return {depthMm / intrinsics_.K(0, 0), depthMm / intrinsics_.K(1, 1)};
+}
+
+}  // namespace hg::geometry

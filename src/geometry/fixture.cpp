@@ -1,0 +1,38 @@
+#include "hullgauge/geometry/fixture.h"
+
+#include <sstream>
+
+namespace hg::geometry {
+
+std::string toString(const FixturePose& pose, FixtureType type)
+{
+    std::ostringstream s;
+    if (type == FixtureType::Rail)
+        s << "rail " << pose.railMm << " mm";
+    else
+        s << "rotation " << pose.rotationDeg << "°, declination " << pose.declinationDeg << "°";
+    return s.str();
+}
+
+RigidTransform FixtureKinematics::cameraFromPart(const FixturePose& pose) const
+{
+    // CONTRACTS §2: the turntable turns the part about the rotation axis, the
+    // declination tilts the turntable (and the part on it) about its own axis.
+    if (type == FixtureType::Rail)
+        return cameraFromFixture * RigidTransform::translation(railAxis.normalized() * pose.railMm);
+    return cameraFromFixture * RigidTransform::rotation(declinationAxis, pose.declinationDeg) *
+           RigidTransform::rotation(rotationAxis, pose.rotationDeg);
+}
+
+bool FixtureKinematics::reachable(const FixturePose& pose) const
+{
+    if (type == FixtureType::Rail) return railRangeMm.contains(pose.railMm);
+    return rotationRangeDeg.contains(pose.rotationDeg) && declinationRangeDeg.contains(pose.declinationDeg);
+}
+
+Vec3 FixtureKinematics::cameraCentreInPart(const FixturePose& pose) const
+{
+    return cameraFromPart(pose).inverse().t;
+}
+
+}  // namespace hg::geometry

@@ -1,0 +1,147 @@
+#include "hullgauge/geometry/station.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "hullgauge/common/error.h"
+
+namespace hg::geometry {
+namespace {
+
+Range parseRange(const ConfigNode& node)
+{
+    auto v = node.asDoubles(2);
+    if (!(v[0] <= v[1])) node.fail("range [min, max] must have min <= max");
+    return {v[0], v[1]};
+}
+
+Vec3 parseAxis(const ConfigNode& node)
+{
+    Vec3 a = node.asVector3();
+    if (a.norm() < 1e-9) node.fail("axis must not be the zero vector");
+    return a.normalized();
+}
+
+Intrinsics parseCamera(const ConfigNode& cam)
+{
+    cam.allowOnlyKeys({"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration"});
+    Intrinsics in;
+    auto sizeNode = cam["image_size"];
+    auto size = sizeNode.items();
+    if (size.size() != 2) sizeNode.fail("expected [width, height] in pixels");
+    in.imageSize = cv::Size(static_cast<int>(size[0].asIntIn(1, 65535)), static_cast<int>(size[1].asIntIn(1, 65535)));
+    auto kNode = cam["K"];
+    in.K = kNode.asMatrix3();
+    if (auto d = cam.optional("dist")) {
+        in.dist = d->asDoubles();
+    }
+    try {
+        in.validate();
+    } catch (const std::invalid_argument& e) {
+        std::string what = e.what();
+        (what.rfind("dist", 0) == 0 ? cam["dist"] : what.rfind("K", 0) == 0 ? kNode : sizeNode)
+            .fail(what.substr(what.find(':') + 2));
+    }
+    return in;
+}
+
+FixtureKinematics parseFixture(const ConfigNode& fix)
+{
+    fix.allowOnlyKeys({"type", "camera_from_fixture", "rotation_axis", "declination_axis", "rotation_range_deg",
+                       "declination_range_deg", "rail_axis", "rail_range_mm", "driver", "calibration"});
+    FixtureKinematics k;
+    auto typeNode = fix["type"];
+    auto type = typeNode.asString();
+    if (type == "rotation_declination")
+        k.type = FixtureType::RotationDeclination;
+    else if (type == "rail")
+        k.type = FixtureType::Rail;
+    else
+        typeNode.fail("unknown fixture type '" + type + "' (rotation_declination or rail)");
+
+    auto cff = fix["camera_from_fixture"];
+    cff.allowOnlyKeys({"R", "t"});
+    auto rNode = cff["R"];
+    Mat3 R = rNode.asMatrix3();
+    // Values typed into YAML carry rounding; accept near-rotations and
+    // re-orthonormalise, reject anything that is not a rotation.
+    if (!isRotation(R, 1e-4)) rNode.fail("not a rotation matrix (must be orthonormal with determinant +1)");
+    k.cameraFromFixture.R = nearestRotation(R);
+    k.cameraFromFixture.t = cff["t"].asVector3();
+
+    if (auto n = fix.optional("rotation_axis")) k.rotationAxis = parseAxis(*n);
+    if (auto n = fix.optional("declination_axis")) k.declinationAxis = parseAxis(*n);
+    if (auto n = fix.optional("rotation_range_deg")) k.rotationRangeDeg = parseRange(*n);
+    if (auto n = fix.optional("declination_range_deg")) k.declinationRangeDeg = parseRange(*n);
+    if (auto n = fix.optional("rail_axis")) k.railAxis = parseAxis(*n);
+    if (auto n = fix.optional("rail_range_mm")) k.railRangeMm = parseRange(*n);
+    return k;
+}
+
+}  // namespace
+
+CameraModel Station::cameraAt(const FixturePose& pose) const
+{
+    return CameraModel(camera, fixture.cameraFromPart(pose));
+}
+
+Station parseStation(const ConfigNode& root)
+{
+    Station s;
+    auto cam = root["camera"];
+    s.camera = parseCamera(cam);
+    if (auto n = cam.optional("pixel_size_um")) {
+        auto v = n->asDoubles(2);
+        if (!(v[0] > 0 && v[1] > 0)) n->fail("pixel size must be positive");
+        s.pixelSizeUm = Vec2(v[0], v[1]);
+    }
+    if (auto n = cam.optional("depth_of_field_mm")) {
+        auto r = parseRange(*n);
+        if (!(r.min > 0)) n->fail("depth of field must lie in front of the camera (near > 0)");
+        s.depthOfFieldMm = r;
+    }
+    s.fixture = parseFixture(root["fixture"]);
+    if (auto env = root.optional("environment")) {
+        env->allowOnlyKeys({"floor_z_mm"});
+        if (auto f = env->optional("floor_z_mm")) s.floorZMm = f->asDouble();
+    }
+    s.document = root;
+    return s;
+}
+
+Station loadStation(const std::filesystem::path& file)
+{
+    return parseStation(ConfigNode::loadFile(file));
+}
+
+std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const FixtureKinematics* fixture)
+{
+    auto root = ConfigNode::loadFile(file);
+    if (!root.isSequence()) root.fail("expected a list of fixture poses");
+    std::vector<FixturePose> poses;
+    for (const auto& item : root.items()) {
+        item.allowOnlyKeys({"rotation_deg", "declination_deg", "rail_mm"});
+        FixturePose p;
+        bool rail = item.has("rail_mm");
+        bool angles = item.has("rotation_deg") || item.has("declination_deg");
+        if (rail == angles) item.fail("a pose gives either rotation_deg/declination_deg or rail_mm");
+        if (rail) {
+            p.railMm = item["rail_mm"].asDouble();
+        } else {
+            if (auto r = item.optional("rotation_deg")) p.rotationDeg = r->asDouble();
+            if (auto d = item.optional("declination_deg")) p.declinationDeg = d->asDouble();
+        }
+        if (fixture) {
+            bool railFixture = fixture->type == FixtureType::Rail;
+            if (rail != railFixture)
+                item.fail(railFixture ? "the station's fixture is a rail: give rail_mm"
+                                      : "the station's fixture turns and tilts: give rotation_deg/declination_deg");
+            if (!fixture->reachable(p))
+                item.fail("pose " + toString(p, fixture->type) + " is outside the fixture's range");
+        }
+        poses.push_back(p);
+    }
+    return poses;
+}
+
+}  // namespace hg::geometry

@@ -1,0 +1,135 @@
+// Station and poses files: valid files load; every kind of bad value names
+// file, line and key.
+#include <gtest/gtest.h>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/geometry/station.h"
+
+namespace hg::geometry {
+namespace {
+
+const char* kStation = R"(camera:
+  image_size: [2448, 2048]
+  K: [[2400, 0, 1224], [0, 2400, 1024], [0, 0, 1]]
+  dist: [-0.1, 0.05, 0, 0, 0]
+  pixel_size_um: [3.45, 3.45]
+  depth_of_field_mm: [250, 350]
+fixture:
+  type: rotation_declination
+  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
+  rotation_axis: [0, 0, 1]
+  declination_axis: [1, 0, 0]
+  rotation_range_deg: [-180, 180]
+  declination_range_deg: [0, 60]
+environment:
+  floor_z_mm: -2.5
+plc: {port: 1502}
+)";
+
+std::string replaced(std::string text, const std::string& from, const std::string& to)
+{
+    auto pos = text.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    return text.replace(pos, from.size(), to);
+}
+
+// Loads `text` and returns the InputError message (empty if it loaded).
+std::string loadError(const std::string& text)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "station.yaml", text);
+    try {
+        loadStation(file);
+    } catch (const InputError& e) {
+        std::string msg = e.what();
+        return msg.substr(msg.find("station.yaml"));
+    }
+    return {};
+}
+
+TEST(Station, LoadsTheContractExample)
+{
+    hgtest::TempDir dir;
+    auto s = loadStation(hgtest::writeFile(dir / "station.yaml", kStation));
+    EXPECT_EQ(s.camera.imageSize, cv::Size(2448, 2048));
+    EXPECT_EQ(s.camera.K(0, 2), 1224);
+    ASSERT_EQ(s.camera.dist.size(), 5u);
+    ASSERT_TRUE(s.pixelSizeUm);
+    ASSERT_TRUE(s.depthOfFieldMm);
+    EXPECT_EQ(s.depthOfFieldMm->max, 350);
+    EXPECT_EQ(s.fixture.type, FixtureType::RotationDeclination);
+    EXPECT_EQ(s.fixture.declinationRangeDeg.max, 60);
+    EXPECT_EQ(s.floorZMm, -2.5);
+    ASSERT_TRUE(s.document);
+    EXPECT_EQ(s.document->raw()["plc"]["port"].as<int>(), 1502);  // driver sections kept
+    auto cam = s.cameraAt({0, 0, 0});
+    EXPECT_LT((cam.centre() - Vec3(0, -300, 0)).norm(), 1e-9);
+}
+
+TEST(Station, WrongTypeNamesLineAndKey)
+{
+    EXPECT_EQ(loadError(replaced(kStation, "[2448, 2048]", "wide")),
+              "station.yaml:2: camera.image_size: expected a sequence, found 'wide'");
+    EXPECT_EQ(loadError(replaced(kStation, "floor_z_mm: -2.5", "floor_z_mm: low")),
+              "station.yaml:15: environment.floor_z_mm: expected a finite number, found 'low'");
+}
+
+TEST(Station, BadValuesAreRefused)
+{
+    EXPECT_EQ(loadError(replaced(kStation, "dist: [-0.1, 0.05, 0, 0, 0]", "dist: [1, 2, 3]")),
+              "station.yaml:4: camera.dist: expected 4, 5, 8 or 12 OpenCV coefficients, found 3");
+    EXPECT_EQ(loadError(replaced(kStation, "[[1, 0, 0], [0, 0, -1], [0, 1, 0]]", "[[1, 0, 0], [0, 0, 1], [0, 1, 0]]")),
+              "station.yaml:9: fixture.camera_from_fixture.R: not a rotation matrix (must be orthonormal with "
+              "determinant +1)");
+    EXPECT_EQ(loadError(replaced(kStation, "type: rotation_declination", "type: turntable")),
+              "station.yaml:8: fixture.type: unknown fixture type 'turntable' (rotation_declination or rail)");
+    EXPECT_EQ(loadError(replaced(kStation, "[0, 60]", "[60, 0]")),
+              "station.yaml:13: fixture.declination_range_deg: range [min, max] must have min <= max");
+    EXPECT_EQ(loadError(replaced(kStation, "[2400, 0, 1224], [0, 2400, 1024]", "[-2400, 0, 1224], [0, 2400, 1024]")),
+              "station.yaml:3: camera.K: fx and fy must be positive");
+}
+
+TEST(Station, MissingAndUnknownKeys)
+{
+    EXPECT_EQ(loadError(replaced(kStation, "  type: rotation_declination\n", "")),
+              "station.yaml:8: fixture: missing required key 'type'");
+    auto msg = loadError(replaced(kStation, "  rotation_axis:", "  rotaton_axis:"));
+    EXPECT_EQ(msg.substr(0, msg.find(" (")), "station.yaml:10: fixture.rotaton_axis: unknown key 'rotaton_axis'");
+}
+
+TEST(Station, SyntaxErrorNamesLine)
+{
+    EXPECT_EQ(loadError("camera:\n  K: [[1, 2\n  image_size: 3\n").substr(0, 15), "station.yaml:3:");
+}
+
+TEST(Poses, LoadAndCheckAgainstTheFixture)
+{
+    hgtest::TempDir dir;
+    auto station = loadStation(hgtest::writeFile(dir / "station.yaml", kStation));
+    auto ok = hgtest::writeFile(dir / "poses.yaml", "- {rotation_deg: 30, declination_deg: 20}\n- {rotation_deg: -90}\n");
+    auto poses = loadPoses(ok, &station.fixture);
+    ASSERT_EQ(poses.size(), 2u);
+    EXPECT_EQ(poses[0], (FixturePose{30, 20, 0}));
+    EXPECT_EQ(poses[1], (FixturePose{-90, 0, 0}));
+
+    auto expectError = [&](const std::string& text, const std::string& expected) {
+        auto file = hgtest::writeFile(dir / "bad.yaml", text);
+        try {
+            loadPoses(file, &station.fixture);
+            ADD_FAILURE() << "no error for " << text;
+        } catch (const InputError& e) {
+            std::string m = e.what();
+            EXPECT_EQ(m.substr(m.find("bad.yaml")), expected);
+        }
+    };
+    expectError("- {rotation_deg: 30, declination_deg: 75}\n",
+                "bad.yaml:1: [0]: pose rotation 30°, declination 75° is outside the fixture's range");
+    expectError("- {rotation_deg: 0}\n- {rail_mm: 10}\n",
+                "bad.yaml:2: [1]: the station's fixture turns and tilts: give rotation_deg/declination_deg");
+    expectError("- {rotation_deg: ten}\n", "bad.yaml:1: [0].rotation_deg: expected a finite number, found 'ten'");
+    expectError("rotation_deg: 10\n", "bad.yaml:1: (document): expected a list of fixture poses");
+}
+
+}  // namespace
+}  // namespace hg::geometry

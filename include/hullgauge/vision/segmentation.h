@@ -1,0 +1,60 @@
+// Segmentation of backlit grey frames into silhouettes (CONTRACTS §3,
+// dissertation 3.3.8 "the views ... are segmented and thresholded").
+//
+// Convention of every silhouette produced here: CV_8U, 255 = object (the part
+// blocks the backlight), 0 = background. Frames may be 8- or 16-bit, grey or
+// colour; thresholds are in the frame's own grey units (0..255 or 0..65535).
+//
+// Goal-driven use: the inspection needs only the pixels its voxels project to,
+// so `segmentRegion` thresholds a rectangle of the frame. The Otsu threshold is
+// taken from a strided histogram of the whole frame (`otsuStride`), not from the
+// regions: a region around one landmark may be almost all object or all
+// background in a given view, and its histogram then has no second mode.
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace hg::vision {
+
+enum class SegmentationMethod {
+    Otsu,   ///< threshold from Otsu's between-class variance criterion
+    Fixed,  ///< `threshold` as given
+    Mask,   ///< the frames already are silhouettes: non-zero = object
+};
+
+struct SegmentationSettings {
+    SegmentationMethod method = SegmentationMethod::Otsu;
+    /// Grey level (frame units) for `Fixed`; pixels darker than or equal to it
+    /// are object when `objectIsDark`.
+    double threshold = 128.0;
+    /// Backlit part: the object is dark against a bright background.
+    bool objectIsDark = true;
+    /// Row and column step of the histogram sample used by Otsu (1 = every pixel).
+    int otsuStride = 4;
+};
+
+/// "otsu", "fixed", "mask"; throws std::invalid_argument for anything else.
+SegmentationMethod parseSegmentationMethod(const std::string& name);
+std::string toString(SegmentationMethod method);
+
+/// A single-channel frame of the same depth (8 or 16 bit); colour frames are
+/// converted by luminance. Throws std::invalid_argument for other depths.
+cv::Mat toGrey(const cv::Mat& frame);
+
+/// The object/background threshold of a grey frame: Otsu over a strided
+/// histogram (full 16-bit resolution for 16-bit frames), or the fixed value.
+/// A pixel is object when `objectIsDark ? v <= t : v > t`. For `Mask` the
+/// threshold is 0 (object is v > 0 regardless of polarity).
+double computeThreshold(const cv::Mat& grey, const SegmentationSettings& settings);
+
+/// Silhouette of `roi` (clipped to the frame) of a grey frame at threshold `t`:
+/// CV_8U of the roi's size, 255 = object.
+cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold,
+                      const SegmentationSettings& settings);
+
+/// Silhouette of the whole frame (any depth and channel count accepted).
+cv::Mat segment(const cv::Mat& frame, const SegmentationSettings& settings);
+
+}  // namespace hg::vision

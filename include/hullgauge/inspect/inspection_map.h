@@ -1,0 +1,169 @@
+// The octree inspection map (dissertation 3.3.1, 3.3.2, 3.5.1).
+//
+// Frame: voxel (level L, i, j, k) is the axis-aligned box
+//   cubeOrigin + ΔV_L * [i, i+1] x [j, j+1] x [k, k+1],  ΔV_L = cubeSize / 2^L
+// in the part frame (mm); level 0 is the whole cube, level `depth` the
+// inspection voxels (ΔV, the MAD of eq. 4.5.1-1).
+//
+// Node types (3.3.2): type one — absent (no entry); type two — a node on a path
+// to at least one landmark (downward links to its 8 children, -1 for type-one
+// children); type three — the voxel holding a landmark at an inspection level;
+// type four — a same-size neighbour of a landmark voxel or of another type-four
+// node, out to `adjacencyDepth` 26-neighbour layers. Neighbour links are
+// symmetric (each of the 26 slots of a network node points to the neighbour
+// node or -1), which is the dissertation's double linkage: a node's "parents"
+// are its linked neighbours nearer a landmark (smaller `ring`), its "children"
+// those farther out. A neighbour reached from two landmarks is one node. A
+// landmark voxel that also lies in another landmark's network stays one node
+// (type three, it carries all of a type four's information).
+//
+// Storage is Open3D-style: nodes in one flat array sorted by their integer
+// voxel key, links as indices into it, so traversal is index chasing and the
+// file format is the arrays themselves.
+//
+// Inspection levels: networks (types three and four) exist at every level from
+// `coarsestLevel` to `depth`; an inspection may run at any of those levels, on
+// any subset of landmarks and with any adjacency up to `adjacencyDepth`,
+// without rebuilding (3.3.7, 3.4).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace hg::inspect {
+
+/// (level, i, j, k) packed: level in bits 60..63, i, j, k in 20 bits each.
+using VoxelKey = std::uint64_t;
+
+constexpr int kMaxDepth = 15;
+
+inline VoxelKey makeKey(int level, int i, int j, int k)
+{
+    return (static_cast<VoxelKey>(level) << 60) | (static_cast<VoxelKey>(i) << 40) |
+           (static_cast<VoxelKey>(j) << 20) | static_cast<VoxelKey>(k);
+}
+inline int keyLevel(VoxelKey key) { return static_cast<int>(key >> 60); }
+inline Eigen::Vector3i keyIndex(VoxelKey key)
+{
+    return {static_cast<int>((key >> 40) & 0xFFFFF), static_cast<int>((key >> 20) & 0xFFFFF),
+            static_cast<int>(key & 0xFFFFF)};
+}
+
+enum class NodeType : std::uint8_t { Path = 2, Landmark = 3, Adjacent = 4 };
+
+struct MapNode {
+    VoxelKey key = 0;
+    NodeType type = NodeType::Path;
+    /// Expected label from the CAD: object when >= 50 % of the voxel is inside
+    /// (network nodes only; path nodes keep false).
+    bool expectedObject = false;
+    /// 26-neighbour layers to the nearest landmark voxel of this level; 0 for a
+    /// landmark voxel, 255 for a node that is on a path only.
+    std::uint8_t ring = 255;
+    /// Index of the first of 8 child slots in InspectionMap::children(), or -1.
+    std::int32_t children = -1;
+    /// Index of the first of 26 neighbour slots in InspectionMap::neighbours(), or -1.
+    std::int32_t neighbours = -1;
+};
+
+/// The 26 neighbour offsets, in slot order (dz fastest, then dy, then dx; the
+/// centre skipped). Slot s and slot 25 - s are opposite.
+const std::array<Eigen::Vector3i, 26>& neighbourOffsets();
+
+struct MapLandmark {
+    std::string id;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< on the CAD surface, mm
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   ///< outward unit normal
+    double toleranceMm = 0.0;
+};
+
+enum class ParameterKind : std::uint8_t { Distance, Perimeter, Area };
+
+struct MapParameter {
+    std::string id;
+    ParameterKind kind = ParameterKind::Distance;
+    std::vector<std::string> landmarks;
+    double nominal = 0.0;    ///< mm, or mm² for an area
+    double tolerance = 0.0;  ///< same unit as nominal
+};
+
+const char* toString(ParameterKind kind);
+/// "distance", "perimeter", "area"; throws std::invalid_argument otherwise.
+ParameterKind parseParameterKind(const std::string& name);
+
+struct MapGeometry {
+    Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();
+    double cubeSize = 1.0;    ///< mm
+    int depth = 8;            ///< finest level (ΔV = cubeSize / 2^depth)
+    int adjacencyDepth = 3;   ///< type-four layers
+    int coarsestLevel = 8;    ///< coarsest level with networks (<= depth)
+};
+
+/// Expected label of a voxel: true = object (>= 50 % inside; Solid::isObjectVoxel).
+using LabelOracle = std::function<bool(const Eigen::AlignedBox3d&)>;
+
+class InspectionMap {
+public:
+    /// Builds the map (3.5.1): path nodes to every landmark, type-three nodes at
+    /// each inspection level, type-four networks out to adjacencyDepth, labels
+    /// from `oracle`. Throws std::invalid_argument for an impossible geometry
+    /// or a landmark outside the cube.
+    static InspectionMap build(std::string partName, const MapGeometry& geometry, std::vector<MapLandmark> landmarks,
+                               std::vector<MapParameter> parameters, const LabelOracle& oracle);
+
+    /// Versioned binary file ("HGMAP", format version, checksum).
+    void save(const std::filesystem::path& file) const;
+    std::vector<std::uint8_t> serialise() const;
+    /// Throws hg::InputError naming the file for a wrong magic, version, size or checksum.
+    static InspectionMap load(const std::filesystem::path& file);
+    static InspectionMap deserialise(const std::vector<std::uint8_t>& bytes, const std::string& name);
+
+    const std::string& partName() const { return partName_; }
+    const MapGeometry& geometry() const { return geometry_; }
+    double voxelSize(int level) const;
+    Eigen::AlignedBox3d voxelBox(VoxelKey key) const;
+    /// The voxel key holding `point` at `level` (clamped into the cube).
+    VoxelKey keyAt(const Eigen::Vector3d& point, int level) const;
+
+    const std::vector<MapNode>& nodes() const { return nodes_; }
+    const std::vector<std::int32_t>& children() const { return children_; }
+    const std::vector<std::int32_t>& neighbours() const { return neighbours_; }
+    const std::vector<MapLandmark>& landmarks() const { return landmarks_; }
+    const std::vector<MapParameter>& parameters() const { return parameters_; }
+    /// Root node index (level 0), -1 for a map without landmarks.
+    std::int32_t root() const { return nodes_.empty() ? -1 : rootIndex_; }
+    /// Node index of landmark `l`'s voxel at `level` (coarsestLevel..depth).
+    std::int32_t landmarkNode(std::size_t l, int level) const;
+    /// Node index of a key, or -1 (binary search).
+    std::int32_t find(VoxelKey key) const;
+    /// Neighbour slot s of node n (-1 when absent or n has no network links).
+    std::int32_t neighbour(std::int32_t n, int slot) const
+    {
+        const std::int32_t base = nodes_[static_cast<std::size_t>(n)].neighbours;
+        return base < 0 ? -1 : neighbours_[static_cast<std::size_t>(base) + slot];
+    }
+    /// Index of a landmark by id, or std::nullopt.
+    std::optional<std::size_t> landmarkIndex(const std::string& id) const;
+
+private:
+    std::string partName_;
+    MapGeometry geometry_;
+    std::vector<MapNode> nodes_;
+    std::vector<std::int32_t> children_;
+    std::vector<std::int32_t> neighbours_;
+    std::vector<MapLandmark> landmarks_;
+    std::vector<MapParameter> parameters_;
+    /// landmarkNodes_[l * levels + (level - coarsestLevel)]
+    std::vector<std::int32_t> landmarkNodes_;
+    std::int32_t rootIndex_ = -1;
+};
+
+}  // namespace hg::inspect

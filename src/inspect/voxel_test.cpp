@@ -1,0 +1,301 @@
+#include "hullgauge/inspect/voxel_test.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace hg::inspect {
+namespace {
+
+// Internally pixel coordinates are shifted by +0.5 so that pixel (c, r) covers
+// [c, c+1] x [r, r+1]; a region's local frame subtracts its top-left corner.
+
+double polygonArea(const std::vector<Vec2>& p)
+{
+    double a = 0.0;
+    for (std::size_t i = 0, n = p.size(); i < n; ++i) {
+        const Vec2& u = p[i];
+        const Vec2& v = p[(i + 1) % n];
+        a += u.x() * v.y() - v.x() * u.y();
+    }
+    return 0.5 * std::abs(a);
+}
+
+/// Sutherland–Hodgman against the half-plane sign * (coord(axis) - bound) >= 0.
+void clipHalfPlane(const std::vector<Vec2>& in, std::vector<Vec2>& out, int axis, double bound, double sign)
+{
+    out.clear();
+    const std::size_t n = in.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec2& a = in[i];
+        const Vec2& b = in[(i + 1) % n];
+        const double da = sign * (a[axis] - bound);
+        const double db = sign * (b[axis] - bound);
+        if (da >= 0) out.push_back(a);
+        if ((da >= 0) != (db >= 0)) {
+            const double t = da / (da - db);
+            Vec2 x = a + t * (b - a);
+            x[axis] = bound;  // exact on the clip line
+            out.push_back(x);
+        }
+    }
+}
+
+void clipToRect(std::vector<Vec2>& poly, double x0, double y0, double x1, double y1)
+{
+    std::vector<Vec2> tmp;
+    clipHalfPlane(poly, tmp, 0, x0, 1.0);
+    clipHalfPlane(tmp, poly, 0, x1, -1.0);
+    clipHalfPlane(poly, tmp, 1, y0, 1.0);
+    clipHalfPlane(tmp, poly, 1, y1, -1.0);
+}
+
+/// Vertical chord length of a convex polygon at abscissa x.
+double chordAt(const std::vector<Vec2>& p, double x)
+{
+    double lo = 1e300, hi = -1e300;
+    for (std::size_t i = 0, n = p.size(); i < n; ++i) {
+        const Vec2& a = p[i];
+        const Vec2& b = p[(i + 1) % n];
+        const double xmin = std::min(a.x(), b.x()), xmax = std::max(a.x(), b.x());
+        if (x < xmin || x > xmax || xmax - xmin <= 0.0) continue;
+        const double y = a.y() + (x - a.x()) * (b.y() - a.y()) / (b.x() - a.x());
+        lo = std::min(lo, y);
+        hi = std::max(hi, y);
+    }
+    return hi > lo ? hi - lo : 0.0;
+}
+
+/// Background area of a convex polygon in region-local shifted coordinates,
+/// already clipped to [0, width] x [0, height].
+double localBackgroundArea(const std::vector<Vec2>& poly, const SilhouetteIndex::Region& reg, double stopAt)
+{
+    if (poly.size() < 3) return 0.0;
+    double ymin = 1e300, ymax = -1e300;
+    for (const Vec2& v : poly) {
+        ymin = std::min(ymin, v.y());
+        ymax = std::max(ymax, v.y());
+    }
+    const int h = reg.rect.height, w = reg.rect.width;
+    const int r0 = std::clamp(static_cast<int>(std::floor(ymin)), 0, h - 1);
+    const int r1 = std::clamp(static_cast<int>(std::ceil(ymax)) - 1, 0, h - 1);
+    double bg = 0.0;
+    std::vector<Vec2> a, b;
+    std::vector<double> xs;
+    for (int r = r0; r <= r1 && bg < stopAt; ++r) {
+        clipHalfPlane(poly, a, 1, static_cast<double>(r), 1.0);
+        clipHalfPlane(a, b, 1, static_cast<double>(r + 1), -1.0);
+        if (b.size() < 3) continue;
+        const std::int32_t* cnt = reg.count.data() + static_cast<std::size_t>(r) * reg.stride;
+        const std::int64_t* mom = reg.moment.data() + static_cast<std::size_t>(r) * reg.stride;
+        auto bgAt = [&](int c) { return static_cast<double>(cnt[c + 1] - cnt[c]); };
+        xs.clear();
+        for (const Vec2& v : b) xs.push_back(v.x());
+        std::sort(xs.begin(), xs.end());
+        for (std::size_t k = 0; k + 1 < xs.size(); ++k) {
+            const double xa = xs[k], xb = xs[k + 1];
+            if (xb - xa <= 1e-12) continue;
+            // w(x) = alpha + beta x is linear between consecutive vertex abscissae.
+            const double x1 = xa + (xb - xa) / 3.0, x2 = xa + 2.0 * (xb - xa) / 3.0;
+            const double w1 = chordAt(b, x1), w2 = chordAt(b, x2);
+            const double beta = (w2 - w1) / (x2 - x1);
+            const double alpha = w1 - beta * x1;
+            auto integral = [&](double u, double v) { return (v - u) * (alpha + beta * 0.5 * (u + v)); };
+            const int ca = std::clamp(static_cast<int>(std::floor(xa)), 0, w - 1);
+            int cb = static_cast<int>(std::floor(xb));
+            if (static_cast<double>(cb) >= xb) --cb;  // xb on a pixel edge ends in the pixel before
+            cb = std::clamp(cb, 0, w - 1);
+            if (ca == cb) {
+                bg += bgAt(ca) * integral(xa, xb);
+                continue;
+            }
+            bg += bgAt(ca) * integral(xa, ca + 1.0);
+            if (cb > ca + 1) {
+                // Whole pixels ca+1 .. cb-1: Σ b_c ∫_c^{c+1} w = alpha·Σb + beta·Σ b_c (c + 1/2).
+                const double s0 = static_cast<double>(cnt[cb] - cnt[ca + 1]);
+                const double s1 = static_cast<double>(mom[cb] - mom[ca + 1]);
+                bg += alpha * s0 + beta * (s1 + 0.5 * s0);
+            }
+            bg += bgAt(cb) * integral(static_cast<double>(cb), xb);
+        }
+    }
+    return bg;
+}
+
+}  // namespace
+
+const char* toString(VoxelLabel label)
+{
+    switch (label) {
+    case VoxelLabel::Unknown: return "unknown";
+    case VoxelLabel::Void: return "void";
+    case VoxelLabel::Object: return "object";
+    case VoxelLabel::Undecided: return "undecided";
+    }
+    return "unknown";
+}
+
+bool SilhouetteIndex::Region::background(int frameRow, int frameCol) const
+{
+    const int r = frameRow - rect.y, c = frameCol - rect.x;
+    const std::size_t base = static_cast<std::size_t>(r) * stride;
+    return count[base + c + 1] != count[base + c];
+}
+
+void SilhouetteIndex::addRegion(const cv::Rect& rect, const cv::Mat& silhouette)
+{
+    if (silhouette.type() != CV_8UC1 || silhouette.rows != rect.height || silhouette.cols != rect.width)
+        throw std::invalid_argument("silhouette region must be CV_8UC1 of the region's size");
+    if ((rect & cv::Rect(0, 0, frameSize_.width, frameSize_.height)) != rect)
+        throw std::invalid_argument("silhouette region outside the frame");
+    Region reg;
+    reg.rect = rect;
+    reg.stride = rect.width + 1;
+    reg.count.assign(static_cast<std::size_t>(rect.height) * reg.stride, 0);
+    reg.moment.assign(reg.count.size(), 0);
+    for (int r = 0; r < rect.height; ++r) {
+        const auto* s = silhouette.ptr<std::uint8_t>(r);
+        std::int32_t* cnt = reg.count.data() + static_cast<std::size_t>(r) * reg.stride;
+        std::int64_t* mom = reg.moment.data() + static_cast<std::size_t>(r) * reg.stride;
+        for (int c = 0; c < rect.width; ++c) {
+            const int bgPixel = s[c] == 0 ? 1 : 0;
+            cnt[c + 1] = cnt[c] + bgPixel;
+            mom[c + 1] = mom[c] + static_cast<std::int64_t>(bgPixel) * c;
+        }
+    }
+    regions_.push_back(std::move(reg));
+}
+
+SilhouetteIndex SilhouetteIndex::fromSilhouette(const cv::Mat& silhouette)
+{
+    SilhouetteIndex idx(silhouette.size());
+    idx.addRegion(cv::Rect(0, 0, silhouette.cols, silhouette.rows), silhouette);
+    return idx;
+}
+
+const SilhouetteIndex::Region* SilhouetteIndex::regionContaining(const cv::Rect& rect) const
+{
+    for (const Region& r : regions_)
+        if ((r.rect & rect) == rect) return &r;
+    return nullptr;
+}
+
+const SilhouetteIndex::Region* SilhouetteIndex::regionAt(int col, int row) const
+{
+    for (const Region& r : regions_)
+        if (r.rect.contains(cv::Point(col, row))) return &r;
+    return nullptr;
+}
+
+std::vector<Vec2> convexHull(std::vector<Vec2> pts)
+{
+    // Andrew's monotone chain; collinear points are dropped.
+    std::sort(pts.begin(), pts.end(),
+              [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+    if (pts.size() < 3) return pts;
+    auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+        return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+    };
+    std::vector<Vec2> hull(2 * pts.size());
+    std::size_t k = 0;
+    for (const Vec2& p : pts) {
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], p) <= 0) --k;
+        hull[k++] = p;
+    }
+    for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+        hull[k++] = pts[i];
+    }
+    hull.resize(k - 1);
+    return hull;
+}
+
+double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::Region& region, double stopAt)
+{
+    std::vector<Vec2> local;
+    local.reserve(polygon.size());
+    for (const Vec2& v : polygon) local.emplace_back(v.x() + 0.5 - region.rect.x, v.y() + 0.5 - region.rect.y);
+    return localBackgroundArea(local, region, stopAt);
+}
+
+FootprintMeasure VoxelTester::measure(const Box3& voxel, std::size_t viewIndex, double stopFraction) const
+{
+    const SilhouetteView& view = (*views_)[viewIndex];
+    FootprintMeasure m;
+    std::vector<Vec2> corners;
+    corners.reserve(8);
+    for (int i = 0; i < 8; ++i) {
+        const auto px = view.camera.project(voxel.corner(static_cast<Box3::CornerType>(i)));
+        if (!px) return m;
+        corners.emplace_back(px->x() + 0.5, px->y() + 0.5);
+    }
+    m.inFront = true;
+    std::vector<Vec2> outline = convexHull(std::move(corners));
+    m.outlineVertices = static_cast<int>(outline.size());
+    m.area = polygonArea(outline);
+    if (outline.size() < 3 || m.area <= 0.0) return m;
+
+    // The region that holds the footprint (by its bounding box); what lies
+    // outside that region (or the frame) is unknown.
+    double xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;
+    for (const Vec2& v : outline) {
+        xmin = std::min(xmin, v.x());
+        xmax = std::max(xmax, v.x());
+        ymin = std::min(ymin, v.y());
+        ymax = std::max(ymax, v.y());
+    }
+    const cv::Rect bbox(static_cast<int>(std::floor(xmin)), static_cast<int>(std::floor(ymin)),
+                        static_cast<int>(std::floor(xmax)) - static_cast<int>(std::floor(xmin)) + 1,
+                        static_cast<int>(std::floor(ymax)) - static_cast<int>(std::floor(ymin)) + 1);
+    const SilhouetteIndex::Region* reg = view.index.regionContaining(bbox);
+    if (!reg) {
+        const cv::Point c(static_cast<int>(std::floor(0.5 * (xmin + xmax))), static_cast<int>(std::floor(0.5 * (ymin + ymax))));
+        reg = view.index.regionAt(c.x, c.y);
+    }
+    if (!reg) {
+        m.unknown = m.area;
+        return m;
+    }
+    for (Vec2& v : outline) v -= Vec2(reg->rect.x, reg->rect.y);
+    clipToRect(outline, 0.0, 0.0, reg->rect.width, reg->rect.height);
+    const double inside = outline.size() >= 3 ? polygonArea(outline) : 0.0;
+    m.unknown = std::max(0.0, m.area - inside);
+    if (inside > 0.0) m.background = localBackgroundArea(outline, *reg, stopFraction * m.area);
+    return m;
+}
+
+VoxelLabel VoxelTester::centrePointLabel(const Box3& voxel, std::size_t viewIndex) const
+{
+    const SilhouetteView& view = (*views_)[viewIndex];
+    const auto px = view.camera.project(voxel.center());
+    if (!px) return VoxelLabel::Undecided;
+    const int c = static_cast<int>(std::floor(px->x() + 0.5)), r = static_cast<int>(std::floor(px->y() + 0.5));
+    const SilhouetteIndex::Region* reg = view.index.regionAt(c, r);
+    if (!reg) return VoxelLabel::Undecided;
+    return reg->background(r, c) ? VoxelLabel::Void : VoxelLabel::Object;
+}
+
+VoxelLabel VoxelTester::classify(const Box3& voxel) const
+{
+    ++tests_;
+    bool objectDecided = false;
+    for (std::size_t v = 0; v < views_->size(); ++v) {
+        if (method_ == VoxelTestMethod::CentrePoint) {
+            const VoxelLabel l = centrePointLabel(voxel, v);
+            if (l == VoxelLabel::Void) return VoxelLabel::Void;
+            objectDecided = objectDecided || l == VoxelLabel::Object;
+            continue;
+        }
+        // 50 % rule (3.3.4, Rule 1): half the footprint in background in one view
+        // proves the voxel void. The relative 1e-9 keeps "exactly 50 %" void in
+        // spite of rounding in the area sums.
+        const FootprintMeasure m = measure(voxel, v, 0.5);
+        if (!m.inFront || m.area <= 0.0) continue;
+        const double half = 0.5 * m.area * (1.0 - 1e-9);
+        if (m.background >= half) return VoxelLabel::Void;
+        if (m.background + m.unknown < half) objectDecided = true;
+    }
+    return objectDecided ? VoxelLabel::Object : VoxelLabel::Undecided;
+}
+
+}  // namespace hg::inspect

@@ -1,0 +1,160 @@
+// Weak convexity per landmark and view planning (dissertation chapters 2 and 5).
+//
+// For every landmark the planner decides, over the station's reachable poses,
+// whether the landmark lies on the visual hull relative to that viewing
+// region (Definition 2 with Assumptions 2.7-2.10: a line of sight from a
+// reachable camera centre passes the landmark's void neighbour on to
+// background without meeting the part or the floor). The witnesses it looks
+// for first are the grazing poses — camera centre in the landmark's tangent
+// plane, solved analytically (pose_space.h) — because a void voxel beside a
+// flat face is proven void only from there (ARCHITECTURE "perspective and
+// grazing views"); a coarse pose grid within a small band of the tangent plane
+// adds the rest. Each candidate is judged by Rules 1-4 (view_rules.h).
+//
+// Then the view pattern analysis of 5.5/5.6.1 (view_pattern.h): every landmark
+// gets its best views (the designer's AND-of-OR lists, 5.3.2, or derived: the
+// grazing poses that pass Rules 1-4), their view variation lists over the
+// candidate poses, OR removal and AND combination by largest intersection, and
+// one final pose per group (minimum summed distance to its landmarks, median
+// orientation among ties, 5.4.4), ordered for least fixture travel.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/inspection_map.h"
+#include "hullgauge/model/solid.h"
+#include "hullgauge/plan/pose_space.h"
+#include "hullgauge/plan/view_rules.h"
+
+namespace hg::plan {
+
+/// The inspection depth's voxel grid (inspection_map.h frame): voxel (i, j, k)
+/// is origin + ΔV [i, i+1] x [j, j+1] x [k, k+1].
+struct VoxelGrid {
+    Vec3 origin = Vec3::Zero();
+    double voxelSize = 1.0;  ///< ΔV, mm
+    int depth = 8;           ///< level of the inspection voxels (for VoxelKey)
+
+    Eigen::Vector3i indexOf(const Vec3& point) const;
+    Eigen::AlignedBox3d box(const Eigen::Vector3i& index) const;
+    inspect::VoxelKey key(const Eigen::Vector3i& index) const;
+};
+
+struct PlanLandmark {
+    std::string id;
+    Vec3 position = Vec3::Zero();
+    /// Outward unit normal; taken from the mesh when absent.
+    std::optional<Vec3> normal;
+    double toleranceMm = 0.0;
+    /// Designer best views: AND over the outer list, OR inside (eq. 5.3.2-1/2). Empty: derive them.
+    std::vector<std::vector<FixturePose>> bestViews;
+};
+
+struct PlanProblem {
+    std::string part;
+    const model::Solid* solid = nullptr;
+    const geometry::Station* station = nullptr;
+    VoxelGrid grid;
+    std::vector<PlanLandmark> landmarks;
+};
+
+struct PlanOptions {
+    PoseGrid grid;
+    RuleOptions rules;
+    /// Grid poses and other landmarks' poses are tried for a landmark only when
+    /// its line of sight lies within this angle (degrees) of its tangent plane.
+    double bandDeg = 2.0;
+    /// AND combination threshold (5.6.1): views merge while they share this many poses.
+    std::size_t minIntersection = 1;
+    /// Requested view count (5.5): fail when the accuracy needs more; 0 = no limit.
+    std::size_t maxViews = 0;
+    /// Also solve the set cover exactly with GLPK (to measure the greedy's gap).
+    bool exact = false;
+    double exactTimeLimitSeconds = 10.0;
+    /// Type-four layers checked for visibility (3.3.8 paring), >= 1.
+    int pareLayers = 1;
+    /// Surface points tried when looking for the nearest inspectable point.
+    std::size_t nearestSearchLimit = 200;
+};
+
+enum class LandmarkVerdict {
+    Inspectable,          ///< weakly convex for the station, a pose passes Rules 1-4
+    NoVoidNeighbour,      ///< the landmark's voxel has no void neighbour at the inspection depth
+    Concavity,            ///< no line of sight reaches background, whatever the fixture ranges
+    OutOfFixtureRange,    ///< only poses outside the fixture's ranges would see it
+    OutsideDepthOfField,  ///< seen only from poses whose depth is outside the depth of field
+    BelowStationMed,      ///< seen, but no view resolves the tolerance (eq. 5.3.6-3)
+    VoxelTooCoarse,       ///< tolerance below the map's voxel size (eq. 5.3.6-1)
+    BestViewsFail,        ///< a designer AND term has no usable pose
+};
+
+const char* toString(LandmarkVerdict verdict);
+
+struct LandmarkAnalysis {
+    std::string id;
+    Vec3 position = Vec3::Zero();
+    Vec3 normal = Vec3::UnitZ();
+    double toleranceMm = 0.0;
+    Eigen::Vector3i voxel = Eigen::Vector3i::Zero();
+    std::optional<Eigen::Vector3i> witnessVoxel;
+    LandmarkVerdict verdict = LandmarkVerdict::Concavity;
+    /// A sentence the designer can act on, empty when inspectable.
+    std::string reason;
+    /// Reachable poses that see the landmark against background (Rules 1, 2, 4).
+    std::vector<FixturePose> witnessPoses;
+    /// Unit lines of sight (camera centre to landmark, part frame) of the witnesses.
+    std::vector<Vec3> witnessDirections;
+    /// Poses outside the fixture's ranges that would see it (OutOfFixtureRange).
+    std::vector<FixturePose> unreachableWitnesses;
+    bool designerBestViews = false;
+    /// Smallest predicted MED over the witnesses (eq. 5.3.6-3), mm.
+    double bestMedMm = 0.0;
+    /// The part region blocking it (Concavity): a triangle and the hit point.
+    std::optional<std::size_t> blockingTriangle;
+    std::optional<Vec3> blockingPoint;
+    /// The nearest surface point that is inspectable from the station.
+    std::optional<Vec3> nearestInspectablePoint;
+    /// Void type-four neighbours no reachable pose proves void: to be pared
+    /// from the inspection map (3.3.8), as keys at the inspection depth.
+    std::vector<inspect::VoxelKey> unseenVoids;
+    std::vector<std::string> warnings;
+
+    bool inspectable() const { return verdict == LandmarkVerdict::Inspectable; }
+};
+
+struct PlannedView {
+    std::string id;
+    FixturePose pose;
+    geometry::CameraModel camera;
+    /// Landmarks (indices) this view observes under Rules 1-4, with the predicted MED of each.
+    std::vector<std::size_t> landmarks;
+    std::vector<double> predictedMedMm;
+};
+
+struct ViewPlan {
+    std::vector<LandmarkAnalysis> landmarks;
+    std::vector<PlannedView> views;  ///< in travel order
+    bool feasible = false;
+    /// Why the plan failed, one sentence each.
+    std::vector<std::string> problems;
+    std::size_t candidatePoses = 0;
+    std::size_t greedyViews = 0;
+    std::optional<std::size_t> exactViews;
+    bool exactOptimal = false;
+    double seconds = 0.0;
+};
+
+/// Weak convexity and best views of every landmark (no view combination).
+std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const PlanOptions& options = {});
+
+/// The whole plan: analysis, view pattern analysis, final views.
+ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options = {});
+
+}  // namespace hg::plan

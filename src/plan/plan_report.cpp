@@ -1,0 +1,209 @@
+#include "hullgauge/plan/plan_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace hg::plan {
+
+namespace {
+
+using nlohmann::json;
+
+json poseJson(const FixturePose& p, FixtureType type)
+{
+    if (type == FixtureType::Rail) return {{"rail_mm", p.railMm}};
+    return {{"rotation_deg", p.rotationDeg}, {"declination_deg", p.declinationDeg}};
+}
+
+json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json mat(const geometry::Mat3& m)
+{
+    json rows = json::array();
+    for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+    return rows;
+}
+
+std::string num(double v, int precision = 4)
+{
+    if (!std::isfinite(v)) return "∞";
+    std::ostringstream s;
+    s.precision(precision);
+    s << v;
+    return s.str();
+}
+
+std::string poseText(const FixturePose& p, FixtureType type)
+{
+    if (type == FixtureType::Rail) return "rail " + num(p.railMm, 6) + " mm";
+    return "rot " + num(p.rotationDeg, 6) + "°, decl " + num(p.declinationDeg, 6) + "°";
+}
+
+// Views (ids) observing landmark l, and the smallest predicted MED among them.
+std::pair<std::vector<std::string>, double> observers(const ViewPlan& plan, std::size_t l)
+{
+    std::vector<std::string> ids;
+    double med = std::numeric_limits<double>::infinity();
+    for (const auto& v : plan.views)
+        for (std::size_t k = 0; k < v.landmarks.size(); ++k)
+            if (v.landmarks[k] == l) {
+                ids.push_back(v.id);
+                med = std::min(med, v.predictedMedMm[k]);
+            }
+    return {ids, med};
+}
+
+}  // namespace
+
+json planToJson(const ViewPlan& plan, const PlanProblem& problem)
+{
+    const auto type = problem.station->fixture.type;
+    json out;
+    out["part"] = problem.part;
+    out["feasible"] = plan.feasible;
+    out["fixture_type"] = type == FixtureType::Rail ? "rail" : "rotation_declination";
+    out["voxel_size_mm"] = problem.grid.voxelSize;
+    out["voxel_level"] = problem.grid.depth;
+    out["problems"] = plan.problems;
+
+    json views = json::array();
+    for (const auto& v : plan.views) {
+        const auto& cam = v.camera;
+        json j;
+        j["id"] = v.id;
+        j["pose"] = poseJson(v.pose, type);
+        j["K"] = mat(cam.intrinsics().K);
+        j["dist"] = cam.intrinsics().dist.empty() ? std::vector<double>(5, 0.0) : cam.intrinsics().dist;
+        j["R"] = mat(cam.cameraFromPart().R);
+        j["t"] = vec(cam.cameraFromPart().t);
+        j["image_size"] = {cam.imageSize().width, cam.imageSize().height};
+        json ids = json::array();
+        json med = json::object();
+        for (std::size_t k = 0; k < v.landmarks.size(); ++k) {
+            const auto& id = plan.landmarks[v.landmarks[k]].id;
+            ids.push_back(id);
+            med[id] = v.predictedMedMm[k];
+        }
+        j["landmarks"] = ids;
+        j["predicted_med_mm"] = med;
+        views.push_back(j);
+    }
+    out["views"] = views;
+
+    json landmarks = json::array();
+    for (std::size_t l = 0; l < plan.landmarks.size(); ++l) {
+        const auto& a = plan.landmarks[l];
+        auto [ids, med] = observers(plan, l);
+        json j;
+        j["id"] = a.id;
+        j["status"] = toString(a.verdict);
+        j["inspectable"] = a.inspectable();
+        j["tolerance_mm"] = a.toleranceMm;
+        j["normal"] = vec(a.normal);
+        j["best_views"] = a.designerBestViews ? "designer" : "derived";
+        j["observed_by"] = ids;
+        if (std::isfinite(med)) j["predicted_med_mm"] = med;
+        if (std::isfinite(a.bestMedMm) && !a.witnessPoses.empty()) j["best_med_mm"] = a.bestMedMm;
+        json witnesses = json::array();
+        for (std::size_t k = 0; k < a.witnessPoses.size(); ++k) {
+            auto w = poseJson(a.witnessPoses[k], type);
+            w["direction"] = vec(a.witnessDirections[k]);
+            witnesses.push_back(w);
+        }
+        j["witnesses"] = witnesses;
+        if (!a.reason.empty()) j["reason"] = a.reason;
+        if (!a.unreachableWitnesses.empty()) {
+            json u = json::array();
+            for (const auto& p : a.unreachableWitnesses) u.push_back(poseJson(p, type));
+            j["unreachable_witnesses"] = u;
+        }
+        if (a.blockingTriangle) j["blocking_triangle"] = *a.blockingTriangle;
+        if (a.blockingPoint) j["blocking_point"] = vec(*a.blockingPoint);
+        if (a.nearestInspectablePoint) j["nearest_inspectable_point"] = vec(*a.nearestInspectablePoint);
+        json voids = json::array();
+        for (auto key : a.unseenVoids) {
+            const auto idx = inspect::keyIndex(key);
+            voids.push_back({idx.x(), idx.y(), idx.z()});
+        }
+        j["unseen_voids"] = voids;
+        if (!a.warnings.empty()) j["warnings"] = a.warnings;
+        landmarks.push_back(j);
+    }
+    out["landmarks"] = landmarks;
+
+    json stats;
+    stats["candidate_poses"] = plan.candidatePoses;
+    stats["views"] = plan.views.size();
+    stats["views_greedy"] = plan.greedyViews;
+    if (plan.exactViews) {
+        stats["views_exact"] = *plan.exactViews;
+        stats["exact_optimal"] = plan.exactOptimal;
+    }
+    stats["seconds"] = plan.seconds;
+    out["statistics"] = stats;
+    return out;
+}
+
+std::string posesYaml(const ViewPlan& plan, FixtureType type)
+{
+    std::ostringstream s;
+    s.precision(12);
+    s << "# Planned views in travel order (hullgauge plan).\n";
+    for (const auto& v : plan.views) {
+        if (type == FixtureType::Rail)
+            s << "- {rail_mm: " << v.pose.railMm << "}\n";
+        else
+            s << "- {rotation_deg: " << v.pose.rotationDeg << ", declination_deg: " << v.pose.declinationDeg << "}\n";
+    }
+    return s.str();
+}
+
+std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
+{
+    const auto type = problem.station->fixture.type;
+    std::ostringstream s;
+    s << "# View plan: " << problem.part << "\n\n";
+    std::size_t inspectable = 0;
+    for (const auto& a : plan.landmarks) inspectable += a.inspectable() ? 1 : 0;
+    s << (plan.feasible ? "**Feasible.** " : "**Not feasible.** ") << plan.views.size() << " views observe "
+      << inspectable << " of " << plan.landmarks.size() << " landmarks (voxel " << num(problem.grid.voxelSize)
+      << " mm; " << plan.candidatePoses << " candidate poses; " << num(plan.seconds, 3) << " s).";
+    if (plan.exactViews)
+        s << " Integer-program optimum: " << *plan.exactViews << " views" << (plan.exactOptimal ? "" : " (not proven)")
+          << ".";
+    s << "\n\n";
+    if (!plan.problems.empty()) {
+        s << "## Problems\n\n";
+        for (const auto& p : plan.problems) s << "- " << p << "\n";
+        s << "\n";
+    }
+    s << "## Views (travel order)\n\n| view | pose | landmarks (predicted MED, mm) |\n|---|---|---|\n";
+    for (const auto& v : plan.views) {
+        s << "| " << v.id << " | " << poseText(v.pose, type) << " | ";
+        for (std::size_t k = 0; k < v.landmarks.size(); ++k)
+            s << (k ? ", " : "") << plan.landmarks[v.landmarks[k]].id << " (" << num(v.predictedMedMm[k], 3) << ")";
+        s << " |\n";
+    }
+    s << "\n## Landmarks\n\n| landmark | verdict | tolerance mm | best MED mm | views | witnesses | unseen voids |\n"
+         "|---|---|---|---|---|---|---|\n";
+    for (std::size_t l = 0; l < plan.landmarks.size(); ++l) {
+        const auto& a = plan.landmarks[l];
+        auto [ids, med] = observers(plan, l);
+        std::string viewList;
+        for (const auto& id : ids) viewList += (viewList.empty() ? "" : " ") + id;
+        s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(a.toleranceMm) << " | "
+          << (a.witnessPoses.empty() ? "-" : num(a.bestMedMm, 3)) << " | " << (viewList.empty() ? "-" : viewList)
+          << " | " << a.witnessPoses.size() << " | " << a.unseenVoids.size() << " |\n";
+    }
+    bool anyWarning = false;
+    for (const auto& a : plan.landmarks)
+        for (const auto& w : a.warnings) {
+            if (!anyWarning) s << "\n## Warnings\n\n";
+            anyWarning = true;
+            s << "- " << a.id << ": " << w << "\n";
+        }
+    return s.str();
+}
+
+}  // namespace hg::plan

@@ -1,0 +1,625 @@
+#include "hullgauge/plan/planner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <map>
+#include <sstream>
+#include <tuple>
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/plan/view_pattern.h"
+
+namespace hg::plan {
+
+Eigen::Vector3i VoxelGrid::indexOf(const Vec3& point) const
+{
+    const Vec3 q = (point - origin) / voxelSize;
+    return {static_cast<int>(std::floor(q.x())), static_cast<int>(std::floor(q.y())),
+            static_cast<int>(std::floor(q.z()))};
+}
+
+Eigen::AlignedBox3d VoxelGrid::box(const Eigen::Vector3i& index) const
+{
+    const Vec3 lo = origin + voxelSize * index.cast<double>();
+    return {lo, lo + Vec3::Constant(voxelSize)};
+}
+
+inspect::VoxelKey VoxelGrid::key(const Eigen::Vector3i& index) const
+{
+    return inspect::makeKey(depth, index.x(), index.y(), index.z());
+}
+
+const char* toString(LandmarkVerdict verdict)
+{
+    switch (verdict) {
+    case LandmarkVerdict::Inspectable: return "inspectable";
+    case LandmarkVerdict::NoVoidNeighbour: return "no_void_neighbour";
+    case LandmarkVerdict::Concavity: return "concavity";
+    case LandmarkVerdict::OutOfFixtureRange: return "out_of_fixture_range";
+    case LandmarkVerdict::OutsideDepthOfField: return "outside_depth_of_field";
+    case LandmarkVerdict::BelowStationMed: return "below_station_med";
+    case LandmarkVerdict::VoxelTooCoarse: return "voxel_too_coarse";
+    case LandmarkVerdict::BestViewsFail: return "best_views_fail";
+    }
+    return "?";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::string fmt(double v, int precision = 3)
+{
+    std::ostringstream s;
+    s.precision(precision);
+    s << std::fixed << v;
+    std::string out = s.str();
+    // 12.500 -> 12.5, 30.000 -> 30
+    if (out.find('.') != std::string::npos) {
+        while (!out.empty() && out.back() == '0') out.pop_back();
+        if (!out.empty() && out.back() == '.') out.pop_back();
+    }
+    return out == "-0" ? "0" : out;
+}
+
+std::string fmtPoint(const Vec3& p)
+{
+    std::ostringstream s;
+    s << '(' << fmt(p.x()) << ", " << fmt(p.y()) << ", " << fmt(p.z()) << ')';
+    return s.str();
+}
+
+std::string fmtPose(const FixturePose& p, FixtureType type)
+{
+    if (type == FixtureType::Rail) return "rail " + fmt(p.railMm) + " mm";
+    return "rotation " + fmt(p.rotationDeg) + "°, declination " + fmt(p.declinationDeg) + "°";
+}
+
+/// Angle (degrees) between the line of sight from `centre` to `x` and the tangent plane at x.
+double tangentAngleDeg(const Vec3& centre, const Vec3& x, const Vec3& n)
+{
+    const Vec3 d = x - centre;
+    return geometry::radToDeg(std::asin(std::clamp(n.dot(d) / d.norm(), -1.0, 1.0)));
+}
+
+/// Pose key for deduplication (micro-degrees / micro-millimetres).
+std::tuple<long long, long long, long long> poseKey(const FixturePose& p)
+{
+    return {std::llround(p.rotationDeg * 1e6), std::llround(p.declinationDeg * 1e6), std::llround(p.railMm * 1e6)};
+}
+
+/// The 26-neighbour voxels of `centre` out to Chebyshev distance `layers`.
+std::vector<Eigen::Vector3i> neighbourhood(const Eigen::Vector3i& centre, int layers)
+{
+    std::vector<Eigen::Vector3i> out;
+    for (int dx = -layers; dx <= layers; ++dx)
+        for (int dy = -layers; dy <= layers; ++dy)
+            for (int dz = -layers; dz <= layers; ++dz)
+                if (dx != 0 || dy != 0 || dz != 0) out.push_back(centre + Eigen::Vector3i(dx, dy, dz));
+    return out;
+}
+
+/// The void 26-neighbour of the landmark voxel lying most nearly along the
+/// outward normal: the voxel whose proof of void bounds the surface at the
+/// landmark (3.3.2 type four nodes).
+std::optional<Eigen::Vector3i> findWitnessVoxel(const model::Solid& solid, const VoxelGrid& grid,
+                                                const Eigen::Vector3i& voxel, const Vec3& x, const Vec3& n)
+{
+    std::optional<Eigen::Vector3i> best;
+    double bestScore = -2.0;
+    for (const auto& v : neighbourhood(voxel, 1)) {
+        const auto box = grid.box(v);
+        const Vec3 d = box.center() - x;
+        const double score = n.dot(d.normalized());
+        if (score <= bestScore || score <= 0.0) continue;
+        if (solid.isObjectVoxel(box)) continue;
+        bestScore = score;
+        best = v;
+    }
+    return best;
+}
+
+/// Everything the planner keeps about one landmark.
+struct Analysed {
+    LandmarkAnalysis a;
+    LandmarkTarget target;
+    bool usable = false;                 // has a witness voxel and tolerance >= ΔV
+    std::vector<FixturePose> candidates; // reachable poses tried (grazing, designer, band grid)
+    std::vector<RuleCheck> checks;
+};
+
+class Analyser {
+public:
+    Analyser(const PlanProblem& problem, const PlanOptions& options)
+        : problem_(problem), options_(options), station_(*problem.station),
+          rules_(*problem.solid, *problem.station, problem.grid.voxelSize, options.rules)
+    {
+        grid_ = gridPoses(station_.fixture, options_.grid);
+        for (const auto& p : grid_) gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
+    }
+
+    const ViewRules& rules() const { return rules_; }
+
+    /// Poses to try for a landmark: its grazing poses and the grid poses whose
+    /// line of sight lies within the band of its tangent plane.
+    std::vector<FixturePose> candidatesFor(const geometry::FixtureKinematics& fixture, const Vec3& x, const Vec3& n,
+                                           bool withGrid) const
+    {
+        auto poses = grazingPoses(fixture, x, n, options_.grid);
+        if (withGrid)
+            for (std::size_t i = 0; i < grid_.size(); ++i)
+                if (std::abs(tangentAngleDeg(gridCentres_[i], x, n)) <= options_.bandDeg) poses.push_back(grid_[i]);
+        return poses;
+    }
+
+    Analysed analyse(const PlanLandmark& lm) const
+    {
+        Analysed r;
+        auto& a = r.a;
+        const auto& solid = *problem_.solid;
+        const auto& grid = problem_.grid;
+        const FixtureType type = station_.fixture.type;
+        a.id = lm.id;
+        a.position = lm.position;
+        a.normal = lm.normal ? lm.normal->normalized() : solid.closestPoint(lm.position).normal;
+        a.toleranceMm = lm.toleranceMm;
+        a.voxel = grid.indexOf(lm.position);
+        a.designerBestViews = !lm.bestViews.empty();
+        a.witnessVoxel = findWitnessVoxel(solid, grid, a.voxel, a.position, a.normal);
+        if (!a.witnessVoxel) {
+            a.verdict = LandmarkVerdict::NoVoidNeighbour;
+            a.reason = "landmark " + lm.id + " at " + fmtPoint(lm.position) +
+                       " has no void neighbour voxel at the inspection depth (ΔV = " + fmt(grid.voxelSize) +
+                       " mm): it is not on the part's boundary at this resolution; move it onto the surface or "
+                       "refine octree.depth.";
+            return r;
+        }
+        r.target = {a.position, a.normal, grid.box(*a.witnessVoxel), lm.toleranceMm};
+
+        // Candidate poses: grazing, the band of the grid, the designer's best views.
+        r.candidates = candidatesFor(station_.fixture, a.position, a.normal, true);
+        for (const auto& term : lm.bestViews)
+            for (const auto& v : term) {
+                if (!station_.fixture.reachable(v)) {
+                    a.warnings.push_back("designer best view " + fmtPose(v, type) +
+                                         " lies outside the fixture's ranges and is ignored");
+                    continue;
+                }
+                r.candidates.push_back(v);
+            }
+        dedupe(r.candidates);
+
+        std::map<std::size_t, std::size_t> blockers;
+        std::map<std::size_t, Vec3> blockerPoints;
+        std::size_t dofOnly = 0;
+        a.bestMedMm = std::numeric_limits<double>::infinity();
+        double nearestDepth = 0.0;
+        for (const auto& p : r.candidates) {
+            const auto chk = rules_.check(r.target, p);
+            r.checks.push_back(chk);
+            if (chk.sees()) {
+                a.witnessPoses.push_back(p);
+                a.witnessDirections.push_back((a.position - station_.fixture.cameraCentreInPart(p)).normalized());
+                a.bestMedMm = std::min(a.bestMedMm, chk.predictedMedMm);
+            } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.rule4) {
+                if (dofOnly++ == 0) nearestDepth = chk.depthMm;
+            } else if (chk.obstruction == Blocker::Part && chk.blockingTriangle) {
+                ++blockers[*chk.blockingTriangle];
+                blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
+            }
+        }
+        // Designer best views that do not pass the rules are kept (the designer
+        // vouched for them) but reported.
+        for (const auto& term : lm.bestViews)
+            for (const auto& v : term)
+                if (station_.fixture.reachable(v)) {
+                    const auto chk = rules_.check(r.target, v);
+                    if (!chk.passes())
+                        a.warnings.push_back("designer best view " + fmtPose(v, type) + " fails: " + chk.failure());
+                }
+
+        r.usable = true;
+        if (lm.toleranceMm < grid.voxelSize) {
+            const int more = static_cast<int>(std::ceil(std::log2(grid.voxelSize / lm.toleranceMm) - 1e-12));
+            a.verdict = LandmarkVerdict::VoxelTooCoarse;
+            a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
+                       " mm is below the inspection voxel ΔV = " + fmt(grid.voxelSize) +
+                       " mm (eq. 5.3.6-1: ΔV <= MED); raise octree.depth to at least " +
+                       std::to_string(grid.depth + more) + " or loosen the tolerance.";
+            r.usable = false;
+        } else if (a.witnessPoses.empty()) {
+            r.usable = false;
+            if (dofOnly > 0) {
+                const auto& dof = *station_.depthOfFieldMm;
+                a.verdict = LandmarkVerdict::OutsideDepthOfField;
+                a.reason = "landmark " + lm.id + " is seen against background only at depths outside the depth of "
+                           "field [" + fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(nearestDepth) +
+                           " mm): refocus the camera or move the part (Rule 4).";
+            } else {
+                explainUnseen(r, blockers, blockerPoints);
+            }
+        } else if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm) {
+            a.verdict = LandmarkVerdict::BelowStationMed;
+            a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
+                       " mm is below the finest discrimination this station reaches there (predicted MED " +
+                       fmt(a.bestMedMm) + " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera closer / "
+                       "use a longer lens.";
+            r.usable = false;
+        } else {
+            a.verdict = LandmarkVerdict::Inspectable;
+        }
+        if (a.verdict != LandmarkVerdict::NoVoidNeighbour) a.unseenVoids = unseenVoids(r);
+        return r;
+    }
+
+private:
+    static void dedupe(std::vector<FixturePose>& poses)
+    {
+        std::map<std::tuple<long long, long long, long long>, bool> seen;
+        std::vector<FixturePose> out;
+        for (const auto& p : poses)
+            if (seen.emplace(poseKey(p), true).second) out.push_back(p);
+        poses.swap(out);
+    }
+
+    /// Not seen from any reachable pose: would a wider fixture see it
+    /// (OutOfFixtureRange), or does the part itself hide it (Concavity)?
+    void explainUnseen(Analysed& r, std::map<std::size_t, std::size_t>& blockers,
+                       std::map<std::size_t, Vec3>& blockerPoints) const
+    {
+        auto& a = r.a;
+        const FixtureType type = station_.fixture.type;
+        geometry::FixtureKinematics wide = station_.fixture;
+        wide.rotationRangeDeg = {-180.0, 180.0};
+        wide.declinationRangeDeg = {-90.0, 90.0};
+        wide.railRangeMm = {-1e4, 1e4};
+        geometry::Station wideStation = station_;
+        wideStation.fixture = wide;
+        for (const auto& p : grazingPoses(wide, a.position, a.normal, options_.grid)) {
+            if (station_.fixture.reachable(p)) continue;
+            const auto chk = rules_.check(r.target, wideStation.cameraAt(p));
+            if (chk.sees())
+                a.unreachableWitnesses.push_back(p);
+            else if (chk.obstruction == Blocker::Part && chk.blockingTriangle) {
+                ++blockers[*chk.blockingTriangle];
+                blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
+            }
+        }
+        if (!a.unreachableWitnesses.empty()) {
+            const auto& f = station_.fixture;
+            a.verdict = LandmarkVerdict::OutOfFixtureRange;
+            std::string ranges = type == FixtureType::Rail
+                                     ? "rail range [" + fmt(f.railRangeMm.min) + ", " + fmt(f.railRangeMm.max) + "] mm"
+                                     : "rotation range [" + fmt(f.rotationRangeDeg.min) + ", " +
+                                           fmt(f.rotationRangeDeg.max) + "]°, declination range [" +
+                                           fmt(f.declinationRangeDeg.min) + ", " + fmt(f.declinationRangeDeg.max) +
+                                           "]°";
+            a.reason = "landmark " + lm(a) + " is seen against background only from poses the fixture cannot "
+                       "reach (e.g. " + fmtPose(a.unreachableWitnesses.front(), type) + "; the " + ranges +
+                       "): widen the fixture's range or mount the part turned so this face comes into reach.";
+            return;
+        }
+        a.verdict = LandmarkVerdict::Concavity;
+        std::ostringstream s;
+        s << "landmark " << a.id << " at " << fmtPoint(a.position)
+          << " lies in a concavity: no line of sight from any fixture pose passes its void neighbour on to "
+             "background (Definition 2)";
+        if (!blockers.empty()) {
+            auto most = std::max_element(blockers.begin(), blockers.end(),
+                                         [](const auto& x, const auto& y) { return x.second < y.second; });
+            a.blockingTriangle = most->first;
+            a.blockingPoint = blockerPoints[most->first];
+            s << "; the part blocks it at triangle " << most->first << " near " << fmtPoint(*a.blockingPoint);
+        }
+        a.nearestInspectablePoint = nearestInspectable(a.position);
+        if (a.nearestInspectablePoint)
+            s << "; the nearest inspectable surface point is " << fmtPoint(*a.nearestInspectablePoint) << ", "
+              << fmt((*a.nearestInspectablePoint - a.position).norm()) << " mm away";
+        s << ". Move the landmark to a visible edge or inspect this feature another way.";
+        a.reason = s.str();
+    }
+
+    static const std::string& lm(const LandmarkAnalysis& a) { return a.id; }
+
+    /// The nearest surface point (triangle centroids, nearest first) seen from
+    /// a reachable grazing pose.
+    std::optional<Vec3> nearestInspectable(const Vec3& x) const
+    {
+        const auto& mesh = problem_.solid->mesh();
+        std::vector<std::pair<double, std::size_t>> order;
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+            order.emplace_back((c - x).norm(), t);
+        }
+        std::sort(order.begin(), order.end());
+        const auto& grid = problem_.grid;
+        std::size_t tried = 0;
+        for (const auto& [dist, t] : order) {
+            if (tried++ >= options_.nearestSearchLimit) break;
+            const auto& tri = mesh.triangles[t];
+            const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+            const Vec3 n = mesh.faceNormal(t);
+            if (n.isZero()) continue;
+            const auto voxel = grid.indexOf(c);
+            auto witness = findWitnessVoxel(*problem_.solid, grid, voxel, c, n);
+            if (!witness) continue;
+            LandmarkTarget target{c, n, grid.box(*witness), 1e9};
+            for (const auto& p : candidatesFor(station_.fixture, c, n, false))
+                if (rules_.check(target, p).sees()) return c;
+        }
+        return std::nullopt;
+    }
+
+    /// Void type-four neighbours (out to pareLayers) that no tried pose proves void (3.3.8).
+    std::vector<inspect::VoxelKey> unseenVoids(const Analysed& r) const
+    {
+        std::vector<inspect::VoxelKey> out;
+        const auto& grid = problem_.grid;
+        // Witnesses first: they prove most neighbours void at once.
+        std::vector<geometry::CameraModel> cameras;
+        for (const auto& p : r.a.witnessPoses) cameras.push_back(station_.cameraAt(p));
+        for (std::size_t i = 0; i < r.candidates.size(); ++i)
+            if (!r.checks[i].sees()) cameras.push_back(station_.cameraAt(r.candidates[i]));
+        for (const auto& v : neighbourhood(r.a.voxel, std::max(1, options_.pareLayers))) {
+            const auto box = grid.box(v);
+            if (problem_.solid->isObjectVoxel(box)) continue;
+            bool seen = false;
+            for (const auto& cam : cameras)
+                if (rules_.provenVoid(box, cam)) {
+                    seen = true;
+                    break;
+                }
+            if (!seen) out.push_back(grid.key(v));
+        }
+        std::sort(out.begin(), out.end());
+        return out;
+    }
+
+    const PlanProblem& problem_;
+    const PlanOptions& options_;
+    const geometry::Station& station_;
+    ViewRules rules_;
+    std::vector<FixturePose> grid_;
+    std::vector<Vec3> gridCentres_;
+};
+
+void validate(const PlanProblem& problem)
+{
+    if (!problem.solid || !problem.station) throw std::invalid_argument("plan: solid and station are required");
+    if (!(problem.grid.voxelSize > 0.0)) throw std::invalid_argument("plan: voxel size must be positive");
+}
+
+/// Final pose of a group (5.4.4, fig. 5.19): the pose of its variation list
+/// with the least summed distance to the group's landmarks; among poses within
+/// 0.1 % of that, the median orientation (rotation, then declination, or rail).
+std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& landmarks,
+                      const std::vector<Vec3>& centres, const std::vector<FixturePose>& poses,
+                      const std::vector<Analysed>& analysed)
+{
+    std::vector<std::pair<double, int>> sums;
+    double best = std::numeric_limits<double>::infinity();
+    for (int p : variation) {
+        double s = 0.0;
+        for (std::size_t l : landmarks) s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
+        sums.emplace_back(s, p);
+        best = std::min(best, s);
+    }
+    if (sums.empty()) throw std::logic_error("plan: a view group without poses");
+    std::vector<int> ties;
+    for (const auto& [s, p] : sums)
+        if (s <= best * (1.0 + 1e-3) + 1e-9) ties.push_back(p);
+    std::sort(ties.begin(), ties.end(), [&](int x, int y) {
+        const auto& a = poses[static_cast<std::size_t>(x)];
+        const auto& b = poses[static_cast<std::size_t>(y)];
+        return std::tie(a.rotationDeg, a.declinationDeg, a.railMm) < std::tie(b.rotationDeg, b.declinationDeg, b.railMm);
+    });
+    return static_cast<std::size_t>(ties[(ties.size() - 1) / 2]);
+}
+
+}  // namespace
+
+std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const PlanOptions& options)
+{
+    validate(problem);
+    Analyser analyser(problem, options);
+    std::vector<LandmarkAnalysis> out;
+    for (const auto& lm : problem.landmarks) out.push_back(analyser.analyse(lm).a);
+    return out;
+}
+
+ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
+{
+    validate(problem);
+    const auto start = Clock::now();
+    auto logger = log::category("plan");
+    const auto& station = *problem.station;
+    const FixtureType type = station.fixture.type;
+    Analyser analyser(problem, options);
+    const auto& rules = analyser.rules();
+
+    ViewPlan plan;
+    std::vector<Analysed> analysed;
+    for (const auto& lm : problem.landmarks) {
+        analysed.push_back(analyser.analyse(lm));
+        const auto& a = analysed.back().a;
+        logger->debug("landmark {}: {} ({} witnesses)", a.id, toString(a.verdict), a.witnessPoses.size());
+        if (!a.inspectable()) plan.problems.push_back(a.reason);
+    }
+
+    // The candidate pose list: every landmark's tried poses, deduplicated.
+    std::map<std::tuple<long long, long long, long long>, int> index;
+    std::vector<FixturePose> poses;
+    std::vector<Vec3> centres;
+    std::vector<std::vector<int>> ownIndex(analysed.size());
+    for (std::size_t l = 0; l < analysed.size(); ++l)
+        for (const auto& p : analysed[l].candidates) {
+            auto [it, fresh] = index.emplace(poseKey(p), static_cast<int>(poses.size()));
+            if (fresh) {
+                poses.push_back(p);
+                centres.push_back(station.fixture.cameraCentreInPart(p));
+            }
+            ownIndex[l].push_back(it->second);
+        }
+    plan.candidatePoses = poses.size();
+
+    // View variation of each landmark (5.4, 5.5.1): the candidates passing Rules 1-4.
+    std::vector<PoseSet> passing(analysed.size());
+    std::vector<std::map<int, RuleCheck>> checkAt(analysed.size());
+    for (std::size_t l = 0; l < analysed.size(); ++l) {
+        auto& r = analysed[l];
+        if (!r.usable) continue;
+        std::vector<bool> tried(poses.size(), false);
+        for (std::size_t k = 0; k < r.candidates.size(); ++k) {
+            const int p = ownIndex[l][k];
+            tried[static_cast<std::size_t>(p)] = true;
+            checkAt[l][p] = r.checks[k];
+            if (r.checks[k].passes()) passing[l].push_back(p);
+        }
+        for (std::size_t p = 0; p < poses.size(); ++p) {
+            if (tried[p] || std::abs(tangentAngleDeg(centres[p], r.a.position, r.a.normal)) > options.bandDeg)
+                continue;
+            const auto chk = rules.check(r.target, poses[p]);
+            checkAt[l][static_cast<int>(p)] = chk;
+            if (chk.passes()) passing[l].push_back(static_cast<int>(p));
+        }
+        std::sort(passing[l].begin(), passing[l].end());
+        passing[l].erase(std::unique(passing[l].begin(), passing[l].end()), passing[l].end());
+    }
+
+    // Best views as requirements (eq. 5.3.2-1/2).
+    std::vector<Requirement> requirements;
+    const auto& K = station.camera.K;
+    const double focal = std::min(K(0, 0), K(1, 1));
+    for (std::size_t l = 0; l < analysed.size(); ++l) {
+        auto& r = analysed[l];
+        if (!r.usable) continue;
+        const auto& lm = problem.landmarks[l];
+        if (lm.bestViews.empty()) {
+            requirements.push_back({l, {passing[l]}});
+            continue;
+        }
+        for (std::size_t t = 0; t < lm.bestViews.size(); ++t) {
+            Requirement req{l, {}};
+            for (const auto& v : lm.bestViews[t]) {
+                auto it = index.find(poseKey(v));
+                if (it == index.end()) continue;  // unreachable, reported already
+                // View variation of a designer best view (5.4.1): the passing
+                // candidates whose line of sight turns from the designer's by no
+                // more than Θ, the largest angle eq. 5.3.6-3 allows at this
+                // distance — the closed form C = D tan Θ (eq. 5.4.1-1/2) as an angle.
+                const Vec3 dv = (r.a.position - centres[static_cast<std::size_t>(it->second)]);
+                const double theta = maxViewAngleRad(focal, dv.norm(), lm.toleranceMm);
+                PoseSet sub{it->second};
+                for (int p : passing[l]) {
+                    const Vec3 dp = r.a.position - centres[static_cast<std::size_t>(p)];
+                    if (std::acos(std::clamp(dp.normalized().dot(dv.normalized()), -1.0, 1.0)) <= theta + 1e-12)
+                        sub.push_back(p);
+                }
+                std::sort(sub.begin(), sub.end());
+                sub.erase(std::unique(sub.begin(), sub.end()), sub.end());
+                req.anyOf.push_back(std::move(sub));
+            }
+            if (req.anyOf.empty()) {
+                r.a.verdict = LandmarkVerdict::BestViewsFail;
+                r.a.reason = "landmark " + lm.id + ": best view group " + std::to_string(t + 1) +
+                             " has no pose the fixture can reach; correct best_views or the fixture's ranges.";
+                plan.problems.push_back(r.a.reason);
+                r.usable = false;
+                break;
+            }
+            requirements.push_back(std::move(req));
+        }
+    }
+    // A landmark marked unusable while its terms were built drops its requirements.
+    requirements.erase(std::remove_if(requirements.begin(), requirements.end(),
+                                      [&](const Requirement& q) { return !analysed[q.landmark].usable; }),
+                       requirements.end());
+
+    PatternOptions pattern;
+    pattern.minIntersection = options.minIntersection;
+    const auto greedy = greedyViewPattern(requirements, pattern);
+    for (std::size_t u : greedy.unserved) {
+        const auto& a = analysed[requirements[u].landmark].a;
+        plan.problems.push_back("landmark " + a.id + ": no pose satisfies Rules 1-4 for one of its best views.");
+    }
+    if (options.exact) {
+        const auto exact = exactViewCover(requirements, options.exactTimeLimitSeconds);
+        if (exact.solved) {
+            plan.exactViews = exact.poses.size();
+            plan.exactOptimal = exact.optimal;
+        } else {
+            logger->warn("exact view cover not solved: {}", exact.message);
+        }
+    }
+
+    // Final views (5.4.4), then every landmark each one observes.
+    std::vector<std::size_t> chosen;
+    for (const auto& g : greedy.groups) chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
+    std::sort(chosen.begin(), chosen.end());
+    chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+    {
+        std::vector<int> asInt(chosen.begin(), chosen.end());
+        asInt = removeRedundantPoses(requirements, asInt);
+        chosen.assign(asInt.begin(), asInt.end());
+    }
+    plan.greedyViews = chosen.size();
+    // 5.5: terminate on the requested view count, or fail when keeping every
+    // landmark's accuracy needs more views than that.
+    if (options.maxViews > 0 && chosen.size() > options.maxViews)
+        plan.problems.push_back("the landmarks' tolerances need " + std::to_string(chosen.size()) +
+                                " views but at most " + std::to_string(options.maxViews) +
+                                " were requested: allow more views or loosen the tightest tolerances.");
+    std::vector<FixturePose> chosenPoses;
+    for (std::size_t p : chosen) chosenPoses.push_back(poses[p]);
+    const auto order = orderForTravel(chosenPoses, type, homePose(station.fixture));
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        const std::size_t p = chosen[order[k]];
+        PlannedView view;
+        view.id = "v" + std::to_string(k);
+        view.pose = poses[p];
+        view.camera = station.cameraAt(view.pose);
+        for (std::size_t l = 0; l < analysed.size(); ++l) {
+            if (!analysed[l].usable) continue;
+            auto it = checkAt[l].find(static_cast<int>(p));
+            const RuleCheck chk = it != checkAt[l].end() ? it->second : rules.check(analysed[l].target, view.camera);
+            if (chk.passes()) {
+                view.landmarks.push_back(l);
+                view.predictedMedMm.push_back(chk.predictedMedMm);
+            }
+        }
+        plan.views.push_back(std::move(view));
+    }
+
+    // Every usable landmark must be observed, and every designer AND term met.
+    for (std::size_t l = 0; l < analysed.size(); ++l) {
+        if (!analysed[l].usable) continue;
+        bool observed = false;
+        for (const auto& v : plan.views)
+            observed = observed || std::find(v.landmarks.begin(), v.landmarks.end(), l) != v.landmarks.end();
+        if (!observed)
+            plan.problems.push_back("landmark " + analysed[l].a.id + " is observed by none of the planned views.");
+    }
+    for (const auto& req : requirements) {
+        bool met = false;
+        for (const auto& sub : req.anyOf)
+            for (std::size_t p : chosen)
+                met = met || std::binary_search(sub.begin(), sub.end(), static_cast<int>(p));
+        if (!met)
+            plan.problems.push_back("landmark " + analysed[req.landmark].a.id +
+                                    ": a best view group is not met by the planned views.");
+    }
+
+    for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));
+    plan.feasible = plan.problems.empty();
+    plan.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    logger->info("plan: {} landmarks, {} candidate poses, {} views in {:.3f} s", plan.landmarks.size(),
+                 plan.candidatePoses, plan.views.size(), plan.seconds);
+    return plan;
+}
+
+}  // namespace hg::plan

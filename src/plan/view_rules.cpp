@@ -1,0 +1,250 @@
+#include "hullgauge/plan/view_rules.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "hullgauge/inspect/voxel_test.h"
+
+namespace hg::plan {
+
+namespace {
+
+constexpr double kSqrt2 = 1.41421356237309504880;
+
+// True when p lies inside the convex, counter-clockwise (in pixel
+// coordinates, either orientation accepted) polygon.
+bool insideConvex(const std::vector<geometry::Vec2>& poly, const geometry::Vec2& p)
+{
+    int sign = 0;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const auto& a = poly[i];
+        const auto& b = poly[(i + 1) % poly.size()];
+        const double cross = (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+        if (cross == 0.0) continue;
+        const int s = cross > 0.0 ? 1 : -1;
+        if (sign == 0)
+            sign = s;
+        else if (s != sign)
+            return false;
+    }
+    return true;
+}
+
+std::array<Vec3, 8> corners(const Eigen::AlignedBox3d& box)
+{
+    std::array<Vec3, 8> c;
+    for (int i = 0; i < 8; ++i)
+        c[static_cast<std::size_t>(i)] = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i));
+    return c;
+}
+
+}  // namespace
+
+const char* toString(Blocker blocker)
+{
+    switch (blocker) {
+    case Blocker::None: return "none";
+    case Blocker::OwnSurface: return "own surface";
+    case Blocker::Part: return "part";
+    case Blocker::Floor: return "floor";
+    case Blocker::CameraBelowFloor: return "camera below floor";
+    }
+    return "?";
+}
+
+std::string RuleCheck::failure() const
+{
+    std::ostringstream s;
+    if (!inFrame)
+        s << "the landmark's neighbourhood is not wholly in the image";
+    else if (!rule2) {
+        s << "Rule 2: the line of sight meets " << toString(obstruction);
+        if (blockingTriangle)
+            s << " (triangle " << *blockingTriangle << " at " << blockingPoint.x() << ", " << blockingPoint.y()
+              << ", " << blockingPoint.z() << ")";
+    } else if (!rule1)
+        s << "Rule 1: only " << static_cast<int>(std::round(100.0 * backgroundFraction))
+          << " % of the void neighbour's projection is background (50 % needed)";
+    else if (!rule4)
+        s << "Rule 4: depth " << depthMm << " mm outside the depth of field";
+    else if (!rule3)
+        s << "Rule 3: predicted MED " << predictedMedMm << " mm exceeds the tolerance";
+    return s.str();
+}
+
+double predictedMedMm(double focalPx, double distanceMm, double thetaRad)
+{
+    const double c = std::cos(thetaRad);
+    const double s = std::sin(thetaRad);
+    if (c - s <= 0.0) return std::numeric_limits<double>::infinity();
+    return 2.0 * kSqrt2 * distanceMm * c / (2.0 * focalPx * (c - s) + 1.0);
+}
+
+double maxViewAngleRad(double focalPx, double distanceMm, double medMm)
+{
+    if (predictedMedMm(focalPx, distanceMm, 0.0) > medMm) return 0.0;
+    // predictedMedMm grows monotonically with θ on [0, π/4) and diverges at π/4.
+    double lo = 0.0;
+    double hi = 0.25 * 3.14159265358979323846;
+    for (int i = 0; i < 60; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (predictedMedMm(focalPx, distanceMm, mid) <= medMm ? lo : hi) = mid;
+    }
+    return lo;
+}
+
+ViewRules::ViewRules(const model::Solid& solid, const geometry::Station& station, double voxelSizeMm,
+                     RuleOptions options)
+    : solid_(solid), station_(station), voxelSize_(voxelSizeMm), options_(options)
+{
+    options_.samplesPerSide = std::max(2, options_.samplesPerSide);
+    if (options_.floorRadiusMm) {
+        floorRadius_ = *options_.floorRadiusMm;
+    } else {
+        for (const auto& v : solid.mesh().vertices) floorRadius_ = std::max(floorRadius_, std::hypot(v.x(), v.y()));
+    }
+    ownRadius_ = options_.ownSurfaceRadiusMm.value_or(3.0 * voxelSizeMm);
+}
+
+Blocker ViewRules::lineOfSight(const Vec3& origin, const Vec3& direction, std::optional<model::RayHit>* hit) const
+{
+    const double floorZ = station_.floorZMm;
+    if (origin.z() < floorZ) return Blocker::CameraBelowFloor;
+    auto partHit = solid_.firstHit(origin, direction);
+    double floorDistance = std::numeric_limits<double>::infinity();
+    if (direction.z() < 0.0) {
+        const double s = (floorZ - origin.z()) / direction.z();
+        const Vec3 p = origin + s * direction;
+        if (std::hypot(p.x(), p.y()) <= floorRadius_) floorDistance = s;
+    }
+    if (partHit && partHit->distance <= floorDistance) {
+        if (hit) *hit = partHit;
+        return Blocker::Part;
+    }
+    if (std::isfinite(floorDistance)) return Blocker::Floor;
+    return Blocker::None;
+}
+
+RuleCheck ViewRules::check(const LandmarkTarget& target, const FixturePose& pose) const
+{
+    return check(target, station_.cameraAt(pose));
+}
+
+RuleCheck ViewRules::check(const LandmarkTarget& target, const geometry::CameraModel& camera) const
+{
+    return evaluate(&target, target.witnessVoxel, camera, true);
+}
+
+bool ViewRules::provenVoid(const Eigen::AlignedBox3d& voxel, const geometry::CameraModel& camera) const
+{
+    auto r = evaluate(nullptr, voxel, camera, true);
+    return r.inFrame && r.rule1;
+}
+
+RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::AlignedBox3d& voxel,
+                              const geometry::CameraModel& camera, bool stopAtDecision) const
+{
+    RuleCheck r;
+    const Vec3 centre = camera.centre();
+
+    // Rules 3 and 4 need only the landmark's position: evaluate them first (cheap).
+    if (target) {
+        const Vec3 toLandmark = target->position - centre;
+        r.distanceMm = toLandmark.norm();
+        r.depthMm = camera.cameraFromPart().apply(target->position).z();
+        const double cosTheta = std::clamp(toLandmark.normalized().dot(camera.opticalAxis()), -1.0, 1.0);
+        const double theta = std::acos(cosTheta);
+        r.viewAngleDeg = geometry::radToDeg(theta);
+        const auto& K = station_.camera.K;
+        r.predictedMedMm = std::max(predictedMedMm(K(0, 0), r.distanceMm, theta),
+                                    predictedMedMm(K(1, 1), r.distanceMm, theta));
+        r.rule3 = r.predictedMedMm <= target->toleranceMm + 1e-12;
+        r.rule4 = !station_.depthOfFieldMm || station_.depthOfFieldMm->contains(r.depthMm, 1e-9);
+    } else {
+        r.rule3 = r.rule4 = true;
+    }
+
+    // The footprint: hull of the 8 projected corners, inside the image.
+    std::vector<geometry::Vec2> projected;
+    projected.reserve(8);
+    for (const auto& c : corners(voxel)) {
+        auto p = camera.project(c);
+        if (!p) return r;
+        projected.push_back(*p);
+    }
+    const auto hull = inspect::convexHull(projected);
+    if (hull.size() < 3) return r;
+    const double margin = options_.imageMarginPx;
+    const auto size = camera.imageSize();
+    geometry::Vec2 lo = hull.front(), hi = hull.front();
+    for (const auto& p : hull) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    }
+    if (lo.x() < -0.5 + margin || lo.y() < -0.5 + margin || hi.x() > size.width - 0.5 - margin ||
+        hi.y() > size.height - 0.5 - margin)
+        return r;
+    r.inFrame = true;
+    if (target && !r.rule4 && stopAtDecision) return r;
+
+    // Sample points: cell centres of a grid over the hull's bounding box that
+    // fall inside the hull; a thin footprint gets a finer grid so that at
+    // least n²/2 samples land inside.
+    std::vector<geometry::Vec2> samples;
+    const int n = options_.samplesPerSide;
+    for (int res = n; res <= 8 * n; res *= 2) {
+        samples.clear();
+        for (int i = 0; i < res; ++i)
+            for (int j = 0; j < res; ++j) {
+                const geometry::Vec2 p(lo.x() + (hi.x() - lo.x()) * (i + 0.5) / res,
+                                       lo.y() + (hi.y() - lo.y()) * (j + 0.5) / res);
+                if (insideConvex(hull, p)) samples.push_back(p);
+            }
+        if (static_cast<int>(samples.size()) * 2 >= n * n) break;
+    }
+    if (samples.empty()) return r;
+    // Visit samples from the middle outwards so an early stop has seen the footprint's core.
+    const geometry::Vec2 mid = 0.5 * (lo + hi);
+    std::sort(samples.begin(), samples.end(),
+              [&](const auto& a, const auto& b) { return (a - mid).squaredNorm() < (b - mid).squaredNorm(); });
+
+    const std::size_t total = samples.size();
+    std::size_t background = 0;
+    std::size_t blocked = 0;
+    bool obstructed = false;
+    for (const auto& px : samples) {
+        const auto ray = camera.backProject(px);
+        std::optional<model::RayHit> hit;
+        Blocker b = lineOfSight(centre, ray.direction.normalized(), &hit);
+        if (b == Blocker::Part && target && (hit->point - target->position).norm() <= ownRadius_)
+            b = Blocker::OwnSurface;
+        if (b == Blocker::None) {
+            ++background;
+        } else {
+            ++blocked;
+            if (target && b != Blocker::OwnSurface && !obstructed) {
+                obstructed = true;
+                r.obstruction = b;
+                if (b == Blocker::Part) {
+                    r.blockingTriangle = hit->triangle;
+                    r.blockingPoint = hit->point;
+                }
+            }
+        }
+        if (stopAtDecision) {
+            if (obstructed) break;                   // Rule 2 failed
+            if (2 * blocked > total) break;          // Rule 1 cannot reach 50 %
+            if (!target && 2 * background >= total)  // void proven; no Rule 2 to check
+                break;
+        }
+    }
+    r.backgroundFraction = static_cast<double>(background) / static_cast<double>(total);
+    r.rule1 = 2 * background >= total;
+    r.rule2 = !obstructed;
+    return r;
+}
+
+}  // namespace hg::plan

@@ -1,0 +1,432 @@
+#include "hullgauge/sim/renderer.h"
+
+#include "hullgauge/common/log.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace hg::sim {
+namespace {
+
+using geometry::Vec2;
+using geometry::Vec3;
+
+/// One edge of a projected triangle, stored from its lower end (smaller y) so
+/// that two triangles sharing the edge compute bit-identical crossings.
+struct ScreenEdge {
+    double xLow = 0.0;
+    double yLow = 0.0;
+    double yHigh = 0.0;
+    double dxdy = 0.0;
+};
+
+struct ScreenTriangle {
+    std::array<ScreenEdge, 3> edges;
+    int firstSub = 0; // first and last sub-scanline index crossing it
+    int lastSub = -1;
+};
+
+/// Collects projected triangles clipped to the image's sub-scanline range.
+class TriangleSink {
+  public:
+    TriangleSink(cv::Size size, int sub) : size_(size), sub_(sub) {}
+
+    void add(const Vec2& a, const Vec2& b, const Vec2& c)
+    {
+        const double ymin = std::min({a.y(), b.y(), c.y()});
+        const double ymax = std::max({a.y(), b.y(), c.y()});
+        const double xmin = std::min({a.x(), b.x(), c.x()});
+        const double xmax = std::max({a.x(), b.x(), c.x()});
+        if (!(ymax > -0.5 && ymin < size_.height - 0.5 && xmax > -0.5 && xmin < size_.width - 0.5)) return;
+        // Sub-scanline k lies at y_k = (k + 0.5) / S - 0.5.
+        const double first = std::ceil((ymin + 0.5) * sub_ - 0.5);
+        const double last = std::floor((ymax + 0.5) * sub_ - 0.5);
+        const int total = size_.height * sub_;
+        ScreenTriangle t;
+        t.firstSub = static_cast<int>(std::max(0.0, first));
+        t.lastSub = static_cast<int>(std::min(static_cast<double>(total - 1), last));
+        if (t.firstSub > t.lastSub) return;
+        const Vec2* p[3] = {&a, &b, &c};
+        for (int i = 0; i < 3; ++i) {
+            const Vec2* lo = p[i];
+            const Vec2* hi = p[(i + 1) % 3];
+            if (hi->y() < lo->y() || (hi->y() == lo->y() && hi->x() < lo->x())) std::swap(lo, hi);
+            ScreenEdge& e = t.edges[static_cast<std::size_t>(i)];
+            e.xLow = lo->x();
+            e.yLow = lo->y();
+            e.yHigh = hi->y();
+            e.dxdy = hi->y() > lo->y() ? (hi->x() - lo->x()) / (hi->y() - lo->y()) : 0.0;
+        }
+        triangles_.push_back(t);
+    }
+
+    std::vector<ScreenTriangle>& triangles() { return triangles_; }
+
+  private:
+    cv::Size size_;
+    int sub_;
+    std::vector<ScreenTriangle> triangles_;
+};
+
+/// The x-interval where the horizontal line at `y` crosses the triangle.
+/// Edges count on the half-open range [yLow, yHigh), so a line through a
+/// vertex meets exactly two edges or none.
+bool crossing(const ScreenTriangle& t, double y, double& x0, double& x1)
+{
+    int n = 0;
+    double xs[3];
+    for (const ScreenEdge& e : t.edges) {
+        if (y >= e.yLow && y < e.yHigh) xs[n++] = e.xLow + (y - e.yLow) * e.dxdy;
+    }
+    if (n < 2) return false;
+    x0 = std::min(xs[0], xs[1]);
+    x1 = std::max(xs[0], xs[1]);
+    return x1 > x0;
+}
+
+/// Scan conversion of the union of the triangles into per-pixel coverage.
+cv::Mat rasterise(std::vector<ScreenTriangle>& triangles, cv::Size size, int sub)
+{
+    cv::Mat coverage(size, CV_32FC1, cv::Scalar(0));
+    std::sort(triangles.begin(), triangles.end(),
+              [](const ScreenTriangle& a, const ScreenTriangle& b) { return a.firstSub < b.firstSub; });
+
+    const int width = size.width;
+    const double weight = 1.0 / sub;
+    const double left = -0.5;
+    const double right = width - 0.5;
+    // Per row: fractional end pixels go to `partial`; runs of fully covered
+    // pixels go into `runs` as +w/-w steps, summed once per row.
+    std::vector<double> partial(static_cast<std::size_t>(width), 0.0);
+    std::vector<double> runs(static_cast<std::size_t>(width) + 1, 0.0);
+    std::vector<std::size_t> active;
+    std::vector<std::pair<double, double>> intervals;
+    std::size_t next = 0;
+
+    auto addSpan = [&](double a, double b) {
+        a = std::max(a, left);
+        b = std::min(b, right);
+        if (b <= a) return;
+        int ca = static_cast<int>(std::floor(a + 0.5));
+        int cb = std::min(static_cast<int>(std::floor(b + 0.5)), width - 1);
+        ca = std::min(ca, width - 1);
+        if (ca == cb) {
+            partial[static_cast<std::size_t>(ca)] += weight * (b - a);
+            return;
+        }
+        partial[static_cast<std::size_t>(ca)] += weight * (ca + 0.5 - a);
+        partial[static_cast<std::size_t>(cb)] += weight * (b - (cb - 0.5));
+        runs[static_cast<std::size_t>(ca) + 1] += weight;
+        runs[static_cast<std::size_t>(cb)] -= weight;
+    };
+
+    for (int row = 0; row < size.height; ++row) {
+        bool touched = false;
+        for (int s = 0; s < sub; ++s) {
+            const int k = row * sub + s;
+            while (next < triangles.size() && triangles[next].firstSub <= k)
+                active.push_back(next++);
+            if (active.empty()) continue;
+            const double y = (k + 0.5) / sub - 0.5;
+            intervals.clear();
+            std::size_t kept = 0;
+            for (std::size_t idx : active) {
+                const ScreenTriangle& t = triangles[idx];
+                if (t.lastSub < k) continue; // finished: drop from the active list
+                active[kept++] = idx;
+                double x0 = 0.0, x1 = 0.0;
+                if (crossing(t, y, x0, x1) && x1 > left && x0 < right) intervals.emplace_back(x0, x1);
+            }
+            active.resize(kept);
+            if (intervals.empty()) continue;
+            touched = true;
+            std::sort(intervals.begin(), intervals.end());
+            double a = intervals.front().first;
+            double b = intervals.front().second;
+            for (std::size_t i = 1; i < intervals.size(); ++i) {
+                if (intervals[i].first <= b) {
+                    b = std::max(b, intervals[i].second);
+                } else {
+                    addSpan(a, b);
+                    a = intervals[i].first;
+                    b = intervals[i].second;
+                }
+            }
+            addSpan(a, b);
+        }
+        if (!touched) continue;
+        float* out = coverage.ptr<float>(row);
+        double run = 0.0;
+        for (int c = 0; c < width; ++c) {
+            run += runs[static_cast<std::size_t>(c)];
+            const double v = run + partial[static_cast<std::size_t>(c)];
+            out[c] = static_cast<float>(std::clamp(v, 0.0, 1.0));
+        }
+        std::fill(partial.begin(), partial.end(), 0.0);
+        std::fill(runs.begin(), runs.end(), 0.0);
+    }
+    return coverage;
+}
+
+/// Clips the camera-frame triangle to z >= near (Sutherland–Hodgman against
+/// one plane). Crossing points are computed from the edge's end points in a
+/// fixed order so a shared edge is cut at the same point in both triangles.
+int clipNear(const Vec3 (&in)[3], double near, Vec3 (&out)[4])
+{
+    auto cut = [near](Vec3 p, Vec3 q) {
+        if (std::lexicographical_compare(q.data(), q.data() + 3, p.data(), p.data() + 3)) std::swap(p, q);
+        const double s = (near - p.z()) / (q.z() - p.z());
+        return Vec3(p + s * (q - p));
+    };
+    int n = 0;
+    for (int i = 0; i < 3; ++i) {
+        const Vec3& p = in[i];
+        const Vec3& q = in[(i + 1) % 3];
+        const bool pIn = p.z() >= near;
+        const bool qIn = q.z() >= near;
+        if (pIn) out[n++] = p;
+        if (pIn != qIn) out[n++] = cut(p, q);
+    }
+    return n;
+}
+
+/// Normalised radius beyond which OpenCV's radial distortion stops being
+/// monotonic: past it the polynomial folds far-away points back into the
+/// image, which a real lens never does, so geometry there is not drawn.
+double monotonicRadius(const std::vector<double>& d)
+{
+    auto at = [&d](std::size_t i) { return i < d.size() ? d[i] : 0.0; };
+    const double k1 = at(0), k2 = at(1), k3 = at(4), k4 = at(5), k5 = at(6), k6 = at(7);
+    auto radial = [&](double r) {
+        const double r2 = r * r;
+        const double num = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        const double den = 1 + r2 * (k4 + r2 * (k5 + r2 * k6));
+        return std::pair{r * num / den, den};
+    };
+    const double step = 1e-3;
+    double prev = 0.0;
+    for (double r = step; r <= 10.0; r += step) {
+        auto [g, den] = radial(r);
+        if (den <= 0.0 || g <= prev) return r - step;
+        prev = g;
+    }
+    return std::numeric_limits<double>::infinity();
+}
+
+/// Projects camera-frame triangles through a distorted camera, subdividing
+/// edges until their images are straight within the sag tolerance.
+class DistortedProjector {
+  public:
+    DistortedProjector(const geometry::CameraModel& camera, double sagPx, TriangleSink& sink)
+        : camera_(camera), sagPx_(sagPx), sink_(sink), limit2_(std::pow(monotonicRadius(camera.intrinsics().dist), 2))
+    {
+    }
+
+    void add(const Vec3& a, const Vec3& b, const Vec3& c) { subdivide(a, b, c, 0); }
+
+  private:
+    // Pieces smaller than this (normalised units, ~1e-3 px) are never split:
+    // it bounds the recursion by the geometry alone, which keeps the split
+    // decision a function of the edge's end points.
+    static constexpr double kMinEdge = 1e-6;
+    // Longest edge (normalised units, ~3° of view) projected without a sag
+    // test, so that wide triangles cannot hide a curve between test points.
+    static constexpr double kMaxEdge = 0.05;
+    static constexpr int kMaxDepth = 40;
+
+    static Vec2 normalised(const Vec3& p) { return {p.x() / p.z(), p.y() / p.z()}; }
+
+    std::optional<Vec2> project(const Vec3& p) const
+    {
+        if (normalised(p).squaredNorm() > limit2_) return std::nullopt;
+        return camera_.projectCameraPoint(p);
+    }
+
+    bool needsSplit(Vec3 p, Vec3 q) const
+    {
+        if (std::lexicographical_compare(q.data(), q.data() + 3, p.data(), p.data() + 3)) std::swap(p, q);
+        const double len = (normalised(p) - normalised(q)).norm();
+        if (len < kMinEdge) return false;
+        if (len > kMaxEdge) return true;
+        auto P = project(p);
+        auto Q = project(q);
+        if (!P || !Q) return false; // outside the lens' valid field: dropped at the leaves
+        const Vec2 chord = *Q - *P;
+        const double chordLen = chord.norm();
+        for (double s : {0.25, 0.5, 0.75}) {
+            auto M = project(Vec3(p + s * (q - p)));
+            if (!M) return true;
+            const Vec2 d = *M - *P;
+            const double off = chordLen > 0 ? std::abs(chord.x() * d.y() - chord.y() * d.x()) / chordLen : d.norm();
+            if (off > sagPx_) return true;
+        }
+        return false;
+    }
+
+    void subdivide(const Vec3& a, const Vec3& b, const Vec3& c, int depth)
+    {
+        if (depth < kMaxDepth) {
+            // Bisect the first edge that bends; the children re-test the rest.
+            const Vec3* v[3] = {&a, &b, &c};
+            for (int i = 0; i < 3; ++i) {
+                const Vec3& p = *v[i];
+                const Vec3& q = *v[(i + 1) % 3];
+                const Vec3& r = *v[(i + 2) % 3];
+                if (needsSplit(p, q)) {
+                    const Vec3 m = 0.5 * (p + q);
+                    subdivide(p, m, r, depth + 1);
+                    subdivide(m, q, r, depth + 1);
+                    return;
+                }
+            }
+        }
+        auto A = project(a);
+        auto B = project(b);
+        auto C = project(c);
+        if (A && B && C) sink_.add(*A, *B, *C);
+    }
+
+    const geometry::CameraModel& camera_;
+    double sagPx_;
+    TriangleSink& sink_;
+    double limit2_;
+};
+
+} // namespace
+
+void RenderOptions::validate() const
+{
+    auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
+    if (subScanlines < 4 || subScanlines > 256) fail("subScanlines must be within [4, 256]");
+    if (!(maxEdgeSagPx > 0.0) || !std::isfinite(maxEdgeSagPx)) fail("maxEdgeSagPx must be positive");
+    if (!(nearPlaneMm > 0.0) || !std::isfinite(nearPlaneMm)) fail("nearPlaneMm must be positive");
+    if (!(backgroundLevel >= 0.0 && backgroundLevel <= 1.0)) fail("backgroundLevel must be within [0, 1]");
+    if (!(objectLevel >= 0.0 && objectLevel <= 1.0)) fail("objectLevel must be within [0, 1]");
+    if (bitDepth != 8 && bitDepth != 16) fail("bitDepth must be 8 or 16");
+    if (!(blurSigmaPx >= 0.0) || !std::isfinite(blurSigmaPx)) fail("blurSigmaPx must be >= 0");
+    if (!(noiseSigma >= 0.0) || !std::isfinite(noiseSigma)) fail("noiseSigma must be >= 0");
+}
+
+SilhouetteRenderer::SilhouetteRenderer(std::vector<model::TriangleMesh> meshes) : meshes_(std::move(meshes))
+{
+}
+
+void SilhouetteRenderer::addMesh(model::TriangleMesh mesh)
+{
+    meshes_.push_back(std::move(mesh));
+}
+
+cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const RenderOptions& options) const
+{
+    options.validate();
+    const cv::Size size = camera.imageSize();
+    if (size.width <= 0 || size.height <= 0) throw std::invalid_argument("camera has no image size");
+    const int sub = options.subScanlines;
+    const double near = options.nearPlaneMm;
+    const auto& pose = camera.cameraFromPart();
+    const geometry::Mat3& K = camera.intrinsics().K;
+    const bool distorted = camera.intrinsics().hasDistortion();
+
+    TriangleSink sink(size, sub);
+    DistortedProjector distortedProjector(camera, options.maxEdgeSagPx, sink);
+    // Pinhole projection x = K X / Z (eq. 4.2.1-1/2 with skew); no distortion.
+    auto pinhole = [&K](const Vec3& p) {
+        const double x = p.x() / p.z();
+        const double y = p.y() / p.z();
+        return Vec2(K(0, 0) * x + K(0, 1) * y + K(0, 2), K(1, 1) * y + K(1, 2));
+    };
+
+    std::vector<Vec3> cam;
+    std::vector<Vec2> pix;
+    std::size_t front = 0;
+    for (const model::TriangleMesh& mesh : meshes_) {
+        // A mesh stored inside out still renders: its front faces are the
+        // ones whose normals point away from the camera.
+        const double orientation = mesh.signedVolume() < 0.0 ? -1.0 : 1.0;
+        cam.resize(mesh.vertices.size());
+        for (std::size_t i = 0; i < cam.size(); ++i)
+            cam[i] = pose.apply(mesh.vertices[i]);
+        if (!distorted) {
+            pix.resize(cam.size());
+            for (std::size_t i = 0; i < cam.size(); ++i)
+                if (cam[i].z() >= near) pix[i] = pinhole(cam[i]);
+        }
+        for (const auto& tri : mesh.triangles) {
+            const Vec3 v[3] = {cam[static_cast<std::size_t>(tri[0])], cam[static_cast<std::size_t>(tri[1])],
+                               cam[static_cast<std::size_t>(tri[2])]};
+            // Front-facing: the outward normal points towards the camera centre (the origin).
+            const Vec3 n = orientation * (v[1] - v[0]).cross(v[2] - v[0]);
+            if (!(n.dot(v[0]) < 0.0)) continue;
+            ++front;
+            const bool allIn = v[0].z() >= near && v[1].z() >= near && v[2].z() >= near;
+            if (allIn && !distorted) {
+                sink.add(pix[static_cast<std::size_t>(tri[0])], pix[static_cast<std::size_t>(tri[1])],
+                         pix[static_cast<std::size_t>(tri[2])]);
+                continue;
+            }
+            Vec3 poly[4];
+            const int n3 = allIn ? 3 : clipNear(v, near, poly);
+            if (allIn) std::copy(std::begin(v), std::end(v), poly);
+            for (int i = 1; i + 1 < n3; ++i) {
+                if (distorted) {
+                    distortedProjector.add(poly[0], poly[i], poly[i + 1]);
+                } else {
+                    sink.add(pinhole(poly[0]), pinhole(poly[i]), pinhole(poly[i + 1]));
+                }
+            }
+        }
+    }
+    log::category("sim")->trace("coverage {}x{}: {} front-facing triangles, {} projected pieces", size.width,
+                                size.height, front, sink.triangles().size());
+    return rasterise(sink.triangles(), size, sub);
+}
+
+cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const RenderOptions& options) const
+{
+    return shadeCoverage(coverage(camera, options), options);
+}
+
+cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options)
+{
+    options.validate();
+    if (coverage.type() != CV_32FC1) throw std::invalid_argument("coverage image must be CV_32FC1");
+    const double full = options.bitDepth == 8 ? 255.0 : 65535.0;
+    const double background = options.backgroundLevel * full;
+    const double object = options.objectLevel * full;
+    // Backlit model: value = background + (object - background) * coverage.
+    cv::Mat grey;
+    coverage.convertTo(grey, CV_32FC1, object - background, background);
+    if (options.blurSigmaPx > 0.0) {
+        // The back light continues beyond the sensor edge: replicate the border.
+        cv::GaussianBlur(grey, grey, cv::Size(0, 0), options.blurSigmaPx, options.blurSigmaPx, cv::BORDER_REPLICATE);
+    }
+    if (options.noiseSigma > 0.0) {
+        cv::RNG rng(options.seed);
+        cv::Mat noise(grey.size(), CV_32FC1);
+        rng.fill(noise, cv::RNG::NORMAL, 0.0, options.noiseSigma);
+        grey += noise;
+    }
+    cv::Mat out;
+    grey.convertTo(out, options.bitDepth == 8 ? CV_8UC1 : CV_16UC1); // rounds and saturates
+    return out;
+}
+
+CoverageStats measureCoverage(const cv::Mat& coverage)
+{
+    if (coverage.type() != CV_32FC1) throw std::invalid_argument("coverage image must be CV_32FC1");
+    CoverageStats stats;
+    stats.areaPx = cv::sum(coverage)[0];
+    cv::Mat mask = coverage > 0.0f;
+    if (cv::countNonZero(mask) == 0) return stats;
+    stats.boundingBox = cv::boundingRect(mask);
+    const cv::Rect& b = stats.boundingBox;
+    stats.touchesBorder = b.x == 0 || b.y == 0 || b.x + b.width == coverage.cols || b.y + b.height == coverage.rows;
+    return stats;
+}
+
+} // namespace hg::sim

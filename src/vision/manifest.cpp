@@ -1,0 +1,378 @@
+#include "hullgauge/vision/manifest.h"
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace hg::vision {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string typeName(const json& j)
+{
+    if (j.is_number()) return "a number";
+    if (j.is_string()) return "a string";
+    if (j.is_boolean()) return "a boolean";
+    if (j.is_null()) return "null";
+    if (j.is_array()) return "an array";
+    return "an object";
+}
+
+/// Reads JSON values and names the manifest and the key path in every error.
+class ManifestReader {
+  public:
+    explicit ManifestReader(std::string file) : file_(std::move(file)) {}
+
+    [[noreturn]] void fail(const std::string& field, const std::string& problem) const
+    {
+        throw InputError(file_, field, problem);
+    }
+
+    double number(const json& j, const std::string& field) const
+    {
+        if (!j.is_number()) fail(field, "expected a number, found " + typeName(j));
+        return j.get<double>();
+    }
+
+    std::string string(const json& j, const std::string& field) const
+    {
+        if (!j.is_string()) fail(field, "expected a string, found " + typeName(j));
+        return j.get<std::string>();
+    }
+
+    bool boolean(const json& j, const std::string& field) const
+    {
+        if (!j.is_boolean()) fail(field, "expected true or false, found " + typeName(j));
+        return j.get<bool>();
+    }
+
+    /// A matrix written as `rows` arrays of `cols` numbers.
+    Eigen::MatrixXd matrix(const json& j, int rows, int cols, const std::string& field) const
+    {
+        const std::string shape = "expected " + std::to_string(rows) + " rows of " + std::to_string(cols) + " numbers";
+        if (!j.is_array() || j.size() != static_cast<std::size_t>(rows)) fail(field, shape);
+        Eigen::MatrixXd m(rows, cols);
+        for (int r = 0; r < rows; ++r) {
+            const json& row = j[static_cast<std::size_t>(r)];
+            if (!row.is_array() || row.size() != static_cast<std::size_t>(cols)) fail(field, shape);
+            for (int c = 0; c < cols; ++c) {
+                const json& v = row[static_cast<std::size_t>(c)];
+                if (!v.is_number()) fail(field, shape + " (row " + std::to_string(r) + " holds " + typeName(v) + ")");
+                m(r, c) = v.get<double>();
+            }
+        }
+        return m;
+    }
+
+    geometry::Vec3 vector3(const json& j, const std::string& field) const
+    {
+        if (!j.is_array() || j.size() != 3 ||
+            !std::all_of(j.begin(), j.end(), [](const json& v) { return v.is_number(); }))
+            fail(field, "expected 3 numbers");
+        return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+    }
+
+    std::vector<double> numbers(const json& j, const std::string& field) const
+    {
+        if (!j.is_array()) fail(field, "expected an array of numbers, found " + typeName(j));
+        std::vector<double> out;
+        for (std::size_t i = 0; i < j.size(); ++i)
+            out.push_back(number(j[i], field + "[" + std::to_string(i) + "]"));
+        return out;
+    }
+
+    void warnUnknownKeys(const json& object, std::initializer_list<std::string_view> known,
+                         const std::string& where) const
+    {
+        for (const auto& [key, value] : object.items()) {
+            if (std::find(known.begin(), known.end(), key) == known.end())
+                log::category("vision")->warn("{}: {}{}: unknown key, ignored", file_, where.empty() ? "" : where + ".",
+                                              key);
+        }
+    }
+
+    geometry::Mat3 cameraMatrix(const json& j, const std::string& field) const
+    {
+        geometry::Mat3 K = matrix(j, 3, 3, field);
+        if (!(K(0, 0) > 0.0) || !(K(1, 1) > 0.0)) fail(field, "fx and fy (K[0][0], K[1][1]) must be positive");
+        if (K(1, 0) != 0.0 || K(2, 0) != 0.0 || K(2, 1) != 0.0 || K(2, 2) != 1.0)
+            fail(field, "expected an upper triangular matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]]");
+        return K;
+    }
+
+    std::vector<double> distortion(const json& j, const std::string& field) const
+    {
+        std::vector<double> d = numbers(j, field);
+        switch (d.size()) {
+        case 0:
+        case 4:
+        case 5:
+        case 8:
+        case 12:
+            return d;
+        default:
+            fail(field, "expected 4, 5, 8 or 12 OpenCV distortion coefficients, found " + std::to_string(d.size()));
+        }
+    }
+
+    geometry::Mat3 rotation(const json& j, const std::string& field) const
+    {
+        geometry::Mat3 R = matrix(j, 3, 3, field);
+        // Hand-written or rounded matrices are accepted to 1e-5 and made
+        // exactly orthonormal; anything further off is a wrong matrix.
+        if (!geometry::isRotation(R, 1e-5)) fail(field, "not a rotation matrix (orthonormal with determinant +1)");
+        return geometry::nearestRotation(R);
+    }
+
+    cv::Size imageSize(const json& j, const std::string& field) const
+    {
+        const std::string shape = "expected [width, height] in pixels, two positive integers";
+        if (!j.is_array() || j.size() != 2) fail(field, shape);
+        int wh[2] = {0, 0};
+        for (int i = 0; i < 2; ++i) {
+            const json& v = j[static_cast<std::size_t>(i)];
+            if (!v.is_number_integer() || v.get<long long>() <= 0 || v.get<long long>() > 1'000'000) fail(field, shape);
+            wh[i] = static_cast<int>(v.get<long long>());
+        }
+        return {wh[0], wh[1]};
+    }
+
+    ManifestFixturePose fixturePose(const json& j, const std::string& field) const
+    {
+        if (!j.is_object()) fail(field, "expected an object {rotation_deg, declination_deg} or {rail_mm}");
+        ManifestFixturePose p;
+        if (j.contains("rail_mm")) {
+            if (j.contains("rotation_deg") || j.contains("declination_deg"))
+                fail(field, "give either rotation_deg/declination_deg or rail_mm, not both");
+            p.type = geometry::FixtureType::Rail;
+            p.pose.railMm = number(j["rail_mm"], field + ".rail_mm");
+        } else {
+            if (!j.contains("rotation_deg")) fail(field + ".rotation_deg", "missing");
+            p.pose.rotationDeg = number(j["rotation_deg"], field + ".rotation_deg");
+            if (j.contains("declination_deg"))
+                p.pose.declinationDeg = number(j["declination_deg"], field + ".declination_deg");
+        }
+        warnUnknownKeys(j, {"rotation_deg", "declination_deg", "rail_mm"}, field);
+        return p;
+    }
+
+    ManifestView view(const json& j, std::size_t index, const fs::path& folder) const
+    {
+        const std::string at = "views[" + std::to_string(index) + "]";
+        if (!j.is_object()) fail(at, "expected an object, found " + typeName(j));
+        ManifestView v;
+        if (!j.contains("id")) fail(at + ".id", "missing");
+        v.id = string(j["id"], at + ".id");
+        if (v.id.empty()) fail(at + ".id", "must not be empty");
+        if (!j.contains("image")) fail(at + ".image", "missing");
+        const std::string image = string(j["image"], at + ".image");
+        if (image.empty()) fail(at + ".image", "must not be empty");
+        v.image = fs::path(image).is_absolute() ? fs::path(image) : folder / image;
+
+        geometry::Intrinsics in;
+        if (j.contains("image_size")) in.imageSize = imageSize(j["image_size"], at + ".image_size");
+        if (j.contains("P")) {
+            for (const char* key : {"K", "R", "t", "dist"})
+                if (j.contains(key)) fail(at + "." + key, "a view gives either P or K, R, t (+ dist), not both");
+            const Eigen::Matrix<double, 3, 4> P = matrix(j["P"], 3, 4, at + ".P");
+            if (std::abs(P.leftCols<3>().determinant()) < 1e-12 * std::pow(P.leftCols<3>().norm(), 3))
+                fail(at + ".P", "the left 3x3 block is singular: not a perspective camera");
+            try {
+                v.camera = geometry::CameraModel::fromProjectionMatrix(P, in.imageSize);
+            } catch (const std::invalid_argument& e) {
+                fail(at + ".P", e.what());
+            }
+            v.fromProjectionMatrix = true;
+        } else {
+            for (const char* key : {"K", "R", "t"})
+                if (!j.contains(key)) fail(at + "." + key, "missing (a view needs K, R and t, or P)");
+            in.K = cameraMatrix(j["K"], at + ".K");
+            if (j.contains("dist")) in.dist = distortion(j["dist"], at + ".dist");
+            geometry::RigidTransform pose;
+            pose.R = rotation(j["R"], at + ".R");
+            pose.t = vector3(j["t"], at + ".t");
+            v.camera = geometry::CameraModel(in, pose);
+        }
+        if (j.contains("fixture_pose")) v.fixturePose = fixturePose(j["fixture_pose"], at + ".fixture_pose");
+        warnUnknownKeys(j, {"id", "image", "K", "dist", "R", "t", "P", "image_size", "fixture_pose"}, at);
+        return v;
+    }
+
+    SegmentationSettings segmentation(const json& j) const
+    {
+        const std::string at = "segmentation";
+        if (!j.is_object()) fail(at, "expected an object, found " + typeName(j));
+        SegmentationSettings s;
+        if (j.contains("method")) {
+            const std::string name = string(j["method"], at + ".method");
+            try {
+                s.method = parseSegmentationMethod(name);
+            } catch (const std::invalid_argument&) {
+                fail(at + ".method", "expected otsu, fixed or mask, found '" + name + "'");
+            }
+        }
+        if (j.contains("threshold")) {
+            s.threshold = number(j["threshold"], at + ".threshold");
+            if (s.threshold < 0.0 || s.threshold > 65535.0)
+                fail(at + ".threshold", "expected a grey level within [0, 65535]");
+        } else if (s.method == SegmentationMethod::Fixed) {
+            fail(at + ".threshold", "missing (method 'fixed' needs a threshold)");
+        }
+        if (j.contains("object_is_dark")) s.objectIsDark = boolean(j["object_is_dark"], at + ".object_is_dark");
+        warnUnknownKeys(j, {"method", "threshold", "object_is_dark"}, at);
+        return s;
+    }
+
+  private:
+    std::string file_;
+};
+
+json matrixJson(const Eigen::MatrixXd& m)
+{
+    json rows = json::array();
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+        json row = json::array();
+        for (Eigen::Index c = 0; c < m.cols(); ++c)
+            row.push_back(m(r, c));
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+/// `image` as written in a manifest stored in `folder`: relative when it lies
+/// below the folder's tree, absolute otherwise.
+std::string relativeImagePath(const fs::path& image, const fs::path& folder)
+{
+    const fs::path abs = fs::absolute(image).lexically_normal();
+    const fs::path rel = abs.lexically_relative(fs::absolute(folder).lexically_normal());
+    return rel.empty() ? abs.generic_string() : rel.generic_string();
+}
+
+} // namespace
+
+const ManifestView* CaptureManifest::find(const std::string& id) const
+{
+    for (const ManifestView& v : views)
+        if (v.id == id) return &v;
+    return nullptr;
+}
+
+CaptureManifest readManifest(const fs::path& file)
+{
+    const std::string name = file.string();
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(name, "", "cannot open file");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const std::string text = ss.str();
+
+    json root;
+    try {
+        root = json::parse(text);
+    } catch (const json::parse_error& e) {
+        // Name the line of the syntax error, as for YAML files.
+        const std::size_t upto = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
+        const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(upto), '\n'));
+        std::string what = e.what();
+        const auto pos = what.find("syntax error");
+        throw InputError(name, "", "JSON " + (pos == std::string::npos ? what : what.substr(pos)), line);
+    }
+
+    ManifestReader reader(name);
+    if (!root.is_object()) reader.fail("(document)", "expected a JSON object with 'views'");
+    if (!root.contains("views")) reader.fail("views", "missing");
+    const json& views = root["views"];
+    if (!views.is_array()) reader.fail("views", "expected an array of views, found " + typeName(views));
+    if (views.empty()) reader.fail("views", "expected at least one view");
+
+    CaptureManifest manifest;
+    manifest.file = file;
+    const fs::path folder = file.parent_path();
+    std::set<std::string> ids;
+    for (std::size_t i = 0; i < views.size(); ++i) {
+        ManifestView v = reader.view(views[i], i, folder);
+        if (!ids.insert(v.id).second) reader.fail("views[" + std::to_string(i) + "].id", "duplicate id '" + v.id + "'");
+        manifest.views.push_back(std::move(v));
+    }
+    if (root.contains("segmentation") && !root["segmentation"].is_null())
+        manifest.segmentation = reader.segmentation(root["segmentation"]);
+    reader.warnUnknownKeys(root, {"views", "segmentation"}, "");
+    return manifest;
+}
+
+void writeManifest(const CaptureManifest& manifest, const fs::path& file)
+{
+    const fs::path folder = file.parent_path();
+    json views = json::array();
+    for (const ManifestView& v : manifest.views) {
+        const geometry::Intrinsics& in = v.camera.intrinsics();
+        const geometry::RigidTransform& pose = v.camera.cameraFromPart();
+        json j;
+        j["id"] = v.id;
+        j["image"] = relativeImagePath(v.image, folder);
+        j["K"] = matrixJson(in.K);
+        j["dist"] = in.dist.empty() ? std::vector<double>(5, 0.0) : in.dist;
+        j["R"] = matrixJson(pose.R);
+        j["t"] = std::vector<double>{pose.t.x(), pose.t.y(), pose.t.z()};
+        if (in.imageSize.width > 0 && in.imageSize.height > 0)
+            j["image_size"] = {in.imageSize.width, in.imageSize.height};
+        if (v.fixturePose) {
+            const geometry::FixturePose& p = v.fixturePose->pose;
+            if (v.fixturePose->type == geometry::FixtureType::Rail)
+                j["fixture_pose"] = {{"rail_mm", p.railMm}};
+            else
+                j["fixture_pose"] = {{"rotation_deg", p.rotationDeg}, {"declination_deg", p.declinationDeg}};
+        }
+        views.push_back(std::move(j));
+    }
+    json seg;
+    seg["method"] = toString(manifest.segmentation.method);
+    if (manifest.segmentation.method == SegmentationMethod::Fixed) seg["threshold"] = manifest.segmentation.threshold;
+    seg["object_is_dark"] = manifest.segmentation.objectIsDark;
+    const json root = {{"views", views}, {"segmentation", seg}};
+
+    std::ofstream out(file, std::ios::binary | std::ios::trunc);
+    if (!out) throw FaultError("cannot write manifest " + file.string());
+    out << root.dump(2) << '\n';
+    out.close();
+    if (!out) throw FaultError("cannot write manifest " + file.string());
+}
+
+cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
+{
+    if (index >= manifest.views.size()) throw std::out_of_range("readViewImage: no view " + std::to_string(index));
+    const ManifestView& v = manifest.views[index];
+    const std::string name = manifest.file.string();
+    const std::string field = "views[" + std::to_string(index) + "].image";
+    std::error_code ec;
+    if (!fs::is_regular_file(v.image, ec))
+        throw InputError(name, field, "no such image file '" + v.image.string() + "'");
+    cv::Mat frame = cv::imread(v.image.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    if (frame.empty()) throw InputError(name, field, "cannot read image '" + v.image.string() + "'");
+    cv::Mat grey;
+    try {
+        grey = toGrey(frame);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(name, field, "'" + v.image.string() + "': " + e.what());
+    }
+    const cv::Size expected = v.camera.imageSize();
+    if (expected.width > 0 && expected.height > 0 && grey.size() != expected) {
+        throw InputError(name, field,
+                         "image '" + v.image.string() + "' is " + std::to_string(grey.cols) + "x" +
+                             std::to_string(grey.rows) + " but image_size says " + std::to_string(expected.width) +
+                             "x" + std::to_string(expected.height));
+    }
+    return grey;
+}
+
+} // namespace hg::vision

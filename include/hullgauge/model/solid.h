@@ -43,7 +43,8 @@ struct RayHit {
 
 class Solid {
 public:
-    /// `mesh` must be closed and outward oriented (see mesh_io.h checkClosed).
+    /// `mesh` must be closed and outward oriented (see mesh_io.h checkMesh);
+    /// a mesh that is not a 2-manifold throws std::invalid_argument.
     explicit Solid(TriangleMesh mesh);
     ~Solid();
     Solid(Solid&&) noexcept;
@@ -51,17 +52,28 @@ public:
 
     const TriangleMesh& mesh() const;
 
+    /// True inside the solid or on its surface.
     bool contains(const Eigen::Vector3d& point) const;
+    /// Classifies the open box (its interior): a box that touches the surface
+    /// only with a face, edge or corner is Inside or Outside, not Boundary.
     Occupancy classify(const Eigen::AlignedBox3d& box) const;
     /// Inside volume fraction, refined until the bracket is narrower than
     /// `tolerance` or decides the 50 % question, whichever comes first when
-    /// `decideHalf` is set.
+    /// `decideHalf` is set. The fraction is computed in closed form, so the
+    /// bracket is always just the floating-point error bound (~1e-12 or
+    /// less) whatever `tolerance` asks for.
     InsideFraction insideFraction(const Eigen::AlignedBox3d& box, double tolerance = 1e-3,
                                   bool decideHalf = false) const;
-    /// The inspection-map label: object when at least 50 % of the box is inside (5.3.3).
+    /// The inspection-map label: object when at least 50 % of the box is inside
+    /// (5.3.3); a fraction within rounding error of exactly 50 % is object.
     bool isObjectVoxel(const Eigen::AlignedBox3d& box) const;
 
+    /// Nearest surface point; `normal` is the outward normal of the nearest triangle.
     SurfacePoint closestPoint(const Eigen::Vector3d& point) const;
+    /// Outward unit normal at a surface point that may lie on an edge or a
+    /// corner: the angle-weighted mean of the normals of the triangles within
+    /// `radius` (the face normal inside a face, the bisector on an edge).
+    Eigen::Vector3d surfaceNormal(const Eigen::Vector3d& surfacePoint, double radius) const;
     /// First intersection of the ray origin + s * direction (s > 0) with the surface.
     std::optional<RayHit> firstHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const;
     /// True when the open segment a-b meets the surface.

@@ -1,0 +1,22 @@
+// Boolean operations on closed meshes, for making defective parts from a
+// nominal CAD model (material missing at a corner, a hole drilled too large):
+// `hullgauge simulate --subtract`. Exact: CGAL corefinement with an exact
+// kernel, so coplanar faces and shared edges are handled robustly.
+#pragma once
+
+#include "hullgauge/model/mesh.h"
+
+namespace hg::model {
+
+/// a minus b. Both must be closed, outward-oriented 2-manifolds without
+/// self-intersections; the result is one as well (possibly empty). Failure
+/// (a non-manifold result) throws InputError naming the operation.
+TriangleMesh difference(const TriangleMesh& a, const TriangleMesh& b);
+
+/// a united with b, under the same conditions.
+TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b);
+
+/// a intersected with b, under the same conditions.
+TriangleMesh intersectionOf(const TriangleMesh& a, const TriangleMesh& b);
+
+}  // namespace hg::model

@@ -1,0 +1,95 @@
+// The part program (CONTRACTS §1): which CAD model, the octree of the
+// inspection map (dissertation 3.3.1, MAD eq. 4.5.1-1), the designer's
+// landmarks with tolerances and best views (5.3.1), and the geometric
+// parameters built from them (4.6.4). The reference is docs/part-program.md.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "hullgauge/geometry/fixture.h"
+#include "hullgauge/model/solid.h"
+
+namespace hg::model {
+
+struct OctreeSpec {
+    Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();  // low corner of the reconstruction cube, mm
+    double cubeSize = 0.0;                                 // edge of the cube, mm
+    int depth = 0;                                         // octree levels below the cube, 1..20
+    int adjacencyDepth = 1;                                // layers of type-four nodes (3.3.2)
+    bool cubeFromMesh = false;  // true when cube_origin/cube_size were derived from the mesh
+
+    /// Voxel edge ΔV = cube_size / 2^depth: the minimum a priori discrimination (MAD, eq. 4.5.1-1).
+    double voxelSize() const;
+    /// Largest error the map can measure: adjacency_depth voxels.
+    double maxMeasurableErrorMm() const { return adjacencyDepth * voxelSize(); }
+};
+
+/// A designer best view: the landmark is observed if, for every group, at
+/// least one of the group's poses is used (AND over groups, OR inside one).
+using BestViewGroup = std::vector<geometry::FixturePose>;
+
+struct Landmark {
+    std::string id;
+    Eigen::Vector3d position;  // part frame, mm, on the CAD surface
+    Eigen::Vector3d normal;    // unit, outward
+    bool normalFromMesh = false;
+    double toleranceMm = 0.0;
+    std::vector<BestViewGroup> bestViews;
+    /// Distance from `position` to the mesh surface, mm (within surfaceToleranceMm()).
+    double distanceToSurfaceMm = 0.0;
+};
+
+enum class ParameterKind { Distance, Perimeter, Area };
+std::string toString(ParameterKind kind);
+
+/// A geometric parameter (dissertation 4.6.4): a distance between two
+/// landmarks, or the perimeter or area of the closed polygon through 3 or more.
+struct GeometricParameter {
+    std::string id;
+    ParameterKind kind = ParameterKind::Distance;
+    std::vector<std::string> landmarkIds;
+    std::vector<std::size_t> landmarkIndices;  // into PartProgram::landmarks
+    double nominalMm = 0.0;                    // mm, or mm² for an area
+    double toleranceMm = 0.0;                  // mm, or mm² for an area
+};
+
+struct PartProgram {
+    std::filesystem::path file;      // the YAML file
+    std::string part;                // free-text name
+    std::filesystem::path meshFile;  // resolved relative to the YAML file
+    std::shared_ptr<const Solid> solid;
+    OctreeSpec octree;
+    std::vector<Landmark> landmarks;
+    std::vector<GeometricParameter> parameters;
+    /// Kind of fixture the best views are written for (rotation/declination or rail), when any are given.
+    std::optional<geometry::FixtureType> bestViewFixture;
+
+    /// How far a landmark may lie from the mesh surface: max(0.01 mm, ΔV/4).
+    /// Tessellation of curved CAD faces moves the mesh off the designer's
+    /// surface by the chord error; a quarter voxel keeps the landmark in the
+    /// voxel the map puts it in.
+    double surfaceToleranceMm() const;
+    const Landmark* findLandmark(const std::string& id) const;
+};
+
+/// Reads and validates a part program; every problem throws InputError with
+/// file, line and field ("part.yaml:23: landmarks[2].position: ...").
+PartProgram loadPartProgram(const std::filesystem::path& file);
+
+/// The cube the loader derives when `cube_origin`/`cube_size` are absent:
+/// the mesh bounding box, centred, with a margin of (adjacency_depth + 1)
+/// voxels on every side so that every type-four neighbour of a boundary
+/// voxel lies inside the cube. With E the longest bounding-box edge and
+/// m = adjacency_depth + 1, the size solves S = E + 2 m S / 2^depth, i.e.
+/// S = E / (1 - 2 m / 2^depth). Returns nullopt when 2^depth <= 2 m (no cube
+/// is large enough).
+std::optional<OctreeSpec> boundingCube(const Eigen::AlignedBox3d& bounds, int depth, int adjacencyDepth);
+
+}  // namespace hg::model

@@ -1,0 +1,107 @@
+// hullgauge check-part --part P.yaml [--json]: validates a part program
+// (CONTRACTS §1) and prints what the inspection map will be built from.
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <spdlog/fmt/fmt.h>
+
+#include "command.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/part_program.h"
+
+namespace hg::cli {
+namespace {
+
+nlohmann::json toJson(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+
+int run(const std::string& partFile, bool json)
+{
+    const model::PartProgram program = model::loadPartProgram(partFile);
+    const model::TriangleMesh& mesh = program.solid->mesh();
+    const model::MeshCheck check = model::checkMesh(mesh);
+    const auto& oct = program.octree;
+    const auto bounds = mesh.bounds();
+
+    if (json) {
+        nlohmann::json out;
+        out["part"] = program.part;
+        out["mesh"] = {{"file", program.meshFile.string()},
+                       {"vertices", mesh.vertices.size()},
+                       {"triangles", mesh.triangles.size()},
+                       {"volume_mm3", mesh.signedVolume()},
+                       {"area_mm2", mesh.area()},
+                       {"closed", check.ok()},
+                       {"bounds_min", toJson(bounds.min())},
+                       {"bounds_max", toJson(bounds.max())}};
+        out["octree"] = {{"cube_origin", toJson(oct.cubeOrigin)},
+                         {"cube_size", oct.cubeSize},
+                         {"cube_from_mesh", oct.cubeFromMesh},
+                         {"depth", oct.depth},
+                         {"adjacency_depth", oct.adjacencyDepth},
+                         {"voxel_size_mm", oct.voxelSize()},
+                         {"max_measurable_error_mm", oct.maxMeasurableErrorMm()}};
+        out["surface_tolerance_mm"] = program.surfaceToleranceMm();
+        out["landmarks"] = nlohmann::json::array();
+        for (const auto& lm : program.landmarks) {
+            out["landmarks"].push_back({{"id", lm.id},
+                                        {"position", toJson(lm.position)},
+                                        {"normal", toJson(lm.normal)},
+                                        {"normal_from_mesh", lm.normalFromMesh},
+                                        {"distance_to_surface_mm", lm.distanceToSurfaceMm},
+                                        {"tolerance_mm", lm.toleranceMm},
+                                        {"best_view_groups", lm.bestViews.size()}});
+        }
+        out["parameters"] = nlohmann::json::array();
+        for (const auto& p : program.parameters)
+            out["parameters"].push_back({{"id", p.id},
+                                         {"kind", model::toString(p.kind)},
+                                         {"landmarks", p.landmarkIds},
+                                         {"nominal_mm", p.nominalMm},
+                                         {"tolerance_mm", p.toleranceMm}});
+        std::cout << out.dump(2) << '\n';
+        return 0;
+    }
+
+    std::cout << fmt::format("part        {}\n", program.part);
+    std::cout << fmt::format("mesh        {}: {} triangles, {} vertices, closed 2-manifold, outward\n",
+                             program.meshFile.string(), mesh.triangles.size(), mesh.vertices.size());
+    std::cout << fmt::format("volume      {:.6g} mm³, area {:.6g} mm²\n", mesh.signedVolume(), mesh.area());
+    std::cout << fmt::format("bounds      ({:.4f}, {:.4f}, {:.4f}) to ({:.4f}, {:.4f}, {:.4f}) mm\n", bounds.min().x(),
+                             bounds.min().y(), bounds.min().z(), bounds.max().x(), bounds.max().y(), bounds.max().z());
+    std::cout << fmt::format("cube        origin ({:.4f}, {:.4f}, {:.4f}) size {:.6g} mm{}\n", oct.cubeOrigin.x(),
+                             oct.cubeOrigin.y(), oct.cubeOrigin.z(), oct.cubeSize,
+                             oct.cubeFromMesh ? " (from the mesh)" : "");
+    std::cout << fmt::format("octree      depth {}, ΔV = {:.6g} mm (MAD), {} adjacency layers = {:.6g} mm measurable\n",
+                             oct.depth, oct.voxelSize(), oct.adjacencyDepth, oct.maxMeasurableErrorMm());
+    std::cout << fmt::format("landmarks   {} (on the surface within {:.3g} mm)\n", program.landmarks.size(),
+                             program.surfaceToleranceMm());
+    for (const auto& lm : program.landmarks)
+        std::cout << fmt::format("  {:<16} at ({:.4f}, {:.4f}, {:.4f}) off {:.2e} mm, normal ({:.4f}, {:.4f}, {:.4f})"
+                                 "{}, tolerance {:.4g} mm, {} best-view group{}\n",
+                                 lm.id, lm.position.x(), lm.position.y(), lm.position.z(), lm.distanceToSurfaceMm,
+                                 lm.normal.x(), lm.normal.y(), lm.normal.z(), lm.normalFromMesh ? " (mesh)" : "",
+                                 lm.toleranceMm, lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
+    std::cout << fmt::format("parameters  {}\n", program.parameters.size());
+    for (const auto& p : program.parameters)
+        std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id, model::toString(p.kind),
+                                 p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
+    return 0;
+}
+
+std::function<int()> factory(CLI::App& app)
+{
+    auto* sub = app.add_subcommand("check-part", "validate a part program and summarise its mesh, cube and landmarks");
+    auto partFile = std::make_shared<std::string>();
+    auto json = std::make_shared<bool>(false);
+    sub->add_option("--part", *partFile, "part program YAML (CONTRACTS §1)")->required();
+    sub->add_flag("--json", *json, "print the summary as JSON");
+    return [partFile, json] { return run(*partFile, *json); };
+}
+
+}  // namespace
+
+HG_REGISTER_COMMAND("check-part", factory);
+
+}  // namespace hg::cli

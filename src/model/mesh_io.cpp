@@ -1,0 +1,328 @@
+// Mesh import and export through CGAL's readers and polygon-soup repair.
+// CGAL's lazy-kernel and Surface_mesh templates trip GCC 12's flow-based
+// -Wnull-dereference inside libstdc++ (false positives in third-party code).
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+
+#include "hullgauge/model/mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <fstream>
+#include <numeric>
+#include <unordered_map>
+#include <vector>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Surface_mesh.h>
+#include <spdlog/fmt/fmt.h>
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
+namespace hg::model {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Polygon = std::vector<std::size_t>;
+using SurfaceMesh = CGAL::Surface_mesh<Point>;
+
+std::string str(const Eigen::Vector3d& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
+
+std::string lowerExtension(const std::filesystem::path& file)
+{
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+// Edge and vertex analysis of an indexed polygon soup (triangles or larger
+// polygons), shared by checkMesh and the loader so both name problems alike.
+MeshCheck analyse(const std::vector<Eigen::Vector3d>& points, const std::vector<Polygon>& polygons)
+{
+    MeshCheck check;
+    check.vertices = points.size();
+    check.triangles = polygons.size();
+
+    struct EdgeUse {
+        int forward = 0;   // traversed from the smaller to the larger index
+        int backward = 0;  // traversed the other way
+    };
+    std::unordered_map<std::uint64_t, EdgeUse> edges;
+    edges.reserve(polygons.size() * 2);
+    auto key = [](std::size_t a, std::size_t b) { return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+    // Per vertex: (polygon, neighbouring vertex) pairs for the fan test.
+    std::vector<std::vector<std::pair<std::size_t, std::size_t>>> incidence(points.size());
+
+    for (std::size_t p = 0; p < polygons.size(); ++p) {
+        const Polygon& poly = polygons[p];
+        const std::size_t n = poly.size();
+        if (n < 3 || std::any_of(poly.begin(), poly.end(), [&](std::size_t v) { return v >= points.size(); })) {
+            ++check.badIndices;
+            continue;
+        }
+        // Vector area: zero for a degenerate polygon.
+        Eigen::Vector3d area = Eigen::Vector3d::Zero();
+        for (std::size_t k = 0; k < n; ++k) area += points[poly[k]].cross(points[poly[(k + 1) % n]]);
+        if (area.squaredNorm() == 0.0) ++check.degenerateTriangles;
+        // Signed volume of the cone from the origin (divergence theorem), fan-triangulated.
+        for (std::size_t k = 1; k + 1 < n; ++k)
+            check.signedVolume += points[poly[0]].dot(points[poly[k]].cross(points[poly[k + 1]])) / 6.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            std::size_t a = poly[k], b = poly[(k + 1) % n];
+            auto& use = edges[key(a, b)];
+            (a < b ? use.forward : use.backward)++;
+            incidence[a].emplace_back(p, b);
+            incidence[b].emplace_back(p, a);
+        }
+    }
+
+    for (const auto& [k, use] : edges) {
+        const std::array<Eigen::Vector3d, 2> coords{points[k >> 32], points[k & 0xffffffffu]};
+        const int count = use.forward + use.backward;
+        if (count == 1) {
+            if (!check.firstOpenEdge) check.firstOpenEdge = coords;
+            ++check.openEdges;
+        } else if (count > 2) {
+            if (!check.firstNonManifoldEdge) check.firstNonManifoldEdge = coords;
+            ++check.nonManifoldEdges;
+        } else if (use.forward == 2 || use.backward == 2) {
+            if (!check.firstInconsistentEdge) check.firstInconsistentEdge = coords;
+            ++check.inconsistentEdges;
+        }
+    }
+
+    // A manifold vertex has one fan: its polygons are connected through the
+    // edges at the vertex. Two fans mean two sheets touch at a point.
+    for (std::size_t v = 0; v < points.size(); ++v) {
+        auto& inc = incidence[v];
+        if (inc.size() < 6) continue;  // a single polygon pair cannot form two closed fans
+        std::vector<std::size_t> polys;
+        for (auto& [p, w] : inc) polys.push_back(p);
+        std::sort(polys.begin(), polys.end());
+        polys.erase(std::unique(polys.begin(), polys.end()), polys.end());
+        std::vector<std::size_t> parent(polys.size());
+        std::iota(parent.begin(), parent.end(), 0);
+        auto find = [&](std::size_t i) {
+            while (parent[i] != i) i = parent[i] = parent[parent[i]];
+            return i;
+        };
+        auto local = [&](std::size_t p) {
+            return static_cast<std::size_t>(std::lower_bound(polys.begin(), polys.end(), p) - polys.begin());
+        };
+        std::sort(inc.begin(), inc.end(), [](auto& x, auto& y) { return x.second < y.second; });
+        for (std::size_t i = 1; i < inc.size(); ++i)
+            if (inc[i].second == inc[i - 1].second) parent[find(local(inc[i].first))] = find(local(inc[i - 1].first));
+        std::size_t fans = 0;
+        for (std::size_t i = 0; i < polys.size(); ++i) fans += find(i) == i;
+        if (fans > 1) {
+            if (!check.firstNonManifoldVertex) check.firstNonManifoldVertex = points[v];
+            ++check.nonManifoldVertices;
+        }
+    }
+    return check;
+}
+
+std::string describeEdge(const std::array<Eigen::Vector3d, 2>& e) { return "from " + str(e[0]) + " to " + str(e[1]); }
+
+std::vector<Polygon> toPolygons(const TriangleMesh& mesh)
+{
+    std::vector<Polygon> polys;
+    polys.reserve(mesh.triangles.size());
+    for (const auto& t : mesh.triangles)
+        polys.push_back({static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]), static_cast<std::size_t>(t[2])});
+    return polys;
+}
+
+// Binary STL: an 80-byte header, a uint32 facet count, then 50 bytes per
+// facet. CGAL's reader stops silently at a short file, so the size is checked
+// against the count first; this names the facet where the file breaks off.
+void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
+{
+    std::ifstream in(file, std::ios::binary);
+    std::string head(std::min<std::uintmax_t>(size, 84), '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    const std::string name = file.string();
+    std::uint64_t announced = 0;
+    if (head.size() == 84) {
+        for (int i = 3; i >= 0; --i) announced = (announced << 8) | static_cast<unsigned char>(head[80 + i]);
+        if (84 + 50 * announced == size) return;  // a well-formed binary STL
+    }
+    // Not a binary STL of the announced size: ASCII when it starts with "solid".
+    auto first = head.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && head.compare(first, 5, "solid") == 0) return;
+    if (head.size() < 84)
+        throw InputError(name, "header", fmt::format("file ends after {} of 84 bytes (80-byte header and facet count)", size));
+    const std::uintmax_t body = size - 84;
+    if (body > 50 * announced) {
+        log::category("model")->warn("{}: {} bytes after the {} facets the header announces are ignored", name,
+                                     body - 50 * announced, announced);
+        return;
+    }
+    const std::uintmax_t complete = body / 50, rest = body % 50;
+    if (rest != 0)
+        throw InputError(name, fmt::format("facet {}", complete + 1),
+                         fmt::format("file ends after {} of 50 bytes (the header announces {} facets)", rest, announced));
+    throw InputError(name, fmt::format("facet {}", complete + 1),
+                     fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
+}
+
+}  // namespace
+
+std::string MeshCheck::problem() const
+{
+    if (triangles == 0) return "the mesh has no triangles";
+    if (badIndices) return fmt::format("{} polygons with fewer than 3 or out-of-range vertex indices", badIndices);
+    if (openEdges)
+        return fmt::format("not closed: {} open edge{} (a hole), the first {}", openEdges, openEdges > 1 ? "s" : "",
+                           describeEdge(*firstOpenEdge));
+    if (nonManifoldEdges)
+        return fmt::format("not a 2-manifold: {} edge{} shared by more than two triangles, the first {}",
+                           nonManifoldEdges, nonManifoldEdges > 1 ? "s" : "", describeEdge(*firstNonManifoldEdge));
+    if (nonManifoldVertices)
+        return fmt::format("not a 2-manifold: {} vertex{} where separate sheets touch, the first at {}",
+                           nonManifoldVertices, nonManifoldVertices > 1 ? "es" : "", str(*firstNonManifoldVertex));
+    if (inconsistentEdges)
+        return fmt::format("inconsistent orientation: {} edge{} whose two triangles run the same way, the first {}",
+                           inconsistentEdges, inconsistentEdges > 1 ? "s" : "", describeEdge(*firstInconsistentEdge));
+    if (signedVolume < 0.0) return fmt::format("inverted orientation (signed volume {:.6g} mm³)", signedVolume);
+    if (signedVolume == 0.0) return "the mesh encloses no volume";
+    return {};
+}
+
+MeshCheck checkMesh(const TriangleMesh& mesh) { return analyse(mesh.vertices, toPolygons(mesh)); }
+
+void requireSolidMesh(TriangleMesh& mesh, const std::string& name)
+{
+    MeshCheck check = checkMesh(mesh);
+    if (check.inverted()) {
+        // Only the orientation is wrong: every normal points inward. Flipping
+        // is the unique fix, so it is applied rather than refused.
+        log::category("model")->warn("{}: mesh is oriented inward (signed volume {:.6g} mm³); flipped", name,
+                                     check.signedVolume);
+        mesh.flip();
+        return;
+    }
+    if (!check.ok()) throw InputError(name, "mesh", check.problem());
+    if (check.degenerateTriangles)
+        log::category("model")->warn("{}: {} degenerate (zero-area) triangles", name, check.degenerateTriangles);
+}
+
+TriangleMesh loadMesh(const std::filesystem::path& file)
+{
+    const std::string name = file.string();
+    const std::string ext = lowerExtension(file);
+    if (ext == ".step" || ext == ".stp")
+        throw InputError(name, "mesh", "STEP files are not supported; export the part as STL, OBJ or PLY");
+    if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off")
+        throw InputError(name, "mesh",
+                         "unknown mesh format '" + ext + "' (expected .stl, .obj, .ply or .off)");
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "mesh", "no such file");
+    const std::uintmax_t size = std::filesystem::file_size(file, ec);
+    if (ec) throw InputError(name, "mesh", "cannot read the file: " + ec.message());
+    if (size == 0) throw InputError(name, "mesh", "the file is empty");
+    if (ext == ".stl") checkStlSize(file, size);
+
+    std::vector<Point> points;
+    std::vector<Polygon> polygons;
+    if (!CGAL::IO::read_polygon_soup(name, points, polygons, CGAL::parameters::verbose(false)))
+        throw InputError(name, "mesh", "not a readable " + ext.substr(1) + " file");
+    if (polygons.empty()) throw InputError(name, "mesh", "the file holds no facets");
+
+    // Merge duplicate points (STL repeats every vertex per facet), drop
+    // repeated polygons and polygons that collapse to fewer than 3 points.
+    PMP::repair_polygon_soup(points, polygons);
+    std::vector<Eigen::Vector3d> coords;
+    coords.reserve(points.size());
+    for (const auto& p : points) coords.emplace_back(p.x(), p.y(), p.z());
+    MeshCheck check = analyse(coords, polygons);
+    if (!check.closedManifold()) throw InputError(name, "mesh", check.problem());
+    if (!check.consistentlyOriented()) {
+        log::category("model")->warn("{}: {}; re-oriented", name, check.problem());
+        PMP::orient_polygon_soup(points, polygons);
+    }
+
+    SurfaceMesh sm;
+    PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
+    if (!CGAL::is_triangle_mesh(sm) && !PMP::triangulate_faces(sm))
+        throw InputError(name, "mesh", "a polygon could not be triangulated");
+    if (PMP::does_self_intersect(sm)) {
+        std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
+        PMP::self_intersections(sm, std::back_inserter(pairs));
+        auto centroid = [&](SurfaceMesh::Face_index f) {
+            Eigen::Vector3d c = Eigen::Vector3d::Zero();
+            for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+                const Point& p = sm.point(v);
+                c += Eigen::Vector3d(p.x(), p.y(), p.z()) / 3.0;
+            }
+            return c;
+        };
+        throw InputError(name, "mesh",
+                         fmt::format("the surface intersects itself ({} triangle pairs, the first near {} and {})",
+                                     pairs.size(), str(centroid(pairs.front().first)),
+                                     str(centroid(pairs.front().second))));
+    }
+
+    // Each closed component outward, inner shells (voids) inward.
+    const double before = [&] {
+        double v = 0;
+        for (auto f : sm.faces()) {
+            auto h = sm.halfedge(f);
+            const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)), &c = sm.point(sm.target(sm.next(h)));
+            v += CGAL::scalar_product(a - CGAL::ORIGIN, CGAL::cross_product(b - CGAL::ORIGIN, c - CGAL::ORIGIN));
+        }
+        return v / 6.0;
+    }();
+    PMP::orient_to_bound_a_volume(sm);
+
+    TriangleMesh mesh;
+    mesh.vertices.reserve(sm.number_of_vertices());
+    std::vector<int> index(sm.number_of_vertices() + sm.number_of_removed_vertices(), -1);
+    for (auto v : sm.vertices()) {
+        index[v] = static_cast<int>(mesh.vertices.size());
+        const Point& p = sm.point(v);
+        mesh.vertices.emplace_back(p.x(), p.y(), p.z());
+    }
+    for (auto f : sm.faces()) {
+        auto h = sm.halfedge(f);
+        mesh.triangles.push_back(
+            {index[sm.source(h)], index[sm.target(h)], index[sm.target(sm.next(h))]});
+    }
+    const double after = mesh.signedVolume();
+    if (before < 0 && std::abs(after + before) <= 1e-9 * std::abs(before))
+        log::category("model")->warn("{}: mesh is oriented inward (signed volume {:.6g} mm³); flipped", name, before);
+    else if (std::abs(after - before) > 1e-9 * std::abs(after))
+        log::category("model")->warn("{}: shells re-oriented to bound a volume ({:.6g} -> {:.6g} mm³)", name, before,
+                                     after);
+    requireSolidMesh(mesh, name);
+    log::category("model")->debug("{}: {} vertices, {} triangles, volume {:.6g} mm³", name, mesh.vertices.size(),
+                                  mesh.triangles.size(), after);
+    return mesh;
+}
+
+void saveMesh(const TriangleMesh& mesh, const std::filesystem::path& file, MeshEncoding encoding)
+{
+    const std::string ext = lowerExtension(file);
+    if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off")
+        throw FaultError(file.string() + ": cannot write meshes with extension '" + ext + "'");
+    std::vector<Point> points;
+    points.reserve(mesh.vertices.size());
+    for (const auto& v : mesh.vertices) points.emplace_back(v.x(), v.y(), v.z());
+    std::vector<Polygon> polygons = toPolygons(mesh);
+    if (!CGAL::IO::write_polygon_soup(file.string(), points, polygons,
+                                      CGAL::parameters::use_binary_mode(encoding == MeshEncoding::Binary)
+                                          .stream_precision(17)))
+        throw FaultError(file.string() + ": cannot write the mesh");
+}
+
+}  // namespace hg::model

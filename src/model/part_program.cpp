@@ -1,0 +1,259 @@
+// Part program loader (CONTRACTS §1); every field is validated through
+// ConfigNode so errors name file, line and key path.
+#include "hullgauge/model/part_program.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <spdlog/fmt/fmt.h>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/model/mesh_io.h"
+
+namespace hg::model {
+namespace {
+
+std::string str(const Eigen::Vector3d& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
+
+OctreeSpec parseOctree(const ConfigNode& node, const Eigen::AlignedBox3d& bounds)
+{
+    node.allowOnlyKeys({"cube_origin", "cube_size", "depth", "adjacency_depth"});
+    OctreeSpec spec;
+    spec.depth = static_cast<int>(node["depth"].asIntIn(1, 20));
+    spec.adjacencyDepth = static_cast<int>(node["adjacency_depth"].asIntIn(1, 1 << 20));
+    const auto origin = node.optional("cube_origin");
+    const auto size = node.optional("cube_size");
+    if (origin && !size) origin->fail("cube_origin needs cube_size as well");
+    const double cells = std::ldexp(1.0, spec.depth);
+    const auto derived = boundingCube(bounds, spec.depth, spec.adjacencyDepth);
+    if (!size) {
+        if (!derived)
+            node["depth"].fail(fmt::format("depth {} gives {} voxels per edge, too few for a default cube with {} "
+                                           "layers of type-four voxels around the part; raise depth or give cube_size",
+                                           spec.depth, cells, spec.adjacencyDepth));
+        spec = *derived;
+        return spec;
+    }
+    spec.cubeSize = size->asPositive();
+    // Without an origin the cube is centred on the part's bounding box.
+    spec.cubeOrigin = origin ? origin->asVector3() : Eigen::Vector3d(bounds.center() - Eigen::Vector3d::Constant(spec.cubeSize / 2));
+    const Eigen::AlignedBox3d cube(spec.cubeOrigin, spec.cubeOrigin + Eigen::Vector3d::Constant(spec.cubeSize));
+    const ConfigNode& where = origin ? *origin : *size;
+    if (!cube.contains(bounds))
+        where.fail(fmt::format("the part (bounding box {} to {}) does not fit in the cube {} to {}", str(bounds.min()),
+                               str(bounds.max()), str(cube.min()), str(cube.max())));
+    const double margin = std::min((bounds.min() - cube.min()).minCoeff(), (cube.max() - bounds.max()).minCoeff());
+    if (margin < spec.adjacencyDepth * spec.voxelSize())
+        log::category("model")->warn("{}: the cube leaves only {:.4g} mm around the part, less than adjacency_depth "
+                                     "({}) voxels of {:.4g} mm; type-four voxels near the cube wall are cut off",
+                                     where.file(), margin, spec.adjacencyDepth, spec.voxelSize());
+    return spec;
+}
+
+// A fixture pose of a best view: {rotation_deg[, declination_deg]} or {rail_mm}.
+geometry::FixturePose parsePose(const ConfigNode& node, std::optional<geometry::FixtureType>& kind)
+{
+    if (!node.isMap()) node.fail("expected a pose such as {rotation_deg: 0, declination_deg: 30} or {rail_mm: 120}");
+    node.allowOnlyKeys({"rotation_deg", "declination_deg", "rail_mm"});
+    geometry::FixturePose pose;
+    geometry::FixtureType type;
+    if (node.has("rail_mm")) {
+        if (node.has("rotation_deg") || node.has("declination_deg"))
+            node.fail("a pose gives either rail_mm or rotation_deg/declination_deg, not both");
+        pose.railMm = node["rail_mm"].asDouble();
+        type = geometry::FixtureType::Rail;
+    } else {
+        pose.rotationDeg = node["rotation_deg"].asDoubleIn(-360.0, 360.0);
+        if (auto d = node.optional("declination_deg")) pose.declinationDeg = d->asDoubleIn(-180.0, 180.0);
+        type = geometry::FixtureType::RotationDeclination;
+    }
+    if (kind && *kind != type) node.fail("best views mix rail poses and rotation/declination poses");
+    kind = type;
+    return pose;
+}
+
+std::vector<BestViewGroup> parseBestViews(const ConfigNode& node, std::optional<geometry::FixtureType>& kind)
+{
+    std::vector<BestViewGroup> groups;
+    for (const ConfigNode& entry : node.items()) {
+        // AND over entries; an entry is one pose or {any_of: [poses]} (OR).
+        BestViewGroup group;
+        if (entry.isMap() && entry.has("any_of")) {
+            entry.allowOnlyKeys({"any_of"});
+            const ConfigNode list = entry["any_of"];
+            for (const ConfigNode& pose : list.items()) group.push_back(parsePose(pose, kind));
+            if (group.empty()) list.fail("any_of needs at least one pose");
+        } else {
+            group.push_back(parsePose(entry, kind));
+        }
+        groups.push_back(std::move(group));
+    }
+    return groups;
+}
+
+Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfaceTolerance,
+                       std::optional<geometry::FixtureType>& kind)
+{
+    node.allowOnlyKeys({"id", "position", "normal", "tolerance_mm", "best_views"});
+    Landmark lm;
+    const ConfigNode idNode = node["id"];
+    lm.id = idNode.asString();
+    if (lm.id.empty()) idNode.fail("landmark id is empty");
+    const ConfigNode posNode = node["position"];
+    lm.position = posNode.asVector3();
+    lm.toleranceMm = node["tolerance_mm"].asPositive();
+
+    // On the surface (within the documented tolerance).
+    const SurfacePoint nearest = solid.closestPoint(lm.position);
+    lm.distanceToSurfaceMm = nearest.distance;
+    if (nearest.distance > surfaceTolerance)
+        posNode.fail(fmt::format("landmark '{}' is {:.3f} mm from the surface (nearest point {}; allowed {:.3g} mm)",
+                                 lm.id, nearest.distance, str(nearest.point), surfaceTolerance));
+
+    // The mesh normal at the landmark; on an edge or a corner (within the
+    // surface tolerance) the angle-weighted mean of the faces that meet there.
+    const Eigen::Vector3d meshNormal = solid.surfaceNormal(nearest.point, surfaceTolerance);
+    if (auto n = node.optional("normal")) {
+        const Eigen::Vector3d given = n->asVector3();
+        if (!(given.norm() > 1e-12)) n->fail("normal has zero length");
+        lm.normal = given.normalized();
+        if (lm.normal.dot(meshNormal) <= 0.0)
+            n->fail(fmt::format("normal {} of landmark '{}' points into the part (the surface normal there is {})",
+                                str(lm.normal), lm.id, str(meshNormal)));
+    } else {
+        lm.normal = meshNormal;
+        lm.normalFromMesh = true;
+    }
+    if (auto bv = node.optional("best_views")) lm.bestViews = parseBestViews(*bv, kind);
+    return lm;
+}
+
+GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::string, std::size_t>& landmarkIndex)
+{
+    node.allowOnlyKeys({"id", "kind", "landmarks", "nominal_mm", "tolerance_mm"});
+    GeometricParameter p;
+    const ConfigNode idNode = node["id"];
+    p.id = idNode.asString();
+    if (p.id.empty()) idNode.fail("parameter id is empty");
+    const ConfigNode kindNode = node["kind"];
+    const std::string kind = kindNode.asString();
+    if (kind == "distance") p.kind = ParameterKind::Distance;
+    else if (kind == "perimeter") p.kind = ParameterKind::Perimeter;
+    else if (kind == "area") p.kind = ParameterKind::Area;
+    else kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
+    const ConfigNode list = node["landmarks"];
+    for (const ConfigNode& item : list.items()) {
+        const std::string id = item.asString();
+        auto it = landmarkIndex.find(id);
+        if (it == landmarkIndex.end()) item.fail("unknown landmark '" + id + "'");
+        p.landmarkIds.push_back(id);
+        p.landmarkIndices.push_back(it->second);
+    }
+    if (p.kind == ParameterKind::Distance && p.landmarkIds.size() != 2)
+        list.fail(fmt::format("a distance needs exactly 2 landmarks, found {}", p.landmarkIds.size()));
+    if (p.kind != ParameterKind::Distance && p.landmarkIds.size() < 3)
+        list.fail(fmt::format("a {} needs at least 3 landmarks (a closed polygon), found {}", kind,
+                              p.landmarkIds.size()));
+    std::set<std::string> unique(p.landmarkIds.begin(), p.landmarkIds.end());
+    if (unique.size() != p.landmarkIds.size()) list.fail("a landmark is listed twice");
+    p.nominalMm = node["nominal_mm"].asDoubleIn(0.0, 1e12);
+    p.toleranceMm = node["tolerance_mm"].asPositive();
+    return p;
+}
+
+}  // namespace
+
+double OctreeSpec::voxelSize() const { return cubeSize / std::ldexp(1.0, depth); }
+
+std::string toString(ParameterKind kind)
+{
+    switch (kind) {
+    case ParameterKind::Distance:
+        return "distance";
+    case ParameterKind::Perimeter:
+        return "perimeter";
+    case ParameterKind::Area:
+        return "area";
+    }
+    return "?";
+}
+
+double PartProgram::surfaceToleranceMm() const { return std::max(0.01, octree.voxelSize() / 4.0); }
+
+const Landmark* PartProgram::findLandmark(const std::string& id) const
+{
+    auto it = std::find_if(landmarks.begin(), landmarks.end(), [&](const Landmark& l) { return l.id == id; });
+    return it == landmarks.end() ? nullptr : &*it;
+}
+
+std::optional<OctreeSpec> boundingCube(const Eigen::AlignedBox3d& bounds, int depth, int adjacencyDepth)
+{
+    const double cells = std::ldexp(1.0, depth);
+    const double margin = adjacencyDepth + 1.0;
+    if (cells <= 2.0 * margin) return std::nullopt;
+    const double extent = (bounds.max() - bounds.min()).maxCoeff();
+    OctreeSpec spec;
+    spec.depth = depth;
+    spec.adjacencyDepth = adjacencyDepth;
+    spec.cubeFromMesh = true;
+    spec.cubeSize = extent / (1.0 - 2.0 * margin / cells);
+    spec.cubeOrigin = bounds.center() - Eigen::Vector3d::Constant(spec.cubeSize / 2.0);
+    return spec;
+}
+
+PartProgram loadPartProgram(const std::filesystem::path& file)
+{
+    const ConfigNode root = ConfigNode::loadFile(file);
+    if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
+    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters"});
+
+    PartProgram program;
+    program.file = file;
+    const ConfigNode partNode = root["part"];
+    program.part = partNode.asString();
+    if (program.part.empty()) partNode.fail("part name is empty");
+
+    const ConfigNode meshNode = root["mesh"];
+    const std::string meshText = meshNode.asString();
+    if (meshText.empty()) meshNode.fail("mesh path is empty");
+    program.meshFile = std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText)
+                                                                      : file.parent_path() / meshText;
+    TriangleMesh mesh;
+    try {
+        mesh = loadMesh(program.meshFile);
+    } catch (const InputError& e) {
+        // The mesh file's own error, reported at the key that names it.
+        meshNode.fail(e.what());
+    }
+    const Eigen::AlignedBox3d bounds = mesh.bounds();
+    program.solid = std::make_shared<const Solid>(std::move(mesh));
+
+    program.octree = parseOctree(root["octree"], bounds);
+
+    const double surfaceTolerance = program.surfaceToleranceMm();
+    const ConfigNode landmarks = root["landmarks"];
+    std::map<std::string, std::size_t> index;
+    for (const ConfigNode& node : landmarks.items()) {
+        Landmark lm = parseLandmark(node, *program.solid, surfaceTolerance, program.bestViewFixture);
+        if (index.count(lm.id)) node["id"].fail("duplicate landmark id '" + lm.id + "'");
+        index[lm.id] = program.landmarks.size();
+        program.landmarks.push_back(std::move(lm));
+    }
+    if (program.landmarks.empty()) landmarks.fail("a part program needs at least one landmark");
+
+    if (auto params = root.optional("parameters")) {
+        std::set<std::string> ids;
+        for (const ConfigNode& node : params->items()) {
+            GeometricParameter p = parseParameter(node, index);
+            if (!ids.insert(p.id).second) node["id"].fail("duplicate parameter id '" + p.id + "'");
+            program.parameters.push_back(std::move(p));
+        }
+    }
+    return program;
+}
+
+}  // namespace hg::model

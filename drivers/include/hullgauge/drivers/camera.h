@@ -1,0 +1,227 @@
+// The camera interface every backend implements (STYLE.md: one small interface
+// per device kind, in domain types; no ArvCamera* or V4L2 handle crosses it).
+//
+// Lifecycle (lifecycle.h): constructing a camera from `camera.driver` only
+// parses and validates (throws hg::InputError naming the key); configure()
+// opens the device and applies the settings; activate() starts streaming;
+// grab() returns one frame; deactivate() stops streaming; cleanup() closes.
+// Every call after construction returns a [[nodiscard]] status and never
+// throws: the capture loop decides what a failure means.
+//
+// Frames are views of driver-owned buffers from a pool preallocated at
+// activate() (no copy between the network/DMA buffer and the cv::Mat). A Frame
+// holds its buffer until it is released or destroyed; holding more frames than
+// `buffer_count` starves the pool and later grabs time out. A frame may outlive
+// stop/cleanup/recovery safely: its buffer is then freed instead of requeued.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/drivers/lifecycle.h"
+
+namespace hg::drivers {
+
+/// Pixel formats of the station (PFNC names). Mono12 is delivered unpacked:
+/// 12 significant bits in the low bits of a 16-bit word (CV_16UC1).
+enum class PixelFormat { Mono8, Mono12, Mono16 };
+enum class TriggerMode { Software, FreeRun };
+
+std::string_view toString(PixelFormat f);
+std::string_view toString(TriggerMode t);
+/// "Mono8" -> PixelFormat::Mono8; std::nullopt for anything else.
+std::optional<PixelFormat> pixelFormatFromString(std::string_view name);
+/// OpenCV element type of a frame in this format (CV_8UC1 or CV_16UC1).
+int cvTypeOf(PixelFormat f);
+
+/// Region of interest on the sensor in pixels; width/height 0 = the whole sensor.
+struct Roi {
+    int x = 0;
+    int y = 0;
+    int width = 0;
+    int height = 0;
+    bool isFullSensor() const { return width == 0 && height == 0; }
+    bool operator==(const Roi&) const = default;
+};
+
+/// What configure() applies to the device.
+struct CameraSettings {
+    PixelFormat pixelFormat = PixelFormat::Mono8;
+    std::optional<double> exposureUs;  ///< µs; unset = leave the device's value
+    std::optional<double> gainDb;      ///< dB; unset = leave the device's value
+    Roi roi;
+    TriggerMode trigger = TriggerMode::Software;
+};
+
+/// Result of a driver call: success, or failure with a precise message.
+class [[nodiscard]] Status {
+public:
+    static Status success() { return Status(true, {}); }
+    static Status failure(std::string message) { return Status(false, std::move(message)); }
+    bool ok() const { return ok_; }
+    explicit operator bool() const { return ok_; }
+    const std::string& message() const { return message_; }
+
+private:
+    Status(bool ok, std::string message) : ok_(ok), message_(std::move(message)) {}
+    bool ok_;
+    std::string message_;
+};
+
+/// A value or a failure message (the cyclic path never throws).
+template <class T> class [[nodiscard]] Result {
+public:
+    Result(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
+    Result(Status failure) : status_(std::move(failure)) {}  // NOLINT
+    bool ok() const { return value_.has_value(); }
+    explicit operator bool() const { return ok(); }
+    const T& value() const { return *value_; }
+    T& value() { return *value_; }
+    const std::string& message() const { return status_.message(); }
+
+private:
+    std::optional<T> value_;
+    Status status_ = Status::success();
+};
+
+enum class FrameStatus {
+    Ok,          ///< complete image
+    Timeout,     ///< no frame within the timeout (camera silent, unplugged, not triggered)
+    Incomplete,  ///< a frame arrived but with missing packets / wrong size; pixels unreliable
+    Error,       ///< the driver could not grab (wrong state, device lost and not yet back)
+};
+std::string_view toString(FrameStatus s);
+
+/// One grabbed frame. `image` is a view of the driver's buffer (no copy); the
+/// buffer goes back to the pool on release() or destruction. Move-only.
+class Frame {
+public:
+    Frame() = default;
+    Frame(Frame&& other) noexcept;
+    Frame& operator=(Frame&& other) noexcept;
+    Frame(const Frame&) = delete;
+    Frame& operator=(const Frame&) = delete;
+    ~Frame();
+
+    /// A failed frame (no image) with the reason.
+    static Frame failed(FrameStatus status, std::string message);
+    /// A frame over a driver buffer; `recycle` gives the buffer back (called once).
+    static Frame over(cv::Mat view, std::uint64_t frameId, std::chrono::nanoseconds timestamp, FrameStatus status,
+                      std::function<void()> recycle, std::string message = {});
+
+    FrameStatus status = FrameStatus::Error;
+    /// CV_8UC1 (Mono8) or CV_16UC1 (Mono12/Mono16), of the ROI's size.
+    cv::Mat image;
+    /// Camera frame counter (GVSP block id, V4L2 sequence, or the driver's own count).
+    std::uint64_t frameId = 0;
+    /// Camera timestamp (device clock, ns) where the device has one, else the host's monotonic clock.
+    std::chrono::nanoseconds timestamp{0};
+    /// Why the status is not Ok.
+    std::string message;
+
+    bool ok() const { return status == FrameStatus::Ok; }
+    /// Gives the buffer back to the pool now; `image` becomes empty.
+    void release();
+
+private:
+    std::function<void()> recycle_;
+};
+
+/// Identity of an open camera, for logs and `hullgauge camera list`.
+struct CameraInfo {
+    std::string backend;
+    std::string vendor;
+    std::string model;
+    std::string serial;
+    std::string address;  ///< IP address, device node or "sim"
+    int sensorWidth = 0;
+    int sensorHeight = 0;
+};
+
+/// One device feature as the maintenance tool shows it.
+struct FeatureInfo {
+    std::string name;
+    std::string type;  ///< Integer, Float, Enumeration, Boolean, String, Command
+    std::string value;  ///< current value as text (empty for commands and unreadable features)
+    std::string access;  ///< RO, WO, RW
+};
+
+/// The abstract camera. Public calls check the lifecycle state and wrap the
+/// backend's protected hooks, so the bookkeeping is written once.
+class Camera {
+public:
+    virtual ~Camera() = default;
+    Camera(const Camera&) = delete;
+    Camera& operator=(const Camera&) = delete;
+
+    LifecycleState state() const { return state_; }
+    const CameraSettings& settings() const { return settings_; }
+    /// "camera.driver" section this camera was built from (for messages).
+    const std::string& configPath() const { return configPath_; }
+
+    /// Unconfigured -> Inactive: open the device, apply settings().
+    Status configure();
+    /// Inactive -> Active: allocate the buffer pool and start streaming.
+    Status activate();
+    /// Active -> Inactive: stop streaming.
+    Status deactivate();
+    /// Inactive/Failed -> Unconfigured: close the device.
+    Status cleanup();
+
+    /// Replaces the settings; applied to the device now when Inactive, at configure() when Unconfigured.
+    /// Refused while Active (stop first: ROI and format change the payload).
+    Status setSettings(const CameraSettings& settings);
+
+    /// Active only. Software trigger: triggers one exposure and waits for it; free
+    /// run: waits for the next frame. Never longer than `timeout` plus one
+    /// reconnect attempt when the device was lost (see docs/camera.md).
+    [[nodiscard]] Frame grab(std::chrono::milliseconds timeout);
+
+    /// Maintenance: device features by name (Inactive or Active).
+    Result<std::vector<FeatureInfo>> listFeatures();
+    Result<std::string> getFeature(const std::string& name);
+    Status setFeature(const std::string& name, const std::string& value);
+    Result<CameraInfo> info();
+
+protected:
+    Camera(std::string configPath, CameraSettings settings);
+
+    virtual Status doConfigure() = 0;
+    virtual Status doApplySettings(const CameraSettings& settings) = 0;
+    virtual Status doActivate() = 0;
+    virtual Status doDeactivate() = 0;
+    virtual Status doCleanup() = 0;
+    virtual Frame doGrab(std::chrono::milliseconds timeout) = 0;
+    virtual Result<std::vector<FeatureInfo>> doListFeatures() = 0;
+    virtual Result<std::string> doGetFeature(const std::string& name) = 0;
+    virtual Status doSetFeature(const std::string& name, const std::string& value) = 0;
+    virtual Result<CameraInfo> doInfo() = 0;
+
+private:
+    Status transition(Transition t, const std::function<Status()>& hook);
+
+    std::string configPath_;
+    CameraSettings settings_;
+    LifecycleState state_ = LifecycleState::Unconfigured;
+};
+
+/// Parses the settings keys shared by every backend (pixel_format, exposure_us,
+/// gain_db, roi, trigger) from a `camera.driver` map.
+CameraSettings parseCameraSettings(const ConfigNode& driver);
+
+/// Builds the camera named by `camera.driver.backend` (aravis | v4l2 | sim).
+/// `root` is the whole station document. Only parses and validates: throws
+/// hg::InputError naming the key (unknown backend -> camera.driver.backend).
+/// The sim backend needs the station and a pose source: use makeSimCamera.
+std::unique_ptr<Camera> makeCamera(const ConfigNode& root);
+
+}  // namespace hg::drivers

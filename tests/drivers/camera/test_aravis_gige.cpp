@@ -1,0 +1,292 @@
+// The Aravis driver end to end against hullgauge-gige-sim over real GVCP/GVSP
+// on 127.0.0.1 (in a private network namespace per test process). Expected
+// pixels are the images the test itself wrote for the simulator to serve.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "gige_sim_process.h"
+#include "hgtest/paths.h"
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/drivers/camera.h"
+
+namespace {
+
+using namespace std::chrono_literals;
+using hg::drivers::Camera;
+using hg::drivers::FrameStatus;
+using hg::drivers::LifecycleState;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kWidth = 160;
+constexpr int kHeight = 120;
+constexpr int kImages = 7;
+
+class AravisGige : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        if (auto why = hgtest::isolateNetwork(); !why.empty()) GTEST_SKIP() << why;
+        // Seeded noise images: every pixel differs between images, so a frame
+        // can only match the image it was made from.
+        cv::RNG rng(20240517);
+        for (int i = 0; i < kImages; ++i) {
+            cv::Mat img(kHeight, kWidth, CV_8UC1);
+            rng.fill(img, cv::RNG::UNIFORM, 0, 256);
+            char name[32];
+            std::snprintf(name, sizeof name, "view%02d.png", i);
+            ASSERT_TRUE(cv::imwrite((dir_ / name).string(), img));
+            images_.push_back(img);
+        }
+    }
+
+    void startSim() { sim_.start({"--images", dir_.path().string(), "--frame-rate", "100"}); }
+
+    std::unique_ptr<Camera> makeCamera(const std::string& extra)
+    {
+        auto root = hg::ConfigNode::parse("camera:\n  driver:\n    backend: aravis\n    address: 127.0.0.1\n" + extra,
+                                          "station.yaml");
+        return hg::drivers::makeCamera(root);
+    }
+
+    static double maxDifference(const cv::Mat& a, const cv::Mat& b)
+    {
+        if (a.size() != b.size() || a.type() != b.type()) return -1.0;
+        return cv::norm(a, b, cv::NORM_INF);
+    }
+
+    /// Index of the served image `frame` equals exactly, or -1.
+    int matchingImage(const cv::Mat& frame) const
+    {
+        for (int i = 0; i < kImages; ++i)
+            if (maxDifference(frame, images_[i]) == 0.0) return i;
+        return -1;
+    }
+
+    hgtest::TempDir dir_;
+    std::vector<cv::Mat> images_;
+    hgtest::GigeSim sim_;
+};
+
+TEST_F(AravisGige, SetsExposureGainAndRoiByNameAndReadsThemBack)
+{
+    startSim();
+    auto cam = makeCamera("    exposure_us: 2500\n    gain_db: 6.5\n    roi: [16, 8, 96, 64]\n");
+    ASSERT_TRUE(cam->configure()) << cam->configure().message();
+    auto number = [&](const char* name) {
+        auto v = cam->getFeature(name);
+        EXPECT_TRUE(v.ok()) << name << ": " << v.message();
+        return v.ok() ? std::stod(v.value()) : -1.0;
+    };
+    EXPECT_DOUBLE_EQ(number("ExposureTime"), 2500.0);
+    EXPECT_DOUBLE_EQ(number("Gain"), 6.5);
+    EXPECT_EQ(number("OffsetX"), 16);
+    EXPECT_EQ(number("OffsetY"), 8);
+    EXPECT_EQ(number("Width"), 96);
+    EXPECT_EQ(number("Height"), 64);
+    EXPECT_EQ(cam->getFeature("PixelFormat").value(), "Mono8");
+    EXPECT_EQ(cam->getFeature("TriggerSource").value(), "Software");
+
+    // Set by name through the maintenance path, read back through the device.
+    EXPECT_TRUE(cam->setFeature("ExposureTime", "12000"));
+    EXPECT_DOUBLE_EQ(number("ExposureTime"), 12000.0);
+    EXPECT_TRUE(cam->setFeature("Gain", "3"));
+    EXPECT_DOUBLE_EQ(number("Gain"), 3.0);
+    EXPECT_TRUE(cam->setFeature("Width", "64"));
+    EXPECT_EQ(number("Width"), 64);
+
+    auto bad = cam->setFeature("NoSuchFeature", "1");
+    EXPECT_FALSE(bad);
+    EXPECT_NE(bad.message().find("NoSuchFeature"), std::string::npos);
+
+    auto info = cam->info();
+    ASSERT_TRUE(info.ok()) << info.message();
+    EXPECT_EQ(info.value().serial, "HGSIM0001");
+    EXPECT_EQ(info.value().sensorWidth, kWidth);
+    EXPECT_EQ(info.value().sensorHeight, kHeight);
+
+    auto features = cam->listFeatures();
+    ASSERT_TRUE(features.ok());
+    bool sawGain = false;
+    for (const auto& f : features.value())
+        if (f.name == "Gain") sawGain = f.type == "Float" && f.access == "RW" && std::stod(f.value) == 3.0;
+    EXPECT_TRUE(sawGain);
+    EXPECT_TRUE(cam->cleanup());
+}
+
+TEST_F(AravisGige, HundredTriggeredFramesEqualTheServedImagesInOrder)
+{
+    startSim();
+    auto cam = makeCamera("    trigger: software\n    buffer_count: 4\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    int first = -1;
+    std::uint64_t lastId = 0;
+    for (int k = 0; k < 100; ++k) {
+        auto frame = cam->grab(2000ms);
+        ASSERT_EQ(frame.status, FrameStatus::Ok) << "frame " << k << ": " << frame.message;
+        ASSERT_EQ(frame.image.type(), CV_8UC1);
+        int match = matchingImage(frame.image);
+        ASSERT_GE(match, 0) << "frame " << k << " equals none of the served images";
+        if (first < 0) first = match;
+        // One trigger, one exposure: the simulator serves its images in turn.
+        EXPECT_EQ(match, (first + k) % kImages) << "frame " << k;
+        if (k > 0) EXPECT_GT(frame.frameId, lastId);
+        lastId = frame.frameId;
+    }
+    EXPECT_TRUE(cam->deactivate());
+    EXPECT_TRUE(cam->cleanup());
+}
+
+TEST_F(AravisGige, RoiAndWidePixelFormatsCarryTheServedPixels)
+{
+    startSim();
+    auto cam = makeCamera("    roi: [24, 10, 64, 48]\n");
+    ASSERT_TRUE(cam->configure());
+    const cv::Rect roi(24, 10, 64, 48);
+
+    struct Case {
+        hg::drivers::PixelFormat format;
+        double scale;  // expected = served * scale
+    };
+    for (Case c : {Case{hg::drivers::PixelFormat::Mono8, 1.0}, Case{hg::drivers::PixelFormat::Mono12, 16.0},
+                   Case{hg::drivers::PixelFormat::Mono16, 257.0}}) {
+        auto s = cam->settings();
+        s.pixelFormat = c.format;
+        ASSERT_TRUE(cam->setSettings(s));
+        ASSERT_TRUE(cam->activate());
+        for (int k = 0; k < 5; ++k) {
+            auto frame = cam->grab(2000ms);
+            ASSERT_TRUE(frame.ok()) << frame.message;
+            ASSERT_EQ(frame.image.size(), roi.size());
+            bool matched = false;
+            for (const auto& img : images_) {
+                cv::Mat expected;
+                img(roi).convertTo(expected, hg::drivers::cvTypeOf(c.format), c.scale);
+                matched = matched || maxDifference(frame.image, expected) == 0.0;
+            }
+            EXPECT_TRUE(matched) << toString(c.format) << " frame " << k;
+        }
+        ASSERT_TRUE(cam->deactivate());
+    }
+    EXPECT_TRUE(cam->cleanup());
+}
+
+TEST_F(AravisGige, FreeRunDeliversFreshServedFrames)
+{
+    startSim();
+    auto cam = makeCamera("    trigger: free_run\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    std::uint64_t lastId = 0;
+    for (int k = 0; k < 20; ++k) {
+        auto frame = cam->grab(1000ms);
+        ASSERT_TRUE(frame.ok()) << frame.message;
+        EXPECT_GE(matchingImage(frame.image), 0);
+        if (k > 0) EXPECT_GT(frame.frameId, lastId);
+        lastId = frame.frameId;
+    }
+}
+
+TEST_F(AravisGige, FramesHeldByTheCallerAreNotOverwritten)
+{
+    startSim();
+    auto cam = makeCamera("    buffer_count: 3\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    // Hold two frames (views of pool buffers) while grabbing more.
+    auto a = cam->grab(2000ms);
+    auto b = cam->grab(2000ms);
+    ASSERT_TRUE(a.ok() && b.ok());
+    const cv::Mat aCopy = a.image.clone();
+    const cv::Mat bCopy = b.image.clone();
+    for (int k = 0; k < 10; ++k) {
+        auto c = cam->grab(2000ms);
+        ASSERT_TRUE(c.ok()) << c.message;
+        EXPECT_NE(c.image.data, a.image.data);
+        EXPECT_NE(c.image.data, b.image.data);
+    }
+    EXPECT_EQ(maxDifference(a.image, aCopy), 0.0);
+    EXPECT_EQ(maxDifference(b.image, bCopy), 0.0);
+    // Frames may outlive the stream: their buffers are then freed, not requeued.
+    ASSERT_TRUE(cam->deactivate());
+    EXPECT_EQ(maxDifference(a.image, aCopy), 0.0);
+    a.release();
+    EXPECT_TRUE(a.image.empty());
+}
+
+TEST_F(AravisGige, CameraKilledMidStreamTimesOutThenRecoversWhenItReturns)
+{
+    startSim();
+    auto cam = makeCamera("    trigger: software\n    reconnect_backoff_ms: [100, 400]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    for (int k = 0; k < 10; ++k) ASSERT_TRUE(cam->grab(2000ms).ok());
+
+    sim_.kill();
+    const auto timeout = 700ms;
+    const auto t0 = Clock::now();
+    auto lost = cam->grab(timeout);
+    const auto took = Clock::now() - t0;
+    EXPECT_EQ(lost.status, FrameStatus::Timeout) << lost.message;
+    EXPECT_FALSE(lost.message.empty());
+    EXPECT_NE(lost.message.find("127.0.0.1"), std::string::npos) << lost.message;
+    EXPECT_LE(took, timeout + 300ms) << "the timeout must bound the grab";
+
+    // While it is away, grabs fail fast and say so; none blocks without bound.
+    for (int k = 0; k < 3; ++k) {
+        const auto t1 = Clock::now();
+        auto f = cam->grab(timeout);
+        EXPECT_FALSE(f.ok());
+        EXPECT_LE(Clock::now() - t1, 5s) << f.message;
+    }
+
+    startSim();
+    const auto deadline = Clock::now() + 15s;
+    bool recovered = false;
+    while (Clock::now() < deadline && !recovered) {
+        auto f = cam->grab(1000ms);
+        if (f.ok()) {
+            recovered = true;
+            EXPECT_GE(matchingImage(f.image), 0);
+        }
+    }
+    ASSERT_TRUE(recovered) << "no frame within 15 s of the camera's return";
+    for (int k = 0; k < 5; ++k) {
+        auto f = cam->grab(2000ms);
+        ASSERT_TRUE(f.ok()) << f.message;
+        EXPECT_GE(matchingImage(f.image), 0);
+    }
+    EXPECT_EQ(cam->state(), LifecycleState::Active);
+}
+
+TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)
+{
+    // No simulator: nothing answers on 127.0.0.1.
+    auto cam = makeCamera("");
+    const auto t0 = Clock::now();
+    auto s = cam->configure();
+    EXPECT_FALSE(s);
+    EXPECT_NE(s.message().find("camera.driver.address"), std::string::npos) << s.message();
+    EXPECT_LE(Clock::now() - t0, 10s);
+    EXPECT_EQ(cam->state(), LifecycleState::Failed);
+    EXPECT_TRUE(cam->cleanup());
+    EXPECT_EQ(cam->state(), LifecycleState::Unconfigured);
+}
+
+TEST_F(AravisGige, RoiTheSensorCannotHoldIsRefused)
+{
+    startSim();
+    auto cam = makeCamera("    roi: [100, 0, 100, 50]\n");  // 100 + 100 > 160 px sensor
+    auto s = cam->configure();
+    EXPECT_FALSE(s);
+    EXPECT_NE(s.message().find("ROI"), std::string::npos) << s.message();
+}
+
+}  // namespace

@@ -1,0 +1,160 @@
+// Goal-driven inspection (dissertation 3.3.8, 3.3.6, 4.6): one traversal of
+// the octree inspection map, reconstructing only the voxels the landmarks need,
+// then per-landmark error measures, statistics and parameters. Pure
+// computation on values: frames in, result out; no I/O, no threads.
+//
+// Traversal, per landmark at the chosen level: reconstruct the landmark voxel
+// (type three). If object, reconstruct its 26 neighbours and recurse outward
+// from every neighbour reconstructed wrongly (label differs from the CAD
+// label), out to `adjacency` layers from the landmark voxel. If void, search
+// the neighbours ring by ring for object voxels — candidate landmark locations —
+// and continue from those. Every voxel is reconstructed at most once per
+// inspection (memoised beside the map, so the map itself stays shareable).
+//
+// Boundary estimate (docs/inspection.md): along the landmark normal through the
+// landmark, the voxels of the network the line crosses are reconstructed in
+// order; each has a normal coordinate s_c = (centre − landmark)·normal. A plane
+// surface at signed offset e is ≥ 50 % inside a cube exactly when e ≥ s_c, so
+// every object→void change between consecutive voxels i, i+1 brackets the
+// surface in [s_c(i), s_c(i+1)]. The landmark's bracket [sLow, sHigh] is the
+// hull of all such changes; error_min/error_max are the smallest and largest
+// |s| over it, error_mm their mean (4.6.2).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "hullgauge/geometry/camera.h"
+#include "hullgauge/inspect/inspection_map.h"
+#include "hullgauge/inspect/measures.h"
+#include "hullgauge/inspect/voxel_test.h"
+#include "hullgauge/vision/segmentation.h"
+
+namespace hg::inspect {
+
+enum class LandmarkStatus { Ok, OutOfTolerance, Overflow, NotFound, NotObservable, NotInspected };
+const char* toString(LandmarkStatus status);
+
+/// Run-time adaptation of the map (3.4) and the mode of the traversal.
+struct InspectionOptions {
+    /// Octree level to inspect at; -1 = the map's depth. Must lie within the
+    /// map's [coarsestLevel, depth].
+    int level = -1;
+    /// Type-four layers searched; -1 = the map's adjacency depth (at most that).
+    int adjacency = -1;
+    /// Landmark ids left out of this inspection (masked branches).
+    std::vector<std::string> maskedLandmarks;
+    /// Stop at the first landmark that is not ok (3.3.6); the rest are not_inspected.
+    bool earlyExit = false;
+    VoxelTestMethod method = VoxelTestMethod::VolumeSource;
+    /// Require eq. 4.4.4-19 (MED <= ΔV) from at least one observing view per
+    /// landmark; a landmark without one is not_observable.
+    bool requireResolution = true;
+};
+
+struct ViewReport {
+    std::string viewId;
+    ViewDiscrimination discrimination;
+};
+
+struct LandmarkResult {
+    std::string id;
+    LandmarkStatus status = LandmarkStatus::NotInspected;
+    std::string reason;            ///< why a landmark is not ok (human readable)
+    int errorNumber = 0;           ///< wrongly reconstructed voxels near the landmark (3.3.6)
+    bool measured = false;         ///< the error fields hold values
+    double errorMinMm = 0.0;
+    double errorMaxMm = 0.0;
+    double errorMm = 0.0;
+    double toleranceMm = 0.0;
+    double offsetLowMm = 0.0;      ///< signed boundary bracket along the outward normal
+    double offsetHighMm = 0.0;
+    bool overflowLow = false;      ///< the boundary lies deeper than the network reaches
+    bool overflowHigh = false;     ///< ... or farther out
+    int voxelsReconstructed = 0;   ///< voxels this landmark caused to be reconstructed
+    std::optional<double> medMm;   ///< best (smallest) eq. 4.4.4-19 MED over observing views
+    std::vector<ViewReport> views;
+};
+
+struct ParameterResult {
+    std::string id;
+    ParameterKind kind = ParameterKind::Distance;
+    bool measured = false;
+    Bracket value;
+    double nominal = 0.0;
+    double tolerance = 0.0;
+    std::string status = "not_measured";  ///< ok | out_of_tolerance | not_measured
+};
+
+struct Statistics {
+    double aveErrorMin = 0, aveErrorMax = 0, aveError = 0;
+    double stdErrorMin = 0, stdErrorMax = 0, stdError = 0;
+    double maxError = 0, minError = 0;
+    double totalVolumeError = 0;  ///< mm³: distinct wrong voxels × ΔV³
+    int landmarksMeasured = 0;
+};
+
+struct InspectionResult {
+    std::string part;
+    bool pass = false;
+    int level = 0;
+    int adjacency = 0;
+    double voxelSizeMm = 0.0;
+    int viewsUsed = 0;
+    std::uint64_t voxelsReconstructed = 0;
+    std::vector<LandmarkResult> landmarks;
+    Statistics statistics;
+    std::vector<ParameterResult> parameters;
+    double segmentationMs = 0.0, reconstructionMs = 0.0, totalMs = 0.0;
+};
+
+/// CONTRACTS §4 plus the documented extensions.
+nlohmann::json toJson(const InspectionResult& result);
+
+/// A reconstruction oracle: the label of a voxel box (Void, Object or Undecided).
+using VoxelOracle = std::function<VoxelLabel(const Box3&)>;
+
+/// A captured view: id, calibrated camera, grey or colour frame (8/16 bit).
+struct CapturedView {
+    std::string id;
+    geometry::CameraModel camera;
+    cv::Mat frame;
+};
+
+class Inspector {
+public:
+    /// Validates `options` against the map; throws std::invalid_argument.
+    Inspector(const InspectionMap& map, InspectionOptions options = {});
+
+    /// Segments only the regions the map's voxels project to, then inspects.
+    /// Frames must match their camera's image size (std::invalid_argument naming the view).
+    InspectionResult inspect(const std::vector<CapturedView>& views,
+                             const vision::SegmentationSettings& segmentation) const;
+    /// Inspects prepared silhouettes (ids name the views in the result).
+    InspectionResult inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const;
+    /// Inspects with any voxel oracle (no views: no MED check, views_used 0).
+    InspectionResult inspectWith(const VoxelOracle& oracle) const;
+
+    /// Frame rectangles (merged, non-overlapping) holding every footprint the
+    /// inspection can ask for in this camera.
+    std::vector<cv::Rect> regionsOfInterest(const geometry::CameraModel& camera) const;
+
+    int level() const { return level_; }
+    int adjacency() const { return adjacency_; }
+
+private:
+    InspectionResult run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
+                         const std::vector<std::string>* viewIds) const;
+
+    const InspectionMap* map_;
+    InspectionOptions options_;
+    int level_;
+    int adjacency_;
+    std::vector<std::uint8_t> active_;
+};
+
+}  // namespace hg::inspect

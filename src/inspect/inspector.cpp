@@ -1,0 +1,509 @@
+#include "hullgauge/inspect/inspector.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <stdexcept>
+#include <unordered_set>
+
+#include "hullgauge/common/log.h"
+
+namespace hg::inspect {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0)
+{
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+int chebyshev(const Eigen::Vector3i& a, const Eigen::Vector3i& b) { return (a - b).cwiseAbs().maxCoeff(); }
+
+/// Per-inspection memo of reconstructed labels, parallel to the map's nodes
+/// (3.3.1: "each voxel will be reconstructed only once").
+class Memo {
+public:
+    Memo(const InspectionMap& map, const VoxelOracle& oracle)
+        : map_(map), oracle_(oracle), labels_(map.nodes().size(), VoxelLabel::Unknown)
+    {
+    }
+    VoxelLabel label(std::int32_t node, int& counter)
+    {
+        VoxelLabel& l = labels_[static_cast<std::size_t>(node)];
+        if (l == VoxelLabel::Unknown) {
+            l = oracle_(map_.voxelBox(map_.nodes()[static_cast<std::size_t>(node)].key));
+            ++counter;
+            ++total_;
+        }
+        return l;
+    }
+    bool wrong(std::int32_t node, VoxelLabel l) const
+    {
+        if (l != VoxelLabel::Object && l != VoxelLabel::Void) return false;
+        return (l == VoxelLabel::Object) != map_.nodes()[static_cast<std::size_t>(node)].expectedObject;
+    }
+    std::uint64_t total() const { return total_; }
+
+private:
+    const InspectionMap& map_;
+    const VoxelOracle& oracle_;
+    std::vector<VoxelLabel> labels_;
+    std::uint64_t total_ = 0;
+};
+
+struct LandmarkWork {
+    LandmarkResult result;
+    std::vector<std::int32_t> wrongNodes;
+    bool objectFound = false;
+};
+
+}  // namespace
+
+const char* toString(LandmarkStatus status)
+{
+    switch (status) {
+    case LandmarkStatus::Ok: return "ok";
+    case LandmarkStatus::OutOfTolerance: return "out_of_tolerance";
+    case LandmarkStatus::Overflow: return "overflow";
+    case LandmarkStatus::NotFound: return "not_found";
+    case LandmarkStatus::NotObservable: return "not_observable";
+    case LandmarkStatus::NotInspected: return "not_inspected";
+    }
+    return "not_inspected";
+}
+
+Inspector::Inspector(const InspectionMap& map, InspectionOptions options) : map_(&map), options_(std::move(options))
+{
+    const MapGeometry& g = map.geometry();
+    level_ = options_.level < 0 ? g.depth : options_.level;
+    if (level_ < g.coarsestLevel || level_ > g.depth)
+        throw std::invalid_argument("inspection level " + std::to_string(level_) + " is not in the map (levels " +
+                                    std::to_string(g.coarsestLevel) + ".." + std::to_string(g.depth) + ")");
+    adjacency_ = options_.adjacency < 0 ? g.adjacencyDepth : options_.adjacency;
+    if (adjacency_ < 1 || adjacency_ > g.adjacencyDepth)
+        throw std::invalid_argument("adjacency " + std::to_string(adjacency_) + " must be within 1.." +
+                                    std::to_string(g.adjacencyDepth));
+    active_.assign(map.landmarks().size(), 1);
+    for (const std::string& id : options_.maskedLandmarks) {
+        const auto idx = map.landmarkIndex(id);
+        if (!idx) throw std::invalid_argument("masked landmark '" + id + "' is not in the map");
+        active_[*idx] = 0;
+    }
+}
+
+std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& camera) const
+{
+    const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
+    const double s = map_->voxelSize(level_);
+    const int nmax = (1 << level_) - 1;
+    std::vector<cv::Rect> rects;
+    for (std::size_t l = 0; l < map_->landmarks().size(); ++l) {
+        if (!active_[l]) continue;
+        const std::int32_t n = map_->landmarkNode(l, level_);
+        const Eigen::Vector3i c = keyIndex(map_->nodes()[static_cast<std::size_t>(n)].key);
+        const Eigen::Vector3i lo = (c.array() - adjacency_).max(0).matrix();
+        const Eigen::Vector3i hi = (c.array() + adjacency_).min(nmax).matrix() + Eigen::Vector3i::Ones();
+        const Box3 box(map_->geometry().cubeOrigin + s * lo.cast<double>(),
+                       map_->geometry().cubeOrigin + s * hi.cast<double>());
+        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+        bool ok = true;
+        for (int i = 0; i < 8 && ok; ++i) {
+            const auto px = camera.project(box.corner(static_cast<Box3::CornerType>(i)));
+            if (!px) {
+                ok = false;
+                break;
+            }
+            x0 = std::min(x0, px->x());
+            y0 = std::min(y0, px->y());
+            x1 = std::max(x1, px->x());
+            y1 = std::max(y1, px->y());
+        }
+        if (!ok) continue;
+        // Pixel (c, r) spans c ± 0.5; one pixel of margin for distortion bending.
+        const int c0 = static_cast<int>(std::floor(x0 + 0.5)) - 1, r0 = static_cast<int>(std::floor(y0 + 0.5)) - 1;
+        const int c1 = static_cast<int>(std::floor(x1 + 0.5)) + 1, r1 = static_cast<int>(std::floor(y1 + 0.5)) + 1;
+        if (c1 < 0 || r1 < 0 || c0 >= frame.width || r0 >= frame.height) continue;
+        const cv::Rect r = cv::Rect(cv::Point(c0, r0), cv::Point(c1 + 1, r1 + 1)) & frame;
+        if (!r.empty()) rects.push_back(r);
+    }
+    // Merge overlapping rectangles until none overlap, so that a footprint in a
+    // landmark's network always lies in one region.
+    bool merged = true;
+    while (merged) {
+        merged = false;
+        for (std::size_t i = 0; i < rects.size() && !merged; ++i)
+            for (std::size_t j = i + 1; j < rects.size(); ++j)
+                if ((rects[i] & rects[j]).area() > 0) {
+                    rects[i] |= rects[j];
+                    rects.erase(rects.begin() + static_cast<std::ptrdiff_t>(j));
+                    merged = true;
+                    break;
+                }
+    }
+    return rects;
+}
+
+InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
+                                    const vision::SegmentationSettings& segmentation) const
+{
+    const auto t0 = Clock::now();
+    std::vector<SilhouetteView> silhouettes;
+    std::vector<std::string> ids;
+    silhouettes.reserve(views.size());
+    for (const CapturedView& v : views) {
+        if (v.frame.cols != v.camera.imageSize().width || v.frame.rows != v.camera.imageSize().height)
+            throw std::invalid_argument("view '" + v.id + "': frame is " + std::to_string(v.frame.cols) + "x" +
+                                        std::to_string(v.frame.rows) + ", camera expects " +
+                                        std::to_string(v.camera.imageSize().width) + "x" +
+                                        std::to_string(v.camera.imageSize().height));
+        const cv::Mat grey = vision::toGrey(v.frame);
+        const double threshold = vision::computeThreshold(grey, segmentation);
+        SilhouetteView sv{v.camera, SilhouetteIndex(grey.size())};
+        for (const cv::Rect& r : regionsOfInterest(v.camera))
+            sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
+        silhouettes.push_back(std::move(sv));
+        ids.push_back(v.id);
+    }
+    const double segMs = msSince(t0);
+    InspectionResult r = inspect(silhouettes, ids);
+    r.segmentationMs = segMs;
+    r.totalMs = msSince(t0);
+    return r;
+}
+
+InspectionResult Inspector::inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const
+{
+    const auto t0 = Clock::now();
+    VoxelTester tester(&views, options_.method);
+    InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
+    r.totalMs = msSince(t0);
+    return r;
+}
+
+InspectionResult Inspector::inspectWith(const VoxelOracle& oracle) const
+{
+    const auto t0 = Clock::now();
+    InspectionResult r = run(oracle, nullptr, nullptr);
+    r.totalMs = msSince(t0);
+    return r;
+}
+
+InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
+                                const std::vector<std::string>* viewIds) const
+{
+    const auto t0 = Clock::now();
+    const InspectionMap& map = *map_;
+    const int A = adjacency_;
+    const double dv = map.voxelSize(level_);
+    Memo memo(map, oracle);
+    InspectionResult result;
+    result.part = map.partName();
+    result.level = level_;
+    result.adjacency = A;
+    result.voxelSizeMm = dv;
+    result.viewsUsed = views ? static_cast<int>(views->size()) : 0;
+
+    std::unordered_set<std::int32_t> allWrong;
+    bool stopped = false;
+    for (std::size_t l = 0; l < map.landmarks().size(); ++l) {
+        const MapLandmark& lm = map.landmarks()[l];
+        if (!active_[l]) continue;
+        LandmarkResult lr;
+        lr.id = lm.id;
+        lr.toleranceMm = lm.toleranceMm;
+        if (stopped) {
+            lr.reason = "inspection stopped at an earlier failing landmark";
+            result.landmarks.push_back(std::move(lr));
+            continue;
+        }
+        int counter = 0;
+        const std::int32_t n0 = map.landmarkNode(l, level_);
+        const Eigen::Vector3i c0 = keyIndex(map.nodes()[static_cast<std::size_t>(n0)].key);
+        auto within = [&](std::int32_t n) {
+            return chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) <= A;
+        };
+
+        // Discrimination (4.5.2): which views observe the landmark and resolve ΔV.
+        if (views) {
+            for (std::size_t v = 0; v < views->size(); ++v) {
+                ViewReport vr{(*viewIds)[v], viewDiscrimination((*views)[v].camera, lm.position)};
+                if (vr.discrimination.observes && (!lr.medMm || vr.discrimination.medRangeMm < *lr.medMm))
+                    lr.medMm = vr.discrimination.medRangeMm;
+                lr.views.push_back(std::move(vr));
+            }
+        }
+
+        // --- The traversal of 3.3.8 -------------------------------------------
+        std::unordered_set<std::int32_t> visited;
+        std::vector<std::int32_t> wrong;
+        int undecided = 0;
+        auto visit = [&](std::int32_t n) {
+            const VoxelLabel lab = memo.label(n, counter);
+            visited.insert(n);
+            if (lab == VoxelLabel::Undecided) ++undecided;
+            if (memo.wrong(n, lab)) wrong.push_back(n);
+            return lab;
+        };
+        const VoxelLabel l0 = visit(n0);
+        std::vector<std::int32_t> seeds;
+        bool objectFound = l0 == VoxelLabel::Object;
+        const bool expectedObject0 = map.nodes()[static_cast<std::size_t>(n0)].expectedObject;
+        if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !expectedObject0)) {
+            // The landmark voxel is object, or void as the map expects (a landmark
+            // on a voxel face can fall in the outer voxel): check its neighbours.
+            seeds.push_back(n0);
+        } else if (l0 == VoxelLabel::Void) {
+            // The landmark voxel should be object but is void: look ring by ring
+            // for object voxels nearby, the candidate locations of the displaced
+            // landmark (3.3.8).
+            std::vector<std::int32_t> front{n0};
+            while (!front.empty() && seeds.empty()) {
+                std::vector<std::int32_t> next;
+                for (std::int32_t u : front)
+                    for (int s = 0; s < 26; ++s) {
+                        const std::int32_t v = map.neighbour(u, s);
+                        if (v < 0 || visited.count(v) || !within(v)) continue;
+                        const VoxelLabel lab = visit(v);
+                        if (lab == VoxelLabel::Object) seeds.push_back(v);
+                        else next.push_back(v);
+                    }
+                front = std::move(next);
+            }
+            objectFound = !seeds.empty();
+        }
+        // From each object seed: reconstruct its neighbours, and recurse outward
+        // from every neighbour whose label differs from the map's.
+        bool frontAtLimit = false;
+        std::deque<std::int32_t> queue(seeds.begin(), seeds.end());
+        while (!queue.empty()) {
+            const std::int32_t u = queue.front();
+            queue.pop_front();
+            for (int s = 0; s < 26; ++s) {
+                const std::int32_t v = map.neighbour(u, s);
+                if (v < 0 || visited.count(v) || !within(v)) continue;
+                const VoxelLabel lab = visit(v);
+                if (!memo.wrong(v, lab)) continue;
+                if (chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(v)].key), c0) >= A) frontAtLimit = true;
+                queue.push_back(v);
+            }
+        }
+        lr.errorNumber = static_cast<int>(wrong.size());
+        allWrong.insert(wrong.begin(), wrong.end());
+
+        // --- Boundary bracket along the normal (docs/inspection.md) -----------
+        const double reach = (A + 1.0) * dv * std::sqrt(3.0);
+        const double step = dv / 16.0;
+        std::vector<std::int32_t> line;
+        for (double s = -reach; s <= reach; s += step) {
+            const VoxelKey key = map.keyAt(lm.position + s * lm.normal, level_);
+            const std::int32_t n = map.find(key);
+            if (n < 0 || !within(n)) continue;
+            if (line.empty() || line.back() != n) line.push_back(n);
+        }
+        bool lineUndecided = false;
+        std::vector<VoxelLabel> labels;
+        std::vector<double> sc;
+        for (std::int32_t n : line) {
+            const VoxelLabel lab = visit(n);
+            lineUndecided = lineUndecided || lab == VoxelLabel::Undecided;
+            labels.push_back(lab);
+            sc.push_back((map.voxelBox(map.nodes()[static_cast<std::size_t>(n)].key).center() - lm.position).dot(lm.normal));
+        }
+        lr.voxelsReconstructed = counter;
+
+        if (l0 == VoxelLabel::Undecided || lineUndecided) {
+            lr.status = LandmarkStatus::NotObservable;
+            lr.reason = "no view decides the voxels at the landmark (footprints outside the frames or behind a camera)";
+        } else if (views && options_.requireResolution && (!lr.medMm || *lr.medMm > dv)) {
+            lr.status = LandmarkStatus::NotObservable;
+            lr.reason = lr.medMm ? "no view resolves the voxel size (eq. 4.4.4-19: best MED " + std::to_string(*lr.medMm) +
+                                       " mm > ΔV " + std::to_string(dv) + " mm)"
+                                 : "no view sees the landmark";
+        } else {
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            for (std::size_t i = 0; i + 1 < labels.size(); ++i)
+                if (labels[i] != labels[i + 1]) {
+                    lo = std::min({lo, sc[i], sc[i + 1]});
+                    hi = std::max({hi, sc[i], sc[i + 1]});
+                }
+            const bool anyObject = std::find(labels.begin(), labels.end(), VoxelLabel::Object) != labels.end();
+            lr.overflowLow = !labels.empty() && labels.front() == VoxelLabel::Void;
+            lr.overflowHigh = !labels.empty() && labels.back() == VoxelLabel::Object;
+            if (lr.overflowLow) lo = sc.front() - 0.5 * dv;
+            if (lr.overflowHigh) hi = sc.back() + 0.5 * dv;
+            if (!(lo <= hi)) lo = hi = 0.0;
+            lr.offsetLowMm = lo;
+            lr.offsetHighMm = hi;
+            lr.errorMinMm = (lo <= 0.0 && hi >= 0.0) ? 0.0 : std::min(std::abs(lo), std::abs(hi));
+            lr.errorMaxMm = std::max(std::abs(lo), std::abs(hi));
+            lr.errorMm = 0.5 * (lr.errorMinMm + lr.errorMaxMm);
+            lr.measured = true;
+            if (!anyObject && !objectFound) {
+                lr.status = LandmarkStatus::NotFound;
+                lr.reason = "no object voxel within the adjacency layers of the landmark";
+            } else if (lr.overflowLow || lr.overflowHigh) {
+                lr.status = LandmarkStatus::Overflow;
+                lr.reason = "the boundary lies beyond the adjacency layers";
+            } else if (lr.errorMm > lm.toleranceMm) {
+                lr.status = LandmarkStatus::OutOfTolerance;
+            } else {
+                lr.status = LandmarkStatus::Ok;
+            }
+        }
+        if (frontAtLimit && lr.reason.empty()) lr.reason = "wrongly reconstructed voxels reach the outermost layer";
+        (void)undecided;
+        if (lr.status != LandmarkStatus::Ok && options_.earlyExit) stopped = true;
+        result.landmarks.push_back(std::move(lr));
+    }
+
+    // --- Statistics (4.6.3) over the landmarks with a measured error ----------
+    Statistics& st = result.statistics;
+    std::vector<const LandmarkResult*> measured;
+    for (const LandmarkResult& lr : result.landmarks)
+        if (lr.measured) measured.push_back(&lr);
+    st.landmarksMeasured = static_cast<int>(measured.size());
+    if (!measured.empty()) {
+        const double N = static_cast<double>(measured.size());
+        st.minError = std::numeric_limits<double>::infinity();
+        for (const LandmarkResult* m : measured) {
+            st.aveErrorMin += m->errorMinMm / N;
+            st.aveErrorMax += m->errorMaxMm / N;
+            st.aveError += m->errorMm / N;
+            st.maxError = std::max(st.maxError, m->errorMaxMm);
+            st.minError = std::min(st.minError, m->errorMinMm);
+        }
+        for (const LandmarkResult* m : measured) {
+            st.stdErrorMin += (m->errorMinMm - st.aveErrorMin) * (m->errorMinMm - st.aveErrorMin) / N;
+            st.stdErrorMax += (m->errorMaxMm - st.aveErrorMax) * (m->errorMaxMm - st.aveErrorMax) / N;
+            st.stdError += (m->errorMm - st.aveError) * (m->errorMm - st.aveError) / N;
+        }
+        st.stdErrorMin = std::sqrt(st.stdErrorMin);
+        st.stdErrorMax = std::sqrt(st.stdErrorMax);
+        st.stdError = std::sqrt(st.stdError);
+    }
+    st.totalVolumeError = static_cast<double>(allWrong.size()) * dv * dv * dv;
+
+    // --- Parameters (4.6.4) ----------------------------------------------------
+    for (const MapParameter& p : map.parameters()) {
+        ParameterResult pr;
+        pr.id = p.id;
+        pr.kind = p.kind;
+        pr.nominal = p.nominal;
+        pr.tolerance = p.tolerance;
+        std::vector<LandmarkEstimate> est;
+        bool ok = true;
+        for (const std::string& id : p.landmarks) {
+            const auto idx = map.landmarkIndex(id);
+            const auto it = std::find_if(result.landmarks.begin(), result.landmarks.end(),
+                                         [&](const LandmarkResult& x) { return x.id == id; });
+            if (!idx || it == result.landmarks.end() || !it->measured || it->overflowLow || it->overflowHigh) {
+                ok = false;
+                break;
+            }
+            const MapLandmark& lm = map.landmarks()[*idx];
+            est.push_back({lm.position, lm.normal, it->offsetLowMm, it->offsetHighMm});
+        }
+        if (ok && !est.empty()) {
+            switch (p.kind) {
+            case ParameterKind::Distance:
+                if (est.size() == 2) pr.value = distanceBracket(est[0], est[1]);
+                else ok = false;
+                break;
+            case ParameterKind::Perimeter: pr.value = perimeterBracket(est); break;
+            case ParameterKind::Area: pr.value = areaBracket(est); break;
+            }
+        }
+        pr.measured = ok && !est.empty();
+        if (pr.measured) pr.status = std::abs(pr.value.mid() - p.nominal) > p.tolerance ? "out_of_tolerance" : "ok";
+        result.parameters.push_back(std::move(pr));
+    }
+
+    result.pass = true;
+    for (const LandmarkResult& lr : result.landmarks)
+        if (lr.status != LandmarkStatus::Ok) result.pass = false;
+    for (const ParameterResult& pr : result.parameters)
+        if (pr.status != "ok") result.pass = false;
+    result.voxelsReconstructed = memo.total();
+    result.reconstructionMs = msSince(t0);
+    log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}", result.landmarks.size(),
+                                    level_, result.voxelsReconstructed, result.pass ? "pass" : "fail");
+    return result;
+}
+
+nlohmann::json toJson(const InspectionResult& r)
+{
+    using nlohmann::json;
+    json j;
+    j["part"] = r.part;
+    j["verdict"] = r.pass ? "pass" : "fail";
+    j["voxel_size_mm"] = r.voxelSizeMm;
+    j["views_used"] = r.viewsUsed;
+    j["voxels_reconstructed"] = r.voxelsReconstructed;
+    j["level"] = r.level;
+    j["adjacency"] = r.adjacency;
+    json lms = json::array();
+    for (const LandmarkResult& lr : r.landmarks) {
+        json l;
+        l["id"] = lr.id;
+        l["status"] = toString(lr.status);
+        l["error_number"] = lr.errorNumber;
+        if (lr.measured) {
+            l["error_min_mm"] = lr.errorMinMm;
+            l["error_max_mm"] = lr.errorMaxMm;
+            l["error_mm"] = lr.errorMm;
+            l["offset_low_mm"] = lr.offsetLowMm;
+            l["offset_high_mm"] = lr.offsetHighMm;
+        } else {
+            l["error_min_mm"] = nullptr;
+            l["error_max_mm"] = nullptr;
+            l["error_mm"] = nullptr;
+        }
+        l["tolerance_mm"] = lr.toleranceMm;
+        if (!lr.reason.empty()) l["reason"] = lr.reason;
+        l["voxels_reconstructed"] = lr.voxelsReconstructed;
+        if (lr.medMm) l["med_mm"] = *lr.medMm;
+        if (!lr.views.empty()) {
+            json vs = json::array();
+            for (const ViewReport& v : lr.views) {
+                json jv{{"view", v.viewId},
+                        {"observes", v.discrimination.observes},
+                        {"distance_mm", v.discrimination.distanceMm},
+                        {"theta_deg", v.discrimination.thetaDeg},
+                        {"med_range_mm", v.discrimination.medRangeMm}};
+                if (std::isfinite(v.discrimination.medAngleMm)) jv["med_angle_mm"] = v.discrimination.medAngleMm;
+                else jv["med_angle_mm"] = nullptr;
+                vs.push_back(std::move(jv));
+            }
+            l["views"] = std::move(vs);
+        }
+        lms.push_back(std::move(l));
+    }
+    j["landmarks"] = std::move(lms);
+    const Statistics& s = r.statistics;
+    j["statistics"] = {{"ave_error_min_mm", s.aveErrorMin}, {"ave_error_max_mm", s.aveErrorMax},
+                       {"ave_error_mm", s.aveError},        {"std_error_min_mm", s.stdErrorMin},
+                       {"std_error_max_mm", s.stdErrorMax}, {"std_error_mm", s.stdError},
+                       {"max_error_mm", s.maxError},        {"min_error_mm", s.minError},
+                       {"total_volume_error_mm3", s.totalVolumeError}, {"landmarks_measured", s.landmarksMeasured}};
+    json ps = json::array();
+    for (const ParameterResult& p : r.parameters) {
+        json jp{{"id", p.id}, {"kind", toString(p.kind)}, {"nominal_mm", p.nominal}, {"tolerance_mm", p.tolerance},
+                {"status", p.status}};
+        if (p.measured) {
+            jp["min_mm"] = p.value.min;
+            jp["max_mm"] = p.value.max;
+        } else {
+            jp["min_mm"] = nullptr;
+            jp["max_mm"] = nullptr;
+        }
+        ps.push_back(std::move(jp));
+    }
+    j["parameters"] = std::move(ps);
+    j["timing_ms"] = {{"segmentation", r.segmentationMs}, {"reconstruction", r.reconstructionMs}, {"total", r.totalMs}};
+    return j;
+}
+
+}  // namespace hg::inspect

@@ -92,6 +92,18 @@ std::tuple<long long, long long, long long> poseKey(const FixturePose& p)
     return {std::llround(p.rotationDeg * 1e6), std::llround(p.declinationDeg * 1e6), std::llround(p.railMm * 1e6)};
 }
 
+/// The inspection-map label of a voxel (5.3.3): the exact classification
+/// decides wholly inside / outside boxes at once, the 50 % volume test the rest.
+bool objectVoxel(const model::Solid& solid, const Eigen::AlignedBox3d& box)
+{
+    switch (solid.classify(box)) {
+    case model::Occupancy::Inside: return true;
+    case model::Occupancy::Outside: return false;
+    case model::Occupancy::Boundary: break;
+    }
+    return solid.isObjectVoxel(box);
+}
+
 /// The 26-neighbour voxels of `centre` out to Chebyshev distance `layers`.
 std::vector<Eigen::Vector3i> neighbourhood(const Eigen::Vector3i& centre, int layers)
 {
@@ -116,7 +128,7 @@ std::optional<Eigen::Vector3i> findWitnessVoxel(const model::Solid& solid, const
         const Vec3 d = box.center() - x;
         const double score = n.dot(d.normalized());
         if (score <= bestScore || score <= 0.0) continue;
-        if (solid.isObjectVoxel(box)) continue;
+        if (objectVoxel(solid, box)) continue;
         bestScore = score;
         best = v;
     }
@@ -167,7 +179,9 @@ public:
         a.position = lm.position;
         a.normal = lm.normal ? lm.normal->normalized() : solid.closestPoint(lm.position).normal;
         a.toleranceMm = lm.toleranceMm;
-        a.voxel = grid.indexOf(lm.position);
+        // The landmark's voxel is the one on the object side of the surface
+        // (a landmark exactly on a voxel face belongs to the voxel behind it).
+        a.voxel = grid.indexOf(lm.position - 0.25 * grid.voxelSize * a.normal);
         a.designerBestViews = !lm.bestViews.empty();
         a.witnessVoxel = findWitnessVoxel(solid, grid, a.voxel, a.position, a.normal);
         if (!a.witnessVoxel) {
@@ -197,6 +211,8 @@ public:
         std::map<std::size_t, Vec3> blockerPoints;
         std::size_t dofOnly = 0;
         a.bestMedMm = std::numeric_limits<double>::infinity();
+        double bestRangeMed = std::numeric_limits<double>::infinity();
+        bool anyPasses = false;
         double nearestDepth = 0.0;
         for (const auto& p : r.candidates) {
             const auto chk = rules_.check(r.target, p);
@@ -205,6 +221,8 @@ public:
                 a.witnessPoses.push_back(p);
                 a.witnessDirections.push_back((a.position - station_.fixture.cameraCentreInPart(p)).normalized());
                 a.bestMedMm = std::min(a.bestMedMm, chk.predictedMedMm);
+                bestRangeMed = std::min(bestRangeMed, chk.rangeMedMm);
+                anyPasses = anyPasses || chk.passes();
             } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.rule4) {
                 if (dofOnly++ == 0) nearestDepth = chk.depthMm;
             } else if (chk.obstruction == Blocker::Part && chk.blockingTriangle) {
@@ -242,12 +260,18 @@ public:
             } else {
                 explainUnseen(r, blockers, blockerPoints);
             }
-        } else if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm) {
+        } else if (!anyPasses) {
             a.verdict = LandmarkVerdict::BelowStationMed;
-            a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
-                       " mm is below the finest discrimination this station reaches there (predicted MED " +
-                       fmt(a.bestMedMm) + " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera closer / "
-                       "use a longer lens.";
+            if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm)
+                a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
+                           " mm is below the finest discrimination this station reaches there (predicted MED " +
+                           fmt(a.bestMedMm) + " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
+                           "closer / use a longer lens.";
+            else
+                a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " +
+                           fmt(grid.voxelSize) + " mm there (best MED " + fmt(bestRangeMed) +
+                           " mm, eq. 4.4.4-19); use a smaller octree.depth, or bring the camera closer / use a "
+                           "longer lens.";
             r.usable = false;
         } else {
             a.verdict = LandmarkVerdict::Inspectable;
@@ -345,7 +369,7 @@ private:
             const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
             const Vec3 n = mesh.faceNormal(t);
             if (n.isZero()) continue;
-            const auto voxel = grid.indexOf(c);
+            const auto voxel = grid.indexOf(c - 0.25 * grid.voxelSize * n);
             auto witness = findWitnessVoxel(*problem_.solid, grid, voxel, c, n);
             if (!witness) continue;
             LandmarkTarget target{c, n, grid.box(*witness), 1e9};
@@ -367,13 +391,24 @@ private:
             if (!r.checks[i].sees()) cameras.push_back(station_.cameraAt(r.candidates[i]));
         for (const auto& v : neighbourhood(r.a.voxel, std::max(1, options_.pareLayers))) {
             const auto box = grid.box(v);
-            if (problem_.solid->isObjectVoxel(box)) continue;
+            if (objectVoxel(*problem_.solid, box)) continue;
             bool seen = false;
             for (const auto& cam : cameras)
                 if (rules_.provenVoid(box, cam)) {
                     seen = true;
                     break;
                 }
+            // Not seen from the landmark's poses: try the grazing poses of the
+            // surface nearest to this voxel (a voxel beside another face of an
+            // edge or corner is seen from that face's tangent plane).
+            if (!seen) {
+                const auto sp = problem_.solid->closestPoint(box.center());
+                for (const auto& p : grazingPoses(station_.fixture, sp.point, sp.normal, options_.grid))
+                    if (rules_.provenVoid(box, station_.cameraAt(p))) {
+                        seen = true;
+                        break;
+                    }
+            }
             if (!seen) out.push_back(grid.key(v));
         }
         std::sort(out.begin(), out.end());

@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 
+#include "hullgauge/inspect/measures.h"
 #include "hullgauge/inspect/voxel_test.h"
 
 namespace hg::plan {
@@ -71,7 +72,8 @@ std::string RuleCheck::failure() const
     else if (!rule4)
         s << "Rule 4: depth " << depthMm << " mm outside the depth of field";
     else if (!rule3)
-        s << "Rule 3: predicted MED " << predictedMedMm << " mm exceeds the tolerance";
+        s << "Rule 3: predicted MED " << predictedMedMm << " mm (eq. 5.3.6-3) or range MED " << rangeMedMm
+          << " mm (eq. 4.4.4-19) too coarse";
     return s.str();
 }
 
@@ -114,11 +116,39 @@ Blocker ViewRules::lineOfSight(const Vec3& origin, const Vec3& direction, std::o
     const double floorZ = station_.floorZMm;
     if (origin.z() < floorZ) return Blocker::CameraBelowFloor;
     auto partHit = solid_.firstHit(origin, direction);
-    double floorDistance = std::numeric_limits<double>::infinity();
+    // The floor and the fixture under it: the region z < floor_z within
+    // floorRadius_ of the turntable axis (the part frame's z axis). The line
+    // of sight meets it where its stretch below the floor plane overlaps its
+    // stretch inside that cylinder.
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    double floorDistance = kInf;
+    double below0 = kInf, below1 = kInf;  // stretch with z < floor_z
     if (direction.z() < 0.0) {
-        const double s = (floorZ - origin.z()) / direction.z();
-        const Vec3 p = origin + s * direction;
-        if (std::hypot(p.x(), p.y()) <= floorRadius_) floorDistance = s;
+        below0 = std::max(0.0, (floorZ - origin.z()) / direction.z());
+    } else if (origin.z() < floorZ) {  // cannot happen (checked above); kept for clarity
+        below0 = 0.0;
+        below1 = direction.z() > 0.0 ? (floorZ - origin.z()) / direction.z() : kInf;
+    }
+    if (std::isfinite(below0)) {
+        const double a = direction.x() * direction.x() + direction.y() * direction.y();
+        const double b = 2.0 * (origin.x() * direction.x() + origin.y() * direction.y());
+        const double c = origin.x() * origin.x() + origin.y() * origin.y() - floorRadius_ * floorRadius_;
+        double in0 = kInf, in1 = -kInf;  // stretch within the cylinder
+        if (a < 1e-18) {
+            if (c <= 0.0) {
+                in0 = 0.0;
+                in1 = kInf;
+            }
+        } else {
+            const double disc = b * b - 4.0 * a * c;
+            if (disc >= 0.0) {
+                in0 = (-b - std::sqrt(disc)) / (2.0 * a);
+                in1 = (-b + std::sqrt(disc)) / (2.0 * a);
+            }
+        }
+        const double lo = std::max(below0, in0);
+        const double hi = std::min(below1, in1);
+        if (lo <= hi && hi >= 0.0) floorDistance = std::max(lo, 0.0);
     }
     if (partHit && partHit->distance <= floorDistance) {
         if (hit) *hit = partHit;
@@ -156,12 +186,15 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
         r.distanceMm = toLandmark.norm();
         r.depthMm = camera.cameraFromPart().apply(target->position).z();
         const double cosTheta = std::clamp(toLandmark.normalized().dot(camera.opticalAxis()), -1.0, 1.0);
-        const double theta = std::acos(cosTheta);
-        r.viewAngleDeg = geometry::radToDeg(theta);
-        const auto& K = station_.camera.K;
-        r.predictedMedMm = std::max(predictedMedMm(K(0, 0), r.distanceMm, theta),
-                                    predictedMedMm(K(1, 1), r.distanceMm, theta));
-        r.rule3 = r.predictedMedMm <= target->toleranceMm + 1e-12;
+        r.viewAngleDeg = geometry::radToDeg(std::acos(cosTheta));
+        // The inspection engine's measures of this view (inspect/measures.h):
+        // eq. 4.4.5-11 is eq. 5.3.6-3 solved for the MED, and eq. 4.4.4-19 is
+        // the resolution the engine demands of an observing view (MED <= ΔV).
+        const auto disc = inspect::viewDiscrimination(camera, target->position);
+        r.predictedMedMm = disc.medAngleMm;
+        r.rangeMedMm = disc.medRangeMm;
+        r.rule3 = r.predictedMedMm <= target->toleranceMm + 1e-12 &&
+                  (!options_.requireVoxelResolution || r.rangeMedMm <= voxelSize_ + 1e-12);
         r.rule4 = !station_.depthOfFieldMm || station_.depthOfFieldMm->contains(r.depthMm, 1e-9);
     } else {
         r.rule3 = r.rule4 = true;

@@ -20,8 +20,10 @@
 //    from the landmark — the blocker is reported (triangle, point).
 //  Rule 3 (accuracy, eq. 5.3.6-3) with the landmark's tolerance as MED: the
 //    view's predicted MED (the smallest MED solving 5.3.6-3 for the view's
-//    distance d and angle θ between the line of sight and the optical axis)
-//    must not exceed the tolerance.
+//    distance d and angle θ between the line of sight and the optical axis —
+//    the engine's eq. 4.4.5-11, inspect::viewDiscrimination) must not exceed
+//    the tolerance; and, as the inspection engine requires of an observing
+//    view, its eq. 4.4.4-19 MED must not exceed ΔV.
 //  Rule 4 (depth of field, eq. 5.3.6-5): the landmark's depth along the
 //    optical axis lies within the station's depth of field, when given.
 //
@@ -56,6 +58,9 @@ struct RuleOptions {
     std::optional<double> ownSurfaceRadiusMm;
     /// Pixels of margin the footprint keeps from the image border.
     double imageMarginPx = 1.0;
+    /// Rule 3 also asks what the inspection engine asks of an observing view
+    /// (inspect::InspectionOptions::requireResolution): eq. 4.4.4-19 MED <= ΔV.
+    bool requireVoxelResolution = true;
 };
 
 /// What blocked a line of sight.
@@ -79,7 +84,8 @@ struct RuleCheck {
     bool rule2 = false;
     bool rule3 = false;
     bool rule4 = false;
-    double predictedMedMm = 0.0;     ///< eq. 5.3.6-3 solved for MED at this view
+    double predictedMedMm = 0.0;     ///< eq. 5.3.6-3 (= 4.4.5-11) solved for MED at this view
+    double rangeMedMm = 0.0;         ///< eq. 4.4.4-19 solved for ΔV at this view
     double distanceMm = 0.0;         ///< camera centre to landmark
     double depthMm = 0.0;            ///< landmark depth along the optical axis
     double viewAngleDeg = 0.0;       ///< θ: line of sight to the landmark vs optical axis
@@ -94,7 +100,8 @@ struct RuleCheck {
     std::string failure() const;
 };
 
-/// Eq. 5.3.6-3 solved for the MED: with f = f/Δp in pixels, the smallest MED with
+/// Eq. 5.3.6-3 solved for the MED (the scalar form of inspect::viewDiscrimination's
+/// medAngleMm, needed here to invert it): with f = f/Δp in pixels, the smallest MED with
 ///   1 < 2 (f/d) (MED/2√2) d (cos θ − sin θ) / (d cos θ − MED/2√2)
 /// is MED = 2√2 d cos θ / (2 f (cos θ − sin θ) + 1). Infinite for θ >= 45°.
 double predictedMedMm(double focalPx, double distanceMm, double thetaRad);

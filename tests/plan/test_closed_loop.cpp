@@ -1,0 +1,105 @@
+// Closed loop: plan the views of a part, render the planned views (backlit
+// renderer), inspect the renders against the inspection map. The nominal part
+// must pass with every landmark observed and ok; a part with material missing
+// on one face must fail at that face's landmarks only.
+#include <gtest/gtest.h>
+
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/model/primitives.h"
+#include "hullgauge/plan/planner.h"
+#include "hullgauge/sim/renderer.h"
+
+namespace hg::plan {
+namespace {
+
+using Eigen::Vector3d;
+
+geometry::Station makeStation()
+{
+    geometry::Station s;
+    s.camera.K << 4000, 0, 1224, 0, 4000, 1024, 0, 0, 1;
+    s.camera.imageSize = {2448, 2048};
+    s.fixture.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+    s.fixture.cameraFromFixture.t = Vec3(0, 0, 300);
+    s.fixture.rotationRangeDeg = {-180, 180};
+    s.fixture.declinationRangeDeg = {0, 60};
+    return s;
+}
+
+struct Loop {
+    geometry::Station station = makeStation();
+    model::Solid nominal{model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20))};
+    std::vector<PlanLandmark> landmarks;
+    inspect::MapGeometry mapGeometry;
+    ViewPlan plan;
+
+    Loop()
+    {
+        auto add = [&](std::string id, Vec3 p, Vec3 n) {
+            PlanLandmark l;
+            l.id = std::move(id);
+            l.position = p;
+            l.normal = n;
+            l.toleranceMm = 0.5;
+            landmarks.push_back(l);
+        };
+        add("top", {1, 2, 20}, {0, 0, 1});
+        add("px", {10, 1, 10}, {1, 0, 0});
+        add("nx", {-10, -2, 11}, {-1, 0, 0});
+        add("py", {3, 10, 9}, {0, 1, 0});
+        add("ny", {-1, -10, 12}, {0, -1, 0});
+        mapGeometry.cubeOrigin = Vec3(-64, -64, -64);
+        mapGeometry.cubeSize = 128;
+        mapGeometry.depth = 9;  // ΔV = 0.25 mm
+        mapGeometry.adjacencyDepth = 4;
+        mapGeometry.coarsestLevel = 9;
+
+        PlanProblem problem;
+        problem.part = "cube";
+        problem.solid = &nominal;
+        problem.station = &station;
+        problem.grid.origin = mapGeometry.cubeOrigin;
+        problem.grid.voxelSize = 0.25;
+        problem.grid.depth = 9;
+        problem.landmarks = landmarks;
+        plan = planViews(problem);
+    }
+
+    inspect::InspectionResult inspect(const model::TriangleMesh& part) const
+    {
+        std::vector<inspect::MapLandmark> mls;
+        for (const auto& l : landmarks) mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
+        auto map = inspect::InspectionMap::build("cube", mapGeometry, mls, {},
+                                                 [&](const Eigen::AlignedBox3d& b) { return nominal.isObjectVoxel(b); });
+        sim::SilhouetteRenderer renderer({part});
+        std::vector<inspect::CapturedView> views;
+        for (const auto& v : plan.views) views.push_back({v.id, v.camera, renderer.render(v.camera)});
+        return inspect::Inspector(map).inspect(views, {});
+    }
+};
+
+TEST(ClosedLoop, NominalPassesDefectFailsAtItsLandmark)
+{
+    Loop loop;
+    ASSERT_TRUE(loop.plan.feasible) << (loop.plan.problems.empty() ? "" : loop.plan.problems[0]);
+    ASSERT_FALSE(loop.plan.views.empty());
+
+    const auto nominal = loop.inspect(loop.nominal.mesh());
+    EXPECT_TRUE(nominal.pass);
+    for (const auto& l : nominal.landmarks)
+        EXPECT_EQ(l.status, inspect::LandmarkStatus::Ok) << l.id << ": " << l.reason;
+
+    // 0.75 mm of material missing on the +x face: px sees a 0.75 mm error
+    // (> 0.5 mm tolerance); the other faces are untouched.
+    const auto defect = loop.inspect(model::makeBox(Vector3d(-10, -10, 0), Vector3d(9.25, 10, 20)));
+    EXPECT_FALSE(defect.pass);
+    for (const auto& l : defect.landmarks) {
+        if (l.id == "px")
+            EXPECT_NE(l.status, inspect::LandmarkStatus::Ok);
+        else
+            EXPECT_EQ(l.status, inspect::LandmarkStatus::Ok) << l.id << ": " << l.reason;
+    }
+}
+
+}  // namespace
+}  // namespace hg::plan

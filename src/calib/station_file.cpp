@@ -1,0 +1,204 @@
+#include "hullgauge/calib/station_file.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
+namespace hg::calib {
+namespace {
+
+YAML::Node flowSequence(const std::vector<double>& values)
+{
+    YAML::Node n(YAML::NodeType::Sequence);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    for (double v : values) n.push_back(v);
+    return n;
+}
+
+YAML::Node vec3(const geometry::Vec3& v)
+{
+    return flowSequence({v.x(), v.y(), v.z()});
+}
+
+YAML::Node mat3(const geometry::Mat3& M)
+{
+    YAML::Node rows(YAML::NodeType::Sequence);
+    rows.SetStyle(YAML::EmitterStyle::Flow);
+    for (int r = 0; r < 3; ++r) rows.push_back(flowSequence({M(r, 0), M(r, 1), M(r, 2)}));
+    return rows;
+}
+
+/// A map child, created (as a map) when missing.
+YAML::Node section(YAML::Node parent, const char* key)
+{
+    YAML::Node child = parent[key];
+    if (!child.IsMap()) child = YAML::Node(YAML::NodeType::Map);
+    return child;
+}
+
+std::string timestamp()
+{
+    std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    std::tm tm{};
+    gmtime_r(&now, &tm);
+    char b[32];
+    std::strftime(b, sizeof b, "%Y%m%dT%H%M%SZ", &tm);
+    return b;
+}
+
+void writeDurably(const std::filesystem::path& path, const std::string& text)
+{
+    int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw FaultError(path.string() + ": cannot create: " + std::strerror(errno));
+    const char* p = text.data();
+    std::size_t left = text.size();
+    while (left > 0) {
+        ssize_t n = ::write(fd, p, left);
+        if (n < 0) {
+            if (errno == EINTR) continue;
+            int err = errno;
+            ::close(fd);
+            throw FaultError(path.string() + ": write failed: " + std::strerror(err));
+        }
+        p += n;
+        left -= static_cast<std::size_t>(n);
+    }
+    if (::fsync(fd) != 0 || ::close(fd) != 0)
+        throw FaultError(path.string() + ": cannot flush to disk: " + std::strerror(errno));
+}
+
+}  // namespace
+
+StationFileUpdate::StationFileUpdate(std::filesystem::path file) : file_(std::move(file))
+{
+    std::error_code ec;
+    existed_ = std::filesystem::exists(file_, ec);
+    if (existed_) {
+        root_ = ConfigNode::loadFile(file_).raw();
+        if (!root_.IsMap()) throw InputError(file_.string(), "(document)", "a station file must be a YAML map");
+    } else {
+        root_ = YAML::Node(YAML::NodeType::Map);
+    }
+}
+
+void StationFileUpdate::setIntrinsics(const IntrinsicsResult& r, const std::string& method)
+{
+    YAML::Node cam = section(root_, "camera");
+    const auto& in = r.intrinsics;
+    YAML::Node size(YAML::NodeType::Sequence);
+    size.SetStyle(YAML::EmitterStyle::Flow);
+    size.push_back(in.imageSize.width);
+    size.push_back(in.imageSize.height);
+    cam["image_size"] = size;
+    cam["K"] = mat3(in.K);
+    cam["dist"] = flowSequence(in.dist);
+    YAML::Node cal(YAML::NodeType::Map);
+    cal["method"] = method;
+    cal["rms_px"] = r.rmsPx;
+    cal["views"] = static_cast<int>(r.viewNames.size());
+    YAML::Node sd(YAML::NodeType::Map);
+    sd.SetStyle(YAML::EmitterStyle::Flow);
+    const auto& names = intrinsicParameterNames();
+    for (std::size_t i = 0; i < names.size() && i < r.stdDev.size(); ++i) sd[names[i]] = r.stdDev[i];
+    cal["std_dev"] = sd;
+    cal["date"] = timestamp();
+    cam["calibration"] = cal;
+    root_["camera"] = cam;
+}
+
+void StationFileUpdate::setRailIntrinsics(const RailCalibration& r, const std::string& field)
+{
+    YAML::Node cam = section(root_, "camera");
+    if (!cam["image_size"])
+        throw InputError(file_.string(), field,
+                         "the station has no camera.image_size; add it (or run calibrate intrinsics) first");
+    geometry::Mat3 K;
+    K << r.fit.fx, 0.0, r.fit.cx, 0.0, r.fit.fy, r.fit.cy, 0.0, 0.0, 1.0;
+    cam["K"] = mat3(K);
+    cam["dist"] = flowSequence({0.0, 0.0, 0.0, 0.0, 0.0});
+    YAML::Node cal(YAML::NodeType::Map);
+    cal["method"] = "rail";
+    cal["rms_px"] = r.fit.rmsPx;
+    cal["views"] = r.fit.observations;
+    YAML::Node sd(YAML::NodeType::Map);
+    sd.SetStyle(YAML::EmitterStyle::Flow);
+    const char* names[] = {"fx", "fy", "cx", "cy"};
+    for (std::size_t i = 0; i < 4 && i < r.fit.stdDev.size(); ++i) sd[names[i]] = r.fit.stdDev[i];
+    cal["std_dev"] = sd;
+    cal["date"] = timestamp();
+    cam["calibration"] = cal;
+    root_["camera"] = cam;
+}
+
+void StationFileUpdate::setFixtureAxes(const FixtureAxesResult& r)
+{
+    YAML::Node fix = section(root_, "fixture");
+    fix["type"] = "rotation_declination";
+    YAML::Node cff(YAML::NodeType::Map);
+    cff["R"] = mat3(r.cameraFromFixture.R);
+    cff["t"] = vec3(r.cameraFromFixture.t);
+    fix["camera_from_fixture"] = cff;
+    fix["rotation_axis"] = vec3(r.rotationAxis);
+    fix["declination_axis"] = vec3(r.declinationAxis);
+    YAML::Node cal(YAML::NodeType::Map);
+    cal["rotation_axis_point"] = vec3(r.rotationAxisPoint);
+    cal["declination_axis_point"] = vec3(r.declinationAxisPoint);
+    cal["axes_angle_deg"] = r.axesAngleDeg;
+    cal["axes_distance_mm"] = r.axesDistanceMm;
+    cal["rms_px"] = r.rmsPx;
+    cal["rms_mm"] = r.rmsMm;
+    cal["views"] = r.views;
+    cal["date"] = timestamp();
+    fix["calibration"] = cal;
+    root_["fixture"] = fix;
+}
+
+std::optional<std::filesystem::path> StationFileUpdate::commit()
+{
+    YAML::Emitter out;
+    out.SetDoublePrecision(12);
+    out << root_;
+    if (!out.good()) throw FaultError(file_.string() + ": cannot format the station: " + out.GetLastError());
+    std::string text = std::string(out.c_str()) + "\n";
+
+    std::optional<std::filesystem::path> backup;
+    std::error_code ec;
+    if (existed_ && std::filesystem::exists(file_, ec)) {
+        // A time-stamped copy, never overwriting an earlier backup.
+        std::filesystem::path b = file_;
+        b += ".bak-" + timestamp();
+        for (int i = 1; std::filesystem::exists(b, ec); ++i) {
+            b = file_;
+            b += ".bak-" + timestamp() + "-" + std::to_string(i);
+        }
+        std::filesystem::copy_file(file_, b, ec);
+        if (ec) throw FaultError(file_.string() + ": cannot write backup " + b.string() + ": " + ec.message());
+        backup = b;
+    }
+    std::filesystem::path tmp = file_;
+    tmp += ".tmp-" + std::to_string(::getpid());
+    try {
+        writeDurably(tmp, text);
+    } catch (...) {
+        std::filesystem::remove(tmp, ec);
+        throw;
+    }
+    std::filesystem::rename(tmp, file_, ec);
+    if (ec) {
+        std::filesystem::remove(tmp, ec);
+        throw FaultError(file_.string() + ": cannot replace the station file: " + ec.message());
+    }
+    hg::log::category("calib")->info("wrote {}{}", file_.string(), backup ? " (backup " + backup->string() + ")" : "");
+    return backup;
+}
+
+}  // namespace hg::calib

@@ -1,0 +1,282 @@
+// hullgauge calibrate intrinsics | rail | fixture (CONTRACTS §5; docs/calibration.md).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "command.h"
+#include "hullgauge/calib/fixture_axes.h"
+#include "hullgauge/calib/intrinsics.h"
+#include "hullgauge/calib/rail.h"
+#include "hullgauge/calib/station_file.h"
+#include "hullgauge/calib/target.h"
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/geometry/station.h"
+
+namespace hg::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+cv::Mat readImage(const fs::path& file, const std::string& field)
+{
+    cv::Mat img = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
+    if (img.empty()) throw InputError(file.string(), field, "cannot read the image (PNG, TIFF or JPEG)");
+    return img;
+}
+
+/// Detects the target in every image, with progress on stderr; images without
+/// the target are reported and skipped.
+std::vector<calib::TargetView> detectInImages(const std::vector<std::string>& files, const calib::TargetSpec& spec,
+                                              cv::Size& size)
+{
+    std::vector<calib::TargetView> views;
+    std::size_t i = 0;
+    for (const auto& f : files) {
+        ++i;
+        cv::Mat img = readImage(f, "--images");
+        if (size.area() == 0)
+            size = img.size();
+        else if (img.size() != size)
+            throw InputError(f, "--images",
+                             "image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                                 " differs from the first image's " + std::to_string(size.width) + "x" +
+                                 std::to_string(size.height));
+        auto v = calib::detectTarget(img, spec, fs::path(f).filename().string());
+        std::cerr << "[" << i << "/" << files.size() << "] " << f << ": "
+                  << (v ? std::to_string(v->imagePoints.size()) + " corners" : std::string("target not found"))
+                  << '\n';
+        if (v) views.push_back(std::move(*v));
+    }
+    return views;
+}
+
+/// The camera section of a station file (K, dist, image_size), without
+/// requiring the rest of the station to be complete yet.
+geometry::Intrinsics readCamera(const fs::path& file)
+{
+    auto root = ConfigNode::loadFile(file);
+    auto cam = root["camera"];
+    geometry::Intrinsics in;
+    auto sizeNode = cam["image_size"];
+    auto size = sizeNode.asDoubles(2);
+    in.imageSize = cv::Size(static_cast<int>(size[0]), static_cast<int>(size[1]));
+    in.K = cam["K"].asMatrix3();
+    if (auto d = cam.optional("dist")) in.dist = d->asDoubles();
+    try {
+        in.validate();
+    } catch (const std::invalid_argument& e) {
+        cam.fail(e.what());
+    }
+    return in;
+}
+
+struct IntrinsicsArgs {
+    std::string pattern;
+    std::vector<std::string> images;
+    std::string out;
+    calib::IntrinsicsOptions options;
+};
+
+int runIntrinsics(const IntrinsicsArgs& a)
+{
+    auto spec = calib::TargetSpec::parse(a.pattern);
+    cv::Size size;
+    auto views = detectInImages(a.images, spec, size);
+    auto result = calib::calibrateIntrinsics(views, size, a.options);
+    std::cout << calib::formatIntrinsicsReport(result);
+    calib::StationFileUpdate update(a.out);
+    update.setIntrinsics(result, spec.toString());
+    auto backup = update.commit();
+    std::cerr << "wrote " << a.out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    return 0;
+}
+
+struct RailArgs {
+    std::string observations;
+    std::string out;
+};
+
+int runRail(const RailArgs& a)
+{
+    auto obs = calib::RailObservations::load(a.observations);
+    calib::RailCalibration cal;
+    try {
+        cal = calib::calibrateRail(obs);
+    } catch (const InputError& e) {
+        // Name the observations file in the message.
+        throw InputError(a.observations, e.field(), e.problem(), e.line());
+    }
+    std::cout << calib::formatRailReport(cal);
+    if (!a.out.empty()) {
+        calib::StationFileUpdate update(a.out);
+        update.setRailIntrinsics(cal, "--out");
+        auto backup = update.commit();
+        std::cerr << "wrote " << a.out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    }
+    return 0;
+}
+
+struct FixtureArgs {
+    std::string station;
+    std::string out;
+    std::string observations;
+    std::string pattern;
+    std::vector<std::string> images;
+    std::string poses;
+};
+
+/// Views from an observations file: `pattern` and a list of views with the
+/// commanded angles and either an image (relative to the file) or the corners.
+std::vector<calib::FixtureView> loadFixtureObservations(const fs::path& file)
+{
+    auto root = ConfigNode::loadFile(file);
+    root.allowOnlyKeys({"pattern", "views"});
+    auto patternNode = root["pattern"];
+    calib::TargetSpec spec;
+    try {
+        spec = calib::TargetSpec::parse(patternNode.asString(), "pattern");
+    } catch (const InputError& e) {
+        patternNode.fail(e.problem());
+    }
+    std::vector<calib::FixtureView> views;
+    auto list = root["views"];
+    if (!list.isSequence()) list.fail("expected a list of {rotation_deg, declination_deg, image | corners}");
+    std::size_t i = 0;
+    for (const auto& item : list.items()) {
+        ++i;
+        item.allowOnlyKeys({"rotation_deg", "declination_deg", "image", "corners", "ids"});
+        calib::FixtureView v;
+        v.pose.rotationDeg = item["rotation_deg"].asDouble();
+        v.pose.declinationDeg = item["declination_deg"].asDouble();
+        if (item.has("image") == item.has("corners")) item.fail("give exactly one of 'image' or 'corners'");
+        if (auto img = item.optional("image")) {
+            fs::path p = fs::path(img->asString());
+            if (p.is_relative()) p = file.parent_path() / p;
+            cv::Mat m = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
+            if (m.empty()) img->fail("cannot read image " + p.string());
+            auto found = calib::detectTarget(m, spec, p.filename().string());
+            std::cerr << "[" << i << "/" << list.size() << "] " << p.string() << ": "
+                      << (found ? std::to_string(found->imagePoints.size()) + " corners" : "target not found") << '\n';
+            if (!found) continue;
+            v.target = std::move(*found);
+        } else {
+            auto cornersNode = item["corners"];
+            std::vector<cv::Point2f> pixels;
+            for (const auto& c : cornersNode.items()) {
+                auto xy = c.asVector2();
+                pixels.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()));
+            }
+            std::vector<int> ids;
+            if (auto idsNode = item.optional("ids")) {
+                for (const auto& id : idsNode->items())
+                    ids.push_back(static_cast<int>(id.asIntIn(0, spec.cornerCount() - 1)));
+                if (ids.size() != pixels.size()) idsNode->fail("needs one id per corner");
+            } else if (static_cast<int>(pixels.size()) != spec.cornerCount()) {
+                cornersNode.fail("expected all " + std::to_string(spec.cornerCount()) + " corners of " +
+                                 spec.toString() + " in order (or give 'ids')");
+            }
+            v.target = calib::viewFromCorners(spec, "views[" + std::to_string(i - 1) + "]", pixels, ids);
+        }
+        views.push_back(std::move(v));
+    }
+    return views;
+}
+
+int runFixture(const FixtureArgs& a)
+{
+    auto camera = readCamera(a.station);
+    std::vector<calib::FixtureView> views;
+    if (!a.observations.empty()) {
+        views = loadFixtureObservations(a.observations);
+    } else {
+        if (a.pattern.empty() || a.poses.empty())
+            throw InputError("", "--images", "give --pattern and --poses with --images (or --observations)");
+        auto spec = calib::TargetSpec::parse(a.pattern);
+        auto poses = geometry::loadPoses(a.poses);
+        if (poses.size() != a.images.size())
+            throw InputError(a.poses, "--poses",
+                             std::to_string(poses.size()) + " poses for " + std::to_string(a.images.size()) +
+                                 " images: give one pose per image, in the same order");
+        for (std::size_t i = 0; i < a.images.size(); ++i) {
+            cv::Mat img = readImage(a.images[i], "--images");
+            auto v = calib::detectTarget(img, spec, fs::path(a.images[i]).filename().string());
+            std::cerr << "[" << i + 1 << "/" << a.images.size() << "] " << a.images[i] << ": "
+                      << (v ? std::to_string(v->imagePoints.size()) + " corners" : "target not found") << '\n';
+            if (v) views.push_back({poses[i], std::move(*v)});
+        }
+    }
+    auto result = calib::calibrateFixtureAxes(views, camera, a.observations.empty() ? "--images" : "views");
+    std::cout << calib::formatFixtureReport(result);
+    std::string out = a.out.empty() ? a.station : a.out;
+    calib::StationFileUpdate update(out);
+    update.setFixtureAxes(result);
+    auto backup = update.commit();
+    std::cerr << "wrote " << out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    return 0;
+}
+
+std::function<int()> addCalibrate(CLI::App& app)
+{
+    auto* cmd = app.add_subcommand("calibrate", "camera and fixture calibration (dissertation 4.3)");
+    cmd->require_subcommand(1);
+
+    auto intr = std::make_shared<IntrinsicsArgs>();
+    auto* ci = cmd->add_subcommand("intrinsics", "camera matrix and distortion from images of a chessboard or ChArUco "
+                                                 "board; writes camera.K, camera.dist, camera.image_size into --out");
+    ci->add_option("--pattern", intr->pattern,
+                   "chessboard:COLSxROWS:SQUARE_MM (inner corners) or charuco:COLSxROWS:SQUARE_MM:MARKER_MM[:DICT]")
+        ->required();
+    ci->add_option("--images", intr->images, "images of the target")->required()->check(CLI::ExistingFile);
+    ci->add_option("--out", intr->out, "station YAML to update (other keys are kept, the old file backed up)")
+        ->required();
+    ci->add_flag("--fix-aspect-ratio", intr->options.fixAspectRatio, "estimate one focal length (fx = fy)");
+    ci->add_flag("--zero-tangent", intr->options.zeroTangentDist, "no tangential distortion (p1 = p2 = 0)");
+    ci->add_flag("--fix-k3", intr->options.fixK3, "no sixth-order radial term (k3 = 0)");
+    ci->add_flag("--fix-principal-point", intr->options.fixPrincipalPoint, "principal point at the image centre");
+
+    auto rail = std::make_shared<RailArgs>();
+    auto* cr = cmd->add_subcommand("rail", "the rail procedure of dissertation 4.3.1: optical centre and f/dp by "
+                                           "similar triangles (Tables 4.3-4.6) and a least-squares fit");
+    cr->add_option("--observations", rail->observations, "rail observations YAML (docs/calibration.md)")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cr->add_option("--out", rail->out, "station YAML whose camera.K is set from the least-squares fit (optional)");
+
+    auto fix = std::make_shared<FixtureArgs>();
+    auto* cf = cmd->add_subcommand("fixture", "rotation and declination axes and camera_from_fixture from views of a "
+                                              "target carried by the fixture");
+    cf->add_option("--station", fix->station, "station YAML with the calibrated camera")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cf->add_option("--out", fix->out, "station YAML to write (default: --station)");
+    auto* obsOpt = cf->add_option("--observations", fix->observations, "fixture observations YAML (docs/calibration.md)")
+                       ->check(CLI::ExistingFile);
+    auto* imgOpt = cf->add_option("--images", fix->images, "target images, one per pose")->check(CLI::ExistingFile);
+    cf->add_option("--pattern", fix->pattern, "target, as for calibrate intrinsics (with --images)");
+    cf->add_option("--poses", fix->poses, "poses YAML, one {rotation_deg, declination_deg} per image (with --images)")
+        ->check(CLI::ExistingFile);
+    obsOpt->excludes(imgOpt);
+    imgOpt->excludes(obsOpt);
+
+    return [=]() -> int {
+        if (ci->parsed()) return runIntrinsics(*intr);
+        if (cr->parsed()) return runRail(*rail);
+        if (cf->parsed()) {
+            if (fix->observations.empty() && fix->images.empty())
+                throw InputError("", "--observations", "give --observations, or --images with --pattern and --poses");
+            return runFixture(*fix);
+        }
+        return static_cast<int>(ExitStatus::BadInput);
+    };
+}
+
+}  // namespace
+
+HG_REGISTER_COMMAND("calibrate", addCalibrate);
+
+}  // namespace hg::cli

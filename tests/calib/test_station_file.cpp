@@ -1,0 +1,120 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "hgtest/paths.h"
+#include "hullgauge/calib/station_file.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/geometry/station.h"
+
+using namespace hg::calib;
+
+namespace {
+
+const char* kStation = R"(# station of line 3
+camera:
+  image_size: [640, 480]
+  K: [[500, 0, 320], [0, 500, 240], [0, 0, 1]]
+  pixel_size_um: [3.45, 3.45]
+  driver: {backend: sim}
+fixture:
+  type: rotation_declination
+  camera_from_fixture: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 400]}
+  rotation_range_deg: [-170, 170]
+environment:
+  floor_z_mm: -5.5
+lamps: {backend: sim, green: G, amber: A, red: R}
+)";
+
+std::string readText(const std::filesystem::path& p)
+{
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+IntrinsicsResult sampleResult()
+{
+    IntrinsicsResult r;
+    r.intrinsics.K << 812.5, 0, 330.25, 0, 811.0, 241.5, 0, 0, 1;
+    r.intrinsics.dist = {-0.2, 0.05, 0.001, -0.002, 0.01};
+    r.intrinsics.imageSize = cv::Size(640, 480);
+    r.rmsPx = 0.21;
+    r.viewNames = {"a", "b", "c"};
+    r.stdDev = {0.5, 0.5, 0.3, 0.3, 0.001, 0.002, 0.0001, 0.0001, 0.003};
+    return r;
+}
+
+}  // namespace
+
+TEST(StationFile, IntrinsicsRewriteKeepsOtherKeysAndMakesABackup)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "station.yaml", kStation);
+    StationFileUpdate update(file);
+    update.setIntrinsics(sampleResult(), "chessboard:9x6:25");
+    auto backup = update.commit();
+
+    ASSERT_TRUE(backup.has_value());
+    EXPECT_EQ(readText(*backup), kStation);  // the old file, comment and all
+    auto station = hg::geometry::loadStation(file);
+    EXPECT_DOUBLE_EQ(station.camera.K(0, 0), 812.5);
+    EXPECT_DOUBLE_EQ(station.camera.K(1, 2), 241.5);
+    ASSERT_EQ(station.camera.dist.size(), 5u);
+    EXPECT_DOUBLE_EQ(station.camera.dist[3], -0.002);
+    // Everything else is as it was.
+    ASSERT_TRUE(station.pixelSizeUm.has_value());
+    EXPECT_DOUBLE_EQ(station.pixelSizeUm->x(), 3.45);
+    EXPECT_DOUBLE_EQ(station.floorZMm, -5.5);
+    EXPECT_DOUBLE_EQ(station.fixture.rotationRangeDeg.min, -170.0);
+    EXPECT_DOUBLE_EQ(station.fixture.cameraFromFixture.t.z(), 400.0);
+    auto root = hg::ConfigNode::loadFile(file);
+    EXPECT_EQ(root["camera"]["driver"]["backend"].asString(), "sim");
+    EXPECT_EQ(root["lamps"]["red"].asString(), "R");
+    EXPECT_DOUBLE_EQ(root["camera"]["calibration"]["rms_px"].asDouble(), 0.21);
+    EXPECT_EQ(root["camera"]["calibration"]["method"].asString(), "chessboard:9x6:25");
+    // Key order is kept: camera, fixture, environment, lamps.
+    EXPECT_EQ(root.keys(), (std::vector<std::string>{"camera", "fixture", "environment", "lamps"}));
+    // No temporary file is left behind.
+    int files = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path())) ++files;
+    EXPECT_EQ(files, 2);
+}
+
+TEST(StationFile, SecondRewriteKeepsBothBackups)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "s.yaml", kStation);
+    auto first = StationFileUpdate(file);
+    first.setIntrinsics(sampleResult(), "m1");
+    auto b1 = first.commit();
+    auto second = StationFileUpdate(file);
+    auto r = sampleResult();
+    r.rmsPx = 0.3;
+    second.setIntrinsics(r, "m2");
+    auto b2 = second.commit();
+    ASSERT_TRUE(b1 && b2);
+    EXPECT_NE(*b1, *b2);
+    EXPECT_EQ(readText(*b1), kStation);
+    EXPECT_NE(readText(*b2).find("m1"), std::string::npos);
+}
+
+TEST(StationFile, NewFileHasNoBackup)
+{
+    hgtest::TempDir dir;
+    StationFileUpdate update(dir / "new.yaml");
+    update.setIntrinsics(sampleResult(), "chessboard:9x6:25");
+    EXPECT_FALSE(update.commit().has_value());
+    auto root = hg::ConfigNode::loadFile(dir / "new.yaml");
+    EXPECT_EQ(root["camera"]["image_size"].asDoubles(2), (std::vector<double>{640, 480}));
+}
+
+TEST(StationFile, BrokenExistingFileIsBadInputAndStaysUntouched)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "bad.yaml", "camera: [unclosed\n");
+    EXPECT_THROW(StationFileUpdate{file}, hg::InputError);
+    EXPECT_EQ(readText(file), "camera: [unclosed\n");
+}

@@ -155,7 +155,14 @@ std::optional<TargetView> detectTarget(const cv::Mat& image, const TargetSpec& s
         cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
     else
         grey = image;
-    if (grey.depth() == CV_16U) grey.convertTo(grey, CV_8U, 1.0 / 257.0);
+    if (grey.depth() == CV_16U) {
+        // Mono12 sits in the low bits of the word, Mono16 uses them all:
+        // stretch the frame's own range to 8 bits for the detectors.
+        double lo = 0.0, hi = 0.0;
+        cv::minMaxLoc(grey, &lo, &hi);
+        double scale = hi > lo ? 255.0 / (hi - lo) : 1.0;
+        grey.convertTo(grey, CV_8U, scale, -lo * scale);
+    }
     if (grey.depth() != CV_8U) throw InputError(name, "image", "unsupported pixel type (8- or 16-bit grey or colour)");
 
     if (spec.kind == TargetKind::Chessboard) {

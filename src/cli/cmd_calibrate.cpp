@@ -15,6 +15,8 @@
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/drivers/fixture.h"
 #include "hullgauge/geometry/station.h"
 
 namespace hg::cli {
@@ -220,6 +222,89 @@ int runFixture(const FixtureArgs& a)
     return 0;
 }
 
+struct RunArgs {
+    std::string station;
+    std::string out;
+    std::string pattern;
+    std::string poses;
+    std::string saveImages;
+    double grabTimeoutS = 5.0;
+};
+
+/// Driver calls in the live sequence: a failure is a fault (exit 3) that names the step.
+void check(bool ok, const std::string& step, const std::string& message)
+{
+    if (!ok) throw FaultError("calibrate run: " + step + ": " + message);
+}
+
+/// The live sequence (issue 5): home, then for every pose move, wait in
+/// position, grab, detect; solve the axes; write the station with a backup.
+int runLive(const RunArgs& a)
+{
+    auto station = geometry::loadStation(a.station);
+    if (station.fixture.type != geometry::FixtureType::RotationDeclination)
+        throw InputError(a.station, "fixture.type", "calibrate run solves rotation/declination fixtures");
+    auto spec = calib::TargetSpec::parse(a.pattern);
+    auto poses = geometry::loadPoses(a.poses, &station.fixture);
+    if (!a.saveImages.empty()) fs::create_directories(a.saveImages);
+    auto root = ConfigNode::loadFile(a.station);
+    auto camera = drivers::makeCamera(root);
+    auto fixture = drivers::makeFixture(station);
+    const auto grabTimeout = std::chrono::milliseconds(static_cast<long long>(a.grabTimeoutS * 1000.0));
+
+    std::vector<calib::FixtureView> views;
+    {
+        auto s = camera->configure();
+        check(s.ok(), "camera configure", s.message());
+    }
+    {
+        auto r = fixture->configure();
+        check(r.ok(), "fixture configure", r.message);
+        r = fixture->activate();
+        check(r.ok(), "fixture activate", r.message);
+        std::cerr << "homing the fixture ..." << std::endl;
+        r = fixture->home();
+        check(r.ok(), "home", r.message);
+        r = fixture->waitInPosition(fixture->homeTimeout());
+        check(r.ok(), "home", r.message);
+    }
+    {
+        auto s = camera->activate();
+        check(s.ok(), "camera activate", s.message());
+    }
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+        const auto& pose = poses[i];
+        std::string where = drivers::describePose(pose, fixture->type());
+        auto r = fixture->moveTo(pose);
+        check(r.ok(), "move to " + where, r.message);
+        r = fixture->waitInPosition(fixture->moveTimeout());
+        check(r.ok(), "move to " + where, r.message);
+        auto frame = camera->grab(grabTimeout);
+        check(frame.ok(), "grab at " + where, frame.message);
+        char name[96];
+        std::snprintf(name, sizeof name, "pose%02zu_r%g_d%g.png", i, pose.rotationDeg, pose.declinationDeg);
+        if (!a.saveImages.empty()) cv::imwrite((fs::path(a.saveImages) / name).string(), frame.image);
+        auto v = calib::detectTarget(frame.image, spec, name);
+        std::cerr << "[" << i + 1 << "/" << poses.size() << "] " << where << ": "
+                  << (v ? std::to_string(v->imagePoints.size()) + " corners" : std::string("target not found"))
+                  << std::endl;
+        if (v) views.push_back({pose, std::move(*v)});
+    }
+    (void)camera->deactivate();
+    (void)camera->cleanup();
+    (void)fixture->deactivate();
+    (void)fixture->cleanup();
+
+    auto result = calib::calibrateFixtureAxes(views, station.camera, "--poses");
+    std::cout << calib::formatFixtureReport(result);
+    std::string out = a.out.empty() ? a.station : a.out;
+    calib::StationFileUpdate update(out);
+    update.setFixtureAxes(result);
+    auto backup = update.commit();
+    std::cerr << "wrote " << out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    return 0;
+}
+
 std::function<int()> addCalibrate(CLI::App& app)
 {
     auto* cmd = app.add_subcommand("calibrate", "camera and fixture calibration (dissertation 4.3)");
@@ -263,7 +348,22 @@ std::function<int()> addCalibrate(CLI::App& app)
     obsOpt->excludes(imgOpt);
     imgOpt->excludes(obsOpt);
 
+    auto run = std::make_shared<RunArgs>();
+    auto* cl = cmd->add_subcommand("run", "live fixture calibration through the station's drivers: home, then move, "
+                                          "grab and detect at every pose, solve the axes, write the station");
+    cl->add_option("--station", run->station, "station YAML with camera, fixture and their driver sections")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cl->add_option("--pattern", run->pattern, "target carried by the fixture, e.g. chessboard:12x9:10")->required();
+    cl->add_option("--poses", run->poses, "poses YAML: the {rotation_deg, declination_deg} grid to visit")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cl->add_option("--out", run->out, "station YAML to write (default: --station)");
+    cl->add_option("--save-images", run->saveImages, "folder for the grabbed images (for calibrate fixture later)");
+    cl->add_option("--grab-timeout", run->grabTimeoutS, "seconds to wait for each frame")->check(CLI::Range(0.1, 600.0));
+
     return [=]() -> int {
+        if (cl->parsed()) return runLive(*run);
         if (ci->parsed()) return runIntrinsics(*intr);
         if (cr->parsed()) return runRail(*rail);
         if (cf->parsed()) {

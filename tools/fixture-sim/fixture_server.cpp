@@ -1,25 +1,24 @@
 #include "fixture_server.h"
 
-#include <algorithm>
-#include <array>
-#include <cerrno>
-#include <chrono>
-#include <cstring>
-#include <fstream>
-#include <vector>
-
-#include <arpa/inet.h>
-#include <modbus/modbus.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "modbus/modbus_link.h"
 #include "modbus/register_map.h"
 #include "simulated_drive.h"
+
+#include <algorithm>
+#include <arpa/inet.h>
+#include <array>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <modbus/modbus.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+#include <vector>
 
 namespace hg::fixturesim {
 namespace {
@@ -36,7 +35,10 @@ double steadySeconds()
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-std::shared_ptr<spdlog::logger> logger() { return log::category("fixture-sim"); }
+std::shared_ptr<spdlog::logger> logger()
+{
+    return log::category("fixture-sim");
+}
 
 /// A listening TCP socket on host:port (port 0: any free port).
 int listenOn(const std::string& host, int port)
@@ -84,17 +86,17 @@ WriteSpan writeSpan(const std::uint8_t* query, int headerLength)
     return {};
 }
 
-}  // namespace
+} // namespace
 
 struct FixtureServer::Impl {
     geometry::FixtureKinematics kinematics;
+    drivers::fixture::ModbusSettings settings; // before `map`: parse() fills it
     RegisterMap map;
-    drivers::fixture::ModbusSettings settings;
     ServerOptions options;
     SimulatedDrive drive;
 
-    modbus_t* device = nullptr;   ///< protocol context of the device channel
-    modbus_t* control = nullptr;  ///< protocol context of the control channel
+    modbus_t* device = nullptr;  ///< protocol context of the device channel
+    modbus_t* control = nullptr; ///< protocol context of the control channel
     modbus_mapping_t* deviceRegs = nullptr;
     modbus_mapping_t* controlRegs = nullptr;
     int deviceListen = -1;
@@ -154,8 +156,10 @@ struct FixtureServer::Impl {
 
     ~Impl()
     {
-        for (int fd : deviceClients) ::close(fd);
-        for (int fd : controlClients) ::close(fd);
+        for (int fd : deviceClients)
+            ::close(fd);
+        for (int fd : controlClients)
+            ::close(fd);
         if (deviceListen >= 0) ::close(deviceListen);
         if (controlListen >= 0) ::close(controlListen);
         // The TCP contexts borrow client sockets; never let them close one twice.
@@ -182,7 +186,8 @@ struct FixtureServer::Impl {
         // A dropped device: connections are cut and new ones refused until the
         // fault clears (on RTU a dropped device simply stops answering).
         if (f == SimulatedFault::Disconnect && before != SimulatedFault::Disconnect) {
-            for (int fd : deviceClients) ::close(fd);
+            for (int fd : deviceClients)
+                ::close(fd);
             deviceClients.clear();
             ::close(deviceListen);
             deviceListen = -1;
@@ -225,9 +230,11 @@ struct FixtureServer::Impl {
     {
         if (value == map.moveCommand) {
             std::vector<double> targets;
-            for (const auto& a : map.axes) targets.push_back(a.target.decode(&deviceRegs->tab_registers[a.target.address]));
-            logger()->debug("move to {}", drivers::describePose(drivers::fixture::poseFromAxes(targets, kinematics.type),
-                                                                kinematics.type));
+            for (const auto& a : map.axes)
+                targets.push_back(a.target.decode(&deviceRegs->tab_registers[a.target.address]));
+            logger()->debug(
+                "move to {}",
+                drivers::describePose(drivers::fixture::poseFromAxes(targets, kinematics.type), kinematics.type));
             drive.move(targets, speeds(), now);
         } else if (value == map.homeCommand) {
             logger()->debug("home");
@@ -242,7 +249,7 @@ struct FixtureServer::Impl {
     /// One request on the device channel, answered as the fault mode says.
     void serveDevice(const std::uint8_t* query, int length)
     {
-        if (fault == SimulatedFault::NoAnswer || fault == SimulatedFault::Disconnect) return;  // swallowed
+        if (fault == SimulatedFault::NoAnswer || fault == SimulatedFault::Disconnect) return; // swallowed
         if (fault == SimulatedFault::ExceptionReply) {
             modbus_reply_exception(device, query, controlRegs->tab_registers[kExceptionCode]);
             return;
@@ -318,7 +325,8 @@ struct FixtureServer::Impl {
         std::uint16_t modeBefore = controlRegs->tab_registers[kFaultMode];
         if (modbus_reply(control, query, length, controlRegs) < 0) return;
         std::uint16_t mode = controlRegs->tab_registers[kFaultMode];
-        bool codeWritten = span.isWrite && span.address <= kDriveFaultCode && span.address + span.count > kDriveFaultCode;
+        bool codeWritten =
+            span.isWrite && span.address <= kDriveFaultCode && span.address + span.count > kDriveFaultCode;
         if (mode != modeBefore || (codeWritten && mode == static_cast<int>(SimulatedFault::DriveFault)))
             applyFault(static_cast<SimulatedFault>(mode));
     }
@@ -363,11 +371,14 @@ struct FixtureServer::Impl {
             if (deviceListen >= 0) add(deviceListen, DeviceListen);
             if (controlListen >= 0) add(controlListen, ControlListen);
             if (!options.rtuDevice.empty()) add(modbus_get_socket(device), Rtu);
-            for (int fd : deviceClients) add(fd, DeviceClient);
-            for (int fd : controlClients) add(fd, ControlClient);
+            for (int fd : deviceClients)
+                add(fd, DeviceClient);
+            for (int fd : controlClients)
+                add(fd, ControlClient);
 
             int n = ::poll(fds.data(), fds.size(), kPollMs);
-            if (n < 0 && errno != EINTR) throw FaultError(std::string("fixture simulator: poll: ") + std::strerror(errno));
+            if (n < 0 && errno != EINTR)
+                throw FaultError(std::string("fixture simulator: poll: ") + std::strerror(errno));
             if (n <= 0) continue;
             std::vector<int> goneDevice;
             std::vector<int> goneControl;
@@ -377,12 +388,16 @@ struct FixtureServer::Impl {
                 case DeviceListen:
                     if (deviceListen >= 0) acceptOn(deviceListen, deviceClients, true);
                     break;
-                case ControlListen: acceptOn(controlListen, controlClients, false); break;
+                case ControlListen:
+                    acceptOn(controlListen, controlClients, false);
+                    break;
                 case Rtu: {
                     std::array<std::uint8_t, MODBUS_RTU_MAX_ADU_LENGTH> query{};
                     int rc = modbus_receive(device, query.data());
-                    if (rc > 0) serveDevice(query.data(), rc);
-                    else if (rc < 0) modbus_flush(device);
+                    if (rc > 0)
+                        serveDevice(query.data(), rc);
+                    else if (rc < 0)
+                        modbus_flush(device);
                     break;
                 }
                 case DeviceClient:
@@ -427,9 +442,18 @@ FixtureServer::FixtureServer(const geometry::Station& station, const ServerOptio
 
 FixtureServer::~FixtureServer() = default;
 
-int FixtureServer::tcpPort() const { return impl_->devicePort; }
-int FixtureServer::controlPort() const { return impl_->ctlPort; }
+int FixtureServer::tcpPort() const
+{
+    return impl_->devicePort;
+}
+int FixtureServer::controlPort() const
+{
+    return impl_->ctlPort;
+}
 
-void FixtureServer::run(const volatile std::sig_atomic_t& stop) { impl_->run(stop); }
+void FixtureServer::run(const volatile std::sig_atomic_t& stop)
+{
+    impl_->run(stop);
+}
 
-}  // namespace hg::fixturesim
+} // namespace hg::fixturesim

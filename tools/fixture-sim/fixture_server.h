@@ -7,39 +7,39 @@
 // channel the driver under test uses.
 #pragma once
 
+#include "hullgauge/drivers/fixture.h"
+#include "hullgauge/geometry/station.h"
+
 #include <atomic>
 #include <csignal>
 #include <filesystem>
 #include <memory>
 #include <string>
 
-#include "hullgauge/drivers/fixture.h"
-#include "hullgauge/geometry/station.h"
-
 namespace hg::fixturesim {
 
 /// Holding registers of the control port (0-based), documented in docs/fixture.md.
 enum ControlRegister : int {
-    kFaultMode = 0,        ///< rw: SimulatedFault value 0..5
-    kExceptionCode = 1,    ///< rw: exception code answered in fault mode 2 (1..255, default 4)
-    kDriveFaultCode = 2,   ///< rw: fault code latched in fault mode 5 (1..65535, default 17)
-    kMovesCompleted = 3,   ///< ro: moves and homings that ended in position
-    kRequestsServed = 4,   ///< ro: device requests answered (low 16 bits)
-    kConnections = 5,      ///< ro: device connections accepted (low 16 bits)
+    kFaultMode = 0,      ///< rw: SimulatedFault value 0..5
+    kExceptionCode = 1,  ///< rw: exception code answered in fault mode 2 (1..255, default 4)
+    kDriveFaultCode = 2, ///< rw: fault code latched in fault mode 5 (1..65535, default 17)
+    kMovesCompleted = 3, ///< ro: moves and homings that ended in position
+    kRequestsServed = 4, ///< ro: device requests answered (low 16 bits)
+    kConnections = 5,    ///< ro: device connections accepted (low 16 bits)
     kControlRegisterCount = 6,
 };
 
 struct ServerOptions {
     std::string host = "127.0.0.1";
-    int tcpPort = -1;         ///< device channel on TCP (0 = any free port); -1 when RTU
-    std::string rtuDevice;    ///< device channel on RTU (serial device or PTY)
-    int controlPort = 0;      ///< control channel (0 = any free port; -1 = none)
+    int tcpPort = -1;      ///< device channel on TCP (0 = any free port); -1 when RTU
+    std::string rtuDevice; ///< device channel on RTU (serial device or PTY)
+    int controlPort = 0;   ///< control channel (0 = any free port; -1 = none)
     drivers::SimulatedFault initialFault = drivers::SimulatedFault::None;
-    std::filesystem::path readyFile;  ///< written ("port=N\ncontrol_port=M\n") once listening
+    std::filesystem::path readyFile; ///< written ("port=N\ncontrol_port=M\n") once listening
 };
 
 class FixtureServer {
-public:
+  public:
     /// Validates the station's fixture.driver section (InputError on bad maps)
     /// and opens the channels (FaultError when a port or device cannot be opened).
     FixtureServer(const geometry::Station& station, const ServerOptions& options);
@@ -53,9 +53,9 @@ public:
     /// Serves until `stop` becomes non-zero (checked at least every 10 ms).
     void run(const volatile std::sig_atomic_t& stop);
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace hg::fixturesim
+} // namespace hg::fixturesim

@@ -1,22 +1,24 @@
 // hullgauge-fixture-sim — the Modbus fixture simulator (docs/fixture.md).
 // Serves the fixture drive's register map of a station YAML over Modbus TCP on
 // a loopback address or RTU on a serial device/PTY, until SIGTERM or SIGINT.
-#include <csignal>
-#include <iostream>
-
-#include <CLI/CLI.hpp>
-
 #include "fixture_server.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
 
 namespace {
 
 volatile std::sig_atomic_t stopRequested = 0;
 
-extern "C" void onSignal(int) { stopRequested = 1; }
+extern "C" void onSignal(int)
+{
+    stopRequested = 1;
+}
 
-}  // namespace
+} // namespace
 
 int main(int argc, char** argv)
 {

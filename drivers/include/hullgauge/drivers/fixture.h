@@ -16,6 +16,11 @@
 // A driver is used from one thread at a time.
 #pragma once
 
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/drivers/lifecycle.h"
+#include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/station.h"
+
 #include <chrono>
 #include <initializer_list>
 #include <memory>
@@ -23,20 +28,15 @@
 #include <string_view>
 #include <vector>
 
-#include "hullgauge/common/config_node.h"
-#include "hullgauge/drivers/lifecycle.h"
-#include "hullgauge/geometry/fixture.h"
-#include "hullgauge/geometry/station.h"
-
 namespace hg::drivers {
 
 /// Outcome classes of every fixture call (documented in docs/fixture.md).
 enum class FixtureStatusCode {
     Ok,
-    Timeout,             ///< the fixture did not reach position within the timeout
-    Fault,               ///< the drive reports a fault (fault bit, fault code)
-    CommunicationError,  ///< no answer, refused connection, exception reply, bad frame
-    NotAllowed,          ///< call not allowed in this lifecycle state, pose out of range, not homed
+    Timeout,            ///< the fixture did not reach position within the timeout
+    Fault,              ///< the drive reports a fault (fault bit, fault code)
+    CommunicationError, ///< no answer, refused connection, exception reply, bad frame
+    NotAllowed,         ///< call not allowed in this lifecycle state, pose out of range, not homed
 };
 
 std::string_view toString(FixtureStatusCode code);
@@ -55,17 +55,17 @@ struct [[nodiscard]] FixtureResult {
 
 /// A snapshot of the fixture as the drive reports it.
 struct FixtureStatus {
-    geometry::FixturePose position;  ///< actual position (degrees / millimetres)
-    bool inPosition = false;         ///< at the commanded target and settled
-    bool busy = false;               ///< moving, homing or settling
+    geometry::FixturePose position; ///< actual position (degrees / millimetres)
+    bool inPosition = false;        ///< at the commanded target and settled
+    bool busy = false;              ///< moving, homing or settling
     bool homed = false;
     bool fault = false;
-    int faultCode = 0;      ///< the drive's fault code (0 = none)
-    std::string faultText;  ///< from `fault_texts` in the configuration, or generic
+    int faultCode = 0;     ///< the drive's fault code (0 = none)
+    std::string faultText; ///< from `fault_texts` in the configuration, or generic
 };
 
 class Fixture {
-public:
+  public:
     virtual ~Fixture() = default;
     Fixture(const Fixture&) = delete;
     Fixture& operator=(const Fixture&) = delete;
@@ -107,7 +107,7 @@ public:
     /// The backend name from the configuration (`modbus`, `sim`).
     virtual std::string_view backend() const = 0;
 
-protected:
+  protected:
     /// `driver` is the `fixture.driver` section; its common keys are read here.
     Fixture(const ConfigNode& driver, const geometry::FixtureKinematics& kinematics);
 
@@ -129,7 +129,7 @@ protected:
     /// Text for a drive fault code (`fault_texts`, else "drive fault code N").
     std::string faultText(int code) const;
 
-private:
+  private:
     FixtureResult transition(Transition t, FixtureResult (Fixture::*hook)());
     FixtureResult requireState(std::initializer_list<LifecycleState> allowedStates, std::string_view call) const;
 
@@ -158,24 +158,24 @@ std::unique_ptr<Fixture> makeFixture(const geometry::Station& station);
 /// fixture simulator share them; numbers are the simulator's FAULT_MODE values).
 enum class SimulatedFault {
     None = 0,
-    NoAnswer = 1,         ///< requests are not answered
-    ExceptionReply = 2,   ///< requests are answered with a Modbus exception
-    Disconnect = 3,       ///< the connection is dropped and refused
-    NeverInPosition = 4,  ///< axes stall half-way, busy stays set
-    DriveFault = 5,       ///< the drive latches a fault (fault bit and code)
+    NoAnswer = 1,        ///< requests are not answered
+    ExceptionReply = 2,  ///< requests are answered with a Modbus exception
+    Disconnect = 3,      ///< the connection is dropped and refused
+    NeverInPosition = 4, ///< axes stall half-way, busy stays set
+    DriveFault = 5,      ///< the drive latches a fault (fault bit and code)
 };
 
 /// The in-process simulated twin (`backend: sim`): the fixture simulator's
 /// motion model and fault switches without Modbus, for tests of the code
 /// above the driver. Obtain it with `dynamic_cast<SimulatedFixture*>`.
 class SimulatedFixture : public Fixture {
-public:
+  public:
     /// Switches a fault on (or off with SimulatedFault::None); `code` is the
     /// drive fault code (DriveFault) or Modbus exception code (ExceptionReply).
     virtual void injectFault(SimulatedFault fault, int code = 0) = 0;
 
-protected:
+  protected:
     using Fixture::Fixture;
 };
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

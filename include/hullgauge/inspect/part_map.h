@@ -1,0 +1,21 @@
+// Building the octree inspection map of a part program (3.5.1): geometry from
+// the program's octree section, labels from the CAD solid (object when >= 50 %
+// of a voxel lies inside: Solid::isObjectVoxel).
+#pragma once
+
+#include <memory>
+
+#include "hullgauge/inspect/inspection_map.h"
+#include "hullgauge/model/part_program.h"
+
+namespace hg::inspect {
+
+/// Expected voxel labels of a CAD solid: object when >= 50 % inside.
+LabelOracle cadLabels(std::shared_ptr<const model::Solid> solid);
+
+/// `levels` inspection levels are prepared: depth - levels + 1 .. depth
+/// (clamped to level 0). Throws hg::InputError naming the part program when
+/// its octree cannot be represented (depth above kMaxDepth).
+InspectionMap buildInspectionMap(const model::PartProgram& program, int levels = 3);
+
+}  // namespace hg::inspect

@@ -1,0 +1,129 @@
+// hullgauge inspect --part P.yaml|--map M.hgmap --views M.json [--out R.json]
+// Goal-driven inspection of one captured part (CONTRACTS §4, §5;
+// docs/inspection.md). Exit 0 when the part passes, 1 when it fails, 2 for bad
+// input (a bad manifest, a missing image or one of the wrong size names the
+// view), 3 for a fault.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include "command.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/vision/manifest.h"
+
+namespace hg::cli {
+namespace {
+
+struct InspectArgs {
+    std::string part;
+    std::string map;
+    std::string views;
+    std::string out;
+    int level = -1;
+    int adjacency = -1;
+    std::vector<std::string> mask;
+    bool earlyExit = false;
+    std::string method = "volume";
+    bool noResolutionCheck = false;
+};
+
+int run(const InspectArgs& args)
+{
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    std::optional<inspect::InspectionMap> map;
+    if (!args.map.empty()) {
+        map = inspect::InspectionMap::load(args.map);
+    } else {
+        const model::PartProgram program = model::loadPartProgram(args.part);
+        // Only the requested level is needed for one inspection.
+        const int level = args.level < 0 ? program.octree.depth : args.level;
+        map = inspect::buildInspectionMap(program, std::max(1, program.octree.depth - level + 1));
+    }
+
+    const vision::CaptureManifest manifest = vision::readManifest(args.views);
+    std::vector<inspect::CapturedView> views;
+    for (std::size_t i = 0; i < manifest.views.size(); ++i) {
+        const vision::ManifestView& mv = manifest.views[i];
+        cv::Mat frame = vision::readViewImage(manifest, i);
+        geometry::Intrinsics in = mv.camera.intrinsics();
+        in.imageSize = frame.size();
+        views.push_back({mv.id, geometry::CameraModel(in, mv.camera.cameraFromPart()), std::move(frame)});
+    }
+    if (views.empty()) throw InputError(args.views, "views", "no views");
+
+    inspect::InspectionOptions options;
+    options.level = args.level;
+    options.adjacency = args.adjacency;
+    options.maskedLandmarks = args.mask;
+    options.earlyExit = args.earlyExit;
+    options.method = args.method == "centre" ? inspect::VoxelTestMethod::CentrePoint
+                                             : inspect::VoxelTestMethod::VolumeSource;
+    options.requireResolution = !args.noResolutionCheck;
+    const std::string source = args.map.empty() ? args.part : args.map;
+    std::optional<inspect::Inspector> inspector;
+    try {
+        inspector.emplace(*map, options);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(source, "inspection options", e.what());
+    }
+    inspect::InspectionResult result;
+    try {
+        result = inspector->inspect(views, manifest.segmentation);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(args.views, "views", e.what());
+    }
+    result.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+
+    const std::string text = inspect::toJson(result).dump(2) + "\n";
+    if (args.out.empty()) {
+        std::cout << text;
+    } else {
+        std::ofstream f(args.out);
+        f << text;
+        if (!f) throw FaultError("cannot write " + args.out);
+    }
+    int failed = 0;
+    for (const auto& l : result.landmarks)
+        if (l.status != inspect::LandmarkStatus::Ok) ++failed;
+    std::cerr << "hullgauge inspect: " << result.part << ": " << (result.pass ? "pass" : "fail") << " ("
+              << result.landmarks.size() - static_cast<std::size_t>(failed) << "/" << result.landmarks.size()
+              << " landmarks ok, " << result.voxelsReconstructed << " voxels reconstructed)\n";
+    return result.pass ? 0 : static_cast<int>(ExitStatus::PartFails);
+}
+
+std::function<int()> factory(CLI::App& app)
+{
+    auto args = std::make_shared<InspectArgs>();
+    auto* cmd = app.add_subcommand("inspect", "goal-driven inspection of one captured part");
+    auto* part = cmd->add_option("--part", args->part, "part program (YAML)");
+    auto* map = cmd->add_option("--map", args->map, "inspection map built by 'hullgauge build-map'");
+    part->excludes(map);
+    map->excludes(part);
+    cmd->add_option("--views", args->views, "capture manifest (JSON, CONTRACTS §3)")->required();
+    cmd->add_option("--out", args->out, "result JSON (default: stdout)");
+    cmd->add_option("--level", args->level, "octree level to inspect at (default: the map's depth)");
+    cmd->add_option("--adjacency", args->adjacency, "type-four layers to search (default: the map's)");
+    cmd->add_option("--mask", args->mask, "landmark ids to leave out")->delimiter(',');
+    cmd->add_flag("--early-exit", args->earlyExit, "stop at the first landmark that is not ok");
+    cmd->add_option("--method", args->method, "voxel test: volume (volume source) or centre (centre point)")
+        ->check(CLI::IsMember({"volume", "centre"}))
+        ->capture_default_str();
+    cmd->add_flag("--no-resolution-check", args->noResolutionCheck,
+                  "do not require a view that resolves ΔV (eq. 4.4.4-19) per landmark");
+    return [args] {
+        if (args->part.empty() == args->map.empty())
+            throw InputError("", "--part/--map", "give exactly one of --part and --map");
+        return run(*args);
+    };
+}
+
+HG_REGISTER_COMMAND("inspect", factory);
+
+}  // namespace
+}  // namespace hg::cli

@@ -271,18 +271,31 @@ class DistortedProjector {
     void subdivide(const Vec3& a, const Vec3& b, const Vec3& c, int depth)
     {
         if (depth < kMaxDepth) {
-            // Bisect the first edge that bends; the children re-test the rest.
+            // Bisect the longest edge that bends (longest-edge bisection keeps
+            // the pieces well shaped; bisecting any bending edge first breeds
+            // slivers whose long sides bend again). The order does not matter
+            // for cracks: an edge that bends is split in every triangle
+            // holding it, at the same midpoint.
             const Vec3* v[3] = {&a, &b, &c};
+            int worst = -1;
+            double worstLength = 0.0;
             for (int i = 0; i < 3; ++i) {
                 const Vec3& p = *v[i];
                 const Vec3& q = *v[(i + 1) % 3];
-                const Vec3& r = *v[(i + 2) % 3];
-                if (needsSplit(p, q)) {
-                    const Vec3 m = 0.5 * (p + q);
-                    subdivide(p, m, r, depth + 1);
-                    subdivide(m, q, r, depth + 1);
-                    return;
+                const double length = (normalised(p) - normalised(q)).squaredNorm();
+                if (length > worstLength && needsSplit(p, q)) {
+                    worst = i;
+                    worstLength = length;
                 }
+            }
+            if (worst >= 0) {
+                const Vec3& p = *v[worst];
+                const Vec3& q = *v[(worst + 1) % 3];
+                const Vec3& r = *v[(worst + 2) % 3];
+                const Vec3 m = 0.5 * (p + q);
+                subdivide(p, m, r, depth + 1);
+                subdivide(m, q, r, depth + 1);
+                return;
             }
         }
         auto A = project(a);

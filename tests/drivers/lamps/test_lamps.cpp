@@ -82,7 +82,8 @@ TEST(LampsConfig, ErrorsNameFileLineAndKey)
 {
     EXPECT_EQ(inputErrorOf("lamps:\n  backend: relay\n  green: A\n  amber: B\n  red: C\n"),
               "station.yaml:2: lamps.backend: unknown lamp backend 'relay' (gpiod or sim)");
-    EXPECT_NE(inputErrorOf("lamps: {backend: sim, green: A, amber: B}").find("lamps.red"), std::string::npos);
+    EXPECT_NE(inputErrorOf("lamps: {backend: sim, green: A, amber: B}").find("lamps: missing required key 'red'"),
+              std::string::npos);
     EXPECT_NE(inputErrorOf("lamps:\n  backend: sim\n  green: A\n  amber: 4\n  red: C\n")
                   .find("station.yaml:4: lamps.amber: a line given by offset needs 'lamps.chip'"),
               std::string::npos);

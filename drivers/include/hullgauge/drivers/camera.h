@@ -28,6 +28,8 @@
 
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/lifecycle.h"
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/model/mesh.h"
 
 namespace hg::drivers {
 
@@ -223,5 +225,36 @@ CameraSettings parseCameraSettings(const ConfigNode& driver);
 /// hg::InputError naming the key (unknown backend -> camera.driver.backend).
 /// The sim backend needs the station and a pose source: use makeSimCamera.
 std::unique_ptr<Camera> makeCamera(const ConfigNode& root);
+
+/// What the simulated camera (`backend: sim`) needs besides its config section.
+struct SimCameraInputs {
+    /// The station calibration: intrinsics (image size, K, dist) and fixture kinematics.
+    geometry::Station station;
+    /// The fixture's current pose, or std::nullopt while it is unknown (moving,
+    /// faulted); set by whoever wires the station (the fixture driver's status).
+    std::function<std::optional<geometry::FixturePose>()> poseSource;
+    /// Parts that can be under test, by name: "nominal" and defect variants (part frame, mm).
+    std::vector<std::pair<std::string, model::TriangleMesh>> parts;
+};
+
+/// The simulated camera: renders the part under test at the fixture's current
+/// pose through the station calibration (backlit silhouette, hg::sim renderer).
+class SimCamera : public Camera {
+public:
+    /// Switches the part under test (thread-safe, also while streaming);
+    /// fails for a name not in the inputs' parts.
+    virtual Status setPart(const std::string& name) = 0;
+    virtual std::string part() const = 0;
+    virtual std::vector<std::string> partNames() const = 0;
+    /// Replaces the pose source (thread-safe).
+    virtual void setPoseSource(std::function<std::optional<geometry::FixturePose>()> source) = 0;
+
+protected:
+    using Camera::Camera;
+};
+
+/// Builds the sim camera from `camera.driver` (backend: sim) and its inputs.
+/// Throws hg::InputError naming the key (e.g. camera.driver.part not among the parts).
+std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs);
 
 }  // namespace hg::drivers

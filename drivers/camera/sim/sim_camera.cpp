@@ -1,0 +1,291 @@
+// The simulated camera (`camera.driver.backend: sim`): the station's twin of a
+// real camera, used by the simulated line and in tests. Each grab asks the pose
+// source where the fixture is, poses the camera through the station
+// calibration (camera_from_part = camera_from_fixture * fixture motion,
+// CONTRACTS §2) and renders the backlit silhouette of the part under test with
+// the hg::sim renderer, into a pool slot cropped to the ROI.
+//
+// Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
+// and read back but do not change the image; Part switches the part under
+// test; PixelFormat, OffsetX/Y, Width/Height, SensorWidth/Height are read-only.
+#include <algorithm>
+#include <cstdlib>
+#include <mutex>
+#include <sstream>
+
+#include <opencv2/core.hpp>
+
+#include "hullgauge/common/log.h"
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/sim/renderer.h"
+
+namespace hg::drivers {
+namespace {
+
+using std::chrono::milliseconds;
+
+struct SimConfig {
+    sim::RenderOptions render;
+    int bufferCount = 4;
+    std::string initialPart = "nominal";
+};
+
+/// Preallocated frame slots; a slot is busy while a Frame views it.
+struct SlotPool {
+    std::mutex mutex;
+    std::vector<cv::Mat> slots;
+    std::vector<bool> busy;
+
+    std::optional<std::size_t> take()
+    {
+        std::lock_guard lock(mutex);
+        for (std::size_t i = 0; i < busy.size(); ++i)
+            if (!busy[i]) {
+                busy[i] = true;
+                return i;
+            }
+        return std::nullopt;
+    }
+    void give(std::size_t i)
+    {
+        std::lock_guard lock(mutex);
+        busy[i] = false;
+    }
+};
+
+class SimCameraImpl final : public SimCamera {
+public:
+    SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, SimCameraInputs inputs)
+        : SimCamera(std::move(configPath), std::move(settings)), config_(std::move(config)),
+          station_(std::move(inputs.station)), poseSource_(std::move(inputs.poseSource))
+    {
+        for (auto& [name, mesh] : inputs.parts)
+            renderers_.emplace_back(name, std::make_shared<const sim::SilhouetteRenderer>(
+                                              std::vector<model::TriangleMesh>{std::move(mesh)}));
+        current_ = find(config_.initialPart);
+        partName_ = config_.initialPart;
+    }
+
+    Status setPart(const std::string& name) override
+    {
+        auto r = find(name);
+        if (!r) {
+            std::string known;
+            for (const auto& [n, _] : renderers_) known += (known.empty() ? "" : ", ") + n;
+            return Status::failure("sim camera: no part named '" + name + "' (known: " + known + ")");
+        }
+        std::lock_guard lock(mutex_);
+        current_ = std::move(r);
+        partName_ = name;
+        log::category("camera")->info("sim camera: part under test is now '{}'", name);
+        return Status::success();
+    }
+
+    std::string part() const override
+    {
+        std::lock_guard lock(mutex_);
+        return partName_;
+    }
+
+    std::vector<std::string> partNames() const override
+    {
+        std::vector<std::string> out;
+        for (const auto& [n, _] : renderers_) out.push_back(n);
+        return out;
+    }
+
+    void setPoseSource(std::function<std::optional<geometry::FixturePose>()> source) override
+    {
+        std::lock_guard lock(mutex_);
+        poseSource_ = std::move(source);
+    }
+
+protected:
+    Status doConfigure() override { return doApplySettings(settings()); }
+
+    Status doApplySettings(const CameraSettings& s) override
+    {
+        const cv::Size sensor = station_.camera.imageSize;
+        const cv::Rect roi = s.roi.isFullSensor() ? cv::Rect({0, 0}, sensor)
+                                                   : cv::Rect(s.roi.x, s.roi.y, s.roi.width, s.roi.height);
+        if ((roi & cv::Rect({0, 0}, sensor)) != roi) {
+            std::ostringstream m;
+            m << "sim camera: ROI [" << roi.x << ", " << roi.y << ", " << roi.width << ", " << roi.height
+              << "] exceeds the " << sensor.width << "x" << sensor.height << " image of the station";
+            return Status::failure(m.str());
+        }
+        roi_ = roi;
+        if (s.exposureUs) exposureUs_ = *s.exposureUs;
+        if (s.gainDb) gainDb_ = *s.gainDb;
+        return Status::success();
+    }
+
+    Status doActivate() override
+    {
+        pool_ = std::make_shared<SlotPool>();
+        for (int i = 0; i < config_.bufferCount; ++i)
+            pool_->slots.emplace_back(roi_.size(), cvTypeOf(settings().pixelFormat));
+        pool_->busy.assign(pool_->slots.size(), false);
+        return Status::success();
+    }
+
+    Status doDeactivate() override
+    {
+        pool_.reset();  // slots still viewed by frames stay alive with them
+        return Status::success();
+    }
+
+    Status doCleanup() override
+    {
+        pool_.reset();
+        return Status::success();
+    }
+
+    Frame doGrab(milliseconds /*timeout*/) override
+    {
+        std::shared_ptr<const sim::SilhouetteRenderer> renderer;
+        std::function<std::optional<geometry::FixturePose>()> source;
+        {
+            std::lock_guard lock(mutex_);
+            renderer = current_;
+            source = poseSource_;
+        }
+        if (!renderer) return Frame::failed(FrameStatus::Error, "sim camera: no part under test");
+        if (!source) return Frame::failed(FrameStatus::Error, "sim camera: no pose source is connected");
+        const auto pose = source();
+        if (!pose) return Frame::failed(FrameStatus::Timeout, "sim camera: the fixture pose is unknown (moving or faulted)");
+        auto slot = pool_->take();
+        if (!slot)
+            return Frame::failed(FrameStatus::Timeout, "sim camera: all " + std::to_string(config_.bufferCount) +
+                                                           " buffers are held by the caller");
+        sim::RenderOptions options = config_.render;
+        const PixelFormat format = settings().pixelFormat;
+        options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
+        options.seed = config_.render.seed + frameCount_;  // fresh, reproducible noise per frame
+        cv::Mat image = renderer->render(station_.cameraAt(*pose), options);
+        cv::Mat& out = pool_->slots[*slot];
+        if (format == PixelFormat::Mono12)
+            image(roi_).convertTo(out, CV_16U, 1.0 / 16.0);  // 12 significant bits
+        else
+            image(roi_).copyTo(out);
+        const auto id = ++frameCount_;
+        auto pool = pool_;
+        const std::size_t index = *slot;
+        return Frame::over(out, id, std::chrono::steady_clock::now().time_since_epoch(), FrameStatus::Ok,
+                           [pool, index] { pool->give(index); });
+    }
+
+    Result<std::vector<FeatureInfo>> doListFeatures() override
+    {
+        std::vector<FeatureInfo> out;
+        for (const char* name : {"Part", "PixelFormat", "ExposureTime", "Gain", "OffsetX", "OffsetY", "Width",
+                                 "Height", "SensorWidth", "SensorHeight"}) {
+            FeatureInfo f;
+            f.name = name;
+            f.type = f.name == "Part" || f.name == "PixelFormat" ? "Enumeration"
+                     : f.name == "ExposureTime" || f.name == "Gain" ? "Float"
+                                                                    : "Integer";
+            f.access = f.name == "Part" || f.name == "ExposureTime" || f.name == "Gain" ? "RW" : "RO";
+            f.value = doGetFeature(name).value();
+            out.push_back(std::move(f));
+        }
+        return out;
+    }
+
+    Result<std::string> doGetFeature(const std::string& name) override
+    {
+        auto num = [](double v) {
+            std::ostringstream s;
+            s << v;
+            return s.str();
+        };
+        if (name == "Part") return part();
+        if (name == "PixelFormat") return std::string(toString(settings().pixelFormat));
+        if (name == "ExposureTime") return num(exposureUs_);
+        if (name == "Gain") return num(gainDb_);
+        if (name == "OffsetX") return std::to_string(roi_.x);
+        if (name == "OffsetY") return std::to_string(roi_.y);
+        if (name == "Width") return std::to_string(roi_.width);
+        if (name == "Height") return std::to_string(roi_.height);
+        if (name == "SensorWidth") return std::to_string(station_.camera.imageSize.width);
+        if (name == "SensorHeight") return std::to_string(station_.camera.imageSize.height);
+        return Status::failure("sim camera: no feature named '" + name + "'");
+    }
+
+    Status doSetFeature(const std::string& name, const std::string& value) override
+    {
+        if (name == "Part") return setPart(value);
+        if (name == "ExposureTime" || name == "Gain") {
+            char* end = nullptr;
+            const double v = std::strtod(value.c_str(), &end);
+            if (end == value.c_str() || *end != '\0' || v < 0)
+                return Status::failure("sim camera: " + name + " needs a non-negative number, got '" + value + "'");
+            (name == "Gain" ? gainDb_ : exposureUs_) = v;
+            return Status::success();
+        }
+        if (doGetFeature(name).ok()) return Status::failure("sim camera: " + name + " is read-only here; set it in camera.driver");
+        return Status::failure("sim camera: no feature named '" + name + "'");
+    }
+
+    Result<CameraInfo> doInfo() override
+    {
+        CameraInfo info;
+        info.backend = "sim";
+        info.vendor = "hullgauge";
+        info.model = "simulated backlit camera";
+        info.serial = "SIM";
+        info.address = "sim";
+        info.sensorWidth = station_.camera.imageSize.width;
+        info.sensorHeight = station_.camera.imageSize.height;
+        return info;
+    }
+
+private:
+    std::shared_ptr<const sim::SilhouetteRenderer> find(const std::string& name) const
+    {
+        for (const auto& [n, r] : renderers_)
+            if (n == name) return r;
+        return nullptr;
+    }
+
+    SimConfig config_;
+    geometry::Station station_;
+    std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
+    mutable std::mutex mutex_;  // guards current_, partName_, poseSource_
+    std::shared_ptr<const sim::SilhouetteRenderer> current_;
+    std::string partName_;
+    std::function<std::optional<geometry::FixturePose>()> poseSource_;
+    cv::Rect roi_;
+    double exposureUs_ = 10000.0;
+    double gainDb_ = 0.0;
+    std::shared_ptr<SlotPool> pool_;
+    std::uint64_t frameCount_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs)
+{
+    driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
+                          "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed",
+                          "sub_scanlines"});
+    if (driver["backend"].asString() != "sim") driver["backend"].fail("makeSimCamera needs backend: sim");
+    SimConfig c;
+    if (auto n = driver.optional("buffer_count")) c.bufferCount = static_cast<int>(n->asIntIn(1, 64));
+    if (auto n = driver.optional("background_level")) c.render.backgroundLevel = n->asDoubleIn(0.0, 1.0);
+    if (auto n = driver.optional("object_level")) c.render.objectLevel = n->asDoubleIn(0.0, 1.0);
+    if (auto n = driver.optional("blur_sigma_px")) c.render.blurSigmaPx = n->asDoubleIn(0.0, 50.0);
+    if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
+    if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
+    if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
+    if (inputs.parts.empty()) driver.fail("the sim camera needs at least one part to render");
+    auto partNode = driver.optional("part");
+    c.initialPart = partNode ? partNode->asString() : inputs.parts.front().first;
+    const bool known = std::any_of(inputs.parts.begin(), inputs.parts.end(),
+                                   [&](const auto& p) { return p.first == c.initialPart; });
+    if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
+    return std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c),
+                                           std::move(inputs));
+}
+
+}  // namespace hg::drivers

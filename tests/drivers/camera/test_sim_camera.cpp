@@ -1,0 +1,170 @@
+// The simulated camera against analytic silhouettes: a cube seen face-on by a
+// pinhole camera projects to a square whose size follows from similar triangles.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/model/primitives.h"
+
+namespace {
+
+using namespace std::chrono_literals;
+using hg::drivers::FrameStatus;
+
+// f = 1000 px, principal point at the image centre, part origin 300 mm in front
+// of the camera; the turntable axis is the optical axis (fixture z).
+constexpr double kF = 1000.0;
+constexpr double kDistance = 300.0;
+const char* kStation = R"(camera:
+  image_size: [640, 480]
+  K: [[1000, 0, 319.5], [0, 1000, 239.5], [0, 0, 1]]
+  driver:
+    backend: sim
+    part: nominal
+fixture:
+  type: rotation_declination
+  camera_from_fixture: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 300]}
+  rotation_axis: [0, 0, 1]
+  declination_axis: [1, 0, 0]
+)";
+
+struct Silhouette {
+    double area = 0;  // dark pixels
+    cv::Rect box;
+};
+
+Silhouette measure(const cv::Mat& image)
+{
+    cv::Mat grey;
+    image.convertTo(grey, CV_32F, image.depth() == CV_8U ? 1.0 / 255.0 : 1.0 / 65535.0);
+    cv::Mat dark = grey < 0.5;
+    Silhouette s;
+    s.area = cv::countNonZero(dark);
+    s.box = cv::boundingRect(dark);
+    return s;
+}
+
+/// Half the projected width of the near face of a cube of half-size a centred on the axis.
+double halfWidthPx(double a) { return kF * a / (kDistance - a); }
+
+class SimCameraTest : public ::testing::Test {
+protected:
+    std::unique_ptr<hg::drivers::SimCamera> make(const std::string& extraDriver = "")
+    {
+        std::string text = kStation;
+        text.insert(text.find("fixture:"), extraDriver);
+        auto root = hg::ConfigNode::parse(text, "station.yaml");
+        hg::drivers::SimCameraInputs in;
+        in.station = hg::geometry::parseStation(root);
+        in.poseSource = [this] { return pose_; };
+        in.parts.emplace_back("nominal", hg::model::makeBox({-20, -20, -20}, {20, 20, 20}));
+        in.parts.emplace_back("short", hg::model::makeBox({-10, -10, -10}, {10, 10, 10}));
+        return hg::drivers::makeSimCamera(root["camera"]["driver"], std::move(in));
+    }
+
+    std::optional<hg::geometry::FixturePose> pose_ = hg::geometry::FixturePose{};
+};
+
+TEST_F(SimCameraTest, FaceOnCubeProjectsToTheSquareOfSimilarTriangles)
+{
+    auto cam = make();
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    ASSERT_EQ(f.image.size(), cv::Size(640, 480));
+    const double side = 2 * halfWidthPx(20.0);  // 142.86 px
+    auto s = measure(f.image);
+    EXPECT_NEAR(s.area, side * side, 0.01 * side * side);
+    EXPECT_NEAR(s.box.width, side, 2.0);
+    EXPECT_NEAR(s.box.x + s.box.width / 2.0, 320.0, 1.0);
+}
+
+TEST_F(SimCameraTest, TurntableRotationFollowsThePoseSource)
+{
+    auto cam = make();
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    pose_ = hg::geometry::FixturePose{45.0, 0.0, 0.0};
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok());
+    // Rotated 45° about the optical axis: the square's diagonal is now horizontal.
+    const double side = 2 * halfWidthPx(20.0);
+    EXPECT_NEAR(measure(f.image).box.width, side * std::sqrt(2.0), 3.0);
+
+    pose_.reset();  // fixture moving: no frame, and it says why
+    auto g = cam->grab(100ms);
+    EXPECT_EQ(g.status, FrameStatus::Timeout);
+    EXPECT_NE(g.message.find("pose"), std::string::npos);
+}
+
+TEST_F(SimCameraTest, PartIsSwitchableWhileStreaming)
+{
+    auto cam = make();
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    const double big = 2 * halfWidthPx(20.0), small = 2 * halfWidthPx(10.0);
+    EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, big, 2.0);
+    ASSERT_TRUE(cam->setPart("short"));
+    EXPECT_EQ(cam->part(), "short");
+    EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, small, 2.0);
+    ASSERT_TRUE(cam->setFeature("Part", "nominal"));
+    EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, big, 2.0);
+    auto bad = cam->setPart("cracked");
+    EXPECT_FALSE(bad);
+    EXPECT_NE(bad.message().find("short"), std::string::npos) << bad.message();
+}
+
+TEST_F(SimCameraTest, RoiCropsAndSixteenBitFormatsScale)
+{
+    auto cam = make("    pixel_format: Mono12\n    roi: [320, 240, 200, 150]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok());
+    ASSERT_EQ(f.image.size(), cv::Size(200, 150));
+    ASSERT_EQ(f.image.type(), CV_16UC1);
+    double maxV = 0;
+    cv::minMaxLoc(f.image, nullptr, &maxV);
+    EXPECT_LE(maxV, 4095.0);
+    EXPECT_GT(maxV, 3000.0);  // lit background at 85 % of 12-bit full scale
+    // The square's lower-right quadrant: from the ROI origin (the image centre) to 71.4 px on.
+    cv::Mat dark = f.image < 2048;
+    const auto box = cv::boundingRect(dark);
+    EXPECT_EQ(box.x, 0);
+    EXPECT_EQ(box.y, 0);
+    EXPECT_NEAR(box.width, halfWidthPx(20.0) - 0.5, 1.5);
+}
+
+TEST_F(SimCameraTest, HeldFramesStarveThePoolAndReleaseRefillsIt)
+{
+    auto cam = make("    buffer_count: 2\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto a = cam->grab(10ms);
+    auto b = cam->grab(10ms);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_NE(a.image.data, b.image.data);
+    auto c = cam->grab(10ms);
+    EXPECT_EQ(c.status, FrameStatus::Timeout);
+    a.release();
+    EXPECT_TRUE(cam->grab(10ms).ok());
+}
+
+TEST_F(SimCameraTest, UnknownInitialPartIsAConfigError)
+{
+    try {
+        (void)make("    part: bent\n");
+        FAIL() << "accepted an unknown part";
+    } catch (const hg::InputError& e) {
+        EXPECT_EQ(e.field(), "camera.driver.part");
+    }
+}
+
+}  // namespace

@@ -1,0 +1,107 @@
+// The daemon's configuration (hullgauged.yaml): which station, which part
+// programs by number, the PLC server, the result store, image retention, the
+// sequencer's timeouts, the maintenance socket and the watchdog. Every key is
+// listed with type, unit and default in docs/daemon.md.
+//
+// loadDaemonConfig validates everything it can without hardware, at start and
+// on SIGHUP: the station file loads, every part program and view plan exists
+// and the view plans load against the station's fixture, addresses parse,
+// ranges hold. Errors throw hg::InputError naming file, line and key; on
+// reload the daemon keeps the configuration it runs with.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/station.h"
+
+namespace hg::station {
+
+/// An IPv4 network (address/prefix); a plain address is a /32.
+struct Ipv4Network {
+    std::uint32_t address = 0;  ///< host byte order
+    int prefix = 32;
+    bool contains(std::uint32_t hostOrderAddress) const;
+    std::string toString() const;
+};
+/// Parses "192.168.0.10" or "10.1.0.0/16"; std::nullopt when malformed.
+std::optional<Ipv4Network> parseIpv4Network(const std::string& text);
+
+struct PartProgramRef {
+    std::uint16_t number = 0;
+    std::filesystem::path partFile;  ///< part program YAML (CONTRACTS §1), absolute
+    std::filesystem::path viewsFile;  ///< view plan: a poses file (CONTRACTS §5), absolute
+    std::vector<geometry::FixturePose> views;  ///< loaded and range-checked
+};
+
+struct PlcConfig {
+    std::string bindAddress = "0.0.0.0";
+    int port = 502;
+    int unitId = 1;
+    /// Empty = any client may connect.
+    std::vector<Ipv4Network> allowedClients;
+    int maxClients = 8;
+    /// A request whose bytes straggle longer than this is dropped (its client closed).
+    std::chrono::milliseconds frameTimeout{500};
+    std::chrono::milliseconds heartbeatPeriod{500};
+};
+
+struct RetentionConfig {
+    std::size_t maxCount = 2000;           ///< failed-part image sets kept
+    std::chrono::hours maxAge{24 * 30};    ///< older image sets are removed
+    std::uint64_t maxBytes = 2ull << 30;   ///< total size of the image folder
+};
+
+struct ResultsConfig {
+    std::filesystem::path database;
+    std::filesystem::path imageDir;
+    bool saveFailedImages = true;
+    RetentionConfig retention;
+};
+
+struct SequencerConfig {
+    std::chrono::milliseconds moveTimeout{10000};
+    std::chrono::milliseconds grabTimeout{2000};
+    std::chrono::milliseconds settle{50};
+    int retries = 1;
+    /// SIGTERM during a cycle: wait this long for it to finish before aborting it.
+    std::chrono::milliseconds shutdownGrace{2000};
+};
+
+struct MaintenanceConfig {
+    std::filesystem::path socket = "/run/hullgauge/hullgauged.sock";
+    /// Group owning the socket (mode 0660); empty = the daemon's own group.
+    std::string group;
+};
+
+struct WatchdogConfig {
+    /// The daemon stops pinging the systemd watchdog when a cycle runs longer
+    /// than this (the sequencer is stuck) or the PLC server loop stalls.
+    std::chrono::milliseconds maxCycle{60000};
+};
+
+struct DaemonConfig {
+    std::filesystem::path file;  ///< the configuration file itself
+    std::filesystem::path stationFile;
+    geometry::Station station;
+    /// Name of the station section that lists the operator lamps (default "lamps").
+    std::string lampsSection = "lamps";
+    std::map<std::uint16_t, PartProgramRef> programs;
+    PlcConfig plc;
+    ResultsConfig results;
+    SequencerConfig sequencer;
+    MaintenanceConfig maintenance;
+    WatchdogConfig watchdog;
+};
+
+/// Loads and validates a daemon configuration. Relative paths are relative to
+/// the configuration file. Throws hg::InputError (file:line: key: problem).
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
+
+}  // namespace hg::station

@@ -1,0 +1,161 @@
+// The PLC's view of the station: the holding-register map of CONTRACTS §6 and
+// its rules, independent of the Modbus transport (the daemon's libmodbus server
+// calls in here for every request).
+//
+// Every access takes one lock, so a read of any block of registers sees one
+// consistent state: RESULT, FAULT_CODE, the landmark counts, CYCLE_MS,
+// LANDMARK_OK_BITS and DONE_SEQ of a cycle are written together by
+// publishResult(), and a PLC that reads DONE_SEQ == its TRIGGER_SEQ in the same
+// block reads that cycle's result.
+//
+// Trigger rule (CONTRACTS §6): a write that changes TRIGGER_SEQ asks for an
+// inspection with the PART_PROGRAM and SERIAL in the registers after that write
+// (an FC16 block writing program, serial and trigger together is applied as one).
+// It is accepted when STATUS is ready or done and the program is known: ACK_SEQ
+// latches the value, STATUS becomes busy at once (so a second trigger is
+// refused even before the sequencer picks the first one up), and the request
+// is queued for the sequencer. Otherwise REJECTED_TRIGGERS counts it and
+// LAST_REJECT_REASON says why; nothing else changes.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hg::station {
+
+/// Holding-register addresses (0-based), CONTRACTS §6. Extensions beyond the
+/// contract are marked and documented in docs/plc.md.
+namespace reg {
+inline constexpr std::uint16_t TriggerSeq = 0;
+inline constexpr std::uint16_t PartProgram = 1;
+inline constexpr std::uint16_t Serial = 2;  ///< 2..9, 16 ASCII characters, high byte first
+inline constexpr std::uint16_t SerialWords = 8;
+inline constexpr std::uint16_t Command = 10;  ///< extension: 1 = abort the cycle, 2 = reset fault
+inline constexpr std::uint16_t AckSeq = 100;
+inline constexpr std::uint16_t DoneSeq = 101;
+inline constexpr std::uint16_t Status = 102;
+inline constexpr std::uint16_t Result = 103;
+inline constexpr std::uint16_t FaultCode = 104;
+inline constexpr std::uint16_t LandmarksFailed = 105;
+inline constexpr std::uint16_t LandmarksTotal = 106;
+inline constexpr std::uint16_t CycleMs = 107;  ///< 107..108, u32 high word first
+inline constexpr std::uint16_t Heartbeat = 109;
+inline constexpr std::uint16_t RejectedTriggers = 110;
+inline constexpr std::uint16_t LastRejectReason = 111;  ///< extension, RejectReason
+inline constexpr std::uint16_t LandmarkOkBits = 120;    ///< 120..135
+inline constexpr std::uint16_t LandmarkOkWords = 16;
+/// One past the last mapped address; reads of [0, Count) are allowed (gaps read 0).
+inline constexpr std::uint16_t Count = 136;
+}  // namespace reg
+
+/// Largest number of landmarks LANDMARK_OK_BITS can report.
+inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
+
+/// STATUS register values (CONTRACTS §6).
+enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4 };
+/// RESULT register values (CONTRACTS §6).
+enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
+/// COMMAND register values (extension).
+enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2 };
+/// LAST_REJECT_REASON register values (extension).
+enum class RejectReason : std::uint16_t { None = 0, Busy = 1, UnknownProgram = 2, NotReady = 3 };
+
+/// Modbus exception codes the map answers with (Modbus application protocol §7).
+enum class ModbusException : std::uint8_t {
+    None = 0,
+    IllegalFunction = 1,
+    IllegalDataAddress = 2,  ///< read-only or unmapped address, or a block past the map
+    IllegalDataValue = 3,    ///< a value the register does not take
+};
+
+/// An accepted trigger, latched with the program and serial at acceptance.
+struct TriggerRequest {
+    std::uint16_t seq = 0;
+    std::uint16_t program = 0;
+    std::string serial;  ///< trailing NULs and spaces removed
+    /// From the maintenance socket, not the PLC: its result never touches
+    /// ACK_SEQ, DONE_SEQ or the result registers the PLC owns a handshake on.
+    bool manual = false;
+};
+
+/// What the PLC sees of a finished (or aborted) cycle.
+struct PublishedResult {
+    std::uint16_t seq = 0;
+    PlcResult result = PlcResult::None;
+    std::uint16_t faultCode = 0;
+    std::uint16_t landmarksFailed = 0;
+    std::uint16_t landmarksTotal = 0;
+    std::uint32_t cycleMs = 0;
+    /// ok[i]: landmark i passed; entries beyond kMaxReportedLandmarks are not reported.
+    std::vector<bool> landmarkOk;
+    /// STATUS after publishing: Done normally, Fault when the station needs recovery.
+    PlcStatus statusAfter = PlcStatus::Done;
+    /// A manual cycle's result only changes STATUS (see TriggerRequest::manual).
+    bool manual = false;
+};
+
+class PlcRegisters {
+public:
+    PlcRegisters();
+
+    /// FC03. Fills `out` with `count` registers from `address`; any block
+    /// inside [0, reg::Count) may be read (unmapped gaps read 0).
+    ModbusException read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const;
+    /// FC06 / FC16. Applies the whole block or nothing: any address outside
+    /// the PLC-writable registers answers IllegalDataAddress, any bad value
+    /// IllegalDataValue (checked before anything changes).
+    ModbusException write(std::uint16_t address, std::span<const std::uint16_t> values);
+
+    /// The part-program numbers a trigger may name (set at start and on reload).
+    void setKnownPrograms(std::set<std::uint16_t> programs);
+    /// STATUS as the sequencer reports it (Starting, Ready, Busy, Fault).
+    void setStatus(PlcStatus status);
+    PlcStatus status() const;
+    /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, LANDMARK_OK_BITS, DONE_SEQ
+    /// and STATUS together (one lock).
+    void publishResult(const PublishedResult& r);
+    /// HEARTBEAT += 1 (wraps at 65536).
+    void beat();
+
+    /// Waits up to `timeout` for an accepted trigger.
+    std::optional<TriggerRequest> waitTrigger(std::chrono::milliseconds timeout);
+    /// Takes a pending PLC command (abort / reset fault), if any.
+    PlcCommand takeCommand();
+
+    /// Counters for the maintenance socket and logs.
+    std::uint16_t rejectedTriggers() const;
+    /// A copy of the whole map (for status displays and tests).
+    std::array<std::uint16_t, reg::Count> snapshot() const;
+
+    /// A trigger from the maintenance socket: the same acceptance rules as
+    /// the PLC's, counted the same way, but the handshake registers stay the PLC's.
+    RejectReason triggerManually(std::uint16_t program, const std::string& serial);
+
+private:
+    RejectReason acceptLocked(TriggerRequest request);
+    static bool writable(std::uint16_t address);
+
+    mutable std::mutex mutex_;
+    std::condition_variable triggerReady_;
+    std::array<std::uint16_t, reg::Count> regs_{};
+    std::set<std::uint16_t> knownPrograms_;
+    std::deque<TriggerRequest> pending_;
+    PlcCommand pendingCommand_ = PlcCommand::None;
+};
+
+/// The serial number in SERIAL (2 ASCII characters per register, high byte
+/// first), without trailing NULs and spaces.
+std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words);
+/// The inverse of decodeSerial (pads with NULs; longer strings are cut at 16).
+std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& serial);
+
+}  // namespace hg::station

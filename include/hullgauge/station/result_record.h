@@ -1,0 +1,52 @@
+// One inspection as the station records it (result store row) and reports it
+// (PLC registers): the daemon builds a record when a cycle ends, commits it to
+// the result store, and only then publishes it to the PLC.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hullgauge/station/plc_registers.h"
+#include "hullgauge/station/sequencer.h"
+
+namespace hg::station {
+
+/// A landmark's outcome, as in the inspection result JSON (CONTRACTS §4).
+struct LandmarkOutcome {
+    std::string id;
+    std::string status;  ///< ok | out_of_tolerance | overflow | not_found | not_observable
+    double errorMinMm = 0.0;
+    double errorMaxMm = 0.0;
+    double errorMm = 0.0;
+    double toleranceMm = 0.0;
+    bool ok() const { return status == "ok"; }
+};
+
+enum class Verdict { Pass, Fail, Aborted, Error };
+std::string_view toString(Verdict v);
+
+struct InspectionRecord {
+    std::int64_t startedUnixMs = 0;  ///< wall clock at trigger acceptance (ms since 1970, UTC)
+    std::uint16_t triggerSeq = 0;
+    bool manual = false;  ///< triggered from the maintenance socket
+    std::string serial;
+    std::uint16_t program = 0;
+    std::string part;  ///< the part program's `part` name
+    Verdict verdict = Verdict::Error;
+    FaultCode faultCode = FaultCode::None;
+    std::uint32_t cycleMs = 0;  ///< trigger accepted -> verdict
+    std::vector<LandmarkOutcome> landmarks;
+    /// Cycle-time breakdown in ms (move, settle, grab, processing, ...).
+    nlohmann::json timingMs = nlohmann::json::object();
+
+    std::size_t landmarksFailed() const;
+    /// The landmark errors as stored in the result database.
+    nlohmann::json landmarksJson() const;
+    /// RESULT, FAULT_CODE, counts, CYCLE_MS and LANDMARK_OK_BITS for the PLC.
+    PublishedResult toPublished(PlcStatus statusAfter) const;
+};
+
+}  // namespace hg::station

@@ -1,0 +1,147 @@
+// The capture sequencer as an explicit state machine (STYLE.md point 6).
+//
+// Pure logic: it consumes events (what the devices and the pipeline reported)
+// and answers the next action; the daemon's cycle runner performs the actions
+// against the drivers and feeds their outcomes back. So every path — timeouts,
+// the one retry, aborts, faults — is decided here and unit-tested without
+// hardware.
+//
+//   Starting --devices active--> Ready --trigger--> Moving(0)
+//   Moving(k) --in position--> Settling(k) --settled--> Grabbing(k)
+//   Grabbing(k) --frame ok--> Moving(k+1), or Processing after the last view
+//   Processing --processed--> Done --trigger--> Moving(0)
+//   Moving/Grabbing --device failure--> same state once more (retry), then Fault
+//   busy --program or inspection error--> Done (result error; devices are fine)
+//   Moving/Settling/Grabbing --abort--> Done (result aborted)
+//   Fault --recovered--> Ready;  any --devices failed--> Fault
+// The table of allowed transitions is transitionAllowed(); the runner's
+// view of "busy" is Moving, Settling, Grabbing and Processing together.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace hg::station {
+
+enum class SequencerState { Starting, Ready, Moving, Settling, Grabbing, Processing, Done, Fault };
+
+enum class SequencerEvent {
+    DevicesActive,     ///< drivers configured and active (start, or after recovery)
+    DevicesFailed,     ///< drivers could not be started or were lost
+    Trigger,           ///< an accepted trigger
+    InPosition,        ///< the fixture reached the view's pose
+    MoveTimeout,       ///< no position within the move timeout
+    MoveFault,         ///< the drive reports a fault
+    MoveCommError,     ///< no answer from the fixture
+    MoveRefused,       ///< pose out of range, not homed, wrong state
+    Settled,           ///< settle time after the move elapsed
+    FrameOk,           ///< a complete frame of the view
+    FrameTimeout,      ///< no frame within the grab timeout
+    FrameBad,          ///< incomplete frame (lost packets, wrong size)
+    FrameError,        ///< the camera could not grab (wrong state, device lost)
+    Processed,         ///< the pipeline delivered the verdict
+    ProcessingFailed,  ///< the pipeline could not decide (error in the inspection)
+    ProgramFailed,     ///< the part program or its view plan could not be loaded
+    Abort,             ///< COMMAND = abort from the PLC (or the maintenance socket)
+    Shutdown,          ///< SIGTERM: abort unless only processing remains
+    Recovered,         ///< recovery after a fault succeeded
+    RecoveryFailed,    ///< recovery after a fault failed (the runner tries again later)
+};
+
+/// FAULT_CODE register values (docs/plc.md lists them for PLC programmers).
+/// 1x camera, 2x fixture, 3x part program / inspection, 4x daemon.
+enum class FaultCode : std::uint16_t {
+    None = 0,
+    CameraTimeout = 10,         ///< no frame within grab_timeout_s, after the retry
+    CameraBadFrame = 11,        ///< incomplete frames (lost packets), after the retry
+    CameraError = 12,           ///< the camera could not grab (state, device lost)
+    FixtureTimeout = 20,        ///< not in position within move_timeout_s, after the retry
+    FixtureFault = 21,          ///< the drive latched a fault, still there after reset and retry
+    FixtureCommunication = 22,  ///< the fixture does not answer
+    FixtureRefused = 23,        ///< pose out of range or fixture not homed, after re-homing
+    ProgramLoad = 30,           ///< part program or view plan failed to load
+    InspectionError = 31,       ///< the inspection could not be computed
+    AbortedByPlc = 40,          ///< COMMAND = 1 during a cycle
+    AbortedByShutdown = 41,     ///< the daemon was stopped during a cycle
+    ResultStore = 42,           ///< the result could not be committed to the database
+    DevicesDown = 43,           ///< drivers could not be started or recovered
+    Internal = 44,              ///< unexpected internal error
+};
+
+std::string_view toString(SequencerState s);
+std::string_view toString(SequencerEvent e);
+std::string_view toString(FaultCode c);
+/// A sentence for operators ("fixture not in position within the move timeout").
+std::string_view describe(FaultCode c);
+
+/// The transition table: may the sequencer go from `from` to `to`?
+bool transitionAllowed(SequencerState from, SequencerState to);
+
+/// True in Moving, Settling, Grabbing and Processing (STATUS busy).
+bool isBusy(SequencerState s);
+
+/// What the runner does next.
+struct SequencerAction {
+    enum class Kind {
+        None,     ///< wait for the next event (idle, or a step still running)
+        MoveTo,   ///< move the fixture to `view`'s pose; `retry`: reset a drive fault / re-home first
+        Settle,   ///< wait the settle time at `view`
+        Grab,     ///< grab `view`; hand the frame to the pipeline as soon as it is in
+        Finish,   ///< all views grabbed: wait for the pipeline's verdict
+        Publish,  ///< the cycle ended: commit the record, then show the result to the PLC
+        Recover,  ///< bring the devices back (reset faults, re-home, restart streaming)
+    };
+    Kind kind = Kind::None;
+    std::size_t view = 0;
+    bool retry = false;
+    /// Publish: stop the fixture first (the cycle ended while it may be moving).
+    bool stopMotion = false;
+    bool operator==(const SequencerAction&) const = default;
+};
+
+/// How a published cycle ended.
+enum class CycleOutcome { Inspected, Aborted, Faulted };
+
+class CaptureSequencer {
+public:
+    /// `retries`: extra attempts of a failed move or grab (the station's default is 1).
+    explicit CaptureSequencer(int retries = 1);
+
+    SequencerState state() const { return state_; }
+    /// Current view (0-based) while busy.
+    std::size_t view() const { return view_; }
+    std::size_t viewCount() const { return viewCount_; }
+    /// Attempts made at the current step (1 = first try).
+    int attempt() const { return attempt_; }
+    /// Why the last cycle faulted or was aborted (None after a clean cycle).
+    FaultCode faultCode() const { return faultCode_; }
+    CycleOutcome outcome() const { return outcome_; }
+
+    /// Starts a cycle over `viewCount` views (only from Ready or Done; a
+    /// trigger in any other state is the caller's bug: the register map refuses it).
+    SequencerAction trigger(std::size_t viewCount);
+    /// Feeds an event; returns the next action. Events that do not apply in
+    /// the current state (a late frame after an abort) change nothing and return None.
+    SequencerAction onEvent(SequencerEvent event);
+    /// After the runner published a cycle: Recover when the cycle left the
+    /// station in Fault, None otherwise.
+    SequencerAction afterPublish() const;
+
+private:
+    SequencerAction go(SequencerState to, SequencerAction action);
+    SequencerAction failStep(FaultCode code, SequencerAction retryAction);
+    /// `toFault`: the devices need recovery before the next cycle (else Done).
+    SequencerAction endCycle(CycleOutcome outcome, FaultCode code, bool stopMotion, bool toFault);
+
+    int retries_;
+    SequencerState state_ = SequencerState::Starting;
+    std::size_t view_ = 0;
+    std::size_t viewCount_ = 0;
+    int attempt_ = 0;
+    FaultCode faultCode_ = FaultCode::None;
+    CycleOutcome outcome_ = CycleOutcome::Inspected;
+};
+
+}  // namespace hg::station

@@ -1,0 +1,385 @@
+#include "cycle_runner.h"
+
+#include <cmath>
+
+#include "hullgauge/common/log.h"
+
+namespace hg::daemon {
+namespace {
+
+using station::SequencerAction;
+using station::SequencerEvent;
+using station::SequencerState;
+using Clock = std::chrono::steady_clock;
+using Kind = SequencerAction::Kind;
+
+std::int64_t nowNs() { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count(); }
+
+std::int64_t wallMs()
+{
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+SequencerEvent moveEvent(const StepResult& r)
+{
+    switch (r.code) {
+    case StepResult::Code::Ok: return SequencerEvent::InPosition;
+    case StepResult::Code::Timeout: return SequencerEvent::MoveTimeout;
+    case StepResult::Code::Fault: return SequencerEvent::MoveFault;
+    case StepResult::Code::Refused: return SequencerEvent::MoveRefused;
+    default: return SequencerEvent::MoveCommError;
+    }
+}
+
+SequencerEvent grabEvent(const StepResult& r)
+{
+    switch (r.code) {
+    case StepResult::Code::Ok: return SequencerEvent::FrameOk;
+    case StepResult::Code::Timeout: return SequencerEvent::FrameTimeout;
+    case StepResult::Code::BadFrame: return SequencerEvent::FrameBad;
+    default: return SequencerEvent::FrameError;
+    }
+}
+
+}  // namespace
+
+std::string_view toString(LampPattern p)
+{
+    switch (p) {
+    case LampPattern::Off: return "off";
+    case LampPattern::Busy: return "busy";
+    case LampPattern::Pass: return "pass";
+    case LampPattern::Fail: return "fail";
+    case LampPattern::Fault: return "fault";
+    }
+    return "off";
+}
+
+CycleRunner::CycleRunner(station::PlcRegisters& registers, StationDevices& devices, Inspector& inspector,
+                         ResultStore& store, std::shared_ptr<const station::DaemonConfig> config)
+    : registers_(registers), devices_(devices), inspector_(inspector), store_(store), config_(std::move(config)),
+      sequencer_(config_->sequencer.retries)
+{
+}
+
+CycleRunner::~CycleRunner() { stop(); }
+
+void CycleRunner::start(std::function<void()> onDevicesActive)
+{
+    onDevicesActive_ = std::move(onDevicesActive);
+    lastLoopNs_ = nowNs();
+    thread_ = std::thread([this] { run(); });
+}
+
+void CycleRunner::stop()
+{
+    if (!thread_.joinable()) return;
+    stopRequestedNs_ = nowNs();
+    stopRequested_ = true;
+    thread_.join();
+}
+
+void CycleRunner::setConfig(std::shared_ptr<const station::DaemonConfig> config)
+{
+    std::lock_guard lock(mutex_);
+    config_ = std::move(config);
+}
+
+station::SequencerState CycleRunner::state() const
+{
+    std::lock_guard lock(mutex_);
+    return sequencer_.state();
+}
+
+bool CycleRunner::healthy() const
+{
+    std::chrono::milliseconds maxCycle;
+    {
+        std::lock_guard lock(mutex_);
+        maxCycle = config_->watchdog.maxCycle;
+    }
+    auto now = nowNs();
+    auto cycleStart = cycleStartNs_.load();
+    if (cycleStart != 0 && now - cycleStart > std::chrono::nanoseconds(maxCycle).count()) return false;
+    // Outside a cycle the thread turns at least every 200 ms; inside one each step is bounded by its timeout.
+    if (cycleStart == 0 && now - lastLoopNs_.load() > std::chrono::nanoseconds(std::chrono::seconds(5)).count())
+        return false;
+    return true;
+}
+
+nlohmann::json CycleRunner::describe() const
+{
+    std::lock_guard lock(mutex_);
+    nlohmann::json j{{"state", std::string(station::toString(sequencer_.state()))},
+                     {"cycles", cycles_},
+                     {"faults", faults_},
+                     {"last_cycle", lastCycle_}};
+    if (station::isBusy(sequencer_.state())) {
+        j["view"] = sequencer_.view();
+        j["views"] = sequencer_.viewCount();
+    }
+    if (sequencer_.state() == SequencerState::Fault) {
+        j["fault_code"] = static_cast<int>(sequencer_.faultCode());
+        j["fault"] = std::string(station::describe(sequencer_.faultCode()));
+    }
+    return j;
+}
+
+void CycleRunner::setState(std::function<SequencerAction()> step, SequencerAction& action)
+{
+    auto log = hg::log::category("seq");
+    std::lock_guard lock(mutex_);
+    auto before = sequencer_.state();
+    action = step();
+    if (sequencer_.state() != before)
+        log->debug("{} -> {}", station::toString(before), station::toString(sequencer_.state()));
+}
+
+void CycleRunner::run()
+{
+    auto log = hg::log::category("seq");
+    SequencerAction action;
+    auto started = devices_.start();
+    if (started.ok()) {
+        setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesActive); }, action);
+        registers_.setStatus(station::PlcStatus::Ready);
+        devices_.showLamps(LampPattern::Off);
+        log->info("devices active; ready");
+        if (onDevicesActive_) onDevicesActive_();
+    } else {
+        log->error("devices failed to start: {}", started.message);
+        setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, action);
+        registers_.setStatus(station::PlcStatus::Fault);
+        devices_.showLamps(LampPattern::Fault);
+    }
+
+    auto lastRecovery = Clock::now();
+    while (!stopRequested_) {
+        lastLoopNs_ = nowNs();
+        auto command = registers_.takeCommand();
+        if (state() == SequencerState::Fault) {
+            // Retry recovery every 2 s, or at once when the PLC asks for a fault reset.
+            if (command == station::PlcCommand::ResetFault || Clock::now() - lastRecovery > std::chrono::seconds(2)) {
+                recover();
+                lastRecovery = Clock::now();
+            }
+        }
+        abortRequested_ = false;  // an abort outside a cycle has nothing to abort
+        if (auto trigger = registers_.waitTrigger(std::chrono::milliseconds(200))) runCycle(*trigger);
+    }
+    devices_.showLamps(LampPattern::Off);
+    devices_.shutdown();
+    log->info("devices shut down");
+}
+
+void CycleRunner::recover()
+{
+    auto log = hg::log::category("seq");
+    SequencerAction action;
+    auto r = devices_.recover();
+    if (r.ok()) {
+        setState([&] { return sequencer_.onEvent(SequencerEvent::Recovered); }, action);
+        registers_.setStatus(station::PlcStatus::Ready);
+        devices_.showLamps(LampPattern::Off);
+        bool first = false;
+        {
+            std::lock_guard lock(mutex_);
+            first = cycles_ == 0 && faults_ == 0;
+        }
+        log->info("recovered; ready");
+        if (first && onDevicesActive_) {
+            onDevicesActive_();
+            onDevicesActive_ = nullptr;
+        }
+    } else {
+        setState([&] { return sequencer_.onEvent(SequencerEvent::RecoveryFailed); }, action);
+        log->warn("recovery failed: {}", r.message);
+    }
+}
+
+bool CycleRunner::interrupted()
+{
+    if (registers_.takeCommand() == station::PlcCommand::Abort) abortRequested_ = true;
+    return abortRequested_ || stopRequested_;
+}
+
+void CycleRunner::runCycle(const station::TriggerRequest& trigger)
+{
+    auto log = hg::log::category("seq");
+    const auto cycleStart = Clock::now();
+    cycleStartNs_ = nowNs();
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+    }
+    station::InspectionRecord record;
+    record.startedUnixMs = wallMs();
+    record.triggerSeq = trigger.seq;
+    record.manual = trigger.manual;
+    record.serial = trigger.serial;
+    record.program = trigger.program;
+    double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0;
+
+    log->info("cycle {}{}: program {}, serial '{}'", trigger.manual ? "manual" : "seq ",
+              trigger.manual ? std::string() : std::to_string(trigger.seq), trigger.program, trigger.serial);
+    devices_.showLamps(LampPattern::Busy);
+
+    auto programIt = cfg->programs.find(trigger.program);
+    const station::PartProgramRef* program = programIt == cfg->programs.end() ? nullptr : &programIt->second;
+    SequencerAction action;
+    setState([&] { return sequencer_.trigger(program ? program->views.size() : 1); }, action);
+    std::string programError;
+    if (!program)
+        programError = "part program " + std::to_string(trigger.program) + " is no longer configured";
+    else if (!inspector_.begin(*program, programError) && programError.empty())
+        programError = "the part program could not be loaded";
+    if (!programError.empty()) {
+        log->error("{}", programError);
+        setState([&] { return sequencer_.onEvent(SequencerEvent::ProgramFailed); }, action);
+    }
+
+    InspectionOutcome outcome;
+    bool abortFed = false;
+    while (action.kind != Kind::Publish) {
+        if (!abortFed && interrupted()) {
+            // SIGTERM gets the grace period to let the cycle finish; the PLC's abort acts at once.
+            bool graceOver = !stopRequested_ ||
+                             nowNs() - stopRequestedNs_.load() >=
+                                 std::chrono::nanoseconds(cfg->sequencer.shutdownGrace).count();
+            if (abortRequested_ || graceOver) {
+                abortFed = true;
+                auto event = abortRequested_ ? SequencerEvent::Abort : SequencerEvent::Shutdown;
+                log->warn("{} during {}", station::toString(event), station::toString(state()));
+                SequencerAction next;
+                setState([&] { return sequencer_.onEvent(event); }, next);
+                if (next.kind != Kind::None) {
+                    action = next;
+                    continue;
+                }
+            }
+        }
+        const auto stepStart = Clock::now();
+        switch (action.kind) {
+        case Kind::MoveTo: {
+            auto pose = program->views[action.view];
+            auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, action.retry);
+            moveMs += msSince(stepStart);
+            if (!r.ok()) log->warn("view {}: move failed: {}", action.view, r.message);
+            setState([&] { return sequencer_.onEvent(moveEvent(r)); }, action);
+            break;
+        }
+        case Kind::Settle: {
+            // Sleep in short slices so an abort is not delayed by the settle time.
+            auto until = stepStart + cfg->sequencer.settle;
+            while (Clock::now() < until && !interrupted())
+                std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
+            settleMs += msSince(stepStart);
+            setState([&] { return sequencer_.onEvent(SequencerEvent::Settled); }, action);
+            break;
+        }
+        case Kind::Grab: {
+            cv::Mat image;
+            auto r = devices_.grab(cfg->sequencer.grabTimeout, image);
+            grabMs += msSince(stepStart);
+            if (r.ok())
+                inspector_.addView(action.view, program->views[action.view], image);
+            else
+                log->warn("view {}: grab failed: {}", action.view, r.message);
+            setState([&] { return sequencer_.onEvent(grabEvent(r)); }, action);
+            break;
+        }
+        case Kind::Finish: {
+            outcome = inspector_.finish();
+            finishMs += msSince(stepStart);
+            if (!outcome.ok) log->error("inspection failed: {}", outcome.error);
+            setState([&] { return sequencer_.onEvent(outcome.ok ? SequencerEvent::Processed
+                                                                : SequencerEvent::ProcessingFailed); },
+                     action);
+            break;
+        }
+        default: {
+            // Nothing to perform: an event was ignored in a state that has no action. Cannot
+            // happen with a consistent table; end the cycle as an internal error rather than spin.
+            log->error("sequencer stalled in {}", station::toString(state()));
+            SequencerAction next;
+            setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, next);
+            action = next;
+            break;
+        }
+        }
+    }
+
+    if (action.stopMotion) devices_.stopMotion();
+    station::CycleOutcome how;
+    station::FaultCode code;
+    station::SequencerState after;
+    {
+        std::lock_guard lock(mutex_);
+        how = sequencer_.outcome();
+        code = sequencer_.faultCode();
+        after = sequencer_.state();
+    }
+    if (how != station::CycleOutcome::Inspected) inspector_.cancel();
+    record.part = outcome.part;
+    record.faultCode = code;
+    if (how == station::CycleOutcome::Inspected) {
+        record.verdict = outcome.pass ? station::Verdict::Pass : station::Verdict::Fail;
+        record.landmarks = outcome.landmarks;
+    } else {
+        record.verdict = how == station::CycleOutcome::Aborted ? station::Verdict::Aborted : station::Verdict::Error;
+    }
+    record.cycleMs = static_cast<std::uint32_t>(std::lround(msSince(cycleStart)));
+    record.timingMs = {{"move", moveMs},
+                       {"settle", settleMs},
+                       {"grab", grabMs},
+                       {"processing", outcome.processingMs},
+                       {"wait_for_verdict", finishMs}};
+
+    std::string imagesDir;
+    if (record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages) {
+        ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
+        imagesDir = archive.saveFailed(record.startedUnixMs, record.serial, outcome.views).string();
+        archive.enforceRetention();
+    }
+    // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6, issue 6).
+    try {
+        store_.commit(record, imagesDir);
+    } catch (const std::exception& e) {
+        log->error("{}", e.what());
+        record.verdict = station::Verdict::Error;
+        record.faultCode = station::FaultCode::ResultStore;
+    }
+    auto statusAfter = after == SequencerState::Fault ? station::PlcStatus::Fault : station::PlcStatus::Done;
+    registers_.publishResult(record.toPublished(statusAfter));
+    cycleStartNs_ = 0;
+    abortRequested_ = false;
+
+    LampPattern lamps = LampPattern::Off;
+    if (after == SequencerState::Fault)
+        lamps = LampPattern::Fault;
+    else if (record.verdict == station::Verdict::Pass)
+        lamps = LampPattern::Pass;
+    else if (record.verdict == station::Verdict::Fail)
+        lamps = LampPattern::Fail;
+    devices_.showLamps(lamps);
+    {
+        std::lock_guard lock(mutex_);
+        ++cycles_;
+        if (record.verdict == station::Verdict::Error) ++faults_;
+        lastCycle_ = {{"trigger_seq", record.triggerSeq}, {"serial", record.serial},
+                      {"program", record.program},        {"verdict", std::string(station::toString(record.verdict))},
+                      {"fault_code", static_cast<int>(record.faultCode)}, {"cycle_ms", record.cycleMs},
+                      {"landmarks_failed", record.landmarksFailed()}, {"landmarks_total", record.landmarks.size()},
+                      {"timing_ms", record.timingMs}};
+    }
+    log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, verdict wait {:.1f})",
+              station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, moveMs, settleMs,
+              grabMs, finishMs);
+    if (sequencer_.afterPublish().kind == Kind::Recover && !stopRequested_) recover();
+}
+
+}  // namespace hg::daemon

@@ -1,0 +1,82 @@
+// Runs inspection cycles: takes accepted triggers from the register map,
+// drives the CaptureSequencer's actions against the devices and the
+// inspection pipeline, commits each record to the result store and only then
+// publishes it to the PLC, and sets the lamps. One thread of its own.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "devices.h"
+#include "hullgauge/station/daemon_config.h"
+#include "hullgauge/station/plc_registers.h"
+#include "hullgauge/station/sequencer.h"
+#include "image_archive.h"
+#include "inspector.h"
+#include "result_store.h"
+
+namespace hg::daemon {
+
+class CycleRunner {
+public:
+    CycleRunner(station::PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
+                std::shared_ptr<const station::DaemonConfig> config);
+    ~CycleRunner();
+    CycleRunner(const CycleRunner&) = delete;
+    CycleRunner& operator=(const CycleRunner&) = delete;
+
+    /// Starts the thread: it starts the devices, then serves triggers.
+    /// `onDevicesActive` is called once, from that thread, when the devices
+    /// first became active (the daemon sends READY=1 there).
+    void start(std::function<void()> onDevicesActive);
+    /// SIGTERM: a running cycle gets `shutdown_grace_s` to finish, is then
+    /// aborted and recorded; the devices are shut down; the thread ends.
+    void stop();
+
+    /// A new configuration for the next cycle (SIGHUP); the running cycle keeps its own.
+    void setConfig(std::shared_ptr<const station::DaemonConfig> config);
+    /// Abort the running cycle (maintenance socket; the PLC uses COMMAND).
+    void abort() { abortRequested_ = true; }
+
+    station::SequencerState state() const;
+    /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
+    bool healthy() const;
+    /// State, current cycle and counters for the maintenance socket.
+    nlohmann::json describe() const;
+
+private:
+    void run();
+    void runCycle(const station::TriggerRequest& trigger);
+    void recover();
+    bool interrupted();
+    void setState(std::function<station::SequencerAction()> step, station::SequencerAction& action);
+
+    station::PlcRegisters& registers_;
+    StationDevices& devices_;
+    Inspector& inspector_;
+    ResultStore& store_;
+
+    mutable std::mutex mutex_;  // guards config_, sequencer_ reads from other threads, counters
+    std::shared_ptr<const station::DaemonConfig> config_;
+    station::CaptureSequencer sequencer_;
+    std::uint64_t cycles_ = 0;
+    std::uint64_t faults_ = 0;
+    nlohmann::json lastCycle_ = nullptr;
+
+    std::thread thread_;
+    std::function<void()> onDevicesActive_;
+    std::atomic<bool> stopRequested_{false};
+    std::atomic<std::int64_t> stopRequestedNs_{0};
+    std::atomic<bool> abortRequested_{false};
+    std::atomic<std::int64_t> lastLoopNs_{0};
+    std::atomic<std::int64_t> cycleStartNs_{0};  ///< 0 when idle
+};
+
+}  // namespace hg::daemon

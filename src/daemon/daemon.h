@@ -1,0 +1,29 @@
+// hullgauged's main program, with the devices and the inspection pipeline
+// supplied by the caller: the installed daemon passes the drivers chosen by
+// the station file; the daemon's tests pass fakes.
+//
+//   hullgauged --config FILE [--log SPEC] [--check]
+//
+// Start: load and validate the configuration (exit 2 naming file, line, key),
+// open the result store, start the PLC server (STATUS = starting), start the
+// devices; READY=1 once they are active. Main loop: HEARTBEAT, WATCHDOG=1
+// while healthy, STATUS lines, signals (SIGHUP reload, SIGTERM/SIGINT stop),
+// the maintenance socket.
+#pragma once
+
+#include <functional>
+#include <memory>
+
+#include "devices.h"
+#include "hullgauge/station/daemon_config.h"
+#include "inspector.h"
+
+namespace hg::daemon {
+
+using DevicesFactory = std::function<std::unique_ptr<StationDevices>(const station::DaemonConfig&)>;
+using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station::DaemonConfig&)>;
+
+/// Runs the daemon until SIGTERM/SIGINT; returns the process exit status.
+int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector);
+
+}  // namespace hg::daemon

@@ -1,0 +1,64 @@
+// What the cycle runner needs from the station's hardware: the fixture, the
+// camera and the operator lamps, behind one narrow port in domain types. The
+// daemon's implementation (driver_devices.cpp) sits on the drivers of
+// drivers/ chosen by the station file; tests use small fakes.
+//
+// Every call returns a status value and never throws (STYLE.md point 4);
+// only construction (configuration parsing) throws hg::InputError.
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "hullgauge/geometry/fixture.h"
+
+namespace hg::daemon {
+
+struct StepResult {
+    enum class Code { Ok, Timeout, Fault, CommunicationError, Refused, BadFrame, Error };
+    Code code = Code::Ok;
+    std::string message;
+    bool ok() const { return code == Code::Ok; }
+    static StepResult success() { return {}; }
+};
+
+/// Operator lamp patterns (CONTRACTS §6): green pass, red fail, amber busy,
+/// red and amber blinking on fault.
+enum class LampPattern { Off, Busy, Pass, Fail, Fault };
+std::string_view toString(LampPattern p);
+
+class StationDevices {
+public:
+    virtual ~StationDevices() = default;
+
+    /// Configure and activate every driver (and home the fixture). READY=1 is
+    /// sent to systemd only after this succeeded.
+    virtual StepResult start() = 0;
+    /// Deactivate and clean up every driver (stop motion first).
+    virtual void shutdown() = 0;
+    /// Move to `pose` and wait until in position or `timeout`. `retry`: a
+    /// second attempt — reset a latched drive fault and re-home if needed first.
+    virtual StepResult moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) = 0;
+    virtual void stopMotion() = 0;
+    /// Grab one frame into `image` (owned copy or a view the caller may keep).
+    virtual StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) = 0;
+    /// Bring the devices back after a fault (reset faults, re-home, restart streaming).
+    virtual StepResult recover() = 0;
+    virtual void showLamps(LampPattern pattern) = 0;
+
+    /// The simulated camera's part variants (empty on real hardware).
+    virtual std::vector<std::string> simulatedParts() const { return {}; }
+    virtual std::string simulatedPart() const { return {}; }
+    /// Switches the simulated part under test; false when unknown or not simulated.
+    virtual bool selectSimulatedPart(const std::string& name)
+    {
+        (void)name;
+        return false;
+    }
+};
+
+}  // namespace hg::daemon

@@ -1,0 +1,154 @@
+#include "driver_devices.h"
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/drivers/fixture.h"
+#include "hullgauge/drivers/lamps.h"
+
+namespace hg::daemon {
+namespace {
+
+using drivers::FixtureStatusCode;
+using drivers::LifecycleState;
+
+StepResult fromFixture(const drivers::FixtureResult& r)
+{
+    switch (r.code) {
+    case FixtureStatusCode::Ok: return StepResult::success();
+    case FixtureStatusCode::Timeout: return {StepResult::Code::Timeout, r.message};
+    case FixtureStatusCode::Fault: return {StepResult::Code::Fault, r.message};
+    case FixtureStatusCode::CommunicationError: return {StepResult::Code::CommunicationError, r.message};
+    case FixtureStatusCode::NotAllowed: return {StepResult::Code::Refused, r.message};
+    }
+    return {StepResult::Code::Error, r.message};
+}
+
+drivers::StationIndication indication(LampPattern p)
+{
+    switch (p) {
+    case LampPattern::Off: return drivers::StationIndication::Dark;
+    case LampPattern::Busy: return drivers::StationIndication::Busy;
+    case LampPattern::Pass: return drivers::StationIndication::Pass;
+    case LampPattern::Fail: return drivers::StationIndication::Fail;
+    case LampPattern::Fault: return drivers::StationIndication::Fault;
+    }
+    return drivers::StationIndication::Dark;
+}
+
+class DriverDevices : public StationDevices {
+public:
+    explicit DriverDevices(const station::DaemonConfig& config)
+    {
+        const auto& doc = *config.station.document;
+        fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture);
+        camera_ = drivers::makeCamera(doc);
+        lamps_ = drivers::makeLamps(doc[config.lampsSection]);
+    }
+
+    StepResult start() override
+    {
+        auto log = hg::log::category("daemon");
+        if (lamps_->state() == LifecycleState::Unconfigured) {
+            if (auto r = lamps_->configure(); !r.ok()) return {StepResult::Code::Error, "lamps: " + r.message};
+        }
+        if (lamps_->state() == LifecycleState::Inactive) {
+            if (auto r = lamps_->activate(); !r.ok()) return {StepResult::Code::Error, "lamps: " + r.message};
+        }
+        if (fixture_->state() == LifecycleState::Unconfigured) {
+            if (auto r = fixture_->configure(); !r.ok()) return {fromFixture(r).code, "fixture: " + r.message};
+        }
+        if (fixture_->state() == LifecycleState::Inactive) {
+            if (auto r = fixture_->activate(); !r.ok()) return {fromFixture(r).code, "fixture: " + r.message};
+        }
+        if (auto r = homeIfNeeded(); !r.ok()) return r;
+        if (camera_->state() == LifecycleState::Unconfigured) {
+            if (auto r = camera_->configure(); !r.ok()) return {StepResult::Code::Error, "camera: " + r.message()};
+        }
+        if (camera_->state() == LifecycleState::Inactive) {
+            if (auto r = camera_->activate(); !r.ok()) return {StepResult::Code::Error, "camera: " + r.message()};
+        }
+        log->info("fixture ({}) and camera active", fixture_->backend());
+        return StepResult::success();
+    }
+
+    void shutdown() override
+    {
+        stopMotion();
+        (void)camera_->deactivate();
+        (void)camera_->cleanup();
+        (void)fixture_->deactivate();
+        (void)fixture_->cleanup();
+        (void)lamps_->deactivate();
+        (void)lamps_->cleanup();
+    }
+
+    StepResult moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) override
+    {
+        if (retry) {
+            // Second attempt: clear a latched drive fault and home again if the drive lost it.
+            (void)fixture_->resetFault();
+            if (auto r = homeIfNeeded(); !r.ok()) return r;
+        }
+        if (auto r = fixture_->moveTo(pose); !r.ok()) return fromFixture(r);
+        return fromFixture(fixture_->waitInPosition(timeout));
+    }
+
+    void stopMotion() override
+    {
+        if (fixture_->state() == LifecycleState::Active) (void)fixture_->stop();
+    }
+
+    StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    {
+        auto frame = camera_->grab(timeout);
+        switch (frame.status) {
+        case drivers::FrameStatus::Ok:
+            // The pipeline keeps the image after the buffer returns to the pool.
+            image = frame.image.clone();
+            return StepResult::success();
+        case drivers::FrameStatus::Timeout: return {StepResult::Code::Timeout, frame.message};
+        case drivers::FrameStatus::Incomplete: return {StepResult::Code::BadFrame, frame.message};
+        case drivers::FrameStatus::Error: return {StepResult::Code::Error, frame.message};
+        }
+        return {StepResult::Code::Error, frame.message};
+    }
+
+    StepResult recover() override
+    {
+        (void)fixture_->resetFault();
+        if (fixture_->state() == LifecycleState::Failed) (void)fixture_->cleanup();
+        if (camera_->state() == LifecycleState::Failed) (void)camera_->cleanup();
+        return start();
+    }
+
+    void showLamps(LampPattern pattern) override
+    {
+        if (auto r = lamps_->show(indication(pattern)); !r.ok())
+            hg::log::category("daemon")->warn("lamps: {}", r.message);
+    }
+
+private:
+    StepResult homeIfNeeded()
+    {
+        drivers::FixtureStatus status;
+        if (auto r = fixture_->status(status); !r.ok()) return fromFixture(r);
+        if (status.homed) return StepResult::success();
+        if (auto r = fixture_->home(); !r.ok()) return fromFixture(r);
+        return fromFixture(fixture_->waitInPosition(fixture_->homeTimeout()));
+    }
+
+    std::unique_ptr<drivers::Fixture> fixture_;
+    std::unique_ptr<drivers::Camera> camera_;
+    std::unique_ptr<drivers::Lamps> lamps_;
+};
+
+}  // namespace
+
+std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& config)
+{
+    if (!config.station.document) throw InputError(config.stationFile.string(), "", "station document missing");
+    return std::make_unique<DriverDevices>(config);
+}
+
+}  // namespace hg::daemon

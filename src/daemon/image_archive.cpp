@@ -1,0 +1,118 @@
+#include "image_archive.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "hullgauge/common/log.h"
+
+namespace hg::daemon {
+namespace fs = std::filesystem;
+
+cv::Scalar statusColour(const std::string& status)
+{
+    if (status == "ok") return {0, 200, 0};
+    if (status == "out_of_tolerance") return {0, 0, 255};
+    if (status == "overflow") return {255, 0, 255};
+    if (status == "not_found") return {0, 140, 255};
+    return {160, 160, 160};
+}
+
+cv::Mat annotate(const ViewEvidence& view)
+{
+    cv::Mat grey;
+    if (view.image.depth() == CV_16U) {
+        double maxValue = 0;
+        cv::minMaxLoc(view.image, nullptr, &maxValue);
+        view.image.convertTo(grey, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
+    } else {
+        grey = view.image;
+    }
+    cv::Mat out;
+    if (grey.channels() == 1)
+        cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
+    else
+        out = grey.clone();
+    const int thickness = std::max(1, out.cols / 800);
+    if (!view.silhouette.empty()) {
+        std::vector<std::vector<cv::Point>> contours;
+        cv::Mat mask = view.silhouette != 0;
+        cv::findContours(mask, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
+        cv::drawContours(out, contours, -1, cv::Scalar(255, 160, 0), thickness);  // silhouette outline: blue
+    }
+    const int radius = std::max(4, out.cols / 150);
+    for (const auto& mark : view.landmarks) {
+        cv::Point p(cvRound(mark.pixel.x), cvRound(mark.pixel.y));
+        auto colour = statusColour(mark.status);
+        cv::circle(out, p, radius, colour, thickness + 1);
+        cv::putText(out, mark.id, p + cv::Point(radius + 2, -radius), cv::FONT_HERSHEY_SIMPLEX,
+                    0.4 * thickness + 0.2, colour, thickness);
+    }
+    return out;
+}
+
+ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention)
+    : root_(std::move(root)), retention_(retention)
+{
+}
+
+fs::path ImageArchive::saveFailed(std::int64_t startedUnixMs, const std::string& serial,
+                                  const std::vector<ViewEvidence>& views)
+{
+    if (views.empty()) return {};
+    auto log = hg::log::category("store");
+    std::string safe;
+    for (char c : serial) safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
+    auto dir = root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) {
+        log->error("cannot create image folder {}: {}", dir.string(), ec.message());
+        return {};
+    }
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        auto file = dir / ("view_" + std::to_string(k) + ".png");
+        try {
+            if (!cv::imwrite(file.string(), annotate(views[k]))) log->error("cannot write {}", file.string());
+        } catch (const cv::Exception& e) {
+            log->error("cannot write {}: {}", file.string(), e.what());
+        }
+    }
+    return dir;
+}
+
+std::size_t ImageArchive::enforceRetention()
+{
+    struct Entry {
+        fs::path dir;
+        fs::file_time_type time;
+        std::uintmax_t bytes = 0;
+    };
+    std::vector<Entry> entries;
+    std::error_code ec;
+    for (const auto& d : fs::directory_iterator(root_, ec)) {
+        if (!d.is_directory()) continue;
+        Entry e{d.path(), d.last_write_time(ec), 0};
+        for (const auto& f : fs::recursive_directory_iterator(d.path(), ec))
+            if (f.is_regular_file()) e.bytes += f.file_size(ec);
+        entries.push_back(std::move(e));
+    }
+    // Newest first; walk and keep while every limit holds.
+    std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.time > b.time; });
+    const auto cutoff = fs::file_time_type::clock::now() - retention_.maxAge;
+    std::uintmax_t total = 0;
+    std::size_t removed = 0;
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+        total += entries[i].bytes;
+        bool keep = i < retention_.maxCount && entries[i].time >= cutoff && total <= retention_.maxBytes;
+        if (keep) continue;
+        fs::remove_all(entries[i].dir, ec);
+        if (!ec) ++removed;
+    }
+    if (removed) hg::log::category("store")->info("image retention removed {} folders", removed);
+    return removed;
+}
+
+}  // namespace hg::daemon

@@ -1,0 +1,58 @@
+// The inspection pipeline as the cycle runner sees it: a cycle begins with a
+// part program, each grabbed view is handed over as soon as it is in (so view
+// k is processed while the fixture moves to view k+1, issue 6 point 4), and
+// finish() waits for the verdict.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "hullgauge/geometry/fixture.h"
+#include "hullgauge/station/daemon_config.h"
+#include "hullgauge/station/result_record.h"
+
+namespace hg::daemon {
+
+/// A landmark drawn on a failed part's image: pixel position and status.
+struct LandmarkMark {
+    cv::Point2d pixel;
+    std::string id;
+    std::string status;
+};
+
+/// What a view contributes to the failed-part images.
+struct ViewEvidence {
+    cv::Mat image;       ///< the grabbed frame
+    cv::Mat silhouette;  ///< CV_8U mask, non-zero = part
+    std::vector<LandmarkMark> landmarks;
+};
+
+struct InspectionOutcome {
+    bool ok = false;     ///< false: the inspection could not be computed (`error` says why)
+    std::string error;
+    std::string part;    ///< the part program's name
+    bool pass = false;
+    std::vector<station::LandmarkOutcome> landmarks;
+    std::vector<ViewEvidence> views;  ///< filled when the part failed
+    double processingMs = 0.0;
+};
+
+class Inspector {
+public:
+    virtual ~Inspector() = default;
+    /// Loads (or reuses) the program's inspection map and plan; false with a
+    /// reason when it cannot be loaded.
+    virtual bool begin(const station::PartProgramRef& program, std::string& error) = 0;
+    /// Hands over view `index` taken at `pose`; returns at once.
+    virtual void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) = 0;
+    /// Waits for every view to be processed and returns the verdict.
+    virtual InspectionOutcome finish() = 0;
+    /// Drops the cycle (abort).
+    virtual void cancel() = 0;
+};
+
+}  // namespace hg::daemon

@@ -1,0 +1,205 @@
+#include "hullgauge/station/daemon_config.h"
+
+#include <arpa/inet.h>
+
+#include <cmath>
+#include <limits>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+
+namespace hg::station {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::chrono::milliseconds seconds(const ConfigNode& node, double lo, double hi)
+{
+    return std::chrono::milliseconds(std::llround(node.asDoubleIn(lo, hi) * 1000.0));
+}
+
+fs::path resolve(const ConfigNode& node, const fs::path& base)
+{
+    auto text = node.asString();
+    if (text.empty()) node.fail("expected a path");
+    fs::path p(text);
+    return p.is_absolute() ? p : (base / p).lexically_normal();
+}
+
+fs::path existingFile(const ConfigNode& node, const fs::path& base)
+{
+    auto p = resolve(node, base);
+    std::error_code ec;
+    if (!fs::is_regular_file(p, ec)) node.fail("no such file: " + p.string());
+    return p;
+}
+
+void parsePlc(const ConfigNode& node, PlcConfig& plc)
+{
+    node.allowOnlyKeys({"bind", "port", "unit_id", "allowed_clients", "max_clients", "frame_timeout_s",
+                        "heartbeat_period_s"});
+    if (auto n = node.optional("bind")) {
+        plc.bindAddress = n->asString();
+        in_addr tmp{};
+        if (inet_pton(AF_INET, plc.bindAddress.c_str(), &tmp) != 1)
+            n->fail("expected an IPv4 address such as 0.0.0.0 or 127.0.0.1");
+    }
+    if (auto n = node.optional("port")) plc.port = static_cast<int>(n->asIntIn(1, 65535));
+    if (auto n = node.optional("unit_id")) plc.unitId = static_cast<int>(n->asIntIn(0, 255));
+    if (auto n = node.optional("allowed_clients")) {
+        if (!n->isSequence()) n->fail("expected a list of IPv4 addresses or networks (a.b.c.d or a.b.c.d/n)");
+        for (const auto& item : n->items()) {
+            auto net = parseIpv4Network(item.asString());
+            if (!net) item.fail("expected an IPv4 address or network (a.b.c.d or a.b.c.d/n)");
+            plc.allowedClients.push_back(*net);
+        }
+    }
+    if (auto n = node.optional("max_clients")) plc.maxClients = static_cast<int>(n->asIntIn(1, 64));
+    if (auto n = node.optional("frame_timeout_s")) plc.frameTimeout = seconds(*n, 0.01, 10.0);
+    // CONTRACTS §6: HEARTBEAT increments at least once a second.
+    if (auto n = node.optional("heartbeat_period_s")) plc.heartbeatPeriod = seconds(*n, 0.05, 1.0);
+}
+
+void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& results)
+{
+    node.allowOnlyKeys({"database", "images", "save_failed_images", "retention"});
+    results.database = resolve(node["database"], base);
+    results.imageDir = resolve(node["images"], base);
+    if (auto n = node.optional("save_failed_images")) results.saveFailedImages = n->asBool();
+    if (auto r = node.optional("retention")) {
+        r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes"});
+        if (auto n = r->optional("max_count"))
+            results.retention.maxCount = static_cast<std::size_t>(n->asIntIn(0, 100'000'000));
+        if (auto n = r->optional("max_age_days"))
+            results.retention.maxAge = std::chrono::hours(std::llround(n->asDoubleIn(0.0, 36500.0) * 24.0));
+        if (auto n = r->optional("max_bytes"))
+            results.retention.maxBytes = static_cast<std::uint64_t>(n->asDoubleIn(0.0, 1e15));
+    }
+}
+
+void parseSequencer(const ConfigNode& node, SequencerConfig& seq)
+{
+    node.allowOnlyKeys({"move_timeout_s", "grab_timeout_s", "settle_s", "retries", "shutdown_grace_s"});
+    if (auto n = node.optional("move_timeout_s")) seq.moveTimeout = seconds(*n, 0.01, 600.0);
+    if (auto n = node.optional("grab_timeout_s")) seq.grabTimeout = seconds(*n, 0.01, 60.0);
+    if (auto n = node.optional("settle_s")) seq.settle = seconds(*n, 0.0, 10.0);
+    if (auto n = node.optional("retries")) seq.retries = static_cast<int>(n->asIntIn(0, 5));
+    if (auto n = node.optional("shutdown_grace_s")) seq.shutdownGrace = seconds(*n, 0.0, 60.0);
+}
+
+PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, const fs::path& base,
+                            const geometry::Station& station)
+{
+    PartProgramRef ref;
+    long long number = -1;
+    try {
+        std::size_t used = 0;
+        number = std::stoll(key, &used);
+        if (used != key.size()) number = -1;
+    } catch (const std::exception&) {
+        number = -1;
+    }
+    // 0 is PART_PROGRAM's "none"; the register holds 16 bits.
+    if (number < 1 || number > 65535) node.fail("part program numbers are integers 1..65535, not '" + key + "'");
+    ref.number = static_cast<std::uint16_t>(number);
+    node.allowOnlyKeys({"part", "views"});
+    ref.partFile = existingFile(node["part"], base);
+    {
+        // The part program's own loader checks it in full when the program is loaded;
+        // here it must at least be a YAML map that names its part and landmarks.
+        auto part = ConfigNode::loadFile(ref.partFile);
+        if (!part.isMap()) part.fail("a part program is a YAML map (CONTRACTS §1)");
+        (void)part["part"].asString();
+        if (!part["landmarks"].isSequence() || part["landmarks"].size() == 0)
+            part["landmarks"].fail("expected a non-empty list of landmarks");
+    }
+    ref.viewsFile = existingFile(node["views"], base);
+    ref.views = geometry::loadPoses(ref.viewsFile, &station.fixture);
+    if (ref.views.empty())
+        throw InputError(ref.viewsFile.string(), "views", "a view plan needs at least one pose");
+    return ref;
+}
+
+}  // namespace
+
+bool Ipv4Network::contains(std::uint32_t hostOrderAddress) const
+{
+    if (prefix == 0) return true;
+    std::uint32_t mask = prefix == 32 ? 0xFFFFFFFFu : ~((1u << (32 - prefix)) - 1u);
+    return (hostOrderAddress & mask) == (address & mask);
+}
+
+std::string Ipv4Network::toString() const
+{
+    in_addr a{htonl(address)};
+    char buf[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &a, buf, sizeof buf);
+    return std::string(buf) + "/" + std::to_string(prefix);
+}
+
+std::optional<Ipv4Network> parseIpv4Network(const std::string& text)
+{
+    Ipv4Network net;
+    auto slash = text.find('/');
+    auto addressText = text.substr(0, slash);
+    in_addr a{};
+    if (inet_pton(AF_INET, addressText.c_str(), &a) != 1) return std::nullopt;
+    net.address = ntohl(a.s_addr);
+    if (slash != std::string::npos) {
+        auto prefixText = text.substr(slash + 1);
+        if (prefixText.empty() || prefixText.size() > 2 ||
+            prefixText.find_first_not_of("0123456789") != std::string::npos)
+            return std::nullopt;
+        net.prefix = std::stoi(prefixText);
+        if (net.prefix > 32) return std::nullopt;
+    }
+    return net;
+}
+
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
+{
+    auto root = ConfigNode::loadFile(file);
+    if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
+    root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance",
+                        "watchdog"});
+    DaemonConfig cfg;
+    cfg.file = fs::absolute(file).lexically_normal();
+    const auto base = cfg.file.parent_path();
+
+    cfg.stationFile = existingFile(root["station"], base);
+    cfg.station = geometry::loadStation(cfg.stationFile);
+    if (auto n = root.optional("lamps_section")) {
+        cfg.lampsSection = n->asString();
+        if (cfg.station.document && !cfg.station.document->has(cfg.lampsSection))
+            n->fail("the station file " + cfg.stationFile.string() + " has no section '" + cfg.lampsSection + "'");
+    }
+
+    auto programs = root["programs"];
+    if (!programs.isMap() || programs.keys().empty())
+        programs.fail("expected a map of part program numbers to {part: FILE, views: FILE}");
+    for (const auto& key : programs.keys()) {
+        auto ref = parseProgram(key, programs[key], base, cfg.station);
+        if (cfg.programs.contains(ref.number)) programs[key].fail("part program number given twice");
+        cfg.programs.emplace(ref.number, std::move(ref));
+    }
+
+    if (auto n = root.optional("plc")) parsePlc(*n, cfg.plc);
+    parseResults(root["results"], base, cfg.results);
+    if (auto n = root.optional("sequencer")) parseSequencer(*n, cfg.sequencer);
+    if (auto n = root.optional("maintenance")) {
+        n->allowOnlyKeys({"socket", "group"});
+        if (auto s = n->optional("socket")) {
+            cfg.maintenance.socket = resolve(*s, base);
+            // sockaddr_un::sun_path holds 108 bytes including the terminating NUL.
+            if (cfg.maintenance.socket.string().size() > 107) s->fail("socket path longer than 107 bytes");
+        }
+        if (auto g = n->optional("group")) cfg.maintenance.group = g->asString();
+    }
+    if (auto n = root.optional("watchdog")) {
+        n->allowOnlyKeys({"max_cycle_s"});
+        if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);
+    }
+    return cfg;
+}
+
+}  // namespace hg::station

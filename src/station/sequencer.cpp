@@ -1,0 +1,230 @@
+#include "hullgauge/station/sequencer.h"
+
+#include <array>
+#include <cassert>
+#include <utility>
+
+namespace hg::station {
+namespace {
+
+using S = SequencerState;
+using E = SequencerEvent;
+using A = SequencerAction::Kind;
+
+// The allowed transitions (from, to); self-transitions are the retries.
+constexpr std::array<std::pair<S, S>, 22> kTransitions{{
+    {S::Starting, S::Ready},
+    {S::Starting, S::Fault},
+    {S::Ready, S::Moving},
+    {S::Ready, S::Fault},
+    {S::Done, S::Moving},
+    {S::Done, S::Fault},
+    {S::Moving, S::Moving},
+    {S::Moving, S::Settling},
+    {S::Moving, S::Done},
+    {S::Moving, S::Fault},
+    {S::Settling, S::Grabbing},
+    {S::Settling, S::Done},
+    {S::Settling, S::Fault},
+    {S::Grabbing, S::Grabbing},
+    {S::Grabbing, S::Moving},
+    {S::Grabbing, S::Processing},
+    {S::Grabbing, S::Done},
+    {S::Grabbing, S::Fault},
+    {S::Processing, S::Done},
+    {S::Processing, S::Fault},
+    {S::Fault, S::Ready},
+    {S::Fault, S::Fault},
+}};
+
+}  // namespace
+
+bool transitionAllowed(SequencerState from, SequencerState to)
+{
+    for (auto [f, t] : kTransitions)
+        if (f == from && t == to) return true;
+    return false;
+}
+
+bool isBusy(SequencerState s)
+{
+    return s == S::Moving || s == S::Settling || s == S::Grabbing || s == S::Processing;
+}
+
+std::string_view toString(SequencerState s)
+{
+    constexpr std::array<std::string_view, 8> names{"starting", "ready",      "moving", "settling",
+                                                    "grabbing", "processing", "done",   "fault"};
+    return names[static_cast<std::size_t>(s)];
+}
+
+std::string_view toString(SequencerEvent e)
+{
+    constexpr std::array<std::string_view, 20> names{
+        "devices-active", "devices-failed", "trigger",     "in-position",       "move-timeout",
+        "move-fault",     "move-comm-error", "move-refused", "settled",          "frame-ok",
+        "frame-timeout",  "frame-bad",      "frame-error",  "processed",   "processing-failed", "program-failed",
+        "abort",          "shutdown",       "recovered",   "recovery-failed"};
+    return names[static_cast<std::size_t>(e)];
+}
+
+std::string_view toString(FaultCode c)
+{
+    switch (c) {
+    case FaultCode::None: return "none";
+    case FaultCode::CameraTimeout: return "camera-timeout";
+    case FaultCode::CameraBadFrame: return "camera-bad-frame";
+    case FaultCode::CameraError: return "camera-error";
+    case FaultCode::FixtureTimeout: return "fixture-timeout";
+    case FaultCode::FixtureFault: return "fixture-fault";
+    case FaultCode::FixtureCommunication: return "fixture-communication";
+    case FaultCode::FixtureRefused: return "fixture-refused";
+    case FaultCode::ProgramLoad: return "program-load";
+    case FaultCode::InspectionError: return "inspection-error";
+    case FaultCode::AbortedByPlc: return "aborted-by-plc";
+    case FaultCode::AbortedByShutdown: return "aborted-by-shutdown";
+    case FaultCode::ResultStore: return "result-store";
+    case FaultCode::DevicesDown: return "devices-down";
+    case FaultCode::Internal: return "internal";
+    }
+    return "unknown";
+}
+
+std::string_view describe(FaultCode c)
+{
+    switch (c) {
+    case FaultCode::None: return "no fault";
+    case FaultCode::CameraTimeout: return "no frame from the camera within the grab timeout (after one retry)";
+    case FaultCode::CameraBadFrame: return "the camera delivered incomplete frames (after one retry)";
+    case FaultCode::CameraError: return "the camera could not grab";
+    case FaultCode::FixtureTimeout: return "the fixture did not reach position within the move timeout (after one retry)";
+    case FaultCode::FixtureFault: return "the fixture drive reports a fault that a reset did not clear";
+    case FaultCode::FixtureCommunication: return "the fixture does not answer";
+    case FaultCode::FixtureRefused: return "the fixture refused the pose (out of range or not homed)";
+    case FaultCode::ProgramLoad: return "the part program or its view plan could not be loaded";
+    case FaultCode::InspectionError: return "the inspection could not be computed";
+    case FaultCode::AbortedByPlc: return "the PLC aborted the cycle";
+    case FaultCode::AbortedByShutdown: return "the daemon was stopped during the cycle";
+    case FaultCode::ResultStore: return "the result could not be committed to the result database";
+    case FaultCode::DevicesDown: return "the camera or fixture could not be started";
+    case FaultCode::Internal: return "internal error";
+    }
+    return "unknown fault";
+}
+
+CaptureSequencer::CaptureSequencer(int retries) : retries_(retries < 0 ? 0 : retries) {}
+
+SequencerAction CaptureSequencer::go(SequencerState to, SequencerAction action)
+{
+    assert(transitionAllowed(state_, to));
+    state_ = to;
+    return action;
+}
+
+SequencerAction CaptureSequencer::trigger(std::size_t viewCount)
+{
+    if (state_ != S::Ready && state_ != S::Done) return {};
+    viewCount_ = viewCount;
+    view_ = 0;
+    attempt_ = 1;
+    faultCode_ = FaultCode::None;
+    outcome_ = CycleOutcome::Inspected;
+    if (viewCount == 0) {
+        // A view plan without views cannot be inspected; the loader refuses it, so this is a bug upstream.
+        return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, false, false);
+    }
+    return go(S::Moving, {A::MoveTo, 0, false, false});
+}
+
+SequencerAction CaptureSequencer::failStep(FaultCode code, SequencerAction retryAction)
+{
+    if (attempt_ <= retries_) {
+        ++attempt_;
+        retryAction.retry = true;
+        return go(state_, retryAction);
+    }
+    return endCycle(CycleOutcome::Faulted, code, true, true);
+}
+
+SequencerAction CaptureSequencer::endCycle(CycleOutcome outcome, FaultCode code, bool stopMotion, bool toFault)
+{
+    outcome_ = outcome;
+    faultCode_ = code;
+    auto to = toFault ? S::Fault : S::Done;
+    return go(to, {A::Publish, view_, false, stopMotion});
+}
+
+SequencerAction CaptureSequencer::afterPublish() const
+{
+    return state_ == S::Fault ? SequencerAction{A::Recover, 0, false, false} : SequencerAction{};
+}
+
+SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
+{
+    const bool busy = isBusy(state_);
+    switch (event) {
+    case E::DevicesActive:
+        if (state_ == S::Starting) return go(S::Ready, {});
+        return {};
+    case E::DevicesFailed:
+        if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::DevicesDown, true, true);
+        if (state_ == S::Fault) return {};
+        faultCode_ = FaultCode::DevicesDown;
+        return go(S::Fault, {A::Recover, 0, false, false});
+    case E::Trigger: return {};  // use trigger(viewCount)
+    case E::Abort:
+    case E::Shutdown:
+        // Processing takes milliseconds and needs no device: let it finish so its result is recorded.
+        if (state_ == S::Moving || state_ == S::Settling || state_ == S::Grabbing)
+            return endCycle(CycleOutcome::Aborted,
+                            event == E::Abort ? FaultCode::AbortedByPlc : FaultCode::AbortedByShutdown, true, false);
+        return {};
+    case E::Recovered:
+        if (state_ == S::Fault) return go(S::Ready, {});
+        return {};
+    case E::RecoveryFailed:
+        if (state_ == S::Fault) return go(S::Fault, {A::Recover, 0, false, false});
+        return {};
+    case E::ProgramFailed:
+        if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, true, false);
+        return {};
+    default: break;
+    }
+
+    switch (state_) {
+    case S::Moving:
+        switch (event) {
+        case E::InPosition: attempt_ = 1; return go(S::Settling, {A::Settle, view_, false, false});
+        case E::MoveTimeout: return failStep(FaultCode::FixtureTimeout, {A::MoveTo, view_, true, false});
+        case E::MoveFault: return failStep(FaultCode::FixtureFault, {A::MoveTo, view_, true, false});
+        case E::MoveCommError: return failStep(FaultCode::FixtureCommunication, {A::MoveTo, view_, true, false});
+        case E::MoveRefused: return failStep(FaultCode::FixtureRefused, {A::MoveTo, view_, true, false});
+        default: return {};
+        }
+    case S::Settling:
+        if (event == E::Settled) return go(S::Grabbing, {A::Grab, view_, false, false});
+        return {};
+    case S::Grabbing:
+        switch (event) {
+        case E::FrameOk:
+            attempt_ = 1;
+            if (view_ + 1 < viewCount_) {
+                ++view_;
+                return go(S::Moving, {A::MoveTo, view_, false, false});
+            }
+            return go(S::Processing, {A::Finish, view_, false, false});
+        case E::FrameTimeout: return failStep(FaultCode::CameraTimeout, {A::Grab, view_, true, false});
+        case E::FrameBad: return failStep(FaultCode::CameraBadFrame, {A::Grab, view_, true, false});
+        case E::FrameError: return failStep(FaultCode::CameraError, {A::Grab, view_, true, false});
+        default: return {};
+        }
+    case S::Processing:
+        if (event == E::Processed) return endCycle(CycleOutcome::Inspected, FaultCode::None, false, false);
+        if (event == E::ProcessingFailed)
+            return endCycle(CycleOutcome::Faulted, FaultCode::InspectionError, false, false);
+        return {};
+    default: return {};
+    }
+}
+
+}  // namespace hg::station

@@ -1,0 +1,124 @@
+// hullgauged with fake devices and a fake inspection, for the daemon's
+// integration tests: the real main loop, PLC server, sequencer, result store,
+// sd_notify and maintenance socket, with hardware whose behaviour the test
+// sets through the environment:
+//   HG_FAKE_MOVE_MS        time a move takes (default 2)
+//   HG_FAKE_MOVE_FAIL      "timeout" | "fault" : every move fails so
+//   HG_FAKE_GRAB_FAIL      "timeout" | "bad"   : every grab fails so
+//   HG_FAKE_START_FAIL     "1": the devices never start
+// The fake camera has two simulated parts (`hullgauge ctl sim-part`):
+// "nominal" grabs bright frames, "dented" dark ones; the fake inspection
+// reports 20 landmarks and fails landmarks 3 and 17 (out_of_tolerance) when a
+// frame is dark.
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <opencv2/core.hpp>
+
+#include "daemon.h"
+
+namespace {
+
+using namespace hg::daemon;
+
+std::string env(const char* name)
+{
+    const char* v = std::getenv(name);
+    return v ? v : "";
+}
+
+class FakeDevices : public StationDevices {
+public:
+    StepResult start() override
+    {
+        if (env("HG_FAKE_START_FAIL") == "1") return {StepResult::Code::Error, "fake: devices do not start"};
+        return StepResult::success();
+    }
+    void shutdown() override {}
+    StepResult moveTo(const hg::geometry::FixturePose&, std::chrono::milliseconds timeout, bool) override
+    {
+        auto mode = env("HG_FAKE_MOVE_FAIL");
+        if (mode == "timeout") {
+            std::this_thread::sleep_for(timeout);
+            return {StepResult::Code::Timeout, "fake: not in position"};
+        }
+        if (mode == "fault") return {StepResult::Code::Fault, "fake: drive fault 7"};
+        auto ms = env("HG_FAKE_MOVE_MS");
+        std::this_thread::sleep_for(std::chrono::milliseconds(ms.empty() ? 2 : std::stoi(ms)));
+        return StepResult::success();
+    }
+    void stopMotion() override {}
+    StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    {
+        auto mode = env("HG_FAKE_GRAB_FAIL");
+        if (mode == "timeout") {
+            std::this_thread::sleep_for(timeout);
+            return {StepResult::Code::Timeout, "fake: no frame"};
+        }
+        if (mode == "bad") return {StepResult::Code::BadFrame, "fake: 12 packets missing"};
+        image = cv::Mat(48, 64, CV_8UC1, cv::Scalar(dented_ ? 100 : 200));
+        return StepResult::success();
+    }
+    StepResult recover() override { return start(); }
+    void showLamps(LampPattern) override {}
+    std::vector<std::string> simulatedParts() const override { return {"nominal", "dented"}; }
+    std::string simulatedPart() const override { return dented_ ? "dented" : "nominal"; }
+    bool selectSimulatedPart(const std::string& name) override
+    {
+        if (name != "nominal" && name != "dented") return false;
+        dented_ = name == "dented";
+        return true;
+    }
+
+private:
+    std::atomic<bool> dented_{false};
+};
+
+class FakeInspector : public Inspector {
+public:
+    bool begin(const hg::station::PartProgramRef&, std::string&) override
+    {
+        frames_.clear();
+        return true;
+    }
+    void addView(std::size_t, const hg::geometry::FixturePose&, cv::Mat image) override { frames_.push_back(image); }
+    InspectionOutcome finish() override
+    {
+        InspectionOutcome out;
+        out.ok = !frames_.empty();
+        out.part = "fake-block";
+        bool dark = false;
+        for (const auto& f : frames_) dark = dark || cv::mean(f)[0] < 150;
+        out.pass = !dark;
+        for (int i = 0; i < 20; ++i) {
+            bool bad = dark && (i == 3 || i == 17);
+            out.landmarks.push_back({"L" + std::to_string(i), bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0,
+                                     bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2});
+        }
+        if (dark)
+            for (const auto& f : frames_) {
+                ViewEvidence v{f, cv::Mat(f.size(), CV_8UC1, cv::Scalar(0)), {}};
+                v.silhouette(cv::Rect(16, 12, 32, 24)).setTo(255);
+                v.landmarks.push_back({cv::Point2d(16, 12), "L3", "out_of_tolerance"});
+                out.views.push_back(v);
+            }
+        return out;
+    }
+    void cancel() override { frames_.clear(); }
+
+private:
+    std::vector<cv::Mat> frames_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return runDaemon(
+        argc, argv, [](const hg::station::DaemonConfig&) { return std::make_unique<FakeDevices>(); },
+        [](const hg::station::DaemonConfig&) { return std::make_unique<FakeInspector>(); });
+}

@@ -1,0 +1,300 @@
+// The daemon as a process (with fake devices): the PLC handshake with an
+// independent client, faults with their codes, sd_notify through a fake
+// NOTIFY_SOCKET, SIGHUP reloads, kill -9 and the result database.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <sstream>
+#include <thread>
+
+#include "daemon_harness.h"
+
+namespace {
+
+using namespace std::chrono_literals;
+using hgdaemon::DaemonProcess;
+
+std::vector<nlohmann::json> jsonLines(const std::string& text)
+{
+    std::vector<nlohmann::json> lines;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line))
+        if (!line.empty()) lines.push_back(nlohmann::json::parse(line));
+    return lines;
+}
+
+std::string sql(const std::filesystem::path& db, const std::string& query)
+{
+    return hgtest::run("sqlite3 " + db.string() + " \"" + query + "\"").out;
+}
+
+TEST(DaemonProcess, HundredCyclesAlternatingNominalAndDefective)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << daemon.logText();
+    auto r = hgdaemon::plcClient(port, "cycles 100 --bad-every 2 --sim-socket " + (dir / "hg.sock").string());
+    ASSERT_EQ(r.status, 0) << r.err << daemon.logText();
+    auto lines = jsonLines(r.out);
+    ASSERT_EQ(lines.size(), 101u);
+    for (std::size_t i = 0; i < 100; ++i) {
+        const auto& c = lines[i];
+        EXPECT_EQ(c["verdict"], c["expected"]) << c.dump();
+        EXPECT_TRUE(c["consistent"].get<bool>()) << c.dump();
+        EXPECT_EQ(c["landmarks_total"], 20);
+        EXPECT_EQ(c["landmarks_failed"], c["expected"] == "fail" ? 2 : 0);
+    }
+    // Every result the PLC saw is in the database, with the same verdict.
+    auto db = dir / "results.db";
+    EXPECT_EQ(sql(db, "SELECT COUNT(*) FROM inspections"), "100\n");
+    EXPECT_EQ(sql(db, "SELECT COUNT(*) FROM inspections WHERE verdict='fail' AND serial LIKE 'BAD%'"), "50\n");
+    EXPECT_EQ(sql(db, "SELECT COUNT(*) FROM inspections WHERE verdict='pass' AND serial LIKE 'SN%'"), "50\n");
+    // Failed parts left their annotated images.
+    auto images = sql(db, "SELECT images_dir FROM inspections WHERE verdict='fail' LIMIT 1");
+    ASSERT_FALSE(images.empty());
+    images.pop_back();
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(images) / "view_0.png")) << images;
+    EXPECT_EQ(WEXITSTATUS(daemon.signal(SIGTERM)), 0);
+}
+
+TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"HG_FAKE_MOVE_MS", "150"}});
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << daemon.logText();
+    // Unknown program 9: refused, counted, nothing else changes.
+    auto refused = hgdaemon::plcClient(port, "cycles 1 --program 9");
+    EXPECT_NE(refused.status, 0);
+    EXPECT_NE(refused.err.find("refused"), std::string::npos) << refused.err;
+    auto regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 100 12").out);
+    EXPECT_EQ(regs[10], 1);  // REJECTED_TRIGGERS
+    EXPECT_EQ(regs[11], 2);  // LAST_REJECT_REASON unknown program
+    EXPECT_EQ(regs[1], 0);   // DONE_SEQ untouched
+    // A manual trigger makes the station busy (3 views x 150 ms); a PLC trigger meanwhile is refused.
+    auto manual = hgdaemon::maintenance(dir / "hg.sock", {{"command", "trigger"}, {"program", 1}, {"serial", "M1"}});
+    ASSERT_TRUE(manual["ok"].get<bool>()) << manual.dump();
+    auto busy = hgdaemon::plcClient(port, "cycles 1");
+    EXPECT_NE(busy.status, 0);
+    regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 100 12").out);
+    EXPECT_EQ(regs[10], 2);
+    EXPECT_EQ(regs[11], 1);  // busy
+    // The cycle in progress finished undisturbed and the station serves the next trigger.
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "done", 10s));
+    auto next = hgdaemon::plcClient(port, "cycles 1 --bad-every 0");
+    EXPECT_EQ(next.status, 0) << next.err;
+    EXPECT_EQ(sql(dir / "results.db", "SELECT serial, manual, verdict FROM inspections ORDER BY id"),
+              "M1|1|pass\nSN000000|0|pass\n");
+}
+
+struct FaultCase {
+    const char* variable;
+    const char* value;
+    int faultCode;
+};
+
+class DaemonFaults : public ::testing::TestWithParam<FaultCase> {};
+
+TEST_P(DaemonFaults, DeviceFaultIsReportedWithItsCodeAndTheDaemonKeepsServing)
+{
+    auto c = GetParam();
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{c.variable, c.value}});
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << daemon.logText();
+    auto r = hgdaemon::plcClient(port, "cycles 1 --bad-every 0");
+    ASSERT_EQ(r.status, 0) << r.err;
+    auto cycle = jsonLines(r.out).at(0);
+    EXPECT_EQ(cycle["verdict"], "error");
+    EXPECT_EQ(cycle["fault_code"], c.faultCode);
+    EXPECT_TRUE(cycle["consistent"].get<bool>());
+    EXPECT_EQ(sql(dir / "results.db", "SELECT verdict, fault_code FROM inspections"),
+              "error|" + std::to_string(c.faultCode) + "\n");
+    // Still serving: the heartbeat moves and the register map answers.
+    auto a = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
+    std::this_thread::sleep_for(450ms);
+    auto b = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
+    EXPECT_GE(b - a, 2);  // heartbeat_period_s 0.2
+}
+
+INSTANTIATE_TEST_SUITE_P(Codes, DaemonFaults,
+                         ::testing::Values(FaultCase{"HG_FAKE_MOVE_FAIL", "timeout", 20},
+                                           FaultCase{"HG_FAKE_MOVE_FAIL", "fault", 21},
+                                           FaultCase{"HG_FAKE_GRAB_FAIL", "timeout", 10},
+                                           FaultCase{"HG_FAKE_GRAB_FAIL", "bad", 11}));
+
+TEST(DaemonProcess, AbortCommandFromThePlcEndsTheCycleAsAborted)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port, {}, 8), {{"HG_FAKE_MOVE_MS", "100"}});
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s));
+    auto manual = hgdaemon::maintenance(dir / "hg.sock", {{"command", "trigger"}, {"program", 1}});
+    ASSERT_TRUE(manual["ok"].get<bool>());
+    std::this_thread::sleep_for(150ms);
+    auto abort = hgtest::run("mbpoll -m tcp -p " + std::to_string(port) + " -a 1 -t 4 -r 10 -0 -1 127.0.0.1 1");
+    EXPECT_EQ(abort.status, 0) << abort.out << abort.err;
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "done", 5s));
+    EXPECT_EQ(sql(dir / "results.db", "SELECT verdict, fault_code FROM inspections"), "aborted|40\n");
+}
+
+// A unix datagram socket standing in for systemd's notify socket.
+class FakeNotifySocket {
+public:
+    explicit FakeNotifySocket(const std::filesystem::path& path) : path_(path)
+    {
+        fd_ = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+        sockaddr_un addr{};
+        addr.sun_family = AF_UNIX;
+        std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+        EXPECT_EQ(bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+        timeval tv{0, 50'000};
+        setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    }
+    ~FakeNotifySocket() { close(fd_); }
+    struct Message {
+        std::chrono::steady_clock::time_point at;
+        std::string text;
+    };
+    /// Collects messages until `until` returns true or `timeout`.
+    void collect(std::chrono::milliseconds timeout, const std::function<bool()>& until = [] { return false; })
+    {
+        auto deadline = std::chrono::steady_clock::now() + timeout;
+        char buf[4096];
+        while (std::chrono::steady_clock::now() < deadline && !until()) {
+            ssize_t n = recv(fd_, buf, sizeof buf, 0);
+            if (n > 0) messages.push_back({std::chrono::steady_clock::now(), std::string(buf, static_cast<std::size_t>(n))});
+        }
+    }
+    bool seen(const std::string& field) const
+    {
+        for (auto& m : messages)
+            if (("\n" + m.text + "\n").find("\n" + field + "\n") != std::string::npos) return true;
+        return false;
+    }
+    std::vector<std::chrono::steady_clock::time_point> times(const std::string& field) const
+    {
+        std::vector<std::chrono::steady_clock::time_point> t;
+        for (auto& m : messages)
+            if (("\n" + m.text + "\n").find("\n" + field + "\n") != std::string::npos) t.push_back(m.at);
+        return t;
+    }
+    std::vector<Message> messages;
+
+private:
+    std::filesystem::path path_;
+    int fd_ = -1;
+};
+
+TEST(DaemonProcess, NotifyProtocolReadyWatchdogStopping)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    FakeNotifySocket notify(dir / "notify.sock");
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"NOTIFY_SOCKET", (dir / "notify.sock").string()},
+                                                            {"WATCHDOG_USEC", "400000"},
+                                                            {"WATCHDOG_PID", "$PID"}});
+    notify.collect(10s, [&] { return notify.seen("READY=1"); });
+    ASSERT_TRUE(notify.seen("READY=1")) << daemon.logText();
+    notify.messages.clear();
+    notify.collect(2s);
+    // WATCHDOG_USEC = 0.4 s: the daemon pings every half interval, 0.2 s.
+    auto pings = notify.times("WATCHDOG=1");
+    EXPECT_GE(pings.size(), 7u);
+    EXPECT_LE(pings.size(), 12u);
+    for (std::size_t i = 1; i < pings.size(); ++i)
+        EXPECT_LT(pings[i] - pings[i - 1], 400ms) << "gap before ping " << i;
+    kill(daemon.pid(), SIGTERM);
+    notify.collect(5s, [&] { return notify.seen("STOPPING=1"); });
+    EXPECT_TRUE(notify.seen("STOPPING=1"));
+    EXPECT_EQ(WEXITSTATUS(daemon.wait(10s)), 0);
+}
+
+TEST(DaemonProcess, NoReadyWhileDevicesDoNotStart)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    FakeNotifySocket notify(dir / "notify.sock");
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port),
+                         {{"NOTIFY_SOCKET", (dir / "notify.sock").string()}, {"HG_FAKE_START_FAIL", "1"}});
+    notify.collect(1500ms);
+    EXPECT_FALSE(notify.seen("READY=1"));
+    auto regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 102 3").out);
+    EXPECT_EQ(regs[0], 3);  // STATUS fault
+    auto refused = hgdaemon::plcClient(port, "cycles 1");
+    EXPECT_NE(refused.status, 0);
+}
+
+TEST(DaemonProcess, SighupWithABadConfigurationKeepsTheRunningOne)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    auto config = hgdaemon::writeConfig(dir, port);
+    DaemonProcess daemon(config);
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s));
+    auto good = hgtest::run("cat " + config.string()).out;
+
+    // Bad: a typo in a key. The daemon logs why and keeps program 1.
+    hgtest::writeFile(config, good + "watchdog: {max_cycel_s: 3}\n");
+    daemon.signal(SIGHUP);
+    std::this_thread::sleep_for(500ms);
+    EXPECT_NE(daemon.logText().find("reload refused"), std::string::npos) << daemon.logText();
+    EXPECT_NE(daemon.logText().find("max_cycel_s"), std::string::npos);
+    EXPECT_EQ(hgdaemon::plcClient(port, "cycles 1 --bad-every 0").status, 0);
+
+    // Good: program 2 added; it is accepted after the reload.
+    EXPECT_NE(hgdaemon::plcClient(port, "cycles 1 --program 2").status, 0);
+    std::string withTwo = good;
+    withTwo.replace(withTwo.find("plc:"), 0, "  2: {part: part.yaml, views: views.yaml}\n");
+    hgtest::writeFile(config, withTwo);
+    daemon.signal(SIGHUP);
+    std::this_thread::sleep_for(500ms);
+    auto r = hgdaemon::plcClient(port, "cycles 1 --program 2 --bad-every 0");
+    EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
+}
+
+TEST(DaemonProcess, KillNineMidCycleLosesNoReportedResult)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    auto config = hgdaemon::writeConfig(dir, port);
+    std::vector<int> reported;
+    {
+        DaemonProcess daemon(config, {{"HG_FAKE_MOVE_MS", "20"}});
+        ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s));
+        // A PLC runs cycles in the background; kill -9 lands in the middle of one.
+        auto out = dir / "plc.out";
+        auto tool = hgtest::sourceDir() / "tools" / "plc-client";
+        auto cmd = "/usr/bin/python3 " + tool.string() + " --port " + std::to_string(port) +
+                   " cycles 1000 --bad-every 3 --sim-socket " + (dir / "hg.sock").string() + " > " + out.string() +
+                   " 2>/dev/null &";
+        (void)!std::system(cmd.c_str());
+        std::this_thread::sleep_for(2s);
+        daemon.signal(SIGKILL);
+        std::this_thread::sleep_for(300ms);
+        for (const auto& line : jsonLines(hgtest::run("cat " + out.string()).out))
+            if (line.contains("seq")) reported.push_back(line["seq"].get<int>());
+    }
+    ASSERT_GT(reported.size(), 5u);
+    auto db = dir / "results.db";
+    EXPECT_EQ(sql(db, "PRAGMA integrity_check"), "ok\n");
+    // After a restart the daemon opens the same database and keeps adding to it.
+    DaemonProcess again(config);
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << again.logText();
+    for (int seq : reported)
+        EXPECT_EQ(sql(db, "SELECT COUNT(*) FROM inspections WHERE trigger_seq=" + std::to_string(seq)), "1\n")
+            << "reported seq " << seq << " missing";
+    EXPECT_EQ(hgdaemon::plcClient(port, "cycles 2").status, 0);
+}
+
+}  // namespace

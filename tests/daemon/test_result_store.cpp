@@ -1,0 +1,131 @@
+// The result store: WAL mode, one durable row per record, readable by the
+// sqlite3 program; failed-part images and their retention.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "image_archive.h"
+#include "result_store.h"
+
+namespace hg::daemon {
+namespace {
+
+station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict)
+{
+    station::InspectionRecord r;
+    r.startedUnixMs = 1'700'000'000'123;
+    r.triggerSeq = seq;
+    r.serial = "SN-" + std::to_string(seq);
+    r.program = 1;
+    r.part = "block";
+    r.verdict = verdict;
+    r.cycleMs = 1234;
+    r.landmarks = {{"c1", "ok", 0.0, 0.125, 0.0625, 0.2}, {"c2", "out_of_tolerance", 0.5, 0.625, 0.5625, 0.2}};
+    return r;
+}
+
+TEST(ResultStore, CommitsInWalModeAndSqliteReadsIt)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "db" / "results.db";
+    {
+        ResultStore store(file);
+        EXPECT_EQ(store.commit(record(5, station::Verdict::Fail), "/img/5"), 1);
+        EXPECT_EQ(store.commit(record(6, station::Verdict::Pass)), 2);
+        EXPECT_EQ(store.count(), 2);
+        auto recent = store.recent(1);
+        ASSERT_EQ(recent.size(), 1u);
+        EXPECT_EQ(recent[0]["serial"], "SN-6");
+        EXPECT_EQ(recent[0]["time"], "2023-11-14T22:13:20.123Z");
+    }
+    // An independent reader: the sqlite3 program.
+    auto mode = hgtest::run("sqlite3 " + file.string() + " 'PRAGMA journal_mode'");
+    EXPECT_EQ(mode.out, "wal\n");
+    auto rows = hgtest::run("sqlite3 " + file.string() +
+                            " \"SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_total, images_dir, "
+                            "json_extract(landmarks_json, '$[1].status') FROM inspections ORDER BY id\"");
+    EXPECT_EQ(rows.out, "5|SN-5|fail|1|2|/img/5|out_of_tolerance\n6|SN-6|pass|1|2||out_of_tolerance\n");
+    // Reopening keeps the rows (schema creation is idempotent).
+    ResultStore again(file);
+    EXPECT_EQ(again.count(), 2);
+}
+
+TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "r.db";
+    { ResultStore store(file); }
+    hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version=99'");
+    EXPECT_THROW(ResultStore{file}, FaultError);
+}
+
+TEST(ResultStore, UnwritableLocationIsAFault)
+{
+    EXPECT_THROW(ResultStore{"/proc/hullgauge/results.db"}, FaultError);
+}
+
+TEST(ImageArchive, FailedViewsAreAnnotatedInStatusColours)
+{
+    hgtest::TempDir dir;
+    ImageArchive archive(dir / "images", {});
+    ViewEvidence v;
+    v.image = cv::Mat(100, 120, CV_16UC1, cv::Scalar(4000));
+    v.silhouette = cv::Mat(100, 120, CV_8UC1, cv::Scalar(0));
+    v.silhouette(cv::Rect(30, 20, 60, 50)).setTo(255);
+    v.landmarks = {{cv::Point2d(90, 70), "c2", "out_of_tolerance"}, {cv::Point2d(30, 20), "c1", "ok"}};
+    auto folder = archive.saveFailed(1'700'000'000'000, "SN/1", {v, v});
+    ASSERT_FALSE(folder.empty());
+    EXPECT_EQ(folder.filename(), "1700000000000_SN_1");
+    auto png = cv::imread((folder / "view_1.png").string(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(png.empty());
+    EXPECT_EQ(png.size(), cv::Size(120, 100));
+    // The landmark circle (radius 4) is drawn in its status colour around its pixel.
+    auto red = png.at<cv::Vec3b>(70, 90 + 4);
+    EXPECT_GT(red[2], 200);
+    EXPECT_LT(red[1], 60);
+    auto green = png.at<cv::Vec3b>(20 + 4, 30);
+    EXPECT_GT(green[1], 150);
+    EXPECT_LT(green[2], 60);
+    // The silhouette outline (blue) runs along its top edge.
+    auto edge = png.at<cv::Vec3b>(20, 60);
+    EXPECT_GT(edge[0], 200);
+    // Away from the drawing: the frame scaled to 8 bit (grey).
+    auto plain = png.at<cv::Vec3b>(5, 5);
+    EXPECT_EQ(plain[0], plain[1]);
+    EXPECT_EQ(plain[0], 255);
+}
+
+TEST(ImageArchive, RetentionKeepsTheNewestWithinCountAndBytes)
+{
+    hgtest::TempDir dir;
+    station::RetentionConfig keep3;
+    keep3.maxCount = 3;
+    ImageArchive archive(dir / "images", keep3);
+    ViewEvidence v{cv::Mat(10, 10, CV_8UC1, cv::Scalar(9)), {}, {}};
+    std::vector<std::filesystem::path> folders;
+    for (int i = 0; i < 5; ++i) {
+        folders.push_back(archive.saveFailed(1000 + i, "S", {v}));
+        std::filesystem::last_write_time(folders.back(), std::filesystem::file_time_type::clock::now() -
+                                                             std::chrono::minutes(10 - i));
+    }
+    EXPECT_EQ(archive.enforceRetention(), 2u);
+    EXPECT_FALSE(std::filesystem::exists(folders[0]));
+    EXPECT_FALSE(std::filesystem::exists(folders[1]));
+    EXPECT_TRUE(std::filesystem::exists(folders[4]));
+
+    station::RetentionConfig young;
+    young.maxAge = std::chrono::hours(1);
+    std::filesystem::last_write_time(folders[2], std::filesystem::file_time_type::clock::now() - std::chrono::hours(2));
+    EXPECT_EQ(ImageArchive(dir / "images", young).enforceRetention(), 1u);
+    EXPECT_FALSE(std::filesystem::exists(folders[2]));
+
+    station::RetentionConfig tiny;
+    tiny.maxBytes = 1;  // less than one folder: everything goes
+    EXPECT_EQ(ImageArchive(dir / "images", tiny).enforceRetention(), 2u);
+}
+
+}  // namespace
+}  // namespace hg::daemon

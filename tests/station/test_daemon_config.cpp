@@ -1,0 +1,173 @@
+// The daemon configuration: a complete file loads with its values; every kind
+// of bad value is refused naming file, line and key.
+#include <gtest/gtest.h>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/station/daemon_config.h"
+
+namespace hg::station {
+namespace {
+
+const char* kStation = R"(camera:
+  image_size: [640, 480]
+  K: [[800, 0, 320], [0, 800, 240], [0, 0, 1]]
+fixture:
+  type: rotation_declination
+  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
+  rotation_axis: [0, 0, 1]
+  declination_axis: [1, 0, 0]
+  rotation_range_deg: [-180, 180]
+  declination_range_deg: [0, 60]
+lamps: {backend: sim}
+)";
+
+const char* kPart = R"(part: block
+mesh: block.stl
+landmarks:
+  - {id: c1, position: [0, 0, 10], tolerance_mm: 0.2}
+)";
+
+const char* kDaemon = R"(station: station.yaml
+programs:
+  1: {part: block.yaml, views: views.yaml}
+  12: {part: block.yaml, views: views.yaml}
+plc:
+  bind: 127.0.0.1
+  port: 1502
+  unit_id: 3
+  allowed_clients: [127.0.0.1, 10.1.0.0/16]
+  heartbeat_period_s: 0.25
+results:
+  database: data/results.db
+  images: /var/tmp/hg-images
+  retention: {max_count: 50, max_age_days: 2, max_bytes: 1.0e6}
+sequencer: {move_timeout_s: 4, grab_timeout_s: 0.5, settle_s: 0.02, retries: 1}
+maintenance: {socket: run/hg.sock, group: hullgauge}
+watchdog: {max_cycle_s: 30}
+)";
+
+std::string replaced(std::string text, const std::string& from, const std::string& to)
+{
+    auto pos = text.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    return text.replace(pos, from.size(), to);
+}
+
+struct Fixture {
+    hgtest::TempDir dir;
+    Fixture()
+    {
+        hgtest::writeFile(dir / "station.yaml", kStation);
+        hgtest::writeFile(dir / "block.yaml", kPart);
+        hgtest::writeFile(dir / "views.yaml", "- {rotation_deg: 0, declination_deg: 30}\n"
+                                              "- {rotation_deg: 90, declination_deg: 30}\n");
+    }
+    std::string error(const std::string& daemonText)
+    {
+        auto file = hgtest::writeFile(dir / "hullgauged.yaml", daemonText);
+        try {
+            loadDaemonConfig(file);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return {};
+    }
+};
+
+TEST(DaemonConfig, LoadsAllSections)
+{
+    Fixture f;
+    auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", kDaemon));
+    EXPECT_EQ(cfg.stationFile, f.dir.path() / "station.yaml");
+    ASSERT_EQ(cfg.programs.size(), 2u);
+    EXPECT_EQ(cfg.programs.at(12).views.size(), 2u);
+    EXPECT_DOUBLE_EQ(cfg.programs.at(12).views[1].rotationDeg, 90.0);
+    EXPECT_EQ(cfg.plc.bindAddress, "127.0.0.1");
+    EXPECT_EQ(cfg.plc.port, 1502);
+    EXPECT_EQ(cfg.plc.unitId, 3);
+    ASSERT_EQ(cfg.plc.allowedClients.size(), 2u);
+    EXPECT_TRUE(cfg.plc.allowedClients[1].contains(0x0A01FE07));   // 10.1.254.7
+    EXPECT_FALSE(cfg.plc.allowedClients[1].contains(0x0A020001));  // 10.2.0.1
+    EXPECT_EQ(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(250));
+    EXPECT_EQ(cfg.results.database, f.dir.path() / "data/results.db");
+    EXPECT_EQ(cfg.results.imageDir, "/var/tmp/hg-images");
+    EXPECT_EQ(cfg.results.retention.maxCount, 50u);
+    EXPECT_EQ(cfg.results.retention.maxAge, std::chrono::hours(48));
+    EXPECT_EQ(cfg.results.retention.maxBytes, 1'000'000u);
+    EXPECT_EQ(cfg.sequencer.grabTimeout, std::chrono::milliseconds(500));
+    EXPECT_EQ(cfg.sequencer.settle, std::chrono::milliseconds(20));
+    EXPECT_EQ(cfg.maintenance.socket, f.dir.path() / "run/hg.sock");
+    EXPECT_EQ(cfg.maintenance.group, "hullgauge");
+    EXPECT_EQ(cfg.watchdog.maxCycle, std::chrono::seconds(30));
+}
+
+TEST(DaemonConfig, DefaultsFollowTheContract)
+{
+    Fixture f;
+    auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml",
+                                                  "station: station.yaml\n"
+                                                  "programs: {1: {part: block.yaml, views: views.yaml}}\n"
+                                                  "results: {database: r.db, images: img}\n"));
+    EXPECT_EQ(cfg.plc.port, 502);   // CONTRACTS §6
+    EXPECT_EQ(cfg.plc.unitId, 1);   // CONTRACTS §6
+    EXPECT_TRUE(cfg.plc.allowedClients.empty());
+    EXPECT_LE(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(1000));
+    EXPECT_EQ(cfg.sequencer.retries, 1);
+    EXPECT_EQ(cfg.lampsSection, "lamps");
+}
+
+TEST(DaemonConfig, BadValuesNameFileLineAndKey)
+{
+    Fixture f;
+    struct Case {
+        std::string from, to, expect;
+    };
+    const Case cases[] = {
+        {"port: 1502", "port: 70000", "hullgauged.yaml:7: plc.port"},
+        {"unit_id: 3", "unit_id: -1", "plc.unit_id"},
+        {"10.1.0.0/16", "10.1.0.0/33", "plc.allowed_clients[1]"},
+        {"10.1.0.0/16", "example.com", "plc.allowed_clients[1]"},
+        {"bind: 127.0.0.1", "bind: localhost", "plc.bind"},
+        {"heartbeat_period_s: 0.25", "heartbeat_period_s: 2", "plc.heartbeat_period_s"},
+        {"  12: {part", "  0: {part", "programs.0"},
+        {"  12: {part", "  x1: {part", "programs.x1"},
+        {"12: {part: block.yaml", "12: {part: missing.yaml", "no such file"},
+        {"retries: 1", "retries: 9", "sequencer.retries"},
+        {"grab_timeout_s: 0.5", "grab_timeout_s: -1", "sequencer.grab_timeout_s"},
+        {"max_cycle_s: 30", "max_cycel_s: 30", "max_cycel_s"},
+        {"station: station.yaml", "station: nowhere.yaml", "station"},
+    };
+    for (const auto& c : cases) {
+        auto message = f.error(replaced(kDaemon, c.from, c.to));
+        EXPECT_NE(message.find(c.expect), std::string::npos) << c.to << " -> " << message;
+        EXPECT_NE(message.find("hullgauged.yaml"), std::string::npos) << message;
+    }
+}
+
+TEST(DaemonConfig, ViewPlanIsCheckedAgainstTheFixture)
+{
+    Fixture f;
+    hgtest::writeFile(f.dir / "views.yaml", "- {rotation_deg: 0, declination_deg: 75}\n");  // range is [0, 60]
+    auto message = f.error(kDaemon);
+    EXPECT_NE(message.find("views.yaml"), std::string::npos) << message;
+    EXPECT_NE(message.find("declination"), std::string::npos) << message;
+}
+
+TEST(DaemonConfig, Ipv4Networks)
+{
+    auto n = parseIpv4Network("192.168.10.0/24");
+    ASSERT_TRUE(n);
+    EXPECT_TRUE(n->contains(0xC0A80A63));   // 192.168.10.99
+    EXPECT_FALSE(n->contains(0xC0A80B01));  // 192.168.11.1
+    EXPECT_EQ(n->toString(), "192.168.10.0/24");
+    auto any = parseIpv4Network("0.0.0.0/0");
+    ASSERT_TRUE(any);
+    EXPECT_TRUE(any->contains(0x01020304));
+    EXPECT_FALSE(parseIpv4Network("1.2.3"));
+    EXPECT_FALSE(parseIpv4Network("1.2.3.4/"));
+    EXPECT_FALSE(parseIpv4Network("1.2.3.4/-1"));
+}
+
+}  // namespace
+}  // namespace hg::station

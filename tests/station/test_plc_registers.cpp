@@ -1,0 +1,255 @@
+// The PLC register map of CONTRACTS §6: access rules, exception codes, the
+// trigger handshake and the all-together publication of a result.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "hullgauge/station/plc_registers.h"
+
+namespace hg::station {
+namespace {
+
+using std::chrono::milliseconds;
+
+std::uint16_t readOne(const PlcRegisters& r, std::uint16_t address)
+{
+    std::vector<std::uint16_t> v;
+    EXPECT_EQ(r.read(address, 1, v), ModbusException::None);
+    return v.empty() ? 0xFFFF : v[0];
+}
+
+ModbusException writeOne(PlcRegisters& r, std::uint16_t address, std::uint16_t value)
+{
+    std::array<std::uint16_t, 1> v{value};
+    return r.write(address, v);
+}
+
+// Programs 1 and 7 configured, STATUS ready.
+void makeReady(PlcRegisters& r)
+{
+    r.setKnownPrograms({1, 7});
+    r.setStatus(PlcStatus::Ready);
+}
+
+TEST(PlcRegisters, StartsInStartingWithEverythingElseZero)
+{
+    PlcRegisters r;
+    auto s = r.snapshot();
+    EXPECT_EQ(s[102], 4);  // STATUS starting (CONTRACTS §6)
+    for (std::size_t a = 0; a < s.size(); ++a) {
+        if (a != 102) {
+            EXPECT_EQ(s[a], 0) << "address " << a;
+        }
+    }
+}
+
+TEST(PlcRegisters, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
+{
+    PlcRegisters r;
+    makeReady(r);
+    for (std::uint16_t a : {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 120, 135})
+        EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "read-only " << a;
+    for (std::uint16_t a : {11, 50, 99, 112, 119, 136, 1000, 65535})
+        EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "unmapped " << a;
+    // A block that starts writable and runs into a read-only register changes nothing.
+    std::array<std::uint16_t, 12> block{};
+    block.fill(0x4141);
+    EXPECT_EQ(r.write(0, block), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(readOne(r, 0), 0);
+    EXPECT_EQ(readOne(r, 2), 0);
+}
+
+TEST(PlcRegisters, BadValuesAnswerIllegalDataValueAndChangeNothing)
+{
+    PlcRegisters r;
+    makeReady(r);
+    EXPECT_EQ(writeOne(r, 2, 0x4101), ModbusException::IllegalDataValue);  // control character in SERIAL
+    EXPECT_EQ(writeOne(r, 9, 0x80'41), ModbusException::IllegalDataValue);  // non-ASCII byte
+    EXPECT_EQ(writeOne(r, 10, 3), ModbusException::IllegalDataValue);      // unknown command
+    // All-or-nothing: program 7 in the same block as a bad serial word is not applied.
+    std::array<std::uint16_t, 3> block{7, 0x4142, 0x1F00};
+    EXPECT_EQ(r.write(1, block), ModbusException::IllegalDataValue);
+    EXPECT_EQ(readOne(r, 1), 0);
+    EXPECT_EQ(readOne(r, 2), 0);
+}
+
+TEST(PlcRegisters, ReadsInsideTheMapSucceedAndPastItFail)
+{
+    PlcRegisters r;
+    makeReady(r);
+    std::vector<std::uint16_t> v;
+    EXPECT_EQ(r.read(0, 136, v), ModbusException::None);
+    EXPECT_EQ(v.size(), 136u);
+    EXPECT_EQ(r.read(130, 7, v), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(r.read(136, 1, v), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(r.read(0, 0, v), ModbusException::IllegalDataAddress);
+}
+
+TEST(PlcRegisters, SerialIsTwoCharactersPerRegisterHighByteFirst)
+{
+    auto words = encodeSerial("AB12");
+    EXPECT_EQ(words[0], 0x4142);  // 'A' = 0x41 high, 'B' = 0x42 low
+    EXPECT_EQ(words[1], 0x3132);
+    EXPECT_EQ(words[2], 0);
+    EXPECT_EQ(decodeSerial(words), "AB12");
+    EXPECT_EQ(decodeSerial(encodeSerial("SN-0123456789ABCDEF")), "SN-0123456789ABC");  // cut at 16
+    std::array<std::uint16_t, 8> padded{0x5820, 0x2020, 0, 0, 0, 0, 0, 0};  // "X" + spaces
+    EXPECT_EQ(decodeSerial(padded), "X");
+}
+
+TEST(PlcRegisters, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
+{
+    PlcRegisters r;
+    makeReady(r);
+    auto serial = encodeSerial("PART-0001");
+    std::array<std::uint16_t, 10> block{};
+    block[0] = 5;  // TRIGGER_SEQ
+    block[1] = 7;  // PART_PROGRAM
+    std::copy(serial.begin(), serial.end(), block.begin() + 2);
+    ASSERT_EQ(r.write(0, block), ModbusException::None);
+    EXPECT_EQ(readOne(r, 100), 5);  // ACK_SEQ
+    EXPECT_EQ(readOne(r, 102), 1);  // STATUS busy at once
+    auto t = r.waitTrigger(milliseconds(100));
+    ASSERT_TRUE(t);
+    EXPECT_EQ(t->seq, 5);
+    EXPECT_EQ(t->program, 7);
+    EXPECT_EQ(t->serial, "PART-0001");
+    EXPECT_FALSE(t->manual);
+    // The PLC changes program and serial for the next part: the latched request is unaffected.
+    ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
+    EXPECT_EQ(t->program, 7);
+}
+
+TEST(PlcRegisters, SameTriggerValueDoesNothing)
+{
+    PlcRegisters r;
+    makeReady(r);
+    ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);
+    ASSERT_TRUE(r.waitTrigger(milliseconds(10)));
+    r.setStatus(PlcStatus::Ready);
+    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);
+    EXPECT_FALSE(r.waitTrigger(milliseconds(10)));
+    EXPECT_EQ(r.rejectedTriggers(), 0);
+}
+
+TEST(PlcRegisters, RefusedTriggersAreCountedWithTheirReason)
+{
+    PlcRegisters r;
+    makeReady(r);
+    ASSERT_EQ(writeOne(r, 1, 9), ModbusException::None);  // program 9 is not configured
+    ASSERT_EQ(writeOne(r, 0, 1), ModbusException::None);
+    EXPECT_EQ(readOne(r, 110), 1);
+    EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::UnknownProgram));
+    EXPECT_EQ(readOne(r, 100), 0);  // ACK_SEQ unchanged
+    EXPECT_EQ(readOne(r, 102), 0);  // still ready
+
+    ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);  // accepted
+    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);  // busy: refused
+    EXPECT_EQ(readOne(r, 100), 2);
+    EXPECT_EQ(readOne(r, 110), 2);
+    EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::Busy));
+    ASSERT_TRUE(r.waitTrigger(milliseconds(10)));
+    EXPECT_FALSE(r.waitTrigger(milliseconds(10)));  // the refused one was never queued
+
+    r.setStatus(PlcStatus::Fault);
+    ASSERT_EQ(writeOne(r, 0, 4), ModbusException::None);
+    EXPECT_EQ(readOne(r, 110), 3);
+    EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::NotReady));
+}
+
+TEST(PlcRegisters, PublishedResultAppearsWithDoneSeqAndBits)
+{
+    PlcRegisters r;
+    makeReady(r);
+    PublishedResult p;
+    p.seq = 42;
+    p.result = PlcResult::Fail;
+    p.faultCode = 0;
+    p.landmarksFailed = 2;
+    p.landmarksTotal = 20;
+    p.cycleMs = 0x0001'2345;  // 74565 ms
+    p.landmarkOk.assign(20, true);
+    p.landmarkOk[3] = false;
+    p.landmarkOk[17] = false;
+    r.publishResult(p);
+    std::vector<std::uint16_t> v;
+    ASSERT_EQ(r.read(100, 36, v), ModbusException::None);
+    EXPECT_EQ(v[1], 42);      // DONE_SEQ
+    EXPECT_EQ(v[2], 2);       // STATUS done
+    EXPECT_EQ(v[3], 2);       // RESULT fail
+    EXPECT_EQ(v[5], 2);       // LANDMARKS_FAILED
+    EXPECT_EQ(v[6], 20);      // LANDMARKS_TOTAL
+    EXPECT_EQ(v[7], 0x0001);  // CYCLE_MS high word first
+    EXPECT_EQ(v[8], 0x2345);
+    EXPECT_EQ(v[20], 0xFFF7);  // word 0: landmarks 0..15, bit 3 clear
+    EXPECT_EQ(v[21], 0x000D);  // word 1: landmarks 16..19 = bits 0,2,3 set, bit 1 (landmark 17) clear
+    EXPECT_EQ(v[22], 0);
+}
+
+TEST(PlcRegisters, ManualTriggerLeavesThePlcHandshakeAlone)
+{
+    PlcRegisters r;
+    makeReady(r);
+    EXPECT_EQ(r.triggerManually(1, "BENCH"), RejectReason::None);
+    auto t = r.waitTrigger(milliseconds(10));
+    ASSERT_TRUE(t);
+    EXPECT_TRUE(t->manual);
+    EXPECT_EQ(readOne(r, 100), 0);
+    PublishedResult p;
+    p.manual = true;
+    p.result = PlcResult::Pass;
+    p.seq = 99;
+    r.publishResult(p);
+    EXPECT_EQ(readOne(r, 101), 0);  // DONE_SEQ untouched
+    EXPECT_EQ(readOne(r, 103), 0);  // RESULT untouched
+    EXPECT_EQ(readOne(r, 102), 2);  // STATUS done
+    EXPECT_EQ(r.triggerManually(3, "X"), RejectReason::UnknownProgram);
+}
+
+TEST(PlcRegisters, CommandRegisterQueuesAbortAndReadsZero)
+{
+    PlcRegisters r;
+    makeReady(r);
+    ASSERT_EQ(writeOne(r, 10, 1), ModbusException::None);
+    EXPECT_EQ(readOne(r, 10), 0);
+    EXPECT_EQ(r.takeCommand(), PlcCommand::Abort);
+    EXPECT_EQ(r.takeCommand(), PlcCommand::None);
+}
+
+// A reader never sees DONE_SEQ of one cycle with RESULT of another.
+TEST(PlcRegisters, ConcurrentReadersSeeConsistentResults)
+{
+    PlcRegisters r;
+    makeReady(r);
+    std::atomic<bool> stop{false};
+    std::atomic<int> inconsistent{0};
+    std::thread reader([&] {
+        std::vector<std::uint16_t> v;
+        while (!stop) {
+            if (r.read(101, 6, v) != ModbusException::None) continue;
+            // Odd sequences pass with 0 failed, even ones fail with seq % 7 + 1 failed.
+            auto seq = v[0];
+            if (seq == 0) continue;
+            bool pass = seq % 2 == 1;
+            if (v[2] != (pass ? 1 : 2) || v[4] != (pass ? 0 : seq % 7 + 1)) ++inconsistent;
+        }
+    });
+    for (std::uint16_t seq = 1; seq < 20000; ++seq) {
+        PublishedResult p;
+        p.seq = seq;
+        bool pass = seq % 2 == 1;
+        p.result = pass ? PlcResult::Pass : PlcResult::Fail;
+        p.landmarksFailed = pass ? 0 : static_cast<std::uint16_t>(seq % 7 + 1);
+        p.landmarksTotal = 10;
+        r.publishResult(p);
+    }
+    stop = true;
+    reader.join();
+    EXPECT_EQ(inconsistent.load(), 0);
+}
+
+}  // namespace
+}  // namespace hg::station

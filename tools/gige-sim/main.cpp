@@ -101,9 +101,11 @@ std::vector<fs::path> imagesOfFolder(const fs::path& dir)
 void fillFromImages(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint32 /*gain*/, ArvPixelFormat format)
 {
     auto* src = static_cast<ImageSource*>(data);
-    size_t size = 0;
-    // The payload memory belongs to the buffer the fake camera allocated for us to fill.
-    auto* out = static_cast<unsigned char*>(const_cast<void*>(arv_buffer_get_data(buffer, &size)));
+    // The payload memory of the buffer the fake camera allocated for us to fill.
+    // Its reported size is the bytes received so far (0 here); the fake camera
+    // calls this hook only after checking that the allocation holds the payload
+    // of the current Width x Height x pixel format, which is what is written.
+    auto* out = static_cast<unsigned char*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
     const int w = arv_buffer_get_image_width(buffer);
     const int h = arv_buffer_get_image_height(buffer);
     const int x0 = arv_buffer_get_image_x(buffer);
@@ -115,7 +117,6 @@ void fillFromImages(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint
     const cv::Mat roi = img(cv::Rect(x0, y0, w, h));
     const bool eight = img.depth() == CV_8U;
     if (format == ARV_PIXEL_FORMAT_MONO_8) {
-        if (size < static_cast<size_t>(w) * h) return;
         cv::Mat dst(h, w, CV_8UC1, out);
         if (eight)
             roi.copyTo(dst);
@@ -123,7 +124,6 @@ void fillFromImages(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint
             for (int r = 0; r < h; ++r)
                 for (int c = 0; c < w; ++c) dst.at<uint8_t>(r, c) = static_cast<uint8_t>(roi.at<uint16_t>(r, c) >> 8);
     } else if (format == ARV_PIXEL_FORMAT_MONO_12 || format == ARV_PIXEL_FORMAT_MONO_16) {
-        if (size < static_cast<size_t>(w) * h * 2) return;
         cv::Mat dst(h, w, CV_16UC1, out);  // little-endian words, as GVSP carries Mono12/Mono16
         for (int r = 0; r < h; ++r)
             for (int c = 0; c < w; ++c) {
@@ -136,7 +136,8 @@ void fillFromImages(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint
                 dst.at<uint16_t>(r, c) = static_cast<uint16_t>(o);
             }
     } else {
-        std::memset(out, 0, size);  // formats the simulator does not model stay black
+        // Formats the simulator does not model (Bayer, RGB) stay black.
+        std::memset(out, 0, static_cast<size_t>(w) * h * ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) / 8);
     }
 }
 

@@ -113,7 +113,11 @@ bool CycleRunner::healthy() const
 nlohmann::json CycleRunner::describe() const
 {
     std::lock_guard lock(mutex_);
-    nlohmann::json j{{"state", std::string(station::toString(sequencer_.state()))},
+    // Between the sequencer's end of cycle and the published result (commit, PLC registers) the
+    // operator sees "processing": "done" promises a result that is already stored.
+    auto shown = sequencer_.state();
+    if (cycleStartNs_.load() != 0 && !station::isBusy(shown)) shown = SequencerState::Processing;
+    nlohmann::json j{{"state", std::string(station::toString(shown))},
                      {"cycles", cycles_},
                      {"faults", faults_},
                      {"last_cycle", lastCycle_}};

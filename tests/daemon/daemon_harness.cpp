@@ -43,7 +43,7 @@ fixture:
     hgtest::writeFile(dir / "part.yaml", "part: fake-block\nmesh: block.stl\nlandmarks:\n"
                                          "  - {id: L0, position: [0, 0, 10], tolerance_mm: 0.2}\n");
     std::string poses;
-    for (int k = 0; k < views; ++k) poses += "- {rotation_deg: " + std::to_string(k * 30) + ", declination_deg: 20}\n";
+    for (int k = 0; k < views; ++k) poses += "- {rotation_deg: " + std::to_string(k * 20) + ", declination_deg: 20}\n";
     hgtest::writeFile(dir / "views.yaml", poses);
     return hgtest::writeFile(dir / "hullgauged.yaml", "station: station.yaml\n"
                                                       "programs:\n"

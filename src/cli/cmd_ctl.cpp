@@ -1,0 +1,163 @@
+// `hullgauge ctl`: talks to the running daemon through its maintenance socket
+// (CONTRACTS §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
+// default. One JSON request per connection, one JSON answer (docs/daemon.md).
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "command.h"
+#include "hullgauge/common/error.h"
+
+namespace hg::cli {
+namespace {
+
+constexpr const char* kDefaultSocket = "/run/hullgauge/hullgauged.sock";
+
+struct CtlOptions {
+    std::string socket;
+    int limit = 10;
+    int program = 1;
+    std::string serial;
+    bool list = false;
+    std::string part;
+    bool json = false;
+};
+
+std::string socketPath(const CtlOptions& o)
+{
+    if (!o.socket.empty()) return o.socket;
+    if (const char* env = std::getenv("HULLGAUGE_SOCKET"); env && *env) return env;
+    return kDefaultSocket;
+}
+
+nlohmann::json request(const std::string& path, const nlohmann::json& req)
+{
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    if (path.size() >= sizeof addr.sun_path) throw InputError("", "--socket", "path longer than 107 bytes");
+    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
+    int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) throw FaultError(std::string("socket: ") + std::strerror(errno));
+    timeval tv{10, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+        std::string why = std::strerror(errno);
+        close(fd);
+        throw FaultError("cannot reach the daemon at " + path + ": " + why +
+                         " (is hullgauged running? use --socket or $HULLGAUGE_SOCKET)");
+    }
+    auto text = req.dump() + "\n";
+    if (write(fd, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
+        close(fd);
+        throw FaultError("cannot send to the daemon at " + path);
+    }
+    std::string answer;
+    char buf[4096];
+    ssize_t n;
+    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
+    close(fd);
+    auto j = nlohmann::json::parse(answer, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) throw FaultError("the daemon at " + path + " sent no valid answer");
+    if (!j.value("ok", false)) throw FaultError("daemon: " + j.value("error", std::string("request failed")));
+    return j;
+}
+
+void printStatus(const nlohmann::json& s)
+{
+    const auto& seq = s["sequencer"];
+    const auto& plc = s["plc"];
+    std::cout << "state:        " << seq["state"].get<std::string>();
+    if (seq.contains("view")) std::cout << " (view " << seq["view"].get<int>() + 1 << " of " << seq["views"] << ")";
+    if (seq.contains("fault")) std::cout << " — fault " << seq["fault_code"] << ": " << seq["fault"].get<std::string>();
+    std::cout << "\nconfig:       " << s["config"].get<std::string>() << "\n"
+              << "plc:          port " << plc["port"] << ", " << plc["clients"] << " clients, status "
+              << plc["status"] << ", ack " << plc["ack_seq"] << ", done " << plc["done_seq"] << ", result "
+              << plc["result"] << ", fault code " << plc["fault_code"] << ", rejected " << plc["rejected_triggers"]
+              << "\n"
+              << "cycles:       " << seq["cycles"] << " (" << seq["faults"] << " with errors)\n"
+              << "results:      " << s["results"]["records"] << " in " << s["results"]["database"].get<std::string>()
+              << "\n";
+    if (!s["simulated_part"].get<std::string>().empty())
+        std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
+    if (!seq["last_cycle"].is_null()) {
+        const auto& c = seq["last_cycle"];
+        std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '" << c["serial"].get<std::string>()
+                  << "', program " << c["program"] << ", " << c["cycle_ms"] << " ms, landmarks failed "
+                  << c["landmarks_failed"] << "/" << c["landmarks_total"] << "\n";
+    }
+}
+
+std::function<int()> factory(CLI::App& app)
+{
+    auto opts = std::make_shared<CtlOptions>();
+    auto* ctl = app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, sim-part)");
+    ctl->add_option("--socket", opts->socket, "maintenance socket (default $HULLGAUGE_SOCKET, else " +
+                                                  std::string(kDefaultSocket) + ")");
+    ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
+    ctl->require_subcommand(1);
+    auto* status = ctl->add_subcommand("status", "print the daemon state");
+    auto* results = ctl->add_subcommand("results", "print the most recent results");
+    results->add_option("-n,--limit", opts->limit, "how many (1..1000)")->check(CLI::Range(1, 1000));
+    auto* trigger = ctl->add_subcommand("trigger", "start an inspection (same rules as a PLC trigger)");
+    trigger->add_option("--program", opts->program, "part program number")->check(CLI::Range(1, 65535));
+    trigger->add_option("--serial", opts->serial, "part serial number");
+    auto* abort = ctl->add_subcommand("abort", "abort the running cycle");
+    auto* simPart = ctl->add_subcommand("sim-part", "switch the simulated part under test");
+    simPart->add_flag("--list", opts->list, "list the parts the simulated line offers");
+    simPart->add_option("name", opts->part, "nominal or a variant name");
+
+    return [=]() -> int {
+        auto path = socketPath(*opts);
+        nlohmann::json answer;
+        if (status->parsed()) {
+            answer = request(path, {{"command", "status"}});
+            if (opts->json)
+                std::cout << answer.dump(2) << "\n";
+            else
+                printStatus(answer);
+        } else if (results->parsed()) {
+            answer = request(path, {{"command", "results"}, {"limit", opts->limit}});
+            if (opts->json) {
+                std::cout << answer["results"].dump(2) << "\n";
+            } else {
+                for (const auto& r : answer["results"])
+                    std::cout << r["id"] << "  " << r["time"].get<std::string>() << "  "
+                              << r["verdict"].get<std::string>() << "  serial '" << r["serial"].get<std::string>()
+                              << "'  program " << r["program"] << "  " << r["cycle_ms"] << " ms  failed "
+                              << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault "
+                              << r["fault_code"] << "\n";
+            }
+        } else if (trigger->parsed()) {
+            request(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});
+            std::cout << "triggered program " << opts->program << "\n";
+        } else if (abort->parsed()) {
+            request(path, {{"command", "abort"}});
+            std::cout << "abort requested\n";
+        } else if (simPart->parsed()) {
+            if (opts->list) {
+                answer = request(path, {{"command", "sim-part"}, {"list", true}});
+                for (const auto& p : answer["parts"])
+                    std::cout << p.get<std::string>() << (p == answer["current"] ? "  (current)" : "") << "\n";
+            } else {
+                if (opts->part.empty()) throw InputError("", "sim-part", "give a part name or --list");
+                answer = request(path, {{"command", "sim-part"}, {"name", opts->part}});
+                std::cout << "simulated part: " << answer["current"].get<std::string>() << "\n";
+            }
+        }
+        return 0;
+    };
+}
+
+}  // namespace
+
+HG_REGISTER_COMMAND("ctl", factory);
+
+}  // namespace hg::cli

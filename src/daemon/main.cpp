@@ -1,9 +1,0 @@
-// hullgauged: the station daemon (docs/daemon.md).
-#include "daemon.h"
-#include "driver_devices.h"
-#include "engine_inspector.h"
-
-int main(int argc, char** argv)
-{
-    return hg::daemon::runDaemon(argc, argv, hg::daemon::makeDriverDevices, hg::daemon::makeEngineInspector);
-}

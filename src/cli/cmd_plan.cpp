@@ -70,7 +70,9 @@ int run(const PlanArgs& args)
     }
 
     plan::PlanOptions options;
-    options.grid = {args.rotationStep, args.declinationStep, args.railStep};
+    options.grid.rotationStepDeg = args.rotationStep;
+    options.grid.declinationStepDeg = args.declinationStep;
+    options.grid.railStepMm = args.railStep;
     options.bandDeg = args.band;
     options.maxViews = args.maxViews;
     options.exact = args.exact;

@@ -148,8 +148,27 @@ class Analyser {
 public:
     Analyser(const PlanProblem& problem, const PlanOptions& options)
         : problem_(problem), options_(options), station_(*problem.station),
-          rules_(*problem.solid, *problem.station, problem.grid.voxelSize, options.rules)
+          rules_(*problem.solid, *problem.station, problem.grid.voxelSize, options.rules), poseGrid_(options.grid)
     {
+        // A face square to the turntable axis is grazed at one declination for
+        // every rotation; solving every other landmark's grazing rotations at
+        // that declination too puts the crossing of the two curves — a pose
+        // that can serve both — among the candidates.
+        const auto& fixture = station_.fixture;
+        if (fixture.type == FixtureType::RotationDeclination)
+            for (const auto& lm : problem.landmarks) {
+                if (!lm.normal) continue;
+                if (lm.normal->normalized().cross(fixture.rotationAxis.normalized()).norm() > 1e-9) continue;
+                PoseGrid single = options.grid;
+                single.rotationStepDeg = 360.0;
+                for (const auto& p : grazingPoses(fixture, lm.position, *lm.normal, single))
+                    poseGrid_.extraDeclinationsDeg.push_back(p.declinationDeg);
+            }
+        std::sort(poseGrid_.extraDeclinationsDeg.begin(), poseGrid_.extraDeclinationsDeg.end());
+        poseGrid_.extraDeclinationsDeg.erase(
+            std::unique(poseGrid_.extraDeclinationsDeg.begin(), poseGrid_.extraDeclinationsDeg.end(),
+                        [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+            poseGrid_.extraDeclinationsDeg.end());
         grid_ = gridPoses(station_.fixture, options_.grid);
         for (const auto& p : grid_) gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
     }
@@ -161,7 +180,7 @@ public:
     std::vector<FixturePose> candidatesFor(const geometry::FixtureKinematics& fixture, const Vec3& x, const Vec3& n,
                                            bool withGrid) const
     {
-        auto poses = grazingPoses(fixture, x, n, options_.grid);
+        auto poses = grazingPoses(fixture, x, n, poseGrid_);
         if (withGrid)
             for (std::size_t i = 0; i < grid_.size(); ++i)
                 if (std::abs(tangentAngleDeg(gridCentres_[i], x, n)) <= options_.bandDeg) poses.push_back(grid_[i]);
@@ -419,6 +438,7 @@ private:
     const PlanOptions& options_;
     const geometry::Station& station_;
     ViewRules rules_;
+    PoseGrid poseGrid_;
     std::vector<FixturePose> grid_;
     std::vector<Vec3> gridCentres_;
 };

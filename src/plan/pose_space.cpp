@@ -124,7 +124,10 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
     const auto& dr = fixture.declinationRangeDeg;
     const auto declinations = gridValues(dr.min, dr.max, grid.declinationStepDeg);
     const auto rotations = gridValues(rr.min, rr.max, grid.rotationStepDeg);
-    for (double d : declinations) {
+    auto solveAt = declinations;
+    for (double d : grid.extraDeclinationsDeg)
+        if (dr.contains(d)) solveAt.push_back(d);
+    for (double d : solveAt) {
         auto [a, b, e] = coefficients([&](double r) { return fixture.cameraCentreInPart({r, d, 0.0}); });
         bool all = false;
         for (double r : solveTrig(a, b, target - e, rr.min, rr.max, scale, all)) addUnique(poses, {r, d, 0.0});

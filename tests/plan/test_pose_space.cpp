@@ -23,6 +23,15 @@ FixtureKinematics turntable(geometry::Range rotation, geometry::Range declinatio
     return f;
 }
 
+PoseGrid steps(double rotationDeg, double declinationDeg, double railMm)
+{
+    PoseGrid g;
+    g.rotationStepDeg = rotationDeg;
+    g.declinationStepDeg = declinationDeg;
+    g.railStepMm = railMm;
+    return g;
+}
+
 TEST(PoseSpace, GridValuesIncludeBothEnds)
 {
     auto v = gridValues(0, 60, 25);
@@ -35,7 +44,7 @@ TEST(PoseSpace, GridValuesIncludeBothEnds)
 TEST(PoseSpace, FullTurnGridKeepsOneEnd)
 {
     auto f = turntable({-180, 180}, {0, 10});
-    auto poses = gridPoses(f, {90, 10, 5});
+    auto poses = gridPoses(f, steps(90, 10, 5));
     // rotations -180, -90, 0, 90 (180 is -180 again) x declinations 0, 10
     EXPECT_EQ(poses.size(), 8u);
 }
@@ -58,7 +67,7 @@ TEST(PoseSpace, HorizontalTangentPlaneIsOneDeclination)
     // Top face of a 20 mm cube standing on the turntable: plane z = 20. The
     // camera centre is in it where 300 sin δ = 20, at every rotation.
     auto f = turntable({-180, 180}, {0, 60});
-    auto poses = grazingPoses(f, Vec3(0, 0, 20), Vec3::UnitZ(), {10, 5, 5});
+    auto poses = grazingPoses(f, Vec3(0, 0, 20), Vec3::UnitZ(), steps(10, 5, 5));
     ASSERT_FALSE(poses.empty());
     const double expected = geometry::radToDeg(std::asin(20.0 / 300.0));
     for (const auto& p : poses) EXPECT_NEAR(p.declinationDeg, expected, 1e-9) << p.rotationDeg;
@@ -71,7 +80,7 @@ TEST(PoseSpace, VerticalTangentPlaneSolvedExactlyInRotation)
     // (-300 cos δ sin θ ... ); every returned pose must put it in the plane.
     auto f = turntable({-180, 180}, {0, 60});
     const Vec3 x(0, -6, 8), n(0, 1, 0);
-    auto poses = grazingPoses(f, x, n, {5, 5, 5});
+    auto poses = grazingPoses(f, x, n, steps(5, 5, 5));
     ASSERT_GE(poses.size(), 2u * 13u);
     for (const auto& p : poses) {
         EXPECT_NEAR(n.dot(f.cameraCentreInPart(p) - x), 0.0, 1e-8) << p.rotationDeg << " " << p.declinationDeg;
@@ -91,7 +100,7 @@ TEST(PoseSpace, VerticalTangentPlaneSolvedExactlyInRotation)
 TEST(PoseSpace, RangesExcludeGrazingPoses)
 {
     auto f = turntable({-30, 30}, {0, 60});
-    for (const auto& p : grazingPoses(f, Vec3(0, -6, 8), Vec3(0, 1, 0), {5, 5, 5})) {
+    for (const auto& p : grazingPoses(f, Vec3(0, -6, 8), Vec3(0, 1, 0), steps(5, 5, 5))) {
         // Only poses with the camera high above can reach plane y = -6 now.
         EXPECT_TRUE(f.reachable(p));
         EXPECT_NEAR(Vec3(0, 1, 0).dot(f.cameraCentreInPart(p) - Vec3(0, -6, 8)), 0.0, 1e-8);

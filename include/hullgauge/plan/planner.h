@@ -81,7 +81,7 @@ struct PlanOptions {
     /// Type-four layers checked for visibility (3.3.8 paring), >= 1.
     int pareLayers = 1;
     /// Surface points tried when looking for the nearest inspectable point.
-    std::size_t nearestSearchLimit = 200;
+    std::size_t nearestSearchLimit = 500;
 };
 
 enum class LandmarkVerdict {

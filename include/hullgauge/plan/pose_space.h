@@ -29,6 +29,10 @@ struct PoseGrid {
     double rotationStepDeg = 5.0;
     double declinationStepDeg = 5.0;
     double railStepMm = 5.0;
+    /// Declinations solved for exactly besides the grid (grazingPoses only):
+    /// the planner adds the grazing declinations of faces square to the
+    /// turntable axis, so other landmarks' curves are solved where they cross.
+    std::vector<double> extraDeclinationsDeg;
 };
 
 /// Grid values from lo to hi inclusive (hi added when the step does not land on it).

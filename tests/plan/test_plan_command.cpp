@@ -1,0 +1,152 @@
+// `hullgauge plan` end to end (CONTRACTS §5): files in, plan.json and poses
+// out, exit 2 with a sentence the designer can act on when no plan exists.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "hgtest/paths.h"
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/model/csg.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/primitives.h"
+
+namespace hg::plan {
+namespace {
+
+using Eigen::Vector3d;
+
+std::string stationYaml(const std::string& rotation)
+{
+    return R"(camera:
+  image_size: [2448, 2048]
+  K: [[4000, 0, 1224], [0, 4000, 1024], [0, 0, 1]]
+fixture:
+  type: rotation_declination
+  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
+  rotation_axis: [0, 0, 1]
+  declination_axis: [1, 0, 0]
+  rotation_range_deg: )" +
+           rotation + R"(
+  declination_range_deg: [0, 60]
+environment:
+  floor_z_mm: 0.0
+)";
+}
+
+std::string partYaml(const std::string& landmarks)
+{
+    return "part: test-part\nmesh: part.stl\noctree:\n  cube_origin: [-64, -64, -64]\n  cube_size: 128\n  depth: 9\n"
+           "  adjacency_depth: 2\nlandmarks:\n" +
+           landmarks;
+}
+
+std::string plan(const hgtest::TempDir& dir, const std::string& extra = "")
+{
+    const auto bin = hgtest::binaryDir() / "bin" / "hullgauge";
+    return bin.string() + " plan --part " + (dir / "part.yaml").string() + " --station " +
+           (dir / "station.yaml").string() + " --out " + (dir / "plan.json").string() + " --report " +
+           (dir / "plan.md").string() + extra;
+}
+
+TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
+{
+    hgtest::TempDir dir;
+    model::saveMesh(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)), dir / "part.stl");
+    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    hgtest::writeFile(dir / "part.yaml", partYaml(R"(  - {id: top, position: [1, 2, 20], normal: [0, 0, 1], tolerance_mm: 0.5}
+  - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: 0.5}
+  - {id: ny, position: [-1, -10, 12], normal: [0, -1, 0], tolerance_mm: 0.5}
+)"));
+    auto r = hgtest::run(plan(dir, " --exact"));
+    ASSERT_EQ(r.status, 0) << r.err;
+
+    std::ifstream in(dir / "plan.json");
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_TRUE(j["feasible"].get<bool>());
+    const auto station = geometry::loadStation(dir / "station.yaml");
+    ASSERT_FALSE(j["views"].empty());
+    for (const auto& v : j["views"]) {
+        // The camera centre from R and t (−Rᵀt) is the fixture's at that pose.
+        geometry::Mat3 R;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) R(a, b) = v["R"][a][b].get<double>();
+        const geometry::Vec3 t(v["t"][0].get<double>(), v["t"][1].get<double>(), v["t"][2].get<double>());
+        const geometry::FixturePose pose{v["pose"]["rotation_deg"].get<double>(),
+                                         v["pose"]["declination_deg"].get<double>(), 0.0};
+        EXPECT_LT((-(R.transpose() * t) - station.fixture.cameraCentreInPart(pose)).norm(), 1e-6);
+        EXPECT_EQ(v["K"][0][0].get<double>(), 4000.0);
+        EXPECT_FALSE(v["landmarks"].empty());
+        for (const auto& id : v["landmarks"]) EXPECT_LE(v["predicted_med_mm"][id.get<std::string>()], 0.5);
+    }
+    for (const auto& l : j["landmarks"]) {
+        EXPECT_EQ(l["status"], "inspectable");
+        EXPECT_FALSE(l["observed_by"].empty()) << l["id"];
+    }
+    EXPECT_LE(j["statistics"]["views_exact"].get<std::size_t>(), j["views"].size());
+    // The poses file beside plan.json loads as a poses file of this station.
+    const auto poses = geometry::loadPoses(dir / "plan.poses.yaml", &station.fixture);
+    EXPECT_EQ(poses.size(), j["views"].size());
+    std::ifstream md(dir / "plan.md");
+    std::string report((std::istreambuf_iterator<char>(md)), {});
+    EXPECT_NE(report.find("**Feasible.**"), std::string::npos);
+}
+
+TEST(PlanCommand, ConcavityExitsTwoWithTheReason)
+{
+    hgtest::TempDir dir;
+    model::saveMesh(model::difference(model::makeCylinder(Vector3d(0, 0, 0), 15, 20, 48),
+                                      model::makeCylinder(Vector3d(0, 0, 3), 12, 20, 48)),
+                    dir / "part.stl");
+    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    hgtest::writeFile(dir / "part.yaml",
+                      partYaml("  - {id: inner-bottom, position: [0, 0, 3], normal: [0, 0, 1], tolerance_mm: 0.5}\n"));
+    auto r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("inner-bottom"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("concavity"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "plan.poses.yaml"));
+}
+
+TEST(PlanCommand, FixtureRangeAndToleranceProblemsExitTwo)
+{
+    hgtest::TempDir dir;
+    std::vector<Eigen::Vector2d> outline{{-10, 0}, {10, 0}, {10, 12}, {6, 12}, {6, 4}, {-6, 4}, {-6, 12}, {-10, 12}};
+    auto channel = model::makePrism(outline, -20, 20);
+    Eigen::Matrix3d R;
+    R << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+    channel.transform(R, Vector3d::Zero());
+    model::saveMesh(channel, dir / "part.stl");
+    hgtest::writeFile(dir / "station.yaml", stationYaml("[-30, 30]"));
+    hgtest::writeFile(dir / "part.yaml",
+                      partYaml("  - {id: inner-wall, position: [0, -6, 8], normal: [0, 1, 0], tolerance_mm: 0.5}\n"
+                               "  - {id: wall-top, position: [0, -8, 12], normal: [0, 0, 1], tolerance_mm: 0.3}\n"));
+    auto r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("inner-wall is seen against background only from poses the fixture cannot reach"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("wall-top"), std::string::npos) << r.err;
+
+    // 0.3 mm is fine; 0.09 mm is below the 0.106 mm this station resolves at
+    // 300 mm (eq. 5.3.6-3), though not below ΔV = 128 / 2^11 = 0.0625 mm.
+    hgtest::writeFile(dir / "part.yaml",
+                      std::string("part: test-part\nmesh: part.stl\noctree:\n  cube_origin: [-64, -64, -64]\n"
+                                  "  cube_size: 128\n  depth: 11\n  adjacency_depth: 2\nlandmarks:\n") +
+                          "  - {id: wall-top, position: [0, -8, 12], normal: [0, 0, 1], tolerance_mm: 0.09}\n");
+    r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("tolerance 0.09 mm is below the finest discrimination"), std::string::npos) << r.err;
+}
+
+TEST(PlanCommand, MissingFileIsBadInput)
+{
+    hgtest::TempDir dir;
+    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    auto r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 2);
+}
+
+}  // namespace
+}  // namespace hg::plan

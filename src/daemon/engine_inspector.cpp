@@ -1,0 +1,116 @@
+#include "engine_inspector.h"
+
+#include <chrono>
+#include <map>
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/vision/segmentation.h"
+
+namespace hg::daemon {
+namespace {
+
+struct LoadedProgram {
+    std::filesystem::path file;
+    model::PartProgram program;
+    std::unique_ptr<inspect::InspectionMap> map;
+    std::unique_ptr<inspect::Inspector> inspector;
+};
+
+class EngineInspector : public Inspector {
+public:
+    explicit EngineInspector(const station::DaemonConfig& config) : station_(config.station) {}
+
+    bool begin(const station::PartProgramRef& ref, std::string& error) override
+    {
+        views_.clear();
+        current_ = nullptr;
+        auto it = loaded_.find(ref.number);
+        // A reload may point the number at another file: rebuild then, else reuse the map.
+        if (it == loaded_.end() || it->second.file != ref.partFile) {
+            try {
+                auto started = std::chrono::steady_clock::now();
+                LoadedProgram p;
+                p.file = ref.partFile;
+                p.program = model::loadPartProgram(ref.partFile);
+                p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program));
+                p.inspector = std::make_unique<inspect::Inspector>(*p.map);
+                hg::log::category("inspect")->info(
+                    "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+                it = loaded_.insert_or_assign(ref.number, std::move(p)).first;
+            } catch (const std::exception& e) {
+                error = e.what();
+                return false;
+            }
+        }
+        current_ = &it->second;
+        return true;
+    }
+
+    void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) override
+    {
+        views_.push_back({"v" + std::to_string(index), station_.cameraAt(pose), std::move(image)});
+    }
+
+    InspectionOutcome finish() override
+    {
+        InspectionOutcome out;
+        if (!current_) {
+            out.error = "no part program loaded";
+            return out;
+        }
+        try {
+            auto result = current_->inspector->inspect(views_, segmentation_);
+            out.ok = true;
+            out.part = result.part;
+            out.pass = result.pass;
+            out.processingMs = result.totalMs;
+            for (const auto& l : result.landmarks)
+                out.landmarks.push_back(
+                    {l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm});
+            if (!result.pass) out.views = evidence(result);
+        } catch (const std::exception& e) {
+            out.error = e.what();
+        }
+        views_.clear();
+        return out;
+    }
+
+    void cancel() override { views_.clear(); }
+
+private:
+    // The failed part's frames with silhouettes and landmark projections (docs/daemon.md).
+    std::vector<ViewEvidence> evidence(const inspect::InspectionResult& result) const
+    {
+        std::map<std::string, std::string> status;
+        for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
+        std::vector<ViewEvidence> out;
+        for (const auto& v : views_) {
+            ViewEvidence e{v.frame, vision::segment(v.frame, segmentation_), {}};
+            for (const auto& l : current_->program.landmarks)
+                if (auto px = v.camera.project(l.position))
+                    e.landmarks.push_back({cv::Point2d((*px).x(), (*px).y()), l.id, status[l.id]});
+            out.push_back(std::move(e));
+        }
+        return out;
+    }
+
+    geometry::Station station_;
+    vision::SegmentationSettings segmentation_;
+    std::map<std::uint16_t, LoadedProgram> loaded_;
+    LoadedProgram* current_ = nullptr;
+    std::vector<inspect::CapturedView> views_;
+};
+
+}  // namespace
+
+std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config)
+{
+    return std::make_unique<EngineInspector>(config);
+}
+
+}  // namespace hg::daemon

@@ -128,7 +128,7 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
         // (3) Signed crossing of the segment with the line y = Y (same
         // ε-rule: y >= Y is beyond). Going from below to beyond in y, the
         // solid lies towards +z: the line enters it.
-        const bool fromBeyond = from.y() >= Y, toBeyond = to.y() >= Y;
+        const bool fromBeyond = from.x() >= Y, toBeyond = to.x() >= Y;  // (x, y) of a Vec2 are (y, z)
         if (fromBeyond != toBeyond) {
             const double z = crossAt(from, to, 0, Y).y();
             const double w = toBeyond ? 1.0 : -1.0;

@@ -1,0 +1,73 @@
+// hullgauge check-part: exit status and messages of the real program.
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "hgtest/paths.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/primitives.h"
+
+namespace {
+
+using Eigen::Vector3d;
+
+std::string hullgauge() { return (hgtest::binaryDir() / "bin/hullgauge").string(); }
+
+const char* kPart = R"(part: block
+mesh: block.stl
+octree:
+  cube_origin: [-3, -3, -3]
+  cube_size: 16
+  depth: 7
+  adjacency_depth: 3
+landmarks:
+  - id: top
+    position: [5, 5, 10]
+    tolerance_mm: 0.2
+)";
+
+TEST(CheckPartCli, GoodProgramPrintsSummaryAsJson)
+{
+    hgtest::TempDir dir;
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    hgtest::writeFile(dir / "part.yaml", kPart);
+    const auto r = hgtest::run(hullgauge() + " check-part --json --part " + (dir / "part.yaml").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["part"], "block");
+    EXPECT_EQ(j["mesh"]["triangles"], 12);
+    EXPECT_NEAR(j["mesh"]["volume_mm3"].get<double>(), 1000.0, 1e-9);
+    EXPECT_DOUBLE_EQ(j["octree"]["voxel_size_mm"].get<double>(), 0.125);
+    EXPECT_EQ(j["landmarks"][0]["normal"], nlohmann::json::array({0.0, 0.0, 1.0}));
+
+    const auto text = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(text.status, 0);
+    EXPECT_NE(text.out.find("ΔV = 0.125 mm"), std::string::npos) << text.out;
+}
+
+TEST(CheckPartCli, BadInputExitsTwoWithOneLineNamingFileAndField)
+{
+    hgtest::TempDir dir;
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    std::string text = kPart;
+    text.replace(text.find("[5, 5, 10]"), 10, "[5, 5, 15]");  // 5 mm above the top face
+    hgtest::writeFile(dir / "part.yaml", text);
+    auto r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("part.yaml:10: landmarks[0].position: landmark 'top' is 5.000 mm from the surface"),
+              std::string::npos)
+        << r.err;
+
+    // A truncated binary STL: the mesh key and the facet are named.
+    std::filesystem::resize_file(dir / "block.stl", 84 + 3 * 50 + 40);
+    r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("part.yaml:2: mesh: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("block.stl: facet 4: file ends after 40 of 50 bytes"), std::string::npos) << r.err;
+}
+
+}  // namespace

@@ -1,0 +1,246 @@
+// Mesh import/export and the closedness check: every format written by the
+// test and read back, and each kind of broken mesh named precisely.
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <spdlog/sinks/ringbuffer_sink.h>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/primitives.h"
+
+namespace hg::model {
+namespace {
+
+namespace fs = std::filesystem;
+using Eigen::Vector3d;
+
+// Captures the "model" log category while alive.
+class LogCapture {
+public:
+    LogCapture() : sink_(std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(64))
+    {
+        log::category("model")->sinks().push_back(sink_);
+    }
+    ~LogCapture()
+    {
+        auto& sinks = log::category("model")->sinks();
+        sinks.erase(std::remove(sinks.begin(), sinks.end(), sink_), sinks.end());
+    }
+    std::string text() const
+    {
+        std::string all;
+        for (const auto& line : sink_->last_formatted()) all += line;
+        return all;
+    }
+
+private:
+    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink_;
+};
+
+InputError loadError(const fs::path& file)
+{
+    try {
+        loadMesh(file);
+    } catch (const InputError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "loading " << file << " did not throw";
+    return InputError("", "", "");
+}
+
+class MeshFormats : public ::testing::TestWithParam<std::pair<std::string, MeshEncoding>> {};
+
+TEST_P(MeshFormats, BoxRoundTripKeepsGeometry)
+{
+    hgtest::TempDir dir;
+    const auto [name, encoding] = GetParam();
+    // A 3 x 4 x 5 mm box away from the origin: volume 60 mm³, area 94 mm².
+    const TriangleMesh box = makeBox(Vector3d(1, 2, 3), Vector3d(4, 6, 8));
+    saveMesh(box, dir / name, encoding);
+    const TriangleMesh loaded = loadMesh(dir / name);
+    EXPECT_EQ(loaded.triangles.size(), 12u);
+    EXPECT_EQ(loaded.vertices.size(), 8u);  // STL's per-facet vertices merged
+    EXPECT_NEAR(loaded.signedVolume(), 60.0, 1e-9);
+    EXPECT_NEAR(loaded.area(), 94.0, 1e-9);
+    EXPECT_TRUE(loaded.bounds().isApprox(Eigen::AlignedBox3d(Vector3d(1, 2, 3), Vector3d(4, 6, 8))));
+    EXPECT_TRUE(checkMesh(loaded).ok());
+}
+
+INSTANTIATE_TEST_SUITE_P(AllFormats, MeshFormats,
+                         ::testing::Values(std::make_pair("b.stl", MeshEncoding::Binary),
+                                           std::make_pair("a.stl", MeshEncoding::Ascii),
+                                           std::make_pair("m.obj", MeshEncoding::Ascii),
+                                           std::make_pair("b.ply", MeshEncoding::Binary),
+                                           std::make_pair("a.ply", MeshEncoding::Ascii),
+                                           std::make_pair("m.off", MeshEncoding::Ascii)));
+
+TEST(MeshIo, HandWrittenAsciiStlTetrahedron)
+{
+    hgtest::TempDir dir;
+    // Unit corner tetrahedron, facets listed outward: volume 1/6.
+    const std::string facet = "facet normal 0 0 0\nouter loop\nvertex {}\nvertex {}\nvertex {}\nendloop\nendfacet\n";
+    auto f = [&](const char* a, const char* b, const char* c) {
+        std::string s = facet;
+        for (const char* v : {a, b, c}) s.replace(s.find("{}"), 2, v);
+        return s;
+    };
+    const std::string text = "solid tet\n" + f("0 0 0", "0 1 0", "1 0 0") + f("0 0 0", "1 0 0", "0 0 1") +
+                             f("0 0 0", "0 0 1", "0 1 0") + f("1 0 0", "0 1 0", "0 0 1") + "endsolid tet\n";
+    const TriangleMesh m = loadMesh(hgtest::writeFile(dir / "tet.stl", text));
+    EXPECT_EQ(m.triangles.size(), 4u);
+    EXPECT_NEAR(m.signedVolume(), 1.0 / 6.0, 1e-12);
+}
+
+TEST(MeshIo, ObjQuadsAreTriangulated)
+{
+    hgtest::TempDir dir;
+    // A 2 mm cube written as six quads (counter-clockwise from outside).
+    const std::string obj = "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0 0 2\nv 2 0 2\nv 2 2 2\nv 0 2 2\n"
+                            "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    const TriangleMesh m = loadMesh(hgtest::writeFile(dir / "cube.obj", obj));
+    EXPECT_EQ(m.triangles.size(), 12u);
+    EXPECT_NEAR(m.signedVolume(), 8.0, 1e-12);
+}
+
+TEST(MeshIo, TruncatedBinaryStlNamesFacetAndBytes)
+{
+    hgtest::TempDir dir;
+    saveMesh(makeSphere(Vector3d::Zero(), 5.0, 16, 8), dir / "s.stl");  // 16*2 + 16*6*2 = 224 facets
+    const auto size = fs::file_size(dir / "s.stl");
+    ASSERT_EQ(size, 84u + 50u * 224u);
+    // Keep the header and 5 whole facets plus 40 bytes of the sixth.
+    fs::resize_file(dir / "s.stl", 84 + 5 * 50 + 40);
+    const InputError e = loadError(dir / "s.stl");
+    EXPECT_EQ(e.field(), "facet 6");
+    EXPECT_NE(std::string(e.what()).find("s.stl: facet 6: file ends after 40 of 50 bytes"), std::string::npos)
+        << e.what();
+    fs::resize_file(dir / "s.stl", 84 + 7 * 50);
+    EXPECT_NE(std::string(loadError(dir / "s.stl").what()).find("facet 8: file ends after 7 of the 224 facets"),
+              std::string::npos);
+    fs::resize_file(dir / "s.stl", 30);
+    EXPECT_EQ(loadError(dir / "s.stl").field(), "header");
+}
+
+TEST(MeshIo, StlWithHoleNamesOpenEdges)
+{
+    hgtest::TempDir dir;
+    TriangleMesh box = makeBox(Vector3d::Zero(), Vector3d(1, 1, 1));
+    box.triangles.pop_back();  // one triangle missing: its 3 edges are open
+    saveMesh(box, dir / "hole.stl");
+    const InputError e = loadError(dir / "hole.stl");
+    EXPECT_NE(std::string(e.what()).find("hole.stl: mesh: not closed: 3 open edges"), std::string::npos) << e.what();
+    const MeshCheck c = checkMesh(box);
+    EXPECT_EQ(c.openEdges, 3u);
+    ASSERT_TRUE(c.firstOpenEdge);
+    // The open edge lies on the removed triangle's face x = 1.
+    EXPECT_DOUBLE_EQ((*c.firstOpenEdge)[0].x(), 1.0);
+    EXPECT_DOUBLE_EQ((*c.firstOpenEdge)[1].x(), 1.0);
+}
+
+TEST(MeshIo, BoxesSharingAnEdgeAreNonManifold)
+{
+    hgtest::TempDir dir;
+    TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
+    m.append(makeBox(Vector3d(1, 1, 0), Vector3d(2, 2, 1)));  // shares the edge x = y = 1
+    saveMesh(m, dir / "edge.stl");
+    const std::string what = loadError(dir / "edge.stl").what();
+    EXPECT_NE(what.find("not a 2-manifold: 1 edge shared by more than two triangles"), std::string::npos) << what;
+    EXPECT_NE(what.find("(1.0000, 1.0000, 0.0000)"), std::string::npos) << what;
+}
+
+TEST(MeshIo, BoxesTouchingAtACornerHaveANonManifoldVertex)
+{
+    hgtest::TempDir dir;
+    TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
+    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(2, 2, 2)));
+    saveMesh(m, dir / "corner.ply");
+    const std::string what = loadError(dir / "corner.ply").what();
+    EXPECT_NE(what.find("1 vertex where separate sheets touch, the first at (1.0000, 1.0000, 1.0000)"),
+              std::string::npos)
+        << what;
+}
+
+TEST(MeshIo, InvertedMeshIsFlippedWithAWarning)
+{
+    hgtest::TempDir dir;
+    TriangleMesh box = makeBox(Vector3d::Zero(), Vector3d(2, 3, 4));
+    box.flip();
+    EXPECT_TRUE(checkMesh(box).inverted());
+    EXPECT_NE(checkMesh(box).problem().find("inverted orientation"), std::string::npos);
+    saveMesh(box, dir / "inv.stl");
+    LogCapture log;
+    const TriangleMesh m = loadMesh(dir / "inv.stl");
+    EXPECT_NEAR(m.signedVolume(), 24.0, 1e-12);
+    EXPECT_NE(log.text().find("oriented inward"), std::string::npos) << log.text();
+}
+
+TEST(MeshIo, InconsistentTriangleIsReorientedWithAWarning)
+{
+    hgtest::TempDir dir;
+    TriangleMesh box = makeBox(Vector3d::Zero(), Vector3d(2, 3, 4));
+    std::swap(box.triangles[5][1], box.triangles[5][2]);
+    const MeshCheck c = checkMesh(box);
+    EXPECT_EQ(c.inconsistentEdges, 3u);
+    EXPECT_FALSE(c.ok());
+    saveMesh(box, dir / "mixed.obj");
+    LogCapture log;
+    const TriangleMesh m = loadMesh(dir / "mixed.obj");
+    EXPECT_NEAR(m.signedVolume(), 24.0, 1e-12);
+    EXPECT_NE(log.text().find("inconsistent orientation"), std::string::npos) << log.text();
+}
+
+TEST(MeshIo, SelfIntersectingMeshIsRefused)
+{
+    hgtest::TempDir dir;
+    TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2));
+    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));  // two overlapping closed shells
+    saveMesh(m, dir / "overlap.stl");
+    EXPECT_NE(std::string(loadError(dir / "overlap.stl").what()).find("intersects itself"), std::string::npos);
+}
+
+TEST(MeshIo, BadFilesAreNamed)
+{
+    hgtest::TempDir dir;
+    EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "m.xyz", "1 2 3\n")).what())
+                  .find("m.xyz: mesh: unknown mesh format '.xyz'"),
+              std::string::npos);
+    EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "e.stl", "")).what()).find("e.stl: mesh: the file is empty"),
+              std::string::npos);
+    EXPECT_NE(std::string(loadError(dir / "missing.obj").what()).find("no such file"), std::string::npos);
+    EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "p.step", "ISO-10303-21;")).what()).find("STEP"),
+              std::string::npos);
+}
+
+TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
+{
+    for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),
+                                  makeCylinder(Vector3d::Zero(), 3.0, 5.0, 24)}) {
+        const MeshCheck c = checkMesh(m);
+        EXPECT_TRUE(c.ok()) << c.problem();
+        EXPECT_EQ(c.problem(), "");
+    }
+}
+
+TEST(MeshCheckTest, RequireSolidMeshFlipsOnlyInvertedMeshes)
+{
+    TriangleMesh box = makeBox(Vector3d::Zero(), Vector3d(1, 1, 1));
+    box.flip();
+    requireSolidMesh(box, "box");
+    EXPECT_NEAR(box.signedVolume(), 1.0, 1e-15);
+    box.triangles.pop_back();
+    try {
+        requireSolidMesh(box, "box");
+        FAIL() << "an open mesh was accepted";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), "box");
+        EXPECT_EQ(e.field(), "mesh");
+    }
+}
+
+}  // namespace
+}  // namespace hg::model

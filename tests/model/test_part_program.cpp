@@ -1,0 +1,227 @@
+// Part program loading (CONTRACTS §1): the fields, the derived cube and
+// normals, and a precise error (file, line, field) for each kind of mistake.
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/model/primitives.h"
+
+namespace hg::model {
+namespace {
+
+using Eigen::Vector3d;
+
+// A 10 x 10 x 10 mm block at the origin, beside the YAML that names it.
+class PartProgramTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        std::filesystem::create_directories(dir / "meshes");
+        saveMesh(makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "meshes/block.stl");
+    }
+
+    std::filesystem::path write(const std::string& yaml) { return hgtest::writeFile(dir / "part.yaml", yaml); }
+
+    InputError error(const std::string& yaml)
+    {
+        try {
+            loadPartProgram(write(yaml));
+        } catch (const InputError& e) {
+            return e;
+        }
+        ADD_FAILURE() << "no error for:\n" << yaml;
+        return InputError("", "", "");
+    }
+
+    hgtest::TempDir dir;
+};
+
+const std::string kGood = R"(part: block-1
+mesh: meshes/block.stl
+octree:
+  depth: 6
+  adjacency_depth: 3
+landmarks:
+  - id: face
+    position: [10, 5, 5]
+    tolerance_mm: 0.2
+  - id: corner
+    position: [10, 10, 10]
+    tolerance_mm: 0.3
+    best_views:
+      - any_of:
+          - {rotation_deg: 0, declination_deg: 30}
+          - {rotation_deg: 180, declination_deg: 30}
+      - {rotation_deg: 90}
+  - id: edge
+    position: [0, 0, 5]
+    normal: [-1, 0, 0]
+    tolerance_mm: 0.2
+parameters:
+  - id: width
+    kind: distance
+    landmarks: [face, edge]
+    nominal_mm: 10
+    tolerance_mm: 0.1
+  - id: triangle
+    kind: area
+    landmarks: [face, corner, edge]
+    nominal_mm: 70.7
+    tolerance_mm: 1
+)";
+
+TEST_F(PartProgramTest, LoadsEveryField)
+{
+    const PartProgram p = loadPartProgram(write(kGood));
+    EXPECT_EQ(p.part, "block-1");
+    EXPECT_EQ(p.meshFile, dir / "meshes/block.stl");
+    ASSERT_TRUE(p.solid);
+    EXPECT_NEAR(p.solid->mesh().signedVolume(), 1000.0, 1e-9);
+
+    // Default cube: 4 voxels (adjacency 3 + 1) of margin around the 10 mm part
+    // at depth 6: S = 10 / (1 - 8/64) = 80/7 mm, centred on (5, 5, 5).
+    const double S = 80.0 / 7.0;
+    EXPECT_TRUE(p.octree.cubeFromMesh);
+    EXPECT_NEAR(p.octree.cubeSize, S, 1e-12);
+    EXPECT_TRUE(p.octree.cubeOrigin.isApprox(Vector3d::Constant(5.0 - S / 2), 1e-12));
+    EXPECT_NEAR(p.octree.voxelSize(), S / 64.0, 1e-15);
+    EXPECT_NEAR(p.octree.cubeOrigin.x() + 4 * p.octree.voxelSize(), 0.0, 1e-12);  // margin is exactly 4 voxels
+    EXPECT_EQ(p.octree.depth, 6);
+    EXPECT_EQ(p.octree.adjacencyDepth, 3);
+    EXPECT_NEAR(p.surfaceToleranceMm(), S / 64.0 / 4.0, 1e-15);
+
+    ASSERT_EQ(p.landmarks.size(), 3u);
+    const Landmark& face = p.landmarks[0];
+    EXPECT_TRUE(face.normalFromMesh);
+    EXPECT_TRUE(face.normal.isApprox(Vector3d(1, 0, 0), 1e-12));
+    EXPECT_DOUBLE_EQ(face.toleranceMm, 0.2);
+    const Landmark& corner = *p.findLandmark("corner");
+    EXPECT_TRUE(corner.normal.isApprox(Vector3d(1, 1, 1).normalized(), 1e-12));  // corner: the bisector
+    ASSERT_EQ(corner.bestViews.size(), 2u);
+    ASSERT_EQ(corner.bestViews[0].size(), 2u);
+    EXPECT_DOUBLE_EQ(corner.bestViews[0][1].rotationDeg, 180.0);
+    EXPECT_DOUBLE_EQ(corner.bestViews[0][1].declinationDeg, 30.0);
+    ASSERT_EQ(corner.bestViews[1].size(), 1u);
+    EXPECT_DOUBLE_EQ(corner.bestViews[1][0].rotationDeg, 90.0);
+    EXPECT_EQ(p.bestViewFixture, geometry::FixtureType::RotationDeclination);
+    const Landmark& edge = *p.findLandmark("edge");
+    EXPECT_FALSE(edge.normalFromMesh);
+    EXPECT_TRUE(edge.normal.isApprox(Vector3d(-1, 0, 0), 1e-15));
+    EXPECT_EQ(p.findLandmark("nope"), nullptr);
+
+    ASSERT_EQ(p.parameters.size(), 2u);
+    EXPECT_EQ(p.parameters[0].kind, ParameterKind::Distance);
+    EXPECT_EQ(p.parameters[0].landmarkIndices, (std::vector<std::size_t>{0, 2}));
+    EXPECT_EQ(p.parameters[1].kind, ParameterKind::Area);
+}
+
+TEST_F(PartProgramTest, GivenCubeIsKept)
+{
+    std::string yaml = kGood;
+    yaml.replace(yaml.find("  depth: 6"), 9, "  cube_origin: [-3, -3, -3]\n  cube_size: 16\n  depth: 7");
+    const PartProgram p = loadPartProgram(write(yaml));
+    EXPECT_FALSE(p.octree.cubeFromMesh);
+    EXPECT_DOUBLE_EQ(p.octree.voxelSize(), 0.125);  // 16 / 2^7, eq. 4.5.1-1
+    EXPECT_TRUE(p.octree.cubeOrigin.isApprox(Vector3d(-3, -3, -3)));
+    EXPECT_DOUBLE_EQ(p.octree.maxMeasurableErrorMm(), 0.375);
+}
+
+TEST_F(PartProgramTest, WrongTypeNamesLineAndField)
+{
+    std::string yaml = kGood;
+    yaml.replace(yaml.find("depth: 6"), 8, "depth: nine");
+    const InputError e = error(yaml);
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.field(), "octree.depth");
+    EXPECT_NE(std::string(e.what()).find("part.yaml:4: octree.depth: expected an integer"), std::string::npos)
+        << e.what();
+}
+
+TEST_F(PartProgramTest, LandmarkOffTheSurfaceNamesIdAndDistance)
+{
+    std::string yaml = kGood;
+    yaml.replace(yaml.find("position: [0, 0, 5]"), 19, "position: [-5, 5, 5]");
+    const InputError e = error(yaml);
+    EXPECT_EQ(e.field(), "landmarks[2].position");
+    EXPECT_EQ(e.line(), 19);
+    EXPECT_NE(std::string(e.what()).find(
+                  "part.yaml:19: landmarks[2].position: landmark 'edge' is 5.000 mm from the surface (nearest point "
+                  "(0.0000, 5.0000, 5.0000)"),
+              std::string::npos)
+        << e.what();
+}
+
+TEST_F(PartProgramTest, LandmarkJustWithinTheSurfaceToleranceIsAccepted)
+{
+    // Tolerance here is ΔV/4 = 80/7/64/4 ≈ 0.0446 mm.
+    std::string yaml = kGood;
+    yaml.replace(yaml.find("position: [10, 5, 5]"), 20, "position: [10.04, 5, 5]");
+    const PartProgram p = loadPartProgram(write(yaml));
+    EXPECT_NEAR(p.landmarks[0].distanceToSurfaceMm, 0.04, 1e-12);
+    yaml.replace(yaml.find("position: [10.04, 5, 5]"), 23, "position: [10.05, 5, 5]");
+    EXPECT_NE(std::string(error(yaml).what()).find("is 0.050 mm from the surface"), std::string::npos);
+}
+
+struct Mistake {
+    std::string from, to, expected;
+};
+
+TEST_F(PartProgramTest, EachMistakeIsNamed)
+{
+    const std::vector<Mistake> mistakes = {
+        {"tolerance_mm: 0.2\n  - id: corner", "tolerence_mm: 0.2\n  - id: corner",
+         "landmarks[0].tolerence_mm: unknown key 'tolerence_mm'"},
+        {"id: corner", "id: face", "landmarks[1].id: duplicate landmark id 'face'"},
+        {"tolerance_mm: 0.3", "tolerance_mm: 0", "landmarks[1].tolerance_mm: expected a positive number"},
+        {"depth: 6", "depth: 21", "octree.depth: value 21 is outside [1, 20]"},
+        {"adjacency_depth: 3", "adjacency_depth: 0", "octree.adjacency_depth: value 0 is outside"},
+        {"depth: 6", "depth: 3", "octree.depth: depth 3 gives 8 voxels per edge, too few"},
+        {"landmarks: [face, edge]", "landmarks: [face, nose]", "parameters[0].landmarks[1]: unknown landmark 'nose'"},
+        {"landmarks: [face, edge]", "landmarks: [face, edge, corner]",
+         "parameters[0].landmarks: a distance needs exactly 2 landmarks, found 3"},
+        {"landmarks: [face, corner, edge]", "landmarks: [face, corner]",
+         "parameters[1].landmarks: a area needs at least 3 landmarks"},
+        {"kind: area", "kind: volume", "parameters[1].kind: unknown kind 'volume'"},
+        {"normal: [-1, 0, 0]", "normal: [1, 0, 0]", "landmarks[2].normal: normal (1.0000, 0.0000, 0.0000) of landmark "
+                                                     "'edge' points into the part"},
+        {"normal: [-1, 0, 0]", "normal: [0, 0, 0]", "landmarks[2].normal: normal has zero length"},
+        {"- {rotation_deg: 90}", "- {rail_mm: 90}", "best views mix rail poses and rotation/declination poses"},
+        {"- {rotation_deg: 90}", "- {rotation_deg: 90, rail_mm: 3}", "either rail_mm or rotation_deg"},
+        {"mesh: meshes/block.stl", "mesh: meshes/none.stl", "part.yaml:2: mesh: "},
+        {"mesh: meshes/block.stl", "mesh: [a, b]", "mesh: expected a string"},
+        {"part: block-1\n", "", "missing required key 'part'"},
+        {"  depth: 6\n", "  cube_origin: [0, 0, 0]\n  depth: 6\n", "octree.cube_origin: cube_origin needs cube_size"},
+        {"  depth: 6\n", "  cube_origin: [2, 0, 0]\n  cube_size: 16\n  depth: 6\n",
+         "octree.cube_origin: the part (bounding box"},
+    };
+    for (const auto& m : mistakes) {
+        std::string yaml = kGood;
+        const auto at = yaml.find(m.from);
+        ASSERT_NE(at, std::string::npos) << m.from;
+        yaml.replace(at, m.from.size(), m.to);
+        const InputError e = error(yaml);
+        EXPECT_NE(std::string(e.what()).find(m.expected), std::string::npos)
+            << "expected '" << m.expected << "' in: " << e.what();
+        EXPECT_NE(std::string(e.what()).find("part.yaml:"), std::string::npos) << e.what();
+        EXPECT_TRUE(e.line().has_value()) << e.what();
+    }
+}
+
+TEST_F(PartProgramTest, BrokenMeshIsReportedAtTheMeshKey)
+{
+    TriangleMesh open = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));
+    open.triangles.pop_back();
+    saveMesh(open, dir / "meshes/block.stl");
+    const InputError e = error(kGood);
+    EXPECT_EQ(e.field(), "mesh");
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_NE(std::string(e.what()).find("block.stl: mesh: not closed: 3 open edges"), std::string::npos) << e.what();
+}
+
+}  // namespace
+}  // namespace hg::model

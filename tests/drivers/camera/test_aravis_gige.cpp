@@ -137,7 +137,9 @@ TEST_F(AravisGige, HundredTriggeredFramesEqualTheServedImagesInOrder)
         if (first < 0) first = match;
         // One trigger, one exposure: the simulator serves its images in turn.
         EXPECT_EQ(match, (first + k) % kImages) << "frame " << k;
-        if (k > 0) EXPECT_GT(frame.frameId, lastId);
+        if (k > 0) {
+            EXPECT_GT(frame.frameId, lastId);
+        }
         lastId = frame.frameId;
     }
     EXPECT_TRUE(cam->deactivate());
@@ -189,7 +191,9 @@ TEST_F(AravisGige, FreeRunDeliversFreshServedFrames)
         auto frame = cam->grab(1000ms);
         ASSERT_TRUE(frame.ok()) << frame.message;
         EXPECT_GE(matchingImage(frame.image), 0);
-        if (k > 0) EXPECT_GT(frame.frameId, lastId);
+        if (k > 0) {
+            EXPECT_GT(frame.frameId, lastId);
+        }
         lastId = frame.frameId;
     }
 }

@@ -239,11 +239,9 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
         // --- The traversal of 3.3.8 -------------------------------------------
         std::unordered_set<std::int32_t> visited;
         std::vector<std::int32_t> wrong;
-        int undecided = 0;
         auto visit = [&](std::int32_t n) {
             const VoxelLabel lab = memo.label(n, counter);
             visited.insert(n);
-            if (lab == VoxelLabel::Undecided) ++undecided;
             if (memo.wrong(n, lab)) wrong.push_back(n);
             return lab;
         };
@@ -353,8 +351,8 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
                 lr.status = LandmarkStatus::Ok;
             }
         }
-        if (frontAtLimit && lr.reason.empty()) lr.reason = "wrongly reconstructed voxels reach the outermost layer";
-        (void)undecided;
+        if (frontAtLimit && lr.status != LandmarkStatus::Ok && lr.reason.empty())
+            lr.reason = "wrongly reconstructed voxels reach the outermost adjacency layer";
         if (lr.status != LandmarkStatus::Ok && options_.earlyExit) stopped = true;
         result.landmarks.push_back(std::move(lr));
     }

@@ -3,6 +3,7 @@
 #include "hullgauge/common/log.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>

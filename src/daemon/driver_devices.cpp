@@ -5,6 +5,7 @@
 #include "hullgauge/drivers/camera.h"
 #include "hullgauge/drivers/fixture.h"
 #include "hullgauge/drivers/lamps.h"
+#include "hullgauge/model/mesh_io.h"
 
 namespace hg::daemon {
 namespace {
@@ -42,8 +43,27 @@ public:
     {
         const auto& doc = *config.station.document;
         fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture);
-        camera_ = drivers::makeCamera(doc);
         lamps_ = drivers::makeLamps(doc[config.lampsSection]);
+        auto cameraDriver = doc["camera"]["driver"];
+        if (cameraDriver.has("backend") && cameraDriver["backend"].asString() == "sim") {
+            // The simulated line: the camera renders the selected part at the fixture's actual pose.
+            drivers::SimCameraInputs inputs;
+            inputs.station = config.station;
+            for (const auto& [name, file] : config.simulatedParts) inputs.parts.emplace_back(name, model::loadMesh(file));
+            if (inputs.parts.empty())
+                throw InputError(config.file.string(), "simulation.parts",
+                                 "the simulated camera needs the parts it can render (nominal and variants)");
+            inputs.poseSource = [this]() -> std::optional<geometry::FixturePose> {
+                drivers::FixtureStatus status;
+                if (!fixture_->status(status).ok() || status.busy || status.fault) return std::nullopt;
+                return status.position;
+            };
+            auto sim = drivers::makeSimCamera(cameraDriver, std::move(inputs));
+            simCamera_ = sim.get();
+            camera_ = std::move(sim);
+        } else {
+            camera_ = drivers::makeCamera(doc);
+        }
     }
 
     StepResult start() override
@@ -122,6 +142,13 @@ public:
         return start();
     }
 
+    std::vector<std::string> simulatedParts() const override
+    {
+        return simCamera_ ? simCamera_->partNames() : std::vector<std::string>{};
+    }
+    std::string simulatedPart() const override { return simCamera_ ? simCamera_->part() : std::string(); }
+    bool selectSimulatedPart(const std::string& name) override { return simCamera_ && simCamera_->setPart(name).ok(); }
+
     void showLamps(LampPattern pattern) override
     {
         if (auto r = lamps_->show(indication(pattern)); !r.ok())
@@ -140,6 +167,7 @@ private:
 
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;
+    drivers::SimCamera* simCamera_ = nullptr;  ///< camera_ when it is the simulated one
     std::unique_ptr<drivers::Lamps> lamps_;
 };
 

@@ -161,7 +161,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance",
-                        "watchdog"});
+                        "watchdog", "simulation"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -198,6 +198,13 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     if (auto n = root.optional("watchdog")) {
         n->allowOnlyKeys({"max_cycle_s"});
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);
+    }
+    if (auto n = root.optional("simulation")) {
+        n->allowOnlyKeys({"parts"});
+        auto parts = (*n)["parts"];
+        if (!parts.isMap()) parts.fail("expected a map of part names to mesh files (nominal and defect variants)");
+        for (const auto& name : parts.keys()) cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
+        if (parts.keys().empty() || !parts.has("nominal")) parts.fail("the simulated parts must include 'nominal'");
     }
     return cfg;
 }

@@ -154,6 +154,22 @@ TEST(DaemonConfig, ViewPlanIsCheckedAgainstTheFixture)
     EXPECT_NE(message.find("declination"), std::string::npos) << message;
 }
 
+TEST(DaemonConfig, SimulatedPartsNeedNominalAndExistingMeshes)
+{
+    Fixture f;
+    hgtest::writeFile(f.dir / "nominal.stl", "solid n\nendsolid n\n");
+    auto cfg = loadDaemonConfig(hgtest::writeFile(
+        f.dir / "hullgauged.yaml", std::string(kDaemon) + "simulation: {parts: {nominal: nominal.stl, dented: nominal.stl}}\n"));
+    ASSERT_EQ(cfg.simulatedParts.size(), 2u);
+    EXPECT_EQ(cfg.simulatedParts[1].first, "dented");
+    EXPECT_EQ(cfg.simulatedParts[0].second, f.dir.path() / "nominal.stl");
+    auto noNominal = f.error(std::string(kDaemon) + "simulation: {parts: {dented: nominal.stl}}\n");
+    EXPECT_NE(noNominal.find("simulation.parts"), std::string::npos) << noNominal;
+    EXPECT_NE(noNominal.find("nominal"), std::string::npos) << noNominal;
+    auto missing = f.error(std::string(kDaemon) + "simulation: {parts: {nominal: gone.stl}}\n");
+    EXPECT_NE(missing.find("simulation.parts.nominal"), std::string::npos) << missing;
+}
+
 TEST(DaemonConfig, Ipv4Networks)
 {
     auto n = parseIpv4Network("192.168.10.0/24");

@@ -98,6 +98,10 @@ struct DaemonConfig {
     SequencerConfig sequencer;
     MaintenanceConfig maintenance;
     WatchdogConfig watchdog;
+    /// Simulated line only (`camera.driver.backend: sim`): the parts the
+    /// simulated camera can render, by name ("nominal" first, then defect
+    /// variants), as mesh files. Empty on real hardware.
+    std::vector<std::pair<std::string, std::filesystem::path>> simulatedParts;
 };
 
 /// Loads and validates a daemon configuration. Relative paths are relative to

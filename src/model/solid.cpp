@@ -154,13 +154,21 @@ InsideFraction Solid::insideFraction(const Eigen::AlignedBox3d& box, double /*to
     const Eigen::Vector3d lo = box.min(), hi = box.max();
     // Triangles meeting the box, or the corner line {x = hi.x, y = hi.y, z <= hi.z}.
     const double below = std::min(lo.z(), impl_->mesh.bounds().min().z()) - 1.0;
-    auto candidates = impl_->trianglesMeeting(toCuboid(box));
+    // The closed form is exact for any superset of the triangles that meet
+    // the box and the corner line. The queries are padded far beyond
+    // rounding (1e-9 of the coordinates) so that a triangle whose rounded
+    // cross-section point lands on the corner line is never left out: its
+    // crossing must meet the opposite crossing of its neighbour to cancel.
+    const double pad = 1e-9 * (impl_->scale + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
+    const Eigen::Vector3d padding = Eigen::Vector3d::Constant(pad);
+    auto candidates = impl_->trianglesMeeting(toCuboid(Eigen::AlignedBox3d(lo - padding, hi + padding)));
     if (candidates.empty()) {
         const bool inside = (*impl_->side)(toPoint(box.center())) == CGAL::ON_BOUNDED_SIDE;
         f.lower = f.upper = f.estimate = inside ? 1.0 : 0.0;
         return f;
     }
-    auto line = impl_->trianglesMeeting(K::Segment_3(Point(hi.x(), hi.y(), below), Point(hi.x(), hi.y(), hi.z())));
+    auto line = impl_->trianglesMeeting(
+        K::Iso_cuboid_3(Point(hi.x() - pad, hi.y() - pad, below), Point(hi.x() + pad, hi.y() + pad, hi.z() + pad)));
     candidates.insert(candidates.end(), line.begin(), line.end());
     std::sort(candidates.begin(), candidates.end());
     candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());

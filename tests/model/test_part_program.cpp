@@ -123,7 +123,7 @@ TEST_F(PartProgramTest, LoadsEveryField)
 TEST_F(PartProgramTest, GivenCubeIsKept)
 {
     std::string yaml = kGood;
-    yaml.replace(yaml.find("  depth: 6"), 9, "  cube_origin: [-3, -3, -3]\n  cube_size: 16\n  depth: 7");
+    yaml.replace(yaml.find("  depth: 6"), 10, "  cube_origin: [-3, -3, -3]\n  cube_size: 16\n  depth: 7");
     const PartProgram p = loadPartProgram(write(yaml));
     EXPECT_FALSE(p.octree.cubeFromMesh);
     EXPECT_DOUBLE_EQ(p.octree.voxelSize(), 0.125);  // 16 / 2^7, eq. 4.5.1-1

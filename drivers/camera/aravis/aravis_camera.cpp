@@ -168,8 +168,14 @@ protected:
             if (arv_device_read_register(arv_camera_get_device(camera_), kBootstrapCcpRegister, &value, &error)) {
                 suspect_ = false;
             } else {
-                logger()->warn("camera {}: not answering ({}); will reconnect", config_.id(), takeError(error));
+                const std::string why = takeError(error);
+                logger()->warn("camera {}: not answering ({}); will reconnect", config_.id(), why);
                 lost_ = true;
+                // The reconnect waits for the next grab: one grab never pays for probe and reopen both.
+                backoff_ = config_.reconnectMin;
+                nextAttempt_ = Clock::now() + backoff_;
+                return Frame::failed(FrameStatus::Error, "camera " + config_.id() + ": not answering (" + why +
+                                                             "); reconnecting from the next grab");
             }
         }
         if (lost_) {
@@ -331,9 +337,19 @@ private:
                                    " refused: " + takeError(error));
 
         int x = s.roi.x, y = s.roi.y, w = s.roi.width, h = s.roi.height;
+        int sensorW = 0, sensorH = 0;
+        arv_camera_get_sensor_size(camera_, &sensorW, &sensorH, &error);
+        if (error) return Status::failure(where + "cannot read the sensor size: " + takeError(error));
         if (s.roi.isFullSensor()) {
-            arv_camera_get_sensor_size(camera_, &w, &h, &error);
+            w = sensorW;
+            h = sensorH;
             x = y = 0;
+        } else if (x + w > sensorW || y + h > sensorH) {
+            // Not every device checks offset + size against the sensor: refuse here.
+            std::ostringstream m;
+            m << where << "ROI [" << x << ", " << y << ", " << w << ", " << h << "] exceeds the " << sensorW << "x"
+              << sensorH << " sensor";
+            return Status::failure(m.str());
         }
         // Offsets first to zero so a larger width fits, then the region.
         if (!error && arv_camera_is_region_offset_available(camera_, nullptr)) {

@@ -47,7 +47,9 @@ TEST(CameraConfig, MissingDriverSectionIsNamed)
         (void)hg::drivers::makeCamera(hg::ConfigNode::parse("camera:\n  image_size: [640, 480]\n", "s.yaml"));
         FAIL() << "accepted a station without camera.driver";
     } catch (const hg::InputError& e) {
-        EXPECT_EQ(e.field(), "camera.driver");
+        // The missing key is named in the problem of its parent map.
+        EXPECT_EQ(e.field(), "camera");
+        EXPECT_NE(e.problem().find("driver"), std::string::npos) << e.what();
     }
 }
 
@@ -73,12 +75,14 @@ TEST(CameraConfig, RejectsBadValuesNamingEachKey)
     EXPECT_EQ(errorOf(a + "    reconnect_backoff_ms: [500, 100]\n").field(), "camera.driver.reconnect_backoff_ms");
     EXPECT_EQ(errorOf(a + "    features: [ExposureAuto]\n").field(), "camera.driver.features");
     // A typo is caught, not ignored.
-    EXPECT_EQ(errorOf(a + "    exposure_usec: 100\n").field(), "camera.driver");
+    EXPECT_EQ(errorOf(a + "    exposure_usec: 100\n").field(), "camera.driver.exposure_usec");
 }
 
 TEST(CameraConfig, V4l2NeedsADeviceAndRefusesUnitlessGain)
 {
-    EXPECT_EQ(errorOf("    backend: v4l2\n").field(), "camera.driver.device");
+    auto noDevice = errorOf("    backend: v4l2\n");
+    EXPECT_EQ(noDevice.field(), "camera.driver");
+    EXPECT_NE(noDevice.problem().find("device"), std::string::npos) << noDevice.what();
     EXPECT_EQ(errorOf("    backend: v4l2\n    device: /dev/video0\n    gain_db: 3\n").field(),
               "camera.driver.gain_db");
 }

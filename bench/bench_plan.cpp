@@ -1,13 +1,12 @@
 // View planning: time for 16, 64 and 256 landmarks on a stamp-like part
 // (target < 1 s for 100), and the greedy view count against the integer
 // program's optimum on instances of 5 to 30 landmarks.
-#include <benchmark/benchmark.h>
-
-#include <random>
-
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
+
+#include <benchmark/benchmark.h>
+#include <random>
 
 namespace {
 
@@ -51,12 +50,30 @@ std::vector<plan::PlanLandmark> landmarks(std::size_t n, unsigned seed)
         const int face = static_cast<int>(rng() % 6);
         const double a = u(rng), b = u(rng);
         switch (face) {
-        case 0: l.position = {12, 11 * a, 34 + 3.5 * b}; l.normal = Vector3d::UnitX(); break;
-        case 1: l.position = {-12, 11 * a, 34 + 3.5 * b}; l.normal = -Vector3d::UnitX(); break;
-        case 2: l.position = {11 * a, 12, 34 + 3.5 * b}; l.normal = Vector3d::UnitY(); break;
-        case 3: l.position = {11 * a, -12, 34 + 3.5 * b}; l.normal = -Vector3d::UnitY(); break;
-        case 4: l.position = {5, 4 * a, 15 + 12 * b}; l.normal = Vector3d::UnitX(); break;
-        default: l.position = {4 * a, -5, 15 + 12 * b}; l.normal = -Vector3d::UnitY(); break;
+        case 0:
+            l.position = {12, 11 * a, 34 + 3.5 * b};
+            l.normal = Vector3d::UnitX();
+            break;
+        case 1:
+            l.position = {-12, 11 * a, 34 + 3.5 * b};
+            l.normal = -Vector3d::UnitX();
+            break;
+        case 2:
+            l.position = {11 * a, 12, 34 + 3.5 * b};
+            l.normal = Vector3d::UnitY();
+            break;
+        case 3:
+            l.position = {11 * a, -12, 34 + 3.5 * b};
+            l.normal = -Vector3d::UnitY();
+            break;
+        case 4:
+            l.position = {5, 4 * a, 15 + 12 * b};
+            l.normal = Vector3d::UnitX();
+            break;
+        default:
+            l.position = {4 * a, -5, 15 + 12 * b};
+            l.normal = -Vector3d::UnitY();
+            break;
         }
         out.push_back(l);
     }
@@ -116,6 +133,6 @@ void BM_GreedyVersusOptimum(benchmark::State& state)
 }
 BENCHMARK(BM_GreedyVersusOptimum)->Arg(5)->Arg(10)->Arg(20)->Arg(30)->Unit(benchmark::kMillisecond)->Iterations(1);
 
-}  // namespace
+} // namespace
 
 BENCHMARK_MAIN();

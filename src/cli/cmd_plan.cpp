@@ -5,16 +5,16 @@
 // (a landmark in a concavity, a fixture range that excludes every witness, a
 // tolerance below the station's MED, too few views allowed) exits 2 with one
 // sentence per problem on stderr.
-#include <filesystem>
-#include <fstream>
-#include <iostream>
-#include <string>
-
 #include "command.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/plan/plan_report.h"
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
 
 namespace hg::cli {
 namespace {
@@ -104,7 +104,8 @@ int run(const PlanArgs& args)
 
     if (!result.feasible) {
         std::cerr << "hullgauge plan: " << args.part << ": no plan:\n";
-        for (const auto& p : result.problems) std::cerr << "  " << p << '\n';
+        for (const auto& p : result.problems)
+            std::cerr << "  " << p << '\n';
         return static_cast<int>(ExitStatus::BadInput);
     }
     std::cerr << "hullgauge plan: " << result.views.size() << " views";
@@ -147,5 +148,5 @@ std::function<int()> factory(CLI::App& app)
 
 HG_REGISTER_COMMAND("plan", factory);
 
-}  // namespace
-}  // namespace hg::cli
+} // namespace
+} // namespace hg::cli

@@ -16,12 +16,16 @@ json poseJson(const FixturePose& p, FixtureType type)
     return {{"rotation_deg", p.rotationDeg}, {"declination_deg", p.declinationDeg}};
 }
 
-json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+json vec(const Vec3& v)
+{
+    return json::array({v.x(), v.y(), v.z()});
+}
 
 json mat(const geometry::Mat3& m)
 {
     json rows = json::array();
-    for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+    for (int r = 0; r < 3; ++r)
+        rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
     return rows;
 }
 
@@ -54,7 +58,7 @@ std::pair<std::vector<std::string>, double> observers(const ViewPlan& plan, std:
     return {ids, med};
 }
 
-}  // namespace
+} // namespace
 
 json planToJson(const ViewPlan& plan, const PlanProblem& problem)
 {
@@ -115,7 +119,8 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         if (!a.reason.empty()) j["reason"] = a.reason;
         if (!a.unreachableWitnesses.empty()) {
             json u = json::array();
-            for (const auto& p : a.unreachableWitnesses) u.push_back(poseJson(p, type));
+            for (const auto& p : a.unreachableWitnesses)
+                u.push_back(poseJson(p, type));
             j["unreachable_witnesses"] = u;
         }
         if (a.blockingTriangle) j["blocking_triangle"] = *a.blockingTriangle;
@@ -165,7 +170,8 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     std::ostringstream s;
     s << "# View plan: " << problem.part << "\n\n";
     std::size_t inspectable = 0;
-    for (const auto& a : plan.landmarks) inspectable += a.inspectable() ? 1 : 0;
+    for (const auto& a : plan.landmarks)
+        inspectable += a.inspectable() ? 1 : 0;
     s << (plan.feasible ? "**Feasible.** " : "**Not feasible.** ") << plan.views.size() << " views observe "
       << inspectable << " of " << plan.landmarks.size() << " landmarks (voxel " << num(problem.grid.voxelSize)
       << " mm; " << plan.candidatePoses << " candidate poses; " << num(plan.seconds, 3) << " s).";
@@ -175,7 +181,8 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     s << "\n\n";
     if (!plan.problems.empty()) {
         s << "## Problems\n\n";
-        for (const auto& p : plan.problems) s << "- " << p << "\n";
+        for (const auto& p : plan.problems)
+            s << "- " << p << "\n";
         s << "\n";
     }
     s << "## Views (travel order)\n\n| view | pose | landmarks (predicted MED, mm) |\n|---|---|---|\n";
@@ -191,7 +198,8 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
         const auto& a = plan.landmarks[l];
         auto [ids, med] = observers(plan, l);
         std::string viewList;
-        for (const auto& id : ids) viewList += (viewList.empty() ? "" : " ") + id;
+        for (const auto& id : ids)
+            viewList += (viewList.empty() ? "" : " ") + id;
         s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(a.toleranceMm) << " | "
           << (a.witnessPoses.empty() ? "-" : num(a.bestMedMm, 3)) << " | " << (viewList.empty() ? "-" : viewList)
           << " | " << a.witnessPoses.size() << " | " << a.unseenVoids.size() << " |\n";
@@ -206,4 +214,4 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     return s.str();
 }
 
-}  // namespace hg::plan
+} // namespace hg::plan

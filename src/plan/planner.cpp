@@ -1,17 +1,17 @@
 #include "hullgauge/plan/planner.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/plan/view_pattern.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
-
-#include "hullgauge/common/error.h"
-#include "hullgauge/common/log.h"
-#include "hullgauge/plan/view_pattern.h"
 
 namespace hg::plan {
 
@@ -36,14 +36,22 @@ inspect::VoxelKey VoxelGrid::key(const Eigen::Vector3i& index) const
 const char* toString(LandmarkVerdict verdict)
 {
     switch (verdict) {
-    case LandmarkVerdict::Inspectable: return "inspectable";
-    case LandmarkVerdict::NoVoidNeighbour: return "no_void_neighbour";
-    case LandmarkVerdict::Concavity: return "concavity";
-    case LandmarkVerdict::OutOfFixtureRange: return "out_of_fixture_range";
-    case LandmarkVerdict::OutsideDepthOfField: return "outside_depth_of_field";
-    case LandmarkVerdict::BelowStationMed: return "below_station_med";
-    case LandmarkVerdict::VoxelTooCoarse: return "voxel_too_coarse";
-    case LandmarkVerdict::BestViewsFail: return "best_views_fail";
+    case LandmarkVerdict::Inspectable:
+        return "inspectable";
+    case LandmarkVerdict::NoVoidNeighbour:
+        return "no_void_neighbour";
+    case LandmarkVerdict::Concavity:
+        return "concavity";
+    case LandmarkVerdict::OutOfFixtureRange:
+        return "out_of_fixture_range";
+    case LandmarkVerdict::OutsideDepthOfField:
+        return "outside_depth_of_field";
+    case LandmarkVerdict::BelowStationMed:
+        return "below_station_med";
+    case LandmarkVerdict::VoxelTooCoarse:
+        return "voxel_too_coarse";
+    case LandmarkVerdict::BestViewsFail:
+        return "best_views_fail";
     }
     return "?";
 }
@@ -60,7 +68,8 @@ std::string fmt(double v, int precision = 3)
     std::string out = s.str();
     // 12.500 -> 12.5, 30.000 -> 30
     if (out.find('.') != std::string::npos) {
-        while (!out.empty() && out.back() == '0') out.pop_back();
+        while (!out.empty() && out.back() == '0')
+            out.pop_back();
         if (!out.empty() && out.back() == '.') out.pop_back();
     }
     return out == "-0" ? "0" : out;
@@ -97,9 +106,12 @@ std::tuple<long long, long long, long long> poseKey(const FixturePose& p)
 bool objectVoxel(const model::Solid& solid, const Eigen::AlignedBox3d& box)
 {
     switch (solid.classify(box)) {
-    case model::Occupancy::Inside: return true;
-    case model::Occupancy::Outside: return false;
-    case model::Occupancy::Boundary: break;
+    case model::Occupancy::Inside:
+        return true;
+    case model::Occupancy::Outside:
+        return false;
+    case model::Occupancy::Boundary:
+        break;
     }
     return solid.isObjectVoxel(box);
 }
@@ -145,7 +157,7 @@ struct Analysed {
 };
 
 class Analyser {
-public:
+  public:
     Analyser(const PlanProblem& problem, const PlanOptions& options)
         : problem_(problem), options_(options), station_(*problem.station),
           rules_(*problem.solid, *problem.station, problem.grid.voxelSize, options.rules), poseGrid_(options.grid)
@@ -165,12 +177,13 @@ public:
                     poseGrid_.extraDeclinationsDeg.push_back(p.declinationDeg);
             }
         std::sort(poseGrid_.extraDeclinationsDeg.begin(), poseGrid_.extraDeclinationsDeg.end());
-        poseGrid_.extraDeclinationsDeg.erase(
-            std::unique(poseGrid_.extraDeclinationsDeg.begin(), poseGrid_.extraDeclinationsDeg.end(),
-                        [](double a, double b) { return std::abs(a - b) < 1e-9; }),
-            poseGrid_.extraDeclinationsDeg.end());
+        poseGrid_.extraDeclinationsDeg.erase(std::unique(poseGrid_.extraDeclinationsDeg.begin(),
+                                                         poseGrid_.extraDeclinationsDeg.end(),
+                                                         [](double a, double b) { return std::abs(a - b) < 1e-9; }),
+                                             poseGrid_.extraDeclinationsDeg.end());
         grid_ = gridPoses(station_.fixture, options_.grid);
-        for (const auto& p : grid_) gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
+        for (const auto& p : grid_)
+            gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
     }
 
     const ViewRules& rules() const { return rules_; }
@@ -273,8 +286,10 @@ public:
             if (dofOnly > 0) {
                 const auto& dof = *station_.depthOfFieldMm;
                 a.verdict = LandmarkVerdict::OutsideDepthOfField;
-                a.reason = "landmark " + lm.id + " is seen against background only at depths outside the depth of "
-                           "field [" + fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(nearestDepth) +
+                a.reason = "landmark " + lm.id +
+                           " is seen against background only at depths outside the depth of "
+                           "field [" +
+                           fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(nearestDepth) +
                            " mm): refocus the camera or move the part (Rule 4).";
             } else {
                 explainUnseen(r, blockers, blockerPoints);
@@ -284,11 +299,12 @@ public:
             if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm)
                 a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
                            " mm is below the finest discrimination this station reaches there (predicted MED " +
-                           fmt(a.bestMedMm) + " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
+                           fmt(a.bestMedMm) +
+                           " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
                            "closer / use a longer lens.";
             else
-                a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " +
-                           fmt(grid.voxelSize) + " mm there (best MED " + fmt(bestRangeMed) +
+                a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " + fmt(grid.voxelSize) +
+                           " mm there (best MED " + fmt(bestRangeMed) +
                            " mm, eq. 4.4.4-19); use a smaller octree.depth, or bring the camera closer / use a "
                            "longer lens.";
             r.usable = false;
@@ -299,7 +315,7 @@ public:
         return r;
     }
 
-private:
+  private:
     static void dedupe(std::vector<FixturePose>& poses)
     {
         std::map<std::tuple<long long, long long, long long>, bool> seen;
@@ -341,8 +357,10 @@ private:
                                            fmt(f.rotationRangeDeg.max) + "]°, declination range [" +
                                            fmt(f.declinationRangeDeg.min) + ", " + fmt(f.declinationRangeDeg.max) +
                                            "]°";
-            a.reason = "landmark " + lm(a) + " is seen against background only from poses the fixture cannot "
-                       "reach (e.g. " + fmtPose(a.unreachableWitnesses.front(), type) + "; the " + ranges +
+            a.reason = "landmark " + lm(a) +
+                       " is seen against background only from poses the fixture cannot "
+                       "reach (e.g. " +
+                       fmtPose(a.unreachableWitnesses.front(), type) + "; the " + ranges +
                        "): widen the fixture's range or mount the part turned so this face comes into reach.";
             return;
         }
@@ -405,7 +423,8 @@ private:
         const auto& grid = problem_.grid;
         // Witnesses first: they prove most neighbours void at once.
         std::vector<geometry::CameraModel> cameras;
-        for (const auto& p : r.a.witnessPoses) cameras.push_back(station_.cameraAt(p));
+        for (const auto& p : r.a.witnessPoses)
+            cameras.push_back(station_.cameraAt(p));
         for (std::size_t i = 0; i < r.candidates.size(); ++i)
             if (!r.checks[i].sees()) cameras.push_back(station_.cameraAt(r.candidates[i]));
         for (const auto& v : neighbourhood(r.a.voxel, std::max(1, options_.pareLayers))) {
@@ -460,7 +479,8 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
     double best = std::numeric_limits<double>::infinity();
     for (int p : variation) {
         double s = 0.0;
-        for (std::size_t l : landmarks) s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
+        for (std::size_t l : landmarks)
+            s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
         sums.emplace_back(s, p);
         best = std::min(best, s);
     }
@@ -471,19 +491,21 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
     std::sort(ties.begin(), ties.end(), [&](int x, int y) {
         const auto& a = poses[static_cast<std::size_t>(x)];
         const auto& b = poses[static_cast<std::size_t>(y)];
-        return std::tie(a.rotationDeg, a.declinationDeg, a.railMm) < std::tie(b.rotationDeg, b.declinationDeg, b.railMm);
+        return std::tie(a.rotationDeg, a.declinationDeg, a.railMm) <
+               std::tie(b.rotationDeg, b.declinationDeg, b.railMm);
     });
     return static_cast<std::size_t>(ties[(ties.size() - 1) / 2]);
 }
 
-}  // namespace
+} // namespace
 
 std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const PlanOptions& options)
 {
     validate(problem);
     Analyser analyser(problem, options);
     std::vector<LandmarkAnalysis> out;
-    for (const auto& lm : problem.landmarks) out.push_back(analyser.analyse(lm).a);
+    for (const auto& lm : problem.landmarks)
+        out.push_back(analyser.analyse(lm).a);
     return out;
 }
 
@@ -536,8 +558,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
             if (r.checks[k].passes()) passing[l].push_back(p);
         }
         for (std::size_t p = 0; p < poses.size(); ++p) {
-            if (tried[p] || std::abs(tangentAngleDeg(centres[p], r.a.position, r.a.normal)) > options.bandDeg)
-                continue;
+            if (tried[p] || std::abs(tangentAngleDeg(centres[p], r.a.position, r.a.normal)) > options.bandDeg) continue;
             const auto chk = rules.check(r.target, poses[p]);
             checkAt[l][static_cast<int>(p)] = chk;
             if (chk.passes()) passing[l].push_back(static_cast<int>(p));
@@ -562,7 +583,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
             Requirement req{l, {}};
             for (const auto& v : lm.bestViews[t]) {
                 auto it = index.find(poseKey(v));
-                if (it == index.end()) continue;  // unreachable, reported already
+                if (it == index.end()) continue; // unreachable, reported already
                 // View variation of a designer best view (5.4.1): the passing
                 // candidates whose line of sight turns from the designer's by no
                 // more than Θ, the largest angle eq. 5.3.6-3 allows at this
@@ -614,7 +635,8 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
 
     // Final views (5.4.4), then every landmark each one observes.
     std::vector<std::size_t> chosen;
-    for (const auto& g : greedy.groups) chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
+    for (const auto& g : greedy.groups)
+        chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
     std::sort(chosen.begin(), chosen.end());
     chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
     {
@@ -630,7 +652,8 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
                                 " views but at most " + std::to_string(options.maxViews) +
                                 " were requested: allow more views or loosen the tightest tolerances.");
     std::vector<FixturePose> chosenPoses;
-    for (std::size_t p : chosen) chosenPoses.push_back(poses[p]);
+    for (std::size_t p : chosen)
+        chosenPoses.push_back(poses[p]);
     const auto order = orderForTravel(chosenPoses, type, homePose(station.fixture));
     for (std::size_t k = 0; k < order.size(); ++k) {
         const std::size_t p = chosen[order[k]];
@@ -669,7 +692,8 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
                                     ": a best view group is not met by the planned views.");
     }
 
-    for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));
+    for (auto& r : analysed)
+        plan.landmarks.push_back(std::move(r.a));
     plan.feasible = plan.problems.empty();
     plan.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     logger->info("plan: {} landmarks, {} candidate poses, {} views in {:.3f} s", plan.landmarks.size(),
@@ -677,4 +701,4 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
     return plan;
 }
 
-}  // namespace hg::plan
+} // namespace hg::plan

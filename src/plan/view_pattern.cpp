@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <climits>
+#include <glpk.h>
 #include <iterator>
 #include <map>
-
-#include <glpk.h>
 
 namespace hg::plan {
 
@@ -40,17 +39,17 @@ namespace {
 struct View {
     PoseSet variation;
     std::vector<std::size_t> requirements;
-    std::size_t orGroup = 0;  // the requirement whose OR list it belongs to (phase 1)
+    std::size_t orGroup = 0; // the requirement whose OR list it belongs to (phase 1)
     bool alive = true;
 };
 
-}  // namespace
+} // namespace
 
 GreedyResult greedyViewPattern(const std::vector<Requirement>& requirements, const PatternOptions& options)
 {
     GreedyResult result;
     std::vector<View> views;
-    std::vector<std::size_t> remaining(requirements.size(), 0);  // live sub-views per requirement
+    std::vector<std::size_t> remaining(requirements.size(), 0); // live sub-views per requirement
     for (std::size_t r = 0; r < requirements.size(); ++r) {
         for (const auto& sub : requirements[r].anyOf)
             if (!sub.empty()) {
@@ -140,7 +139,8 @@ GreedyResult greedyViewPattern(const std::vector<Requirement>& requirements, con
         g.variation = views[i].variation;
         g.requirements = views[i].requirements;
         std::sort(g.requirements.begin(), g.requirements.end());
-        for (std::size_t r : g.requirements) g.landmarks.push_back(requirements[r].landmark);
+        for (std::size_t r : g.requirements)
+            g.landmarks.push_back(requirements[r].landmark);
         std::sort(g.landmarks.begin(), g.landmarks.end());
         g.landmarks.erase(std::unique(g.landmarks.begin(), g.landmarks.end()), g.landmarks.end());
         result.groups.push_back(std::move(g));
@@ -165,7 +165,8 @@ std::vector<int> removeRedundantPoses(const std::vector<Requirement>& requiremen
                 ++served[i];
             }
     std::vector<std::size_t> order(poses.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    for (std::size_t i = 0; i < order.size(); ++i)
+        order[i] = i;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return served[a] < served[b]; });
     std::vector<bool> keep(poses.size(), true);
     for (std::size_t i : order) {
@@ -191,14 +192,16 @@ ExactResult exactViewCover(const std::vector<Requirement>& requirements, double 
     std::vector<PoseSet> rows;
     for (const auto& req : requirements) {
         PoseSet u;
-        for (const auto& sub : req.anyOf) u.insert(u.end(), sub.begin(), sub.end());
+        for (const auto& sub : req.anyOf)
+            u.insert(u.end(), sub.begin(), sub.end());
         std::sort(u.begin(), u.end());
         u.erase(std::unique(u.begin(), u.end()), u.end());
         if (u.empty()) {
             result.message = "a requirement has no candidate pose";
             return result;
         }
-        for (int p : u) column.emplace(p, 0);
+        for (int p : u)
+            column.emplace(p, 0);
         rows.push_back(std::move(u));
     }
     if (rows.empty()) {
@@ -208,7 +211,7 @@ ExactResult exactViewCover(const std::vector<Requirement>& requirements, double 
     std::vector<int> poseOf;
     for (auto& [pose, col] : column) {
         poseOf.push_back(pose);
-        col = static_cast<int>(poseOf.size());  // GLPK columns are 1-based
+        col = static_cast<int>(poseOf.size()); // GLPK columns are 1-based
     }
 
     glp_term_out(GLP_OFF);
@@ -245,11 +248,11 @@ ExactResult exactViewCover(const std::vector<Requirement>& requirements, double 
             if (glp_mip_col_val(lp, static_cast<int>(c) + 1) > 0.5) result.poses.push_back(poseOf[c]);
         if (!result.optimal) result.message = "time limit reached before optimality was proven";
     } else {
-        result.message = rc == GLP_ETMLIM ? "time limit reached without a solution" : "GLPK failed (code " +
-                                                                                          std::to_string(rc) + ")";
+        result.message = rc == GLP_ETMLIM ? "time limit reached without a solution"
+                                          : "GLPK failed (code " + std::to_string(rc) + ")";
     }
     glp_delete_prob(lp);
     return result;
 }
 
-}  // namespace hg::plan
+} // namespace hg::plan

@@ -1,13 +1,13 @@
 #include "hullgauge/plan/view_rules.h"
 
+#include "hullgauge/inspect/measures.h"
+#include "hullgauge/inspect/voxel_test.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
-
-#include "hullgauge/inspect/measures.h"
-#include "hullgauge/inspect/voxel_test.h"
 
 namespace hg::plan {
 
@@ -42,16 +42,21 @@ std::array<Vec3, 8> corners(const Eigen::AlignedBox3d& box)
     return c;
 }
 
-}  // namespace
+} // namespace
 
 const char* toString(Blocker blocker)
 {
     switch (blocker) {
-    case Blocker::None: return "none";
-    case Blocker::OwnSurface: return "own surface";
-    case Blocker::Part: return "part";
-    case Blocker::Floor: return "floor";
-    case Blocker::CameraBelowFloor: return "camera below floor";
+    case Blocker::None:
+        return "none";
+    case Blocker::OwnSurface:
+        return "own surface";
+    case Blocker::Part:
+        return "part";
+    case Blocker::Floor:
+        return "floor";
+    case Blocker::CameraBelowFloor:
+        return "camera below floor";
     }
     return "?";
 }
@@ -64,8 +69,8 @@ std::string RuleCheck::failure() const
     else if (!rule2) {
         s << "Rule 2: the line of sight meets " << toString(obstruction);
         if (blockingTriangle)
-            s << " (triangle " << *blockingTriangle << " at " << blockingPoint.x() << ", " << blockingPoint.y()
-              << ", " << blockingPoint.z() << ")";
+            s << " (triangle " << *blockingTriangle << " at " << blockingPoint.x() << ", " << blockingPoint.y() << ", "
+              << blockingPoint.z() << ")";
     } else if (!rule1)
         s << "Rule 1: only " << static_cast<int>(std::round(100.0 * backgroundFraction))
           << " % of the void neighbour's projection is background (50 % needed)";
@@ -106,7 +111,8 @@ ViewRules::ViewRules(const model::Solid& solid, const geometry::Station& station
     if (options_.floorRadiusMm) {
         floorRadius_ = *options_.floorRadiusMm;
     } else {
-        for (const auto& v : solid.mesh().vertices) floorRadius_ = std::max(floorRadius_, std::hypot(v.x(), v.y()));
+        for (const auto& v : solid.mesh().vertices)
+            floorRadius_ = std::max(floorRadius_, std::hypot(v.x(), v.y()));
     }
     ownRadius_ = options_.ownSurfaceRadiusMm.value_or(3.0 * voxelSizeMm);
 }
@@ -122,10 +128,10 @@ Blocker ViewRules::lineOfSight(const Vec3& origin, const Vec3& direction, std::o
     // stretch inside that cylinder.
     constexpr double kInf = std::numeric_limits<double>::infinity();
     double floorDistance = kInf;
-    double below0 = kInf, below1 = kInf;  // stretch with z < floor_z
+    double below0 = kInf, below1 = kInf; // stretch with z < floor_z
     if (direction.z() < 0.0) {
         below0 = std::max(0.0, (floorZ - origin.z()) / direction.z());
-    } else if (origin.z() < floorZ) {  // cannot happen (checked above); kept for clarity
+    } else if (origin.z() < floorZ) { // cannot happen (checked above); kept for clarity
         below0 = 0.0;
         below1 = direction.z() > 0.0 ? (floorZ - origin.z()) / direction.z() : kInf;
     }
@@ -133,7 +139,7 @@ Blocker ViewRules::lineOfSight(const Vec3& origin, const Vec3& direction, std::o
         const double a = direction.x() * direction.x() + direction.y() * direction.y();
         const double b = 2.0 * (origin.x() * direction.x() + origin.y() * direction.y());
         const double c = origin.x() * origin.x() + origin.y() * origin.y() - floorRadius_ * floorRadius_;
-        double in0 = kInf, in1 = -kInf;  // stretch within the cylinder
+        double in0 = kInf, in1 = -kInf; // stretch within the cylinder
         if (a < 1e-18) {
             if (c <= 0.0) {
                 in0 = 0.0;
@@ -268,9 +274,9 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
             }
         }
         if (stopAtDecision) {
-            if (obstructed) break;                   // Rule 2 failed
-            if (2 * blocked > total) break;          // Rule 1 cannot reach 50 %
-            if (!target && 2 * background >= total)  // void proven; no Rule 2 to check
+            if (obstructed) break;                  // Rule 2 failed
+            if (2 * blocked > total) break;         // Rule 1 cannot reach 50 %
+            if (!target && 2 * background >= total) // void proven; no Rule 2 to check
                 break;
         }
     }
@@ -280,4 +286,4 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
     return r;
 }
 
-}  // namespace hg::plan
+} // namespace hg::plan

@@ -2,12 +2,12 @@
 // renderer), inspect the renders against the inspection map. The nominal part
 // must pass with every landmark observed and ok; a part with material missing
 // on one face must fail at that face's landmarks only.
-#include <gtest/gtest.h>
-
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
 #include "hullgauge/sim/renderer.h"
+
+#include <gtest/gtest.h>
 
 namespace hg::plan {
 namespace {
@@ -50,7 +50,7 @@ struct Loop {
         add("ny", {-1, -10, 12}, {0, -1, 0});
         mapGeometry.cubeOrigin = Vec3(-64, -64, -64);
         mapGeometry.cubeSize = 128;
-        mapGeometry.depth = 9;  // ΔV = 0.25 mm
+        mapGeometry.depth = 9; // ΔV = 0.25 mm
         mapGeometry.adjacencyDepth = 4;
         mapGeometry.coarsestLevel = 9;
 
@@ -68,12 +68,14 @@ struct Loop {
     inspect::InspectionResult inspect(const model::TriangleMesh& part) const
     {
         std::vector<inspect::MapLandmark> mls;
-        for (const auto& l : landmarks) mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
-        auto map = inspect::InspectionMap::build("cube", mapGeometry, mls, {},
-                                                 [&](const Eigen::AlignedBox3d& b) { return nominal.isObjectVoxel(b); });
+        for (const auto& l : landmarks)
+            mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
+        auto map = inspect::InspectionMap::build(
+            "cube", mapGeometry, mls, {}, [&](const Eigen::AlignedBox3d& b) { return nominal.isObjectVoxel(b); });
         sim::SilhouetteRenderer renderer({part});
         std::vector<inspect::CapturedView> views;
-        for (const auto& v : plan.views) views.push_back({v.id, v.camera, renderer.render(v.camera)});
+        for (const auto& v : plan.views)
+            views.push_back({v.id, v.camera, renderer.render(v.camera)});
         return inspect::Inspector(map).inspect(views, {});
     }
 };
@@ -101,5 +103,5 @@ TEST(ClosedLoop, NominalPassesDefectFailsAtItsLandmark)
     }
 }
 
-}  // namespace
-}  // namespace hg::plan
+} // namespace
+} // namespace hg::plan

@@ -1,16 +1,14 @@
 // `hullgauge plan` end to end (CONTRACTS §5): files in, plan.json and poses
 // out, exit 2 with a sentence the designer can act on when no plan exists.
-#include <gtest/gtest.h>
-
-#include <fstream>
-
-#include <nlohmann/json.hpp>
-
 #include "hgtest/paths.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/primitives.h"
+
+#include <fstream>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 namespace hg::plan {
 namespace {
@@ -55,7 +53,8 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
     hgtest::TempDir dir;
     model::saveMesh(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)), dir / "part.stl");
     hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
-    hgtest::writeFile(dir / "part.yaml", partYaml(R"(  - {id: top, position: [1, 2, 20], normal: [0, 0, 1], tolerance_mm: 0.5}
+    hgtest::writeFile(dir / "part.yaml",
+                      partYaml(R"(  - {id: top, position: [1, 2, 20], normal: [0, 0, 1], tolerance_mm: 0.5}
   - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: 0.5}
   - {id: ny, position: [-1, -10, 12], normal: [0, -1, 0], tolerance_mm: 0.5}
 )"));
@@ -71,14 +70,16 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
         // The camera centre from R and t (−Rᵀt) is the fixture's at that pose.
         geometry::Mat3 R;
         for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) R(a, b) = v["R"][a][b].get<double>();
+            for (int b = 0; b < 3; ++b)
+                R(a, b) = v["R"][a][b].get<double>();
         const geometry::Vec3 t(v["t"][0].get<double>(), v["t"][1].get<double>(), v["t"][2].get<double>());
         const geometry::FixturePose pose{v["pose"]["rotation_deg"].get<double>(),
                                          v["pose"]["declination_deg"].get<double>(), 0.0};
         EXPECT_LT((-(R.transpose() * t) - station.fixture.cameraCentreInPart(pose)).norm(), 1e-6);
         EXPECT_EQ(v["K"][0][0].get<double>(), 4000.0);
         EXPECT_FALSE(v["landmarks"].empty());
-        for (const auto& id : v["landmarks"]) EXPECT_LE(v["predicted_med_mm"][id.get<std::string>()], 0.5);
+        for (const auto& id : v["landmarks"])
+            EXPECT_LE(v["predicted_med_mm"][id.get<std::string>()], 0.5);
     }
     for (const auto& l : j["landmarks"]) {
         EXPECT_EQ(l["status"], "inspectable");
@@ -148,5 +149,5 @@ TEST(PlanCommand, MissingFileIsBadInput)
     EXPECT_EQ(r.status, 2);
 }
 
-}  // namespace
-}  // namespace hg::plan
+} // namespace
+} // namespace hg::plan

@@ -1,11 +1,10 @@
 // Pose space: grazing poses solve the tangent-plane condition exactly, grids
 // cover the ranges, travel ordering is optimal on small sets.
-#include <gtest/gtest.h>
-
-#include <cmath>
-
 #include "hullgauge/plan/pose_space.h"
 #include "hullgauge/plan/view_rules.h"
+
+#include <cmath>
+#include <gtest/gtest.h>
 
 namespace hg::plan {
 namespace {
@@ -70,8 +69,9 @@ TEST(PoseSpace, HorizontalTangentPlaneIsOneDeclination)
     auto poses = grazingPoses(f, Vec3(0, 0, 20), Vec3::UnitZ(), steps(10, 5, 5));
     ASSERT_FALSE(poses.empty());
     const double expected = geometry::radToDeg(std::asin(20.0 / 300.0));
-    for (const auto& p : poses) EXPECT_NEAR(p.declinationDeg, expected, 1e-9) << p.rotationDeg;
-    EXPECT_GE(poses.size(), 36u);  // one per grid rotation
+    for (const auto& p : poses)
+        EXPECT_NEAR(p.declinationDeg, expected, 1e-9) << p.rotationDeg;
+    EXPECT_GE(poses.size(), 36u); // one per grid rotation
 }
 
 TEST(PoseSpace, VerticalTangentPlaneSolvedExactlyInRotation)
@@ -138,7 +138,8 @@ TEST(PoseSpace, TravelOrderImprovesLargeSets)
 {
     // 12 poses on a line, shuffled: the best path from 0 visits them in order.
     std::vector<FixturePose> poses;
-    for (int k : {7, 3, 11, 1, 9, 5, 12, 2, 8, 4, 10, 6}) poses.push_back({10.0 * k, 0, 0});
+    for (int k : {7, 3, 11, 1, 9, 5, 12, 2, 8, 4, 10, 6})
+        poses.push_back({10.0 * k, 0, 0});
     auto order = orderForTravel(poses, FixtureType::RotationDeclination, {0, 0, 0});
     for (std::size_t i = 1; i < order.size(); ++i)
         EXPECT_LT(poses[order[i - 1]].rotationDeg, poses[order[i]].rotationDeg);
@@ -157,8 +158,8 @@ TEST(ViewRulesMed, Equation536_3ByHand)
     const double theta = maxViewAngleRad(4000, 300, 0.2);
     EXPECT_GT(theta, 0.3);
     EXPECT_NEAR(predictedMedMm(4000, 300, theta), 0.2, 1e-9);
-    EXPECT_EQ(maxViewAngleRad(4000, 300, 0.05), 0.0);  // below the θ = 0 MED
+    EXPECT_EQ(maxViewAngleRad(4000, 300, 0.05), 0.0); // below the θ = 0 MED
 }
 
-}  // namespace
-}  // namespace hg::plan
+} // namespace
+} // namespace hg::plan

@@ -1,10 +1,9 @@
 // View pattern analysis on hand-built variation lists: OR removal, AND
 // combination and the exact set cover, each against a worked answer.
-#include <gtest/gtest.h>
-
-#include <random>
-
 #include "hullgauge/plan/view_pattern.h"
+
+#include <gtest/gtest.h>
+#include <random>
 
 namespace hg::plan {
 namespace {
@@ -79,7 +78,8 @@ TEST(ViewPattern, ExactCoverFindsTheOptimum)
     EXPECT_EQ(e.poses.size(), 2u);
     for (const auto& r : reqs) {
         bool met = false;
-        for (int p : e.poses) met = met || std::binary_search(r.anyOf[0].begin(), r.anyOf[0].end(), p);
+        for (int p : e.poses)
+            met = met || std::binary_search(r.anyOf[0].begin(), r.anyOf[0].end(), p);
         EXPECT_TRUE(met);
     }
 }
@@ -122,5 +122,5 @@ TEST(ViewPattern, ExactNeverWorseThanGreedyOnRandomInstances)
     }
 }
 
-}  // namespace
-}  // namespace hg::plan
+} // namespace
+} // namespace hg::plan

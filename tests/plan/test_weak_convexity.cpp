@@ -6,13 +6,12 @@
 // from the fixture origin on -y looking along +y; positive declination raises
 // it: camera centre (0, -300 cos δ, 300 sin δ) at rotation 0, and rotation θ
 // turns that point about z (rotation 90° puts the camera at -x).
-#include <gtest/gtest.h>
-
-#include <cmath>
-
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
+
+#include <cmath>
+#include <gtest/gtest.h>
 
 namespace hg::plan {
 namespace {
@@ -84,9 +83,11 @@ TEST(WeakConvexity, CubeIsInspectableEverywhereFromGrazingPoses)
         EXPECT_TRUE(a.unseenVoids.empty()) << a.id << " " << a.unseenVoids.size();
     }
     const double grazing = geometry::radToDeg(std::asin(20.0 / 300.0));
-    for (const auto& p : find(all, "top").witnessPoses) EXPECT_NEAR(p.declinationDeg, grazing, 1.0);
+    for (const auto& p : find(all, "top").witnessPoses)
+        EXPECT_NEAR(p.declinationDeg, grazing, 1.0);
     // The -y face: lines of sight run in the plane y = -10, i.e. along x.
-    for (const auto& d : find(all, "ny").witnessDirections) EXPECT_LT(std::abs(d.y()), 0.03);
+    for (const auto& d : find(all, "ny").witnessDirections)
+        EXPECT_LT(std::abs(d.y()), 0.03);
 }
 
 // Stamp (fig. 5.2): a handle with a wider head on top; the impression face
@@ -101,7 +102,8 @@ TEST(WeakConvexity, StampIsInspectable)
     auto problem = problemFor(stamp, station,
                               {landmark("face", {0, 0, 38}, {0, 0, 1}), landmark("head-side", {12, 0, 34}, {1, 0, 0}),
                                landmark("handle", {5, 0, 15}, {1, 0, 0})});
-    for (const auto& a : analyseLandmarks(problem)) EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
+    for (const auto& a : analyseLandmarks(problem))
+        EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
 }
 
 // Open U channel (2.8.3, Proposition 2.3), channel along x: outer walls
@@ -127,11 +129,13 @@ TEST(WeakConvexity, UChannelInsideSeenOnlyAlongTheChannel)
 {
     model::Solid channel(uChannel());
     auto full = makeStation({-180, 180}, {0, 60});
-    auto problem = problemFor(channel, full,
-                              {landmark("inner-wall", {0, -6, 8}, {0, 1, 0}), landmark("inner-floor", {0, 0, 4}, {0, 0, 1}),
-                               landmark("outer-wall", {0, -10, 6}, {0, -1, 0})});
+    auto problem =
+        problemFor(channel, full,
+                   {landmark("inner-wall", {0, -6, 8}, {0, 1, 0}), landmark("inner-floor", {0, 0, 4}, {0, 0, 1}),
+                    landmark("outer-wall", {0, -10, 6}, {0, -1, 0})});
     auto all = analyseLandmarks(problem);
-    for (const auto& a : all) EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
+    for (const auto& a : all)
+        EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
     // Inner wall: the tangent plane y = -6 holds the line of sight (its y
     // component is only the camera's 6 mm offset over 300 mm); in that plane
     // nothing but the floor (z = 4) and the channel's ends bound it, so a line
@@ -300,7 +304,8 @@ TEST(ViewPlan, CubePlanObservesEveryLandmark)
             EXPECT_GT(v.predictedMedMm[k], 0.1);
         }
     }
-    for (std::size_t l = 0; l < seen.size(); ++l) EXPECT_GT(seen[l], 0) << problem.landmarks[l].id;
+    for (std::size_t l = 0; l < seen.size(); ++l)
+        EXPECT_GT(seen[l], 0) << problem.landmarks[l].id;
     // px and px2 share the face plane x = 10: one view serves both.
     bool shared = false;
     for (const auto& v : plan.views)
@@ -337,7 +342,7 @@ TEST(ViewPlan, DesignerBestViewsAreHonoured)
     const Vec3 designer = (x - station.fixture.cameraCentreInPart({0, 30, 0})).normalized();
     const Vec3 chosen = (x - plan.views[0].camera.centre()).normalized();
     const double theta = maxViewAngleRad(4000, (x - station.fixture.cameraCentreInPart({0, 30, 0})).norm(), 0.5);
-    EXPECT_GT(theta, geometry::degToRad(20));  // hand check: Θ = 38.2° at d = 300 mm
+    EXPECT_GT(theta, geometry::degToRad(20)); // hand check: Θ = 38.2° at d = 300 mm
     EXPECT_LE(std::acos(designer.dot(chosen)), theta + 1e-9);
     // And the chosen view grazes the face: camera centre within 1 mm of x = 10.
     EXPECT_NEAR(plan.views[0].camera.centre().x(), 10.0, 1.0);
@@ -347,8 +352,8 @@ TEST(ViewPlan, RequestedViewCountTooSmallFails)
 {
     model::Solid cube(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)));
     auto station = makeStation({-180, 180}, {0, 60});
-    auto problem = problemFor(cube, station,
-                              {landmark("px", {10, 0, 10}, {1, 0, 0}), landmark("py", {0, 10, 10}, {0, 1, 0})});
+    auto problem =
+        problemFor(cube, station, {landmark("px", {10, 0, 10}, {1, 0, 0}), landmark("py", {0, 10, 10}, {0, 1, 0})});
     PlanOptions options;
     options.maxViews = 1;
     auto plan = planViews(problem, options);
@@ -357,5 +362,5 @@ TEST(ViewPlan, RequestedViewCountTooSmallFails)
     EXPECT_NE(plan.problems.back().find("at most 1"), std::string::npos) << plan.problems.back();
 }
 
-}  // namespace
-}  // namespace hg::plan
+} // namespace
+} // namespace hg::plan

@@ -3,11 +3,10 @@
 // format), and a Markdown report for the designer. Format: docs/planning.md.
 #pragma once
 
-#include <string>
+#include "hullgauge/plan/planner.h"
 
 #include <nlohmann/json.hpp>
-
-#include "hullgauge/plan/planner.h"
+#include <string>
 
 namespace hg::plan {
 
@@ -23,4 +22,4 @@ std::string posesYaml(const ViewPlan& plan, FixtureType type);
 /// A readable report: summary, views, landmarks, problems and warnings.
 std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem);
 
-}  // namespace hg::plan
+} // namespace hg::plan

@@ -19,19 +19,18 @@
 // orientation among ties, 5.4.4), ordered for least fixture travel.
 #pragma once
 
-#include <cstddef>
-#include <optional>
-#include <string>
-#include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/model/solid.h"
 #include "hullgauge/plan/pose_space.h"
 #include "hullgauge/plan/view_rules.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace hg::plan {
 
@@ -39,8 +38,8 @@ namespace hg::plan {
 /// is origin + ΔV [i, i+1] x [j, j+1] x [k, k+1].
 struct VoxelGrid {
     Vec3 origin = Vec3::Zero();
-    double voxelSize = 1.0;  ///< ΔV, mm
-    int depth = 8;           ///< level of the inspection voxels (for VoxelKey)
+    double voxelSize = 1.0; ///< ΔV, mm
+    int depth = 8;          ///< level of the inspection voxels (for VoxelKey)
 
     Eigen::Vector3i indexOf(const Vec3& point) const;
     Eigen::AlignedBox3d box(const Eigen::Vector3i& index) const;
@@ -85,14 +84,14 @@ struct PlanOptions {
 };
 
 enum class LandmarkVerdict {
-    Inspectable,          ///< weakly convex for the station, a pose passes Rules 1-4
-    NoVoidNeighbour,      ///< the landmark's voxel has no void neighbour at the inspection depth
-    Concavity,            ///< no line of sight reaches background, whatever the fixture ranges
-    OutOfFixtureRange,    ///< only poses outside the fixture's ranges would see it
-    OutsideDepthOfField,  ///< seen only from poses whose depth is outside the depth of field
-    BelowStationMed,      ///< seen, but no view resolves the tolerance (eq. 5.3.6-3)
-    VoxelTooCoarse,       ///< tolerance below the map's voxel size (eq. 5.3.6-1)
-    BestViewsFail,        ///< a designer AND term has no usable pose
+    Inspectable,         ///< weakly convex for the station, a pose passes Rules 1-4
+    NoVoidNeighbour,     ///< the landmark's voxel has no void neighbour at the inspection depth
+    Concavity,           ///< no line of sight reaches background, whatever the fixture ranges
+    OutOfFixtureRange,   ///< only poses outside the fixture's ranges would see it
+    OutsideDepthOfField, ///< seen only from poses whose depth is outside the depth of field
+    BelowStationMed,     ///< seen, but no view resolves the tolerance (eq. 5.3.6-3)
+    VoxelTooCoarse,      ///< tolerance below the map's voxel size (eq. 5.3.6-1)
+    BestViewsFail,       ///< a designer AND term has no usable pose
 };
 
 const char* toString(LandmarkVerdict verdict);
@@ -140,7 +139,7 @@ struct PlannedView {
 
 struct ViewPlan {
     std::vector<LandmarkAnalysis> landmarks;
-    std::vector<PlannedView> views;  ///< in travel order
+    std::vector<PlannedView> views; ///< in travel order
     bool feasible = false;
     /// Why the plan failed, one sentence each.
     std::vector<std::string> problems;
@@ -157,4 +156,4 @@ std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const
 /// The whole plan: analysis, view pattern analysis, final views.
 ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options = {});
 
-}  // namespace hg::plan
+} // namespace hg::plan

@@ -11,10 +11,10 @@
 // n·C = n·x is therefore solved exactly in the free variable.
 #pragma once
 
+#include "hullgauge/geometry/fixture.h"
+
 #include <cstddef>
 #include <vector>
-
-#include "hullgauge/geometry/fixture.h"
 
 namespace hg::plan {
 
@@ -64,4 +64,4 @@ std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, F
 /// The pose the fixture sits at when homed: zero on every axis, clamped into the ranges.
 FixturePose homePose(const FixtureKinematics& fixture);
 
-}  // namespace hg::plan
+} // namespace hg::plan

@@ -45,8 +45,8 @@ struct PatternOptions {
 /// One final view group: its variation list and what it serves.
 struct ViewGroup {
     PoseSet variation;
-    std::vector<std::size_t> requirements;  ///< indices into the requirement list
-    std::vector<std::size_t> landmarks;     ///< sorted, unique
+    std::vector<std::size_t> requirements; ///< indices into the requirement list
+    std::vector<std::size_t> landmarks;    ///< sorted, unique
 };
 
 /// The greedy of 5.6.1. A requirement with an empty sub-view list, or whose
@@ -67,11 +67,11 @@ std::vector<int> removeRedundantPoses(const std::vector<Requirement>& requiremen
 /// Minimum set cover by integer programming (GLPK). Every requirement must be
 /// met by one chosen pose from the union of its sub-views' lists.
 struct ExactResult {
-    bool solved = false;   ///< an integer solution was found
-    bool optimal = false;  ///< and proven optimal within the time limit
+    bool solved = false;  ///< an integer solution was found
+    bool optimal = false; ///< and proven optimal within the time limit
     std::vector<int> poses;
-    std::string message;   ///< why it was not solved
+    std::string message; ///< why it was not solved
 };
 ExactResult exactViewCover(const std::vector<Requirement>& requirements, double timeLimitSeconds = 10.0);
 
-}  // namespace hg::plan
+} // namespace hg::plan

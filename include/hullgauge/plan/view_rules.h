@@ -33,14 +33,13 @@
 // axis (the turntable under the part); beyond it the back light is seen.
 #pragma once
 
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/model/solid.h"
+
+#include <Eigen/Geometry>
 #include <cstddef>
 #include <optional>
 #include <string>
-
-#include <Eigen/Geometry>
-
-#include "hullgauge/geometry/station.h"
-#include "hullgauge/model/solid.h"
 
 namespace hg::plan {
 
@@ -84,13 +83,13 @@ struct RuleCheck {
     bool rule2 = false;
     bool rule3 = false;
     bool rule4 = false;
-    double predictedMedMm = 0.0;     ///< eq. 5.3.6-3 (= 4.4.5-11) solved for MED at this view
-    double rangeMedMm = 0.0;         ///< eq. 4.4.4-19 solved for ΔV at this view
-    double distanceMm = 0.0;         ///< camera centre to landmark
-    double depthMm = 0.0;            ///< landmark depth along the optical axis
-    double viewAngleDeg = 0.0;       ///< θ: line of sight to the landmark vs optical axis
-    Blocker obstruction = Blocker::None;           ///< first Rule-2 blocker met
-    std::optional<std::size_t> blockingTriangle;   ///< when obstruction == Part
+    double predictedMedMm = 0.0;                 ///< eq. 5.3.6-3 (= 4.4.5-11) solved for MED at this view
+    double rangeMedMm = 0.0;                     ///< eq. 4.4.4-19 solved for ΔV at this view
+    double distanceMm = 0.0;                     ///< camera centre to landmark
+    double depthMm = 0.0;                        ///< landmark depth along the optical axis
+    double viewAngleDeg = 0.0;                   ///< θ: line of sight to the landmark vs optical axis
+    Blocker obstruction = Blocker::None;         ///< first Rule-2 blocker met
+    std::optional<std::size_t> blockingTriangle; ///< when obstruction == Part
     Vec3 blockingPoint = Vec3::Zero();
     /// Rules 1, 2 and 4 — the view sees the landmark against background.
     bool sees() const { return inFrame && rule1 && rule2 && rule4; }
@@ -112,7 +111,7 @@ double predictedMedMm(double focalPx, double distanceMm, double thetaRad);
 double maxViewAngleRad(double focalPx, double distanceMm, double medMm);
 
 class ViewRules {
-public:
+  public:
     /// `solid` and `station` must outlive the object. `voxelSizeMm` is ΔV.
     ViewRules(const model::Solid& solid, const geometry::Station& station, double voxelSizeMm,
               RuleOptions options = {});
@@ -135,7 +134,7 @@ public:
     double ownSurfaceRadiusMm() const { return ownRadius_; }
     const RuleOptions& options() const { return options_; }
 
-private:
+  private:
     struct Footprint;
     RuleCheck evaluate(const LandmarkTarget* target, const Eigen::AlignedBox3d& voxel,
                        const geometry::CameraModel& camera, bool stopAtDecision) const;
@@ -148,4 +147,4 @@ private:
     double ownRadius_ = 0.0;
 };
 
-}  // namespace hg::plan
+} // namespace hg::plan

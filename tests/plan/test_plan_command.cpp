@@ -90,7 +90,8 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
     const auto poses = geometry::loadPoses(dir / "plan.poses.yaml", &station.fixture);
     EXPECT_EQ(poses.size(), j["views"].size());
     std::ifstream md(dir / "plan.md");
-    std::string report((std::istreambuf_iterator<char>(md)), {});
+    std::string report, line;
+    while (std::getline(md, line)) report += line + '\n';
     EXPECT_NE(report.find("**Feasible.**"), std::string::npos);
 }
 

@@ -131,6 +131,12 @@ struct BadCase {
     std::string problem; // a part of the expected message
 };
 
+// Names the case in CTest's list instead of dumping its bytes.
+void PrintTo(const BadCase& c, std::ostream* os)
+{
+    *os << c.name;
+}
+
 std::string goodView(const std::string& id)
 {
     return R"({"id": ")" + id +

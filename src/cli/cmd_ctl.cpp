@@ -1,20 +1,18 @@
 // `hullgauge ctl`: talks to the running daemon through its maintenance socket
 // (CONTRACTS §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
 // default. One JSON request per connection, one JSON answer (docs/daemon.md).
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <unistd.h>
+#include "command.h"
+#include "hullgauge/common/error.h"
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <memory>
-
 #include <nlohmann/json.hpp>
-
-#include "command.h"
-#include "hullgauge/common/error.h"
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 namespace hg::cli {
 namespace {
@@ -62,7 +60,8 @@ nlohmann::json request(const std::string& path, const nlohmann::json& req)
     std::string answer;
     char buf[4096];
     ssize_t n;
-    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
+    while ((n = read(fd, buf, sizeof buf)) > 0)
+        answer.append(buf, static_cast<std::size_t>(n));
     close(fd);
     auto j = nlohmann::json::parse(answer, nullptr, false);
     if (j.is_discarded() || !j.is_object()) throw FaultError("the daemon at " + path + " sent no valid answer");
@@ -78,10 +77,9 @@ void printStatus(const nlohmann::json& s)
     if (seq.contains("view")) std::cout << " (view " << seq["view"].get<int>() + 1 << " of " << seq["views"] << ")";
     if (seq.contains("fault")) std::cout << " — fault " << seq["fault_code"] << ": " << seq["fault"].get<std::string>();
     std::cout << "\nconfig:       " << s["config"].get<std::string>() << "\n"
-              << "plc:          port " << plc["port"] << ", " << plc["clients"] << " clients, status "
-              << plc["status"] << ", ack " << plc["ack_seq"] << ", done " << plc["done_seq"] << ", result "
-              << plc["result"] << ", fault code " << plc["fault_code"] << ", rejected " << plc["rejected_triggers"]
-              << "\n"
+              << "plc:          port " << plc["port"] << ", " << plc["clients"] << " clients, status " << plc["status"]
+              << ", ack " << plc["ack_seq"] << ", done " << plc["done_seq"] << ", result " << plc["result"]
+              << ", fault code " << plc["fault_code"] << ", rejected " << plc["rejected_triggers"] << "\n"
               << "cycles:       " << seq["cycles"] << " (" << seq["faults"] << " with errors)\n"
               << "results:      " << s["results"]["records"] << " in " << s["results"]["database"].get<std::string>()
               << "\n";
@@ -89,9 +87,9 @@ void printStatus(const nlohmann::json& s)
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];
-        std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '" << c["serial"].get<std::string>()
-                  << "', program " << c["program"] << ", " << c["cycle_ms"] << " ms, landmarks failed "
-                  << c["landmarks_failed"] << "/" << c["landmarks_total"] << "\n";
+        std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"
+                  << c["serial"].get<std::string>() << "', program " << c["program"] << ", " << c["cycle_ms"]
+                  << " ms, landmarks failed " << c["landmarks_failed"] << "/" << c["landmarks_total"] << "\n";
     }
 }
 
@@ -99,8 +97,8 @@ std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
     auto* ctl = app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, sim-part)");
-    ctl->add_option("--socket", opts->socket, "maintenance socket (default $HULLGAUGE_SOCKET, else " +
-                                                  std::string(kDefaultSocket) + ")");
+    ctl->add_option("--socket", opts->socket,
+                    "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
     ctl->require_subcommand(1);
     auto* status = ctl->add_subcommand("status", "print the daemon state");
@@ -132,8 +130,8 @@ std::function<int()> factory(CLI::App& app)
                     std::cout << r["id"] << "  " << r["time"].get<std::string>() << "  "
                               << r["verdict"].get<std::string>() << "  serial '" << r["serial"].get<std::string>()
                               << "'  program " << r["program"] << "  " << r["cycle_ms"] << " ms  failed "
-                              << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault "
-                              << r["fault_code"] << "\n";
+                              << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault " << r["fault_code"]
+                              << "\n";
             }
         } else if (trigger->parsed()) {
             request(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});
@@ -156,8 +154,8 @@ std::function<int()> factory(CLI::App& app)
     };
 }
 
-}  // namespace
+} // namespace
 
 HG_REGISTER_COMMAND("ctl", factory);
 
-}  // namespace hg::cli
+} // namespace hg::cli

@@ -1,8 +1,8 @@
 #include "cycle_runner.h"
 
-#include <cmath>
-
 #include "hullgauge/common/log.h"
+
+#include <cmath>
 
 namespace hg::daemon {
 namespace {
@@ -13,7 +13,10 @@ using station::SequencerState;
 using Clock = std::chrono::steady_clock;
 using Kind = SequencerAction::Kind;
 
-std::int64_t nowNs() { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count(); }
+std::int64_t nowNs()
+{
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
+}
 
 std::int64_t wallMs()
 {
@@ -21,39 +24,56 @@ std::int64_t wallMs()
         .count();
 }
 
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double msSince(Clock::time_point t)
+{
+    return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 SequencerEvent moveEvent(const StepResult& r)
 {
     switch (r.code) {
-    case StepResult::Code::Ok: return SequencerEvent::InPosition;
-    case StepResult::Code::Timeout: return SequencerEvent::MoveTimeout;
-    case StepResult::Code::Fault: return SequencerEvent::MoveFault;
-    case StepResult::Code::Refused: return SequencerEvent::MoveRefused;
-    default: return SequencerEvent::MoveCommError;
+    case StepResult::Code::Ok:
+        return SequencerEvent::InPosition;
+    case StepResult::Code::Timeout:
+        return SequencerEvent::MoveTimeout;
+    case StepResult::Code::Fault:
+        return SequencerEvent::MoveFault;
+    case StepResult::Code::Refused:
+        return SequencerEvent::MoveRefused;
+    default:
+        return SequencerEvent::MoveCommError;
     }
 }
 
 SequencerEvent grabEvent(const StepResult& r)
 {
     switch (r.code) {
-    case StepResult::Code::Ok: return SequencerEvent::FrameOk;
-    case StepResult::Code::Timeout: return SequencerEvent::FrameTimeout;
-    case StepResult::Code::BadFrame: return SequencerEvent::FrameBad;
-    default: return SequencerEvent::FrameError;
+    case StepResult::Code::Ok:
+        return SequencerEvent::FrameOk;
+    case StepResult::Code::Timeout:
+        return SequencerEvent::FrameTimeout;
+    case StepResult::Code::BadFrame:
+        return SequencerEvent::FrameBad;
+    default:
+        return SequencerEvent::FrameError;
     }
 }
 
-}  // namespace
+} // namespace
 
 std::string_view toString(LampPattern p)
 {
     switch (p) {
-    case LampPattern::Off: return "off";
-    case LampPattern::Busy: return "busy";
-    case LampPattern::Pass: return "pass";
-    case LampPattern::Fail: return "fail";
-    case LampPattern::Fault: return "fault";
+    case LampPattern::Off:
+        return "off";
+    case LampPattern::Busy:
+        return "busy";
+    case LampPattern::Pass:
+        return "pass";
+    case LampPattern::Fail:
+        return "fail";
+    case LampPattern::Fault:
+        return "fault";
     }
     return "off";
 }
@@ -65,7 +85,10 @@ CycleRunner::CycleRunner(station::PlcRegisters& registers, StationDevices& devic
 {
 }
 
-CycleRunner::~CycleRunner() { stop(); }
+CycleRunner::~CycleRunner()
+{
+    stop();
+}
 
 void CycleRunner::start(std::function<void()> onDevicesActive)
 {
@@ -171,7 +194,7 @@ void CycleRunner::run()
                 lastRecovery = Clock::now();
             }
         }
-        abortRequested_ = false;  // an abort outside a cycle has nothing to abort
+        abortRequested_ = false; // an abort outside a cycle has nothing to abort
         if (auto trigger = registers_.waitTrigger(std::chrono::milliseconds(200))) runCycle(*trigger);
     }
     devices_.showLamps(LampPattern::Off);
@@ -251,9 +274,8 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     while (action.kind != Kind::Publish) {
         if (!abortFed && interrupted()) {
             // SIGTERM gets the grace period to let the cycle finish; the PLC's abort acts at once.
-            bool graceOver = !stopRequested_ ||
-                             nowNs() - stopRequestedNs_.load() >=
-                                 std::chrono::nanoseconds(cfg->sequencer.shutdownGrace).count();
+            bool graceOver = !stopRequested_ || nowNs() - stopRequestedNs_.load() >=
+                                                    std::chrono::nanoseconds(cfg->sequencer.shutdownGrace).count();
             if (abortRequested_ || graceOver) {
                 abortFed = true;
                 auto event = abortRequested_ ? SequencerEvent::Abort : SequencerEvent::Shutdown;
@@ -280,7 +302,8 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             // Sleep in short slices so an abort is not delayed by the settle time.
             auto until = stepStart + cfg->sequencer.settle;
             while (Clock::now() < until && !interrupted())
-                std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
+                std::this_thread::sleep_for(
+                    std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
             settleMs += msSince(stepStart);
             setState([&] { return sequencer_.onEvent(SequencerEvent::Settled); }, action);
             break;
@@ -300,9 +323,12 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             outcome = inspector_.finish();
             finishMs += msSince(stepStart);
             if (!outcome.ok) log->error("inspection failed: {}", outcome.error);
-            setState([&] { return sequencer_.onEvent(outcome.ok ? SequencerEvent::Processed
-                                                                : SequencerEvent::ProcessingFailed); },
-                     action);
+            setState(
+                [&] {
+                    return sequencer_.onEvent(outcome.ok ? SequencerEvent::Processed
+                                                         : SequencerEvent::ProcessingFailed);
+                },
+                action);
             break;
         }
         default: {
@@ -374,10 +400,14 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
         std::lock_guard lock(mutex_);
         ++cycles_;
         if (record.verdict == station::Verdict::Error) ++faults_;
-        lastCycle_ = {{"trigger_seq", record.triggerSeq}, {"serial", record.serial},
-                      {"program", record.program},        {"verdict", std::string(station::toString(record.verdict))},
-                      {"fault_code", static_cast<int>(record.faultCode)}, {"cycle_ms", record.cycleMs},
-                      {"landmarks_failed", record.landmarksFailed()}, {"landmarks_total", record.landmarks.size()},
+        lastCycle_ = {{"trigger_seq", record.triggerSeq},
+                      {"serial", record.serial},
+                      {"program", record.program},
+                      {"verdict", std::string(station::toString(record.verdict))},
+                      {"fault_code", static_cast<int>(record.faultCode)},
+                      {"cycle_ms", record.cycleMs},
+                      {"landmarks_failed", record.landmarksFailed()},
+                      {"landmarks_total", record.landmarks.size()},
                       {"timing_ms", record.timingMs}};
     }
     log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, verdict wait {:.1f})",
@@ -386,4 +416,4 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     if (sequencer_.afterPublish().kind == Kind::Recover && !stopRequested_) recover();
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -4,16 +4,6 @@
 // publishes it to the PLC, and sets the lamps. One thread of its own.
 #pragma once
 
-#include <atomic>
-#include <chrono>
-#include <cstdint>
-#include <functional>
-#include <memory>
-#include <mutex>
-#include <thread>
-
-#include <nlohmann/json.hpp>
-
 #include "devices.h"
 #include "hullgauge/station/daemon_config.h"
 #include "hullgauge/station/plc_registers.h"
@@ -22,10 +12,19 @@
 #include "inspector.h"
 #include "result_store.h"
 
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <thread>
+
 namespace hg::daemon {
 
 class CycleRunner {
-public:
+  public:
     CycleRunner(station::PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
                 std::shared_ptr<const station::DaemonConfig> config);
     ~CycleRunner();
@@ -51,7 +50,7 @@ public:
     /// State, current cycle and counters for the maintenance socket.
     nlohmann::json describe() const;
 
-private:
+  private:
     void run();
     void runCycle(const station::TriggerRequest& trigger);
     void recover();
@@ -63,7 +62,7 @@ private:
     Inspector& inspector_;
     ResultStore& store_;
 
-    mutable std::mutex mutex_;  // guards config_, sequencer_ reads from other threads, counters
+    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters
     std::shared_ptr<const station::DaemonConfig> config_;
     station::CaptureSequencer sequencer_;
     std::uint64_t cycles_ = 0;
@@ -76,7 +75,7 @@ private:
     std::atomic<std::int64_t> stopRequestedNs_{0};
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
-    std::atomic<std::int64_t> cycleStartNs_{0};  ///< 0 when idle
+    std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

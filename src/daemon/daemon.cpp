@@ -1,16 +1,5 @@
 #include "daemon.h"
 
-#include <poll.h>
-#include <signal.h>
-#include <sys/signalfd.h>
-#include <unistd.h>
-
-#include <chrono>
-#include <cstdlib>
-#include <iostream>
-
-#include <CLI/CLI.hpp>
-
 #include "cycle_runner.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
@@ -18,6 +7,15 @@
 #include "notify.h"
 #include "plc_server.h"
 #include "result_store.h"
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdlib>
+#include <iostream>
+#include <poll.h>
+#include <signal.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
 
 namespace hg::daemon {
 namespace {
@@ -27,7 +25,8 @@ using Clock = std::chrono::steady_clock;
 std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
 {
     std::set<std::uint16_t> numbers;
-    for (const auto& [number, program] : cfg.programs) numbers.insert(number);
+    for (const auto& [number, program] : cfg.programs)
+        numbers.insert(number);
     return numbers;
 }
 
@@ -50,7 +49,7 @@ std::int64_t ageNs(std::int64_t thenNs)
     return now - thenNs;
 }
 
-}  // namespace
+} // namespace
 
 int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector)
 {
@@ -141,7 +140,8 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                 auto reason = registers.triggerManually(static_cast<std::uint16_t>(program),
                                                         request.value("serial", std::string()));
                 if (reason == station::RejectReason::None) return {{"ok", true}};
-                static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
+                static constexpr const char* why[] = {"", "busy", "unknown part program",
+                                                      "not ready (fault or starting)"};
                 return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
             }
             if (command == "abort") {
@@ -180,8 +180,8 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                 nextBeat = now + heartbeat;
             }
             // Healthy: the PLC server loop turns (it wakes every 0.5 s) and no cycle is stuck.
-            bool healthy = ageNs(plc.lastLoopNs()) < std::chrono::nanoseconds(std::chrono::seconds(3)).count() &&
-                           runner.healthy();
+            bool healthy =
+                ageNs(plc.lastLoopNs()) < std::chrono::nanoseconds(std::chrono::seconds(3)).count() && runner.healthy();
             if (healthy != wasHealthy) {
                 if (healthy)
                     log->info("healthy again; watchdog pings resume");
@@ -195,8 +195,8 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                 nextPing = now + watchdogPeriod;
             }
             auto state = runner.state();
-            notifier.status(healthy ? std::string(station::toString(state)) : "unhealthy: " +
-                                                                              std::string(station::toString(state)));
+            notifier.status(healthy ? std::string(station::toString(state))
+                                    : "unhealthy: " + std::string(station::toString(state)));
 
             auto wake = std::min(nextBeat, notifier.watchdogInterval() ? nextPing : nextBeat);
             auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
@@ -210,8 +210,8 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                 if (info.ssi_signo == SIGHUP) {
                     notifier.reloading();
                     try {
-                        auto fresh = std::make_shared<const station::DaemonConfig>(
-                            station::loadDaemonConfig(config->file));
+                        auto fresh =
+                            std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(config->file));
                         for (const auto& key : needsRestart(*config, *fresh))
                             log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
                         registers.setKnownPrograms(programNumbers(*fresh));
@@ -247,4 +247,4 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
     return 0;
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

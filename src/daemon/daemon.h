@@ -11,12 +11,12 @@
 // the maintenance socket.
 #pragma once
 
-#include <functional>
-#include <memory>
-
 #include "devices.h"
 #include "hullgauge/station/daemon_config.h"
 #include "inspector.h"
+
+#include <functional>
+#include <memory>
 
 namespace hg::daemon {
 
@@ -26,4 +26,4 @@ using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station:
 /// Runs the daemon until SIGTERM/SIGINT; returns the process exit status.
 int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector);
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -7,14 +7,13 @@
 // only construction (configuration parsing) throws hg::InputError.
 #pragma once
 
+#include "hullgauge/geometry/fixture.h"
+
 #include <chrono>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
-
-#include "hullgauge/geometry/fixture.h"
 
 namespace hg::daemon {
 
@@ -32,7 +31,7 @@ enum class LampPattern { Off, Busy, Pass, Fail, Fault };
 std::string_view toString(LampPattern p);
 
 class StationDevices {
-public:
+  public:
     virtual ~StationDevices() = default;
 
     /// Configure and activate every driver (and home the fixture). READY=1 is
@@ -61,4 +60,4 @@ public:
     }
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

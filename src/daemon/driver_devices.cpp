@@ -16,11 +16,16 @@ using drivers::LifecycleState;
 StepResult fromFixture(const drivers::FixtureResult& r)
 {
     switch (r.code) {
-    case FixtureStatusCode::Ok: return StepResult::success();
-    case FixtureStatusCode::Timeout: return {StepResult::Code::Timeout, r.message};
-    case FixtureStatusCode::Fault: return {StepResult::Code::Fault, r.message};
-    case FixtureStatusCode::CommunicationError: return {StepResult::Code::CommunicationError, r.message};
-    case FixtureStatusCode::NotAllowed: return {StepResult::Code::Refused, r.message};
+    case FixtureStatusCode::Ok:
+        return StepResult::success();
+    case FixtureStatusCode::Timeout:
+        return {StepResult::Code::Timeout, r.message};
+    case FixtureStatusCode::Fault:
+        return {StepResult::Code::Fault, r.message};
+    case FixtureStatusCode::CommunicationError:
+        return {StepResult::Code::CommunicationError, r.message};
+    case FixtureStatusCode::NotAllowed:
+        return {StepResult::Code::Refused, r.message};
     }
     return {StepResult::Code::Error, r.message};
 }
@@ -28,17 +33,22 @@ StepResult fromFixture(const drivers::FixtureResult& r)
 drivers::StationIndication indication(LampPattern p)
 {
     switch (p) {
-    case LampPattern::Off: return drivers::StationIndication::Dark;
-    case LampPattern::Busy: return drivers::StationIndication::Busy;
-    case LampPattern::Pass: return drivers::StationIndication::Pass;
-    case LampPattern::Fail: return drivers::StationIndication::Fail;
-    case LampPattern::Fault: return drivers::StationIndication::Fault;
+    case LampPattern::Off:
+        return drivers::StationIndication::Dark;
+    case LampPattern::Busy:
+        return drivers::StationIndication::Busy;
+    case LampPattern::Pass:
+        return drivers::StationIndication::Pass;
+    case LampPattern::Fail:
+        return drivers::StationIndication::Fail;
+    case LampPattern::Fault:
+        return drivers::StationIndication::Fault;
     }
     return drivers::StationIndication::Dark;
 }
 
 class DriverDevices : public StationDevices {
-public:
+  public:
     explicit DriverDevices(const station::DaemonConfig& config)
     {
         const auto& doc = *config.station.document;
@@ -49,7 +59,8 @@ public:
             // The simulated line: the camera renders the selected part at the fixture's actual pose.
             drivers::SimCameraInputs inputs;
             inputs.station = config.station;
-            for (const auto& [name, file] : config.simulatedParts) inputs.parts.emplace_back(name, model::loadMesh(file));
+            for (const auto& [name, file] : config.simulatedParts)
+                inputs.parts.emplace_back(name, model::loadMesh(file));
             if (inputs.parts.empty())
                 throw InputError(config.file.string(), "simulation.parts",
                                  "the simulated camera needs the parts it can render (nominal and variants)");
@@ -127,9 +138,12 @@ public:
             // The pipeline keeps the image after the buffer returns to the pool.
             image = frame.image.clone();
             return StepResult::success();
-        case drivers::FrameStatus::Timeout: return {StepResult::Code::Timeout, frame.message};
-        case drivers::FrameStatus::Incomplete: return {StepResult::Code::BadFrame, frame.message};
-        case drivers::FrameStatus::Error: return {StepResult::Code::Error, frame.message};
+        case drivers::FrameStatus::Timeout:
+            return {StepResult::Code::Timeout, frame.message};
+        case drivers::FrameStatus::Incomplete:
+            return {StepResult::Code::BadFrame, frame.message};
+        case drivers::FrameStatus::Error:
+            return {StepResult::Code::Error, frame.message};
         }
         return {StepResult::Code::Error, frame.message};
     }
@@ -155,7 +169,7 @@ public:
             hg::log::category("daemon")->warn("lamps: {}", r.message);
     }
 
-private:
+  private:
     StepResult homeIfNeeded()
     {
         drivers::FixtureStatus status;
@@ -167,11 +181,11 @@ private:
 
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;
-    drivers::SimCamera* simCamera_ = nullptr;  ///< camera_ when it is the simulated one
+    drivers::SimCamera* simCamera_ = nullptr; ///< camera_ when it is the simulated one
     std::unique_ptr<drivers::Lamps> lamps_;
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& config)
 {
@@ -179,4 +193,4 @@ std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& c
     return std::make_unique<DriverDevices>(config);
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

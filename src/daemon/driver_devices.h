@@ -2,14 +2,14 @@
 // the station file (camera.driver, fixture.driver, the lamps section).
 #pragma once
 
-#include <memory>
-
 #include "devices.h"
 #include "hullgauge/station/daemon_config.h"
+
+#include <memory>
 
 namespace hg::daemon {
 
 /// Builds the drivers (parsing only; throws hg::InputError naming the key).
 std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& config);
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

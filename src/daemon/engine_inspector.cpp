@@ -1,14 +1,14 @@
 #include "engine_inspector.h"
 
-#include <chrono>
-#include <map>
-
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/vision/segmentation.h"
+
+#include <chrono>
+#include <map>
 
 namespace hg::daemon {
 namespace {
@@ -21,7 +21,7 @@ struct LoadedProgram {
 };
 
 class EngineInspector : public Inspector {
-public:
+  public:
     explicit EngineInspector(const station::DaemonConfig& config) : station_(config.station) {}
 
     bool begin(const station::PartProgramRef& ref, std::string& error) override
@@ -82,12 +82,13 @@ public:
 
     void cancel() override { views_.clear(); }
 
-private:
+  private:
     // The failed part's frames with silhouettes and landmark projections (docs/daemon.md).
     std::vector<ViewEvidence> evidence(const inspect::InspectionResult& result) const
     {
         std::map<std::string, std::string> status;
-        for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
+        for (const auto& l : result.landmarks)
+            status[l.id] = inspect::toString(l.status);
         std::vector<ViewEvidence> out;
         for (const auto& v : views_) {
             ViewEvidence e{v.frame, vision::segment(v.frame, segmentation_), {}};
@@ -106,11 +107,11 @@ private:
     std::vector<inspect::CapturedView> views_;
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config)
 {
     return std::make_unique<EngineInspector>(config);
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

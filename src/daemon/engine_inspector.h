@@ -4,13 +4,13 @@
 // grabbed views with their posed cameras and inspects them at finish().
 #pragma once
 
-#include <memory>
-
 #include "hullgauge/station/daemon_config.h"
 #include "inspector.h"
+
+#include <memory>
 
 namespace hg::daemon {
 
 std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config);
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -1,12 +1,11 @@
 #include "image_archive.h"
 
+#include "hullgauge/common/log.h"
+
 #include <algorithm>
 #include <chrono>
-
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include "hullgauge/common/log.h"
 
 namespace hg::daemon {
 namespace fs = std::filesystem;
@@ -40,15 +39,15 @@ cv::Mat annotate(const ViewEvidence& view)
         std::vector<std::vector<cv::Point>> contours;
         cv::Mat mask = view.silhouette != 0;
         cv::findContours(mask, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
-        cv::drawContours(out, contours, -1, cv::Scalar(255, 160, 0), thickness);  // silhouette outline: blue
+        cv::drawContours(out, contours, -1, cv::Scalar(255, 160, 0), thickness); // silhouette outline: blue
     }
     const int radius = std::max(4, out.cols / 150);
     for (const auto& mark : view.landmarks) {
         cv::Point p(cvRound(mark.pixel.x), cvRound(mark.pixel.y));
         auto colour = statusColour(mark.status);
         cv::circle(out, p, radius, colour, thickness + 1);
-        cv::putText(out, mark.id, p + cv::Point(radius + 2, -radius), cv::FONT_HERSHEY_SIMPLEX,
-                    0.4 * thickness + 0.2, colour, thickness);
+        cv::putText(out, mark.id, p + cv::Point(radius + 2, -radius), cv::FONT_HERSHEY_SIMPLEX, 0.4 * thickness + 0.2,
+                    colour, thickness);
     }
     return out;
 }
@@ -64,7 +63,8 @@ fs::path ImageArchive::saveFailed(std::int64_t startedUnixMs, const std::string&
     if (views.empty()) return {};
     auto log = hg::log::category("store");
     std::string safe;
-    for (char c : serial) safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
+    for (char c : serial)
+        safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
     auto dir = root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
     std::error_code ec;
     fs::create_directories(dir, ec);
@@ -115,4 +115,4 @@ std::size_t ImageArchive::enforceRetention()
     return removed;
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

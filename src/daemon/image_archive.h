@@ -3,15 +3,14 @@
 // kept within the retention limits (count, age, bytes; oldest removed first).
 #pragma once
 
-#include <cstdint>
-#include <filesystem>
-#include <string>
-#include <vector>
-
-#include <opencv2/core/types.hpp>
-
 #include "hullgauge/station/daemon_config.h"
 #include "inspector.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/core/types.hpp>
+#include <string>
+#include <vector>
 
 namespace hg::daemon {
 
@@ -23,7 +22,7 @@ cv::Scalar statusColour(const std::string& status);
 cv::Mat annotate(const ViewEvidence& view);
 
 class ImageArchive {
-public:
+  public:
     ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
 
     /// Writes `views` as view_<k>.png into a new folder named after the time
@@ -35,9 +34,9 @@ public:
     /// or beyond max_bytes in total. Returns how many were removed.
     std::size_t enforceRetention();
 
-private:
+  private:
     std::filesystem::path root_;
     station::RetentionConfig retention_;
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

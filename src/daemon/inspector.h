@@ -4,16 +4,15 @@
 // finish() waits for the verdict.
 #pragma once
 
-#include <cstddef>
-#include <optional>
-#include <string>
-#include <vector>
-
-#include <opencv2/core/mat.hpp>
-
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/daemon_config.h"
 #include "hullgauge/station/result_record.h"
+
+#include <cstddef>
+#include <opencv2/core/mat.hpp>
+#include <optional>
+#include <string>
+#include <vector>
 
 namespace hg::daemon {
 
@@ -26,23 +25,23 @@ struct LandmarkMark {
 
 /// What a view contributes to the failed-part images.
 struct ViewEvidence {
-    cv::Mat image;       ///< the grabbed frame
-    cv::Mat silhouette;  ///< CV_8U mask, non-zero = part
+    cv::Mat image;      ///< the grabbed frame
+    cv::Mat silhouette; ///< CV_8U mask, non-zero = part
     std::vector<LandmarkMark> landmarks;
 };
 
 struct InspectionOutcome {
-    bool ok = false;     ///< false: the inspection could not be computed (`error` says why)
+    bool ok = false; ///< false: the inspection could not be computed (`error` says why)
     std::string error;
-    std::string part;    ///< the part program's name
+    std::string part; ///< the part program's name
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
-    std::vector<ViewEvidence> views;  ///< filled when the part failed
+    std::vector<ViewEvidence> views; ///< filled when the part failed
     double processingMs = 0.0;
 };
 
 class Inspector {
-public:
+  public:
     virtual ~Inspector() = default;
     /// Loads (or reuses) the program's inspection map and plan; false with a
     /// reason when it cannot be loaded.
@@ -55,4 +54,4 @@ public:
     virtual void cancel() = 0;
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

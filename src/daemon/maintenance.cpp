@@ -1,16 +1,15 @@
 #include "maintenance.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
+#include <cerrno>
+#include <cstring>
 #include <grp.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-
-#include "hullgauge/common/error.h"
-#include "hullgauge/common/log.h"
 
 namespace hg::daemon {
 
@@ -97,4 +96,4 @@ void MaintenanceServer::serveOne()
     close(client);
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

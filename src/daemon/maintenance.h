@@ -7,14 +7,13 @@
 
 #include <filesystem>
 #include <functional>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace hg::daemon {
 
 class MaintenanceServer {
-public:
+  public:
     using Handler = std::function<nlohmann::json(const nlohmann::json& request)>;
 
     /// Creates the socket (removing a stale one); throws hg::FaultError naming the path.
@@ -28,10 +27,10 @@ public:
     /// Accepts and answers one pending client (call when fd() is readable).
     void serveOne();
 
-private:
+  private:
     std::filesystem::path path_;
     Handler handler_;
     int fd_ = -1;
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -1,11 +1,10 @@
 #include "notify.h"
 
-#include <systemd/sd-daemon.h>
+#include "hullgauge/common/log.h"
 
 #include <cstdint>
 #include <cstdlib>
-
-#include "hullgauge/common/log.h"
+#include <systemd/sd-daemon.h>
 
 namespace hg::daemon {
 
@@ -31,9 +30,15 @@ void Notifier::ready(const std::string& status)
     send("READY=1\nSTATUS=" + status);
 }
 
-void Notifier::reloading() { send("RELOADING=1\nSTATUS=reloading configuration"); }
+void Notifier::reloading()
+{
+    send("RELOADING=1\nSTATUS=reloading configuration");
+}
 
-void Notifier::watchdog() { send("WATCHDOG=1"); }
+void Notifier::watchdog()
+{
+    send("WATCHDOG=1");
+}
 
 void Notifier::status(const std::string& text)
 {
@@ -43,6 +48,9 @@ void Notifier::status(const std::string& text)
     send("STATUS=" + text);
 }
 
-void Notifier::stopping(const std::string& status) { send("STOPPING=1\nSTATUS=" + status); }
+void Notifier::stopping(const std::string& status)
+{
+    send("STOPPING=1\nSTATUS=" + status);
+}
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -12,7 +12,7 @@
 namespace hg::daemon {
 
 class Notifier {
-public:
+  public:
     Notifier();
     /// True when a NOTIFY_SOCKET was given (running under systemd or a test harness).
     bool active() const { return active_; }
@@ -25,11 +25,11 @@ public:
     void status(const std::string& text);
     void stopping(const std::string& status);
 
-private:
+  private:
     void send(const std::string& message);
     bool active_ = false;
     std::optional<std::chrono::microseconds> watchdog_;
     std::string lastStatus_;
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -1,27 +1,26 @@
 #include "plc_server.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
 #include <arpa/inet.h>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 #include <fcntl.h>
 #include <modbus/modbus.h>
+#include <mutex>
 #include <netinet/in.h>
 #include <sys/select.h>
 #include <sys/socket.h>
 #include <unistd.h>
-
-#include <cerrno>
-#include <chrono>
-#include <cstring>
-#include <mutex>
-
-#include "hullgauge/common/error.h"
-#include "hullgauge/common/log.h"
 
 namespace hg::daemon {
 namespace {
 
 using station::ModbusException;
 
-constexpr int kHeader = 7;  // MBAP header: transaction (2), protocol (2), length (2), unit (1)
+constexpr int kHeader = 7; // MBAP header: transaction (2), protocol (2), length (2), unit (1)
 constexpr std::uint8_t kGatewayTargetFailed = 0x0B;
 
 std::int64_t nowNs()
@@ -30,7 +29,10 @@ std::int64_t nowNs()
         .count();
 }
 
-std::uint16_t be16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
+std::uint16_t be16(const std::uint8_t* p)
+{
+    return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
+}
 
 std::string peerText(int fd)
 {
@@ -42,11 +44,11 @@ std::string peerText(int fd)
     return std::string(buf) + ":" + std::to_string(ntohs(addr.sin_port));
 }
 
-}  // namespace
+} // namespace
 
 struct PlcServer::Impl {
     modbus_t* ctx = nullptr;
-    modbus_mapping_t* scratch = nullptr;  // the reply buffer; never the source of truth
+    modbus_mapping_t* scratch = nullptr; // the reply buffer; never the source of truth
     int listenFd = -1;
     int wakeRead = -1;
     int wakeWrite = -1;
@@ -60,14 +62,18 @@ PlcServer::PlcServer(station::PlcRegisters& registers, station::PlcConfig config
 {
 }
 
-PlcServer::~PlcServer() { stop(); }
+PlcServer::~PlcServer()
+{
+    stop();
+}
 
 void PlcServer::start()
 {
     auto log = hg::log::category("plc");
     impl_ = new Impl;
     impl_->ctx = modbus_new_tcp(config_.bindAddress.c_str(), config_.port);
-    if (!impl_->ctx) throw FaultError("plc: cannot create the Modbus TCP context: " + std::string(modbus_strerror(errno)));
+    if (!impl_->ctx)
+        throw FaultError("plc: cannot create the Modbus TCP context: " + std::string(modbus_strerror(errno)));
     impl_->scratch = modbus_mapping_new_start_address(0, 0, 0, 0, 0, station::reg::Count, 0, 0);
     auto frameS = static_cast<std::uint32_t>(config_.frameTimeout.count() / 1000);
     auto frameUs = static_cast<std::uint32_t>((config_.frameTimeout.count() % 1000) * 1000);
@@ -95,7 +101,8 @@ void PlcServer::start()
     running_ = true;
     lastLoopNs_ = nowNs();
     log->info("Modbus TCP server on {}:{}, unit id {}, {} allowed client networks", config_.bindAddress, port_,
-              config_.unitId, config_.allowedClients.empty() ? std::string("any") : std::to_string(config_.allowedClients.size()));
+              config_.unitId,
+              config_.allowedClients.empty() ? std::string("any") : std::to_string(config_.allowedClients.size()));
     thread_ = std::thread([this] { serve(); });
 }
 
@@ -107,7 +114,8 @@ void PlcServer::stop()
         (void)!write(impl_->wakeWrite, &c, 1);
     }
     if (thread_.joinable()) thread_.join();
-    for (int fd : impl_->clients) close(fd);
+    for (int fd : impl_->clients)
+        close(fd);
     if (impl_->listenFd >= 0) close(impl_->listenFd);
     if (impl_->wakeRead >= 0) close(impl_->wakeRead);
     if (impl_->wakeWrite >= 0) close(impl_->wakeWrite);
@@ -168,10 +176,8 @@ void PlcServer::serve()
                     log->warn("refused connection from {}: not in plc.allowed_clients", who);
                     ++impl_->counters.refusedConnections;
                     close(fd);
-                } else if (static_cast<int>(impl_->clients.size()) >= config_.maxClients ||
-                           fd >= FD_SETSIZE) {
-                    log->warn("refused connection from {}: {} clients already connected", who,
-                              impl_->clients.size());
+                } else if (static_cast<int>(impl_->clients.size()) >= config_.maxClients || fd >= FD_SETSIZE) {
+                    log->warn("refused connection from {}: {} clients already connected", who, impl_->clients.size());
                     ++impl_->counters.refusedConnections;
                     close(fd);
                 } else {
@@ -261,7 +267,7 @@ bool PlcServer::handle(int fd)
         auto ex = registers_.write(address, std::span<const std::uint16_t>(&value, 1));
         if (ex != ModbusException::None) return reject(static_cast<std::uint8_t>(ex));
         log->debug("write {} = {}", address, value);
-        if (address >= station::reg::Count) return false;  // cannot happen: write() refused it
+        if (address >= station::reg::Count) return false; // cannot happen: write() refused it
         return modbus_reply(impl_->ctx, req, rc, impl_->scratch) >= 0;
     }
     case MODBUS_FC_WRITE_MULTIPLE_REGISTERS: {
@@ -272,14 +278,16 @@ bool PlcServer::handle(int fd)
         if (count < 1 || count > MODBUS_MAX_WRITE_REGISTERS || bytes != count * 2 || rc != kHeader + 6 + bytes)
             return reject(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values(count);
-        for (std::size_t i = 0; i < count; ++i) values[i] = be16(pdu + 6 + 2 * i);
+        for (std::size_t i = 0; i < count; ++i)
+            values[i] = be16(pdu + 6 + 2 * i);
         auto ex = registers_.write(address, values);
         if (ex != ModbusException::None) return reject(static_cast<std::uint8_t>(ex));
         log->debug("write {}+{}", address, count);
         return modbus_reply(impl_->ctx, req, rc, impl_->scratch) >= 0;
     }
-    default: return reject(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+    default:
+        return reject(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
     }
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -13,6 +13,9 @@
 // other client keeps being served and new clients are accepted.
 #pragma once
 
+#include "hullgauge/station/daemon_config.h"
+#include "hullgauge/station/plc_registers.h"
+
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -20,13 +23,10 @@
 #include <thread>
 #include <vector>
 
-#include "hullgauge/station/daemon_config.h"
-#include "hullgauge/station/plc_registers.h"
-
 namespace hg::daemon {
 
 class PlcServer {
-public:
+  public:
     PlcServer(station::PlcRegisters& registers, station::PlcConfig config);
     ~PlcServer();
     PlcServer(const PlcServer&) = delete;
@@ -51,7 +51,7 @@ public:
     };
     Counters counters() const;
 
-private:
+  private:
     void serve();
     bool allowed(std::uint32_t hostOrderAddress) const;
     /// Handles one request on `fd`; false when the client must be closed.
@@ -67,4 +67,4 @@ private:
     std::atomic<std::int64_t> lastLoopNs_{0};
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

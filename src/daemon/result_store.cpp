@@ -1,12 +1,11 @@
 #include "result_store.h"
 
-#include <sqlite3.h>
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
 
 #include <chrono>
 #include <ctime>
-
-#include "hullgauge/common/error.h"
-#include "hullgauge/common/log.h"
+#include <sqlite3.h>
 
 namespace hg::daemon {
 namespace {
@@ -60,7 +59,7 @@ struct Statement {
     Statement& operator=(const Statement&) = delete;
 };
 
-}  // namespace
+} // namespace
 
 ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
 {
@@ -174,4 +173,4 @@ std::int64_t ResultStore::count() const
     return sqlite3_step(query.stmt) == SQLITE_ROW ? sqlite3_column_int64(query.stmt, 0) : 0;
 }
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -5,20 +5,19 @@
 // so every result the PLC saw survives a power cut or kill -9.
 #pragma once
 
+#include "hullgauge/station/result_record.h"
+
 #include <cstdint>
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
-
-#include "hullgauge/station/result_record.h"
+#include <string>
 
 struct sqlite3;
 
 namespace hg::daemon {
 
 class ResultStore {
-public:
+  public:
     /// Opens or creates the database (and its folder). Throws hg::FaultError
     /// with SQLite's message when the file cannot be opened or is not ours.
     explicit ResultStore(const std::filesystem::path& file);
@@ -33,11 +32,11 @@ public:
     std::int64_t count() const;
     const std::filesystem::path& file() const { return file_; }
 
-private:
+  private:
     void exec(const char* sql) const;
 
     std::filesystem::path file_;
     sqlite3* db_ = nullptr;
 };
 
-}  // namespace hg::daemon
+} // namespace hg::daemon

@@ -1,12 +1,11 @@
 #include "hullgauge/station/daemon_config.h"
 
-#include <arpa/inet.h>
-
-#include <cmath>
-#include <limits>
-
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
+
+#include <arpa/inet.h>
+#include <cmath>
+#include <limits>
 
 namespace hg::station {
 namespace {
@@ -36,8 +35,8 @@ fs::path existingFile(const ConfigNode& node, const fs::path& base)
 
 void parsePlc(const ConfigNode& node, PlcConfig& plc)
 {
-    node.allowOnlyKeys({"bind", "port", "unit_id", "allowed_clients", "max_clients", "frame_timeout_s",
-                        "heartbeat_period_s"});
+    node.allowOnlyKeys(
+        {"bind", "port", "unit_id", "allowed_clients", "max_clients", "frame_timeout_s", "heartbeat_period_s"});
     if (auto n = node.optional("bind")) {
         plc.bindAddress = n->asString();
         in_addr tmp{};
@@ -115,12 +114,11 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     }
     ref.viewsFile = existingFile(node["views"], base);
     ref.views = geometry::loadPoses(ref.viewsFile, &station.fixture);
-    if (ref.views.empty())
-        throw InputError(ref.viewsFile.string(), "views", "a view plan needs at least one pose");
+    if (ref.views.empty()) throw InputError(ref.viewsFile.string(), "views", "a view plan needs at least one pose");
     return ref;
 }
 
-}  // namespace
+} // namespace
 
 bool Ipv4Network::contains(std::uint32_t hostOrderAddress) const
 {
@@ -203,10 +201,11 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         n->allowOnlyKeys({"parts"});
         auto parts = (*n)["parts"];
         if (!parts.isMap()) parts.fail("expected a map of part names to mesh files (nominal and defect variants)");
-        for (const auto& name : parts.keys()) cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
+        for (const auto& name : parts.keys())
+            cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
         if (parts.keys().empty() || !parts.has("nominal")) parts.fail("the simulated parts must include 'nominal'");
     }
     return cfg;
 }
 
-}  // namespace hg::station
+} // namespace hg::station

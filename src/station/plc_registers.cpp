@@ -6,12 +6,18 @@
 namespace hg::station {
 namespace {
 
-std::uint16_t u16(auto v) { return static_cast<std::uint16_t>(v); }
+std::uint16_t u16(auto v)
+{
+    return static_cast<std::uint16_t>(v);
+}
 
 // SERIAL carries printable ASCII; NUL pads a short serial.
-bool validSerialByte(unsigned byte) { return byte == 0 || (byte >= 0x20 && byte <= 0x7E); }
+bool validSerialByte(unsigned byte)
+{
+    return byte == 0 || (byte >= 0x20 && byte <= 0x7E);
+}
 
-}  // namespace
+} // namespace
 
 std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
 {
@@ -20,7 +26,8 @@ std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
         s.push_back(static_cast<char>(w >> 8));
         s.push_back(static_cast<char>(w & 0xFF));
     }
-    while (!s.empty() && (s.back() == '\0' || s.back() == ' ')) s.pop_back();
+    while (!s.empty() && (s.back() == '\0' || s.back() == ' '))
+        s.pop_back();
     // A NUL inside the serial ends it (C-string convention of most PLC string types).
     if (auto nul = s.find('\0'); nul != std::string::npos) s.resize(nul);
     return s;
@@ -36,7 +43,10 @@ std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& seri
     return words;
 }
 
-PlcRegisters::PlcRegisters() { regs_[reg::Status] = u16(PlcStatus::Starting); }
+PlcRegisters::PlcRegisters()
+{
+    regs_[reg::Status] = u16(PlcStatus::Starting);
+}
 
 bool PlcRegisters::writable(std::uint16_t address)
 {
@@ -90,8 +100,8 @@ ModbusException PlcRegisters::write(std::uint16_t address, std::span<const std::
     if (newTrigger) {
         // Program and serial written in the same block are already in place.
         TriggerRequest request{*newTrigger, regs_[reg::PartProgram],
-                               decodeSerial(std::span<const std::uint16_t, reg::SerialWords>(
-                                   regs_.data() + reg::Serial, reg::SerialWords)),
+                               decodeSerial(std::span<const std::uint16_t, reg::SerialWords>(regs_.data() + reg::Serial,
+                                                                                             reg::SerialWords)),
                                false};
         acceptLocked(std::move(request));
     }
@@ -201,4 +211,4 @@ std::array<std::uint16_t, reg::Count> PlcRegisters::snapshot() const
     return regs_;
 }
 
-}  // namespace hg::station
+} // namespace hg::station

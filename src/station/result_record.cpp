@@ -8,10 +8,14 @@ namespace hg::station {
 std::string_view toString(Verdict v)
 {
     switch (v) {
-    case Verdict::Pass: return "pass";
-    case Verdict::Fail: return "fail";
-    case Verdict::Aborted: return "aborted";
-    case Verdict::Error: return "error";
+    case Verdict::Pass:
+        return "pass";
+    case Verdict::Fail:
+        return "fail";
+    case Verdict::Aborted:
+        return "aborted";
+    case Verdict::Error:
+        return "error";
     }
     return "error";
 }
@@ -43,17 +47,24 @@ PublishedResult InspectionRecord::toPublished(PlcStatus statusAfter) const
     r.statusAfter = statusAfter;
     r.faultCode = static_cast<std::uint16_t>(faultCode);
     switch (verdict) {
-    case Verdict::Pass: r.result = PlcResult::Pass; break;
-    case Verdict::Fail: r.result = PlcResult::Fail; break;
+    case Verdict::Pass:
+        r.result = PlcResult::Pass;
+        break;
+    case Verdict::Fail:
+        r.result = PlcResult::Fail;
+        break;
     case Verdict::Aborted:
-    case Verdict::Error: r.result = PlcResult::Aborted; break;
+    case Verdict::Error:
+        r.result = PlcResult::Aborted;
+        break;
     }
     r.landmarksFailed = static_cast<std::uint16_t>(std::min<std::size_t>(landmarksFailed(), kMax));
     r.landmarksTotal = static_cast<std::uint16_t>(std::min<std::size_t>(landmarks.size(), kMax));
     r.cycleMs = cycleMs;
     r.landmarkOk.reserve(landmarks.size());
-    for (const auto& l : landmarks) r.landmarkOk.push_back(l.ok());
+    for (const auto& l : landmarks)
+        r.landmarkOk.push_back(l.ok());
     return r;
 }
 
-}  // namespace hg::station
+} // namespace hg::station

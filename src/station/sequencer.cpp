@@ -13,31 +13,15 @@ using A = SequencerAction::Kind;
 
 // The allowed transitions (from, to); self-transitions are the retries.
 constexpr std::array<std::pair<S, S>, 22> kTransitions{{
-    {S::Starting, S::Ready},
-    {S::Starting, S::Fault},
-    {S::Ready, S::Moving},
-    {S::Ready, S::Fault},
-    {S::Done, S::Moving},
-    {S::Done, S::Fault},
-    {S::Moving, S::Moving},
-    {S::Moving, S::Settling},
-    {S::Moving, S::Done},
-    {S::Moving, S::Fault},
-    {S::Settling, S::Grabbing},
-    {S::Settling, S::Done},
-    {S::Settling, S::Fault},
-    {S::Grabbing, S::Grabbing},
-    {S::Grabbing, S::Moving},
-    {S::Grabbing, S::Processing},
-    {S::Grabbing, S::Done},
-    {S::Grabbing, S::Fault},
-    {S::Processing, S::Done},
-    {S::Processing, S::Fault},
-    {S::Fault, S::Ready},
-    {S::Fault, S::Fault},
+    {S::Starting, S::Ready}, {S::Starting, S::Fault},    {S::Ready, S::Moving},      {S::Ready, S::Fault},
+    {S::Done, S::Moving},    {S::Done, S::Fault},        {S::Moving, S::Moving},     {S::Moving, S::Settling},
+    {S::Moving, S::Done},    {S::Moving, S::Fault},      {S::Settling, S::Grabbing}, {S::Settling, S::Done},
+    {S::Settling, S::Fault}, {S::Grabbing, S::Grabbing}, {S::Grabbing, S::Moving},   {S::Grabbing, S::Processing},
+    {S::Grabbing, S::Done},  {S::Grabbing, S::Fault},    {S::Processing, S::Done},   {S::Processing, S::Fault},
+    {S::Fault, S::Ready},    {S::Fault, S::Fault},
 }};
 
-}  // namespace
+} // namespace
 
 bool transitionAllowed(SequencerState from, SequencerState to)
 {
@@ -61,31 +45,46 @@ std::string_view toString(SequencerState s)
 std::string_view toString(SequencerEvent e)
 {
     constexpr std::array<std::string_view, 20> names{
-        "devices-active", "devices-failed", "trigger",     "in-position",       "move-timeout",
-        "move-fault",     "move-comm-error", "move-refused", "settled",          "frame-ok",
-        "frame-timeout",  "frame-bad",      "frame-error",  "processed",   "processing-failed", "program-failed",
-        "abort",          "shutdown",       "recovered",   "recovery-failed"};
+        "devices-active", "devices-failed",  "trigger",      "in-position", "move-timeout",
+        "move-fault",     "move-comm-error", "move-refused", "settled",     "frame-ok",
+        "frame-timeout",  "frame-bad",       "frame-error",  "processed",   "processing-failed",
+        "program-failed", "abort",           "shutdown",     "recovered",   "recovery-failed"};
     return names[static_cast<std::size_t>(e)];
 }
 
 std::string_view toString(FaultCode c)
 {
     switch (c) {
-    case FaultCode::None: return "none";
-    case FaultCode::CameraTimeout: return "camera-timeout";
-    case FaultCode::CameraBadFrame: return "camera-bad-frame";
-    case FaultCode::CameraError: return "camera-error";
-    case FaultCode::FixtureTimeout: return "fixture-timeout";
-    case FaultCode::FixtureFault: return "fixture-fault";
-    case FaultCode::FixtureCommunication: return "fixture-communication";
-    case FaultCode::FixtureRefused: return "fixture-refused";
-    case FaultCode::ProgramLoad: return "program-load";
-    case FaultCode::InspectionError: return "inspection-error";
-    case FaultCode::AbortedByPlc: return "aborted-by-plc";
-    case FaultCode::AbortedByShutdown: return "aborted-by-shutdown";
-    case FaultCode::ResultStore: return "result-store";
-    case FaultCode::DevicesDown: return "devices-down";
-    case FaultCode::Internal: return "internal";
+    case FaultCode::None:
+        return "none";
+    case FaultCode::CameraTimeout:
+        return "camera-timeout";
+    case FaultCode::CameraBadFrame:
+        return "camera-bad-frame";
+    case FaultCode::CameraError:
+        return "camera-error";
+    case FaultCode::FixtureTimeout:
+        return "fixture-timeout";
+    case FaultCode::FixtureFault:
+        return "fixture-fault";
+    case FaultCode::FixtureCommunication:
+        return "fixture-communication";
+    case FaultCode::FixtureRefused:
+        return "fixture-refused";
+    case FaultCode::ProgramLoad:
+        return "program-load";
+    case FaultCode::InspectionError:
+        return "inspection-error";
+    case FaultCode::AbortedByPlc:
+        return "aborted-by-plc";
+    case FaultCode::AbortedByShutdown:
+        return "aborted-by-shutdown";
+    case FaultCode::ResultStore:
+        return "result-store";
+    case FaultCode::DevicesDown:
+        return "devices-down";
+    case FaultCode::Internal:
+        return "internal";
     }
     return "unknown";
 }
@@ -93,26 +92,43 @@ std::string_view toString(FaultCode c)
 std::string_view describe(FaultCode c)
 {
     switch (c) {
-    case FaultCode::None: return "no fault";
-    case FaultCode::CameraTimeout: return "no frame from the camera within the grab timeout (after one retry)";
-    case FaultCode::CameraBadFrame: return "the camera delivered incomplete frames (after one retry)";
-    case FaultCode::CameraError: return "the camera could not grab";
-    case FaultCode::FixtureTimeout: return "the fixture did not reach position within the move timeout (after one retry)";
-    case FaultCode::FixtureFault: return "the fixture drive reports a fault that a reset did not clear";
-    case FaultCode::FixtureCommunication: return "the fixture does not answer";
-    case FaultCode::FixtureRefused: return "the fixture refused the pose (out of range or not homed)";
-    case FaultCode::ProgramLoad: return "the part program or its view plan could not be loaded";
-    case FaultCode::InspectionError: return "the inspection could not be computed";
-    case FaultCode::AbortedByPlc: return "the PLC aborted the cycle";
-    case FaultCode::AbortedByShutdown: return "the daemon was stopped during the cycle";
-    case FaultCode::ResultStore: return "the result could not be committed to the result database";
-    case FaultCode::DevicesDown: return "the camera or fixture could not be started";
-    case FaultCode::Internal: return "internal error";
+    case FaultCode::None:
+        return "no fault";
+    case FaultCode::CameraTimeout:
+        return "no frame from the camera within the grab timeout (after one retry)";
+    case FaultCode::CameraBadFrame:
+        return "the camera delivered incomplete frames (after one retry)";
+    case FaultCode::CameraError:
+        return "the camera could not grab";
+    case FaultCode::FixtureTimeout:
+        return "the fixture did not reach position within the move timeout (after one retry)";
+    case FaultCode::FixtureFault:
+        return "the fixture drive reports a fault that a reset did not clear";
+    case FaultCode::FixtureCommunication:
+        return "the fixture does not answer";
+    case FaultCode::FixtureRefused:
+        return "the fixture refused the pose (out of range or not homed)";
+    case FaultCode::ProgramLoad:
+        return "the part program or its view plan could not be loaded";
+    case FaultCode::InspectionError:
+        return "the inspection could not be computed";
+    case FaultCode::AbortedByPlc:
+        return "the PLC aborted the cycle";
+    case FaultCode::AbortedByShutdown:
+        return "the daemon was stopped during the cycle";
+    case FaultCode::ResultStore:
+        return "the result could not be committed to the result database";
+    case FaultCode::DevicesDown:
+        return "the camera or fixture could not be started";
+    case FaultCode::Internal:
+        return "internal error";
     }
     return "unknown fault";
 }
 
-CaptureSequencer::CaptureSequencer(int retries) : retries_(retries < 0 ? 0 : retries) {}
+CaptureSequencer::CaptureSequencer(int retries) : retries_(retries < 0 ? 0 : retries)
+{
+}
 
 SequencerAction CaptureSequencer::go(SequencerState to, SequencerAction action)
 {
@@ -171,7 +187,8 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
         if (state_ == S::Fault) return {};
         faultCode_ = FaultCode::DevicesDown;
         return go(S::Fault, {A::Recover, 0, false, false});
-    case E::Trigger: return {};  // use trigger(viewCount)
+    case E::Trigger:
+        return {}; // use trigger(viewCount)
     case E::Abort:
     case E::Shutdown:
         // Processing takes milliseconds and needs no device: let it finish so its result is recorded.
@@ -188,18 +205,26 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
     case E::ProgramFailed:
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, true, false);
         return {};
-    default: break;
+    default:
+        break;
     }
 
     switch (state_) {
     case S::Moving:
         switch (event) {
-        case E::InPosition: attempt_ = 1; return go(S::Settling, {A::Settle, view_, false, false});
-        case E::MoveTimeout: return failStep(FaultCode::FixtureTimeout, {A::MoveTo, view_, true, false});
-        case E::MoveFault: return failStep(FaultCode::FixtureFault, {A::MoveTo, view_, true, false});
-        case E::MoveCommError: return failStep(FaultCode::FixtureCommunication, {A::MoveTo, view_, true, false});
-        case E::MoveRefused: return failStep(FaultCode::FixtureRefused, {A::MoveTo, view_, true, false});
-        default: return {};
+        case E::InPosition:
+            attempt_ = 1;
+            return go(S::Settling, {A::Settle, view_, false, false});
+        case E::MoveTimeout:
+            return failStep(FaultCode::FixtureTimeout, {A::MoveTo, view_, true, false});
+        case E::MoveFault:
+            return failStep(FaultCode::FixtureFault, {A::MoveTo, view_, true, false});
+        case E::MoveCommError:
+            return failStep(FaultCode::FixtureCommunication, {A::MoveTo, view_, true, false});
+        case E::MoveRefused:
+            return failStep(FaultCode::FixtureRefused, {A::MoveTo, view_, true, false});
+        default:
+            return {};
         }
     case S::Settling:
         if (event == E::Settled) return go(S::Grabbing, {A::Grab, view_, false, false});
@@ -213,18 +238,23 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
                 return go(S::Moving, {A::MoveTo, view_, false, false});
             }
             return go(S::Processing, {A::Finish, view_, false, false});
-        case E::FrameTimeout: return failStep(FaultCode::CameraTimeout, {A::Grab, view_, true, false});
-        case E::FrameBad: return failStep(FaultCode::CameraBadFrame, {A::Grab, view_, true, false});
-        case E::FrameError: return failStep(FaultCode::CameraError, {A::Grab, view_, true, false});
-        default: return {};
+        case E::FrameTimeout:
+            return failStep(FaultCode::CameraTimeout, {A::Grab, view_, true, false});
+        case E::FrameBad:
+            return failStep(FaultCode::CameraBadFrame, {A::Grab, view_, true, false});
+        case E::FrameError:
+            return failStep(FaultCode::CameraError, {A::Grab, view_, true, false});
+        default:
+            return {};
         }
     case S::Processing:
         if (event == E::Processed) return endCycle(CycleOutcome::Inspected, FaultCode::None, false, false);
         if (event == E::ProcessingFailed)
             return endCycle(CycleOutcome::Faulted, FaultCode::InspectionError, false, false);
         return {};
-    default: return {};
+    default:
+        return {};
     }
 }
 
-}  // namespace hg::station
+} // namespace hg::station

@@ -2,16 +2,14 @@
 // in a temp folder, the fake daemon as a child process, the PLC client.
 #pragma once
 
-#include <sys/types.h>
+#include "hgtest/paths.h"
 
 #include <chrono>
 #include <filesystem>
 #include <map>
-#include <string>
-
 #include <nlohmann/json.hpp>
-
-#include "hgtest/paths.h"
+#include <string>
+#include <sys/types.h>
 
 namespace hgdaemon {
 
@@ -20,12 +18,11 @@ int freePort();
 
 /// Writes station.yaml, part.yaml, views.yaml (`views` poses) and
 /// hullgauged.yaml (with `extra` appended) into `dir`; returns the config path.
-std::filesystem::path writeConfig(const hgtest::TempDir& dir, int port, const std::string& extra = {},
-                                  int views = 3);
+std::filesystem::path writeConfig(const hgtest::TempDir& dir, int port, const std::string& extra = {}, int views = 3);
 
 /// The fake daemon (tests/hullgauged-fake) as a child process.
 class DaemonProcess {
-public:
+  public:
     DaemonProcess(const std::filesystem::path& config, std::map<std::string, std::string> env = {});
     ~DaemonProcess();
     pid_t pid() const { return pid_; }
@@ -36,7 +33,7 @@ public:
     const std::filesystem::path& log() const { return log_; }
     std::string logText() const;
 
-private:
+  private:
     pid_t pid_ = -1;
     std::filesystem::path log_;
 };
@@ -49,4 +46,4 @@ bool waitForState(const std::filesystem::path& socket, const std::string& state,
 /// Runs tools/plc-client with `args`.
 hgtest::RunResult plcClient(int port, const std::string& args);
 
-}  // namespace hgdaemon
+} // namespace hgdaemon

@@ -10,16 +10,15 @@
 // "nominal" grabs bright frames, "dented" dark ones; the fake inspection
 // reports 20 landmarks and fails landmarks 3 and 17 (out_of_tolerance) when a
 // frame is dark.
+#include "daemon.h"
+
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <string>
 #include <thread>
-
-#include <opencv2/core.hpp>
-
-#include "daemon.h"
 
 namespace {
 
@@ -32,7 +31,7 @@ std::string env(const char* name)
 }
 
 class FakeDevices : public StationDevices {
-public:
+  public:
     StepResult start() override
     {
         if (env("HG_FAKE_START_FAIL") == "1") return {StepResult::Code::Error, "fake: devices do not start"};
@@ -74,12 +73,12 @@ public:
         return true;
     }
 
-private:
+  private:
     std::atomic<bool> dented_{false};
 };
 
 class FakeInspector : public Inspector {
-public:
+  public:
     bool begin(const hg::station::PartProgramRef&, std::string&) override
     {
         frames_.clear();
@@ -92,7 +91,8 @@ public:
         out.ok = !frames_.empty();
         out.part = "fake-block";
         bool dark = false;
-        for (const auto& f : frames_) dark = dark || cv::mean(f)[0] < 150;
+        for (const auto& f : frames_)
+            dark = dark || cv::mean(f)[0] < 150;
         out.pass = !dark;
         for (int i = 0; i < 20; ++i) {
             bool bad = dark && (i == 3 || i == 17);
@@ -110,11 +110,11 @@ public:
     }
     void cancel() override { frames_.clear(); }
 
-private:
+  private:
     std::vector<cv::Mat> frames_;
 };
 
-}  // namespace
+} // namespace
 
 int main(int argc, char** argv)
 {

@@ -1,10 +1,9 @@
 // `hullgauge ctl` against a running daemon (CONTRACTS §7): socket selection,
 // status, sim-part, trigger, results, and the exit status when no daemon runs.
-#include <gtest/gtest.h>
-
-#include <thread>
-
 #include "daemon_harness.h"
+
+#include <gtest/gtest.h>
+#include <thread>
 
 namespace {
 
@@ -45,7 +44,7 @@ TEST(Ctl, DrivesTheDaemonThroughItsMaintenanceSocket)
     auto rows = nlohmann::json::parse(results.out);
     ASSERT_EQ(rows.size(), 1u);
     EXPECT_EQ(rows[0]["serial"], "BENCH-7");
-    EXPECT_EQ(rows[0]["verdict"], "fail");  // the dented part
+    EXPECT_EQ(rows[0]["verdict"], "fail"); // the dented part
     EXPECT_EQ(rows[0]["landmarks_failed"], 2);
     // A trigger for an unknown program is refused with the reason.
     auto refused = hgtest::run(ctl("--socket " + sock + " trigger --program 5"));
@@ -60,4 +59,4 @@ TEST(Ctl, NoDaemonIsAFaultNamingTheSocket)
     EXPECT_NE(r.err.find("/nonexistent/hg.sock"), std::string::npos) << r.err;
 }
 
-}  // namespace
+} // namespace

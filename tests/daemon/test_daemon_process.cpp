@@ -1,21 +1,19 @@
 // The daemon as a process (with fake devices): the PLC handshake with an
 // independent client, faults with their codes, sd_notify through a fake
 // NOTIFY_SOCKET, SIGHUP reloads, kill -9 and the result database.
-#include <gtest/gtest.h>
-
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <sys/wait.h>
-#include <unistd.h>
+#include "daemon_harness.h"
 
 #include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <gtest/gtest.h>
+#include <signal.h>
 #include <sstream>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <thread>
-
-#include "daemon_harness.h"
+#include <unistd.h>
 
 namespace {
 
@@ -78,9 +76,9 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
     EXPECT_NE(refused.status, 0);
     EXPECT_NE(refused.err.find("refused"), std::string::npos) << refused.err;
     auto regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 100 12").out);
-    EXPECT_EQ(regs[10], 1);  // REJECTED_TRIGGERS
-    EXPECT_EQ(regs[11], 2);  // LAST_REJECT_REASON unknown program
-    EXPECT_EQ(regs[1], 0);   // DONE_SEQ untouched
+    EXPECT_EQ(regs[10], 1); // REJECTED_TRIGGERS
+    EXPECT_EQ(regs[11], 2); // LAST_REJECT_REASON unknown program
+    EXPECT_EQ(regs[1], 0);  // DONE_SEQ untouched
     // A manual trigger makes the station busy (3 views x 150 ms); a PLC trigger meanwhile is refused.
     auto manual = hgdaemon::maintenance(dir / "hg.sock", {{"command", "trigger"}, {"program", 1}, {"serial", "M1"}});
     ASSERT_TRUE(manual["ok"].get<bool>()) << manual.dump();
@@ -88,7 +86,7 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
     EXPECT_NE(busy.status, 0);
     regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 100 12").out);
     EXPECT_EQ(regs[10], 2);
-    EXPECT_EQ(regs[11], 1);  // busy
+    EXPECT_EQ(regs[11], 1); // busy
     // The cycle in progress finished undisturbed and the station serves the next trigger.
     ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "done", 10s));
     auto next = hgdaemon::plcClient(port, "cycles 1 --bad-every 0");
@@ -124,7 +122,7 @@ TEST_P(DaemonFaults, DeviceFaultIsReportedWithItsCodeAndTheDaemonKeepsServing)
     auto a = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
     std::this_thread::sleep_for(450ms);
     auto b = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
-    EXPECT_GE(b - a, 2);  // heartbeat_period_s 0.2
+    EXPECT_GE(b - a, 2); // heartbeat_period_s 0.2
 }
 
 INSTANTIATE_TEST_SUITE_P(Codes, DaemonFaults,
@@ -150,7 +148,7 @@ TEST(DaemonProcess, AbortCommandFromThePlcEndsTheCycleAsAborted)
 
 // A unix datagram socket standing in for systemd's notify socket.
 class FakeNotifySocket {
-public:
+  public:
     explicit FakeNotifySocket(const std::filesystem::path& path) : path_(path)
     {
         fd_ = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
@@ -167,13 +165,15 @@ public:
         std::string text;
     };
     /// Collects messages until `until` returns true or `timeout`.
-    void collect(std::chrono::milliseconds timeout, const std::function<bool()>& until = [] { return false; })
+    void collect(
+        std::chrono::milliseconds timeout, const std::function<bool()>& until = [] { return false; })
     {
         auto deadline = std::chrono::steady_clock::now() + timeout;
         char buf[4096];
         while (std::chrono::steady_clock::now() < deadline && !until()) {
             ssize_t n = recv(fd_, buf, sizeof buf, 0);
-            if (n > 0) messages.push_back({std::chrono::steady_clock::now(), std::string(buf, static_cast<std::size_t>(n))});
+            if (n > 0)
+                messages.push_back({std::chrono::steady_clock::now(), std::string(buf, static_cast<std::size_t>(n))});
         }
     }
     bool seen(const std::string& field) const
@@ -191,7 +191,7 @@ public:
     }
     std::vector<Message> messages;
 
-private:
+  private:
     std::filesystem::path path_;
     int fd_ = -1;
 };
@@ -201,9 +201,9 @@ TEST(DaemonProcess, NotifyProtocolReadyWatchdogStopping)
     hgtest::TempDir dir;
     int port = hgdaemon::freePort();
     FakeNotifySocket notify(dir / "notify.sock");
-    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"NOTIFY_SOCKET", (dir / "notify.sock").string()},
-                                                            {"WATCHDOG_USEC", "400000"},
-                                                            {"WATCHDOG_PID", "$PID"}});
+    DaemonProcess daemon(
+        hgdaemon::writeConfig(dir, port),
+        {{"NOTIFY_SOCKET", (dir / "notify.sock").string()}, {"WATCHDOG_USEC", "400000"}, {"WATCHDOG_PID", "$PID"}});
     notify.collect(10s, [&] { return notify.seen("READY=1"); });
     ASSERT_TRUE(notify.seen("READY=1")) << daemon.logText();
     notify.messages.clear();
@@ -230,7 +230,7 @@ TEST(DaemonProcess, NoReadyWhileDevicesDoNotStart)
     notify.collect(1500ms);
     EXPECT_FALSE(notify.seen("READY=1"));
     auto regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 102 3").out);
-    EXPECT_EQ(regs[0], 3);  // STATUS fault
+    EXPECT_EQ(regs[0], 3); // STATUS fault
     auto refused = hgdaemon::plcClient(port, "cycles 1");
     EXPECT_NE(refused.status, 0);
 }
@@ -297,4 +297,4 @@ TEST(DaemonProcess, KillNineMidCycleLosesNoReportedResult)
     EXPECT_EQ(hgdaemon::plcClient(port, "cycles 2").status, 0);
 }
 
-}  // namespace
+} // namespace

@@ -1,16 +1,14 @@
 // The Modbus TCP server against independent clients: pymodbus (tools/plc-client)
 // and raw socket bytes. The register map behind it is the real one.
-#include <gtest/gtest.h>
-
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
-#include <thread>
-
 #include "daemon_harness.h"
 #include "plc_server.h"
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <thread>
+#include <unistd.h>
 
 namespace hg::daemon {
 namespace {
@@ -45,8 +43,18 @@ std::vector<std::uint8_t> roundTrip(int fd, const std::vector<std::uint8_t>& fra
 // FC03 read of `count` registers from `address`, unit 1, transaction 0x1234.
 std::vector<std::uint8_t> readFrame(std::uint16_t address, std::uint16_t count, std::uint8_t unit = 1)
 {
-    return {0x12, 0x34, 0, 0, 0, 6, unit, 3, static_cast<std::uint8_t>(address >> 8),
-            static_cast<std::uint8_t>(address), static_cast<std::uint8_t>(count >> 8), static_cast<std::uint8_t>(count)};
+    return {0x12,
+            0x34,
+            0,
+            0,
+            0,
+            6,
+            unit,
+            3,
+            static_cast<std::uint8_t>(address >> 8),
+            static_cast<std::uint8_t>(address),
+            static_cast<std::uint8_t>(count >> 8),
+            static_cast<std::uint8_t>(count)};
 }
 
 struct Server {
@@ -80,7 +88,7 @@ TEST(PlcServer, AccessRulesAnswerTheDocumentedExceptions)
     EXPECT_EQ(j["read_past_map"], 2);
     EXPECT_EQ(j["write_program"], 0);
     EXPECT_EQ(j["read_map"], 0);
-    EXPECT_EQ(s.registers.snapshot()[1], 1);  // the good write landed
+    EXPECT_EQ(s.registers.snapshot()[1], 1); // the good write landed
 }
 
 TEST(PlcServer, IndependentClientReadsWhatThePublisherWrote)
@@ -99,9 +107,9 @@ TEST(PlcServer, IndependentClientReadsWhatThePublisherWrote)
     auto v = nlohmann::json::parse(r.out);
     EXPECT_EQ(v[1], 77);
     EXPECT_EQ(v[3], 2);
-    EXPECT_EQ(v[7], 1);     // 70000 = 0x0001'1170: high word
-    EXPECT_EQ(v[8], 4464);  // low word 0x1170
-    EXPECT_EQ(v[20], 5);    // bits 0 and 2
+    EXPECT_EQ(v[7], 1);    // 70000 = 0x0001'1170: high word
+    EXPECT_EQ(v[8], 4464); // low word 0x1170
+    EXPECT_EQ(v[20], 5);   // bits 0 and 2
 }
 
 TEST(PlcServer, MalformedFramesDropOnlyTheirClient)
@@ -112,14 +120,14 @@ TEST(PlcServer, MalformedFramesDropOnlyTheirClient)
     auto answer = roundTrip(good, readFrame(102, 1));
     ASSERT_EQ(answer.size(), 11u);
     EXPECT_EQ(answer[7], 3);
-    EXPECT_EQ(answer[10], 0);  // STATUS ready
+    EXPECT_EQ(answer[10], 0); // STATUS ready
 
     const std::vector<std::vector<std::uint8_t>> garbage = {
-        {0x12, 0x34, 0x00, 0x07, 0, 6, 1, 3, 0, 100, 0, 1},              // protocol id 7
-        {0x12, 0x34, 0, 0, 0, 60, 1, 3, 0, 100, 0, 1},                   // MBAP length lies
-        {0x12, 0x34, 0, 0, 0, 9, 1, 16, 0, 0, 0, 100, 200, 0, 1},        // FC16 byte count beyond the frame
-        {0xde, 0xad, 0xbe, 0xef},                                        // a fragment, then silence
-        {0x12, 0x34, 0, 0, 0, 4, 1, 0x2b, 0x0e, 0x01},                   // unsupported function with data
+        {0x12, 0x34, 0x00, 0x07, 0, 6, 1, 3, 0, 100, 0, 1},       // protocol id 7
+        {0x12, 0x34, 0, 0, 0, 60, 1, 3, 0, 100, 0, 1},            // MBAP length lies
+        {0x12, 0x34, 0, 0, 0, 9, 1, 16, 0, 0, 0, 100, 200, 0, 1}, // FC16 byte count beyond the frame
+        {0xde, 0xad, 0xbe, 0xef},                                 // a fragment, then silence
+        {0x12, 0x34, 0, 0, 0, 4, 1, 0x2b, 0x0e, 0x01},            // unsupported function with data
     };
     for (const auto& frame : garbage) {
         int bad = connectTo(s.port());
@@ -174,14 +182,16 @@ TEST(PlcServer, SeveralClientsAtOnce)
 {
     Server s;
     std::vector<int> fds;
-    for (int i = 0; i < 5; ++i) fds.push_back(connectTo(s.port()));
+    for (int i = 0; i < 5; ++i)
+        fds.push_back(connectTo(s.port()));
     for (int round = 0; round < 20; ++round)
         for (int fd : fds) {
             auto a = roundTrip(fd, readFrame(100, 10));
             ASSERT_EQ(a.size(), 9u + 20u);
         }
-    for (int fd : fds) close(fd);
+    for (int fd : fds)
+        close(fd);
 }
 
-}  // namespace
-}  // namespace hg::daemon
+} // namespace
+} // namespace hg::daemon

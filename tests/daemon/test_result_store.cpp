@@ -1,14 +1,13 @@
 // The result store: WAL mode, one durable row per record, readable by the
 // sqlite3 program; failed-part images and their retention.
-#include <gtest/gtest.h>
-
-#include <opencv2/imgcodecs.hpp>
-#include <thread>
-
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
 #include "image_archive.h"
 #include "result_store.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
 
 namespace hg::daemon {
 namespace {
@@ -57,7 +56,9 @@ TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
 {
     hgtest::TempDir dir;
     auto file = dir / "r.db";
-    { ResultStore store(file); }
+    {
+        ResultStore store(file);
+    }
     hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version=99'");
     EXPECT_THROW(ResultStore{file}, FaultError);
 }
@@ -108,8 +109,8 @@ TEST(ImageArchive, RetentionKeepsTheNewestWithinCountAndBytes)
     std::vector<std::filesystem::path> folders;
     for (int i = 0; i < 5; ++i) {
         folders.push_back(archive.saveFailed(1000 + i, "S", {v}));
-        std::filesystem::last_write_time(folders.back(), std::filesystem::file_time_type::clock::now() -
-                                                             std::chrono::minutes(10 - i));
+        std::filesystem::last_write_time(folders.back(),
+                                         std::filesystem::file_time_type::clock::now() - std::chrono::minutes(10 - i));
     }
     EXPECT_EQ(archive.enforceRetention(), 2u);
     EXPECT_FALSE(std::filesystem::exists(folders[0]));
@@ -123,9 +124,9 @@ TEST(ImageArchive, RetentionKeepsTheNewestWithinCountAndBytes)
     EXPECT_FALSE(std::filesystem::exists(folders[2]));
 
     station::RetentionConfig tiny;
-    tiny.maxBytes = 1;  // less than one folder: everything goes
+    tiny.maxBytes = 1; // less than one folder: everything goes
     EXPECT_EQ(ImageArchive(dir / "images", tiny).enforceRetention(), 2u);
 }
 
-}  // namespace
-}  // namespace hg::daemon
+} // namespace
+} // namespace hg::daemon

@@ -1,10 +1,10 @@
 // The daemon configuration: a complete file loads with its values; every kind
 // of bad value is refused naming file, line and key.
-#include <gtest/gtest.h>
-
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/station/daemon_config.h"
+
+#include <gtest/gtest.h>
 
 namespace hg::station {
 namespace {
@@ -87,8 +87,8 @@ TEST(DaemonConfig, LoadsAllSections)
     EXPECT_EQ(cfg.plc.port, 1502);
     EXPECT_EQ(cfg.plc.unitId, 3);
     ASSERT_EQ(cfg.plc.allowedClients.size(), 2u);
-    EXPECT_TRUE(cfg.plc.allowedClients[1].contains(0x0A01FE07));   // 10.1.254.7
-    EXPECT_FALSE(cfg.plc.allowedClients[1].contains(0x0A020001));  // 10.2.0.1
+    EXPECT_TRUE(cfg.plc.allowedClients[1].contains(0x0A01FE07));  // 10.1.254.7
+    EXPECT_FALSE(cfg.plc.allowedClients[1].contains(0x0A020001)); // 10.2.0.1
     EXPECT_EQ(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(250));
     EXPECT_EQ(cfg.results.database, f.dir.path() / "data/results.db");
     EXPECT_EQ(cfg.results.imageDir, "/var/tmp/hg-images");
@@ -109,8 +109,8 @@ TEST(DaemonConfig, DefaultsFollowTheContract)
                                                   "station: station.yaml\n"
                                                   "programs: {1: {part: block.yaml, views: views.yaml}}\n"
                                                   "results: {database: r.db, images: img}\n"));
-    EXPECT_EQ(cfg.plc.port, 502);   // CONTRACTS §6
-    EXPECT_EQ(cfg.plc.unitId, 1);   // CONTRACTS §6
+    EXPECT_EQ(cfg.plc.port, 502); // CONTRACTS §6
+    EXPECT_EQ(cfg.plc.unitId, 1); // CONTRACTS §6
     EXPECT_TRUE(cfg.plc.allowedClients.empty());
     EXPECT_LE(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(1000));
     EXPECT_EQ(cfg.sequencer.retries, 1);
@@ -148,7 +148,7 @@ TEST(DaemonConfig, BadValuesNameFileLineAndKey)
 TEST(DaemonConfig, ViewPlanIsCheckedAgainstTheFixture)
 {
     Fixture f;
-    hgtest::writeFile(f.dir / "views.yaml", "- {rotation_deg: 0, declination_deg: 75}\n");  // range is [0, 60]
+    hgtest::writeFile(f.dir / "views.yaml", "- {rotation_deg: 0, declination_deg: 75}\n"); // range is [0, 60]
     auto message = f.error(kDaemon);
     EXPECT_NE(message.find("views.yaml"), std::string::npos) << message;
     EXPECT_NE(message.find("declination"), std::string::npos) << message;
@@ -158,8 +158,9 @@ TEST(DaemonConfig, SimulatedPartsNeedNominalAndExistingMeshes)
 {
     Fixture f;
     hgtest::writeFile(f.dir / "nominal.stl", "solid n\nendsolid n\n");
-    auto cfg = loadDaemonConfig(hgtest::writeFile(
-        f.dir / "hullgauged.yaml", std::string(kDaemon) + "simulation: {parts: {nominal: nominal.stl, dented: nominal.stl}}\n"));
+    auto cfg = loadDaemonConfig(
+        hgtest::writeFile(f.dir / "hullgauged.yaml",
+                          std::string(kDaemon) + "simulation: {parts: {nominal: nominal.stl, dented: nominal.stl}}\n"));
     ASSERT_EQ(cfg.simulatedParts.size(), 2u);
     EXPECT_EQ(cfg.simulatedParts[1].first, "dented");
     EXPECT_EQ(cfg.simulatedParts[0].second, f.dir.path() / "nominal.stl");
@@ -174,8 +175,8 @@ TEST(DaemonConfig, Ipv4Networks)
 {
     auto n = parseIpv4Network("192.168.10.0/24");
     ASSERT_TRUE(n);
-    EXPECT_TRUE(n->contains(0xC0A80A63));   // 192.168.10.99
-    EXPECT_FALSE(n->contains(0xC0A80B01));  // 192.168.11.1
+    EXPECT_TRUE(n->contains(0xC0A80A63));  // 192.168.10.99
+    EXPECT_FALSE(n->contains(0xC0A80B01)); // 192.168.11.1
     EXPECT_EQ(n->toString(), "192.168.10.0/24");
     auto any = parseIpv4Network("0.0.0.0/0");
     ASSERT_TRUE(any);
@@ -185,5 +186,5 @@ TEST(DaemonConfig, Ipv4Networks)
     EXPECT_FALSE(parseIpv4Network("1.2.3.4/-1"));
 }
 
-}  // namespace
-}  // namespace hg::station
+} // namespace
+} // namespace hg::station

@@ -1,11 +1,10 @@
 // The PLC register map of CONTRACTS §6: access rules, exception codes, the
 // trigger handshake and the all-together publication of a result.
-#include <gtest/gtest.h>
+#include "hullgauge/station/plc_registers.h"
 
 #include <atomic>
+#include <gtest/gtest.h>
 #include <thread>
-
-#include "hullgauge/station/plc_registers.h"
 
 namespace hg::station {
 namespace {
@@ -36,7 +35,7 @@ TEST(PlcRegisters, StartsInStartingWithEverythingElseZero)
 {
     PlcRegisters r;
     auto s = r.snapshot();
-    EXPECT_EQ(s[102], 4);  // STATUS starting (CONTRACTS §6)
+    EXPECT_EQ(s[102], 4); // STATUS starting (CONTRACTS §6)
     for (std::size_t a = 0; a < s.size(); ++a) {
         if (a != 102) {
             EXPECT_EQ(s[a], 0) << "address " << a;
@@ -65,7 +64,7 @@ TEST(PlcRegisters, BadValuesAnswerIllegalDataValueAndChangeNothing)
     PlcRegisters r;
     makeReady(r);
     EXPECT_EQ(writeOne(r, 2, 0x4101), ModbusException::IllegalDataValue);  // control character in SERIAL
-    EXPECT_EQ(writeOne(r, 9, 0x80'41), ModbusException::IllegalDataValue);  // non-ASCII byte
+    EXPECT_EQ(writeOne(r, 9, 0x80'41), ModbusException::IllegalDataValue); // non-ASCII byte
     EXPECT_EQ(writeOne(r, 10, 3), ModbusException::IllegalDataValue);      // unknown command
     // All-or-nothing: program 7 in the same block as a bad serial word is not applied.
     std::array<std::uint16_t, 3> block{7, 0x4142, 0x1F00};
@@ -89,12 +88,12 @@ TEST(PlcRegisters, ReadsInsideTheMapSucceedAndPastItFail)
 TEST(PlcRegisters, SerialIsTwoCharactersPerRegisterHighByteFirst)
 {
     auto words = encodeSerial("AB12");
-    EXPECT_EQ(words[0], 0x4142);  // 'A' = 0x41 high, 'B' = 0x42 low
+    EXPECT_EQ(words[0], 0x4142); // 'A' = 0x41 high, 'B' = 0x42 low
     EXPECT_EQ(words[1], 0x3132);
     EXPECT_EQ(words[2], 0);
     EXPECT_EQ(decodeSerial(words), "AB12");
-    EXPECT_EQ(decodeSerial(encodeSerial("SN-0123456789ABCDEF")), "SN-0123456789ABC");  // cut at 16
-    std::array<std::uint16_t, 8> padded{0x5820, 0x2020, 0, 0, 0, 0, 0, 0};  // "X" + spaces
+    EXPECT_EQ(decodeSerial(encodeSerial("SN-0123456789ABCDEF")), "SN-0123456789ABC"); // cut at 16
+    std::array<std::uint16_t, 8> padded{0x5820, 0x2020, 0, 0, 0, 0, 0, 0};            // "X" + spaces
     EXPECT_EQ(decodeSerial(padded), "X");
 }
 
@@ -104,12 +103,12 @@ TEST(PlcRegisters, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
     makeReady(r);
     auto serial = encodeSerial("PART-0001");
     std::array<std::uint16_t, 10> block{};
-    block[0] = 5;  // TRIGGER_SEQ
-    block[1] = 7;  // PART_PROGRAM
+    block[0] = 5; // TRIGGER_SEQ
+    block[1] = 7; // PART_PROGRAM
     std::copy(serial.begin(), serial.end(), block.begin() + 2);
     ASSERT_EQ(r.write(0, block), ModbusException::None);
-    EXPECT_EQ(readOne(r, 100), 5);  // ACK_SEQ
-    EXPECT_EQ(readOne(r, 102), 1);  // STATUS busy at once
+    EXPECT_EQ(readOne(r, 100), 5); // ACK_SEQ
+    EXPECT_EQ(readOne(r, 102), 1); // STATUS busy at once
     auto t = r.waitTrigger(milliseconds(100));
     ASSERT_TRUE(t);
     EXPECT_EQ(t->seq, 5);
@@ -138,21 +137,21 @@ TEST(PlcRegisters, RefusedTriggersAreCountedWithTheirReason)
 {
     PlcRegisters r;
     makeReady(r);
-    ASSERT_EQ(writeOne(r, 1, 9), ModbusException::None);  // program 9 is not configured
+    ASSERT_EQ(writeOne(r, 1, 9), ModbusException::None); // program 9 is not configured
     ASSERT_EQ(writeOne(r, 0, 1), ModbusException::None);
     EXPECT_EQ(readOne(r, 110), 1);
     EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::UnknownProgram));
-    EXPECT_EQ(readOne(r, 100), 0);  // ACK_SEQ unchanged
-    EXPECT_EQ(readOne(r, 102), 0);  // still ready
+    EXPECT_EQ(readOne(r, 100), 0); // ACK_SEQ unchanged
+    EXPECT_EQ(readOne(r, 102), 0); // still ready
 
     ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
-    ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);  // accepted
-    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);  // busy: refused
+    ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None); // accepted
+    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None); // busy: refused
     EXPECT_EQ(readOne(r, 100), 2);
     EXPECT_EQ(readOne(r, 110), 2);
     EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::Busy));
     ASSERT_TRUE(r.waitTrigger(milliseconds(10)));
-    EXPECT_FALSE(r.waitTrigger(milliseconds(10)));  // the refused one was never queued
+    EXPECT_FALSE(r.waitTrigger(milliseconds(10))); // the refused one was never queued
 
     r.setStatus(PlcStatus::Fault);
     ASSERT_EQ(writeOne(r, 0, 4), ModbusException::None);
@@ -170,22 +169,22 @@ TEST(PlcRegisters, PublishedResultAppearsWithDoneSeqAndBits)
     p.faultCode = 0;
     p.landmarksFailed = 2;
     p.landmarksTotal = 20;
-    p.cycleMs = 0x0001'2345;  // 74565 ms
+    p.cycleMs = 0x0001'2345; // 74565 ms
     p.landmarkOk.assign(20, true);
     p.landmarkOk[3] = false;
     p.landmarkOk[17] = false;
     r.publishResult(p);
     std::vector<std::uint16_t> v;
     ASSERT_EQ(r.read(100, 36, v), ModbusException::None);
-    EXPECT_EQ(v[1], 42);      // DONE_SEQ
-    EXPECT_EQ(v[2], 2);       // STATUS done
-    EXPECT_EQ(v[3], 2);       // RESULT fail
-    EXPECT_EQ(v[5], 2);       // LANDMARKS_FAILED
-    EXPECT_EQ(v[6], 20);      // LANDMARKS_TOTAL
-    EXPECT_EQ(v[7], 0x0001);  // CYCLE_MS high word first
+    EXPECT_EQ(v[1], 42);     // DONE_SEQ
+    EXPECT_EQ(v[2], 2);      // STATUS done
+    EXPECT_EQ(v[3], 2);      // RESULT fail
+    EXPECT_EQ(v[5], 2);      // LANDMARKS_FAILED
+    EXPECT_EQ(v[6], 20);     // LANDMARKS_TOTAL
+    EXPECT_EQ(v[7], 0x0001); // CYCLE_MS high word first
     EXPECT_EQ(v[8], 0x2345);
-    EXPECT_EQ(v[20], 0xFFF7);  // word 0: landmarks 0..15, bit 3 clear
-    EXPECT_EQ(v[21], 0x000D);  // word 1: landmarks 16..19 = bits 0,2,3 set, bit 1 (landmark 17) clear
+    EXPECT_EQ(v[20], 0xFFF7); // word 0: landmarks 0..15, bit 3 clear
+    EXPECT_EQ(v[21], 0x000D); // word 1: landmarks 16..19 = bits 0,2,3 set, bit 1 (landmark 17) clear
     EXPECT_EQ(v[22], 0);
 }
 
@@ -203,9 +202,9 @@ TEST(PlcRegisters, ManualTriggerLeavesThePlcHandshakeAlone)
     p.result = PlcResult::Pass;
     p.seq = 99;
     r.publishResult(p);
-    EXPECT_EQ(readOne(r, 101), 0);  // DONE_SEQ untouched
-    EXPECT_EQ(readOne(r, 103), 0);  // RESULT untouched
-    EXPECT_EQ(readOne(r, 102), 2);  // STATUS done
+    EXPECT_EQ(readOne(r, 101), 0); // DONE_SEQ untouched
+    EXPECT_EQ(readOne(r, 103), 0); // RESULT untouched
+    EXPECT_EQ(readOne(r, 102), 2); // STATUS done
     EXPECT_EQ(r.triggerManually(3, "X"), RejectReason::UnknownProgram);
 }
 
@@ -251,5 +250,5 @@ TEST(PlcRegisters, ConcurrentReadersSeeConsistentResults)
     EXPECT_EQ(inconsistent.load(), 0);
 }
 
-}  // namespace
-}  // namespace hg::station
+} // namespace
+} // namespace hg::station

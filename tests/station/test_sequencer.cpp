@@ -1,8 +1,8 @@
 // The capture sequencer's state machine: normal cycles, the one retry, faults
 // with their codes, aborts, recovery, and the transition table.
-#include <gtest/gtest.h>
-
 #include "hullgauge/station/sequencer.h"
+
+#include <gtest/gtest.h>
 
 namespace hg::station {
 namespace {
@@ -65,7 +65,7 @@ TEST(Sequencer, OneRetryOfAMoveThenSuccessContinues)
     EXPECT_EQ(s.attempt(), 2);
     a = s.onEvent(E::InPosition);
     EXPECT_EQ(a.kind, A::Settle);
-    EXPECT_EQ(s.attempt(), 1);  // the next step has its own retry
+    EXPECT_EQ(s.attempt(), 1); // the next step has its own retry
 }
 
 struct FailureCase {
@@ -81,7 +81,7 @@ TEST_P(SequencerFailure, SecondFailureFaultsWithItsCode)
     auto c = GetParam();
     auto s = readySequencer();
     (void)s.trigger(4);
-    (void)completeView(s);  // view 0 done; now moving to view 1
+    (void)completeView(s); // view 0 done; now moving to view 1
     if (c.duringGrab) {
         (void)s.onEvent(E::InPosition);
         (void)s.onEvent(E::Settled);
@@ -185,7 +185,7 @@ TEST(Sequencer, TransitionTable)
     EXPECT_TRUE(transitionAllowed(S::Processing, S::Done));
     EXPECT_FALSE(transitionAllowed(S::Ready, S::Processing));
     EXPECT_FALSE(transitionAllowed(S::Starting, S::Moving));
-    EXPECT_FALSE(transitionAllowed(S::Fault, S::Moving));  // a fault must be recovered first
+    EXPECT_FALSE(transitionAllowed(S::Fault, S::Moving)); // a fault must be recovered first
     EXPECT_FALSE(transitionAllowed(S::Processing, S::Moving));
     EXPECT_FALSE(transitionAllowed(S::Done, S::Processing));
 }
@@ -202,5 +202,5 @@ TEST(Sequencer, FaultCodesHaveNamesAndStableNumbers)
     EXPECT_EQ(toString(E::RecoveryFailed), "recovery-failed");
 }
 
-}  // namespace
-}  // namespace hg::station
+} // namespace
+} // namespace hg::station

@@ -10,6 +10,9 @@
 // reload the daemon keeps the configuration it runs with.
 #pragma once
 
+#include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/station.h"
+
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -18,14 +21,11 @@
 #include <string>
 #include <vector>
 
-#include "hullgauge/geometry/fixture.h"
-#include "hullgauge/geometry/station.h"
-
 namespace hg::station {
 
 /// An IPv4 network (address/prefix); a plain address is a /32.
 struct Ipv4Network {
-    std::uint32_t address = 0;  ///< host byte order
+    std::uint32_t address = 0; ///< host byte order
     int prefix = 32;
     bool contains(std::uint32_t hostOrderAddress) const;
     std::string toString() const;
@@ -35,9 +35,9 @@ std::optional<Ipv4Network> parseIpv4Network(const std::string& text);
 
 struct PartProgramRef {
     std::uint16_t number = 0;
-    std::filesystem::path partFile;  ///< part program YAML (CONTRACTS §1), absolute
-    std::filesystem::path viewsFile;  ///< view plan: a poses file (CONTRACTS §5), absolute
-    std::vector<geometry::FixturePose> views;  ///< loaded and range-checked
+    std::filesystem::path partFile;           ///< part program YAML (CONTRACTS §1), absolute
+    std::filesystem::path viewsFile;          ///< view plan: a poses file (CONTRACTS §5), absolute
+    std::vector<geometry::FixturePose> views; ///< loaded and range-checked
 };
 
 struct PlcConfig {
@@ -53,9 +53,9 @@ struct PlcConfig {
 };
 
 struct RetentionConfig {
-    std::size_t maxCount = 2000;           ///< failed-part image sets kept
-    std::chrono::hours maxAge{24 * 30};    ///< older image sets are removed
-    std::uint64_t maxBytes = 2ull << 30;   ///< total size of the image folder
+    std::size_t maxCount = 2000;         ///< failed-part image sets kept
+    std::chrono::hours maxAge{24 * 30};  ///< older image sets are removed
+    std::uint64_t maxBytes = 2ull << 30; ///< total size of the image folder
 };
 
 struct ResultsConfig {
@@ -87,7 +87,7 @@ struct WatchdogConfig {
 };
 
 struct DaemonConfig {
-    std::filesystem::path file;  ///< the configuration file itself
+    std::filesystem::path file; ///< the configuration file itself
     std::filesystem::path stationFile;
     geometry::Station station;
     /// Name of the station section that lists the operator lamps (default "lamps").
@@ -108,4 +108,4 @@ struct DaemonConfig {
 /// the configuration file. Throws hg::InputError (file:line: key: problem).
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
 
-}  // namespace hg::station
+} // namespace hg::station

@@ -37,9 +37,9 @@ namespace hg::station {
 namespace reg {
 inline constexpr std::uint16_t TriggerSeq = 0;
 inline constexpr std::uint16_t PartProgram = 1;
-inline constexpr std::uint16_t Serial = 2;  ///< 2..9, 16 ASCII characters, high byte first
+inline constexpr std::uint16_t Serial = 2; ///< 2..9, 16 ASCII characters, high byte first
 inline constexpr std::uint16_t SerialWords = 8;
-inline constexpr std::uint16_t Command = 10;  ///< extension: 1 = abort the cycle, 2 = reset fault
+inline constexpr std::uint16_t Command = 10; ///< extension: 1 = abort the cycle, 2 = reset fault
 inline constexpr std::uint16_t AckSeq = 100;
 inline constexpr std::uint16_t DoneSeq = 101;
 inline constexpr std::uint16_t Status = 102;
@@ -47,15 +47,15 @@ inline constexpr std::uint16_t Result = 103;
 inline constexpr std::uint16_t FaultCode = 104;
 inline constexpr std::uint16_t LandmarksFailed = 105;
 inline constexpr std::uint16_t LandmarksTotal = 106;
-inline constexpr std::uint16_t CycleMs = 107;  ///< 107..108, u32 high word first
+inline constexpr std::uint16_t CycleMs = 107; ///< 107..108, u32 high word first
 inline constexpr std::uint16_t Heartbeat = 109;
 inline constexpr std::uint16_t RejectedTriggers = 110;
-inline constexpr std::uint16_t LastRejectReason = 111;  ///< extension, RejectReason
-inline constexpr std::uint16_t LandmarkOkBits = 120;    ///< 120..135
+inline constexpr std::uint16_t LastRejectReason = 111; ///< extension, RejectReason
+inline constexpr std::uint16_t LandmarkOkBits = 120;   ///< 120..135
 inline constexpr std::uint16_t LandmarkOkWords = 16;
 /// One past the last mapped address; reads of [0, Count) are allowed (gaps read 0).
 inline constexpr std::uint16_t Count = 136;
-}  // namespace reg
+} // namespace reg
 
 /// Largest number of landmarks LANDMARK_OK_BITS can report.
 inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
@@ -73,15 +73,15 @@ enum class RejectReason : std::uint16_t { None = 0, Busy = 1, UnknownProgram = 2
 enum class ModbusException : std::uint8_t {
     None = 0,
     IllegalFunction = 1,
-    IllegalDataAddress = 2,  ///< read-only or unmapped address, or a block past the map
-    IllegalDataValue = 3,    ///< a value the register does not take
+    IllegalDataAddress = 2, ///< read-only or unmapped address, or a block past the map
+    IllegalDataValue = 3,   ///< a value the register does not take
 };
 
 /// An accepted trigger, latched with the program and serial at acceptance.
 struct TriggerRequest {
     std::uint16_t seq = 0;
     std::uint16_t program = 0;
-    std::string serial;  ///< trailing NULs and spaces removed
+    std::string serial; ///< trailing NULs and spaces removed
     /// From the maintenance socket, not the PLC: its result never touches
     /// ACK_SEQ, DONE_SEQ or the result registers the PLC owns a handshake on.
     bool manual = false;
@@ -104,7 +104,7 @@ struct PublishedResult {
 };
 
 class PlcRegisters {
-public:
+  public:
     PlcRegisters();
 
     /// FC03. Fills `out` with `count` registers from `address`; any block
@@ -140,7 +140,7 @@ public:
     /// the PLC's, counted the same way, but the handshake registers stay the PLC's.
     RejectReason triggerManually(std::uint16_t program, const std::string& serial);
 
-private:
+  private:
     RejectReason acceptLocked(TriggerRequest request);
     static bool writable(std::uint16_t address);
 
@@ -158,4 +158,4 @@ std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
 /// The inverse of decodeSerial (pads with NULs; longer strings are cut at 16).
 std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& serial);
 
-}  // namespace hg::station
+} // namespace hg::station

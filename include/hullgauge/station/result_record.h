@@ -3,21 +3,20 @@
 // the result store, and only then publishes it to the PLC.
 #pragma once
 
-#include <cstdint>
-#include <string>
-#include <vector>
-
-#include <nlohmann/json.hpp>
-
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 namespace hg::station {
 
 /// A landmark's outcome, as in the inspection result JSON (CONTRACTS §4).
 struct LandmarkOutcome {
     std::string id;
-    std::string status;  ///< ok | out_of_tolerance | overflow | not_found | not_observable
+    std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable
     double errorMinMm = 0.0;
     double errorMaxMm = 0.0;
     double errorMm = 0.0;
@@ -29,15 +28,15 @@ enum class Verdict { Pass, Fail, Aborted, Error };
 std::string_view toString(Verdict v);
 
 struct InspectionRecord {
-    std::int64_t startedUnixMs = 0;  ///< wall clock at trigger acceptance (ms since 1970, UTC)
+    std::int64_t startedUnixMs = 0; ///< wall clock at trigger acceptance (ms since 1970, UTC)
     std::uint16_t triggerSeq = 0;
-    bool manual = false;  ///< triggered from the maintenance socket
+    bool manual = false; ///< triggered from the maintenance socket
     std::string serial;
     std::uint16_t program = 0;
-    std::string part;  ///< the part program's `part` name
+    std::string part; ///< the part program's `part` name
     Verdict verdict = Verdict::Error;
     FaultCode faultCode = FaultCode::None;
-    std::uint32_t cycleMs = 0;  ///< trigger accepted -> verdict
+    std::uint32_t cycleMs = 0; ///< trigger accepted -> verdict
     std::vector<LandmarkOutcome> landmarks;
     /// Cycle-time breakdown in ms (move, settle, grab, processing, ...).
     nlohmann::json timingMs = nlohmann::json::object();
@@ -49,4 +48,4 @@ struct InspectionRecord {
     PublishedResult toPublished(PlcStatus statusAfter) const;
 };
 
-}  // namespace hg::station
+} // namespace hg::station

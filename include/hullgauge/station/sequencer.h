@@ -28,46 +28,46 @@ namespace hg::station {
 enum class SequencerState { Starting, Ready, Moving, Settling, Grabbing, Processing, Done, Fault };
 
 enum class SequencerEvent {
-    DevicesActive,     ///< drivers configured and active (start, or after recovery)
-    DevicesFailed,     ///< drivers could not be started or were lost
-    Trigger,           ///< an accepted trigger
-    InPosition,        ///< the fixture reached the view's pose
-    MoveTimeout,       ///< no position within the move timeout
-    MoveFault,         ///< the drive reports a fault
-    MoveCommError,     ///< no answer from the fixture
-    MoveRefused,       ///< pose out of range, not homed, wrong state
-    Settled,           ///< settle time after the move elapsed
-    FrameOk,           ///< a complete frame of the view
-    FrameTimeout,      ///< no frame within the grab timeout
-    FrameBad,          ///< incomplete frame (lost packets, wrong size)
-    FrameError,        ///< the camera could not grab (wrong state, device lost)
-    Processed,         ///< the pipeline delivered the verdict
-    ProcessingFailed,  ///< the pipeline could not decide (error in the inspection)
-    ProgramFailed,     ///< the part program or its view plan could not be loaded
-    Abort,             ///< COMMAND = abort from the PLC (or the maintenance socket)
-    Shutdown,          ///< SIGTERM: abort unless only processing remains
-    Recovered,         ///< recovery after a fault succeeded
-    RecoveryFailed,    ///< recovery after a fault failed (the runner tries again later)
+    DevicesActive,    ///< drivers configured and active (start, or after recovery)
+    DevicesFailed,    ///< drivers could not be started or were lost
+    Trigger,          ///< an accepted trigger
+    InPosition,       ///< the fixture reached the view's pose
+    MoveTimeout,      ///< no position within the move timeout
+    MoveFault,        ///< the drive reports a fault
+    MoveCommError,    ///< no answer from the fixture
+    MoveRefused,      ///< pose out of range, not homed, wrong state
+    Settled,          ///< settle time after the move elapsed
+    FrameOk,          ///< a complete frame of the view
+    FrameTimeout,     ///< no frame within the grab timeout
+    FrameBad,         ///< incomplete frame (lost packets, wrong size)
+    FrameError,       ///< the camera could not grab (wrong state, device lost)
+    Processed,        ///< the pipeline delivered the verdict
+    ProcessingFailed, ///< the pipeline could not decide (error in the inspection)
+    ProgramFailed,    ///< the part program or its view plan could not be loaded
+    Abort,            ///< COMMAND = abort from the PLC (or the maintenance socket)
+    Shutdown,         ///< SIGTERM: abort unless only processing remains
+    Recovered,        ///< recovery after a fault succeeded
+    RecoveryFailed,   ///< recovery after a fault failed (the runner tries again later)
 };
 
 /// FAULT_CODE register values (docs/plc.md lists them for PLC programmers).
 /// 1x camera, 2x fixture, 3x part program / inspection, 4x daemon.
 enum class FaultCode : std::uint16_t {
     None = 0,
-    CameraTimeout = 10,         ///< no frame within grab_timeout_s, after the retry
-    CameraBadFrame = 11,        ///< incomplete frames (lost packets), after the retry
-    CameraError = 12,           ///< the camera could not grab (state, device lost)
-    FixtureTimeout = 20,        ///< not in position within move_timeout_s, after the retry
-    FixtureFault = 21,          ///< the drive latched a fault, still there after reset and retry
-    FixtureCommunication = 22,  ///< the fixture does not answer
-    FixtureRefused = 23,        ///< pose out of range or fixture not homed, after re-homing
-    ProgramLoad = 30,           ///< part program or view plan failed to load
-    InspectionError = 31,       ///< the inspection could not be computed
-    AbortedByPlc = 40,          ///< COMMAND = 1 during a cycle
-    AbortedByShutdown = 41,     ///< the daemon was stopped during a cycle
-    ResultStore = 42,           ///< the result could not be committed to the database
-    DevicesDown = 43,           ///< drivers could not be started or recovered
-    Internal = 44,              ///< unexpected internal error
+    CameraTimeout = 10,        ///< no frame within grab_timeout_s, after the retry
+    CameraBadFrame = 11,       ///< incomplete frames (lost packets), after the retry
+    CameraError = 12,          ///< the camera could not grab (state, device lost)
+    FixtureTimeout = 20,       ///< not in position within move_timeout_s, after the retry
+    FixtureFault = 21,         ///< the drive latched a fault, still there after reset and retry
+    FixtureCommunication = 22, ///< the fixture does not answer
+    FixtureRefused = 23,       ///< pose out of range or fixture not homed, after re-homing
+    ProgramLoad = 30,          ///< part program or view plan failed to load
+    InspectionError = 31,      ///< the inspection could not be computed
+    AbortedByPlc = 40,         ///< COMMAND = 1 during a cycle
+    AbortedByShutdown = 41,    ///< the daemon was stopped during a cycle
+    ResultStore = 42,          ///< the result could not be committed to the database
+    DevicesDown = 43,          ///< drivers could not be started or recovered
+    Internal = 44,             ///< unexpected internal error
 };
 
 std::string_view toString(SequencerState s);
@@ -85,13 +85,13 @@ bool isBusy(SequencerState s);
 /// What the runner does next.
 struct SequencerAction {
     enum class Kind {
-        None,     ///< wait for the next event (idle, or a step still running)
-        MoveTo,   ///< move the fixture to `view`'s pose; `retry`: reset a drive fault / re-home first
-        Settle,   ///< wait the settle time at `view`
-        Grab,     ///< grab `view`; hand the frame to the pipeline as soon as it is in
-        Finish,   ///< all views grabbed: wait for the pipeline's verdict
-        Publish,  ///< the cycle ended: commit the record, then show the result to the PLC
-        Recover,  ///< bring the devices back (reset faults, re-home, restart streaming)
+        None,    ///< wait for the next event (idle, or a step still running)
+        MoveTo,  ///< move the fixture to `view`'s pose; `retry`: reset a drive fault / re-home first
+        Settle,  ///< wait the settle time at `view`
+        Grab,    ///< grab `view`; hand the frame to the pipeline as soon as it is in
+        Finish,  ///< all views grabbed: wait for the pipeline's verdict
+        Publish, ///< the cycle ended: commit the record, then show the result to the PLC
+        Recover, ///< bring the devices back (reset faults, re-home, restart streaming)
     };
     Kind kind = Kind::None;
     std::size_t view = 0;
@@ -105,7 +105,7 @@ struct SequencerAction {
 enum class CycleOutcome { Inspected, Aborted, Faulted };
 
 class CaptureSequencer {
-public:
+  public:
     /// `retries`: extra attempts of a failed move or grab (the station's default is 1).
     explicit CaptureSequencer(int retries = 1);
 
@@ -129,7 +129,7 @@ public:
     /// station in Fault, None otherwise.
     SequencerAction afterPublish() const;
 
-private:
+  private:
     SequencerAction go(SequencerState to, SequencerAction action);
     SequencerAction failStep(FaultCode code, SequencerAction retryAction);
     /// `toFault`: the devices need recovery before the next cycle (else Done).
@@ -144,4 +144,4 @@ private:
     CycleOutcome outcome_ = CycleOutcome::Inspected;
 };
 
-}  // namespace hg::station
+} // namespace hg::station

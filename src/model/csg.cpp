@@ -1,9 +1,6 @@
 // Mesh booleans by CGAL corefinement on an exact kernel (Epeck): the
 // intersection curves are computed exactly, so coplanar faces, shared edges
 // and touching parts (a cutter flush with a face) come out right.
-// CGAL's lazy-kernel and Surface_mesh templates trip GCC 12's flow-based
-// -Wnull-dereference inside libstdc++ (false positives in third-party code).
-#pragma GCC diagnostic ignored "-Wnull-dereference"
 
 #include "hullgauge/model/csg.h"
 

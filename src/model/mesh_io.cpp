@@ -1,7 +1,4 @@
 // Mesh import and export through CGAL's readers and polygon-soup repair.
-// CGAL's lazy-kernel and Surface_mesh templates trip GCC 12's flow-based
-// -Wnull-dereference inside libstdc++ (false positives in third-party code).
-#pragma GCC diagnostic ignored "-Wnull-dereference"
 
 #include "hullgauge/model/mesh_io.h"
 

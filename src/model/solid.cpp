@@ -1,8 +1,5 @@
 // Exact queries on the CAD solid with a CGAL AABB tree (dissertation 5.3.3:
 // the representation map, evaluated lazily per voxel instead of as an array).
-// CGAL's lazy-kernel and Surface_mesh templates trip GCC 12's flow-based
-// -Wnull-dereference inside libstdc++ (false positives in third-party code).
-#pragma GCC diagnostic ignored "-Wnull-dereference"
 
 #include "hullgauge/model/solid.h"
 

@@ -52,7 +52,7 @@ octree:
   cube_origin: [-6, -6, -11]
   cube_size: 32
   depth: 8
-  adjacency_depth: 4
+  adjacency_depth: 6   # 0.75 mm: the 0.6 mm raise below stays measurable
 landmarks:
   - {id: top-a, position: [6, 6, 10], normal: [0, 0, 1], tolerance_mm: 0.3}
   - {id: top-b, position: [14, 12, 10], normal: [0, 0, 1], tolerance_mm: 0.3}

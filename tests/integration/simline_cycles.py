@@ -1,0 +1,166 @@
+#!/usr/bin/python3
+"""The simulated line end to end (CONTRACTS §6, §7).
+
+Starts tools/simline (fixture simulator on Modbus TCP, hullgauged with the
+simulated camera and config/sim), runs --cycles inspections with the
+independent PLC client tools/plc-client alternating the nominal part and a
+defective variant (half the run `face-low`, half `corner-missing`), and checks:
+
+- every verdict is the part's: nominal passes with 0 of 10 landmarks failed;
+  `face-low` fails exactly step-top and step-top-back, `corner-missing` exactly
+  tall-corner and tall-side (the landmarks the defects were built to move);
+- every result block the PLC read was consistent (ACK_SEQ, DONE_SEQ, RESULT,
+  LANDMARKS_FAILED and LANDMARK_OK_BITS of the same trigger), and afterwards
+  ACK_SEQ = DONE_SEQ = the last trigger with its RESULT and OK bits;
+- the SQLite store holds exactly one row per cycle with the PLC's trigger
+  sequence, serial, verdict and failing landmarks;
+- SIGTERM stops the line cleanly (exit 0, no process left behind).
+Every wait is bounded.
+"""
+import argparse
+import json
+import os
+import signal
+import socket
+import sqlite3
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+LANDMARKS = ["tall-top", "tall-corner", "tall-side", "tall-foot", "riser", "step-top", "step-side", "end-front",
+             "end-back", "step-top-back"]
+FAILING = {"nominal": set(), "face-low": {"step-top", "step-top-back"}, "corner-missing": {"tall-corner", "tall-side"}}
+RESULT_CODE = {"pass": 1, "fail": 2}
+
+failures = []
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAILED: {message}", file=sys.stderr, flush=True)
+    return condition
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def ok_bits(failing):
+    """LANDMARK_OK_BITS word 0 for the given failing landmarks (bit i: landmark i in program order)."""
+    return sum(1 << i for i, name in enumerate(LANDMARKS) if name not in failing)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--source", required=True, type=Path)
+    ap.add_argument("--bin", required=True, type=Path)
+    ap.add_argument("--cycles", type=int, default=22)
+    args = ap.parse_args()
+    if args.cycles < 4:
+        ap.error("--cycles: at least 4")
+    # The PLC client needs Debian's python3-pymodbus: the system interpreter, whatever runs this script.
+    plc_client = ["/usr/bin/python3", str(args.source / "tools" / "plc-client")]
+    hullgauge = str(args.bin / "hullgauge")
+
+    workdir = Path(tempfile.mkdtemp(prefix="hg-simline-"))
+    plc_port = free_port()
+    line_out = open(workdir / "simline.out", "w")
+    line = subprocess.Popen([str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(workdir),
+                             "--plc-port", str(plc_port), "--fixture-port", "0"],
+                            stdout=line_out, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 90
+        while not (workdir / "simline.ready").exists():
+            if line.poll() is not None:
+                print((workdir / "simline.out").read_text(), file=sys.stderr)
+                raise SystemExit(f"tools/simline exited with {line.returncode} before the line was ready")
+            if time.monotonic() > deadline:
+                raise SystemExit("the simulated line was not ready within 90 s")
+            time.sleep(0.1)
+        sock = str(workdir / "hullgauged.sock")
+
+        listed = subprocess.run([hullgauge, "ctl", "--socket", sock, "--json", "sim-part", "--list"],
+                                capture_output=True, text=True, timeout=10)
+        check(listed.returncode == 0, f"ctl sim-part --list: {listed.stderr}")
+        check(all(name in listed.stdout for name in FAILING), f"parts listed: {listed.stdout}")
+
+        # The PLC client alternates: cycle i of a run is defective when i is odd.
+        plan = []
+        for variant, n in (("face-low", args.cycles // 2), ("corner-missing", args.cycles - args.cycles // 2)):
+            run = subprocess.run(plc_client + ["--port", str(plc_port), "cycles", str(n), "--bad-every", "2",
+                                               "--timeout", "30", "--sim-socket", sock, "--variant", variant],
+                                 capture_output=True, text=True, timeout=150)
+            check(run.returncode == 0, f"plc-client ({variant}) exit {run.returncode}: {run.stderr}")
+            rows = [json.loads(text) for text in run.stdout.splitlines() if text.strip()]
+            cycles = [r for r in rows if "summary" not in r]
+            check(len(cycles) == n, f"{variant}: {len(cycles)} of {n} cycles ran")
+            for i, r in enumerate(cycles):
+                part = variant if i % 2 == 1 else "nominal"
+                expected = "fail" if FAILING[part] else "pass"
+                check(r["verdict"] == expected, f"cycle {r['seq']} ({part}): verdict {r['verdict']}, expected {expected}")
+                check(r["consistent"], f"cycle {r['seq']} ({part}): inconsistent result block {r}")
+                check(r["fault_code"] == 0, f"cycle {r['seq']}: fault code {r['fault_code']}")
+                check(r["landmarks_total"] == len(LANDMARKS), f"cycle {r['seq']}: LANDMARKS_TOTAL {r['landmarks_total']}")
+                check(r["landmarks_failed"] == len(FAILING[part]),
+                      f"cycle {r['seq']} ({part}): LANDMARKS_FAILED {r['landmarks_failed']}")
+                check(0 < r["cycle_ms"] < 30000, f"cycle {r['seq']}: CYCLE_MS {r['cycle_ms']}")
+                plan.append((r["seq"], r["serial"], part, expected))
+            print(f"{variant}: {len(cycles)} cycles, verdicts checked", flush=True)
+
+        # After the last cycle the registers still show its result, all of a piece.
+        read = subprocess.run(plc_client + ["--port", str(plc_port), "read", "100", "21"], capture_output=True,
+                              text=True, timeout=10)
+        check(read.returncode == 0, f"plc-client read: {read.stderr}")
+        if read.returncode == 0 and plan:
+            regs = json.loads(read.stdout)
+            last_seq, _, last_part, last_expected = plan[-1]
+            check(regs[0] == last_seq and regs[1] == last_seq, f"ACK_SEQ {regs[0]} DONE_SEQ {regs[1]}, last {last_seq}")
+            check(regs[3] == RESULT_CODE[last_expected], f"RESULT {regs[3]} after a {last_part} part")
+            check(regs[20] == ok_bits(FAILING[last_part]),
+                  f"LANDMARK_OK_BITS word 0 {regs[20]:#06x}, expected {ok_bits(FAILING[last_part]):#06x}")
+
+        # SIGTERM stops the line; nothing of it is left running.
+        line.send_signal(signal.SIGTERM)
+        try:
+            check(line.wait(timeout=40) == 0, f"tools/simline exit status {line.returncode} after SIGTERM")
+        except subprocess.TimeoutExpired:
+            check(False, "tools/simline did not stop within 40 s of SIGTERM")
+        time.sleep(0.2)
+        try:
+            os.killpg(line.pid, 0)
+            check(False, "processes of the simulated line survived its stop")
+        except ProcessLookupError:
+            pass
+
+        # The result store: one row per cycle, the PLC's sequence, serial, verdict and failing landmarks.
+        db = sqlite3.connect(f"file:{workdir / 'results.db'}?mode=ro", uri=True)
+        rows = db.execute("SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_json FROM inspections "
+                          "WHERE manual = 0 ORDER BY id").fetchall()
+        check(len(rows) == len(plan), f"{len(rows)} rows in the result store for {len(plan)} cycles")
+        for (seq, serial, part, expected), (db_seq, db_serial, verdict, failed, landmarks) in zip(plan, rows):
+            check((db_seq, db_serial, verdict) == (seq, serial, expected),
+                  f"stored ({db_seq}, {db_serial}, {verdict}), PLC saw ({seq}, {serial}, {expected})")
+            bad = {l["id"] for l in json.loads(landmarks) if l["status"] != "ok"}
+            check(bad == FAILING[part] and failed == len(bad), f"cycle {seq} ({part}): stored failing landmarks {bad}")
+        db.close()
+    finally:
+        if line.poll() is None:
+            os.killpg(line.pid, signal.SIGKILL)
+            line.wait()
+        line_out.close()
+
+    if failures:
+        print(f"{len(failures)} checks failed; work folder {workdir}", file=sys.stderr)
+        return 1
+    print(f"simulated line: {len(plan)} cycles, every verdict, register block and stored record right")
+    subprocess.run(["rm", "-rf", str(workdir)])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

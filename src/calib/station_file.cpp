@@ -149,9 +149,11 @@ void StationFileUpdate::setFixtureAxes(const FixtureAxesResult& r)
     fix["camera_from_fixture"] = cff;
     fix["rotation_axis"] = vec3(r.rotationAxis);
     fix["declination_axis"] = vec3(r.declinationAxis);
+    // Skew axes (a common perpendicular of non-zero length) are used by the
+    // kinematics through these points (geometry/fixture.h).
+    fix["rotation_axis_point"] = vec3(r.rotationAxisPoint);
+    fix["declination_axis_point"] = vec3(r.declinationAxisPoint);
     YAML::Node cal(YAML::NodeType::Map);
-    cal["rotation_axis_point"] = vec3(r.rotationAxisPoint);
-    cal["declination_axis_point"] = vec3(r.declinationAxisPoint);
     cal["axes_angle_deg"] = r.axesAngleDeg;
     cal["axes_distance_mm"] = r.axesDistanceMm;
     cal["rms_px"] = r.rmsPx;

@@ -3,6 +3,17 @@
 #include <sstream>
 
 namespace hg::geometry {
+namespace {
+
+/// Rotation by `angleDeg` about the line through `point` along `axis`.
+RigidTransform rotationAboutLine(const Vec3& axis, const Vec3& point, double angleDeg)
+{
+    RigidTransform T = RigidTransform::rotation(axis, angleDeg);
+    T.t = point - T.R * point;
+    return T;
+}
+
+}  // namespace
 
 std::string toString(const FixturePose& pose, FixtureType type)
 {
@@ -20,8 +31,8 @@ RigidTransform FixtureKinematics::cameraFromPart(const FixturePose& pose) const
     // declination tilts the turntable (and the part on it) about its own axis.
     if (type == FixtureType::Rail)
         return cameraFromFixture * RigidTransform::translation(railAxis.normalized() * pose.railMm);
-    return cameraFromFixture * RigidTransform::rotation(declinationAxis, pose.declinationDeg) *
-           RigidTransform::rotation(rotationAxis, pose.rotationDeg);
+    return cameraFromFixture * rotationAboutLine(declinationAxis, declinationAxisPoint, pose.declinationDeg) *
+           rotationAboutLine(rotationAxis, rotationAxisPoint, pose.rotationDeg);
 }
 
 bool FixtureKinematics::reachable(const FixturePose& pose) const

@@ -48,7 +48,8 @@ Intrinsics parseCamera(const ConfigNode& cam)
 FixtureKinematics parseFixture(const ConfigNode& fix)
 {
     fix.allowOnlyKeys({"type", "camera_from_fixture", "rotation_axis", "declination_axis", "rotation_range_deg",
-                       "declination_range_deg", "rail_axis", "rail_range_mm", "driver", "calibration"});
+                       "declination_range_deg", "rail_axis", "rail_range_mm", "rotation_axis_point",
+                       "declination_axis_point", "driver", "calibration"});
     FixtureKinematics k;
     auto typeNode = fix["type"];
     auto type = typeNode.asString();
@@ -71,6 +72,8 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
 
     if (auto n = fix.optional("rotation_axis")) k.rotationAxis = parseAxis(*n);
     if (auto n = fix.optional("declination_axis")) k.declinationAxis = parseAxis(*n);
+    if (auto n = fix.optional("rotation_axis_point")) k.rotationAxisPoint = n->asVector3();
+    if (auto n = fix.optional("declination_axis_point")) k.declinationAxisPoint = n->asVector3();
     if (auto n = fix.optional("rotation_range_deg")) k.rotationRangeDeg = parseRange(*n);
     if (auto n = fix.optional("declination_range_deg")) k.declinationRangeDeg = parseRange(*n);
     if (auto n = fix.optional("rail_axis")) k.railAxis = parseAxis(*n);

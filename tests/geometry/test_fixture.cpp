@@ -55,6 +55,24 @@ TEST(FixtureKinematics, DeclinationTiltsTheTurntable)
     expectNear(k.cameraFromPart({0, 30, 0}).apply({0, 0, 10}), {0, -10 * std::cos(degToRad(30)), 300 - 5}, 1e-9);
 }
 
+TEST(FixtureKinematics, SkewDeclinationAxisThroughItsOwnPoint)
+{
+    // Declination axis parallel to x through (0, 0, -20) in the fixture frame
+    // (20 mm below the turntable): a 90° tilt about that line carries the
+    // part origin, 20 mm above the axis, a quarter circle towards the camera
+    // to fixture (0, -20, -20), i.e. camera (0, 20, 280).
+    auto k = sideCamera();
+    k.declinationAxisPoint = Vec3(0, 0, -20);
+    expectNear(k.cameraFromPart({0, 90, 0}).apply({0, 0, 0}), {0, 20, 280}, 1e-9);
+    // The rotation axis is unaffected at declination 0, and points on the
+    // declination line stay put whatever the tilt.
+    expectNear(k.cameraFromPart({90, 0, 0}).apply({10, 0, 0}), {0, 0, 310}, 1e-9);
+    expectNear(k.cameraFromPart({0, 37, 0}).apply({5, 0, -20}), k.cameraFromPart({}).apply({5, 0, -20}), 1e-9);
+    // A rotation axis through (3, 0, 0): part point (3, 0, 0) is on it.
+    k.rotationAxisPoint = Vec3(3, 0, 0);
+    expectNear(k.cameraFromPart({70, 0, 0}).apply({3, 0, 5}), k.cameraFromPart({}).apply({3, 0, 5}), 1e-9);
+}
+
 TEST(FixtureKinematics, RailTranslatesAlongItsAxis)
 {
     FixtureKinematics k;

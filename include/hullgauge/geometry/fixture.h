@@ -5,6 +5,11 @@
 // turntable tilts about `declinationAxis`, both through the fixture origin:
 //   camera_from_part = camera_from_fixture * Rot(declination_axis, declination)
 //                                          * Rot(rotation_axis, rotation)
+// Extension: a calibrated fixture's axes need not meet. Each axis may pass
+// through its own point (`rotationAxisPoint`, `declinationAxisPoint`, default
+// the origin); Rot(L, a) is then the rotation about the line L:
+// Trans(p) * Rot(axis, a) * Trans(-p). With both points at the origin this is
+// exactly the formula above.
 // Rail: the part travels along `railAxis`:
 //   camera_from_part = camera_from_fixture * Trans(rail_axis * rail_mm)
 #pragma once
@@ -41,6 +46,9 @@ public:
     RigidTransform cameraFromFixture;
     Vec3 rotationAxis = Vec3::UnitZ();
     Vec3 declinationAxis = Vec3::UnitX();
+    /// A point of each axis line in the fixture frame (mm); the origin unless calibrated otherwise.
+    Vec3 rotationAxisPoint = Vec3::Zero();
+    Vec3 declinationAxisPoint = Vec3::Zero();
     Range rotationRangeDeg{-180.0, 180.0};
     Range declinationRangeDeg{0.0, 60.0};
     Vec3 railAxis = Vec3::UnitZ();

@@ -22,6 +22,13 @@
 namespace hg::cli {
 namespace {
 
+/// Writes the station file (atomically, keeping a backup) and says so on stderr.
+void commitAndReport(calib::StationFileUpdate& update, const std::string& path)
+{
+    auto backup = update.commit();
+    std::cerr << "wrote " << path << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+}
+
 namespace fs = std::filesystem;
 
 cv::Mat readImage(const fs::path& file, const std::string& field)
@@ -93,8 +100,7 @@ int runIntrinsics(const IntrinsicsArgs& a)
     std::cout << calib::formatIntrinsicsReport(result);
     calib::StationFileUpdate update(a.out);
     update.setIntrinsics(result, spec.toString());
-    auto backup = update.commit();
-    std::cerr << "wrote " << a.out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    commitAndReport(update, a.out);
     return 0;
 }
 
@@ -117,8 +123,7 @@ int runRail(const RailArgs& a)
     if (!a.out.empty()) {
         calib::StationFileUpdate update(a.out);
         update.setRailIntrinsics(cal, "--out");
-        auto backup = update.commit();
-        std::cerr << "wrote " << a.out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+        commitAndReport(update, a.out);
     }
     return 0;
 }
@@ -217,8 +222,7 @@ int runFixture(const FixtureArgs& a)
     std::string out = a.out.empty() ? a.station : a.out;
     calib::StationFileUpdate update(out);
     update.setFixtureAxes(result);
-    auto backup = update.commit();
-    std::cerr << "wrote " << out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    commitAndReport(update, out);
     return 0;
 }
 
@@ -300,8 +304,7 @@ int runLive(const RunArgs& a)
     std::string out = a.out.empty() ? a.station : a.out;
     calib::StationFileUpdate update(out);
     update.setFixtureAxes(result);
-    auto backup = update.commit();
-    std::cerr << "wrote " << out << (backup ? " (previous file kept as " + backup->string() + ")" : "") << '\n';
+    commitAndReport(update, out);
     return 0;
 }
 

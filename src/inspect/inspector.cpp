@@ -146,6 +146,21 @@ std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& 
     return rects;
 }
 
+SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::SegmentationSettings& segmentation) const
+{
+    if (v.frame.cols != v.camera.imageSize().width || v.frame.rows != v.camera.imageSize().height)
+        throw std::invalid_argument("view '" + v.id + "': frame is " + std::to_string(v.frame.cols) + "x" +
+                                    std::to_string(v.frame.rows) + ", camera expects " +
+                                    std::to_string(v.camera.imageSize().width) + "x" +
+                                    std::to_string(v.camera.imageSize().height));
+    const cv::Mat grey = vision::toGrey(v.frame);
+    const double threshold = vision::computeThreshold(grey, segmentation);
+    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size())};
+    for (const cv::Rect& r : regionsOfInterest(v.camera))
+        sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
+    return sv;
+}
+
 InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
                                     const vision::SegmentationSettings& segmentation) const
 {
@@ -154,17 +169,7 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
     std::vector<std::string> ids;
     silhouettes.reserve(views.size());
     for (const CapturedView& v : views) {
-        if (v.frame.cols != v.camera.imageSize().width || v.frame.rows != v.camera.imageSize().height)
-            throw std::invalid_argument("view '" + v.id + "': frame is " + std::to_string(v.frame.cols) + "x" +
-                                        std::to_string(v.frame.rows) + ", camera expects " +
-                                        std::to_string(v.camera.imageSize().width) + "x" +
-                                        std::to_string(v.camera.imageSize().height));
-        const cv::Mat grey = vision::toGrey(v.frame);
-        const double threshold = vision::computeThreshold(grey, segmentation);
-        SilhouetteView sv{v.camera, SilhouetteIndex(grey.size())};
-        for (const cv::Rect& r : regionsOfInterest(v.camera))
-            sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
-        silhouettes.push_back(std::move(sv));
+        silhouettes.push_back(prepareView(v, segmentation));
         ids.push_back(v.id);
     }
     const double segMs = msSince(t0);

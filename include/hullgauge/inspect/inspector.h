@@ -134,6 +134,12 @@ public:
     /// Frames must match their camera's image size (std::invalid_argument naming the view).
     InspectionResult inspect(const std::vector<CapturedView>& views,
                              const vision::SegmentationSettings& segmentation) const;
+    /// Segments one view's regions of interest into its silhouette index: the
+    /// per-view half of `inspect`, so a caller can prepare view k while the
+    /// fixture moves to view k+1 (issue 6, pipeline). Const and free of shared
+    /// state: safe to call from several threads. Throws std::invalid_argument
+    /// naming the view when the frame does not match its camera.
+    SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;
     /// Inspects prepared silhouettes (ids name the views in the result).
     InspectionResult inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const;
     /// Inspects with any voxel oracle (no views: no MED check, views_used 0).

@@ -1,6 +1,8 @@
 #include "hullgauge/inspect/voxel_test.h"
 
 #include <algorithm>
+#include <array>
+#include <string>
 #include <cmath>
 #include <stdexcept>
 
@@ -10,40 +12,53 @@ namespace {
 // Internally pixel coordinates are shifted by +0.5 so that pixel (c, r) covers
 // [c, c+1] x [r, r+1]; a region's local frame subtracts its top-left corner.
 
-double polygonArea(const std::vector<Vec2>& p)
+/// A convex polygon on the stack. A footprint has at most 6 outline vertices
+/// and each clipping line adds at most one: 4 frame/region sides plus the 2
+/// lines of a pixel row give at most 12. The voxel test runs tens of thousands
+/// of times per inspection, so it must not touch the heap.
+struct Poly {
+    static constexpr int kMax = 32;
+    std::array<Vec2, kMax> v;
+    int n = 0;
+    void clear() { n = 0; }
+    void push(const Vec2& p) { v[static_cast<std::size_t>(n++)] = p; }
+    const Vec2& operator[](int i) const { return v[static_cast<std::size_t>(i)]; }
+    Vec2& operator[](int i) { return v[static_cast<std::size_t>(i)]; }
+};
+
+double polygonArea(const Poly& p)
 {
     double a = 0.0;
-    for (std::size_t i = 0, n = p.size(); i < n; ++i) {
+    for (int i = 0; i < p.n; ++i) {
         const Vec2& u = p[i];
-        const Vec2& v = p[(i + 1) % n];
-        a += u.x() * v.y() - v.x() * u.y();
+        const Vec2& w = p[i + 1 == p.n ? 0 : i + 1];
+        a += u.x() * w.y() - w.x() * u.y();
     }
     return 0.5 * std::abs(a);
 }
 
 /// Sutherland–Hodgman against the half-plane sign * (coord(axis) - bound) >= 0.
-void clipHalfPlane(const std::vector<Vec2>& in, std::vector<Vec2>& out, int axis, double bound, double sign)
+void clipHalfPlane(const Poly& in, Poly& out, int axis, double bound, double sign)
 {
     out.clear();
-    const std::size_t n = in.size();
-    for (std::size_t i = 0; i < n; ++i) {
+    for (int i = 0; i < in.n; ++i) {
         const Vec2& a = in[i];
-        const Vec2& b = in[(i + 1) % n];
+        const Vec2& b = in[i + 1 == in.n ? 0 : i + 1];
         const double da = sign * (a[axis] - bound);
         const double db = sign * (b[axis] - bound);
-        if (da >= 0) out.push_back(a);
+        if (da >= 0) out.push(a);
         if ((da >= 0) != (db >= 0)) {
             const double t = da / (da - db);
             Vec2 x = a + t * (b - a);
             x[axis] = bound;  // exact on the clip line
-            out.push_back(x);
+            out.push(x);
         }
     }
 }
 
-void clipToRect(std::vector<Vec2>& poly, double x0, double y0, double x1, double y1)
+void clipToRect(Poly& poly, double x0, double y0, double x1, double y1)
 {
-    std::vector<Vec2> tmp;
+    Poly tmp;
     clipHalfPlane(poly, tmp, 0, x0, 1.0);
     clipHalfPlane(tmp, poly, 0, x1, -1.0);
     clipHalfPlane(poly, tmp, 1, y0, 1.0);
@@ -51,12 +66,12 @@ void clipToRect(std::vector<Vec2>& poly, double x0, double y0, double x1, double
 }
 
 /// Vertical chord length of a convex polygon at abscissa x.
-double chordAt(const std::vector<Vec2>& p, double x)
+double chordAt(const Poly& p, double x)
 {
     double lo = 1e300, hi = -1e300;
-    for (std::size_t i = 0, n = p.size(); i < n; ++i) {
+    for (int i = 0; i < p.n; ++i) {
         const Vec2& a = p[i];
-        const Vec2& b = p[(i + 1) % n];
+        const Vec2& b = p[i + 1 == p.n ? 0 : i + 1];
         const double xmin = std::min(a.x(), b.x()), xmax = std::max(a.x(), b.x());
         if (x < xmin || x > xmax || xmax - xmin <= 0.0) continue;
         const double y = a.y() + (x - a.x()) * (b.y() - a.y()) / (b.x() - a.x());
@@ -68,32 +83,31 @@ double chordAt(const std::vector<Vec2>& p, double x)
 
 /// Background area of a convex polygon in region-local shifted coordinates,
 /// already clipped to [0, width] x [0, height].
-double localBackgroundArea(const std::vector<Vec2>& poly, const SilhouetteIndex::Region& reg, double stopAt)
+double localBackgroundArea(const Poly& poly, const SilhouetteIndex::Region& reg, double stopAt)
 {
-    if (poly.size() < 3) return 0.0;
+    if (poly.n < 3) return 0.0;
     double ymin = 1e300, ymax = -1e300;
-    for (const Vec2& v : poly) {
-        ymin = std::min(ymin, v.y());
-        ymax = std::max(ymax, v.y());
+    for (int i = 0; i < poly.n; ++i) {
+        ymin = std::min(ymin, poly[i].y());
+        ymax = std::max(ymax, poly[i].y());
     }
     const int h = reg.rect.height, w = reg.rect.width;
     const int r0 = std::clamp(static_cast<int>(std::floor(ymin)), 0, h - 1);
     const int r1 = std::clamp(static_cast<int>(std::ceil(ymax)) - 1, 0, h - 1);
     double bg = 0.0;
-    std::vector<Vec2> a, b;
-    std::vector<double> xs;
+    Poly a, b;
+    std::array<double, Poly::kMax> xs{};
     for (int r = r0; r <= r1 && bg < stopAt; ++r) {
         clipHalfPlane(poly, a, 1, static_cast<double>(r), 1.0);
         clipHalfPlane(a, b, 1, static_cast<double>(r + 1), -1.0);
-        if (b.size() < 3) continue;
+        if (b.n < 3) continue;
         const std::int32_t* cnt = reg.count.data() + static_cast<std::size_t>(r) * reg.stride;
         const std::int64_t* mom = reg.moment.data() + static_cast<std::size_t>(r) * reg.stride;
         auto bgAt = [&](int c) { return static_cast<double>(cnt[c + 1] - cnt[c]); };
-        xs.clear();
-        for (const Vec2& v : b) xs.push_back(v.x());
-        std::sort(xs.begin(), xs.end());
-        for (std::size_t k = 0; k + 1 < xs.size(); ++k) {
-            const double xa = xs[k], xb = xs[k + 1];
+        for (int k = 0; k < b.n; ++k) xs[static_cast<std::size_t>(k)] = b[k].x();
+        std::sort(xs.begin(), xs.begin() + b.n);
+        for (int k = 0; k + 1 < b.n; ++k) {
+            const double xa = xs[static_cast<std::size_t>(k)], xb = xs[static_cast<std::size_t>(k) + 1];
             if (xb - xa <= 1e-12) continue;
             // w(x) = alpha + beta x is linear between consecutive vertex abscissae.
             const double x1 = xa + (xb - xa) / 3.0, x2 = xa + 2.0 * (xb - xa) / 3.0;
@@ -120,6 +134,32 @@ double localBackgroundArea(const std::vector<Vec2>& poly, const SilhouetteIndex:
         }
     }
     return bg;
+}
+
+/// Andrew's monotone chain over pts[0..n) (sorted in place) into `hull`
+/// (counter-clockwise in pixel coordinates, collinear points dropped); returns
+/// the vertex count. `hull` needs room for 2n points.
+int monotoneChain(Vec2* pts, int n, Vec2* hull)
+{
+    std::sort(pts, pts + n,
+              [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+    if (n < 3) {
+        std::copy(pts, pts + n, hull);
+        return n;
+    }
+    auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+        return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+    };
+    int k = 0;
+    for (int i = 0; i < n; ++i) {
+        while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+        hull[k++] = pts[i];
+    }
+    for (int i = n - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+        hull[k++] = pts[i];
+    }
+    return k - 1;
 }
 
 }  // namespace
@@ -189,32 +229,19 @@ const SilhouetteIndex::Region* SilhouetteIndex::regionAt(int col, int row) const
 
 std::vector<Vec2> convexHull(std::vector<Vec2> pts)
 {
-    // Andrew's monotone chain; collinear points are dropped.
-    std::sort(pts.begin(), pts.end(),
-              [](const Vec2& a, const Vec2& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-    if (pts.size() < 3) return pts;
-    auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
-        return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
-    };
-    std::vector<Vec2> hull(2 * pts.size());
-    std::size_t k = 0;
-    for (const Vec2& p : pts) {
-        while (k >= 2 && cross(hull[k - 2], hull[k - 1], p) <= 0) --k;
-        hull[k++] = p;
-    }
-    for (std::size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
-        while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
-        hull[k++] = pts[i];
-    }
-    hull.resize(k - 1);
+    std::vector<Vec2> hull(2 * pts.size() + 1);
+    hull.resize(static_cast<std::size_t>(monotoneChain(pts.data(), static_cast<int>(pts.size()), hull.data())));
     return hull;
 }
 
 double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::Region& region, double stopAt)
 {
-    std::vector<Vec2> local;
-    local.reserve(polygon.size());
-    for (const Vec2& v : polygon) local.emplace_back(v.x() + 0.5 - region.rect.x, v.y() + 0.5 - region.rect.y);
+    // Two row clips add at most two vertices to the convex polygon.
+    if (polygon.size() + 2 > static_cast<std::size_t>(Poly::kMax))
+        throw std::invalid_argument("backgroundArea: polygon has more than " + std::to_string(Poly::kMax - 2) +
+                                    " vertices");
+    Poly local;
+    for (const Vec2& v : polygon) local.push(Vec2(v.x() + 0.5 - region.rect.x, v.y() + 0.5 - region.rect.y));
     return localBackgroundArea(local, region, stopAt);
 }
 
@@ -222,27 +249,27 @@ FootprintMeasure VoxelTester::measure(const Box3& voxel, std::size_t viewIndex, 
 {
     const SilhouetteView& view = (*views_)[viewIndex];
     FootprintMeasure m;
-    std::vector<Vec2> corners;
-    corners.reserve(8);
+    std::array<Vec2, 8> corners;
     for (int i = 0; i < 8; ++i) {
         const auto px = view.camera.project(voxel.corner(static_cast<Box3::CornerType>(i)));
         if (!px) return m;
-        corners.emplace_back(px->x() + 0.5, px->y() + 0.5);
+        corners[static_cast<std::size_t>(i)] = Vec2(px->x() + 0.5, px->y() + 0.5);
     }
     m.inFront = true;
-    std::vector<Vec2> outline = convexHull(std::move(corners));
-    m.outlineVertices = static_cast<int>(outline.size());
+    Poly outline;
+    outline.n = monotoneChain(corners.data(), 8, outline.v.data());
+    m.outlineVertices = outline.n;
     m.area = polygonArea(outline);
-    if (outline.size() < 3 || m.area <= 0.0) return m;
+    if (outline.n < 3 || m.area <= 0.0) return m;
 
     // The region that holds the footprint (by its bounding box); what lies
     // outside that region (or the frame) is unknown.
     double xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;
-    for (const Vec2& v : outline) {
-        xmin = std::min(xmin, v.x());
-        xmax = std::max(xmax, v.x());
-        ymin = std::min(ymin, v.y());
-        ymax = std::max(ymax, v.y());
+    for (int i = 0; i < outline.n; ++i) {
+        xmin = std::min(xmin, outline[i].x());
+        xmax = std::max(xmax, outline[i].x());
+        ymin = std::min(ymin, outline[i].y());
+        ymax = std::max(ymax, outline[i].y());
     }
     const cv::Rect bbox(static_cast<int>(std::floor(xmin)), static_cast<int>(std::floor(ymin)),
                         static_cast<int>(std::floor(xmax)) - static_cast<int>(std::floor(xmin)) + 1,
@@ -256,9 +283,9 @@ FootprintMeasure VoxelTester::measure(const Box3& voxel, std::size_t viewIndex, 
         m.unknown = m.area;
         return m;
     }
-    for (Vec2& v : outline) v -= Vec2(reg->rect.x, reg->rect.y);
+    for (int i = 0; i < outline.n; ++i) outline[i] -= Vec2(reg->rect.x, reg->rect.y);
     clipToRect(outline, 0.0, 0.0, reg->rect.width, reg->rect.height);
-    const double inside = outline.size() >= 3 ? polygonArea(outline) : 0.0;
+    const double inside = outline.n >= 3 ? polygonArea(outline) : 0.0;
     m.unknown = std::max(0.0, m.area - inside);
     if (inside > 0.0) m.background = localBackgroundArea(outline, *reg, stopFraction * m.area);
     return m;

@@ -1,6 +1,7 @@
 #include "hullgauge/vision/segmentation.h"
 
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <vector>
 
@@ -94,16 +95,24 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
     }
     const int stride = std::max(1, settings.otsuStride);
     const bool wide = grey.depth() == CV_16U;
-    std::vector<double> hist(wide ? 65536 : 256, 0.0);
+    const std::size_t bins = wide ? 65536 : 256;
+    // Four interleaved integer histograms: a backlit frame holds few distinct
+    // grey values, and one histogram would serialise every increment on the
+    // same counter (this pass is a fifth of an inspection's compute otherwise).
+    std::vector<std::uint32_t> counts(4 * bins, 0);
+    auto tally = [&](const auto* row) {
+        int c = 0, k = 0;
+        for (; c < grey.cols; c += stride, k = (k + 1) & 3) ++counts[static_cast<std::size_t>(k) * bins + row[c]];
+    };
     for (int r = 0; r < grey.rows; r += stride) {
-        if (wide) {
-            const auto* row = grey.ptr<std::uint16_t>(r);
-            for (int c = 0; c < grey.cols; c += stride) hist[row[c]] += 1.0;
-        } else {
-            const auto* row = grey.ptr<std::uint8_t>(r);
-            for (int c = 0; c < grey.cols; c += stride) hist[row[c]] += 1.0;
-        }
+        if (wide)
+            tally(grey.ptr<std::uint16_t>(r));
+        else
+            tally(grey.ptr<std::uint8_t>(r));
     }
+    std::vector<double> hist(bins, 0.0);
+    for (std::size_t k = 0; k < 4; ++k)
+        for (std::size_t i = 0; i < bins; ++i) hist[i] += counts[k * bins + i];
     return static_cast<double>(otsuBin(hist));
 }
 

@@ -117,6 +117,52 @@ TEST(BackgroundArea, MatchesPerPixelClippingOnRandomPolygonsAndSilhouettes)
     }
 }
 
+TEST(BackgroundArea, UniformBlocksGiveZeroOrTheWholeArea)
+{
+    // Left half object, right half background, one boundary column at x = 16:
+    // footprints wholly on one side take the uniform shortcut, footprints that
+    // straddle it are integrated; both must agree with per-pixel clipping.
+    cv::Mat sil(32, 32, CV_8U, cv::Scalar(0));
+    sil(cv::Rect(0, 0, 16, 32)).setTo(255);
+    const auto idx = SilhouetteIndex::fromSilhouette(sil);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(1.0, 30.0);
+    int inObject = 0, inBackground = 0, straddling = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        std::vector<Vec2> pts;
+        const Vec2 c(u(rng), u(rng));
+        for (int i = 0; i < 6; ++i) pts.push_back(c + Vec2(u(rng) - 15.5, u(rng) - 15.5) * 0.15);
+        auto hull = convexHull(pts);
+        ASSERT_GE(hull.size(), 3u);
+        bool inside = true;
+        for (const auto& v : hull) inside = inside && v.x() > 0 && v.x() < 31 && v.y() > 0 && v.y() < 31;
+        if (!inside) continue;
+        double xmin = 1e9, xmax = -1e9, area = 0;
+        for (std::size_t i = 0; i < hull.size(); ++i) {
+            xmin = std::min(xmin, hull[i].x());
+            xmax = std::max(xmax, hull[i].x());
+            const auto& a = hull[i];
+            const auto& b = hull[(i + 1) % hull.size()];
+            area += 0.5 * (a.x() * b.y() - b.x() * a.y());
+        }
+        const double bg = backgroundArea(hull, idx.regions()[0]);
+        // Pixel c covers [c - 0.5, c + 0.5]: object pixels end at x = 15.5.
+        if (xmax < 15.5) {
+            ++inObject;
+            EXPECT_EQ(bg, 0.0) << "trial " << trial;
+        } else if (xmin > 15.5) {
+            ++inBackground;
+            EXPECT_NEAR(bg, std::abs(area), 1e-9) << "trial " << trial;
+        } else {
+            ++straddling;
+        }
+        EXPECT_NEAR(bg, referenceBackground(hull, sil), 1e-8) << "trial " << trial;
+    }
+    EXPECT_GT(inObject, 20);
+    EXPECT_GT(inBackground, 20);
+    EXPECT_GT(straddling, 5);
+}
+
 TEST(VoxelTest, FiftyPercentRuleOnFaceOnFootprint)
 {
     // Camera on the z axis at 100 mm, f = 1000 px; a unit voxel at the origin

@@ -32,7 +32,7 @@ struct SegmentationSettings {
     /// Backlit part: the object is dark against a bright background.
     bool objectIsDark = true;
     /// Row and column step of the histogram sample used by Otsu (1 = every pixel).
-    int otsuStride = 8;
+    int otsuStride = 16;
 };
 
 /// "otsu", "fixed", "mask"; throws std::invalid_argument for anything else.

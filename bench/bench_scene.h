@@ -1,0 +1,128 @@
+// The benchmarks' part and views, shared by bench_inspect and bench_open3d:
+// a 40 x 40 x 20 mm block in a 64 mm part cube, n x n landmarks on its top
+// face, and `views` cameras in the face's tangent plane (grazing views)
+// around it, 400 mm away, f = 3500 px.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/model/primitives.h"
+#include "hullgauge/model/solid.h"
+#include "hullgauge/sim/renderer.h"
+
+namespace hgbench {
+
+constexpr double kTop = 20.0;
+inline const Eigen::Vector3d kCubeOrigin(-12, -12, -22);
+constexpr double kCubeSize = 64.0;
+
+inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, cv::Size size)
+{
+    const Eigen::Vector3d down(0, 0, -1);
+    Eigen::Matrix3d R;
+    R.row(0) = down.cross(forward).transpose();
+    R.row(1) = down.transpose();
+    R.row(2) = forward.transpose();
+    hg::geometry::Intrinsics in;
+    in.K << 3500, 0, (size.width - 1) / 2.0, 0, 3500, (size.height - 1) / 2.0, 0, 0, 1;
+    in.imageSize = size;
+    return {in, {R, -R * centre}};
+}
+
+inline hg::model::TriangleMesh block(double raise = 0.0)
+{
+    return hg::model::makeBox({0, 0, 0}, {40, 40, kTop + raise});
+}
+
+struct Scene {
+    hg::inspect::InspectionMap map;
+    std::vector<hg::inspect::CapturedView> frames;
+
+    Scene(int n, int views, cv::Size size, double raise, int depth = 9, double distance = 400.0)
+    {
+        using namespace hg::inspect;
+        auto solid = std::make_shared<const hg::model::Solid>(block());
+        MapGeometry g;
+        g.cubeOrigin = kCubeOrigin;
+        g.cubeSize = kCubeSize;
+        g.depth = depth;  // ΔV = 0.125 mm at depth 9
+        g.adjacencyDepth = 4;
+        g.coarsestLevel = depth;
+        std::vector<MapLandmark> lms;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j)
+                lms.push_back({"l" + std::to_string(i * n + j),
+                               Eigen::Vector3d(5.0 + 30.0 * i / std::max(1, n - 1),
+                                               5.0 + 30.0 * j / std::max(1, n - 1), kTop),
+                               Eigen::Vector3d::UnitZ(), 0.3});
+        map = InspectionMap::build("block", g, lms, {}, cadLabels(solid));
+        hg::sim::SilhouetteRenderer r({block(raise)});
+        for (int v = 0; v < views; ++v) {
+            const double a = 2 * M_PI * v / views;
+            const Eigen::Vector3d dir(std::cos(a), std::sin(a), 0);
+            const auto cam = lookAt(Eigen::Vector3d(20, 20, kTop) + distance * dir, -dir, size);
+            frames.push_back({"v" + std::to_string(v), cam, r.render(cam)});
+        }
+    }
+};
+
+/// A general camera looking at `target` from `distance` at azimuth/elevation
+/// (degrees); image-down is the projection of −z.
+inline hg::geometry::CameraModel orbit(const Eigen::Vector3d& target, double azimuthDeg, double elevationDeg,
+                                       double distance, cv::Size size)
+{
+    const double a = azimuthDeg * M_PI / 180, e = elevationDeg * M_PI / 180;
+    const Eigen::Vector3d dir(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+    const Eigen::Vector3d fwd = -dir;
+    // Image-down: world −z with its component along the line of sight removed.
+    Eigen::Vector3d d = Eigen::Vector3d(0, 0, -1) - Eigen::Vector3d(0, 0, -1).dot(fwd) * fwd;
+    d.normalize();
+    Eigen::Matrix3d R;
+    R.row(0) = d.cross(fwd).transpose();
+    R.row(1) = d.transpose();
+    R.row(2) = fwd.transpose();
+    hg::geometry::Intrinsics in;
+    in.K << 3500, 0, (size.width - 1) / 2.0, 0, 3500, (size.height - 1) / 2.0, 0, 0, 1;
+    in.imageSize = size;
+    const Eigen::Vector3d centre = target + distance * dir;
+    return {in, {R, -R * centre}};
+}
+
+/// Whole-object reconstruction views of the block (16): 4 along its side
+/// faces, and 4 azimuths at each of the elevations −35°, 10° and 55°,
+/// staggered, so top, bottom, sides and edges are all cut.
+inline std::vector<hg::inspect::CapturedView> carvingViews(cv::Size size)
+{
+    hg::sim::SilhouetteRenderer r({block()});
+    std::vector<hg::inspect::CapturedView> out;
+    for (int i = 0; i < 4; ++i) {
+        const auto cam = orbit({20, 20, kTop / 2}, 90.0 * i, 0.0, 400.0, size);
+        out.push_back({"c" + std::to_string(out.size()), cam, r.render(cam)});
+    }
+    const double elevations[] = {-35.0, 10.0, 55.0};
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 4; ++i) {
+            const auto cam = orbit({20, 20, kTop / 2}, 90.0 * i + 30.0 * k + 15.0, elevations[k], 400.0, size);
+            out.push_back({"c" + std::to_string(out.size()), cam, r.render(cam)});
+        }
+    return out;
+}
+
+/// True-solid label of a voxel of the block: object when >= 50 % of it lies
+/// inside [0,40] x [0,40] x [0,20] (analytic: the product of 1-D overlaps).
+inline bool trulyObject(const Eigen::AlignedBox3d& b)
+{
+    const Eigen::Vector3d hi(40, 40, kTop);
+    double f = 1.0;
+    for (int a = 0; a < 3; ++a)
+        f *= std::max(0.0, std::min(b.max()[a], hi[a]) - std::max(b.min()[a], 0.0)) / b.sizes()[a];
+    return f >= 0.5;
+}
+
+}  // namespace hgbench

@@ -6,7 +6,8 @@
 // completed after grab() was called (frames already queued are stale and are
 // requeued). Exposure maps to V4L2_CID_EXPOSURE_ABSOLUTE (100 µs units); V4L2
 // gain has no unit, so gain_db is refused and the raw control is set by name
-// under `features`.
+// under `features`; a control value outside the control's range is refused
+// (the kernel would clamp it silently). `device_format` pins the device format.
 #include "v4l2_camera.h"
 
 #include <fcntl.h>
@@ -15,6 +16,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <mutex>
@@ -47,6 +49,9 @@ int xioctl(int fd, unsigned long request, void* arg)
 struct V4l2Config {
     std::string device;
     int bufferCount = 4;
+    /// `device_format`: the device format pinned by the station, instead of
+    /// the best one negotiated for the pixel format (std::nullopt).
+    std::optional<std::uint32_t> deviceFormat;
     std::vector<std::pair<std::string, std::string>> features;
 };
 
@@ -185,13 +190,16 @@ protected:
         while (dequeue(b)) pool_->requeue(b.index);
         const auto deadline = Clock::now() + timeout;
         for (;;) {
-            const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now()).count();
-            if (left < 0) break;
+            // poll() counts whole milliseconds: round up and re-check the
+            // deadline, so a timeout is reported only once it has fully passed.
+            const auto now = Clock::now();
+            if (now >= deadline) break;
+            const auto left = std::chrono::ceil<milliseconds>(deadline - now).count();
             pollfd p{fd_, POLLIN, 0};
             int r = ::poll(&p, 1, static_cast<int>(left));
             if (r < 0 && errno == EINTR) continue;
             if (r < 0) return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": poll: " + errnoText(errno));
-            if (r == 0) break;
+            if (r == 0) continue;
             if (p.revents & (POLLERR | POLLHUP))
                 return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": device error or unplugged");
             if (dequeue(b)) return toFrame(b);
@@ -232,9 +240,9 @@ protected:
 
     Result<std::string> doGetFeature(const std::string& name) override
     {
-        auto id = controlId(name);
-        if (!id) return Status::failure("v4l2 " + config_.device + ": no control named '" + name + "'");
-        v4l2_control c{*id, 0};
+        auto q = findControl(name);
+        if (!q) return Status::failure("v4l2 " + config_.device + ": no control named '" + name + "'");
+        v4l2_control c{q->id, 0};
         if (xioctl(fd_, VIDIOC_G_CTRL, &c) == -1)
             return Status::failure("v4l2 " + config_.device + ": cannot read " + name + ": " + errnoText(errno));
         return std::to_string(c.value);
@@ -242,8 +250,8 @@ protected:
 
     Status doSetFeature(const std::string& name, const std::string& value) override
     {
-        auto id = controlId(name);
-        if (!id) return Status::failure("v4l2 " + config_.device + ": no control named '" + name + "'");
+        auto q = findControl(name);
+        if (!q) return Status::failure("v4l2 " + config_.device + ": no control named '" + name + "'");
         std::int32_t v = 0;
         std::istringstream in(value);
         if (value == "true" || value == "on")
@@ -252,7 +260,19 @@ protected:
             v = 0;
         else if (!(in >> v) || !in.eof())
             return Status::failure("v4l2 " + config_.device + ": " + name + " needs an integer, got '" + value + "'");
-        v4l2_control c{*id, v};
+        // The kernel clamps integer controls to their range instead of refusing:
+        // check first, so a wrong value is an error rather than another value.
+        const bool ranged = q->type == V4L2_CTRL_TYPE_INTEGER || q->type == V4L2_CTRL_TYPE_BOOLEAN ||
+                            q->type == V4L2_CTRL_TYPE_MENU || q->type == V4L2_CTRL_TYPE_INTEGER_MENU;
+        if (ranged && (v < q->minimum || v > q->maximum))
+            return Status::failure("v4l2 " + config_.device + ": cannot set " + name + " = " + value +
+                                   ": outside the control's range " + std::to_string(q->minimum) + ".." +
+                                   std::to_string(q->maximum));
+        if (q->type == V4L2_CTRL_TYPE_INTEGER && q->step > 1 && (v - q->minimum) % q->step != 0)
+            return Status::failure("v4l2 " + config_.device + ": cannot set " + name + " = " + value +
+                                   ": not a multiple of the step " + std::to_string(q->step) + " from " +
+                                   std::to_string(q->minimum));
+        v4l2_control c{q->id, v};
         if (xioctl(fd_, VIDIOC_S_CTRL, &c) == -1)
             return Status::failure("v4l2 " + config_.device + ": cannot set " + name + " = " + value + ": " +
                                    errnoText(errno));
@@ -273,12 +293,13 @@ protected:
     }
 
 private:
-    std::optional<std::uint32_t> controlId(const std::string& name)
+    /// The control whose name (as VIDIOC_QUERYCTRL reports it) is `name`.
+    std::optional<v4l2_queryctrl> findControl(const std::string& name)
     {
         v4l2_queryctrl q{};
         q.id = V4L2_CTRL_FLAG_NEXT_CTRL;
         while (xioctl(fd_, VIDIOC_QUERYCTRL, &q) == 0) {
-            if (name == reinterpret_cast<const char*>(q.name)) return q.id;
+            if (name == reinterpret_cast<const char*>(q.name)) return q;
             q.id |= V4L2_CTRL_FLAG_NEXT_CTRL;
         }
         return std::nullopt;
@@ -298,12 +319,26 @@ private:
             offered.push_back(d.pixelformat);
             ++d.index;
         }
-        auto chosen = v4l2::negotiate(s.pixelFormat, offered);
+        std::optional<std::uint32_t> chosen;
+        if (config_.deviceFormat) {
+            const auto fits = v4l2::candidateFourccs(s.pixelFormat);
+            if (std::find(fits.begin(), fits.end(), *config_.deviceFormat) == fits.end())
+                return Status::failure(configPath() + ".device_format: " + v4l2::fourccName(*config_.deviceFormat) +
+                                       " cannot deliver " + std::string(toString(s.pixelFormat)));
+            if (std::find(offered.begin(), offered.end(), *config_.deviceFormat) != offered.end())
+                chosen = config_.deviceFormat;
+        } else {
+            chosen = v4l2::negotiate(s.pixelFormat, offered);
+        }
         if (!chosen) {
             std::string list;
             for (auto f : offered) list += (list.empty() ? "" : ", ") + v4l2::fourccName(f);
             std::string want;
-            for (auto f : v4l2::candidateFourccs(s.pixelFormat)) want += (want.empty() ? "" : " or ") + v4l2::fourccName(f);
+            if (config_.deviceFormat)
+                want = v4l2::fourccName(*config_.deviceFormat) + " (device_format)";
+            else
+                for (auto f : v4l2::candidateFourccs(s.pixelFormat))
+                    want += (want.empty() ? "" : " or ") + v4l2::fourccName(f);
             return Status::failure(where + std::string(toString(s.pixelFormat)) + " needs " + want +
                                    "; the device offers " + (list.empty() ? "nothing" : list));
         }
@@ -333,6 +368,13 @@ private:
         height_ = static_cast<int>(fmt.fmt.pix.height);
         bytesPerLine_ = fmt.fmt.pix.bytesperline;
         if (s.exposureUs) {
+            // Webcams and test devices often have no absolute exposure at all:
+            // say so rather than pass on the ioctl's bare EINVAL.
+            v4l2_queryctrl q{};
+            q.id = V4L2_CID_EXPOSURE_ABSOLUTE;
+            if (xioctl(fd_, VIDIOC_QUERYCTRL, &q) == -1 || (q.flags & V4L2_CTRL_FLAG_DISABLED))
+                return Status::failure(where + "exposure_us is set but the device has no absolute exposure control "
+                                               "(V4L2_CID_EXPOSURE_ABSOLUTE); leave exposure_us unset");
             v4l2_control manual{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL};
             xioctl(fd_, VIDIOC_S_CTRL, &manual);  // absent on many devices; the absolute value decides
             v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<std::int32_t>(*s.exposureUs / 100.0 + 0.5)};
@@ -413,8 +455,8 @@ private:
 
 std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
 {
-    driver.allowOnlyKeys(
-        {"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "device", "buffer_count", "features"});
+    driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "device",
+                          "device_format", "buffer_count", "features"});
     V4l2Config c;
     c.device = driver["device"].asString();
     if (c.device.empty()) driver["device"].fail("empty device path");
@@ -424,6 +466,16 @@ std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
         for (const auto& key : n->keys()) c.features.emplace_back(key, (*n)[key].asString());
     }
     CameraSettings s = parseCameraSettings(driver);
+    if (auto n = driver.optional("device_format")) {
+        const std::string name = n->asString();
+        std::string fits;
+        for (auto f : v4l2::candidateFourccs(s.pixelFormat)) {
+            if (v4l2::fourccName(f) == name) c.deviceFormat = f;
+            fits += (fits.empty() ? "" : " or ") + v4l2::fourccName(f);
+        }
+        if (!c.deviceFormat)
+            n->fail("'" + name + "' cannot deliver " + std::string(toString(s.pixelFormat)) + "; expected " + fits);
+    }
     if (s.gainDb) driver["gain_db"].fail("V4L2 gain has no unit; set the device's gain control under 'features'");
     return std::make_unique<V4l2Camera>(driver.path(), s, std::move(c));
 }

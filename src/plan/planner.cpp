@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
@@ -246,7 +247,7 @@ class Analyser {
         double bestRangeMed = std::numeric_limits<double>::infinity();
         bool anyPasses = false;
         double nearestDepth = 0.0;
-        for (const auto& p : r.candidates) {
+        auto consider = [&](const FixturePose& p) {
             const auto chk = rules_.check(r.target, p);
             r.checks.push_back(chk);
             if (chk.sees()) {
@@ -261,6 +262,21 @@ class Analyser {
                 ++blockers[*chk.blockingTriangle];
                 blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
             }
+        };
+        for (const auto& p : r.candidates) consider(p);
+        // Weak convexity is relative to the whole reachable pose set (Definition
+        // 2): when no pose near the tangent plane sees the void neighbour, every
+        // other grid pose is tried before the landmark is declared not
+        // inspectable (a void voxel at an edge or corner can be seen from well
+        // outside the band). Only such landmarks pay for the full search.
+        if (a.witnessPoses.empty()) {
+            std::set<std::tuple<long long, long long, long long>> tried;
+            for (const auto& p : r.candidates) tried.insert(poseKey(p));
+            for (const auto& p : grid_)
+                if (tried.insert(poseKey(p)).second) {
+                    r.candidates.push_back(p);
+                    consider(p);
+                }
         }
         // Designer best views that do not pass the rules are kept (the designer
         // vouched for them) but reported.

@@ -279,6 +279,38 @@ TEST(WeakConvexity, ToleranceBelowStationMedIsRefused)
 // declination (3.82°, any rotation) crosses each side face's grazing curve, so
 // each side view can serve the top too: exactly four. px and px2 share the
 // plane x = 10. Every landmark is observed and the exact cover agrees.
+// Witnesses outside the tangent-plane band. Cube [-10,10]² x [0,20]; the
+// declination range [0°, 1°] keeps the camera 0…5.2 mm high, 300 mm out on -y:
+// the top face's tangent plane z = 20 (δ = 3.82°) is out of reach and every
+// grid pose looks up at it by at least atan(14.8 / 290) = 2.9°, outside the 2°
+// band. At δ = 1° the line of sight through the void voxel above a landmark
+// 0.5 mm from the -y edge rises 0.051 mm per mm: followed back towards the
+// camera it drops below z = 20 only 2.45 mm before the voxel, beyond the
+// edge, and clears the edge (y = -10) where it is higher than 20 + 0.026 mm —
+// about 90 % of the voxel (20 … 20.25) is seen against background: weakly
+// convex for this station, found only by searching the whole pose set. At the
+// face centre the same line meets the face 2.45 mm before the voxel: blocked,
+// out of the fixture's range (grazing at δ = 3.82° would see it).
+TEST(WeakConvexity, WitnessOutsideTheTangentBandIsFoundByTheFullPoseSearch)
+{
+    model::Solid cube(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)));
+    auto station = makeStation({-10, 10}, {0, 1});
+    auto problem = problemFor(cube, station,
+                              {landmark("near-edge", {0, -9.5, 20}, {0, 0, 1}), landmark("centre", {0, 0, 20}, {0, 0, 1})});
+    auto all = analyseLandmarks(problem);
+    const auto& edge = find(all, "near-edge");
+    EXPECT_TRUE(edge.inspectable()) << edge.reason;
+    ASSERT_FALSE(edge.witnessPoses.empty());
+    for (const auto& p : edge.witnessPoses) {
+        // Seen from below the tangent plane, outside the band.
+        const Vec3 c = station.fixture.cameraCentreInPart(p);
+        EXPECT_LT(c.z(), 20.0 - 0.02 * 290.0) << p.rotationDeg << " " << p.declinationDeg;
+    }
+    const auto& centre = find(all, "centre");
+    EXPECT_FALSE(centre.inspectable());
+    EXPECT_EQ(centre.verdict, LandmarkVerdict::OutOfFixtureRange) << centre.reason;
+}
+
 TEST(ViewPlan, CubePlanObservesEveryLandmark)
 {
     model::Solid cube(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)));

@@ -169,6 +169,7 @@ void expectBars(const cv::Mat& image, const std::function<double(int)>& expected
 /// increasing sequence numbers and timestamps; hands each to `check`.
 struct StreamStats {
     std::uint64_t firstId = 0, lastId = 0;
+    int repeatedIds = 0;
     std::chrono::nanoseconds firstTs{0}, lastTs{0};
 };
 StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<void(const Frame&)>& check)
@@ -183,7 +184,11 @@ StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<voi
         EXPECT_EQ(f.image.rows, kHeight);
         EXPECT_EQ(f.image.type(), cvType);
         if (!first) {
-            EXPECT_GT(f.frameId, st.lastId) << "frame " << k;
+            // vivid's capture thread runs on the kernel tick; when the guest is
+            // starved it can emit two frames within one frame period, and both
+            // carry that period's sequence number. Never backwards, rarely equal.
+            EXPECT_GE(f.frameId, st.lastId) << "frame " << k;
+            if (f.frameId == st.lastId) ++st.repeatedIds;
             EXPECT_GT(f.timestamp, st.lastTs) << "frame " << k;
         } else {
             st.firstId = f.frameId;
@@ -194,9 +199,10 @@ StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<voi
         st.lastTs = f.timestamp;
         check(f);
     }
+    EXPECT_LE(st.repeatedIds, n / 10) << "sequence numbers repeated";
     // vivid paces frames by the kernel tick (jiffies): single gaps jitter by a
-    // tick (4 ms at HZ=250), the mean period over the run is the set rate.
-    if (n > 1 && st.lastId > st.firstId) {
+    // tick (4 ms at HZ=250), the mean period over a long run is the set rate.
+    if (st.lastId >= st.firstId + 20) {
         using Ms = std::chrono::duration<double, std::milli>;
         const double meanMs = Ms(st.lastTs - st.firstTs).count() / static_cast<double>(st.lastId - st.firstId);
         EXPECT_NEAR(meanMs, Ms(kFramePeriod).count(), 0.1 * Ms(kFramePeriod).count())
@@ -256,7 +262,7 @@ TEST_F(Vivid, GreyStreamsThirtyFramesOfTheSeventyFivePercentBars)
         expectBars(
             f.image, [](int i) { return 255.0 * lumaOf(kBars75[i], kRec709); }, kTol8);
     });
-    EXPECT_GE(st.lastId - st.firstId, 29u);
+    EXPECT_GE(st.lastId - st.firstId + static_cast<std::uint64_t>(st.repeatedIds), 29u);
     ASSERT_TRUE(cam->deactivate());
     ASSERT_TRUE(cam->cleanup());
 }

@@ -3,6 +3,7 @@
 #include "hullgauge/common/log.h"
 
 #include <cmath>
+#include <optional>
 
 namespace hg::daemon {
 namespace {
@@ -250,6 +251,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     record.serial = trigger.serial;
     record.program = trigger.program;
     double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0;
+    std::optional<Clock::time_point> lastFrameAt; // when the last good frame was in (latency, issue 6)
 
     log->info("cycle {}{}: program {}, serial '{}'", trigger.manual ? "manual" : "seq ",
               trigger.manual ? std::string() : std::to_string(trigger.seq), trigger.program, trigger.serial);
@@ -312,9 +314,10 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             cv::Mat image;
             auto r = devices_.grab(cfg->sequencer.grabTimeout, image);
             grabMs += msSince(stepStart);
-            if (r.ok())
+            if (r.ok()) {
+                lastFrameAt = Clock::now();
                 inspector_.addView(action.view, program->views[action.view], image);
-            else
+            } else
                 log->warn("view {}: grab failed: {}", action.view, r.message);
             setState([&] { return sequencer_.onEvent(grabEvent(r)); }, action);
             break;
@@ -363,19 +366,26 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
         record.verdict = how == station::CycleOutcome::Aborted ? station::Verdict::Aborted : station::Verdict::Error;
     }
     record.cycleMs = static_cast<std::uint32_t>(std::lround(msSince(cycleStart)));
+    // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
+    // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.
     record.timingMs = {{"move", moveMs},
                        {"settle", settleMs},
                        {"grab", grabMs},
+                       {"prepare", outcome.prepareMs},
+                       {"traversal", outcome.traversalMs},
                        {"processing", outcome.processingMs},
                        {"wait_for_verdict", finishMs}};
 
     std::string imagesDir;
+    const auto imagesStart = Clock::now();
     if (record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages) {
         ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
         imagesDir = archive.saveFailed(record.startedUnixMs, record.serial, outcome.views).string();
         archive.enforceRetention();
+        record.timingMs["images"] = msSince(imagesStart);
     }
     // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6, issue 6).
+    const auto commitStart = Clock::now();
     try {
         store_.commit(record, imagesDir);
     } catch (const std::exception& e) {
@@ -383,11 +393,8 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
         record.verdict = station::Verdict::Error;
         record.faultCode = station::FaultCode::ResultStore;
     }
-    auto statusAfter = after == SequencerState::Fault ? station::PlcStatus::Fault : station::PlcStatus::Done;
-    registers_.publishResult(record.toPublished(statusAfter));
-    cycleStartNs_ = 0;
-    abortRequested_ = false;
-
+    const double commitMs = msSince(commitStart);
+    // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
     LampPattern lamps = LampPattern::Off;
     if (after == SequencerState::Fault)
         lamps = LampPattern::Fault;
@@ -396,6 +403,18 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     else if (record.verdict == station::Verdict::Fail)
         lamps = LampPattern::Fail;
     devices_.showLamps(lamps);
+    auto statusAfter = after == SequencerState::Fault ? station::PlcStatus::Fault : station::PlcStatus::Done;
+    const auto publishStart = Clock::now();
+    registers_.publishResult(record.toPublished(statusAfter));
+    const auto published = Clock::now();
+    cycleStartNs_ = 0;
+    auto timing = record.timingMs;
+    timing["commit"] = commitMs;
+    timing["publish"] = std::chrono::duration<double, std::milli>(published - publishStart).count();
+    // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
+    if (lastFrameAt)
+        timing["last_frame_to_publish"] = std::chrono::duration<double, std::milli>(published - *lastFrameAt).count();
+    abortRequested_ = false;
     {
         std::lock_guard lock(mutex_);
         ++cycles_;
@@ -408,11 +427,12 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                       {"cycle_ms", record.cycleMs},
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
-                      {"timing_ms", record.timingMs}};
+                      {"timing_ms", timing}};
     }
-    log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, verdict wait {:.1f})",
+    log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
+              "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
               station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, moveMs, settleMs,
-              grabMs, finishMs);
+              grabMs, outcome.prepareMs, finishMs, commitMs, timing.value("last_frame_to_publish", 0.0));
     if (sequencer_.afterPublish().kind == Kind::Recover && !stopRequested_) recover();
 }
 

@@ -128,6 +128,7 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                           {"refused_connections", counters.refusedConnections},
                           {"dropped_connections", counters.droppedConnections}}},
                         {"results", {{"database", store.file().string()}, {"records", store.count()}}},
+                        {"lamps", devices->lampStatus()},
                         {"simulated_part", devices->simulatedPart()}};
             }
             if (command == "results") {

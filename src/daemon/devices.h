@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
 #include <string>
 #include <vector>
@@ -48,6 +49,10 @@ class StationDevices {
     /// Bring the devices back after a fault (reset faults, re-home, restart streaming).
     virtual StepResult recover() = 0;
     virtual void showLamps(LampPattern pattern) = 0;
+    /// What the lamps show, for the maintenance status: per lamp the commanded
+    /// state ("off", "on", "blinking") and, where the driver can read its lines
+    /// back (the simulated twin), whether the lamp is lit right now.
+    virtual nlohmann::json lampStatus() const { return nullptr; }
 
     /// The simulated camera's part variants (empty on real hardware).
     virtual std::vector<std::string> simulatedParts() const { return {}; }

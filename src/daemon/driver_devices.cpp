@@ -169,6 +169,19 @@ class DriverDevices : public StationDevices {
             hg::log::category("daemon")->warn("lamps: {}", r.message);
     }
 
+    nlohmann::json lampStatus() const override
+    {
+        nlohmann::json j{{"backend", std::string(lamps_->backend())}};
+        const auto* sim = dynamic_cast<const drivers::SimulatedLamps*>(lamps_.get());
+        for (auto lamp : drivers::kAllLamps) {
+            auto name = std::string(drivers::toString(lamp));
+            j[name] = std::string(drivers::toString(lamps_->commanded(lamp)));
+            // The simulated lines' levels: what an operator would see now (blink phase included).
+            if (sim) j["lit"][name] = sim->lit(lamp);
+        }
+        return j;
+    }
+
   private:
     StepResult homeIfNeeded()
     {

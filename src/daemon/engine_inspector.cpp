@@ -6,6 +6,7 @@
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/vision/segmentation.h"
+#include "view_pipeline.h"
 
 #include <chrono>
 #include <map>
@@ -26,6 +27,8 @@ class EngineInspector : public Inspector {
 
     bool begin(const station::PartProgramRef& ref, std::string& error) override
     {
+        // The worker must be idle, and forget the last program's inspector, before a reload may replace it.
+        pipeline_.begin(nullptr);
         views_.clear();
         current_ = nullptr;
         auto it = loaded_.find(ref.number);
@@ -48,12 +51,19 @@ class EngineInspector : public Inspector {
             }
         }
         current_ = &it->second;
+        const inspect::Inspector* inspector = current_->inspector.get();
+        pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
+            return inspector->prepareView(view, settings);
+        });
         return true;
     }
 
+    // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
     void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) override
     {
-        views_.push_back({"v" + std::to_string(index), station_.cameraAt(pose), std::move(image)});
+        inspect::CapturedView view{"v" + std::to_string(index), station_.cameraAt(pose), std::move(image)};
+        views_.push_back(view); // kept (shared pixels) for the failed-part images
+        pipeline_.submit(std::move(view));
     }
 
     InspectionOutcome finish() override
@@ -64,11 +74,20 @@ class EngineInspector : public Inspector {
             return out;
         }
         try {
-            auto result = current_->inspector->inspect(views_, segmentation_);
+            auto prepared = pipeline_.wait();
+            out.prepareMs = prepared.prepareMs;
+            if (!prepared.error.empty()) {
+                out.error = prepared.error;
+                views_.clear();
+                return out;
+            }
+            // Only the traversal is left once the last frame is in (dissertation 3.3.8).
+            auto result = current_->inspector->inspect(prepared.views, prepared.ids);
             out.ok = true;
             out.part = result.part;
             out.pass = result.pass;
-            out.processingMs = result.totalMs;
+            out.traversalMs = result.totalMs;
+            out.processingMs = prepared.prepareMs + result.totalMs;
             for (const auto& l : result.landmarks)
                 out.landmarks.push_back(
                     {l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm});
@@ -80,7 +99,11 @@ class EngineInspector : public Inspector {
         return out;
     }
 
-    void cancel() override { views_.clear(); }
+    void cancel() override
+    {
+        pipeline_.cancel();
+        views_.clear();
+    }
 
   private:
     // The failed part's frames with silhouettes and landmark projections (docs/daemon.md).
@@ -105,6 +128,8 @@ class EngineInspector : public Inspector {
     std::map<std::uint16_t, LoadedProgram> loaded_;
     LoadedProgram* current_ = nullptr;
     std::vector<inspect::CapturedView> views_;
+    // Declared last: destroyed first, so its worker has stopped before the programs it prepares with go.
+    ViewPipeline pipeline_;
 };
 
 } // namespace

@@ -1,7 +1,10 @@
 // The inspection pipeline of the installed daemon over the core's goal-driven
 // inspection (include/hullgauge/inspect): the part program and its octree
-// inspection map are loaded once per program and kept; each cycle collects the
-// grabbed views with their posed cameras and inspects them at finish().
+// inspection map are loaded once per program and kept; each grabbed view goes
+// with its posed camera to the ViewPipeline's worker (view_pipeline.h), which
+// segments its regions of interest while the fixture moves to the next view;
+// finish() waits for the worker and runs only the traversal. The frames are
+// kept for the failed-part images.
 #pragma once
 
 #include "hullgauge/station/daemon_config.h"

@@ -37,7 +37,9 @@ struct InspectionOutcome {
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
     std::vector<ViewEvidence> views; ///< filled when the part failed
-    double processingMs = 0.0;
+    double processingMs = 0.0;       ///< preparation of every view plus the traversal
+    double prepareMs = 0.0;          ///< segmentation of the views (mostly while the fixture moved)
+    double traversalMs = 0.0;        ///< the goal-driven traversal after the last frame
 };
 
 class Inspector {

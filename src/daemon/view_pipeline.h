@@ -1,0 +1,109 @@
+// The inspection pipeline's worker (issue 6 point 4): view k's frame is
+// segmented into its silhouette index — the per-view half of the goal-driven
+// inspection, the regions of interest the volume-source voxel test of
+// dissertation 3.3.4 will read — on a thread of its own while the cycle runner
+// moves the fixture to view k+1. When the last frame is in, only the traversal
+// (3.3.8) is left, so the verdict follows the last frame within milliseconds.
+//
+// One worker thread, owned by the pipeline and joined by its destructor (no
+// detached threads); a bounded queue: submit() returns at once unless
+// `capacity` views already wait, then it waits for room (back-pressure instead
+// of unbounded frame memory). The pipeline does not know how a view is prepared:
+// the caller passes the preparation with begin() (the daemon passes
+// hg::inspect::Inspector::prepareView, tests a slow stand-in).
+//
+// Thread safety: begin/submit/wait/cancel are called by one thread (the cycle
+// runner); the worker runs the preparation function, which must be safe to run
+// beside that thread (prepareView is const and free of shared state).
+#pragma once
+
+#include "hullgauge/inspect/inspector.h"
+
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace hg::daemon {
+
+class ViewPipeline {
+  public:
+    using Clock = std::chrono::steady_clock;
+    using PrepareFn = std::function<inspect::SilhouetteView(const inspect::CapturedView&)>;
+
+    /// When a view went through the pipeline (for the latency breakdown and the tests).
+    struct ViewTiming {
+        std::string id;
+        Clock::time_point submitted; ///< submit() was called (the frame was just grabbed)
+        Clock::time_point started;   ///< the worker began preparing it
+        Clock::time_point finished;  ///< the worker finished (or failed) it
+    };
+
+    /// The prepared silhouettes of a cycle, in submission order.
+    struct Prepared {
+        std::vector<inspect::SilhouetteView> views;
+        std::vector<std::string> ids;
+        /// Empty, or why the first failing view (in submission order) could not be
+        /// prepared, naming the view; `views` is then incomplete and must not be inspected.
+        std::string error;
+        double prepareMs = 0.0; ///< sum of the worker's preparation times
+        std::vector<ViewTiming> timings;
+    };
+
+    /// Starts the worker. `capacity` >= 1: views that may wait unprepared.
+    explicit ViewPipeline(std::size_t capacity = 4);
+    /// Drops queued views, lets the one in preparation end, joins the worker.
+    ~ViewPipeline();
+    ViewPipeline(const ViewPipeline&) = delete;
+    ViewPipeline& operator=(const ViewPipeline&) = delete;
+
+    /// A new cycle prepared with `prepare`; whatever an earlier cycle left is dropped.
+    void begin(PrepareFn prepare);
+    /// Queues a view of the current cycle. Returns at once while fewer than
+    /// `capacity` views wait, else waits for the worker to take one.
+    void submit(inspect::CapturedView view);
+    /// Waits until every submitted view is prepared and ends the cycle.
+    Prepared wait();
+    /// Drops the queued views and waits for the one in preparation to end (its
+    /// result is discarded), so the preparation function is no longer in use.
+    void cancel();
+
+    std::size_t capacity() const { return capacity_; }
+
+  private:
+    struct Job {
+        std::uint64_t cycle;
+        std::size_t slot;
+        inspect::CapturedView view;
+    };
+    struct Slot {
+        std::string id;
+        std::optional<inspect::SilhouetteView> view;
+        std::string error;
+        bool done = false;
+        ViewTiming timing;
+    };
+
+    void work();
+    void dropLocked(std::unique_lock<std::mutex>& lock);
+
+    const std::size_t capacity_;
+    std::mutex mutex_;
+    std::condition_variable changed_; ///< queue, slots or busy_ changed
+    std::deque<Job> queue_;
+    std::vector<Slot> slots_;
+    PrepareFn prepare_;
+    std::uint64_t cycle_ = 0; ///< increases on begin() and cancel(): stale results are discarded
+    bool busy_ = false;       ///< the worker is preparing a view (outside the lock)
+    bool stop_ = false;
+    std::thread worker_;
+};
+
+} // namespace hg::daemon

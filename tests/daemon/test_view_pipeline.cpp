@@ -1,0 +1,272 @@
+// The inspection pipeline (issue 6 point 4): view k is prepared while the
+// fixture moves to view k+1, finish() runs only the traversal. First the
+// ViewPipeline with a stand-in preparation whose timing the test controls,
+// then the daemon's engine inspector on the simulated line's part program with
+// rendered frames, against the defects the variant meshes were built with.
+#include "engine_inspector.h"
+#include "hgtest/paths.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/sim/renderer.h"
+#include "hullgauge/station/daemon_config.h"
+#include "view_pipeline.h"
+
+#include <atomic>
+#include <chrono>
+#include <future>
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <thread>
+
+namespace {
+
+using hg::daemon::ViewPipeline;
+using hg::inspect::CapturedView;
+using hg::inspect::SilhouetteView;
+using namespace std::chrono_literals;
+
+hg::geometry::CameraModel smallCamera()
+{
+    hg::geometry::Intrinsics in;
+    in.K << 80, 0, 32, 0, 80, 24, 0, 0, 1;
+    in.imageSize = {64, 48};
+    return hg::geometry::CameraModel(
+        in, hg::geometry::RigidTransform{Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, 300)});
+}
+
+CapturedView view(int k)
+{
+    return {"v" + std::to_string(k), smallCamera(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(200))};
+}
+
+// A stand-in preparation taking `ms`, counting the calls.
+ViewPipeline::PrepareFn slowPreparation(std::chrono::milliseconds ms, std::atomic<int>& calls)
+{
+    return [ms, &calls](const CapturedView& v) {
+        ++calls;
+        std::this_thread::sleep_for(ms);
+        return SilhouetteView{v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+    };
+}
+
+TEST(ViewPipeline, PreparesEachViewWhileTheFixtureMovesToTheNext)
+{
+    // Fixture move 120 ms per view, preparation 25 ms: the worker must have finished
+    // view k before the move to view k+1 ends (the cycle runner submits view k+1 then).
+    constexpr int kViews = 5;
+    const auto move = 120ms, prepare = 25ms;
+    std::atomic<int> calls{0};
+    ViewPipeline pipeline(2);
+    pipeline.begin(slowPreparation(prepare, calls));
+    for (int k = 0; k < kViews; ++k) {
+        std::this_thread::sleep_for(move);
+        pipeline.submit(view(k));
+    }
+    const auto lastSubmitted = ViewPipeline::Clock::now();
+    auto prepared = pipeline.wait();
+    const auto waited = ViewPipeline::Clock::now() - lastSubmitted;
+
+    ASSERT_TRUE(prepared.error.empty()) << prepared.error;
+    ASSERT_EQ(prepared.views.size(), static_cast<std::size_t>(kViews));
+    ASSERT_EQ(prepared.timings.size(), static_cast<std::size_t>(kViews));
+    EXPECT_EQ(calls.load(), kViews);
+    for (int k = 0; k < kViews; ++k) {
+        EXPECT_EQ(prepared.ids[k], "v" + std::to_string(k)) << "views come back in submission order";
+        const auto& t = prepared.timings[k];
+        EXPECT_LE(t.submitted, t.started);
+        EXPECT_LE(t.started, t.finished);
+        if (k + 1 < kViews) {
+            EXPECT_LT(t.finished, prepared.timings[k + 1].submitted)
+                << "view " << k << " was not prepared before the move to view " << k + 1 << " ended";
+        }
+    }
+    // Only the last view was left to prepare after the last frame: the wait is one
+    // preparation, not kViews of them (the bound leaves 3 preparations of slack).
+    EXPECT_LT(waited, (kViews - 1) * prepare) << std::chrono::duration<double, std::milli>(waited).count() << " ms";
+    EXPECT_GE(prepared.prepareMs, kViews * 25.0 * 0.9);
+}
+
+TEST(ViewPipeline, NamesTheViewThatCouldNotBePrepared)
+{
+    ViewPipeline pipeline;
+    pipeline.begin([](const CapturedView& v) -> SilhouetteView {
+        if (v.id == "v1") throw std::runtime_error("lost 3 lines");
+        return {v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+    });
+    for (int k = 0; k < 3; ++k)
+        pipeline.submit(view(k));
+    auto prepared = pipeline.wait();
+    EXPECT_EQ(prepared.error, "view 'v1': lost 3 lines");
+    EXPECT_EQ(prepared.ids, (std::vector<std::string>{"v0", "v2"}));
+
+    // The next cycle starts clean.
+    std::atomic<int> calls{0};
+    pipeline.begin(slowPreparation(0ms, calls));
+    pipeline.submit(view(7));
+    prepared = pipeline.wait();
+    EXPECT_TRUE(prepared.error.empty());
+    EXPECT_EQ(prepared.ids, std::vector<std::string>{"v7"});
+}
+
+TEST(ViewPipeline, CancelDropsQueuedViewsAndTheNextCycleSeesOnlyItsOwn)
+{
+    std::promise<void> release;
+    std::shared_future<void> released = release.get_future().share();
+    std::atomic<int> calls{0};
+    ViewPipeline pipeline(4);
+    pipeline.begin([&](const CapturedView& v) {
+        ++calls;
+        released.wait(); // the first view holds the worker until the test lets go
+        return SilhouetteView{v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+    });
+    for (int k = 0; k < 4; ++k)
+        pipeline.submit(view(k));
+    // cancel() must wait for the view in preparation: let it go from another thread.
+    auto releaser = std::async(std::launch::async, [&] {
+        std::this_thread::sleep_for(30ms);
+        release.set_value();
+    });
+    pipeline.cancel();
+    releaser.get();
+    EXPECT_LE(calls.load(), 1) << "queued views were prepared after cancel()";
+
+    std::atomic<int> fresh{0};
+    pipeline.begin(slowPreparation(0ms, fresh));
+    pipeline.submit(view(9));
+    auto prepared = pipeline.wait();
+    EXPECT_EQ(prepared.ids, std::vector<std::string>{"v9"});
+    EXPECT_EQ(fresh.load(), 1);
+    EXPECT_LE(calls.load(), 1);
+}
+
+TEST(ViewPipeline, QueueIsBounded)
+{
+    std::promise<void> release;
+    std::shared_future<void> released = release.get_future().share();
+    std::atomic<int> started{0};
+    ViewPipeline pipeline(2);
+    pipeline.begin([&](const CapturedView& v) {
+        ++started;
+        released.wait();
+        return SilhouetteView{v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+    });
+    pipeline.submit(view(0));
+    // Bounded wait for the worker to hold view 0, so the queue holds exactly what follows.
+    for (int i = 0; i < 200 && started.load() == 0; ++i)
+        std::this_thread::sleep_for(5ms);
+    ASSERT_EQ(started.load(), 1);
+    pipeline.submit(view(1));
+    pipeline.submit(view(2)); // the queue is full now (capacity 2)
+    std::atomic<bool> fourthIn{false};
+    auto fourth = std::async(std::launch::async, [&] {
+        pipeline.submit(view(3));
+        fourthIn = true;
+    });
+    std::this_thread::sleep_for(60ms);
+    EXPECT_FALSE(fourthIn.load()) << "submit() did not wait for room in a full queue";
+    release.set_value();
+    fourth.get();
+    EXPECT_TRUE(fourthIn.load());
+    auto prepared = pipeline.wait();
+    EXPECT_EQ(prepared.ids, (std::vector<std::string>{"v0", "v1", "v2", "v3"}));
+}
+
+// The daemon's engine inspector on the simulated line (config/sim): the part
+// program's landmarks and the defect variants built to move exactly two of them.
+class EnginePipeline : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite()
+    {
+        config_ = new hg::station::DaemonConfig(
+            hg::station::loadDaemonConfig(hgtest::sourceDir() / "config" / "sim" / "hullgauged.yaml"));
+    }
+    static void TearDownTestSuite()
+    {
+        delete config_;
+        config_ = nullptr;
+    }
+
+    // The frames the simulated camera would grab of `part` (config/sim/station.yaml's grey levels).
+    static std::vector<cv::Mat> frames(const std::string& part)
+    {
+        std::filesystem::path mesh;
+        for (const auto& [name, file] : config_->simulatedParts)
+            if (name == part) mesh = file;
+        hg::sim::SilhouetteRenderer renderer({hg::model::loadMesh(mesh)});
+        hg::sim::RenderOptions options;
+        options.backgroundLevel = 0.92;
+        options.objectLevel = 0.04;
+        options.blurSigmaPx = 0.6;
+        options.noiseSigma = 1.5;
+        options.seed = 7;
+        std::vector<cv::Mat> out;
+        for (const auto& pose : config_->programs.at(1).views)
+            out.push_back(renderer.render(config_->station.cameraAt(pose), options));
+        return out;
+    }
+
+    static hg::daemon::InspectionOutcome inspect(hg::daemon::Inspector& inspector, const std::vector<cv::Mat>& images)
+    {
+        std::string error;
+        EXPECT_TRUE(inspector.begin(config_->programs.at(1), error)) << error;
+        const auto& poses = config_->programs.at(1).views;
+        for (std::size_t k = 0; k < images.size(); ++k)
+            inspector.addView(k, poses[k], images[k]);
+        return inspector.finish();
+    }
+
+    static std::set<std::string> failing(const hg::daemon::InspectionOutcome& outcome)
+    {
+        std::set<std::string> ids;
+        for (const auto& l : outcome.landmarks)
+            if (l.status != "ok") ids.insert(l.id);
+        return ids;
+    }
+
+    static hg::station::DaemonConfig* config_;
+};
+
+hg::station::DaemonConfig* EnginePipeline::config_ = nullptr;
+
+TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
+{
+    auto inspector = hg::daemon::makeEngineInspector(*config_);
+    auto nominal = inspect(*inspector, frames("nominal"));
+    ASSERT_TRUE(nominal.ok) << nominal.error;
+    EXPECT_TRUE(nominal.pass);
+    EXPECT_EQ(nominal.landmarks.size(), 10u);
+    EXPECT_TRUE(failing(nominal).empty());
+    EXPECT_TRUE(nominal.views.empty()) << "a passed part keeps no evidence";
+    EXPECT_GT(nominal.prepareMs, 0.0);
+    EXPECT_GT(nominal.traversalMs, 0.0);
+
+    // Same inspector, next cycle: the map is reused, the worker starts clean.
+    auto low = inspect(*inspector, frames("face-low"));
+    ASSERT_TRUE(low.ok) << low.error;
+    EXPECT_FALSE(low.pass);
+    EXPECT_EQ(failing(low), (std::set<std::string>{"step-top", "step-top-back"}));
+    ASSERT_EQ(low.views.size(), config_->programs.at(1).views.size()) << "a failed part keeps every frame";
+    EXPECT_EQ(low.views[0].image.size(), cv::Size(1280, 960));
+}
+
+TEST_F(EnginePipeline, WrongFrameSizeIsAnOutcomeErrorNamingTheView)
+{
+    auto inspector = hg::daemon::makeEngineInspector(*config_);
+    auto images = frames("nominal");
+    cv::resize(images[1], images[1], cv::Size(640, 480));
+    auto outcome = inspect(*inspector, images);
+    EXPECT_FALSE(outcome.ok);
+    EXPECT_NE(outcome.error.find("view 'v1'"), std::string::npos) << outcome.error;
+    EXPECT_NE(outcome.error.find("640x480"), std::string::npos) << outcome.error;
+
+    // An aborted cycle leaves nothing behind for the next one.
+    std::string error;
+    ASSERT_TRUE(inspector->begin(config_->programs.at(1), error));
+    inspector->addView(0, config_->programs.at(1).views[0], images[0]);
+    inspector->cancel();
+    auto again = inspect(*inspector, frames("nominal"));
+    ASSERT_TRUE(again.ok) << again.error;
+    EXPECT_TRUE(again.pass);
+}
+
+} // namespace

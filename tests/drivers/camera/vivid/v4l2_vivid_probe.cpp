@@ -304,7 +304,8 @@ TEST_F(Vivid, DeviceFormatMustServeThePixelFormatAtLoad)
     ASSERT_TRUE(cam->activate()) << "activate";
     Frame f = cam->grab(kGrabTimeout);
     ASSERT_TRUE(f.ok()) << f.message;
-    expectBars(f.image, [](int i) { return 255.0 * lumaOf(kBars75[i], kRec709); }, kTol8);
+    expectBars(
+        f.image, [](int i) { return 255.0 * lumaOf(kBars75[i], kRec709); }, kTol8);
 }
 
 TEST_F(Vivid, SixteenAndTwelveBitGreyKeepTheirDepth)

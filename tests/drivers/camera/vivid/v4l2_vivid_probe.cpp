@@ -14,23 +14,26 @@
 //   - the luma-only formats GREY/Y12/Y16 are computed by vivid with the
 //     Rec. 709 luma coefficients (Kr 0.2126, Kb 0.0722) in full range: 255 Y'
 //     (scaled to 12 and 16 bits for Y12 and Y16).
-#include "hullgauge/common/config_node.h"
-#include "hullgauge/common/error.h"
-#include "hullgauge/drivers/camera.h"
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstring>
-#include <fcntl.h>
 #include <functional>
-#include <gtest/gtest.h>
+#include <string>
+#include <vector>
+
 #include <linux/videodev2.h>
 #include <opencv2/core.hpp>
-#include <string>
-#include <sys/ioctl.h>
-#include <unistd.h>
-#include <vector>
+
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/drivers/camera.h"
 
 namespace {
 

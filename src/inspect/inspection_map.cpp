@@ -13,7 +13,12 @@ namespace hg::inspect {
 namespace {
 
 constexpr char kMagic[8] = {'H', 'G', 'M', 'A', 'P', '\r', '\n', '\x1a'};
-constexpr std::uint32_t kFormatVersion = 1;
+// Version 2 stores the don't-care and hidden flags in the node's former
+// reserved byte; version 1 had zero there, which reads as neither.
+constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kOldestReadableVersion = 1;
+constexpr std::uint8_t kFlagDontCare = 1;
+constexpr std::uint8_t kFlagHidden = 2;
 
 /// FNV-1a over 64-bit little-endian words (the tail byte-wise): a corruption
 /// check fast enough to keep loading a large map well under 10 ms.
@@ -189,6 +194,13 @@ std::optional<std::size_t> InspectionMap::landmarkIndex(const std::string& id) c
 InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, std::vector<MapLandmark> landmarks,
                                    std::vector<MapParameter> parameters, const LabelOracle& oracle)
 {
+    return build(std::move(partName), g, std::move(landmarks), std::move(parameters),
+                 [&oracle](const Eigen::AlignedBox3d& box) { return VoxelExpectation{oracle(box), false, false}; });
+}
+
+InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, std::vector<MapLandmark> landmarks,
+                                   std::vector<MapParameter> parameters, const ExpectationOracle& oracle)
+{
     if (!(g.cubeSize > 0.0)) throw std::invalid_argument("octree cube size must be positive");
     if (g.depth < 0 || g.depth > kMaxDepth)
         throw std::invalid_argument("octree depth must be within 0.." + std::to_string(kMaxDepth));
@@ -270,7 +282,10 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
                 }
                 map.neighbours_.push_back(idx);
             }
-            n.expectedObject = oracle(map.voxelBox(n.key));
+            const VoxelExpectation e = oracle(map.voxelBox(n.key));
+            n.expectedObject = e.object;
+            n.dontCare = e.dontCare;
+            n.hidden = e.hidden && !e.object;
         }
     }
 
@@ -301,7 +316,7 @@ std::vector<std::uint8_t> InspectionMap::serialise() const
         w.put(static_cast<std::uint8_t>(n.type));
         w.put(static_cast<std::uint8_t>(n.expectedObject ? 1 : 0));
         w.put(n.ring);
-        w.put(std::uint8_t{0});
+        w.put(static_cast<std::uint8_t>((n.dontCare ? kFlagDontCare : 0) | (n.hidden ? kFlagHidden : 0)));
         w.put(n.children);
         w.put(n.neighbours);
     }
@@ -365,9 +380,10 @@ InspectionMap InspectionMap::deserialise(const std::vector<std::uint8_t>& bytes,
     if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) head.fail("not an inspection map (bad magic)");
     Reader hr(bytes.data() + 8, bytes.size() - 8, name);
     const auto version = hr.get<std::uint32_t>();
-    if (version != kFormatVersion)
-        hr.fail("format version " + std::to_string(version) + " is not supported (expected " +
-                std::to_string(kFormatVersion) + "); rebuild it with 'hullgauge build-map'");
+    if (version < kOldestReadableVersion || version > kFormatVersion)
+        hr.fail("format version " + std::to_string(version) + " is not supported (this program reads " +
+                std::to_string(kOldestReadableVersion) + ".." + std::to_string(kFormatVersion) +
+                "); rebuild it with 'hullgauge build-map'");
     hr.get<std::uint32_t>();
     const auto size = hr.get<std::uint64_t>();
     const auto stored = hr.get<std::uint64_t>();
@@ -398,7 +414,10 @@ InspectionMap InspectionMap::deserialise(const std::vector<std::uint8_t>& bytes,
         n.type = static_cast<NodeType>(type);
         n.expectedObject = r.get<std::uint8_t>() != 0;
         n.ring = r.get<std::uint8_t>();
-        r.get<std::uint8_t>();
+        const auto flags = r.get<std::uint8_t>();
+        if (flags & ~(kFlagDontCare | kFlagHidden)) r.fail("bad node flags");
+        n.dontCare = (flags & kFlagDontCare) != 0;
+        n.hidden = (flags & kFlagHidden) != 0;
         n.children = r.get<std::int32_t>();
         n.neighbours = r.get<std::int32_t>();
     }

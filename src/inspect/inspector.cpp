@@ -40,10 +40,15 @@ public:
         }
         return l;
     }
+    /// A decided label that differs from the CAD's. Don't-care voxels (CAD
+    /// fraction at the 50 % tie) and hidden ones (no silhouette can carve
+    /// them) are never wrong.
     bool wrong(std::int32_t node, VoxelLabel l) const
     {
         if (l != VoxelLabel::Object && l != VoxelLabel::Void) return false;
-        return (l == VoxelLabel::Object) != map_.nodes()[static_cast<std::size_t>(node)].expectedObject;
+        const MapNode& n = map_.nodes()[static_cast<std::size_t>(node)];
+        if (n.dontCare || n.hidden) return false;
+        return (l == VoxelLabel::Object) != n.expectedObject;
     }
     std::uint64_t total() const { return total_; }
 
@@ -253,10 +258,10 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
         const VoxelLabel l0 = visit(n0);
         std::vector<std::int32_t> seeds;
         bool objectFound = l0 == VoxelLabel::Object;
-        const bool expectedObject0 = map.nodes()[static_cast<std::size_t>(n0)].expectedObject;
-        if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !expectedObject0)) {
+        if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !memo.wrong(n0, l0))) {
             // The landmark voxel is object, or void as the map expects (a landmark
-            // on a voxel face can fall in the outer voxel): check its neighbours.
+            // on a voxel face can fall in the outer voxel, one on a mid-plane in
+            // a don't-care voxel): check its neighbours.
             seeds.push_back(n0);
         } else if (l0 == VoxelLabel::Void) {
             // The landmark voxel should be object but is void: look ring by ring
@@ -307,17 +312,25 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             if (line.empty() || line.back() != n) line.push_back(n);
         }
         bool lineUndecided = false;
+        bool lineHidden = false;
         std::vector<VoxelLabel> labels;
         std::vector<double> sc;
         for (std::int32_t n : line) {
             const VoxelLabel lab = visit(n);
             lineUndecided = lineUndecided || lab == VoxelLabel::Undecided;
+            // The void next to the landmark is enclosed by the part: no view can carve it.
+            lineHidden = lineHidden || (map.nodes()[static_cast<std::size_t>(n)].hidden &&
+                                        chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) <= 1);
             labels.push_back(lab);
             sc.push_back((map.voxelBox(map.nodes()[static_cast<std::size_t>(n)].key).center() - lm.position).dot(lm.normal));
         }
         lr.voxelsReconstructed = counter;
 
-        if (l0 == VoxelLabel::Undecided || lineUndecided) {
+        if (lineHidden) {
+            lr.status = LandmarkStatus::NotObservable;
+            lr.reason = "the void next to the landmark is enclosed by the part: no line of sight through it misses "
+                        "the part, so no silhouette can reconstruct it (not weakly convex, 3.3.8)";
+        } else if (l0 == VoxelLabel::Undecided || lineUndecided) {
             lr.status = LandmarkStatus::NotObservable;
             lr.reason = "no view decides the voxels at the landmark (footprints outside the frames or behind a camera)";
         } else if (views && options_.requireResolution && (!lr.medMm || *lr.medMm > dv)) {

@@ -1,24 +1,94 @@
 #include "hullgauge/inspect/part_map.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "hullgauge/common/error.h"
 
 namespace hg::inspect {
 
-LabelOracle cadLabels(std::shared_ptr<const model::Solid> solid)
+namespace {
+
+/// Directions tried for a line of sight through a void voxel, in addition to
+/// the tangent directions of the nearest surface: the 13 lattice directions
+/// (axes, face and body diagonals: slots, channels and holes are mostly
+/// machined along them) and 64 spread over the half sphere (a Fibonacci
+/// lattice; a line runs both ways). An enclosed voxel tries them all, so
+/// their number is the cost of a cavity in the map build.
+const std::vector<Eigen::Vector3d>& lineDirections()
 {
-    return [solid = std::move(solid)](const Eigen::AlignedBox3d& box) {
+    static const std::vector<Eigen::Vector3d> dirs = [] {
+        std::vector<Eigen::Vector3d> d;
+        for (int x = -1; x <= 1; ++x)
+            for (int y = -1; y <= 1; ++y)
+                for (int z = -1; z <= 1; ++z) {
+                    const Eigen::Vector3d v(x, y, z);
+                    // One of each opposite pair: first non-zero coordinate positive.
+                    if (v.isZero() || (x < 0) || (x == 0 && y < 0) || (x == 0 && y == 0 && z < 0)) continue;
+                    d.push_back(v.normalized());
+                }
+        constexpr int n = 64;
+        const double golden = M_PI * (3.0 - std::sqrt(5.0));
+        for (int i = 0; i < n; ++i) {
+            const double z = (i + 0.5) / n;  // upper half sphere
+            const double r = std::sqrt(1.0 - z * z);
+            d.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
+        }
+        return d;
+    }();
+    return dirs;
+}
+
+/// True when some straight line through the voxel's centre misses the part:
+/// then a view along it can see background through the voxel (weak convexity,
+/// chapter 2). Directions in the tangent plane of the nearest surface come
+/// first: they are the grazing lines of sight, the only clear ones next to a
+/// face inside a channel or a hole.
+bool someLineMisses(const model::Solid& solid, const Eigen::AlignedBox3d& bounds, const Eigen::AlignedBox3d& box)
+{
+    const Eigen::Vector3d c = box.center();
+    const double reach = 2.0 * (bounds.diagonal().norm() + (c - bounds.center()).norm()) + 1.0;
+    auto clear = [&](const Eigen::Vector3d& d) { return !solid.segmentHits(c - reach * d, c + reach * d); };
+
+    const Eigen::Vector3d n = solid.closestPoint(c).normal;
+    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+    for (int a = 0; a < 3; ++a) {
+        const Eigen::Vector3d axis = Eigen::Vector3d::Unit(a);
+        const Eigen::Vector3d t = axis - axis.dot(n) * n;
+        if (t.norm() > 1e-9 && clear(t.normalized())) return true;
+    }
+    constexpr int azimuths = 12;
+    for (int k = 0; k < azimuths; ++k) {
+        const double phi = M_PI * k / azimuths;
+        if (clear(std::cos(phi) * u + std::sin(phi) * v)) return true;
+    }
+    return std::any_of(lineDirections().begin(), lineDirections().end(), clear);
+}
+
+}  // namespace
+
+ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid)
+{
+    const Eigen::AlignedBox3d bounds = solid->mesh().bounds();
+    return [solid = std::move(solid), bounds](const Eigen::AlignedBox3d& box) {
+        VoxelExpectation e;
         // The exact classification settles voxels wholly inside or outside
         // (including those touching a face); only boundary voxels need the
         // volume fraction.
         switch (solid->classify(box)) {
-        case model::Occupancy::Inside: return true;
-        case model::Occupancy::Outside: return false;
-        case model::Occupancy::Boundary: break;
+        case model::Occupancy::Inside: e.object = true; return e;
+        case model::Occupancy::Outside: break;
+        case model::Occupancy::Boundary: {
+            const double f = solid->insideFraction(box).estimate;
+            e.object = solid->isObjectVoxel(box);
+            e.dontCare = std::abs(f - 0.5) < kDontCareBand;
+            break;
         }
-        return solid->isObjectVoxel(box);
+        }
+        if (!e.object && !e.dontCare) e.hidden = !someLineMisses(*solid, bounds, box);
+        return e;
     };
 }
 

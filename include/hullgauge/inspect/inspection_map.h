@@ -65,6 +65,14 @@ struct MapNode {
     /// Expected label from the CAD: object when >= 50 % of the voxel is inside
     /// (network nodes only; path nodes keep false).
     bool expectedObject = false;
+    /// The CAD inside fraction is within kDontCareBand of 50 %: either
+    /// reconstruction is right, so the voxel never counts as wrong.
+    bool dontCare = false;
+    /// Void in the CAD but enclosed by the part: no line of sight through the
+    /// voxel misses the part, so no silhouette can prove it void (the type-four
+    /// nodes 3.3.8 pares from the map as not visible). Never counts as wrong; a
+    /// landmark whose normal line starts in such voxels is not_observable.
+    bool hidden = false;
     /// 26-neighbour layers to the nearest landmark voxel of this level; 0 for a
     /// landmark voxel, 255 for a node that is on a path only.
     std::uint8_t ring = 255;
@@ -110,6 +118,21 @@ struct MapGeometry {
 /// Expected label of a voxel: true = object (>= 50 % inside; Solid::isObjectVoxel).
 using LabelOracle = std::function<bool(const Eigen::AlignedBox3d&)>;
 
+/// Half-width of the "don't care" band of CAD inside fractions around 50 %.
+/// A face lying on a voxel mid-plane puts the voxel exactly at the tie of
+/// the CAD label (object at >= 50 % inside) and of the 50 % rule (void at >=
+/// 50 % background); within |f - 0.5| < 0.02 (a face within 2 % of ΔV of the
+/// mid-plane) the reconstruction may go either way and is not an error.
+constexpr double kDontCareBand = 0.02;
+
+/// What the CAD says of one network voxel (see MapNode).
+struct VoxelExpectation {
+    bool object = false;
+    bool dontCare = false;
+    bool hidden = false;
+};
+using ExpectationOracle = std::function<VoxelExpectation(const Eigen::AlignedBox3d&)>;
+
 class InspectionMap {
 public:
     /// Builds the map (3.5.1): path nodes to every landmark, type-three nodes at
@@ -118,8 +141,13 @@ public:
     /// or a landmark outside the cube.
     static InspectionMap build(std::string partName, const MapGeometry& geometry, std::vector<MapLandmark> landmarks,
                                std::vector<MapParameter> parameters, const LabelOracle& oracle);
+    /// The same with the full expectation per voxel (don't-care band, hidden
+    /// voxels), as cadLabels() gives it.
+    static InspectionMap build(std::string partName, const MapGeometry& geometry, std::vector<MapLandmark> landmarks,
+                               std::vector<MapParameter> parameters, const ExpectationOracle& oracle);
 
-    /// Versioned binary file ("HGMAP", format version, checksum).
+    /// Versioned binary file ("HGMAP", format version 2, checksum). Version 1
+    /// files (no don't-care or hidden voxels) are still read.
     void save(const std::filesystem::path& file) const;
     std::vector<std::uint8_t> serialise() const;
     /// Throws hg::InputError naming the file for a wrong magic, version, size or checksum.

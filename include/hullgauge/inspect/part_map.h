@@ -10,8 +10,12 @@
 
 namespace hg::inspect {
 
-/// Expected voxel labels of a CAD solid: object when >= 50 % inside.
-LabelOracle cadLabels(std::shared_ptr<const model::Solid> solid);
+/// Expected voxel labels of a CAD solid: object when >= 50 % inside; don't
+/// care when the inside fraction is within kDontCareBand of 50 %; hidden when
+/// void but no straight line through the voxel's centre misses the solid
+/// (tried: 15 tangent directions of the nearest surface, the 13 lattice
+/// directions and 64 spread over the sphere), so no view can carve it (3.3.8).
+ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid);
 
 /// `levels` inspection levels are prepared: depth - levels + 1 .. depth
 /// (clamped to level 0). Throws hg::InputError naming the part program when

@@ -1,30 +1,43 @@
 // GigE Vision backend over Aravis 0.8.
 //
 // - Opens by IP address (preferred on a line PC: no discovery, and as root a
-//   name lookup can pick another interface) or by serial / device id.
+//   name lookup can pick another interface) or by serial / device id. By
+//   address the device is opened directly (arv_gv_device_new with the local
+//   interface address the kernel routes to the camera), never by discovery.
 // - Features by GenICam name for maintenance and for `camera.driver.features`.
 // - Streams into a pool of `buffer_count` Aravis buffers allocated at
 //   activate(); a Frame's cv::Mat is a view of the ArvBuffer memory and the
 //   buffer is pushed back into the stream when the frame is released.
 // - The stream socket gets a fixed receive buffer (default 4 MiB): without the
 //   packet socket (non-root) the kernel default drops most packets of a frame.
-// - Recovery: a grab that times out (or a failed trigger, or the heartbeat
-//   thread's "control-lost") marks the link suspect; the next grab probes the
-//   device with one GVCP read and, when it does not answer, closes it and
-//   reopens it by address, re-applies settings and features and restarts the
-//   stream. Failed reopen attempts back off exponentially.
+// - Recovery runs on a link worker thread owned by the driver (started by
+//   activate(), joined by deactivate()/cleanup()), because every GVCP command
+//   to a dead camera blocks for Aravis' fixed control-channel timeout (~2.5 s)
+//   and a reopen for longer. The worker sends the software triggers, probes
+//   the device with one GVCP read when the link is suspect (a grab timed out,
+//   a trigger was not acknowledged, the heartbeat reported "control-lost"),
+//   and, when the device does not answer, reopens it with exponential backoff
+//   and restarts the stream. grab() only pops frames and waits on the
+//   worker's verdict, never longer than its own timeout.
 #include "aravis_camera.h"
-
-#include <algorithm>
-#include <atomic>
-#include <mutex>
-#include <sstream>
-
-#include <arv.h>
-#include <opencv2/core.hpp>
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+
+#include <algorithm>
+#include <arpa/inet.h>
+#include <arv.h>
+#include <atomic>
+#include <cerrno>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
+#include <netinet/in.h>
+#include <opencv2/core.hpp>
+#include <sstream>
+#include <sys/socket.h>
+#include <thread>
+#include <unistd.h>
 
 namespace hg::drivers {
 namespace {
@@ -32,7 +45,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
-std::shared_ptr<spdlog::logger> logger() { return log::category("camera"); }
+std::shared_ptr<spdlog::logger> logger()
+{
+    return log::category("camera");
+}
 
 /// Takes a GError (if any) and turns it into text, freeing it.
 std::string takeError(GError*& error, std::string_view fallback = "unknown error")
@@ -46,10 +62,12 @@ std::string takeError(GError*& error, std::string_view fallback = "unknown error
 /// GigE Vision bootstrap register CCP (Control Channel Privilege, GigE Vision 2.0
 /// table 28-1): readable on every compliant device, so one read is a cheap probe.
 constexpr guint64 kBootstrapCcpRegister = 0x0A00;
+/// GVCP's UDP port (GigE Vision 2.0 section 7.3); only used to ask the kernel's route.
+constexpr guint16 kGvcpPort = 3956;
 
 struct AravisConfig {
-    std::string address;  ///< IPv4 address, or empty
-    std::string serial;   ///< serial number or device id, or empty
+    std::string address; ///< IPv4 address, or empty
+    std::string serial;  ///< serial number or device id, or empty
     int bufferCount = 4;
     std::optional<int> packetSize;
     int socketBufferBytes = 4 * 1024 * 1024;
@@ -62,6 +80,38 @@ struct AravisConfig {
 
     std::string id() const { return address.empty() ? serial : address; }
 };
+
+/// The local address the kernel would send from to reach `device` (IPv4): a
+/// connected UDP socket's own address. No packet is sent. Empty on failure,
+/// with the reason in `why`.
+std::string interfaceAddressFor(const std::string& device, std::string& why)
+{
+    sockaddr_in peer{};
+    peer.sin_family = AF_INET;
+    peer.sin_port = htons(kGvcpPort);
+    if (::inet_pton(AF_INET, device.c_str(), &peer.sin_addr) != 1) {
+        why = "'" + device + "' is not an IPv4 address";
+        return {};
+    }
+    const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    if (fd < 0) {
+        why = std::string("socket: ") + std::strerror(errno);
+        return {};
+    }
+    sockaddr_in local{};
+    socklen_t length = sizeof local;
+    std::string out;
+    if (::connect(fd, reinterpret_cast<const sockaddr*>(&peer), sizeof peer) != 0)
+        why = std::string("no route to ") + device + ": " + std::strerror(errno);
+    else if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0)
+        why = std::string("getsockname: ") + std::strerror(errno);
+    else {
+        char text[INET_ADDRSTRLEN] = {};
+        if (::inet_ntop(AF_INET, &local.sin_addr, text, sizeof text)) out = text;
+    }
+    ::close(fd);
+    return out;
+}
 
 /// Buffers go back to the stream they came from; once that stream is retired
 /// (stop, reopen) they are freed instead. Shared with every outstanding Frame.
@@ -84,33 +134,82 @@ struct BufferHome {
     }
 };
 
+/// One open connection to the device: the camera object and, while
+/// streaming, its stream and buffer home. Shared (a grab holds it while it
+/// waits for a frame) so that the link worker can replace it at any time; the
+/// last holder closes it.
+struct Link {
+    ArvCamera* camera = nullptr;
+    ArvStream* stream = nullptr;
+    std::shared_ptr<BufferHome> home;
+    gpointer signalOwner = nullptr;
+
+    Link() = default;
+    Link(const Link&) = delete;
+    Link& operator=(const Link&) = delete;
+    ~Link()
+    {
+        dropStream();
+        if (camera) {
+            if (signalOwner) g_signal_handlers_disconnect_by_data(arv_camera_get_device(camera), signalOwner);
+            g_clear_object(&camera);
+        }
+    }
+
+    /// Forgets the stream without talking to the device (it may be gone).
+    void dropStream()
+    {
+        if (!stream) return;
+        if (home) home->retire();
+        home.reset();
+        g_clear_object(&stream); // frees the buffers still queued; frames out there free their own
+    }
+};
+
 std::string describeBufferStatus(ArvBufferStatus s)
 {
     switch (s) {
-    case ARV_BUFFER_STATUS_SUCCESS: return "success";
-    case ARV_BUFFER_STATUS_CLEARED: return "cleared";
-    case ARV_BUFFER_STATUS_TIMEOUT: return "not all packets arrived in time";
-    case ARV_BUFFER_STATUS_MISSING_PACKETS: return "missing packets";
-    case ARV_BUFFER_STATUS_WRONG_PACKET_ID: return "wrong packet id";
-    case ARV_BUFFER_STATUS_SIZE_MISMATCH: return "image larger than the buffer";
-    case ARV_BUFFER_STATUS_FILLING: return "still filling";
-    case ARV_BUFFER_STATUS_ABORTED: return "aborted";
-    default: return "unknown buffer status";
+    case ARV_BUFFER_STATUS_SUCCESS:
+        return "success";
+    case ARV_BUFFER_STATUS_CLEARED:
+        return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+        return "not all packets arrived in time";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+        return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+        return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+        return "image larger than the buffer";
+    case ARV_BUFFER_STATUS_FILLING:
+        return "still filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+        return "aborted";
+    default:
+        return "unknown buffer status";
     }
 }
 
 ArvPixelFormat arvPixelFormat(PixelFormat f)
 {
     switch (f) {
-    case PixelFormat::Mono8: return ARV_PIXEL_FORMAT_MONO_8;
-    case PixelFormat::Mono12: return ARV_PIXEL_FORMAT_MONO_12;
-    case PixelFormat::Mono16: return ARV_PIXEL_FORMAT_MONO_16;
+    case PixelFormat::Mono8:
+        return ARV_PIXEL_FORMAT_MONO_8;
+    case PixelFormat::Mono12:
+        return ARV_PIXEL_FORMAT_MONO_12;
+    case PixelFormat::Mono16:
+        return ARV_PIXEL_FORMAT_MONO_16;
     }
     return ARV_PIXEL_FORMAT_MONO_8;
 }
 
+long long msUntil(Clock::time_point t)
+{
+    return std::max<long long>(0, std::chrono::duration_cast<milliseconds>(t - Clock::now()).count());
+}
+
 class AravisCamera final : public Camera {
-public:
+  public:
     AravisCamera(std::string configPath, CameraSettings settings, AravisConfig config)
         : Camera(std::move(configPath), std::move(settings)), config_(std::move(config))
     {
@@ -118,99 +217,134 @@ public:
 
     ~AravisCamera() override
     {
-        stopStream(/*talkToDevice=*/!lost_);
-        closeDevice();
+        stopWorker();
+        closeAll();
     }
 
-protected:
+  protected:
     Status doConfigure() override
     {
-        if (Status s = openDevice(); !s) return s;
-        if (Status s = applyAll(settings()); !s) {
-            closeDevice();
-            return s;
-        }
+        auto link = std::make_shared<Link>();
+        if (Status s = openDevice(*link); !s) return s;
+        if (Status s = applyAll(*link, settings()); !s) return s;
+        std::lock_guard lock(mutex_);
+        link_ = std::move(link);
+        health_ = Health::Streaming;
         return Status::success();
     }
 
-    Status doApplySettings(const CameraSettings& s) override { return applyAll(s); }
+    Status doApplySettings(const CameraSettings& s) override
+    {
+        auto link = currentLink();
+        if (!link) return Status::failure(lostMessage());
+        return applyAll(*link, s);
+    }
 
     Status doActivate() override
     {
-        lost_ = false;
-        suspect_ = false;
-        return startStream();
+        std::shared_ptr<Link> link;
+        {
+            std::lock_guard lock(mutex_);
+            if (health_ != Health::Lost) link = link_;
+            link_.reset();
+        }
+        if (!link) {
+            // Lost while it was last active and not back then: open it again now.
+            link = std::make_shared<Link>();
+            Status s = openDevice(*link);
+            if (s) s = applyAll(*link, settings());
+            if (!s) return s;
+        }
+        if (Status s = startStream(*link); !s) return s;
+        {
+            std::lock_guard lock(mutex_);
+            link_ = std::move(link);
+            health_ = Health::Streaming;
+            stopping_ = false;
+            triggerPending_ = false;
+            consecutiveTimeouts_ = 0;
+            controlLost_ = false;
+        }
+        worker_ = std::thread([this] { linkWorker(); });
+        return Status::success();
     }
 
     Status doDeactivate() override
     {
-        stopStream(/*talkToDevice=*/!lost_);
+        const bool healthy = stopWorker();
+        auto link = currentLink();
+        const auto t0 = Clock::now();
+        if (link) stopStream(*link, /*talkToDevice=*/healthy);
+        logger()->debug("camera {}: stream stopped in {} ms{}", config_.id(),
+                        std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count(),
+                        healthy ? "" : " (device not answering: not told)");
         return Status::success();
     }
 
     Status doCleanup() override
     {
-        stopStream(/*talkToDevice=*/!lost_);
-        closeDevice();
+        stopWorker();
+        closeAll();
         return Status::success();
     }
 
     Frame doGrab(milliseconds timeout) override
     {
         const auto start = Clock::now();
-        if (controlLost_.exchange(false)) {
-            logger()->warn("camera {}: control of the device was lost (heartbeat)", config_.id());
-            suspect_ = true;
-        }
-        if (suspect_ && !lost_) {
-            GError* error = nullptr;
-            guint32 value = 0;
-            if (arv_device_read_register(arv_camera_get_device(camera_), kBootstrapCcpRegister, &value, &error)) {
-                suspect_ = false;
-            } else {
-                const std::string why = takeError(error);
-                logger()->warn("camera {}: not answering ({}); will reconnect", config_.id(), why);
-                lost_ = true;
-                // The reconnect waits for the next grab: one grab never pays for probe and reopen both.
-                backoff_ = config_.reconnectMin;
-                nextAttempt_ = Clock::now() + backoff_;
-                return Frame::failed(FrameStatus::Error, "camera " + config_.id() + ": not answering (" + why +
-                                                             "); reconnecting from the next grab");
-            }
-        }
-        if (lost_) {
-            if (Frame f = tryReconnect(); f.status != FrameStatus::Ok) return f;
+        const auto deadline = start + timeout;
+        std::shared_ptr<Link> link;
+        {
+            std::unique_lock lock(mutex_);
+            // While the worker checks or restores the link, wait for its verdict, never past the deadline.
+            wakeup_.wait_until(lock, deadline, [&] { return health_ == Health::Streaming; });
+            if (health_ == Health::Suspect)
+                return Frame::failed(FrameStatus::Timeout, "camera " + config_.id() + ": no frame within " +
+                                                               std::to_string(timeout.count()) + " ms: " + reason_ +
+                                                               "; checking whether the camera still answers");
+            if (health_ == Health::Lost)
+                return Frame::failed(FrameStatus::Error,
+                                     "camera " + config_.id() + ": lost (" + reason_ + "); " +
+                                         (link_ || closing_
+                                              ? std::string("closing the old connection, then reconnecting")
+                                              : "reconnecting in the background, next attempt in " +
+                                                    std::to_string(msUntil(nextAttempt_)) + " ms"));
+            link = link_;
         }
 
-        drainStaleFrames();
+        drainStaleFrames(*link);
+        std::uint64_t trigger = 0;
         if (settings().trigger == TriggerMode::Software) {
-            GError* error = nullptr;
-            arv_camera_software_trigger(camera_, &error);
-            if (error) {
-                suspect_ = true;
-                return Frame::failed(FrameStatus::Timeout, "camera " + config_.id() +
-                                                               ": software trigger not acknowledged: " +
-                                                               takeError(error));
-            }
+            std::lock_guard lock(mutex_);
+            triggerPending_ = true;
+            trigger = ++triggersRequested_;
         }
-        const auto remaining = std::max(timeout - std::chrono::duration_cast<milliseconds>(Clock::now() - start),
-                                        milliseconds(0));
-        ArvBuffer* buffer = arv_stream_timeout_pop_buffer(stream_, static_cast<guint64>(remaining.count()) * 1000);
-        if (!buffer) {
-            suspect_ = true;
-            ++consecutiveTimeouts_;
+        if (trigger) wakeup_.notify_all();
+        ArvBuffer* buffer = arv_stream_timeout_pop_buffer(link->stream, static_cast<guint64>(msUntil(deadline)) * 1000);
+        if (buffer) {
+            std::lock_guard lock(mutex_);
+            consecutiveTimeouts_ = 0;
+        } else {
             std::ostringstream m;
             m << "camera " << config_.id() << ": no frame within " << timeout.count() << " ms";
+            std::lock_guard lock(mutex_);
+            ++consecutiveTimeouts_;
             if (consecutiveTimeouts_ > 1) m << " (" << consecutiveTimeouts_ << " timeouts in a row)";
+            if (trigger && triggerFailed_ == trigger) m << "; software trigger not acknowledged: " << triggerError_;
+            if (health_ == Health::Streaming && link_ == link) {
+                health_ = Health::Suspect;
+                reason_ = "no frame within " + std::to_string(timeout.count()) + " ms";
+                wakeup_.notify_all();
+            }
             return Frame::failed(FrameStatus::Timeout, m.str());
         }
-        consecutiveTimeouts_ = 0;
-        return toFrame(buffer);
+        return toFrame(*link, buffer);
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override
     {
-        ArvGc* gc = arv_device_get_genicam(arv_camera_get_device(camera_));
+        auto link = currentLink();
+        if (!link) return Status::failure(lostMessage());
+        ArvGc* gc = arv_device_get_genicam(arv_camera_get_device(link->camera));
         std::vector<FeatureInfo> out;
         std::vector<std::string> seen;
         collectFeatures(gc, "Root", out, seen, 0);
@@ -219,7 +353,9 @@ protected:
 
     Result<std::string> doGetFeature(const std::string& name) override
     {
-        ArvGcFeatureNode* node = featureNode(name);
+        auto link = currentLink();
+        if (!link) return Status::failure(lostMessage());
+        ArvGcFeatureNode* node = featureNode(*link, name);
         if (!node) return Status::failure("camera " + config_.id() + ": no feature named '" + name + "'");
         GError* error = nullptr;
         const char* v = arv_gc_feature_node_get_value_as_string(node, &error);
@@ -229,88 +365,143 @@ protected:
 
     Status doSetFeature(const std::string& name, const std::string& value) override
     {
-        ArvGcFeatureNode* node = featureNode(name);
-        if (!node) return Status::failure("camera " + config_.id() + ": no feature named '" + name + "'");
-        GError* error = nullptr;
-        if (ARV_IS_GC_COMMAND(node))
-            arv_gc_command_execute(ARV_GC_COMMAND(node), &error);
-        else
-            arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
-        if (error)
-            return Status::failure("camera " + config_.id() + ": cannot set " + name + " = '" + value +
-                                   "': " + takeError(error));
-        return Status::success();
+        auto link = currentLink();
+        if (!link) return Status::failure(lostMessage());
+        return setFeatureOn(*link, name, value);
     }
 
     Result<CameraInfo> doInfo() override
     {
+        auto link = currentLink();
+        if (!link) return Status::failure(lostMessage());
+        ArvCamera* camera = link->camera;
         CameraInfo info;
         info.backend = "aravis";
         GError* error = nullptr;
         auto text = [&](const char* s) { return std::string(s ? s : ""); };
-        info.vendor = text(arv_camera_get_vendor_name(camera_, &error));
-        info.model = text(arv_camera_get_model_name(camera_, &error));
-        info.serial = text(arv_camera_get_device_serial_number(camera_, &error));
-        arv_camera_get_sensor_size(camera_, &info.sensorWidth, &info.sensorHeight, &error);
+        info.vendor = text(arv_camera_get_vendor_name(camera, &error));
+        info.model = text(arv_camera_get_model_name(camera, &error));
+        info.serial = text(arv_camera_get_device_serial_number(camera, &error));
+        arv_camera_get_sensor_size(camera, &info.sensorWidth, &info.sensorHeight, &error);
         if (error) return Status::failure("camera " + config_.id() + ": " + takeError(error));
-        info.address = config_.address.empty() ? deviceAddress() : config_.address;
+        info.address = config_.address.empty() ? deviceAddress(*link) : config_.address;
         return info;
     }
 
-private:
+  private:
+    /// What the link worker knows of the device while the camera is active.
+    enum class Health {
+        Streaming, ///< answering; grabs pop frames
+        Suspect,   ///< a grab timed out, a trigger failed or the heartbeat lost control: probing
+        Lost,      ///< not answering: reopening with backoff
+    };
+
+    std::shared_ptr<Link> currentLink()
+    {
+        std::lock_guard lock(mutex_);
+        return link_;
+    }
+
+    std::string lostMessage() const
+    {
+        return "camera " + config_.id() + ": lost and not reopened yet; clean up and configure again";
+    }
+
     // --- device --------------------------------------------------------------
 
-    Status openDevice()
+    /// Opens the device into `link` (no stream): by address directly, by serial through discovery.
+    Status openDevice(Link& link)
     {
         GError* error = nullptr;
         const std::string id = config_.id();
-        camera_ = arv_camera_new(id.c_str(), &error);
-        if (!camera_) {
-            return Status::failure(configPath() + (config_.address.empty() ? ".serial" : ".address") +
-                                   ": no GigE Vision camera answers at '" + id + "': " +
-                                   takeError(error, "device not found"));
+        const std::string key = configPath() + (config_.address.empty() ? ".serial" : ".address");
+        if (!config_.address.empty()) {
+            std::string why;
+            const std::string local = interfaceAddressFor(config_.address, why);
+            if (local.empty()) return Status::failure(key + ": cannot reach '" + id + "': " + why);
+            GInetAddress* interfaceAddress = g_inet_address_new_from_string(local.c_str());
+            GInetAddress* deviceAddress = g_inet_address_new_from_string(config_.address.c_str());
+            ArvDevice* device = arv_gv_device_new(interfaceAddress, deviceAddress, &error);
+            g_object_unref(interfaceAddress);
+            g_object_unref(deviceAddress);
+            if (!device)
+                return Status::failure(key + ": no GigE Vision camera answers at '" + id + "' (from " + local +
+                                       "): " + takeError(error, "device not found"));
+            link.camera = arv_camera_new_with_device(device, &error); // takes its own reference
+            g_object_unref(device);
+        } else {
+            link.camera = arv_camera_new(id.c_str(), &error);
         }
-        if (!arv_camera_is_gv_device(camera_)) {
-            closeDevice();
+        if (!link.camera) {
+            return Status::failure(key + ": no GigE Vision camera answers at '" + id +
+                                   "': " + takeError(error, "device not found"));
+        }
+        if (!arv_camera_is_gv_device(link.camera))
             return Status::failure(configPath() + ": '" + id + "' is not a GigE Vision camera");
-        }
-        g_signal_connect(arv_camera_get_device(camera_), "control-lost", G_CALLBACK(&AravisCamera::onControlLost),
+        g_signal_connect(arv_camera_get_device(link.camera), "control-lost", G_CALLBACK(&AravisCamera::onControlLost),
                          this);
+        link.signalOwner = this;
         if (!config_.packetSocket)
-            arv_camera_gv_set_stream_options(camera_, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+            arv_camera_gv_set_stream_options(link.camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
         if (config_.packetSize) {
-            arv_camera_gv_set_packet_size(camera_, *config_.packetSize, &error);
-            if (error) {
-                std::string m = takeError(error);
-                closeDevice();
+            arv_camera_gv_set_packet_size(link.camera, *config_.packetSize, &error);
+            if (error)
                 return Status::failure(configPath() + ".packet_size: camera refused " +
-                                       std::to_string(*config_.packetSize) + ": " + m);
-            }
+                                       std::to_string(*config_.packetSize) + ": " + takeError(error));
         }
         for (const auto& [name, value] : config_.features) {
-            if (Status s = doSetFeature(name, value); !s) {
-                closeDevice();
+            if (Status s = setFeatureOn(link, name, value); !s)
                 return Status::failure(configPath() + ".features." + name + ": " + s.message());
-            }
         }
-        logger()->info("camera {}: opened ({} {}, serial {})", id, safe(arv_camera_get_vendor_name(camera_, nullptr)),
-                       safe(arv_camera_get_model_name(camera_, nullptr)),
-                       safe(arv_camera_get_device_serial_number(camera_, nullptr)));
+        logger()->info("camera {}: opened ({} {}, serial {})", id,
+                       safe(arv_camera_get_vendor_name(link.camera, nullptr)),
+                       safe(arv_camera_get_model_name(link.camera, nullptr)),
+                       safe(arv_camera_get_device_serial_number(link.camera, nullptr)));
         return Status::success();
     }
 
-    void closeDevice()
+    /// Stops the worker (bounded: it finishes the GVCP command or reopen
+    /// attempt in progress) and returns whether the device was answering.
+    bool stopWorker()
     {
-        if (!camera_) return;
-        g_signal_handlers_disconnect_by_data(arv_camera_get_device(camera_), this);
-        g_clear_object(&camera_);
+        {
+            std::lock_guard lock(mutex_);
+            stopping_ = true;
+        }
+        wakeup_.notify_all();
+        if (worker_.joinable()) {
+            const auto t0 = Clock::now();
+            worker_.join();
+            logger()->debug("camera {}: link worker stopped in {} ms", config_.id(),
+                            std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
+        }
+        std::lock_guard lock(mutex_);
+        return health_ == Health::Streaming;
+    }
+
+    void closeAll()
+    {
+        std::shared_ptr<Link> link;
+        bool healthy = false;
+        {
+            std::lock_guard lock(mutex_);
+            link = std::move(link_);
+            link_.reset();
+            healthy = health_ == Health::Streaming;
+        }
+        if (!link) return;
+        const auto t0 = Clock::now();
+        stopStream(*link, /*talkToDevice=*/healthy);
+        link.reset();
+        logger()->debug("camera {}: closed in {} ms", config_.id(),
+                        std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
     }
 
     static std::string safe(const char* s) { return s ? s : ""; }
 
-    std::string deviceAddress() const
+    static std::string deviceAddress(const Link& link)
     {
-        GSocketAddress* a = arv_gv_device_get_device_address(ARV_GV_DEVICE(arv_camera_get_device(camera_)));
+        GSocketAddress* a = arv_gv_device_get_device_address(ARV_GV_DEVICE(arv_camera_get_device(link.camera)));
         if (!a) return {};
         GInetAddress* inet = g_inet_socket_address_get_address(G_INET_SOCKET_ADDRESS(a));
         gchar* s = g_inet_address_to_string(inet);
@@ -321,24 +512,175 @@ private:
 
     static void onControlLost(ArvGvDevice* /*device*/, gpointer self)
     {
-        // Called on Aravis' heartbeat thread: only flag it.
-        static_cast<AravisCamera*>(self)->controlLost_ = true;
+        // Called on Aravis' heartbeat thread: flag it and wake the worker (no lock taken here).
+        auto* camera = static_cast<AravisCamera*>(self);
+        camera->controlLost_ = true;
+        camera->wakeup_.notify_all();
+    }
+
+    // --- link worker ---------------------------------------------------------
+
+    /// The worker's loop: triggers, probes and reconnections, each a blocking
+    /// GVCP exchange that must not hold up grab(). Ends when stopping_ is set,
+    /// after the exchange in progress (bounded by Aravis' GVCP timeouts).
+    void linkWorker()
+    {
+        std::unique_lock lock(mutex_);
+        while (!stopping_) {
+            if (controlLost_.exchange(false) && health_ == Health::Streaming) {
+                health_ = Health::Suspect;
+                reason_ = "control of the device was lost (heartbeat)";
+                logger()->warn("camera {}: {}", config_.id(), reason_);
+            }
+            switch (health_) {
+            case Health::Streaming:
+                if (triggerPending_) {
+                    sendTrigger(lock);
+                } else {
+                    // Bounded wait: a heartbeat flag set without the lock is seen within 100 ms.
+                    wakeup_.wait_for(lock, milliseconds(100));
+                }
+                break;
+            case Health::Suspect:
+                probe(lock);
+                break;
+            case Health::Lost:
+                if (link_)
+                    closeDeadLink(lock);
+                else if (Clock::now() < nextAttempt_)
+                    wakeup_.wait_until(lock, nextAttempt_);
+                else
+                    reconnect(lock);
+                break;
+            }
+        }
+    }
+
+    void sendTrigger(std::unique_lock<std::mutex>& lock)
+    {
+        triggerPending_ = false;
+        const std::uint64_t trigger = triggersRequested_;
+        auto link = link_;
+        lock.unlock();
+        GError* error = nullptr;
+        arv_camera_software_trigger(link->camera, &error);
+        // A command that timed out already is the probe's answer: no second GVCP timeout to learn it.
+        const bool timedOut = error && g_error_matches(error, ARV_DEVICE_ERROR, ARV_DEVICE_ERROR_TIMEOUT);
+        const std::string why = error ? takeError(error) : std::string();
+        link.reset();
+        lock.lock();
+        if (why.empty()) return;
+        logger()->debug("camera {}: trigger {} failed ({}{})", config_.id(), trigger, why,
+                        timedOut ? ", timed out" : "");
+        triggerFailed_ = trigger;
+        triggerError_ = why;
+        if (timedOut && health_ != Health::Lost) {
+            declareLost("software trigger not acknowledged: " + why);
+        } else if (health_ == Health::Streaming) {
+            health_ = Health::Suspect;
+            reason_ = "software trigger refused: " + why;
+        }
+        wakeup_.notify_all();
+    }
+
+    /// The device does not answer: reopen it after the first backoff step.
+    void declareLost(const std::string& why)
+    {
+        logger()->warn("camera {}: not answering ({}); reconnecting", config_.id(), why);
+        health_ = Health::Lost;
+        reason_ = "not answering: " + why;
+        backoff_ = config_.reconnectMin;
+        nextAttempt_ = Clock::now() + backoff_;
+    }
+
+    void probe(std::unique_lock<std::mutex>& lock)
+    {
+        auto link = link_;
+        lock.unlock();
+        GError* error = nullptr;
+        guint32 value = 0;
+        const bool answers =
+            arv_device_read_register(arv_camera_get_device(link->camera), kBootstrapCcpRegister, &value, &error);
+        const std::string why = answers ? std::string() : takeError(error);
+        link.reset();
+        lock.lock();
+        if (answers) {
+            logger()->debug("camera {}: answers ({}); streaming on", config_.id(), reason_);
+            health_ = Health::Streaming;
+        } else {
+            declareLost(why);
+        }
+        wakeup_.notify_all();
+    }
+
+    /// One reopen attempt: a fresh link (device by address, settings, stream).
+    void reconnect(std::unique_lock<std::mutex>& lock)
+    {
+        lock.unlock();
+        auto fresh = std::make_shared<Link>();
+        Status s = openDevice(*fresh);
+        if (s) s = applyAll(*fresh, settings());
+        if (s) s = startStream(*fresh);
+        if (!s) fresh.reset(); // closed here, on the worker
+        lock.lock();
+        if (!s) {
+            backoff_ = std::min(backoff_ * 2, config_.reconnectMax);
+            nextAttempt_ = Clock::now() + backoff_;
+            reason_ = "reconnect failed: " + s.message();
+            logger()->warn("camera {}: reconnect failed ({}); next attempt in {} ms", config_.id(), s.message(),
+                           backoff_.count());
+            return;
+        }
+        logger()->info("camera {}: reconnected", config_.id());
+        link_ = std::move(fresh);
+        health_ = Health::Streaming;
+        consecutiveTimeouts_ = 0;
+        controlLost_ = false;
+        triggerPending_ = false;
+        backoff_ = milliseconds(0);
+        wakeup_.notify_all();
+    }
+
+    /// Closes the connection to a device that stopped answering, before any
+    /// reopen: Aravis then tells the device to stop streaming and to release
+    /// control, each GVCP command waiting for its timeout (~10 s in all while
+    /// the device is away). Done here, off the grab path, and before the new
+    /// connection exists, so that the old one's release of control can never
+    /// reach the camera once it is back and controlled by the new one.
+    void closeDeadLink(std::unique_lock<std::mutex>& lock)
+    {
+        if (link_.use_count() > 1) {
+            // A grab still waits on the old stream; it lets go within its timeout.
+            wakeup_.wait_for(lock, milliseconds(20));
+            return;
+        }
+        auto dead = std::move(link_);
+        link_.reset();
+        closing_ = true;
+        lock.unlock();
+        const auto t0 = Clock::now();
+        dead.reset();
+        const auto took = std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count();
+        lock.lock();
+        closing_ = false;
+        logger()->debug("camera {}: closed the connection that stopped answering in {} ms", config_.id(), took);
     }
 
     /// Pixel format, ROI, exposure, gain and trigger, each read back.
-    Status applyAll(const CameraSettings& s)
+    Status applyAll(Link& link, const CameraSettings& s)
     {
+        ArvCamera* camera = link.camera;
         GError* error = nullptr;
         const std::string where = "camera " + config_.id() + ": ";
 
-        arv_camera_set_pixel_format(camera_, arvPixelFormat(s.pixelFormat), &error);
+        arv_camera_set_pixel_format(camera, arvPixelFormat(s.pixelFormat), &error);
         if (error)
             return Status::failure(where + "pixel format " + std::string(toString(s.pixelFormat)) +
                                    " refused: " + takeError(error));
 
         int x = s.roi.x, y = s.roi.y, w = s.roi.width, h = s.roi.height;
         int sensorW = 0, sensorH = 0;
-        arv_camera_get_sensor_size(camera_, &sensorW, &sensorH, &error);
+        arv_camera_get_sensor_size(camera, &sensorW, &sensorH, &error);
         if (error) return Status::failure(where + "cannot read the sensor size: " + takeError(error));
         if (s.roi.isFullSensor()) {
             w = sensorW;
@@ -352,14 +694,14 @@ private:
             return Status::failure(m.str());
         }
         // Offsets first to zero so a larger width fits, then the region.
-        if (!error && arv_camera_is_region_offset_available(camera_, nullptr)) {
-            arv_camera_set_integer(camera_, "OffsetX", 0, &error);
-            if (!error) arv_camera_set_integer(camera_, "OffsetY", 0, &error);
+        if (!error && arv_camera_is_region_offset_available(camera, nullptr)) {
+            arv_camera_set_integer(camera, "OffsetX", 0, &error);
+            if (!error) arv_camera_set_integer(camera, "OffsetY", 0, &error);
         }
-        if (!error) arv_camera_set_region(camera_, x, y, w, h, &error);
+        if (!error) arv_camera_set_region(camera, x, y, w, h, &error);
         if (error) return Status::failure(where + "ROI refused: " + takeError(error));
         int rx = 0, ry = 0, rw = 0, rh = 0;
-        arv_camera_get_region(camera_, &rx, &ry, &rw, &rh, &error);
+        arv_camera_get_region(camera, &rx, &ry, &rw, &rh, &error);
         if (error) return Status::failure(where + "cannot read the ROI back: " + takeError(error));
         if (rx != x || ry != y || rw != w || rh != h) {
             std::ostringstream m;
@@ -369,29 +711,29 @@ private:
         }
 
         if (s.exposureUs) {
-            if (arv_camera_is_exposure_auto_available(camera_, nullptr))
-                arv_camera_set_exposure_time_auto(camera_, ARV_AUTO_OFF, nullptr);
-            arv_camera_set_exposure_time(camera_, *s.exposureUs, &error);
+            if (arv_camera_is_exposure_auto_available(camera, nullptr))
+                arv_camera_set_exposure_time_auto(camera, ARV_AUTO_OFF, nullptr);
+            arv_camera_set_exposure_time(camera, *s.exposureUs, &error);
             if (error) return Status::failure(where + "exposure refused: " + takeError(error));
         }
         if (s.gainDb) {
             // SFNC's Gain is in dB; GainRaw is in device units and is not accepted as dB.
-            if (!ARV_IS_GC_FLOAT(arv_device_get_feature(arv_camera_get_device(camera_), "Gain")))
+            if (!ARV_IS_GC_FLOAT(arv_device_get_feature(arv_camera_get_device(camera), "Gain")))
                 return Status::failure(where + "the camera has no Gain feature in dB; set its raw gain by name "
-                                                "under camera.driver.features instead of gain_db");
-            if (arv_camera_is_gain_auto_available(camera_, nullptr))
-                arv_camera_set_gain_auto(camera_, ARV_AUTO_OFF, nullptr);
-            arv_camera_set_gain(camera_, *s.gainDb, &error);
+                                               "under camera.driver.features instead of gain_db");
+            if (arv_camera_is_gain_auto_available(camera, nullptr))
+                arv_camera_set_gain_auto(camera, ARV_AUTO_OFF, nullptr);
+            arv_camera_set_gain(camera, *s.gainDb, &error);
             if (error) return Status::failure(where + "gain refused: " + takeError(error));
         }
 
         if (s.trigger == TriggerMode::Software) {
-            if (!arv_camera_is_software_trigger_supported(camera_, nullptr))
+            if (!arv_camera_is_software_trigger_supported(camera, nullptr))
                 return Status::failure(where + "the camera has no software trigger");
-            arv_camera_set_trigger(camera_, "Software", &error);
+            arv_camera_set_trigger(camera, "Software", &error);
         } else {
-            arv_camera_clear_triggers(camera_, &error);
-            if (!error) arv_camera_set_acquisition_mode(camera_, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
+            arv_camera_clear_triggers(camera, &error);
+            if (!error) arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
         }
         if (error) return Status::failure(where + "trigger mode refused: " + takeError(error));
         return Status::success();
@@ -399,30 +741,32 @@ private:
 
     // --- stream --------------------------------------------------------------
 
-    Status startStream()
+    Status startStream(Link& link)
     {
         GError* error = nullptr;
         const std::string where = "camera " + config_.id() + ": ";
-        const guint payload = arv_camera_get_payload(camera_, &error);
+        const guint payload = arv_camera_get_payload(link.camera, &error);
         if (error) return Status::failure(where + "cannot read the payload size: " + takeError(error));
-        stream_ = arv_camera_create_stream(camera_, nullptr, nullptr, &error);
-        if (!stream_) return Status::failure(where + "cannot open the stream: " + takeError(error));
-        if (ARV_IS_GV_STREAM(stream_)) {
-            g_object_set(stream_, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+        link.stream = arv_camera_create_stream(link.camera, nullptr, nullptr, &error);
+        if (!link.stream) return Status::failure(where + "cannot open the stream: " + takeError(error));
+        if (ARV_IS_GV_STREAM(link.stream)) {
+            g_object_set(link.stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
                          config_.socketBufferBytes, nullptr);
             if (config_.packetTimeoutMs)
-                g_object_set(stream_, "packet-timeout", static_cast<guint>(*config_.packetTimeoutMs * 1000), nullptr);
+                g_object_set(link.stream, "packet-timeout", static_cast<guint>(*config_.packetTimeoutMs * 1000),
+                             nullptr);
             if (config_.frameRetentionMs)
-                g_object_set(stream_, "frame-retention", static_cast<guint>(*config_.frameRetentionMs * 1000),
+                g_object_set(link.stream, "frame-retention", static_cast<guint>(*config_.frameRetentionMs * 1000),
                              nullptr);
         }
-        home_ = std::make_shared<BufferHome>();
-        home_->stream = stream_;
-        for (int i = 0; i < config_.bufferCount; ++i) arv_stream_push_buffer(stream_, arv_buffer_new_allocate(payload));
-        arv_camera_start_acquisition(camera_, &error);
+        link.home = std::make_shared<BufferHome>();
+        link.home->stream = link.stream;
+        for (int i = 0; i < config_.bufferCount; ++i)
+            arv_stream_push_buffer(link.stream, arv_buffer_new_allocate(payload));
+        arv_camera_start_acquisition(link.camera, &error);
         if (error) {
             std::string m = takeError(error);
-            stopStream(false);
+            link.dropStream();
             return Status::failure(where + "cannot start acquisition: " + m);
         }
         logger()->debug("camera {}: streaming, payload {} bytes, {} buffers", config_.id(), payload,
@@ -430,35 +774,34 @@ private:
         return Status::success();
     }
 
-    void stopStream(bool talkToDevice)
+    void stopStream(Link& link, bool talkToDevice)
     {
-        if (!stream_) return;
-        if (talkToDevice && camera_) {
+        if (!link.stream) return;
+        if (talkToDevice && link.camera) {
             GError* error = nullptr;
-            arv_camera_stop_acquisition(camera_, &error);
+            arv_camera_stop_acquisition(link.camera, &error);
             if (error) logger()->warn("camera {}: stop acquisition: {}", config_.id(), takeError(error));
         }
-        if (home_) home_->retire();
-        home_.reset();
-        g_clear_object(&stream_);  // frees the buffers still queued; frames out there free their own
+        link.dropStream();
     }
 
     /// Frames finished before this grab are stale (the part may have moved since).
-    void drainStaleFrames()
+    static void drainStaleFrames(Link& link)
     {
-        while (ArvBuffer* stale = arv_stream_try_pop_buffer(stream_)) arv_stream_push_buffer(stream_, stale);
+        while (ArvBuffer* stale = arv_stream_try_pop_buffer(link.stream))
+            arv_stream_push_buffer(link.stream, stale);
     }
 
-    Frame toFrame(ArvBuffer* buffer)
+    Frame toFrame(const Link& link, ArvBuffer* buffer)
     {
         const auto id = arv_buffer_get_frame_id(buffer);
         const auto status = arv_buffer_get_status(buffer);
-        auto giveBack = [home = home_, buffer] { home->give(buffer); };
+        auto giveBack = [home = link.home, buffer] { home->give(buffer); };
         if (status != ARV_BUFFER_STATUS_SUCCESS) {
             giveBack();
-            Frame f = Frame::failed(FrameStatus::Incomplete, "camera " + config_.id() + ": frame " +
-                                                                 std::to_string(id) + " " +
-                                                                 describeBufferStatus(status));
+            Frame f =
+                Frame::failed(FrameStatus::Incomplete, "camera " + config_.id() + ": frame " + std::to_string(id) +
+                                                           " " + describeBufferStatus(status));
             f.frameId = id;
             return f;
         }
@@ -472,9 +815,8 @@ private:
         if (pf != arvPixelFormat(want) || !data || size < static_cast<std::size_t>(w) * h * bytesPerPixel) {
             giveBack();
             std::ostringstream m;
-            m << "camera " << config_.id() << ": frame " << id << " has pixel format 0x" << std::hex << pf
-              << std::dec << ", " << size << " bytes for " << w << "x" << h << " (expected "
-              << toString(want) << ")";
+            m << "camera " << config_.id() << ": frame " << id << " has pixel format 0x" << std::hex << pf << std::dec
+              << ", " << size << " bytes for " << w << "x" << h << " (expected " << toString(want) << ")";
             Frame f = Frame::failed(FrameStatus::Error, m.str());
             f.frameId = id;
             return f;
@@ -486,47 +828,26 @@ private:
                            std::move(giveBack));
     }
 
-    /// Reopen after the device was lost; the returned frame is Ok when the
-    /// camera streams again, else an Error naming the reason and the next attempt.
-    Frame tryReconnect()
-    {
-        const auto now = Clock::now();
-        if (now < nextAttempt_) {
-            auto wait = std::chrono::duration_cast<milliseconds>(nextAttempt_ - now).count();
-            return Frame::failed(FrameStatus::Error, "camera " + config_.id() +
-                                                         ": lost; next reconnect attempt in " +
-                                                         std::to_string(wait) + " ms");
-        }
-        stopStream(/*talkToDevice=*/false);
-        closeDevice();
-        Status s = openDevice();
-        if (s) s = applyAll(settings());
-        if (s) s = startStream();
-        if (!s) {
-            stopStream(false);
-            closeDevice();
-            backoff_ = backoff_.count() == 0 ? config_.reconnectMin : std::min(backoff_ * 2, config_.reconnectMax);
-            nextAttempt_ = Clock::now() + backoff_;
-            logger()->warn("camera {}: reconnect failed ({}); next attempt in {} ms", config_.id(), s.message(),
-                           backoff_.count());
-            return Frame::failed(FrameStatus::Error, "camera " + config_.id() + ": lost; reconnect failed: " +
-                                                         s.message());
-        }
-        logger()->info("camera {}: reconnected", config_.id());
-        lost_ = false;
-        suspect_ = false;
-        controlLost_ = false;
-        backoff_ = milliseconds(0);
-        Frame ok;
-        ok.status = FrameStatus::Ok;
-        return ok;
-    }
-
     // --- features ------------------------------------------------------------
 
-    ArvGcFeatureNode* featureNode(const std::string& name)
+    Status setFeatureOn(Link& link, const std::string& name, const std::string& value)
     {
-        ArvGc* gc = arv_device_get_genicam(arv_camera_get_device(camera_));
+        ArvGcFeatureNode* node = featureNode(link, name);
+        if (!node) return Status::failure("camera " + config_.id() + ": no feature named '" + name + "'");
+        GError* error = nullptr;
+        if (ARV_IS_GC_COMMAND(node))
+            arv_gc_command_execute(ARV_GC_COMMAND(node), &error);
+        else
+            arv_gc_feature_node_set_value_from_string(node, value.c_str(), &error);
+        if (error)
+            return Status::failure("camera " + config_.id() + ": cannot set " + name + " = '" + value +
+                                   "': " + takeError(error));
+        return Status::success();
+    }
+
+    static ArvGcFeatureNode* featureNode(Link& link, const std::string& name)
+    {
+        ArvGc* gc = arv_device_get_genicam(arv_camera_get_device(link.camera));
         ArvGcNode* node = arv_gc_get_node(gc, name.c_str());
         return ARV_IS_GC_FEATURE_NODE(node) ? ARV_GC_FEATURE_NODE(node) : nullptr;
     }
@@ -555,10 +876,18 @@ private:
                     : ARV_IS_GC_STRING(node)      ? "String"
                                                   : "Other";
         switch (arv_gc_feature_node_get_actual_access_mode(feature)) {
-        case ARV_GC_ACCESS_MODE_RO: info.access = "RO"; break;
-        case ARV_GC_ACCESS_MODE_WO: info.access = "WO"; break;
-        case ARV_GC_ACCESS_MODE_RW: info.access = "RW"; break;
-        default: info.access = "?"; break;
+        case ARV_GC_ACCESS_MODE_RO:
+            info.access = "RO";
+            break;
+        case ARV_GC_ACCESS_MODE_WO:
+            info.access = "WO";
+            break;
+        case ARV_GC_ACCESS_MODE_RW:
+            info.access = "RW";
+            break;
+        default:
+            info.access = "?";
+            break;
         }
         if (info.type != "Command" && info.access != "WO") {
             GError* error = nullptr;
@@ -569,18 +898,25 @@ private:
     }
 
     AravisConfig config_;
-    ArvCamera* camera_ = nullptr;
-    ArvStream* stream_ = nullptr;
-    std::shared_ptr<BufferHome> home_;
+    std::thread worker_;
+    std::mutex mutex_; // guards everything below except controlLost_
+    std::condition_variable wakeup_;
+    std::shared_ptr<Link> link_;
+    Health health_ = Health::Streaming;
+    std::string reason_; ///< why the link is suspect or lost
+    bool stopping_ = false;
+    bool closing_ = false; ///< the worker is closing the connection that stopped answering
+    bool triggerPending_ = false;
+    std::uint64_t triggersRequested_ = 0;
+    std::uint64_t triggerFailed_ = 0; ///< the last trigger the device did not acknowledge
+    std::string triggerError_;
     std::atomic<bool> controlLost_{false};
-    bool suspect_ = false;
-    bool lost_ = false;
     int consecutiveTimeouts_ = 0;
     milliseconds backoff_{0};
     Clock::time_point nextAttempt_{};
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver)
 {
@@ -620,9 +956,10 @@ std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver)
     }
     if (auto n = driver.optional("features")) {
         require(n->isMap(), *n, "expected a map of GenICam feature names to values");
-        for (const auto& key : n->keys()) c.features.emplace_back(key, (*n)[key].asString());
+        for (const auto& key : n->keys())
+            c.features.emplace_back(key, (*n)[key].asString());
     }
     return std::make_unique<AravisCamera>(driver.path(), parseCameraSettings(driver), std::move(c));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

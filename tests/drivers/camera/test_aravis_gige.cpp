@@ -1,20 +1,19 @@
 // The Aravis driver end to end against hullgauge-gige-sim over real GVCP/GVSP
 // on 127.0.0.1 (in a private network namespace per test process). Expected
 // pixels are the images the test itself wrote for the simulator to serve.
-#include <gtest/gtest.h>
-
-#include <chrono>
-#include <memory>
-#include <string>
-#include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include "gige_sim_process.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/camera.h"
+
+#include <chrono>
+#include <functional>
+#include <gtest/gtest.h>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -29,7 +28,7 @@ constexpr int kHeight = 120;
 constexpr int kImages = 7;
 
 class AravisGige : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override
     {
         if (auto why = hgtest::isolateNetwork(); !why.empty()) GTEST_SKIP() << why;
@@ -155,7 +154,7 @@ TEST_F(AravisGige, RoiAndWidePixelFormatsCarryTheServedPixels)
 
     struct Case {
         hg::drivers::PixelFormat format;
-        double scale;  // expected = served * scale
+        double scale; // expected = served * scale
     };
     for (Case c : {Case{hg::drivers::PixelFormat::Mono8, 1.0}, Case{hg::drivers::PixelFormat::Mono12, 16.0},
                    Case{hg::drivers::PixelFormat::Mono16, 257.0}}) {
@@ -225,54 +224,115 @@ TEST_F(AravisGige, FramesHeldByTheCallerAreNotOverwritten)
     EXPECT_TRUE(a.image.empty());
 }
 
-TEST_F(AravisGige, CameraKilledMidStreamTimesOutThenRecoversWhenItReturns)
+/// The product's promise for a dead camera: every grab returns within its own
+/// timeout plus a small margin (generous here for a loaded 2-core machine),
+/// fails with a message naming the camera, and frames come back within a
+/// bounded number of grabs once the camera returns.
+void killAndRecover(Camera& cam, hgtest::GigeSim& sim, const std::function<void()>& restart,
+                    const std::function<int(const cv::Mat&)>& match)
+{
+    for (int k = 0; k < 10; ++k)
+        ASSERT_TRUE(cam.grab(2000ms).ok());
+
+    sim.kill();
+    const auto timeout = 400ms;
+    const auto margin = 500ms;
+    // Long enough to cover the probe of the dead camera (Aravis' GVCP timeout)
+    // and several failed reopen attempts, all of which run off the grab path.
+    const auto deadAfter = Clock::now() + 6s;
+    int grabs = 0;
+    FrameStatus firstStatus = FrameStatus::Ok;
+    bool sawLost = false;
+    while (Clock::now() < deadAfter) {
+        const auto t0 = Clock::now();
+        auto f = cam.grab(timeout);
+        const auto took = Clock::now() - t0;
+        EXPECT_LE(took, timeout + margin)
+            << "grab " << grabs << " took " << std::chrono::duration_cast<std::chrono::milliseconds>(took).count()
+            << " ms: " << f.message;
+        EXPECT_FALSE(f.ok()) << "grab " << grabs << " delivered a frame from a dead camera";
+        EXPECT_NE(f.message.find("camera 127.0.0.1"), std::string::npos) << f.message;
+        if (grabs == 0) firstStatus = f.status;
+        sawLost = sawLost || (f.status == FrameStatus::Error && f.message.find("lost") != std::string::npos);
+        ++grabs;
+    }
+    EXPECT_EQ(firstStatus, FrameStatus::Timeout);
+    EXPECT_TRUE(sawLost) << "the driver never declared the camera lost";
+    EXPECT_GE(grabs, 6) << "grabs must not block while the driver reconnects";
+    EXPECT_EQ(cam.state(), LifecycleState::Active);
+
+    restart();
+    // Reconnection: backoff at most 400 ms (the test's reconnect_backoff_ms)
+    // plus one reopen attempt in flight; 40 grabs of 400 ms bound it.
+    int recoveredAfter = -1;
+    for (int k = 0; k < 40 && recoveredAfter < 0; ++k) {
+        const auto t0 = Clock::now();
+        auto f = cam.grab(timeout);
+        EXPECT_LE(Clock::now() - t0, timeout + margin) << f.message;
+        if (f.ok()) {
+            recoveredAfter = k;
+            EXPECT_GE(match(f.image), 0);
+        }
+    }
+    ASSERT_GE(recoveredAfter, 0) << "no frame within 40 grabs of the camera's return";
+    for (int k = 0; k < 5; ++k) {
+        auto f = cam.grab(2000ms);
+        ASSERT_TRUE(f.ok()) << f.message;
+        EXPECT_GE(match(f.image), 0);
+    }
+    EXPECT_EQ(cam.state(), LifecycleState::Active);
+}
+
+TEST_F(AravisGige, SoftwareTriggeredGrabsOfADeadCameraAreBoundedAndRecover)
 {
     startSim();
-    // Free run: the stream timeout alone bounds the grab. (With a software
-    // trigger the trigger command itself waits for Aravis' control-channel
-    // timeout, about 2.5 s, before the loss is reported; see docs/camera.md.)
+    auto cam = makeCamera("    trigger: software\n    reconnect_backoff_ms: [100, 400]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    killAndRecover(
+        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); });
+    // Deactivate and clean up are bounded too after a recovery.
+    const auto t0 = Clock::now();
+    EXPECT_TRUE(cam->deactivate());
+    EXPECT_TRUE(cam->cleanup());
+    EXPECT_LE(Clock::now() - t0, 5s);
+}
+
+TEST_F(AravisGige, FreeRunGrabsOfADeadCameraAreBoundedAndRecover)
+{
+    startSim();
     auto cam = makeCamera("    trigger: free_run\n    reconnect_backoff_ms: [100, 400]\n");
     ASSERT_TRUE(cam->configure());
     ASSERT_TRUE(cam->activate());
-    for (int k = 0; k < 10; ++k) ASSERT_TRUE(cam->grab(2000ms).ok());
+    killAndRecover(
+        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); });
+}
 
-    sim_.kill();
-    const auto timeout = 700ms;
-    const auto t0 = Clock::now();
-    auto lost = cam->grab(timeout);
-    const auto took = Clock::now() - t0;
-    EXPECT_EQ(lost.status, FrameStatus::Timeout) << lost.message;
-    EXPECT_FALSE(lost.message.empty());
-    EXPECT_NE(lost.message.find("127.0.0.1"), std::string::npos) << lost.message;
-    EXPECT_LE(took, timeout + 300ms) << "the timeout must bound the grab";
-
-    // While it is away, grabs fail and say so; none blocks without bound (a
-    // probe and a reconnect attempt are bounded by Aravis' GVCP and discovery timeouts).
-    for (int k = 0; k < 2; ++k) {
-        const auto t1 = Clock::now();
-        auto f = cam->grab(timeout);
-        EXPECT_FALSE(f.ok());
-        EXPECT_FALSE(f.message.empty());
-        EXPECT_LE(Clock::now() - t1, 20s) << f.message;
-    }
-
+TEST_F(AravisGige, DeactivatingWhileTheCameraIsLostIsBounded)
+{
     startSim();
-    const auto deadline = Clock::now() + 25s;
-    bool recovered = false;
-    while (Clock::now() < deadline && !recovered) {
-        auto f = cam->grab(1000ms);
-        if (f.ok()) {
-            recovered = true;
-            EXPECT_GE(matchingImage(f.image), 0);
-        }
-    }
-    ASSERT_TRUE(recovered) << "no frame within 25 s of the camera's return";
-    for (int k = 0; k < 5; ++k) {
-        auto f = cam->grab(2000ms);
-        ASSERT_TRUE(f.ok()) << f.message;
-        EXPECT_GE(matchingImage(f.image), 0);
-    }
-    EXPECT_EQ(cam->state(), LifecycleState::Active);
+    auto cam = makeCamera("    trigger: software\n    reconnect_backoff_ms: [100, 400]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    ASSERT_TRUE(cam->grab(2000ms).ok());
+    sim_.kill();
+    for (int k = 0; k < 8; ++k)
+        (void)cam->grab(300ms); // probe and reopen attempts under way
+    const auto t0 = Clock::now();
+    EXPECT_TRUE(cam->deactivate());
+    EXPECT_TRUE(cam->cleanup());
+    // Bounded by Aravis' GVCP timeouts: the exchange in flight (~2.5 s), then
+    // telling the dead device to stop its stream and to release control
+    // (~5 s each); see docs/camera.md.
+    EXPECT_LE(Clock::now() - t0, 15s);
+    EXPECT_EQ(cam->state(), LifecycleState::Unconfigured);
+    // And the camera comes back through the ordinary lifecycle.
+    startSim();
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(2000ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    EXPECT_GE(matchingImage(f.image), 0);
 }
 
 TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)
@@ -292,10 +352,10 @@ TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)
 TEST_F(AravisGige, RoiTheSensorCannotHoldIsRefused)
 {
     startSim();
-    auto cam = makeCamera("    roi: [100, 0, 100, 50]\n");  // 100 + 100 > 160 px sensor
+    auto cam = makeCamera("    roi: [100, 0, 100, 50]\n"); // 100 + 100 > 160 px sensor
     auto s = cam->configure();
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("ROI"), std::string::npos) << s.message();
 }
 
-}  // namespace
+} // namespace

@@ -184,8 +184,8 @@ public:
     Status setSettings(const CameraSettings& settings);
 
     /// Active only. Software trigger: triggers one exposure and waits for it; free
-    /// run: waits for the next frame. Never longer than `timeout` plus one
-    /// reconnect attempt when the device was lost (see docs/camera.md).
+    /// run: waits for the next frame. Never longer than `timeout`, also when the
+    /// device is lost: backends recover in the background (see docs/camera.md).
     [[nodiscard]] Frame grab(std::chrono::milliseconds timeout);
 
     /// Maintenance: device features by name (Inactive or Active).

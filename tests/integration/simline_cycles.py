@@ -2,7 +2,9 @@
 """The simulated line end to end (CONTRACTS §6, §7).
 
 Starts tools/simline (fixture simulator on Modbus TCP, hullgauged with the
-simulated camera and config/sim), runs --cycles inspections with the
+simulated camera and config/sim, with --config laid over it: CTest uses
+config/sim-fast, the same line with a faster turntable), runs --cycles
+inspections (CTest: 100) with the
 independent PLC client tools/plc-client alternating the nominal part and a
 defective variant (half the run `face-low`, half `corner-missing`), and checks:
 
@@ -10,8 +12,13 @@ defective variant (half the run `face-low`, half `corner-missing`), and checks:
   `face-low` fails exactly step-top and step-top-back, `corner-missing` exactly
   tall-corner and tall-side (the landmarks the defects were built to move);
 - every result block the PLC read was consistent (ACK_SEQ, DONE_SEQ, RESULT,
-  LANDMARKS_FAILED and LANDMARK_OK_BITS of the same trigger), and afterwards
-  ACK_SEQ = DONE_SEQ = the last trigger with its RESULT and OK bits;
+  LANDMARKS_FAILED and LANDMARK_OK_BITS of the same trigger, the OK bits those
+  of the part's failing landmarks), every read while polling showed the
+  previous result whole, and afterwards ACK_SEQ = DONE_SEQ = the last trigger
+  with its RESULT and OK bits;
+- the lamps, read from outside the daemon after every cycle (the simulated
+  lamp lines in the maintenance socket's status): green alone after a pass,
+  red alone after a fail, amber never lit once the result is shown;
 - the SQLite store holds exactly one row per cycle with the PLC's trigger
   sequence, serial, verdict and failing landmarks;
 - SIGTERM stops the line cleanly (exit 0, no process left behind).
@@ -60,6 +67,7 @@ def main():
     ap.add_argument("--source", required=True, type=Path)
     ap.add_argument("--bin", required=True, type=Path)
     ap.add_argument("--cycles", type=int, default=22)
+    ap.add_argument("--config", type=Path, help="a folder laid over config/sim (tools/simline --config)")
     args = ap.parse_args()
     if args.cycles < 4:
         ap.error("--cycles: at least 4")
@@ -71,7 +79,8 @@ def main():
     plc_port = free_port()
     line_out = open(workdir / "simline.out", "w")
     line = subprocess.Popen([str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(workdir),
-                             "--plc-port", str(plc_port), "--fixture-port", "0"],
+                             "--plc-port", str(plc_port), "--fixture-port", "0"] +
+                            (["--config", str(args.config)] if args.config else []),
                             stdout=line_out, stderr=subprocess.STDOUT, start_new_session=True)
     try:
         deadline = time.monotonic() + 90
@@ -109,6 +118,17 @@ def main():
                 check(r["landmarks_failed"] == len(FAILING[part]),
                       f"cycle {r['seq']} ({part}): LANDMARKS_FAILED {r['landmarks_failed']}")
                 check(0 < r["cycle_ms"] < 30000, f"cycle {r['seq']}: CYCLE_MS {r['cycle_ms']}")
+                check(r["ok_bits"] == [ok_bits(FAILING[part])],
+                      f"cycle {r['seq']} ({part}): LANDMARK_OK_BITS {r['ok_bits']}, expected {ok_bits(FAILING[part]):#06x}")
+                check(r["inconsistent_reads"] == 0 and r["reads"] >= 1,
+                      f"cycle {r['seq']}: {r['inconsistent_reads']} of {r['reads']} polling reads showed a mixed block")
+                passed = expected == "pass"
+                lamps = r.get("lamps") or {}
+                check(lamps.get("lit") == {"green": passed, "amber": False, "red": not passed},
+                      f"cycle {r['seq']} ({part}): lamps lit {lamps.get('lit')} after a {expected}")
+                check((lamps.get("green"), lamps.get("amber"), lamps.get("red")) ==
+                      (("on", "off", "off") if passed else ("off", "off", "on")),
+                      f"cycle {r['seq']} ({part}): lamps commanded {lamps}")
                 plan.append((r["seq"], r["serial"], part, expected))
             print(f"{variant}: {len(cycles)} cycles, verdicts checked", flush=True)
 

@@ -376,14 +376,13 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                        {"processing", outcome.processingMs},
                        {"wait_for_verdict", finishMs}};
 
+    // A failed part's images are written after the result is shown (below): the record names
+    // their folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
     std::string imagesDir;
-    const auto imagesStart = Clock::now();
-    if (record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages) {
-        ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
-        imagesDir = archive.saveFailed(record.startedUnixMs, record.serial, outcome.views).string();
-        archive.enforceRetention();
-        record.timingMs["images"] = msSince(imagesStart);
-    }
+    ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
+    const bool saveImages = record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages &&
+                            (!outcome.views.empty() || outcome.evidence);
+    if (saveImages) imagesDir = archive.folderFor(record.startedUnixMs, record.serial).string();
     // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6, issue 6).
     const auto commitStart = Clock::now();
     try {
@@ -414,6 +413,14 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
     if (lastFrameAt)
         timing["last_frame_to_publish"] = std::chrono::duration<double, std::milli>(published - *lastFrameAt).count();
+    if (saveImages) {
+        const auto imagesStart = Clock::now();
+        auto views = outcome.views.empty() ? outcome.evidence() : std::move(outcome.views);
+        if (archive.saveFailed(record.startedUnixMs, record.serial, views).empty())
+            log->error("the images of the failed part {} could not be written to {}", record.serial, imagesDir);
+        archive.enforceRetention();
+        timing["images"] = msSince(imagesStart);
+    }
     abortRequested_ = false;
     {
         std::lock_guard lock(mutex_);

@@ -91,7 +91,7 @@ class EngineInspector : public Inspector {
             for (const auto& l : result.landmarks)
                 out.landmarks.push_back(
                     {l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm});
-            if (!result.pass) out.views = evidence(result);
+            if (!result.pass) out.evidence = evidence(result);
         } catch (const std::exception& e) {
             out.error = e.what();
         }
@@ -106,21 +106,27 @@ class EngineInspector : public Inspector {
     }
 
   private:
-    // The failed part's frames with silhouettes and landmark projections (docs/daemon.md).
-    std::vector<ViewEvidence> evidence(const inspect::InspectionResult& result) const
+    // The failed part's frames with silhouettes and landmark projections (docs/daemon.md). The
+    // projections are taken now (they need the program); the whole-frame segmentation for the
+    // outline is left to the returned function, which the cycle runs after the result is shown.
+    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result) const
     {
         std::map<std::string, std::string> status;
         for (const auto& l : result.landmarks)
             status[l.id] = inspect::toString(l.status);
-        std::vector<ViewEvidence> out;
+        std::vector<ViewEvidence> views;
         for (const auto& v : views_) {
-            ViewEvidence e{v.frame, vision::segment(v.frame, segmentation_), {}};
+            ViewEvidence e{v.frame, cv::Mat(), {}};
             for (const auto& l : current_->program.landmarks)
                 if (auto px = v.camera.project(l.position))
                     e.landmarks.push_back({cv::Point2d((*px).x(), (*px).y()), l.id, status[l.id]});
-            out.push_back(std::move(e));
+            views.push_back(std::move(e));
         }
-        return out;
+        return [views = std::move(views), settings = segmentation_]() mutable {
+            for (auto& e : views)
+                e.silhouette = vision::segment(e.image, settings);
+            return views;
+        };
     }
 
     geometry::Station station_;

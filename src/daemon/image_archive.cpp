@@ -57,15 +57,20 @@ ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention)
 {
 }
 
+fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& serial) const
+{
+    std::string safe;
+    for (char c : serial)
+        safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
+    return root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
+}
+
 fs::path ImageArchive::saveFailed(std::int64_t startedUnixMs, const std::string& serial,
                                   const std::vector<ViewEvidence>& views)
 {
     if (views.empty()) return {};
     auto log = hg::log::category("store");
-    std::string safe;
-    for (char c : serial)
-        safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
-    auto dir = root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
+    auto dir = folderFor(startedUnixMs, serial);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec) {

@@ -25,8 +25,11 @@ class ImageArchive {
   public:
     ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
 
-    /// Writes `views` as view_<k>.png into a new folder named after the time
-    /// and serial; returns the folder (empty when there was nothing to write).
+    /// The folder of a failed inspection: `<root>/<startedUnixMs>_<serial>`
+    /// (serial characters other than letters, digits and '-' become '_').
+    std::filesystem::path folderFor(std::int64_t startedUnixMs, const std::string& serial) const;
+    /// Writes `views` as view_<k>.png into folderFor(startedUnixMs, serial);
+    /// returns the folder (empty when there was nothing to write).
     /// Never throws: a failure is logged and the record keeps an empty path.
     std::filesystem::path saveFailed(std::int64_t startedUnixMs, const std::string& serial,
                                      const std::vector<ViewEvidence>& views);

@@ -9,6 +9,7 @@
 #include "hullgauge/station/result_record.h"
 
 #include <cstddef>
+#include <functional>
 #include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
@@ -36,10 +37,14 @@ struct InspectionOutcome {
     std::string part; ///< the part program's name
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
-    std::vector<ViewEvidence> views; ///< filled when the part failed
-    double processingMs = 0.0;       ///< preparation of every view plus the traversal
-    double prepareMs = 0.0;          ///< segmentation of the views (mostly while the fixture moved)
-    double traversalMs = 0.0;        ///< the goal-driven traversal after the last frame
+    /// A failed part's views for its images: either `views` (ready) or `evidence`, which
+    /// builds them (whole-frame segmentation) when the cycle writes the images, after
+    /// the result is shown — that work is not on the path from the last frame to the verdict.
+    std::vector<ViewEvidence> views;
+    std::function<std::vector<ViewEvidence>()> evidence;
+    double processingMs = 0.0; ///< preparation of every view plus the traversal
+    double prepareMs = 0.0;    ///< segmentation of the views (mostly while the fixture moved)
+    double traversalMs = 0.0;  ///< the goal-driven traversal after the last frame
 };
 
 class Inspector {

@@ -236,7 +236,7 @@ TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
     EXPECT_TRUE(nominal.pass);
     EXPECT_EQ(nominal.landmarks.size(), 10u);
     EXPECT_TRUE(failing(nominal).empty());
-    EXPECT_TRUE(nominal.views.empty()) << "a passed part keeps no evidence";
+    EXPECT_TRUE(nominal.views.empty() && !nominal.evidence) << "a passed part keeps no evidence";
     EXPECT_GT(nominal.prepareMs, 0.0);
     EXPECT_GT(nominal.traversalMs, 0.0);
 
@@ -245,8 +245,22 @@ TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
     ASSERT_TRUE(low.ok) << low.error;
     EXPECT_FALSE(low.pass);
     EXPECT_EQ(failing(low), (std::set<std::string>{"step-top", "step-top-back"}));
-    ASSERT_EQ(low.views.size(), config_->programs.at(1).views.size()) << "a failed part keeps every frame";
-    EXPECT_EQ(low.views[0].image.size(), cv::Size(1280, 960));
+    // The failed part's images are built after the verdict, from the frames the cycle kept.
+    ASSERT_TRUE(low.evidence);
+    auto views = low.evidence();
+    ASSERT_EQ(views.size(), config_->programs.at(1).views.size()) << "a failed part keeps every frame";
+    for (const auto& v : views) {
+        EXPECT_EQ(v.image.size(), cv::Size(1280, 960));
+        ASSERT_EQ(v.silhouette.size(), v.image.size());
+        // The stepped block fills part of the frame, never all of it.
+        const double partShare = cv::countNonZero(v.silhouette) / static_cast<double>(v.image.total());
+        EXPECT_GT(partShare, 0.01);
+        EXPECT_LT(partShare, 0.9);
+    }
+    std::set<std::string> drawnFailing;
+    for (const auto& mark : views[0].landmarks)
+        if (mark.status != "ok") drawnFailing.insert(mark.id);
+    EXPECT_EQ(drawnFailing, (std::set<std::string>{"step-top", "step-top-back"}));
 }
 
 TEST_F(EnginePipeline, WrongFrameSizeIsAnOutcomeErrorNamingTheView)

@@ -413,14 +413,6 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
     if (lastFrameAt)
         timing["last_frame_to_publish"] = std::chrono::duration<double, std::milli>(published - *lastFrameAt).count();
-    if (saveImages) {
-        const auto imagesStart = Clock::now();
-        auto views = outcome.views.empty() ? outcome.evidence() : std::move(outcome.views);
-        if (archive.saveFailed(record.startedUnixMs, record.serial, views).empty())
-            log->error("the images of the failed part {} could not be written to {}", record.serial, imagesDir);
-        archive.enforceRetention();
-        timing["images"] = msSince(imagesStart);
-    }
     abortRequested_ = false;
     {
         std::lock_guard lock(mutex_);
@@ -434,7 +426,18 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                       {"cycle_ms", record.cycleMs},
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
+                      {"images_dir", imagesDir},
                       {"timing_ms", timing}};
+    }
+    if (saveImages) {
+        const auto imagesStart = Clock::now();
+        auto views = outcome.views.empty() ? outcome.evidence() : std::move(outcome.views);
+        if (archive.saveFailed(record.startedUnixMs, record.serial, views).empty())
+            log->error("the images of the failed part {} could not be written to {}", record.serial, imagesDir);
+        archive.enforceRetention();
+        timing["images"] = msSince(imagesStart);
+        std::lock_guard lock(mutex_);
+        lastCycle_["timing_ms"]["images"] = timing["images"];
     }
     log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
               "{:.1f}, commit {:.1f}; last frame to result {:.1f})",

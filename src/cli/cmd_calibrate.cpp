@@ -1,12 +1,4 @@
 // hullgauge calibrate intrinsics | rail | fixture (CONTRACTS §5; docs/calibration.md).
-#include <filesystem>
-#include <iostream>
-#include <memory>
-#include <string>
-#include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-
 #include "command.h"
 #include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/calib/intrinsics.h"
@@ -18,6 +10,13 @@
 #include "hullgauge/drivers/camera.h"
 #include "hullgauge/drivers/fixture.h"
 #include "hullgauge/geometry/station.h"
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 namespace hg::cli {
 namespace {
@@ -57,8 +56,7 @@ std::vector<calib::TargetView> detectInImages(const std::vector<std::string>& fi
                                  std::to_string(size.height));
         auto v = calib::detectTarget(img, spec, fs::path(f).filename().string());
         std::cerr << "[" << i << "/" << files.size() << "] " << f << ": "
-                  << (v ? std::to_string(v->imagePoints.size()) + " corners" : std::string("target not found"))
-                  << '\n';
+                  << (v ? std::to_string(v->imagePoints.size()) + " corners" : std::string("target not found")) << '\n';
         if (v) views.push_back(std::move(*v));
     }
     return views;
@@ -241,6 +239,33 @@ void check(bool ok, const std::string& step, const std::string& message)
     if (!ok) throw FaultError("calibrate run: " + step + ": " + message);
 }
 
+/// The station's camera for the live sequence: its driver, or with
+/// `backend: sim` the simulated twin showing the target it carries
+/// (`camera.driver.target`) at the pose the fixture driver reports — so the
+/// whole sequence runs against the fixture simulator as against the station.
+std::unique_ptr<drivers::Camera> makeRunCamera(const ConfigNode& root, const geometry::Station& station,
+                                               drivers::Fixture& fixture)
+{
+    auto driver = root["camera"]["driver"];
+    if (!driver.isMap() || !driver.has("backend") || driver["backend"].asString() != "sim")
+        return drivers::makeCamera(root);
+    if (!driver.has("target"))
+        throw InputError(driver.file(), driver.path() + ".target",
+                         "the simulated camera shows no calibration target: describe the chessboard the fixture "
+                         "carries (docs/camera.md)",
+                         driver.line());
+    drivers::SimCameraInputs inputs;
+    inputs.station = station;
+    inputs.poseSource = [&fixture]() -> std::optional<geometry::FixturePose> {
+        drivers::FixtureStatus status;
+        if (!fixture.status(status).ok() || status.busy || status.fault) return std::nullopt;
+        return status.position;
+    };
+    auto camera = drivers::makeSimCamera(driver, std::move(inputs));
+    if (auto s = camera->setPart("target"); !s) throw FaultError("calibrate run: " + s.message());
+    return camera;
+}
+
 /// The live sequence (issue 5): home, then for every pose move, wait in
 /// position, grab, detect; solve the axes; write the station with a backup.
 int runLive(const RunArgs& a)
@@ -252,8 +277,8 @@ int runLive(const RunArgs& a)
     auto poses = geometry::loadPoses(a.poses, &station.fixture);
     if (!a.saveImages.empty()) fs::create_directories(a.saveImages);
     auto root = ConfigNode::loadFile(a.station);
-    auto camera = drivers::makeCamera(root);
     auto fixture = drivers::makeFixture(station);
+    auto camera = makeRunCamera(root, station, *fixture);
     const auto grabTimeout = std::chrono::milliseconds(static_cast<long long>(a.grabTimeoutS * 1000.0));
 
     std::vector<calib::FixtureView> views;
@@ -342,8 +367,9 @@ std::function<int()> addCalibrate(CLI::App& app)
         ->required()
         ->check(CLI::ExistingFile);
     cf->add_option("--out", fix->out, "station YAML to write (default: --station)");
-    auto* obsOpt = cf->add_option("--observations", fix->observations, "fixture observations YAML (docs/calibration.md)")
-                       ->check(CLI::ExistingFile);
+    auto* obsOpt =
+        cf->add_option("--observations", fix->observations, "fixture observations YAML (docs/calibration.md)")
+            ->check(CLI::ExistingFile);
     auto* imgOpt = cf->add_option("--images", fix->images, "target images, one per pose")->check(CLI::ExistingFile);
     cf->add_option("--pattern", fix->pattern, "target, as for calibrate intrinsics (with --images)");
     cf->add_option("--poses", fix->poses, "poses YAML, one {rotation_deg, declination_deg} per image (with --images)")
@@ -363,7 +389,8 @@ std::function<int()> addCalibrate(CLI::App& app)
         ->check(CLI::ExistingFile);
     cl->add_option("--out", run->out, "station YAML to write (default: --station)");
     cl->add_option("--save-images", run->saveImages, "folder for the grabbed images (for calibrate fixture later)");
-    cl->add_option("--grab-timeout", run->grabTimeoutS, "seconds to wait for each frame")->check(CLI::Range(0.1, 600.0));
+    cl->add_option("--grab-timeout", run->grabTimeoutS, "seconds to wait for each frame")
+        ->check(CLI::Range(0.1, 600.0));
 
     return [=]() -> int {
         if (cl->parsed()) return runLive(*run);
@@ -378,8 +405,8 @@ std::function<int()> addCalibrate(CLI::App& app)
     };
 }
 
-}  // namespace
+} // namespace
 
 HG_REGISTER_COMMAND("calibrate", addCalibrate);
 
-}  // namespace hg::cli
+} // namespace hg::cli

@@ -8,21 +8,94 @@
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
 // and read back but do not change the image; Part switches the part under
 // test; PixelFormat, OffsetX/Y, Width/Height, SensorWidth/Height are read-only.
+//
+// Two optional keys make the twin stand for a physical rig in calibration:
+// `target` adds a backlit chessboard carried by the fixture as the part named
+// "target", and `truth_station` names a station file whose camera and fixture
+// geometry the twin renders with instead of the station's own (nominal) one,
+// so `hullgauge calibrate run` has something true to recover.
+#include "hullgauge/calib/target.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/geometry/transform.h"
+#include "hullgauge/model/primitives.h"
+#include "hullgauge/sim/renderer.h"
+
 #include <algorithm>
 #include <cstdlib>
 #include <mutex>
-#include <sstream>
-
 #include <opencv2/core.hpp>
-
-#include "hullgauge/common/log.h"
-#include "hullgauge/drivers/camera.h"
-#include "hullgauge/sim/renderer.h"
+#include <sstream>
 
 namespace hg::drivers {
 namespace {
 
 using std::chrono::milliseconds;
+
+/// Name of the part the `target` key adds.
+constexpr const char* kTargetPart = "target";
+/// Thickness of a dark square (mm). Seen obliquely a square's side faces
+/// widen its outline by thickness x tan(angle): 0.01 mm keeps that far below
+/// a corner detector's precision, while the box stays a closed solid the
+/// renderer takes as it is.
+constexpr double kSquareThicknessMm = 0.01;
+
+/// A backlit chessboard: a clear plate carrying opaque squares, as a
+/// calibration target for back light is made. COLS x ROWS inner corners give
+/// (COLS+1) x (ROWS+1) squares; the square at a board corner, on the side of
+/// inner corner 0, is dark, and dark squares touch only at their corners, as
+/// on a printed board. Target frame as calib::TargetSpec: origin on the first
+/// inner corner, x along the columns, y along the rows, the squares' face
+/// towards +z at z = 0 (the corners lie on it). Around the squares the plate is
+/// clear: the back light is the board's white margin.
+model::TriangleMesh backlitChessboard(const calib::TargetSpec& spec)
+{
+    model::TriangleMesh board;
+    const double s = spec.squareMm;
+    for (int j = 0; j <= spec.rows; ++j)
+        for (int i = 0; i <= spec.cols; ++i) {
+            if ((i + j) % 2 != 0) continue;
+            board.append(model::makeBox({(i - 1) * s, (j - 1) * s, -kSquareThicknessMm}, {i * s, j * s, 0.0}));
+        }
+    return board;
+}
+
+/// `camera.driver.target`: the chessboard and where it sits on the turntable.
+model::TriangleMesh parseTarget(const ConfigNode& node)
+{
+    require(node.isMap(), node, "expected {pattern: chessboard:COLSxROWS:SQUARE_MM, part_from_target: {R, t}}");
+    node.allowOnlyKeys({"pattern", "part_from_target"});
+    auto patternNode = node["pattern"];
+    calib::TargetSpec spec;
+    try {
+        spec = calib::TargetSpec::parse(patternNode.asString(), patternNode.path());
+    } catch (const InputError& e) {
+        patternNode.fail(e.problem());
+    }
+    if (spec.kind != calib::TargetKind::Chessboard)
+        patternNode.fail("the simulated camera renders chessboard targets only (chessboard:COLSxROWS:SQUARE_MM)");
+    auto pose = node["part_from_target"];
+    pose.allowOnlyKeys({"R", "t"});
+    auto rNode = pose["R"];
+    const geometry::Mat3 R = rNode.asMatrix3();
+    if (!geometry::isRotation(R, 1e-4)) rNode.fail("not a rotation matrix (must be orthonormal with determinant +1)");
+    model::TriangleMesh board = backlitChessboard(spec);
+    board.transform(geometry::nearestRotation(R), pose["t"].asVector3());
+    return board;
+}
+
+/// `camera.driver.truth_station`: the rig as it really is, relative to the station file.
+geometry::Station loadTruthStation(const ConfigNode& node, const geometry::Station& nominal)
+{
+    std::filesystem::path file = node.asString();
+    if (file.is_relative()) file = std::filesystem::path(node.file()).parent_path() / file;
+    if (!std::filesystem::exists(file)) node.fail("no such file: " + file.string());
+    geometry::Station truth = geometry::loadStation(file);
+    if (truth.camera.imageSize != nominal.camera.imageSize)
+        node.fail("the camera of " + file.string() + " has another image size than camera.image_size");
+    return truth;
+}
 
 struct SimConfig {
     sim::RenderOptions render;
@@ -54,7 +127,7 @@ struct SlotPool {
 };
 
 class SimCameraImpl final : public SimCamera {
-public:
+  public:
     SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, SimCameraInputs inputs)
         : SimCamera(std::move(configPath), std::move(settings)), config_(std::move(config)),
           station_(std::move(inputs.station)), poseSource_(std::move(inputs.poseSource))
@@ -71,7 +144,8 @@ public:
         auto r = find(name);
         if (!r) {
             std::string known;
-            for (const auto& [n, _] : renderers_) known += (known.empty() ? "" : ", ") + n;
+            for (const auto& [n, _] : renderers_)
+                known += (known.empty() ? "" : ", ") + n;
             return Status::failure("sim camera: no part named '" + name + "' (known: " + known + ")");
         }
         std::lock_guard lock(mutex_);
@@ -90,7 +164,8 @@ public:
     std::vector<std::string> partNames() const override
     {
         std::vector<std::string> out;
-        for (const auto& [n, _] : renderers_) out.push_back(n);
+        for (const auto& [n, _] : renderers_)
+            out.push_back(n);
         return out;
     }
 
@@ -100,14 +175,14 @@ public:
         poseSource_ = std::move(source);
     }
 
-protected:
+  protected:
     Status doConfigure() override { return doApplySettings(settings()); }
 
     Status doApplySettings(const CameraSettings& s) override
     {
         const cv::Size sensor = station_.camera.imageSize;
-        const cv::Rect roi = s.roi.isFullSensor() ? cv::Rect({0, 0}, sensor)
-                                                   : cv::Rect(s.roi.x, s.roi.y, s.roi.width, s.roi.height);
+        const cv::Rect roi =
+            s.roi.isFullSensor() ? cv::Rect({0, 0}, sensor) : cv::Rect(s.roi.x, s.roi.y, s.roi.width, s.roi.height);
         if ((roi & cv::Rect({0, 0}, sensor)) != roi) {
             std::ostringstream m;
             m << "sim camera: ROI [" << roi.x << ", " << roi.y << ", " << roi.width << ", " << roi.height
@@ -131,7 +206,7 @@ protected:
 
     Status doDeactivate() override
     {
-        pool_.reset();  // slots still viewed by frames stay alive with them
+        pool_.reset(); // slots still viewed by frames stay alive with them
         return Status::success();
     }
 
@@ -153,7 +228,8 @@ protected:
         if (!renderer) return Frame::failed(FrameStatus::Error, "sim camera: no part under test");
         if (!source) return Frame::failed(FrameStatus::Error, "sim camera: no pose source is connected");
         const auto pose = source();
-        if (!pose) return Frame::failed(FrameStatus::Timeout, "sim camera: the fixture pose is unknown (moving or faulted)");
+        if (!pose)
+            return Frame::failed(FrameStatus::Timeout, "sim camera: the fixture pose is unknown (moving or faulted)");
         auto slot = pool_->take();
         if (!slot)
             return Frame::failed(FrameStatus::Timeout, "sim camera: all " + std::to_string(config_.bufferCount) +
@@ -161,11 +237,11 @@ protected:
         sim::RenderOptions options = config_.render;
         const PixelFormat format = settings().pixelFormat;
         options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
-        options.seed = config_.render.seed + frameCount_;  // fresh, reproducible noise per frame
+        options.seed = config_.render.seed + frameCount_; // fresh, reproducible noise per frame
         cv::Mat image = renderer->render(station_.cameraAt(*pose), options);
         cv::Mat& out = pool_->slots[*slot];
         if (format == PixelFormat::Mono12)
-            image(roi_).convertTo(out, CV_16U, 1.0 / 16.0);  // 12 significant bits
+            image(roi_).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
         else
             image(roi_).copyTo(out);
         const auto id = ++frameCount_;
@@ -178,11 +254,11 @@ protected:
     Result<std::vector<FeatureInfo>> doListFeatures() override
     {
         std::vector<FeatureInfo> out;
-        for (const char* name : {"Part", "PixelFormat", "ExposureTime", "Gain", "OffsetX", "OffsetY", "Width",
-                                 "Height", "SensorWidth", "SensorHeight"}) {
+        for (const char* name : {"Part", "PixelFormat", "ExposureTime", "Gain", "OffsetX", "OffsetY", "Width", "Height",
+                                 "SensorWidth", "SensorHeight"}) {
             FeatureInfo f;
             f.name = name;
-            f.type = f.name == "Part" || f.name == "PixelFormat" ? "Enumeration"
+            f.type = f.name == "Part" || f.name == "PixelFormat"    ? "Enumeration"
                      : f.name == "ExposureTime" || f.name == "Gain" ? "Float"
                                                                     : "Integer";
             f.access = f.name == "Part" || f.name == "ExposureTime" || f.name == "Gain" ? "RW" : "RO";
@@ -223,7 +299,8 @@ protected:
             (name == "Gain" ? gainDb_ : exposureUs_) = v;
             return Status::success();
         }
-        if (doGetFeature(name).ok()) return Status::failure("sim camera: " + name + " is read-only here; set it in camera.driver");
+        if (doGetFeature(name).ok())
+            return Status::failure("sim camera: " + name + " is read-only here; set it in camera.driver");
         return Status::failure("sim camera: no feature named '" + name + "'");
     }
 
@@ -240,7 +317,7 @@ protected:
         return info;
     }
 
-private:
+  private:
     std::shared_ptr<const sim::SilhouetteRenderer> find(const std::string& name) const
     {
         for (const auto& [n, r] : renderers_)
@@ -251,7 +328,7 @@ private:
     SimConfig config_;
     geometry::Station station_;
     std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
-    mutable std::mutex mutex_;  // guards current_, partName_, poseSource_
+    mutable std::mutex mutex_; // guards current_, partName_, poseSource_
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
     std::function<std::optional<geometry::FixturePose>()> poseSource_;
@@ -262,13 +339,13 @@ private:
     std::uint64_t frameCount_ = 0;
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs)
 {
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
-                          "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed",
-                          "sub_scanlines"});
+                          "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed", "sub_scanlines",
+                          "target", "truth_station"});
     if (driver["backend"].asString() != "sim") driver["backend"].fail("makeSimCamera needs backend: sim");
     SimConfig c;
     if (auto n = driver.optional("buffer_count")) c.bufferCount = static_cast<int>(n->asIntIn(1, 64));
@@ -278,14 +355,20 @@ std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInpu
     if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
     if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
-    if (inputs.parts.empty()) driver.fail("the sim camera needs at least one part to render");
+    if (auto n = driver.optional("truth_station")) inputs.station = loadTruthStation(*n, inputs.station);
+    if (auto n = driver.optional("target")) {
+        const bool taken =
+            std::any_of(inputs.parts.begin(), inputs.parts.end(), [](const auto& p) { return p.first == kTargetPart; });
+        if (taken) n->fail("a part is already named 'target'");
+        inputs.parts.emplace_back(kTargetPart, parseTarget(*n));
+    }
+    if (inputs.parts.empty()) driver.fail("the sim camera needs at least one part to render (or a target)");
     auto partNode = driver.optional("part");
     c.initialPart = partNode ? partNode->asString() : inputs.parts.front().first;
-    const bool known = std::any_of(inputs.parts.begin(), inputs.parts.end(),
-                                   [&](const auto& p) { return p.first == c.initialPart; });
+    const bool known =
+        std::any_of(inputs.parts.begin(), inputs.parts.end(), [&](const auto& p) { return p.first == c.initialPart; });
     if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
-    return std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c),
-                                           std::move(inputs));
+    return std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c), std::move(inputs));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

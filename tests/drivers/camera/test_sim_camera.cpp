@@ -1,16 +1,16 @@
 // The simulated camera against analytic silhouettes: a cube seen face-on by a
 // pinhole camera projects to a square whose size follows from similar triangles.
-#include <gtest/gtest.h>
-
-#include <cmath>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
+#include "hgtest/paths.h"
+#include "hullgauge/calib/target.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/drivers/camera.h"
 #include "hullgauge/model/primitives.h"
+
+#include <cmath>
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace {
 
@@ -34,7 +34,7 @@ fixture:
 )";
 
 struct Silhouette {
-    double area = 0;  // dark pixels
+    double area = 0; // dark pixels
     cv::Rect box;
 };
 
@@ -50,10 +50,13 @@ Silhouette measure(const cv::Mat& image)
 }
 
 /// Half the projected width of the near face of a cube of half-size a centred on the axis.
-double halfWidthPx(double a) { return kF * a / (kDistance - a); }
+double halfWidthPx(double a)
+{
+    return kF * a / (kDistance - a);
+}
 
 class SimCameraTest : public ::testing::Test {
-protected:
+  protected:
     std::unique_ptr<hg::drivers::SimCamera> make(const std::string& extraDriver = "")
     {
         std::string text = kStation;
@@ -78,7 +81,7 @@ TEST_F(SimCameraTest, FaceOnCubeProjectsToTheSquareOfSimilarTriangles)
     auto f = cam->grab(100ms);
     ASSERT_TRUE(f.ok()) << f.message;
     ASSERT_EQ(f.image.size(), cv::Size(640, 480));
-    const double side = 2 * halfWidthPx(20.0);  // 142.86 px
+    const double side = 2 * halfWidthPx(20.0); // 142.86 px
     auto s = measure(f.image);
     // Pixels count as dark when their centre is inside: the area is within half
     // a pixel of the outline all round.
@@ -99,7 +102,7 @@ TEST_F(SimCameraTest, TurntableRotationFollowsThePoseSource)
     const double side = 2 * halfWidthPx(20.0);
     EXPECT_NEAR(measure(f.image).box.width, side * std::sqrt(2.0), 3.0);
 
-    pose_.reset();  // fixture moving: no frame, and it says why
+    pose_.reset(); // fixture moving: no frame, and it says why
     auto g = cam->grab(100ms);
     EXPECT_EQ(g.status, FrameStatus::Timeout);
     EXPECT_NE(g.message.find("pose"), std::string::npos);
@@ -134,7 +137,7 @@ TEST_F(SimCameraTest, RoiCropsAndSixteenBitFormatsScale)
     double maxV = 0;
     cv::minMaxLoc(f.image, nullptr, &maxV);
     EXPECT_LE(maxV, 4095.0);
-    EXPECT_GT(maxV, 3000.0);  // lit background at 85 % of 12-bit full scale
+    EXPECT_GT(maxV, 3000.0); // lit background at 85 % of 12-bit full scale
     // The square's lower-right quadrant: from the ROI origin (the image centre) to 71.4 px on.
     cv::Mat dark = f.image < 2048;
     const auto box = cv::boundingRect(dark);
@@ -168,4 +171,90 @@ TEST_F(SimCameraTest, UnknownInitialPartIsAConfigError)
     }
 }
 
-}  // namespace
+// A 9x6 chessboard of 12 mm squares facing the camera, its first inner corner
+// at (-48, -30) mm in the part frame, 300 mm in front of the camera (the
+// fixture at rest): corner (c, r) is seen at u = 319.5 + 1000 (-48 + 12 c) / 300,
+// v = 239.5 + 1000 (-30 + 12 r) / 300 (similar triangles).
+const char* kTarget = "    target:\n      pattern: chessboard:9x6:12\n"
+                      "      part_from_target: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [-48, -30, 0]}\n";
+
+TEST_F(SimCameraTest, BacklitChessboardTargetIsDetectedAtItsProjectedCorners)
+{
+    auto cam = make(std::string(kTarget) + "    part: target\n    blur_sigma_px: 0.6\n    noise_sigma: 1\n");
+    EXPECT_EQ(cam->part(), "target");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    const auto spec = hg::calib::TargetSpec::parse("chessboard:9x6:12");
+    auto view = hg::calib::detectTarget(f.image, spec, "frame");
+    ASSERT_TRUE(view) << "the rendered chessboard was not found";
+    ASSERT_EQ(view->imagePoints.size(), 54u);
+    double worst = 0.0;
+    for (int id = 0; id < 54; ++id) {
+        const int c = id % 9, r = id / 9;
+        const cv::Point2d expected(319.5 + kF * (-48.0 + 12.0 * c) / kDistance,
+                                   239.5 + kF * (-30.0 + 12.0 * r) / kDistance);
+        const cv::Point2d found = view->imagePoints[id];
+        worst = std::max(worst, cv::norm(found - expected));
+    }
+    // Corner 0 comes first (the board's dark corner square fixes the order),
+    // and every corner sits where the pinhole puts it.
+    EXPECT_LT(worst, 0.1) << "largest corner error in px";
+    // The margin around the squares is the back light.
+    EXPECT_GT(f.image.at<std::uint8_t>(239, 100), 200);
+}
+
+TEST_F(SimCameraTest, TruthStationGeometryIsWhatTheTwinRenders)
+{
+    hgtest::TempDir dir;
+    // The rig as it is: the fixture origin 10 mm to the right of where the
+    // station file (nominal) says, so the cube's near face moves 1000 * 10 / 280 px right.
+    std::string truth = kStation;
+    truth.replace(truth.find("t: [0, 0, 300]"), 14, "t: [10, 0, 300]");
+    hgtest::writeFile(dir / "truth.yaml", truth);
+    std::string text = kStation;
+    text.insert(text.find("fixture:"), "    truth_station: truth.yaml\n");
+    auto file = hgtest::writeFile(dir / "station.yaml", text);
+    auto root = hg::ConfigNode::loadFile(file);
+    hg::drivers::SimCameraInputs in;
+    in.station = hg::geometry::parseStation(root);
+    in.poseSource = [] { return hg::geometry::FixturePose{}; };
+    in.parts.emplace_back("nominal", hg::model::makeBox({-20, -20, -20}, {20, 20, 20}));
+    auto cam = hg::drivers::makeSimCamera(root["camera"]["driver"], std::move(in));
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    auto box = measure(f.image).box;
+    // The near face (20 mm closer) bounds the silhouette.
+    EXPECT_NEAR(box.x + box.width / 2.0, 320.0 + kF * 10.0 / (kDistance - 20.0), 1.0);
+}
+
+TEST_F(SimCameraTest, BadTargetAndTruthKeysNameTheKey)
+{
+    auto field = [&](const std::string& extra) {
+        try {
+            (void)make(extra);
+        } catch (const hg::InputError& e) {
+            return e.field() + ": " + e.problem();
+        }
+        return std::string("accepted");
+    };
+    EXPECT_EQ(field("    target:\n      pattern: charuco:5x5:10:7\n      part_from_target: {R: [[1, 0, 0], [0, 1, "
+                    "0], [0, 0, 1]], t: [0, 0, 0]}\n")
+                  .rfind("camera.driver.target.pattern: ", 0),
+              0u);
+    EXPECT_EQ(field("    target:\n      pattern: chessboard:9x6:12\n      part_from_target: {R: [[2, 0, 0], [0, 1, "
+                    "0], [0, 0, 1]], t: [0, 0, 0]}\n")
+                  .rfind("camera.driver.target.part_from_target.R: not a rotation", 0),
+              0u);
+    EXPECT_EQ(field("    target:\n      pattern: chessboard:9x6:12\n")
+                  .rfind("camera.driver.target: missing required key 'part_from_target'", 0),
+              0u);
+    EXPECT_EQ(
+        field("    truth_station: /nonexistent/truth.yaml\n").rfind("camera.driver.truth_station: no such file", 0),
+        0u);
+}
+
+} // namespace

@@ -234,9 +234,22 @@ std::optional<RayHit> Solid::firstHit(const Eigen::Vector3d& origin, const Eigen
     const Eigen::Vector3d d = direction / len;
     const K::Ray_3 ray(toPoint(origin), K::Vector_3(d.x(), d.y(), d.z()));
     using Hit = Tree::Intersection_and_primitive_id<K::Ray_3>::Type;
+    std::optional<RayHit> best;
+    // Fast path: CGAL's nearest-first traversal. A ray that starts on the
+    // surface gets its own start point back (s = 0, not a hit): then every
+    // intersection is listed and the nearest one beyond the start is kept.
+    if (const auto first = impl_->tree.first_intersection(ray)) {
+        const auto& [object, face] = *first;
+        if (const auto* p = boost::get<Point>(&object)) {
+            const Eigen::Vector3d q = toEigen(*p);
+            const double s = (q - origin).dot(d);
+            if (s > 0.0) return RayHit{s, q, impl_->faceIndex(face)};
+        }
+    } else {
+        return std::nullopt;
+    }
     std::vector<Hit> hits;
     impl_->tree.all_intersections(ray, std::back_inserter(hits));
-    std::optional<RayHit> best;
     auto consider = [&](const Point& p, std::size_t tri) {
         const Eigen::Vector3d q = toEigen(p);
         const double s = (q - origin).dot(d);

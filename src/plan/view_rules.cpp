@@ -42,6 +42,31 @@ std::array<Vec3, 8> corners(const Eigen::AlignedBox3d& box)
     return c;
 }
 
+/// True when the line of sight crosses `voxel` inside the part: the sample
+/// then belongs to the object share of the voxel's own footprint (a voxel
+/// straddling the surface is part object), and meeting the part is expected
+/// wherever along the line it is met — on a grazing view of a long face the
+/// line enters the face far before the landmark. Judged at the middle of the
+/// line's chord through the voxel (slab intersection).
+bool throughOwnMaterial(const Eigen::AlignedBox3d& voxel, const Vec3& origin, const Vec3& direction,
+                        const model::Solid& solid)
+{
+    double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(direction[a]) < 1e-15) {
+            if (origin[a] < voxel.min()[a] || origin[a] > voxel.max()[a]) return false;
+            continue;
+        }
+        double ta = (voxel.min()[a] - origin[a]) / direction[a];
+        double tb = (voxel.max()[a] - origin[a]) / direction[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    if (t1 <= t0) return false;
+    return solid.contains(origin + 0.5 * (t0 + t1) * direction);
+}
+
 } // namespace
 
 const char* toString(Blocker blocker)
@@ -258,7 +283,9 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
         const auto ray = camera.backProject(px);
         std::optional<model::RayHit> hit;
         Blocker b = lineOfSight(centre, ray.direction.normalized(), &hit);
-        if (b == Blocker::Part && target && (hit->point - target->position).norm() <= ownRadius_)
+        if (b == Blocker::Part && target &&
+            ((hit->point - target->position).norm() <= ownRadius_ ||
+             throughOwnMaterial(voxel, centre, ray.direction.normalized(), solid_)))
             b = Blocker::OwnSurface;
         if (b == Blocker::None) {
             ++background;

@@ -6,6 +6,7 @@
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
 #include "hullgauge/sim/renderer.h"
+#include "hgtest/parts.h"
 
 #include <gtest/gtest.h>
 
@@ -100,6 +101,61 @@ TEST(ClosedLoop, NominalPassesDefectFailsAtItsLandmark)
             EXPECT_NE(l.status, inspect::LandmarkStatus::Ok);
         else
             EXPECT_EQ(l.status, inspect::LandmarkStatus::Ok) << l.id << ": " << l.reason;
+    }
+}
+
+// The whole defect list (hgtest::plateDefects: a feature shifted, material
+// missing at a corner, a burr, a hole too large, a face too low, each 0.65 mm)
+// through the planner's own views: plan once from the nominal CAD, render the
+// planned views of every part as made, inspect. The station can look down the
+// through hole (declination up to 90°), and the part stands on a spigot of
+// radius 5 mm, 50 mm above the turntable (the floor disc of Rule 2), so every
+// landmark — the bottom face and the hole wall included — has a witness. Expected per landmark from the defect geometry
+// (hgtest::expectJudgedAgainstTruth): |e| > tolerance + 2ΔV fails, |e| <
+// tolerance − 2ΔV passes, e inside the reported bracket ± ΔV.
+TEST(ClosedLoop, DefectListThroughThePlannedViews)
+{
+    const hgtest::TestPart plate = hgtest::defectPlatePart();
+    geometry::Station station = makeStation();
+    station.fixture.declinationRangeDeg = {0, 90};
+    station.floorZMm = -50.0;
+
+    PlanProblem problem;
+    problem.part = plate.name;
+    problem.solid = plate.solid.get();
+    problem.station = &station;
+    problem.grid.origin = plate.geometry.cubeOrigin;
+    problem.grid.depth = plate.geometry.depth;
+    problem.grid.voxelSize = plate.geometry.cubeSize / static_cast<double>(1 << plate.geometry.depth);
+    for (const auto& l : plate.landmarks) {
+        PlanLandmark pl;
+        pl.id = l.id;
+        pl.position = l.position;
+        pl.normal = l.normal;
+        pl.toleranceMm = l.toleranceMm;
+        problem.landmarks.push_back(pl);
+    }
+    PlanOptions options;
+    options.rules.floorRadiusMm = 5.0;
+    const ViewPlan plan = planViews(problem, options);
+    ASSERT_TRUE(plan.feasible) << (plan.problems.empty() ? "" : plan.problems[0]);
+    for (const auto& a : plan.landmarks) EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
+    std::vector<geometry::CameraModel> cameras;
+    for (const auto& v : plan.views) cameras.push_back(v.camera);
+
+    const inspect::InspectionMap map = plate.map();
+    const inspect::Inspector inspector(map);
+    std::vector<hgtest::PartAsMade> parts{hgtest::asDesigned(plate)};
+    for (auto& d : hgtest::plateDefects(plate)) parts.push_back(std::move(d));
+    std::uint64_t seed = 100;
+    for (const auto& made : parts) {
+        SCOPED_TRACE(made.name);
+        const auto views = hgtest::renderViews(made.mesh, cameras, 2.0, seed += 16);
+        const auto result = inspector.inspect(views, {});
+        bool defective = false;
+        for (double e : made.offsetMm) defective = defective || std::abs(e) > 0.0;
+        EXPECT_EQ(result.pass, !defective);
+        hgtest::expectJudgedAgainstTruth(result, plate, made);
     }
 }
 

@@ -90,33 +90,19 @@ void BM_ReconstructOctree(benchmark::State& state)
         benchmark::DoNotOptimize(h.objectVoxels);
     }
     // Disagreement with the true solid, voxel by voxel at the finest level.
-    const int n = 1 << depth;
-    const double dv = kCubeSize / n;
-    std::vector<std::uint8_t> reconstructed(static_cast<std::size_t>(n) * n * n, 0);
+    DenseGrid grid(depth);
     for (const HullNode& node : h.objectNodes) {
         const int s = 1 << (depth - node.level);
         for (int i = 0; i < s; ++i)
             for (int j = 0; j < s; ++j)
-                for (int k = 0; k < s; ++k) {
-                    const Eigen::Vector3i v = node.index * s + Eigen::Vector3i(i, j, k);
-                    reconstructed[(static_cast<std::size_t>(v.x()) * n + v.y()) * n + v.z()] = 1;
-                }
+                for (int k = 0; k < s; ++k) grid.set(node.index * s + Eigen::Vector3i(i, j, k));
     }
-    std::uint64_t extra = 0, missing = 0;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j)
-            for (int k = 0; k < n; ++k) {
-                const Eigen::Vector3d lo = kCubeOrigin + dv * Eigen::Vector3d(i, j, k);
-                const bool truth = trulyObject(Box3(lo, lo + Eigen::Vector3d::Constant(dv)));
-                const bool got = reconstructed[(static_cast<std::size_t>(i) * n + j) * n + k] != 0;
-                extra += got && !truth;
-                missing += truth && !got;
-            }
+    const Disagreement d = compareWithTruth(grid);
     state.counters["views"] = static_cast<double>(views.size());
     state.counters["volume_mm3"] = h.volumeMm3();
     state.counters["footprints"] = static_cast<double>(h.footprintsMeasured);
-    state.counters["wrong_extra"] = static_cast<double>(extra);
-    state.counters["wrong_missing"] = static_cast<double>(missing);
+    state.counters["wrong_extra"] = static_cast<double>(d.extra);
+    state.counters["wrong_missing"] = static_cast<double>(d.missing);
 }
 BENCHMARK(BM_ReconstructOctree)->Arg(6)->Arg(7)->Unit(benchmark::kMillisecond);
 

@@ -69,28 +69,16 @@ void BM_Open3dCarveSilhouette(benchmark::State& state)
         for (const auto& v : views) grid->CarveSilhouette(v.mask, v.camera, false);
         benchmark::DoNotOptimize(grid->voxels_.size());
     }
-    const int n = 1 << depth;
-    std::vector<std::uint8_t> kept(static_cast<std::size_t>(n) * n * n, 0);
+    DenseGrid kept(depth);
     for (const auto& [index, voxel] : grid->voxels_) {
         const Eigen::Vector3i& g = voxel.grid_index_;
-        if ((g.array() >= 0).all() && (g.array() < n).all())
-            kept[(static_cast<std::size_t>(g.x()) * n + g.y()) * n + g.z()] = 1;
+        if ((g.array() >= 0).all() && (g.array() < kept.n).all()) kept.set(g);
     }
-    std::uint64_t extra = 0, missing = 0, object = 0;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j)
-            for (int k = 0; k < n; ++k) {
-                const Eigen::Vector3d lo = kCubeOrigin + dv * Eigen::Vector3d(i, j, k);
-                const bool truth = trulyObject(Box3(lo, lo + Eigen::Vector3d::Constant(dv)));
-                const bool got = kept[(static_cast<std::size_t>(i) * n + j) * n + k] != 0;
-                extra += got && !truth;
-                missing += truth && !got;
-                object += got;
-            }
+    const Disagreement d = compareWithTruth(kept);
     state.counters["views"] = static_cast<double>(views.size());
-    state.counters["volume_mm3"] = static_cast<double>(object) * dv * dv * dv;
-    state.counters["wrong_extra"] = static_cast<double>(extra);
-    state.counters["wrong_missing"] = static_cast<double>(missing);
+    state.counters["volume_mm3"] = static_cast<double>(d.object) * dv * dv * dv;
+    state.counters["wrong_extra"] = static_cast<double>(d.extra);
+    state.counters["wrong_missing"] = static_cast<double>(d.missing);
 }
 BENCHMARK(BM_Open3dCarveSilhouette)->Arg(6)->Arg(7)->Unit(benchmark::kMillisecond);
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,9 +23,11 @@ constexpr double kTop = 20.0;
 inline const Eigen::Vector3d kCubeOrigin(-12, -12, -22);
 constexpr double kCubeSize = 64.0;
 
-inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, cv::Size size)
+/// A camera at `centre` looking along unit `forward`, image-down `down`
+/// (unit, orthogonal to forward), f = 3500 px, principal point centred.
+inline hg::geometry::CameraModel camera(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward,
+                                        const Eigen::Vector3d& down, cv::Size size)
 {
-    const Eigen::Vector3d down(0, 0, -1);
     Eigen::Matrix3d R;
     R.row(0) = down.cross(forward).transpose();
     R.row(1) = down.transpose();
@@ -33,6 +36,12 @@ inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eig
     in.K << 3500, 0, (size.width - 1) / 2.0, 0, 3500, (size.height - 1) / 2.0, 0, 0, 1;
     in.imageSize = size;
     return {in, {R, -R * centre}};
+}
+
+/// A level camera at `centre` looking along horizontal `forward`.
+inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, cv::Size size)
+{
+    return camera(centre, forward, Eigen::Vector3d(0, 0, -1), size);
 }
 
 inline hg::model::TriangleMesh block(double raise = 0.0)
@@ -83,15 +92,7 @@ inline hg::geometry::CameraModel orbit(const Eigen::Vector3d& target, double azi
     // Image-down: world −z with its component along the line of sight removed.
     Eigen::Vector3d d = Eigen::Vector3d(0, 0, -1) - Eigen::Vector3d(0, 0, -1).dot(fwd) * fwd;
     d.normalize();
-    Eigen::Matrix3d R;
-    R.row(0) = d.cross(fwd).transpose();
-    R.row(1) = d.transpose();
-    R.row(2) = fwd.transpose();
-    hg::geometry::Intrinsics in;
-    in.K << 3500, 0, (size.width - 1) / 2.0, 0, 3500, (size.height - 1) / 2.0, 0, 0, 1;
-    in.imageSize = size;
-    const Eigen::Vector3d centre = target + distance * dir;
-    return {in, {R, -R * centre}};
+    return camera(target + distance * dir, fwd, d, size);
 }
 
 /// Whole-object reconstruction views of the block (16): 4 along its side
@@ -123,6 +124,41 @@ inline bool trulyObject(const Eigen::AlignedBox3d& b)
     for (int a = 0; a < 3; ++a)
         f *= std::max(0.0, std::min(b.max()[a], hi[a]) - std::max(b.min()[a], 0.0)) / b.sizes()[a];
     return f >= 0.5;
+}
+
+/// A dense voxel grid over the part cube at `depth` (index (i, j, k) at
+/// (i·n + j)·n + k, n = 2^depth), one byte per voxel: 1 = reconstructed object.
+struct DenseGrid {
+    int depth;
+    int n;
+    std::vector<std::uint8_t> object;
+    explicit DenseGrid(int d) : depth(d), n(1 << d), object(static_cast<std::size_t>(n) * n * n, 0) {}
+    void set(const Eigen::Vector3i& v) { object[(static_cast<std::size_t>(v.x()) * n + v.y()) * n + v.z()] = 1; }
+    double voxelSize() const { return kCubeSize / n; }
+};
+
+/// Voxels of a reconstruction that disagree with the true solid.
+struct Disagreement {
+    std::uint64_t extra = 0;   ///< reconstructed object, truly void
+    std::uint64_t missing = 0; ///< truly object, reconstructed void
+    std::uint64_t object = 0;  ///< reconstructed object voxels
+};
+
+inline Disagreement compareWithTruth(const DenseGrid& g)
+{
+    Disagreement d;
+    const double dv = g.voxelSize();
+    for (int i = 0; i < g.n; ++i)
+        for (int j = 0; j < g.n; ++j)
+            for (int k = 0; k < g.n; ++k) {
+                const Eigen::Vector3d lo = kCubeOrigin + dv * Eigen::Vector3d(i, j, k);
+                const bool truth = trulyObject(Eigen::AlignedBox3d(lo, lo + Eigen::Vector3d::Constant(dv)));
+                const bool got = g.object[(static_cast<std::size_t>(i) * g.n + j) * g.n + k] != 0;
+                d.extra += got && !truth;
+                d.missing += truth && !got;
+                d.object += got;
+            }
+    return d;
 }
 
 }  // namespace hgbench

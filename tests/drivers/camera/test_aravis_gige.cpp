@@ -228,8 +228,11 @@ TEST_F(AravisGige, FramesHeldByTheCallerAreNotOverwritten)
 /// timeout plus a small margin (generous here for a loaded 2-core machine),
 /// fails with a message naming the camera, and frames come back within a
 /// bounded number of grabs once the camera returns.
+/// `away`: how long the camera stays dead. 6 s covers the loss being noticed
+/// and the old connection being closed; 16 s also failed reopen attempts with
+/// backoff (closing a dead connection costs Aravis ~10 s of GVCP timeouts).
 void killAndRecover(Camera& cam, hgtest::GigeSim& sim, const std::function<void()>& restart,
-                    const std::function<int(const cv::Mat&)>& match)
+                    const std::function<int(const cv::Mat&)>& match, std::chrono::seconds away)
 {
     for (int k = 0; k < 10; ++k)
         ASSERT_TRUE(cam.grab(2000ms).ok());
@@ -237,12 +240,12 @@ void killAndRecover(Camera& cam, hgtest::GigeSim& sim, const std::function<void(
     sim.kill();
     const auto timeout = 400ms;
     const auto margin = 500ms;
-    // Long enough to cover the probe of the dead camera (Aravis' GVCP timeout)
-    // and several failed reopen attempts, all of which run off the grab path.
-    const auto deadAfter = Clock::now() + 6s;
+    // Probe, close and reopen attempts all run off the grab path.
+    const auto deadAfter = Clock::now() + away;
     int grabs = 0;
     FrameStatus firstStatus = FrameStatus::Ok;
     bool sawLost = false;
+    bool sawFailedReopen = false;
     while (Clock::now() < deadAfter) {
         const auto t0 = Clock::now();
         auto f = cam.grab(timeout);
@@ -254,10 +257,14 @@ void killAndRecover(Camera& cam, hgtest::GigeSim& sim, const std::function<void(
         EXPECT_NE(f.message.find("camera 127.0.0.1"), std::string::npos) << f.message;
         if (grabs == 0) firstStatus = f.status;
         sawLost = sawLost || (f.status == FrameStatus::Error && f.message.find("lost") != std::string::npos);
+        sawFailedReopen = sawFailedReopen || f.message.find("reconnect failed") != std::string::npos;
         ++grabs;
     }
     EXPECT_EQ(firstStatus, FrameStatus::Timeout);
     EXPECT_TRUE(sawLost) << "the driver never declared the camera lost";
+    if (away >= 16s) {
+        EXPECT_TRUE(sawFailedReopen) << "no reopen attempt failed while the camera was away";
+    }
     EXPECT_GE(grabs, 6) << "grabs must not block while the driver reconnects";
     EXPECT_EQ(cam.state(), LifecycleState::Active);
 
@@ -290,7 +297,7 @@ TEST_F(AravisGige, SoftwareTriggeredGrabsOfADeadCameraAreBoundedAndRecover)
     ASSERT_TRUE(cam->configure());
     ASSERT_TRUE(cam->activate());
     killAndRecover(
-        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); });
+        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); }, 6s);
     // Deactivate and clean up are bounded too after a recovery.
     const auto t0 = Clock::now();
     EXPECT_TRUE(cam->deactivate());
@@ -298,14 +305,14 @@ TEST_F(AravisGige, SoftwareTriggeredGrabsOfADeadCameraAreBoundedAndRecover)
     EXPECT_LE(Clock::now() - t0, 5s);
 }
 
-TEST_F(AravisGige, FreeRunGrabsOfADeadCameraAreBoundedAndRecover)
+TEST_F(AravisGige, FreeRunGrabsOfACameraAwayLongerAreBoundedThroughFailedReopensAndRecover)
 {
     startSim();
     auto cam = makeCamera("    trigger: free_run\n    reconnect_backoff_ms: [100, 400]\n");
     ASSERT_TRUE(cam->configure());
     ASSERT_TRUE(cam->activate());
     killAndRecover(
-        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); });
+        *cam, sim_, [&] { startSim(); }, [&](const cv::Mat& m) { return matchingImage(m); }, 16s);
 }
 
 TEST_F(AravisGige, DeactivatingWhileTheCameraIsLostIsBounded)

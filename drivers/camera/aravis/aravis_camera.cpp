@@ -404,7 +404,9 @@ class AravisCamera final : public Camera {
 
     std::string lostMessage() const
     {
-        return "camera " + config_.id() + ": lost and not reopened yet; clean up and configure again";
+        return "camera " + config_.id() +
+               ": not connected (lost and not reopened yet; while active the driver "
+               "reconnects by itself, else clean up and configure again)";
     }
 
     // --- device --------------------------------------------------------------

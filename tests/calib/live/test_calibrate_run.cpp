@@ -244,4 +244,22 @@ TEST_F(CalibrateRun, FixtureFaultMidSequenceIsExitThreeNamingTheStepAndLeavesThe
     EXPECT_TRUE(backupsOf(station).empty());
 }
 
+TEST_F(CalibrateRun, SimulatedCameraWithoutATargetIsBadInputNamingTheKey)
+{
+    std::string text = stationText;
+    const auto from = text.find("    target:\n");
+    const auto to = text.find("    blur_sigma_px:");
+    ASSERT_NE(from, std::string::npos);
+    text.erase(from, to - from);
+    hgtest::writeFile(station, text);
+    std::string line;
+    for (const auto& a : command())
+        line += a + " ";
+    auto r = hgtest::run(line);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("camera.driver.target"), std::string::npos) << r.err;
+    EXPECT_EQ(readText(station), text);
+    EXPECT_TRUE(backupsOf(station).empty());
+}
+
 } // namespace

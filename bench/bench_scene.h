@@ -81,6 +81,47 @@ struct Scene {
     }
 };
 
+/// The block's four top corners as landmarks (normals along the body
+/// diagonals), seen from two grazing views each — the camera centre in the
+/// corner's tangent plane, 400 mm out along (n × z) and along n's in-plane
+/// downward direction — rendered with the block grown by `grow` on every side
+/// (true offset at each corner: √3·grow along its normal).
+struct CornerScene {
+    hg::inspect::InspectionMap map;
+    std::vector<hg::inspect::CapturedView> frames;
+
+    explicit CornerScene(double grow, cv::Size size = {1224, 1024}, int depth = 9)
+    {
+        using namespace hg::inspect;
+        auto solid = std::make_shared<const hg::model::Solid>(block());
+        MapGeometry g;
+        g.cubeOrigin = kCubeOrigin;
+        g.cubeSize = kCubeSize;
+        g.depth = depth;
+        g.adjacencyDepth = 6;
+        g.coarsestLevel = depth;
+        std::vector<MapLandmark> lms;
+        hg::sim::SilhouetteRenderer r({hg::model::makeBox(Eigen::Vector3d::Constant(-grow),
+                                                          Eigen::Vector3d(40 + grow, 40 + grow, kTop + grow))});
+        for (int c = 0; c < 4; ++c) {
+            const double sx = (c & 1) ? 1.0 : -1.0, sy = (c & 2) ? 1.0 : -1.0;
+            const Eigen::Vector3d p(sx > 0 ? 40 : 0, sy > 0 ? 40 : 0, kTop);
+            const Eigen::Vector3d n = Eigen::Vector3d(sx, sy, 1).normalized();
+            lms.push_back({"corner" + std::to_string(c), p, n, 0.3});
+            const Eigen::Vector3d d1 = n.cross(Eigen::Vector3d::UnitZ()).normalized();
+            const Eigen::Vector3d d2 = n.cross(d1).normalized();  // in the plane, pointing down and outwards
+            for (const Eigen::Vector3d& d : {d1, d2}) {
+                const Eigen::Vector3d fwd = -d;
+                Eigen::Vector3d down = Eigen::Vector3d(0, 0, -1) - Eigen::Vector3d(0, 0, -1).dot(fwd) * fwd;
+                down.normalize();
+                const auto cam = camera(p + 400 * d, fwd, down, size);
+                frames.push_back({"c" + std::to_string(frames.size()), cam, r.render(cam)});
+            }
+        }
+        map = InspectionMap::build("block-corners", g, lms, {}, cadLabels(solid));
+    }
+};
+
 /// A general camera looking at `target` from `distance` at azimuth/elevation
 /// (degrees); image-down is the projection of −z.
 inline hg::geometry::CameraModel orbit(const Eigen::Vector3d& target, double azimuthDeg, double elevationDeg,

@@ -25,6 +25,7 @@ defective variant (half the run `face-low`, half `corner-missing`), and checks:
 Every wait is bounded.
 """
 import argparse
+import ctypes
 import json
 import os
 import signal
@@ -49,6 +50,12 @@ def check(condition, message):
         failures.append(message)
         print(f"FAILED: {message}", file=sys.stderr, flush=True)
     return condition
+
+
+def die_with_parent():
+    """In the child: SIGTERM when this script ends, however it ends (a CTest timeout kills it outright),
+    so the simulated line never outlives it."""
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
 def free_port():
@@ -81,7 +88,8 @@ def main():
     line = subprocess.Popen([str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(workdir),
                              "--plc-port", str(plc_port), "--fixture-port", "0"] +
                             (["--config", str(args.config)] if args.config else []),
-                            stdout=line_out, stderr=subprocess.STDOUT, start_new_session=True)
+                            stdout=line_out, stderr=subprocess.STDOUT, start_new_session=True,
+                            preexec_fn=die_with_parent)
     try:
         deadline = time.monotonic() + 90
         while not (workdir / "simline.ready").exists():

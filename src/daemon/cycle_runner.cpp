@@ -406,6 +406,8 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     const auto publishStart = Clock::now();
     registers_.publishResult(record.toPublished(statusAfter));
     const auto published = Clock::now();
+    // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
+    lastLoopNs_ = nowNs();
     cycleStartNs_ = 0;
     auto timing = record.timingMs;
     timing["commit"] = commitMs;

@@ -428,18 +428,32 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                       {"cycle_ms", record.cycleMs},
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
+                      {"manual", record.manual},
                       {"images_dir", imagesDir},
                       {"timing_ms", timing}};
     }
     if (saveImages) {
-        const auto imagesStart = Clock::now();
-        auto views = outcome.views.empty() ? outcome.evidence() : std::move(outcome.views);
-        if (archive.saveFailed(record.startedUnixMs, record.serial, views).empty())
-            log->error("the images of the failed part {} could not be written to {}", record.serial, imagesDir);
-        archive.enforceRetention();
-        timing["images"] = msSince(imagesStart);
-        std::lock_guard lock(mutex_);
-        lastCycle_["timing_ms"]["images"] = timing["images"];
+        // On the writer's thread: the runner is free for the next trigger meanwhile.
+        auto evidence =
+            outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
+        images_.post([this, archive, evidence = std::move(evidence), startedUnixMs = record.startedUnixMs,
+                      serial = record.serial, imagesDir, seq = record.triggerSeq, manual = record.manual]() mutable {
+            auto storeLog = hg::log::category("store");
+            const auto imagesStart = Clock::now();
+            try {
+                if (archive.saveFailed(startedUnixMs, serial, evidence()).empty())
+                    storeLog->error("the images of the failed part '{}' could not be written to {}", serial, imagesDir);
+                archive.enforceRetention();
+            } catch (const std::exception& e) {
+                storeLog->error("the images of the failed part '{}': {}", serial, e.what());
+            }
+            const double ms = msSince(imagesStart);
+            storeLog->debug("images of '{}' written in {:.0f} ms", serial, ms);
+            std::lock_guard lock(mutex_);
+            if (lastCycle_.is_object() && lastCycle_.value("trigger_seq", -1) == seq &&
+                lastCycle_.value("manual", !manual) == manual)
+                lastCycle_["timing_ms"]["images"] = ms;
+        });
     }
     log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
               "{:.1f}, commit {:.1f}; last frame to result {:.1f})",

@@ -9,6 +9,7 @@
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
 #include "image_archive.h"
+#include "image_writer.h"
 #include "inspector.h"
 #include "result_store.h"
 
@@ -76,6 +77,9 @@ class CycleRunner {
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
     std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
+    // Declared last, destroyed first: the images still queued are written while the members
+    // their jobs touch (mutex_, lastCycle_) are alive.
+    ImageWriter images_;
 };
 
 } // namespace hg::daemon

@@ -63,6 +63,19 @@ TEST(DaemonProcess, HundredCyclesAlternatingNominalAndDefective)
     images.pop_back();
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(images) / "view_0.png")) << images;
     EXPECT_EQ(WEXITSTATUS(daemon.signal(SIGTERM)), 0);
+    // The images are written after each result is shown; a stop writes what is still queued,
+    // so every failed part's folder holds its 3 views, the last one's too.
+    auto folders = sql(db, "SELECT images_dir FROM inspections WHERE verdict='fail' ORDER BY id");
+    std::istringstream list(folders);
+    int complete = 0;
+    for (std::string folder; std::getline(list, folder);) {
+        bool all = true;
+        for (int k = 0; k < 3; ++k)
+            all =
+                all && std::filesystem::exists(std::filesystem::path(folder) / ("view_" + std::to_string(k) + ".png"));
+        complete += all ? 1 : 0;
+    }
+    EXPECT_EQ(complete, 50) << folders;
 }
 
 TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)

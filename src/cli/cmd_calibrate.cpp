@@ -1,6 +1,7 @@
 // hullgauge calibrate intrinsics | rail | fixture (CONTRACTS §5; docs/calibration.md).
 #include "command.h"
 #include "hullgauge/calib/fixture_axes.h"
+#include "hullgauge/calib/fixture_sequence.h"
 #include "hullgauge/calib/intrinsics.h"
 #include "hullgauge/calib/rail.h"
 #include "hullgauge/calib/station_file.h"
@@ -281,7 +282,6 @@ int runLive(const RunArgs& a)
     auto camera = makeRunCamera(root, station, *fixture);
     const auto grabTimeout = std::chrono::milliseconds(static_cast<long long>(a.grabTimeoutS * 1000.0));
 
-    std::vector<calib::FixtureView> views;
     {
         auto s = camera->configure();
         check(s.ok(), "camera configure", s.message());
@@ -301,30 +301,29 @@ int runLive(const RunArgs& a)
         auto s = camera->activate();
         check(s.ok(), "camera activate", s.message());
     }
-    for (std::size_t i = 0; i < poses.size(); ++i) {
-        const auto& pose = poses[i];
-        std::string where = drivers::describePose(pose, fixture->type());
+    calib::FixtureSequenceIo io;
+    io.moveTo = [&](const geometry::FixturePose& pose) -> calib::SequenceStep {
         auto r = fixture->moveTo(pose);
-        check(r.ok(), "move to " + where, r.message);
-        r = fixture->waitInPosition(fixture->moveTimeout());
-        check(r.ok(), "move to " + where, r.message);
+        if (r.ok()) r = fixture->waitInPosition(fixture->moveTimeout());
+        return {r.ok(), r.message};
+    };
+    io.grab = [&](cv::Mat& image) -> calib::SequenceStep {
         auto frame = camera->grab(grabTimeout);
-        check(frame.ok(), "grab at " + where, frame.message);
-        char name[96];
-        std::snprintf(name, sizeof name, "pose%02zu_r%g_d%g.png", i, pose.rotationDeg, pose.declinationDeg);
-        if (!a.saveImages.empty()) cv::imwrite((fs::path(a.saveImages) / name).string(), frame.image);
-        auto v = calib::detectTarget(frame.image, spec, name);
-        std::cerr << "[" << i + 1 << "/" << poses.size() << "] " << where << ": "
-                  << (v ? std::to_string(v->imagePoints.size()) + " corners" : std::string("target not found"))
-                  << std::endl;
-        if (v) views.push_back({pose, std::move(*v)});
-    }
+        if (frame.ok()) image = frame.image;
+        return {frame.ok(), frame.message};
+    };
+    io.progress = [](std::size_t, std::size_t, const std::string& line) { std::cerr << line << std::endl; };
+    if (!a.saveImages.empty())
+        io.keep = [&](const std::string& name, const cv::Mat& image) {
+            cv::imwrite((fs::path(a.saveImages) / name).string(), image);
+        };
+    auto sequence = calib::runFixtureSequence(poses, spec, station.camera, fixture->type(), io, "--poses");
     (void)camera->deactivate();
     (void)camera->cleanup();
     (void)fixture->deactivate();
     (void)fixture->cleanup();
 
-    auto result = calib::calibrateFixtureAxes(views, station.camera, "--poses");
+    const auto& result = sequence.axes;
     std::cout << calib::formatFixtureReport(result);
     std::string out = a.out.empty() ? a.station : a.out;
     calib::StationFileUpdate update(out);

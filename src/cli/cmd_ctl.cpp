@@ -5,6 +5,9 @@
 #include "hullgauge/common/error.h"
 
 #include <cerrno>
+#include <chrono>
+#include <filesystem>
+#include <thread>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -27,6 +30,11 @@ struct CtlOptions {
     bool list = false;
     std::string part;
     bool json = false;
+    std::string pattern;
+    std::string poses;
+    std::string out;
+    bool noWait = false;
+    double waitS = 900.0;
 };
 
 std::string socketPath(const CtlOptions& o)
@@ -93,10 +101,42 @@ void printStatus(const nlohmann::json& s)
     }
 }
 
+/// Queues the calibration and follows its progress lines until it ends:
+/// exit 0 when the axes were solved and written, 3 when it failed.
+int runCalibrate(const std::string& path, const CtlOptions& o)
+{
+    nlohmann::json req{{"command", "calibrate"},
+                       {"pattern", o.pattern},
+                       {"poses", std::filesystem::absolute(o.poses).string()}};
+    if (!o.out.empty()) req["out"] = std::filesystem::absolute(o.out).string();
+    request(path, req);
+    std::cerr << "calibration queued" << std::endl;
+    if (o.noWait) return 0;
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.waitS);
+    std::size_t shown = 0;
+    while (true) {
+        auto c = request(path, {{"command", "calibration"}})["calibration"];
+        const auto& lines = c["progress"];
+        for (; shown < lines.size(); ++shown) std::cerr << lines[shown].get<std::string>() << std::endl;
+        const auto state = c.value("state", std::string());
+        if (state == "done") {
+            std::cout << c.value("report", std::string());
+            std::cout << "written: " << c.value("out", std::string());
+            if (!c.value("backup", std::string()).empty()) std::cout << " (backup " << c["backup"].get<std::string>() << ")";
+            std::cout << "\nthe daemon uses it after a reload (systemctl reload hullgauged)\n";
+            return 0;
+        }
+        if (state == "failed") throw FaultError(c.value("error", std::string("calibration failed")));
+        if (std::chrono::steady_clock::now() > deadline)
+            throw FaultError("calibration still " + state + " after --wait-timeout; follow it with ctl status");
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+}
+
 std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
-    auto* ctl = app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, sim-part)");
+    auto* ctl = app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, calibrate)");
     ctl->add_option("--socket", opts->socket,
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
@@ -111,6 +151,17 @@ std::function<int()> factory(CLI::App& app)
     auto* simPart = ctl->add_subcommand("sim-part", "switch the simulated part under test");
     simPart->add_flag("--list", opts->list, "list the parts the simulated line offers");
     simPart->add_option("name", opts->part, "nominal or a variant name");
+    auto* calibrate = ctl->add_subcommand(
+        "calibrate", "run the live fixture calibration through the daemon's devices while production is paused; "
+                     "writes the station file (with a backup), used after a reload");
+    calibrate->add_option("--pattern", opts->pattern, "target carried by the fixture, e.g. chessboard:8x5:10")
+        ->required();
+    calibrate->add_option("--poses", opts->poses, "poses YAML: the {rotation_deg, declination_deg} to visit")
+        ->required()
+        ->check(CLI::ExistingFile);
+    calibrate->add_option("--out", opts->out, "station YAML to write (default: the daemon's station file)");
+    calibrate->add_flag("--no-wait", opts->noWait, "return once the daemon has queued it");
+    calibrate->add_option("--wait-timeout", opts->waitS, "seconds to follow the progress")->check(CLI::Range(1.0, 86400.0));
 
     return [=]() -> int {
         auto path = socketPath(*opts);
@@ -139,6 +190,8 @@ std::function<int()> factory(CLI::App& app)
         } else if (abort->parsed()) {
             request(path, {{"command", "abort"}});
             std::cout << "abort requested\n";
+        } else if (calibrate->parsed()) {
+            return runCalibrate(path, *opts);
         } else if (simPart->parsed()) {
             if (opts->list) {
                 answer = request(path, {{"command", "sim-part"}, {"list", true}});

@@ -1,9 +1,11 @@
 #include "cycle_runner.h"
 
+#include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/log.h"
 
 #include <cmath>
 #include <optional>
+#include <thread>
 
 namespace hg::daemon {
 namespace {
@@ -128,6 +130,16 @@ bool CycleRunner::healthy() const
     auto now = nowNs();
     auto cycleStart = cycleStartNs_.load();
     if (cycleStart != 0 && now - cycleStart > std::chrono::nanoseconds(maxCycle).count()) return false;
+    // A calibration step (move, settle, grab) is bounded by its timeouts.
+    if (auto step = calibrationStepNs_.load(); step != 0) {
+        std::chrono::milliseconds bound;
+        {
+            std::lock_guard lock(mutex_);
+            bound = config_->sequencer.moveTimeout + config_->sequencer.settle + config_->sequencer.grabTimeout +
+                    std::chrono::seconds(5);
+        }
+        return now - step <= std::chrono::nanoseconds(bound).count();
+    }
     // Outside a cycle the thread turns at least every 200 ms; inside one each step is bounded by its timeout.
     if (cycleStart == 0 && now - lastLoopNs_.load() > std::chrono::nanoseconds(std::chrono::seconds(5)).count())
         return false;
@@ -195,12 +207,144 @@ void CycleRunner::run()
                 lastRecovery = Clock::now();
             }
         }
-        abortRequested_ = false; // an abort outside a cycle has nothing to abort
-        if (auto trigger = registers_.waitTrigger(std::chrono::milliseconds(200))) runCycle(*trigger);
+        bool calibrationQueued = false;
+        {
+            std::lock_guard lock(mutex_);
+            calibrationQueued = calibrationJob_.has_value();
+        }
+        if (!calibrationQueued) abortRequested_ = false; // an abort outside a cycle has nothing to abort
+        // Triggers first: a queued calibration starts only when none is pending.
+        if (auto trigger = registers_.waitTrigger(std::chrono::milliseconds(calibrationQueued ? 0 : 200))) {
+            runCycle(*trigger);
+            continue;
+        }
+        if (calibrationQueued) {
+            std::optional<CalibrationJob> job;
+            {
+                std::lock_guard lock(mutex_);
+                job.swap(calibrationJob_);
+                // A cycle before it faulted the station: the calibration is not started.
+                if (job && sequencer_.state() == SequencerState::Fault) {
+                    calibration_["state"] = "failed";
+                    calibration_["error"] = "the station went into fault before the calibration started";
+                    job.reset();
+                }
+            }
+            if (job) runCalibration(std::move(*job));
+        }
     }
     devices_.showLamps(LampPattern::Off);
     devices_.shutdown();
     log->info("devices shut down");
+}
+
+bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
+{
+    std::lock_guard lock(mutex_);
+    const auto st = sequencer_.state();
+    if (calibrationJob_ || st == SequencerState::Calibrating) {
+        why = "a calibration is already queued or running";
+        return false;
+    }
+    if (st == SequencerState::Fault || st == SequencerState::Starting) {
+        why = std::string("the station is not ready (") + std::string(station::toString(st)) + ")";
+        return false;
+    }
+    calibration_ = {{"state", "queued"}, {"poses", job.poses.size()}, {"out", job.out.string()},
+                    {"progress", nlohmann::json::array()}};
+    calibrationJob_ = std::move(job);
+    return true;
+}
+
+nlohmann::json CycleRunner::calibration() const
+{
+    std::lock_guard lock(mutex_);
+    return calibration_;
+}
+
+// The live fixture calibration (calib::runFixtureSequence) through the
+// station's own devices, between cycles: STATUS 5 refuses triggers, the amber
+// lamp shows the station busy, the sequencer sits in `calibrating`. The
+// station file is written with a backup only when the axes were solved; the
+// running configuration is not touched (a reload takes the new calibration).
+void CycleRunner::runCalibration(CalibrationJob job)
+{
+    auto log = hg::log::category("calib");
+    auto finish = [&](const char* state, nlohmann::json extra) {
+        std::lock_guard lock(mutex_);
+        calibration_["state"] = state;
+        calibration_.update(extra);
+    };
+    if (!registers_.enterMaintenance()) {
+        // A trigger was accepted in the meantime: its cycle runs first.
+        std::lock_guard lock(mutex_);
+        calibrationJob_ = std::move(job);
+        return;
+    }
+    SequencerAction action;
+    setState([&] { return sequencer_.onEvent(SequencerEvent::CalibrationStart); }, action);
+    devices_.showLamps(LampPattern::Busy);
+    abortRequested_ = false;
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+        calibration_["state"] = "running";
+    }
+    log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target.toString(),
+              job.out.string());
+    calib::FixtureSequenceIo io;
+    io.moveTo = [&](const geometry::FixturePose& pose) -> calib::SequenceStep {
+        calibrationStepNs_ = nowNs();
+        auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, false);
+        if (!r.ok()) return {false, r.message};
+        // Settle as a cycle does, in short slices so an abort is not delayed.
+        const auto until = Clock::now() + cfg->sequencer.settle;
+        while (Clock::now() < until && !abortRequested_) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        return {};
+    };
+    io.grab = [&](cv::Mat& image) -> calib::SequenceStep {
+        calibrationStepNs_ = nowNs();
+        auto r = devices_.grab(cfg->sequencer.grabTimeout, image);
+        return {r.ok(), r.message};
+    };
+    io.progress = [&](std::size_t, std::size_t, const std::string& line) {
+        log->info("calibration {}", line);
+        std::lock_guard lock(mutex_);
+        calibration_["progress"].push_back(line);
+    };
+    io.cancelled = [&] { return abortRequested_.load() || stopRequested_.load(); };
+    bool ok = false;
+    try {
+        auto result = calib::runFixtureSequence(job.poses, job.target, cfg->station.camera, cfg->station.fixture.type,
+                                                io, "poses");
+        calib::StationFileUpdate update(job.out);
+        update.setFixtureAxes(result.axes);
+        const auto backup = update.commit();
+        finish("done", {{"report", calib::formatFixtureReport(result.axes)},
+                        {"views_used", result.views.size()},
+                        {"backup", backup ? backup->string() : std::string()}});
+        log->info("calibration written to {}", job.out.string());
+        ok = true;
+    } catch (const std::exception& e) {
+        log->error("calibration failed: {}", e.what());
+        finish("failed", {{"error", e.what()}});
+    }
+    calibrationStepNs_ = 0;
+    abortRequested_ = false;
+    setState([&] { return sequencer_.onEvent(SequencerEvent::CalibrationEnd); }, action);
+    registers_.setStatus(station::PlcStatus::Ready);
+    devices_.showLamps(LampPattern::Off);
+    // A failed step may have left the drive faulted or the camera stopped: bring
+    // the station back the way a cycle fault does before production resumes.
+    if (!ok) {
+        auto r = devices_.recover();
+        if (!r.ok()) {
+            setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, action);
+            registers_.setStatus(station::PlcStatus::Fault);
+            devices_.showLamps(LampPattern::Fault);
+        }
+    }
 }
 
 void CycleRunner::recover()

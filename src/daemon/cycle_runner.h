@@ -5,6 +5,7 @@
 #pragma once
 
 #include "devices.h"
+#include "hullgauge/calib/fixture_sequence.h"
 #include "hullgauge/station/daemon_config.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
@@ -14,6 +15,9 @@
 #include "result_store.h"
 
 #include <atomic>
+#include <filesystem>
+#include <optional>
+#include <vector>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -23,6 +27,15 @@
 #include <thread>
 
 namespace hg::daemon {
+
+/// A live fixture calibration requested on the maintenance socket: the poses
+/// to visit, the target the fixture carries, and the station file to write
+/// (the old one is kept as a backup; the daemon uses it after a reload).
+struct CalibrationJob {
+    std::vector<geometry::FixturePose> poses;
+    calib::TargetSpec target;
+    std::filesystem::path out;
+};
 
 class CycleRunner {
   public:
@@ -42,8 +55,17 @@ class CycleRunner {
 
     /// A new configuration for the next cycle (SIGHUP); the running cycle keeps its own.
     void setConfig(std::shared_ptr<const station::DaemonConfig> config);
-    /// Abort the running cycle (maintenance socket; the PLC uses COMMAND).
+    /// Abort the running cycle or calibration (maintenance socket; the PLC uses COMMAND).
     void abort() { abortRequested_ = true; }
+
+    /// Queues a calibration; it runs between cycles, on the runner thread, when
+    /// the station is ready (production is paused meanwhile: PLC STATUS 5,
+    /// triggers refused as not ready). False with `why` when one is queued or
+    /// running, or the station is faulted or starting.
+    bool requestCalibration(CalibrationJob job, std::string& why);
+    /// The last calibration: state (queued, running, done, failed), progress
+    /// lines, the report or the error, the file written and its backup.
+    nlohmann::json calibration() const;
 
     station::SequencerState state() const;
     /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
@@ -55,6 +77,7 @@ class CycleRunner {
     void run();
     void runCycle(const station::TriggerRequest& trigger);
     void recover();
+    void runCalibration(CalibrationJob job);
     bool interrupted();
     void setState(std::function<station::SequencerAction()> step, station::SequencerAction& action);
 
@@ -69,6 +92,8 @@ class CycleRunner {
     std::uint64_t cycles_ = 0;
     std::uint64_t faults_ = 0;
     nlohmann::json lastCycle_ = nullptr;
+    std::optional<CalibrationJob> calibrationJob_;
+    nlohmann::json calibration_ = nullptr;
 
     std::thread thread_;
     std::function<void()> onDevicesActive_;
@@ -77,6 +102,7 @@ class CycleRunner {
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
     std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
+    std::atomic<std::int64_t> calibrationStepNs_{0}; ///< start of the calibration's current step, 0 when none runs
     // Declared last, destroyed first: the images still queued are written while the members
     // their jobs touch (mutex_, lastCycle_) are alive.
     ImageWriter images_;

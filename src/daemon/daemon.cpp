@@ -4,6 +4,8 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
+#include "hullgauge/calib/target.h"
+#include "hullgauge/geometry/station.h"
 #include "notify.h"
 #include "plc_server.h"
 #include "result_store.h"
@@ -129,6 +131,7 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                           {"dropped_connections", counters.droppedConnections}}},
                         {"results", {{"database", store.file().string()}, {"records", store.count()}}},
                         {"lamps", devices->lampStatus()},
+                        {"calibration", runner.calibration()},
                         {"simulated_part", devices->simulatedPart()}};
             }
             if (command == "results") {
@@ -149,6 +152,26 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                 runner.abort();
                 return {{"ok", true}};
             }
+            if (command == "calibrate") {
+                // The live fixture calibration (docs/calibration.md), run by the
+                // cycle runner between cycles. Bad input is answered at once.
+                CalibrationJob job;
+                try {
+                    job.target = calib::TargetSpec::parse(request.value("pattern", std::string()), "pattern");
+                    const auto poses = request.value("poses", std::string());
+                    if (poses.empty()) return {{"ok", false}, {"error", "poses: the poses YAML file is required"}};
+                    job.poses = geometry::loadPoses(poses, &config->station.fixture);
+                } catch (const std::exception& e) {
+                    return {{"ok", false}, {"error", e.what()}};
+                }
+                if (config->station.fixture.type != geometry::FixtureType::RotationDeclination)
+                    return {{"ok", false}, {"error", "calibrate solves rotation/declination fixtures"}};
+                job.out = request.value("out", config->stationFile.string());
+                std::string why;
+                if (!runner.requestCalibration(std::move(job), why)) return {{"ok", false}, {"error", why}};
+                return {{"ok", true}, {"calibration", runner.calibration()}};
+            }
+            if (command == "calibration") return {{"ok", true}, {"calibration", runner.calibration()}};
             if (command == "sim-part") {
                 auto parts = devices->simulatedParts();
                 if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};

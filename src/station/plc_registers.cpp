@@ -114,7 +114,7 @@ RejectReason PlcRegisters::acceptLocked(TriggerRequest request)
     RejectReason reason = RejectReason::None;
     if (status == PlcStatus::Busy)
         reason = RejectReason::Busy;
-    else if (status == PlcStatus::Fault || status == PlcStatus::Starting)
+    else if (status == PlcStatus::Fault || status == PlcStatus::Starting || status == PlcStatus::Maintenance)
         reason = RejectReason::NotReady;
     else if (!knownPrograms_.contains(request.program))
         reason = RejectReason::UnknownProgram;
@@ -148,6 +148,15 @@ void PlcRegisters::setStatus(PlcStatus status)
 {
     std::lock_guard lock(mutex_);
     regs_[reg::Status] = u16(status);
+}
+
+bool PlcRegisters::enterMaintenance()
+{
+    std::lock_guard lock(mutex_);
+    const auto status = static_cast<PlcStatus>(regs_[reg::Status]);
+    if ((status != PlcStatus::Ready && status != PlcStatus::Done) || !pending_.empty()) return false;
+    regs_[reg::Status] = u16(PlcStatus::Maintenance);
+    return true;
 }
 
 PlcStatus PlcRegisters::status() const

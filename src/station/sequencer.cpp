@@ -12,13 +12,14 @@ using E = SequencerEvent;
 using A = SequencerAction::Kind;
 
 // The allowed transitions (from, to); self-transitions are the retries.
-constexpr std::array<std::pair<S, S>, 22> kTransitions{{
+constexpr std::array<std::pair<S, S>, 26> kTransitions{{
     {S::Starting, S::Ready}, {S::Starting, S::Fault},    {S::Ready, S::Moving},      {S::Ready, S::Fault},
     {S::Done, S::Moving},    {S::Done, S::Fault},        {S::Moving, S::Moving},     {S::Moving, S::Settling},
     {S::Moving, S::Done},    {S::Moving, S::Fault},      {S::Settling, S::Grabbing}, {S::Settling, S::Done},
     {S::Settling, S::Fault}, {S::Grabbing, S::Grabbing}, {S::Grabbing, S::Moving},   {S::Grabbing, S::Processing},
     {S::Grabbing, S::Done},  {S::Grabbing, S::Fault},    {S::Processing, S::Done},   {S::Processing, S::Fault},
-    {S::Fault, S::Ready},    {S::Fault, S::Fault},
+    {S::Fault, S::Ready},    {S::Fault, S::Fault},       {S::Ready, S::Calibrating}, {S::Done, S::Calibrating},
+    {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault},
 }};
 
 } // namespace
@@ -37,18 +38,19 @@ bool isBusy(SequencerState s)
 
 std::string_view toString(SequencerState s)
 {
-    constexpr std::array<std::string_view, 8> names{"starting", "ready",      "moving", "settling",
-                                                    "grabbing", "processing", "done",   "fault"};
+    constexpr std::array<std::string_view, 9> names{"starting",   "ready", "moving", "settling",   "grabbing",
+                                                    "processing", "done",  "fault",  "calibrating"};
     return names[static_cast<std::size_t>(s)];
 }
 
 std::string_view toString(SequencerEvent e)
 {
-    constexpr std::array<std::string_view, 20> names{
+    constexpr std::array<std::string_view, 22> names{
         "devices-active", "devices-failed",  "trigger",      "in-position", "move-timeout",
         "move-fault",     "move-comm-error", "move-refused", "settled",     "frame-ok",
         "frame-timeout",  "frame-bad",       "frame-error",  "processed",   "processing-failed",
-        "program-failed", "abort",           "shutdown",     "recovered",   "recovery-failed"};
+        "program-failed", "abort",           "shutdown",     "recovered",   "recovery-failed",
+        "calibration-start", "calibration-end"};
     return names[static_cast<std::size_t>(e)];
 }
 
@@ -204,6 +206,12 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
         return {};
     case E::ProgramFailed:
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, true, false);
+        return {};
+    case E::CalibrationStart:
+        if (state_ == S::Ready || state_ == S::Done) return go(S::Calibrating, {});
+        return {};
+    case E::CalibrationEnd:
+        if (state_ == S::Calibrating) return go(S::Ready, {});
         return {};
     default:
         break;

@@ -252,3 +252,28 @@ TEST(PlcRegisters, ConcurrentReadersSeeConsistentResults)
 
 } // namespace
 } // namespace hg::station
+
+namespace hg::station {
+namespace {
+
+// STATUS 5 (maintenance, an extension): entered only from an idle map with no
+// trigger pending, atomically with trigger acceptance; triggers meanwhile are
+// refused as not ready (LAST_REJECT_REASON 3) and counted.
+TEST(PlcRegisters, MaintenanceRefusesTriggersAndIsEnteredOnlyWhenIdle)
+{
+    PlcRegisters r;
+    EXPECT_FALSE(r.enterMaintenance()); // still starting
+    makeReady(r);
+    ASSERT_TRUE(r.enterMaintenance());
+    EXPECT_EQ(readOne(r, reg::Status), 5);
+    EXPECT_EQ(r.triggerManually(1, "S1"), RejectReason::NotReady);
+    EXPECT_EQ(readOne(r, reg::RejectedTriggers), 1);
+    EXPECT_EQ(readOne(r, reg::LastRejectReason), 3);
+    r.setStatus(PlcStatus::Ready);
+    EXPECT_EQ(r.triggerManually(1, "S2"), RejectReason::None); // accepted: STATUS busy, one pending
+    EXPECT_FALSE(r.enterMaintenance());
+    EXPECT_EQ(readOne(r, reg::Status), 1);
+}
+
+} // namespace
+} // namespace hg::station

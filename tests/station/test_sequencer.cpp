@@ -204,3 +204,35 @@ TEST(Sequencer, FaultCodesHaveNamesAndStableNumbers)
 
 } // namespace
 } // namespace hg::station
+
+namespace hg::station {
+namespace {
+
+// The maintenance calibration: only from an idle station (ready or done),
+// back to ready when it ends; a fault or a running cycle does not start it.
+TEST(Sequencer, CalibrationRunsOnlyFromAnIdleStationAndReturnsToReady)
+{
+    CaptureSequencer s = readySequencer();
+    s.onEvent(SequencerEvent::CalibrationStart);
+    EXPECT_EQ(s.state(), SequencerState::Calibrating);
+    EXPECT_TRUE(transitionAllowed(SequencerState::Calibrating, SequencerState::Ready));
+    EXPECT_FALSE(transitionAllowed(SequencerState::Calibrating, SequencerState::Moving)); // no trigger in between
+    s.onEvent(SequencerEvent::CalibrationEnd);
+    EXPECT_EQ(s.state(), SequencerState::Ready);
+    EXPECT_EQ(toString(SequencerState::Calibrating), "calibrating");
+
+    CaptureSequencer busy = readySequencer();
+    busy.trigger(2);
+    const auto before = busy.state();
+    busy.onEvent(SequencerEvent::CalibrationStart);
+    EXPECT_EQ(busy.state(), before);
+
+    CaptureSequencer fault = readySequencer();
+    fault.onEvent(SequencerEvent::DevicesFailed);
+    ASSERT_EQ(fault.state(), SequencerState::Fault);
+    fault.onEvent(SequencerEvent::CalibrationStart);
+    EXPECT_EQ(fault.state(), SequencerState::Fault);
+}
+
+} // namespace
+} // namespace hg::station

@@ -61,7 +61,9 @@ inline constexpr std::uint16_t Count = 136;
 inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
 
 /// STATUS register values (CONTRACTS §6).
-enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4 };
+/// Maintenance (5) is an extension: a calibration runs from the maintenance
+/// socket; triggers are refused as not ready.
+enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4, Maintenance = 5 };
 /// RESULT register values (CONTRACTS §6).
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
 /// COMMAND register values (extension).
@@ -119,6 +121,9 @@ class PlcRegisters {
     void setKnownPrograms(std::set<std::uint16_t> programs);
     /// STATUS as the sequencer reports it (Starting, Ready, Busy, Fault).
     void setStatus(PlcStatus status);
+    /// Ready or done with no trigger pending -> Maintenance, atomically with
+    /// the trigger acceptance (a trigger accepted first wins); false otherwise.
+    bool enterMaintenance();
     PlcStatus status() const;
     /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, LANDMARK_OK_BITS, DONE_SEQ
     /// and STATUS together (one lock).

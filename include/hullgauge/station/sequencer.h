@@ -25,7 +25,9 @@
 
 namespace hg::station {
 
-enum class SequencerState { Starting, Ready, Moving, Settling, Grabbing, Processing, Done, Fault };
+/// Calibrating: the live fixture calibration runs from the maintenance socket
+/// (production paused, PLC STATUS 5).
+enum class SequencerState { Starting, Ready, Moving, Settling, Grabbing, Processing, Done, Fault, Calibrating };
 
 enum class SequencerEvent {
     DevicesActive,    ///< drivers configured and active (start, or after recovery)
@@ -48,6 +50,8 @@ enum class SequencerEvent {
     Shutdown,         ///< SIGTERM: abort unless only processing remains
     Recovered,        ///< recovery after a fault succeeded
     RecoveryFailed,   ///< recovery after a fault failed (the runner tries again later)
+    CalibrationStart, ///< a calibration requested on the maintenance socket begins (idle station only)
+    CalibrationEnd,   ///< the calibration sequence ended (solved, failed or cancelled)
 };
 
 /// FAULT_CODE register values (docs/plc.md lists them for PLC programmers).

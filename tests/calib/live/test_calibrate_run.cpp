@@ -12,6 +12,7 @@
 #include "sim_process.h"
 #include "station_yaml.h"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -19,6 +20,7 @@
 #include <iostream>
 #include <sstream>
 #include <thread>
+#include <unistd.h>
 
 namespace {
 
@@ -107,6 +109,36 @@ struct TrueRig {
     }
 };
 
+/// The station file's fixture section after a calibration run, checked against
+/// the true rig with the bounds of the fixture-axis calibration on simulated
+/// corners (0.05°, 0.1 mm).
+hg::ConfigNode expectRecoveredRig(const fs::path& station, const TrueRig& rig)
+{
+    auto fixture = hg::ConfigNode::loadFile(station)["fixture"];
+    const Mat3 R = fixture["camera_from_fixture"]["R"].asMatrix3();
+    const Vec3 t = fixture["camera_from_fixture"]["t"].asVector3();
+    const auto angleDeg = [](const Vec3& a, const Vec3& b) {
+        return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
+    };
+    std::cout << "camera_from_fixture off by " << hg::geometry::rotationAngleDeg(R, rig.cameraFromFixture.R) << " deg, "
+              << (t - rig.cameraFromFixture.t).norm() << " mm; declination axis off by "
+              << angleDeg(fixture["declination_axis"].asVector3(), rig.declinationAxis) << " deg, "
+              << (fixture["declination_axis_point"].asVector3() - rig.declinationPoint).norm() << " mm\n";
+    // Same bounds as the fixture-axis calibration on simulated corners.
+    EXPECT_LT(hg::geometry::rotationAngleDeg(R, rig.cameraFromFixture.R), 0.05);
+    EXPECT_LT((t - rig.cameraFromFixture.t).norm(), 0.1)
+        << t.transpose() << " vs " << rig.cameraFromFixture.t.transpose();
+    EXPECT_LT(angleDeg(fixture["rotation_axis"].asVector3(), Vec3::UnitZ()), 0.05);
+    EXPECT_LT(fixture["rotation_axis_point"].asVector3().norm(), 0.1);
+    EXPECT_LT(angleDeg(fixture["declination_axis"].asVector3(), rig.declinationAxis), 0.05)
+        << fixture["declination_axis"].asVector3().transpose();
+    EXPECT_LT((fixture["declination_axis_point"].asVector3() - rig.declinationPoint).norm(), 0.1)
+        << fixture["declination_axis_point"].asVector3().transpose();
+    EXPECT_NEAR(fixture["calibration"]["axes_distance_mm"].asDouble(), kSkewMm, 0.1);
+    EXPECT_NEAR(fixture["calibration"]["axes_angle_deg"].asDouble(), 90.0 - kTiltDeg, 0.05);
+    return fixture;
+}
+
 const char* kCamera = "camera:\n  image_size: [800, 600]\n  K: [[1100, 0, 400.5], [0, 1100, 300.25], [0, 0, 1]]\n";
 
 class CalibrateRun : public ::testing::Test {
@@ -189,28 +221,7 @@ TEST_F(CalibrateRun, RecoversTheTrueSkewAxesThroughTheDriversAndKeepsABackup)
     EXPECT_EQ(count(r.err, ": " + std::to_string(kCorners) + " corners"), kPoses) << r.err;
     EXPECT_NE(r.out.find("distance between axes"), std::string::npos) << r.out;
 
-    auto fixture = hg::ConfigNode::loadFile(station)["fixture"];
-    const Mat3 R = fixture["camera_from_fixture"]["R"].asMatrix3();
-    const Vec3 t = fixture["camera_from_fixture"]["t"].asVector3();
-    const auto angleDeg = [](const Vec3& a, const Vec3& b) {
-        return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / M_PI;
-    };
-    std::cout << "camera_from_fixture off by " << hg::geometry::rotationAngleDeg(R, rig.cameraFromFixture.R) << " deg, "
-              << (t - rig.cameraFromFixture.t).norm() << " mm; declination axis off by "
-              << angleDeg(fixture["declination_axis"].asVector3(), rig.declinationAxis) << " deg, "
-              << (fixture["declination_axis_point"].asVector3() - rig.declinationPoint).norm() << " mm\n";
-    // Same bounds as the fixture-axis calibration on simulated corners.
-    EXPECT_LT(hg::geometry::rotationAngleDeg(R, rig.cameraFromFixture.R), 0.05);
-    EXPECT_LT((t - rig.cameraFromFixture.t).norm(), 0.1)
-        << t.transpose() << " vs " << rig.cameraFromFixture.t.transpose();
-    EXPECT_LT(angleDeg(fixture["rotation_axis"].asVector3(), Vec3::UnitZ()), 0.05);
-    EXPECT_LT(fixture["rotation_axis_point"].asVector3().norm(), 0.1);
-    EXPECT_LT(angleDeg(fixture["declination_axis"].asVector3(), rig.declinationAxis), 0.05)
-        << fixture["declination_axis"].asVector3().transpose();
-    EXPECT_LT((fixture["declination_axis_point"].asVector3() - rig.declinationPoint).norm(), 0.1)
-        << fixture["declination_axis_point"].asVector3().transpose();
-    EXPECT_NEAR(fixture["calibration"]["axes_distance_mm"].asDouble(), kSkewMm, 0.1);
-    EXPECT_NEAR(fixture["calibration"]["axes_angle_deg"].asDouble(), 90.0 - kTiltDeg, 0.05);
+    auto fixture = expectRecoveredRig(station, rig);
     EXPECT_EQ(fixture["calibration"]["views"].asInt(), kPoses);
     // The driver sections survive the rewrite.
     EXPECT_EQ(fixture["driver"]["backend"].asString(), "modbus");
@@ -260,6 +271,82 @@ TEST_F(CalibrateRun, SimulatedCameraWithoutATargetIsBadInputNamingTheKey)
     EXPECT_NE(r.err.find("camera.driver.target"), std::string::npos) << r.err;
     EXPECT_EQ(readText(station), text);
     EXPECT_TRUE(backupsOf(station).empty());
+}
+
+// The same calibration through the running daemon (issue 6, maintenance
+// socket): hullgauged with this station and a part program, the operator
+// puts the target on the fixture (`ctl sim-part target`) and runs `ctl
+// calibrate`; production is paused meanwhile (PLC STATUS 5 = maintenance,
+// sequencer `calibrating`) and resumes afterwards; the station file is
+// rewritten with a backup and the true rig recovered.
+TEST_F(CalibrateRun, ThroughTheDaemonMaintenanceSocketWithProductionPaused)
+{
+    const fs::path cfg = hgtest::sourceDir() / "config" / "sim";
+    for (const char* f : {"stepped-block.yaml", "stepped-block.stl", "stepped-block-views.yaml"})
+        fs::copy_file(cfg / f, dir / f);
+    // The daemon also drives the operator lamps.
+    hgtest::writeFile(station, stationText + "lamps:\n  backend: sim\n  consumer: hullgauge\n  blink_period_s: 1.0\n"
+                               "  green: LAMP_GREEN\n  amber: LAMP_AMBER\n  red: LAMP_RED\n");
+    const std::string before = readText(station);
+    const fs::path socket = dir / "hg.sock";
+    const int plcPort = 20000 + static_cast<int>(::getpid() % 20000);
+    std::ostringstream d;
+    d << "station: station.yaml\nprograms:\n  1: {part: stepped-block.yaml, views: stepped-block-views.yaml}\n"
+      << "plc: {bind: 127.0.0.1, port: " << plcPort << ", unit_id: 1, allowed_clients: [127.0.0.1]}\n"
+      << "results: {database: results.db, images: images}\n"
+      << "sequencer: {move_timeout_s: 10, grab_timeout_s: 5, settle_s: 0.02}\n"
+      << "maintenance: {socket: hg.sock}\n"
+      << "simulation:\n  parts: {nominal: stepped-block.stl}\n";
+    const auto daemonConfig = hgtest::writeFile(dir / "hullgauged.yaml", d.str());
+    fixturetest::ChildProcess daemon(
+        {(hgtest::binaryDir() / "bin" / "hullgauged").string(), "--config", daemonConfig.string()},
+        dir / "hullgauged.log");
+    const std::string ctl = (hgtest::binaryDir() / "bin" / "hullgauge").string() + " ctl --socket " + socket.string();
+    bool ready = false;
+    for (int i = 0; i < 200 && !ready; ++i) { // bounded: 20 s
+        auto r = hgtest::run(ctl + " --json status");
+        ready = r.status == 0 && r.out.find("\"state\": \"ready\"") != std::string::npos;
+        if (!ready) std::this_thread::sleep_for(100ms);
+    }
+    ASSERT_TRUE(ready) << readText(dir / "hullgauged.log");
+
+    ASSERT_EQ(hgtest::run(ctl + " sim-part target").status, 0);
+    // Follow the daemon's state while the calibration runs in the background.
+    std::atomic<bool> done{false};
+    std::atomic<bool> sawMaintenance{false};
+    std::thread watcher([&] {
+        while (!done) {
+            auto r = hgtest::run(ctl + " --json status");
+            if (r.out.find("\"state\": \"calibrating\"") != std::string::npos &&
+                r.out.find("\"status\": 5") != std::string::npos)
+                sawMaintenance = true;
+            std::this_thread::sleep_for(50ms);
+        }
+    });
+    auto r = hgtest::run(ctl + " calibrate --pattern " + kPattern + " --poses " + posesFile.string() +
+                         " --wait-timeout 120");
+    done = true;
+    watcher.join();
+    ASSERT_EQ(r.status, 0) << r.err << readText(dir / "hullgauged.log");
+    EXPECT_TRUE(sawMaintenance) << "production was not seen paused (sequencer calibrating, PLC STATUS 5)";
+    EXPECT_NE(r.err.find("[1/12] rotation -45 deg, declination 0 deg: 40 corners"), std::string::npos) << r.err;
+    EXPECT_EQ(count(r.err, ": " + std::to_string(kCorners) + " corners"), kPoses) << r.err;
+    EXPECT_NE(r.out.find("written: " + station.string()), std::string::npos) << r.out;
+    auto fixture = expectRecoveredRig(station, rig);
+    EXPECT_EQ(fixture["calibration"]["views"].asInt(), kPoses);
+    const auto backups = backupsOf(station);
+    ASSERT_EQ(backups.size(), 1u);
+    EXPECT_EQ(readText(backups.front()), before);
+
+    // Production resumes: ready again, and a trigger runs a cycle.
+    auto s = hgtest::run(ctl + " --json status");
+    EXPECT_NE(s.out.find("\"state\": \"ready\""), std::string::npos) << s.out;
+    EXPECT_NE(s.out.find("\"status\": 0"), std::string::npos) << s.out;
+    // A second request while none runs is accepted; bad input is refused at once naming it.
+    auto bad = hgtest::run(ctl + " calibrate --pattern chessboard:8x5 --poses " + posesFile.string());
+    EXPECT_EQ(bad.status, 3) << bad.err;
+    EXPECT_NE(bad.err.find("pattern"), std::string::npos) << bad.err;
+    EXPECT_EQ(daemon.terminate(10000), 0) << readText(dir / "hullgauged.log");
 }
 
 } // namespace

@@ -6,16 +6,15 @@
 // and this module stays free of I/O.
 #pragma once
 
-#include <cstddef>
-#include <functional>
-#include <string>
-#include <vector>
-
-#include <opencv2/core/mat.hpp>
-
 #include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/geometry/fixture.h"
+
+#include <cstddef>
+#include <functional>
+#include <opencv2/core/mat.hpp>
+#include <string>
+#include <vector>
 
 namespace hg::calib {
 

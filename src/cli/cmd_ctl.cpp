@@ -93,6 +93,21 @@ void printStatus(const nlohmann::json& s)
               << "\n";
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
+    if (s.contains("lamps") && s["lamps"].is_object()) {
+        // Commanded state per lamp (off, on, blinking), and the backend.
+        const auto& l = s["lamps"];
+        std::cout << "lamps:        ";
+        for (const char* name : {"green", "amber", "red"})
+            if (l.contains(name) && l[name].is_string()) std::cout << name << " " << l[name].get<std::string>() << ", ";
+        std::cout << "backend " << l.value("backend", std::string("?")) << "\n";
+    }
+    if (s.contains("calibration") && s["calibration"].is_object()) {
+        const auto& c = s["calibration"];
+        std::cout << "calibration:  " << c.value("state", std::string()) << ", "
+                  << (c.contains("progress") ? c["progress"].size() : 0) << "/" << c.value("poses", 0) << " poses";
+        if (c.contains("error")) std::cout << " — " << c["error"].get<std::string>();
+        std::cout << "\n";
+    }
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];
         std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"

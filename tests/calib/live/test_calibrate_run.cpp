@@ -342,6 +342,9 @@ TEST_F(CalibrateRun, ThroughTheDaemonMaintenanceSocketWithProductionPaused)
     auto s = hgtest::run(ctl + " --json status");
     EXPECT_NE(s.out.find("\"state\": \"ready\""), std::string::npos) << s.out;
     EXPECT_NE(s.out.find("\"status\": 0"), std::string::npos) << s.out;
+    auto text = hgtest::run(ctl + " status");
+    EXPECT_NE(text.out.find("calibration:  done, 12/12 poses"), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("lamps:        green off, amber off, red off, backend sim"), std::string::npos) << text.out;
     // A second request while none runs is accepted; bad input is refused at once naming it.
     auto bad = hgtest::run(ctl + " calibrate --pattern chessboard:8x5 --poses " + posesFile.string());
     EXPECT_EQ(bad.status, 3) << bad.err;

@@ -4,6 +4,7 @@
 #include "hullgauge/common/log.h"
 
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <thread>
 
@@ -15,6 +16,13 @@ using station::SequencerEvent;
 using station::SequencerState;
 using Clock = std::chrono::steady_clock;
 using Kind = SequencerAction::Kind;
+
+/// Settle time: sleeps in short slices so an abort is not delayed by it.
+void sleepUntil(Clock::time_point until, const std::function<bool()>& stop)
+{
+    while (Clock::now() < until && !stop())
+        std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
+}
 
 std::int64_t nowNs()
 {
@@ -298,9 +306,7 @@ void CycleRunner::runCalibration(CalibrationJob job)
         calibrationStepNs_ = nowNs();
         auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, false);
         if (!r.ok()) return {false, r.message};
-        // Settle as a cycle does, in short slices so an abort is not delayed.
-        const auto until = Clock::now() + cfg->sequencer.settle;
-        while (Clock::now() < until && !abortRequested_) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        sleepUntil(Clock::now() + cfg->sequencer.settle, [this] { return abortRequested_.load(); });
         return {};
     };
     io.grab = [&](cv::Mat& image) -> calib::SequenceStep {
@@ -445,11 +451,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             break;
         }
         case Kind::Settle: {
-            // Sleep in short slices so an abort is not delayed by the settle time.
-            auto until = stepStart + cfg->sequencer.settle;
-            while (Clock::now() < until && !interrupted())
-                std::this_thread::sleep_for(
-                    std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
+            sleepUntil(stepStart + cfg->sequencer.settle, [this] { return interrupted(); });
             settleMs += msSince(stepStart);
             setState([&] { return sequencer_.onEvent(SequencerEvent::Settled); }, action);
             break;

@@ -38,10 +38,18 @@ inline hg::geometry::CameraModel camera(const Eigen::Vector3d& centre, const Eig
     return {in, {R, -R * centre}};
 }
 
+/// A camera at `centre` looking along unit `forward` with image-down the
+/// world −z made orthogonal to the line of sight (upright images).
+inline hg::geometry::CameraModel upright(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, cv::Size size)
+{
+    const Eigen::Vector3d minusZ(0, 0, -1);
+    return camera(centre, forward, (minusZ - minusZ.dot(forward) * forward).normalized(), size);
+}
+
 /// A level camera at `centre` looking along horizontal `forward`.
 inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, cv::Size size)
 {
-    return camera(centre, forward, Eigen::Vector3d(0, 0, -1), size);
+    return upright(centre, forward, size);
 }
 
 inline hg::model::TriangleMesh block(double raise = 0.0)
@@ -111,10 +119,7 @@ struct CornerScene {
             const Eigen::Vector3d d1 = n.cross(Eigen::Vector3d::UnitZ()).normalized();
             const Eigen::Vector3d d2 = n.cross(d1).normalized();  // in the plane, pointing down and outwards
             for (const Eigen::Vector3d& d : {d1, d2}) {
-                const Eigen::Vector3d fwd = -d;
-                Eigen::Vector3d down = Eigen::Vector3d(0, 0, -1) - Eigen::Vector3d(0, 0, -1).dot(fwd) * fwd;
-                down.normalize();
-                const auto cam = camera(p + 400 * d, fwd, down, size);
+                const auto cam = upright(p + 400 * d, -d, size);
                 frames.push_back({"c" + std::to_string(frames.size()), cam, r.render(cam)});
             }
         }
@@ -122,18 +127,14 @@ struct CornerScene {
     }
 };
 
-/// A general camera looking at `target` from `distance` at azimuth/elevation
-/// (degrees); image-down is the projection of −z.
+/// An upright camera looking at `target` from `distance` at azimuth/elevation
+/// (degrees).
 inline hg::geometry::CameraModel orbit(const Eigen::Vector3d& target, double azimuthDeg, double elevationDeg,
                                        double distance, cv::Size size)
 {
     const double a = azimuthDeg * M_PI / 180, e = elevationDeg * M_PI / 180;
     const Eigen::Vector3d dir(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
-    const Eigen::Vector3d fwd = -dir;
-    // Image-down: world −z with its component along the line of sight removed.
-    Eigen::Vector3d d = Eigen::Vector3d(0, 0, -1) - Eigen::Vector3d(0, 0, -1).dot(fwd) * fwd;
-    d.normalize();
-    return camera(target + distance * dir, fwd, d, size);
+    return upright(target + distance * dir, -dir, size);
 }
 
 /// Whole-object reconstruction views of the block (16): 4 along its side

@@ -86,8 +86,10 @@ double chordAt(const Poly& p, double x)
 double localBackgroundArea(const Poly& poly, const SilhouetteIndex::Region& reg, double stopAt)
 {
     if (poly.n < 3) return 0.0;
-    double ymin = 1e300, ymax = -1e300;
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
     for (int i = 0; i < poly.n; ++i) {
+        xmin = std::min(xmin, poly[i].x());
+        xmax = std::max(xmax, poly[i].x());
         ymin = std::min(ymin, poly[i].y());
         ymax = std::max(ymax, poly[i].y());
     }
@@ -98,11 +100,6 @@ double localBackgroundArea(const Poly& poly, const SilhouetteIndex::Region& reg,
     // pixel of the footprint's bounding box has the same label, the answer is
     // 0 or the whole area, exactly, without integrating row by row.
     {
-        double xmin = 1e300, xmax = -1e300;
-        for (int i = 0; i < poly.n; ++i) {
-            xmin = std::min(xmin, poly[i].x());
-            xmax = std::max(xmax, poly[i].x());
-        }
         const int c0 = std::clamp(static_cast<int>(std::floor(xmin)), 0, w - 1);
         const int c1 = std::clamp(static_cast<int>(std::ceil(xmax)) - 1, 0, w - 1);
         std::int64_t bgPixels = 0;

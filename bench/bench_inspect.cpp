@@ -201,6 +201,6 @@ void BM_VoxelTestAccuracyCorners(benchmark::State& state)
 }
 BENCHMARK(BM_VoxelTestAccuracyCorners)->ArgsProduct({{0, 1}, {7, 9}})->Unit(benchmark::kMillisecond);
 
-}  // namespace
+} // namespace
 
 BENCHMARK_MAIN();

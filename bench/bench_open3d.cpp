@@ -30,7 +30,7 @@ std::vector<Open3dView> open3dViews(const std::vector<CapturedView>& frames)
     for (const auto& f : frames) {
         const cv::Mat sil = hg::vision::segment(f.frame, {});
         Open3dView v;
-        v.mask.Prepare(sil.cols, sil.rows, 1, 4);  // FloatValueAt needs a float image
+        v.mask.Prepare(sil.cols, sil.rows, 1, 4); // FloatValueAt needs a float image
         for (int r = 0; r < sil.rows; ++r)
             for (int c = 0; c < sil.cols; ++c)
                 *v.mask.PointerAt<float>(c, r) = sil.at<std::uint8_t>(r, c) ? 1.0f : 0.0f;
@@ -64,8 +64,8 @@ void BM_Open3dCarveSilhouette(benchmark::State& state)
     }
     std::shared_ptr<open3d::geometry::VoxelGrid> grid;
     for (auto _ : state) {
-        grid = open3d::geometry::VoxelGrid::CreateDense(kCubeOrigin, Eigen::Vector3d(1, 1, 1), dv, kCubeSize,
-                                                        kCubeSize, kCubeSize);
+        grid = open3d::geometry::VoxelGrid::CreateDense(kCubeOrigin, Eigen::Vector3d(1, 1, 1), dv, kCubeSize, kCubeSize,
+                                                        kCubeSize);
         for (const auto& v : views) grid->CarveSilhouette(v.mask, v.camera, false);
         benchmark::DoNotOptimize(grid->voxels_.size());
     }
@@ -82,6 +82,6 @@ void BM_Open3dCarveSilhouette(benchmark::State& state)
 }
 BENCHMARK(BM_Open3dCarveSilhouette)->Arg(6)->Arg(7)->Unit(benchmark::kMillisecond);
 
-}  // namespace
+} // namespace
 
 BENCHMARK_MAIN();

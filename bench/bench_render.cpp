@@ -39,8 +39,7 @@ void BM_Coverage(benchmark::State& state)
     const CameraModel camera = stationCamera(state.range(0) != 0);
     hg::sim::RenderOptions options;
     options.subScanlines = static_cast<int>(state.range(1));
-    for (auto _ : state)
-        benchmark::DoNotOptimize(renderer.coverage(camera, options));
+    for (auto _ : state) benchmark::DoNotOptimize(renderer.coverage(camera, options));
     state.SetLabel(state.range(0) != 0 ? "distorted" : "pinhole");
 }
 BENCHMARK(BM_Coverage)->Args({0, 16})->Args({0, 4})->Args({1, 16})->Unit(benchmark::kMillisecond);
@@ -52,8 +51,7 @@ void BM_RenderWithBlurAndNoise(benchmark::State& state)
     hg::sim::RenderOptions options;
     options.blurSigmaPx = 0.8;
     options.noiseSigma = 2.0;
-    for (auto _ : state)
-        benchmark::DoNotOptimize(renderer.render(camera, options));
+    for (auto _ : state) benchmark::DoNotOptimize(renderer.render(camera, options));
 }
 BENCHMARK(BM_RenderWithBlurAndNoise)->Unit(benchmark::kMillisecond);
 

@@ -68,16 +68,16 @@ struct Scene {
         MapGeometry g;
         g.cubeOrigin = kCubeOrigin;
         g.cubeSize = kCubeSize;
-        g.depth = depth;  // ΔV = 0.125 mm at depth 9
+        g.depth = depth; // ΔV = 0.125 mm at depth 9
         g.adjacencyDepth = 4;
         g.coarsestLevel = depth;
         std::vector<MapLandmark> lms;
         for (int i = 0; i < n; ++i)
             for (int j = 0; j < n; ++j)
-                lms.push_back({"l" + std::to_string(i * n + j),
-                               Eigen::Vector3d(5.0 + 30.0 * i / std::max(1, n - 1),
-                                               5.0 + 30.0 * j / std::max(1, n - 1), kTop),
-                               Eigen::Vector3d::UnitZ(), 0.3});
+                lms.push_back(
+                    {"l" + std::to_string(i * n + j),
+                     Eigen::Vector3d(5.0 + 30.0 * i / std::max(1, n - 1), 5.0 + 30.0 * j / std::max(1, n - 1), kTop),
+                     Eigen::Vector3d::UnitZ(), 0.3});
         map = InspectionMap::build("block", g, lms, {}, cadLabels(solid));
         hg::sim::SilhouetteRenderer r({block(raise)});
         for (int v = 0; v < views; ++v) {
@@ -109,15 +109,15 @@ struct CornerScene {
         g.adjacencyDepth = 6;
         g.coarsestLevel = depth;
         std::vector<MapLandmark> lms;
-        hg::sim::SilhouetteRenderer r({hg::model::makeBox(Eigen::Vector3d::Constant(-grow),
-                                                          Eigen::Vector3d(40 + grow, 40 + grow, kTop + grow))});
+        hg::sim::SilhouetteRenderer r(
+            {hg::model::makeBox(Eigen::Vector3d::Constant(-grow), Eigen::Vector3d(40 + grow, 40 + grow, kTop + grow))});
         for (int c = 0; c < 4; ++c) {
             const double sx = (c & 1) ? 1.0 : -1.0, sy = (c & 2) ? 1.0 : -1.0;
             const Eigen::Vector3d p(sx > 0 ? 40 : 0, sy > 0 ? 40 : 0, kTop);
             const Eigen::Vector3d n = Eigen::Vector3d(sx, sy, 1).normalized();
             lms.push_back({"corner" + std::to_string(c), p, n, 0.3});
             const Eigen::Vector3d d1 = n.cross(Eigen::Vector3d::UnitZ()).normalized();
-            const Eigen::Vector3d d2 = n.cross(d1).normalized();  // in the plane, pointing down and outwards
+            const Eigen::Vector3d d2 = n.cross(d1).normalized(); // in the plane, pointing down and outwards
             for (const Eigen::Vector3d& d : {d1, d2}) {
                 const auto cam = upright(p + 400 * d, -d, size);
                 frames.push_back({"c" + std::to_string(frames.size()), cam, r.render(cam)});
@@ -203,4 +203,4 @@ inline Disagreement compareWithTruth(const DenseGrid& g)
     return d;
 }
 
-}  // namespace hgbench
+} // namespace hgbench

@@ -17,9 +17,15 @@ namespace {
 constexpr std::array<std::string_view, 3> kPixelFormatNames{"Mono8", "Mono12", "Mono16"};
 }
 
-std::string_view toString(PixelFormat f) { return kPixelFormatNames[static_cast<int>(f)]; }
+std::string_view toString(PixelFormat f)
+{
+    return kPixelFormatNames[static_cast<int>(f)];
+}
 
-std::string_view toString(TriggerMode t) { return t == TriggerMode::Software ? "software" : "free_run"; }
+std::string_view toString(TriggerMode t)
+{
+    return t == TriggerMode::Software ? "software" : "free_run";
+}
 
 std::optional<PixelFormat> pixelFormatFromString(std::string_view name)
 {
@@ -28,7 +34,10 @@ std::optional<PixelFormat> pixelFormatFromString(std::string_view name)
     return std::nullopt;
 }
 
-int cvTypeOf(PixelFormat f) { return f == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1; }
+int cvTypeOf(PixelFormat f)
+{
+    return f == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1;
+}
 
 std::string_view toString(FrameStatus s)
 {
@@ -63,7 +72,10 @@ Frame& Frame::operator=(Frame&& other) noexcept
     return *this;
 }
 
-Frame::~Frame() { release(); }
+Frame::~Frame()
+{
+    release();
+}
 
 void Frame::release()
 {
@@ -108,10 +120,11 @@ Camera::Camera(std::string configPath, CameraSettings settings)
 Status Camera::transition(Transition t, const std::function<Status()>& hook)
 {
     if (!allowed(state_, t))
-        return Status::failure("camera: cannot " + std::string(t == Transition::Configure    ? "configure"
-                                                               : t == Transition::Activate   ? "activate"
-                                                               : t == Transition::Deactivate ? "deactivate"
-                                                                                             : "clean up") +
+        return Status::failure("camera: cannot " +
+                               std::string(t == Transition::Configure    ? "configure"
+                                           : t == Transition::Activate   ? "activate"
+                                           : t == Transition::Deactivate ? "deactivate"
+                                                                         : "clean up") +
                                " while " + std::string(toString(state_)));
     Status s = hook();
     if (s.ok()) {
@@ -124,9 +137,18 @@ Status Camera::transition(Transition t, const std::function<Status()>& hook)
     return s;
 }
 
-Status Camera::configure() { return transition(Transition::Configure, [this] { return doConfigure(); }); }
-Status Camera::activate() { return transition(Transition::Activate, [this] { return doActivate(); }); }
-Status Camera::deactivate() { return transition(Transition::Deactivate, [this] { return doDeactivate(); }); }
+Status Camera::configure()
+{
+    return transition(Transition::Configure, [this] { return doConfigure(); });
+}
+Status Camera::activate()
+{
+    return transition(Transition::Activate, [this] { return doActivate(); });
+}
+Status Camera::deactivate()
+{
+    return transition(Transition::Deactivate, [this] { return doDeactivate(); });
+}
 
 Status Camera::cleanup()
 {
@@ -140,7 +162,9 @@ Status Camera::cleanup()
 Status Camera::setSettings(const CameraSettings& settings)
 {
     switch (state_) {
-    case LifecycleState::Unconfigured: settings_ = settings; return Status::success();
+    case LifecycleState::Unconfigured:
+        settings_ = settings;
+        return Status::success();
     case LifecycleState::Inactive: {
         Status s = doApplySettings(settings);
         if (s.ok()) settings_ = settings;
@@ -161,12 +185,15 @@ Frame Camera::grab(std::chrono::milliseconds timeout)
 }
 
 namespace {
-bool deviceOpen(LifecycleState s) { return s == LifecycleState::Inactive || s == LifecycleState::Active; }
+bool deviceOpen(LifecycleState s)
+{
+    return s == LifecycleState::Inactive || s == LifecycleState::Active;
+}
 std::string closedMessage(LifecycleState s)
 {
     return "camera: the device is not open (state " + std::string(toString(s)) + "); configure it first";
 }
-}  // namespace
+} // namespace
 
 Result<std::vector<FeatureInfo>> Camera::listFeatures()
 {
@@ -240,4 +267,4 @@ std::unique_ptr<Camera> makeCamera(const ConfigNode& root)
     backendNode.fail("unknown camera backend '" + backend + "' (expected aravis, v4l2 or sim)");
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

@@ -12,4 +12,4 @@ std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config);
 /// The in-process twin (drivers/lamps/sim/sim_lamps.cpp).
 std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config);
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

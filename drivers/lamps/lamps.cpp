@@ -61,7 +61,7 @@ LampLine parseLine(const ConfigNode& node, bool defaultActiveLow)
     return line;
 }
 
-}  // namespace
+} // namespace
 
 std::string_view toString(Lamp lamp)
 {
@@ -71,9 +71,12 @@ std::string_view toString(Lamp lamp)
 std::string_view toString(LampState state)
 {
     switch (state) {
-    case LampState::Off: return "off";
-    case LampState::On: return "on";
-    case LampState::Blinking: return "blinking";
+    case LampState::Off:
+        return "off";
+    case LampState::On:
+        return "on";
+    case LampState::Blinking:
+        return "blinking";
     }
     return "?";
 }
@@ -81,11 +84,16 @@ std::string_view toString(LampState state)
 std::string_view toString(StationIndication indication)
 {
     switch (indication) {
-    case StationIndication::Dark: return "dark";
-    case StationIndication::Pass: return "pass";
-    case StationIndication::Fail: return "fail";
-    case StationIndication::Busy: return "busy";
-    case StationIndication::Fault: return "fault";
+    case StationIndication::Dark:
+        return "dark";
+    case StationIndication::Pass:
+        return "pass";
+    case StationIndication::Fail:
+        return "fail";
+    case StationIndication::Busy:
+        return "busy";
+    case StationIndication::Fault:
+        return "fault";
     }
     return "?";
 }
@@ -93,9 +101,12 @@ std::string_view toString(StationIndication indication)
 std::string_view toString(LampStatusCode code)
 {
     switch (code) {
-    case LampStatusCode::Ok: return "ok";
-    case LampStatusCode::IoError: return "I/O error";
-    case LampStatusCode::NotAllowed: return "not allowed";
+    case LampStatusCode::Ok:
+        return "ok";
+    case LampStatusCode::IoError:
+        return "I/O error";
+    case LampStatusCode::NotAllowed:
+        return "not allowed";
     }
     return "?";
 }
@@ -151,16 +162,23 @@ std::array<LampState, 3> lampStatesFor(StationIndication indication)
 {
     using S = LampState;
     switch (indication) {
-    case StationIndication::Dark: return {S::Off, S::Off, S::Off};
-    case StationIndication::Pass: return {S::On, S::Off, S::Off};
-    case StationIndication::Fail: return {S::Off, S::Off, S::On};
-    case StationIndication::Busy: return {S::Off, S::On, S::Off};
-    case StationIndication::Fault: return {S::Off, S::Blinking, S::Blinking};
+    case StationIndication::Dark:
+        return {S::Off, S::Off, S::Off};
+    case StationIndication::Pass:
+        return {S::On, S::Off, S::Off};
+    case StationIndication::Fail:
+        return {S::Off, S::Off, S::On};
+    case StationIndication::Busy:
+        return {S::Off, S::On, S::Off};
+    case StationIndication::Fault:
+        return {S::Off, S::Blinking, S::Blinking};
     }
     return {S::Off, S::Off, S::Off};
 }
 
-Lamps::Lamps(LampsConfig config) : config_(std::move(config)) {}
+Lamps::Lamps(LampsConfig config) : config_(std::move(config))
+{
+}
 
 Lamps::~Lamps()
 {
@@ -255,9 +273,8 @@ LampResult Lamps::cleanup()
 LampResult Lamps::requireActiveLocked(std::string_view call) const
 {
     if (state_ == LifecycleState::Active) return LampResult::success();
-    return failure(LampStatusCode::NotAllowed,
-                   "lamps: " + std::string(call) + " needs the driver active (it is " + std::string(toString(state_)) +
-                       ")");
+    return failure(LampStatusCode::NotAllowed, "lamps: " + std::string(call) + " needs the driver active (it is " +
+                                                   std::string(toString(state_)) + ")");
 }
 
 LampResult Lamps::set(Lamp lamp, LampState s)
@@ -344,4 +361,4 @@ std::unique_ptr<Lamps> makeLamps(const ConfigNode& section)
     return makeSimulatedLamps(std::move(config));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

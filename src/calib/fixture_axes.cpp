@@ -129,7 +129,7 @@ Model applyDelta(const Model& base, const Eigen::VectorXd& x)
     return m;
 }
 
-}  // namespace
+} // namespace
 
 RigidTransform rotationAboutLine(const AxisLine& line, double angleDeg)
 {
@@ -306,8 +306,8 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
     out.corners = static_cast<int>(corners);
     out.rmsPx = std::sqrt(ssPx / static_cast<double>(corners));
     out.rmsMm = std::sqrt(ssMm / static_cast<double>(corners));
-    log->info("fixture axes from {} views: angle {:.3f} deg, distance {:.3f} mm, RMS {:.3f} px / {:.4f} mm",
-              out.views, out.axesAngleDeg, out.axesDistanceMm, out.rmsPx, out.rmsMm);
+    log->info("fixture axes from {} views: angle {:.3f} deg, distance {:.3f} mm, RMS {:.3f} px / {:.4f} mm", out.views,
+              out.axesAngleDeg, out.axesDistanceMm, out.rmsPx, out.rmsMm);
     return out;
 }
 
@@ -338,4 +338,4 @@ std::string formatFixtureReport(const FixtureAxesResult& r)
     return s.str();
 }
 
-}  // namespace hg::calib
+} // namespace hg::calib

@@ -33,16 +33,16 @@ IntrinsicsResult calibrateIntrinsics(const std::vector<TargetView>& views, cv::S
 
     int flags = 0;
     cv::Mat K = cv::Mat::eye(3, 3, CV_64F);
-    if (options.fixAspectRatio) flags |= cv::CALIB_FIX_ASPECT_RATIO;  // with K's fx/fy = 1
+    if (options.fixAspectRatio) flags |= cv::CALIB_FIX_ASPECT_RATIO; // with K's fx/fy = 1
     if (options.zeroTangentDist) flags |= cv::CALIB_ZERO_TANGENT_DIST;
     if (options.fixK3) flags |= cv::CALIB_FIX_K3;
     if (options.fixPrincipalPoint) flags |= cv::CALIB_FIX_PRINCIPAL_POINT;
     cv::Mat dist = cv::Mat::zeros(5, 1, CV_64F);
     std::vector<cv::Mat> rvecs, tvecs;
     cv::Mat stdIntr, stdExtr, perView;
-    result.rmsPx = cv::calibrateCamera(
-        objectPoints, imagePoints, imageSize, K, dist, rvecs, tvecs, stdIntr, stdExtr, perView, flags,
-        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, DBL_EPSILON));
+    result.rmsPx =
+        cv::calibrateCamera(objectPoints, imagePoints, imageSize, K, dist, rvecs, tvecs, stdIntr, stdExtr, perView,
+                            flags, cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, DBL_EPSILON));
 
     cv::cv2eigen(K, result.intrinsics.K);
     result.intrinsics.dist.assign(dist.begin<double>(), dist.end<double>());
@@ -90,4 +90,4 @@ std::string formatIntrinsicsReport(const IntrinsicsResult& r)
     return s.str();
 }
 
-}  // namespace hg::calib
+} // namespace hg::calib

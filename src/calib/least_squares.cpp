@@ -9,7 +9,8 @@
 namespace hg::calib::detail {
 namespace {
 
-Eigen::MatrixXd jacobian(const ResidualFunction& f, const Eigen::VectorXd& x, const Eigen::VectorXd& step, Eigen::Index m)
+Eigen::MatrixXd jacobian(const ResidualFunction& f, const Eigen::VectorXd& x, const Eigen::VectorXd& step,
+                         Eigen::Index m)
 {
     Eigen::MatrixXd J(m, x.size());
     Eigen::VectorXd rp(m), rm(m);
@@ -24,10 +25,10 @@ Eigen::MatrixXd jacobian(const ResidualFunction& f, const Eigen::VectorXd& x, co
     return J;
 }
 
-}  // namespace
+} // namespace
 
-LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::VectorXd& x0,
-                                      const Eigen::VectorXd& step, int maxIterations)
+LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::VectorXd& x0, const Eigen::VectorXd& step,
+                                      int maxIterations)
 {
     LeastSquaresResult out;
     Eigen::VectorXd x = x0;
@@ -65,7 +66,7 @@ LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::Ve
             lambda *= 10.0;
         }
         if (!improved) {
-            out.converged = true;  // no step reduces the cost: at a minimum
+            out.converged = true; // no step reduces the cost: at a minimum
             break;
         }
         J = jacobian(f, x, step, m);
@@ -81,4 +82,4 @@ LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::Ve
     return out;
 }
 
-}  // namespace hg::calib::detail
+} // namespace hg::calib::detail

@@ -23,7 +23,7 @@ struct LeastSquaresResult {
 
 /// Minimises |residuals(x)|^2 from `x0`. `step` is the finite-difference step
 /// per parameter (scaled to each parameter's unit).
-LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::VectorXd& x0,
-                                      const Eigen::VectorXd& step, int maxIterations = 100);
+LeastSquaresResult levenbergMarquardt(const ResidualFunction& f, const Eigen::VectorXd& x0, const Eigen::VectorXd& step,
+                                      int maxIterations = 100);
 
-}  // namespace hg::calib::detail
+} // namespace hg::calib::detail

@@ -72,7 +72,7 @@ std::string fmtRange(double v)
     return b;
 }
 
-}  // namespace
+} // namespace
 
 RailObservations RailObservations::parse(const ConfigNode& root)
 {
@@ -167,7 +167,7 @@ SimilarTriangleTable similarTriangleTable(const std::vector<RailSeries>& series,
     std::vector<std::vector<double>> perPair(table.rangePairs.size()), perDisplacement(series.size());
     std::vector<double> all;
     for (std::size_t col = 0; col < series.size(); ++col) {
-        std::map<double, double> offsetAt;  // range -> n, pixels from the optical centre
+        std::map<double, double> offsetAt; // range -> n, pixels from the optical centre
         for (const auto& sample : series[col].samples) offsetAt[sample.rangeMm] = sample.pixel[axis] - centreCoordinate;
         double v = series[col].displacementMm;
         for (std::size_t row = 0; row < table.rangePairs.size(); ++row) {
@@ -194,9 +194,8 @@ SimilarTriangleTable similarTriangleTable(const std::vector<RailSeries>& series,
 RailCalibration calibrateRail(const RailObservations& obs)
 {
     auto needSeries = [](const std::vector<RailSeries>& s, const char* key) {
-        bool any = std::any_of(s.begin(), s.end(), [](const RailSeries& x) {
-            return x.displacementMm != 0.0 && x.samples.size() >= 2;
-        });
+        bool any = std::any_of(s.begin(), s.end(),
+                               [](const RailSeries& x) { return x.displacementMm != 0.0 && x.samples.size() >= 2; });
         if (!any)
             throw InputError("", key, "needs at least one displaced point (displacement_mm != 0) seen at two ranges");
     };
@@ -228,7 +227,8 @@ RailCalibration calibrateRail(const RailObservations& obs)
     for (const auto& o : data) {
         double c = o.axis == 0 ? cal.centre.centre.x() : cal.centre.centre.y();
         double n = o.pixel - c;
-        if (std::abs(n) > 5.0 && o.displacement != 0.0) offsets.push_back((o.axis == 0 ? fx0 : fy0) * o.displacement / n - o.range);
+        if (std::abs(n) > 5.0 && o.displacement != 0.0)
+            offsets.push_back((o.axis == 0 ? fx0 : fy0) * o.displacement / n - o.range);
     }
     std::nth_element(offsets.begin(), offsets.begin() + static_cast<long>(offsets.size() / 2), offsets.end());
     double d0 = offsets.empty() ? 0.0 : offsets[offsets.size() / 2];
@@ -236,7 +236,8 @@ RailCalibration calibrateRail(const RailObservations& obs)
     Eigen::VectorXd x0(7);
     x0 << fx0, fy0, cal.centre.centre.x(), cal.centre.centre.y(), d0, 0.0, 0.0;
     Eigen::VectorXd step(7);
-    step << 1e-6 * std::abs(fx0) + 1e-6, 1e-6 * std::abs(fy0) + 1e-6, 1e-4, 1e-4, 1e-5 * (std::abs(d0) + 1.0), 1e-5, 1e-5;
+    step << 1e-6 * std::abs(fx0) + 1e-6, 1e-6 * std::abs(fy0) + 1e-6, 1e-4, 1e-4, 1e-5 * (std::abs(d0) + 1.0), 1e-5,
+        1e-5;
     auto residuals = [&data](const Eigen::VectorXd& p, Eigen::VectorXd& r) {
         r.resize(static_cast<Eigen::Index>(data.size()));
         for (std::size_t i = 0; i < data.size(); ++i) {
@@ -277,7 +278,8 @@ void printTable(std::ostringstream& s, const SimilarTriangleTable& t, const char
     }
     s << '\n';
     for (std::size_t row = 0; row < t.rangePairs.size(); ++row) {
-        std::snprintf(b, sizeof b, "  %-13s", (fmtRange(t.rangePairs[row].first) + "/" + fmtRange(t.rangePairs[row].second)).c_str());
+        std::snprintf(b, sizeof b, "  %-13s",
+                      (fmtRange(t.rangePairs[row].first) + "/" + fmtRange(t.rangePairs[row].second)).c_str());
         s << b;
         for (const auto& v : t.values[row]) {
             if (v)
@@ -291,7 +293,8 @@ void printTable(std::ostringstream& s, const SimilarTriangleTable& t, const char
     s << pairTitle << "\n  range pair          AVE          STD    n\n";
     for (std::size_t row = 0; row < t.rangePairs.size(); ++row) {
         const auto& st = t.byRangePair[row];
-        std::snprintf(b, sizeof b, "  %-13s", (fmtRange(t.rangePairs[row].first) + "/" + fmtRange(t.rangePairs[row].second)).c_str());
+        std::snprintf(b, sizeof b, "  %-13s",
+                      (fmtRange(t.rangePairs[row].first) + "/" + fmtRange(t.rangePairs[row].second)).c_str());
         s << b;
         if (st.count)
             std::snprintf(b, sizeof b, " %12.1f %12.1f %4d\n", st.mean, st.stdDev, st.count);
@@ -310,20 +313,20 @@ void printTable(std::ostringstream& s, const SimilarTriangleTable& t, const char
             std::snprintf(b, sizeof b, " %12s %12s %4d\n", "-", "-", 0);
         s << b;
     }
-    std::snprintf(b, sizeof b, "  all          %12.1f %12.1f %4d\n\n", t.overall.mean, t.overall.stdDev, t.overall.count);
+    std::snprintf(b, sizeof b, "  all          %12.1f %12.1f %4d\n\n", t.overall.mean, t.overall.stdDev,
+                  t.overall.count);
     s << b;
 }
 
-}  // namespace
+} // namespace
 
 std::string formatRailReport(const RailCalibration& cal)
 {
     std::ostringstream s;
     char b[256];
-    std::snprintf(b, sizeof b,
-                  "optical centre (4.3 step 1, %d moving tracks, %d stationary): (%.3f, %.3f) px, RMS %.3f px\n\n",
-                  cal.centre.lines, cal.centre.stationary, cal.centre.centre.x(), cal.centre.centre.y(),
-                  cal.centre.rmsPx);
+    std::snprintf(
+        b, sizeof b, "optical centre (4.3 step 1, %d moving tracks, %d stationary): (%.3f, %.3f) px, RMS %.3f px\n\n",
+        cal.centre.lines, cal.centre.stationary, cal.centre.centre.x(), cal.centre.centre.y(), cal.centre.rmsPx);
     s << b;
     printTable(s, cal.horizontal, "f/dp_h by similar triangles, eq. 4.3.1-1 (Table 4.3)",
                "f/dp_h by range pair (Table 4.5)", "f/dp_h by displacement (Table 4.6)");
@@ -344,4 +347,4 @@ std::string formatRailReport(const RailCalibration& cal)
     return s.str();
 }
 
-}  // namespace hg::calib
+} // namespace hg::calib

@@ -76,7 +76,7 @@ void writeDurably(const std::filesystem::path& path, const std::string& text)
         throw FaultError(path.string() + ": cannot flush to disk: " + std::strerror(errno));
 }
 
-}  // namespace
+} // namespace
 
 StationFileUpdate::StationFileUpdate(std::filesystem::path file) : file_(std::move(file))
 {
@@ -203,4 +203,4 @@ std::optional<std::filesystem::path> StationFileUpdate::commit()
     return backup;
 }
 
-}  // namespace hg::calib
+} // namespace hg::calib

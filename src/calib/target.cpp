@@ -15,16 +15,26 @@ namespace hg::calib {
 namespace {
 
 constexpr std::array<std::pair<const char*, int>, 21> kDictionaries{{
-    {"DICT_4X4_50", cv::aruco::DICT_4X4_50},           {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
-    {"DICT_4X4_250", cv::aruco::DICT_4X4_250},         {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
-    {"DICT_5X5_50", cv::aruco::DICT_5X5_50},           {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
-    {"DICT_5X5_250", cv::aruco::DICT_5X5_250},         {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
-    {"DICT_6X6_50", cv::aruco::DICT_6X6_50},           {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
-    {"DICT_6X6_250", cv::aruco::DICT_6X6_250},         {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
-    {"DICT_7X7_50", cv::aruco::DICT_7X7_50},           {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
-    {"DICT_7X7_250", cv::aruco::DICT_7X7_250},         {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
-    {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL}, {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
-    {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},   {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
+    {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+    {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+    {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+    {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
+    {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+    {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+    {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+    {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
+    {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+    {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
+    {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+    {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+    {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+    {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
+    {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
+    {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
+    {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
+    {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
+    {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},
+    {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
     {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
 }};
 
@@ -69,7 +79,7 @@ cv::Ptr<cv::aruco::CharucoBoard> makeBoard(const TargetSpec& spec)
                                            static_cast<float>(spec.markerMm), dict);
 }
 
-}  // namespace
+} // namespace
 
 TargetSpec TargetSpec::parse(const std::string& text, const std::string& field)
 {
@@ -92,11 +102,9 @@ TargetSpec TargetSpec::parse(const std::string& text, const std::string& field)
     spec.rows = parseCount(size[1], field, "ROWS");
     spec.squareMm = parseNumber(parts[2], field, "square size");
     if (spec.kind == TargetKind::Charuco) {
-        if (spec.cols < 3 || spec.rows < 3)
-            throw InputError("", field, "a ChArUco board needs at least 3x3 squares");
+        if (spec.cols < 3 || spec.rows < 3) throw InputError("", field, "a ChArUco board needs at least 3x3 squares");
         spec.markerMm = parseNumber(parts[3], field, "marker size");
-        if (spec.markerMm >= spec.squareMm)
-            throw InputError("", field, "the marker must be smaller than the square");
+        if (spec.markerMm >= spec.squareMm) throw InputError("", field, "the marker must be smaller than the square");
         spec.dictionary = parts.size() == 5 ? parts[4] : "DICT_5X5_100";
         if (dictionaryId(spec.dictionary) < 0)
             throw InputError("", field, "unknown ArUco dictionary '" + spec.dictionary + "' (e.g. DICT_5X5_100)");
@@ -190,4 +198,4 @@ std::optional<TargetView> detectTarget(const cv::Mat& image, const TargetSpec& s
     return viewFromCorners(spec, name, corners, ids);
 }
 
-}  // namespace hg::calib
+} // namespace hg::calib

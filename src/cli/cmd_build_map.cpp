@@ -24,8 +24,8 @@ int run(const BuildMapArgs& args)
     const inspect::InspectionMap map = inspect::buildInspectionMap(program, args.levels);
     map.save(args.out);
     std::cerr << "hullgauge build-map: " << program.part << ": " << map.landmarks().size() << " landmarks, "
-              << map.nodes().size() << " nodes, levels " << map.geometry().coarsestLevel << ".."
-              << map.geometry().depth << " -> " << args.out << '\n';
+              << map.nodes().size() << " nodes, levels " << map.geometry().coarsestLevel << ".." << map.geometry().depth
+              << " -> " << args.out << '\n';
     return 0;
 }
 
@@ -43,5 +43,5 @@ std::function<int()> factory(CLI::App& app)
 
 HG_REGISTER_COMMAND("build-map", factory);
 
-}  // namespace
-}  // namespace hg::cli
+} // namespace
+} // namespace hg::cli

@@ -20,9 +20,9 @@ namespace {
 
 struct CameraArgs {
     std::string station;
-    std::vector<std::string> names;        // get
-    std::vector<std::string> assignments;  // set NAME=VALUE
-    std::string out;                       // grab
+    std::vector<std::string> names;       // get
+    std::vector<std::string> assignments; // set NAME=VALUE
+    std::string out;                      // grab
     double timeoutS = 5.0;
 };
 
@@ -40,8 +40,8 @@ nlohmann::json infoJson(drivers::Camera& camera)
     auto info = camera.info();
     if (!info) throw FaultError(info.message());
     const auto& i = info.value();
-    return {{"backend", i.backend}, {"vendor", i.vendor},           {"model", i.model},
-            {"serial", i.serial},   {"address", i.address},         {"sensor_size", {i.sensorWidth, i.sensorHeight}}};
+    return {{"backend", i.backend}, {"vendor", i.vendor},   {"model", i.model},
+            {"serial", i.serial},   {"address", i.address}, {"sensor_size", {i.sensorWidth, i.sensorHeight}}};
 }
 
 int runList(const CameraArgs& a)
@@ -149,8 +149,8 @@ std::function<int()> addCamera(CLI::App& app)
     };
 }
 
-}  // namespace
+} // namespace
 
 HG_REGISTER_COMMAND("camera", addCamera);
 
-}  // namespace hg::cli
+} // namespace hg::cli

@@ -14,7 +14,10 @@
 namespace hg::cli {
 namespace {
 
-nlohmann::json toJson(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+nlohmann::json toJson(const Eigen::Vector3d& v)
+{
+    return nlohmann::json::array({v.x(), v.y(), v.z()});
+}
 
 int run(const std::string& partFile, bool json)
 {
@@ -85,8 +88,8 @@ int run(const std::string& partFile, bool json)
                                  lm.toleranceMm, lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
     std::cout << fmt::format("parameters  {}\n", program.parameters.size());
     for (const auto& p : program.parameters)
-        std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id, model::toString(p.kind),
-                                 p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
+        std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id,
+                                 model::toString(p.kind), p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
     return 0;
 }
 
@@ -100,8 +103,8 @@ std::function<int()> factory(CLI::App& app)
     return [partFile, json] { return run(*partFile, *json); };
 }
 
-}  // namespace
+} // namespace
 
 HG_REGISTER_COMMAND("check-part", factory);
 
-}  // namespace hg::cli
+} // namespace hg::cli

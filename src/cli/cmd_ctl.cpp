@@ -6,15 +6,15 @@
 
 #include <cerrno>
 #include <chrono>
-#include <filesystem>
-#include <thread>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sys/socket.h>
 #include <sys/un.h>
+#include <thread>
 #include <unistd.h>
 
 namespace hg::cli {
@@ -68,8 +68,7 @@ nlohmann::json request(const std::string& path, const nlohmann::json& req)
     std::string answer;
     char buf[4096];
     ssize_t n;
-    while ((n = read(fd, buf, sizeof buf)) > 0)
-        answer.append(buf, static_cast<std::size_t>(n));
+    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
     close(fd);
     auto j = nlohmann::json::parse(answer, nullptr, false);
     if (j.is_discarded() || !j.is_object()) throw FaultError("the daemon at " + path + " sent no valid answer");
@@ -120,9 +119,8 @@ void printStatus(const nlohmann::json& s)
 /// exit 0 when the axes were solved and written, 3 when it failed.
 int runCalibrate(const std::string& path, const CtlOptions& o)
 {
-    nlohmann::json req{{"command", "calibrate"},
-                       {"pattern", o.pattern},
-                       {"poses", std::filesystem::absolute(o.poses).string()}};
+    nlohmann::json req{
+        {"command", "calibrate"}, {"pattern", o.pattern}, {"poses", std::filesystem::absolute(o.poses).string()}};
     if (!o.out.empty()) req["out"] = std::filesystem::absolute(o.out).string();
     request(path, req);
     std::cerr << "calibration queued" << std::endl;
@@ -137,7 +135,8 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
         if (state == "done") {
             std::cout << c.value("report", std::string());
             std::cout << "written: " << c.value("out", std::string());
-            if (!c.value("backup", std::string()).empty()) std::cout << " (backup " << c["backup"].get<std::string>() << ")";
+            if (!c.value("backup", std::string()).empty())
+                std::cout << " (backup " << c["backup"].get<std::string>() << ")";
             std::cout << "\nthe daemon uses it after a reload (systemctl reload hullgauged)\n";
             return 0;
         }
@@ -151,7 +150,8 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
 std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
-    auto* ctl = app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, calibrate)");
+    auto* ctl =
+        app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, calibrate)");
     ctl->add_option("--socket", opts->socket,
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
@@ -176,7 +176,8 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::ExistingFile);
     calibrate->add_option("--out", opts->out, "station YAML to write (default: the daemon's station file)");
     calibrate->add_flag("--no-wait", opts->noWait, "return once the daemon has queued it");
-    calibrate->add_option("--wait-timeout", opts->waitS, "seconds to follow the progress")->check(CLI::Range(1.0, 86400.0));
+    calibrate->add_option("--wait-timeout", opts->waitS, "seconds to follow the progress")
+        ->check(CLI::Range(1.0, 86400.0));
 
     return [=]() -> int {
         auto path = socketPath(*opts);

@@ -62,8 +62,8 @@ int run(const InspectArgs& args)
     options.adjacency = args.adjacency;
     options.maskedLandmarks = args.mask;
     options.earlyExit = args.earlyExit;
-    options.method = args.method == "centre" ? inspect::VoxelTestMethod::CentrePoint
-                                             : inspect::VoxelTestMethod::VolumeSource;
+    options.method =
+        args.method == "centre" ? inspect::VoxelTestMethod::CentrePoint : inspect::VoxelTestMethod::VolumeSource;
     options.requireResolution = !args.noResolutionCheck;
     const std::string source = args.map.empty() ? args.part : args.map;
     std::optional<inspect::Inspector> inspector;
@@ -125,5 +125,5 @@ std::function<int()> factory(CLI::App& app)
 
 HG_REGISTER_COMMAND("inspect", factory);
 
-}  // namespace
-}  // namespace hg::cli
+} // namespace
+} // namespace hg::cli

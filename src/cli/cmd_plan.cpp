@@ -104,8 +104,7 @@ int run(const PlanArgs& args)
 
     if (!result.feasible) {
         std::cerr << "hullgauge plan: " << args.part << ": no plan:\n";
-        for (const auto& p : result.problems)
-            std::cerr << "  " << p << '\n';
+        for (const auto& p : result.problems) std::cerr << "  " << p << '\n';
         return static_cast<int>(ExitStatus::BadInput);
     }
     std::cerr << "hullgauge plan: " << result.views.size() << " views";

@@ -95,5 +95,5 @@ std::function<int()> factory(CLI::App& app)
 
 HG_REGISTER_COMMAND("reconstruct", factory);
 
-}  // namespace
-}  // namespace hg::cli
+} // namespace
+} // namespace hg::cli

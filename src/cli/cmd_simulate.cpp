@@ -48,8 +48,7 @@ struct SimulateArgs {
 std::vector<model::TriangleMesh> loadPart(const SimulateArgs& args)
 {
     std::vector<model::TriangleMesh> cutters;
-    for (const auto& file : args.subtract)
-        cutters.push_back(model::loadMesh(file));
+    for (const auto& file : args.subtract) cutters.push_back(model::loadMesh(file));
     std::vector<model::TriangleMesh> part;
     for (const auto& file : args.meshes) {
         model::TriangleMesh mesh = model::loadMesh(file);
@@ -93,8 +92,7 @@ int run(const SimulateArgs& args)
 
     const std::vector<model::TriangleMesh> part = loadPart(args);
     std::size_t triangles = 0;
-    for (const auto& m : part)
-        triangles += m.triangles.size();
+    for (const auto& m : part) triangles += m.triangles.size();
     const sim::SilhouetteRenderer renderer(part);
 
     const fs::path outDir = args.out;

@@ -20,10 +20,10 @@ struct CommandRegistration {
 
 std::vector<std::pair<std::string, CommandFactory>>& commands();
 
-}  // namespace hg::cli
+} // namespace hg::cli
 
 #define HG_CLI_CONCAT2(a, b) a##b
 #define HG_CLI_CONCAT(a, b) HG_CLI_CONCAT2(a, b)
 /// HG_REGISTER_COMMAND("simulate", factory) at namespace scope in cmd_simulate.cpp.
-#define HG_REGISTER_COMMAND(name, factory) \
+#define HG_REGISTER_COMMAND(name, factory)                                                                             \
     static const ::hg::cli::CommandRegistration HG_CLI_CONCAT(hgCommand_, __LINE__)(name, factory)

@@ -22,7 +22,7 @@ std::vector<std::pair<std::string, CommandFactory>>& commands()
     return list;
 }
 
-}  // namespace hg::cli
+} // namespace hg::cli
 
 int main(int argc, char** argv)
 {

@@ -14,11 +14,16 @@ std::string describe(const YAML::Node& n)
 {
     if (!n) return "nothing";
     switch (n.Type()) {
-    case YAML::NodeType::Null: return "null";
-    case YAML::NodeType::Scalar: return "'" + n.Scalar() + "'";
-    case YAML::NodeType::Sequence: return "a sequence";
-    case YAML::NodeType::Map: return "a map";
-    default: return "an undefined value";
+    case YAML::NodeType::Null:
+        return "null";
+    case YAML::NodeType::Scalar:
+        return "'" + n.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+        return "a sequence";
+    case YAML::NodeType::Map:
+        return "a map";
+    default:
+        return "an undefined value";
     }
 }
 
@@ -29,7 +34,7 @@ std::string fmtNumber(double v)
     return s.str();
 }
 
-}  // namespace
+} // namespace
 
 ConfigNode ConfigNode::loadFile(const std::filesystem::path& file)
 {
@@ -48,7 +53,8 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)
         if (!root || root.IsNull()) throw InputError(name, "", "file is empty");
         return ConfigNode(root, fileName, "");
     } catch (const YAML::Exception& e) {
-        throw InputError(name, "", "YAML syntax error: " + e.msg, e.mark.is_null() ? std::nullopt : std::optional<int>(e.mark.line + 1));
+        throw InputError(name, "", "YAML syntax error: " + e.msg,
+                         e.mark.is_null() ? std::nullopt : std::optional<int>(e.mark.line + 1));
     }
 }
 
@@ -173,7 +179,8 @@ std::string ConfigNode::asString() const
 
 std::vector<double> ConfigNode::asDoubles(std::size_t expectedSize) const
 {
-    auto what = expectedSize ? "a sequence of " + std::to_string(expectedSize) + " numbers" : std::string("a sequence of numbers");
+    auto what = expectedSize ? "a sequence of " + std::to_string(expectedSize) + " numbers"
+                             : std::string("a sequence of numbers");
     if (!node_.IsSequence()) fail("expected " + what + ", found " + describe(node_));
     if ((expectedSize && node_.size() != expectedSize) || node_.size() == 0)
         fail("expected " + what + ", found " + std::to_string(node_.size()) + " elements");
@@ -230,4 +237,4 @@ void ConfigNode::allowOnlyKeys(std::initializer_list<std::string_view> allowed) 
     }
 }
 
-}  // namespace hg
+} // namespace hg

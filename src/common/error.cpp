@@ -21,12 +21,12 @@ std::string format(const std::string& file, const std::string& field, const std:
     return s;
 }
 
-}  // namespace
+} // namespace
 
 InputError::InputError(std::string file, std::string field, std::string problem, std::optional<int> line)
-    : std::runtime_error(format(file, field, problem, line)),
-      file_(std::move(file)), field_(std::move(field)), problem_(std::move(problem)), line_(line)
+    : std::runtime_error(format(file, field, problem, line)), file_(std::move(file)), field_(std::move(field)),
+      problem_(std::move(problem)), line_(line)
 {
 }
 
-}  // namespace hg
+} // namespace hg

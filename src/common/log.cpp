@@ -33,8 +33,9 @@ spdlog::level::level_enum parseLevel(std::string_view spec, std::string_view nam
     auto level = spdlog::level::from_str(std::string(name));
     // from_str answers "off" for anything it does not know; only accept "off" when asked for.
     if (level == spdlog::level::off && name != "off")
-        throw InputError("", "log level", "unknown level '" + std::string(name) + "' in '" + std::string(spec) +
-                                              "' (trace, debug, info, warn, error, critical, off)");
+        throw InputError("", "log level",
+                         "unknown level '" + std::string(name) + "' in '" + std::string(spec) +
+                             "' (trace, debug, info, warn, error, critical, off)");
     return level;
 }
 
@@ -61,7 +62,7 @@ void applyLocked(Registry& r, std::string_view spec)
     }
 }
 
-}  // namespace
+} // namespace
 
 std::shared_ptr<spdlog::logger> category(std::string_view name)
 {
@@ -104,4 +105,4 @@ void useJournal()
     for (auto& [name, logger] : r.loggers) logger->set_pattern(r.pattern);
 }
 
-}  // namespace hg::log
+} // namespace hg::log

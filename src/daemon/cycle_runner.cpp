@@ -258,7 +258,9 @@ bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
         why = std::string("the station is not ready (") + std::string(station::toString(st)) + ")";
         return false;
     }
-    calibration_ = {{"state", "queued"}, {"poses", job.poses.size()}, {"out", job.out.string()},
+    calibration_ = {{"state", "queued"},
+                    {"poses", job.poses.size()},
+                    {"out", job.out.string()},
                     {"progress", nlohmann::json::array()}};
     calibrationJob_ = std::move(job);
     return true;

@@ -15,16 +15,16 @@
 #include "result_store.h"
 
 #include <atomic>
-#include <filesystem>
-#include <optional>
-#include <vector>
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
+#include <vector>
 
 namespace hg::daemon {
 
@@ -101,7 +101,7 @@ class CycleRunner {
     std::atomic<std::int64_t> stopRequestedNs_{0};
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
-    std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
+    std::atomic<std::int64_t> cycleStartNs_{0};      ///< 0 when idle
     std::atomic<std::int64_t> calibrationStepNs_{0}; ///< start of the calibration's current step, 0 when none runs
     // Declared last, destroyed first: the images still queued are written while the members
     // their jobs touch (mutex_, lastCycle_) are alive.

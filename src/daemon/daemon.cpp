@@ -1,11 +1,11 @@
 #include "daemon.h"
 
 #include "cycle_runner.h"
+#include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
-#include "maintenance.h"
-#include "hullgauge/calib/target.h"
 #include "hullgauge/geometry/station.h"
+#include "maintenance.h"
 #include "notify.h"
 #include "plc_server.h"
 #include "result_store.h"
@@ -27,8 +27,7 @@ using Clock = std::chrono::steady_clock;
 std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
 {
     std::set<std::uint16_t> numbers;
-    for (const auto& [number, program] : cfg.programs)
-        numbers.insert(number);
+    for (const auto& [number, program] : cfg.programs) numbers.insert(number);
     return numbers;
 }
 

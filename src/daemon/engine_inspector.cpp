@@ -112,8 +112,7 @@ class EngineInspector : public Inspector {
     std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result) const
     {
         std::map<std::string, std::string> status;
-        for (const auto& l : result.landmarks)
-            status[l.id] = inspect::toString(l.status);
+        for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
         std::vector<ViewEvidence> views;
         for (const auto& v : views_) {
             ViewEvidence e{v.frame, cv::Mat(), {}};
@@ -123,8 +122,7 @@ class EngineInspector : public Inspector {
             views.push_back(std::move(e));
         }
         return [views = std::move(views), settings = segmentation_]() mutable {
-            for (auto& e : views)
-                e.silhouette = vision::segment(e.image, settings);
+            for (auto& e : views) e.silhouette = vision::segment(e.image, settings);
             return views;
         };
     }

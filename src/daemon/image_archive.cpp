@@ -60,8 +60,7 @@ ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention)
 fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& serial) const
 {
     std::string safe;
-    for (char c : serial)
-        safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
+    for (char c : serial) safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
     return root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
 }
 

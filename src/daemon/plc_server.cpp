@@ -114,8 +114,7 @@ void PlcServer::stop()
         (void)!write(impl_->wakeWrite, &c, 1);
     }
     if (thread_.joinable()) thread_.join();
-    for (int fd : impl_->clients)
-        close(fd);
+    for (int fd : impl_->clients) close(fd);
     if (impl_->listenFd >= 0) close(impl_->listenFd);
     if (impl_->wakeRead >= 0) close(impl_->wakeRead);
     if (impl_->wakeWrite >= 0) close(impl_->wakeWrite);
@@ -278,8 +277,7 @@ bool PlcServer::handle(int fd)
         if (count < 1 || count > MODBUS_MAX_WRITE_REGISTERS || bytes != count * 2 || rc != kHeader + 6 + bytes)
             return reject(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values(count);
-        for (std::size_t i = 0; i < count; ++i)
-            values[i] = be16(pdu + 6 + 2 * i);
+        for (std::size_t i = 0; i < count; ++i) values[i] = be16(pdu + 6 + 2 * i);
         auto ex = registers_.write(address, values);
         if (ex != ModbusException::None) return reject(static_cast<std::uint8_t>(ex));
         log->debug("write {}+{}", address, count);

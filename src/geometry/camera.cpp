@@ -23,8 +23,14 @@ void Intrinsics::validate() const
     if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
         throw std::invalid_argument("K: must be upper triangular with K[2][2] = 1");
     switch (dist.size()) {
-    case 0: case 4: case 5: case 8: case 12: break;
-    case 14: throw std::invalid_argument("dist: the 14-coefficient tilted-sensor model is not supported");
+    case 0:
+    case 4:
+    case 5:
+    case 8:
+    case 12:
+        break;
+    case 14:
+        throw std::invalid_argument("dist: the 14-coefficient tilted-sensor model is not supported");
     default:
         throw std::invalid_argument("dist: expected 4, 5, 8 or 12 OpenCV coefficients, found " +
                                     std::to_string(dist.size()));
@@ -155,4 +161,4 @@ Vec2 CameraModel::millimetresPerPixelAt(double depthMm) const
     return {depthMm / intrinsics_.K(0, 0), depthMm / intrinsics_.K(1, 1)};
 }
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -13,7 +13,7 @@ RigidTransform rotationAboutLine(const Vec3& axis, const Vec3& point, double ang
     return T;
 }
 
-}  // namespace
+} // namespace
 
 std::string toString(const FixturePose& pose, FixtureType type)
 {
@@ -46,4 +46,4 @@ Vec3 FixtureKinematics::cameraCentreInPart(const FixturePose& pose) const
     return cameraFromPart(pose).inverse().t;
 }
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

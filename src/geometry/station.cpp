@@ -39,7 +39,9 @@ Intrinsics parseCamera(const ConfigNode& cam)
         in.validate();
     } catch (const std::invalid_argument& e) {
         std::string what = e.what();
-        (what.rfind("dist", 0) == 0 ? cam["dist"] : what.rfind("K", 0) == 0 ? kNode : sizeNode)
+        (what.rfind("dist", 0) == 0 ? cam["dist"]
+         : what.rfind("K", 0) == 0  ? kNode
+                                    : sizeNode)
             .fail(what.substr(what.find(':') + 2));
     }
     return in;
@@ -81,7 +83,7 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
     return k;
 }
 
-}  // namespace
+} // namespace
 
 CameraModel Station::cameraAt(const FixturePose& pose) const
 {
@@ -147,4 +149,4 @@ std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const Fixt
     return poses;
 }
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -24,7 +24,8 @@ RigidTransform RigidTransform::rotation(const Vec3& axis, double angleDeg)
 
 bool isRotation(const Mat3& R, double tol)
 {
-    return (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff() <= tol && std::abs(R.determinant() - 1.0) <= tol;
+    return (R.transpose() * R - Mat3::Identity()).cwiseAbs().maxCoeff() <= tol &&
+           std::abs(R.determinant() - 1.0) <= tol;
 }
 
 Mat3 nearestRotation(const Mat3& M)
@@ -41,4 +42,4 @@ double rotationAngleDeg(const Mat3& Ra, const Mat3& Rb)
     return radToDeg(std::acos(std::clamp(c, -1.0, 1.0)));
 }
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -37,7 +37,7 @@ std::uint64_t checksum(const std::uint8_t* data, std::size_t n)
 
 /// Little-endian writer/reader of the map file's fields.
 class Writer {
-public:
+  public:
     std::vector<std::uint8_t> bytes;
     template <typename T> void put(T v)
     {
@@ -65,8 +65,11 @@ public:
 };
 
 class Reader {
-public:
-    Reader(const std::uint8_t* data, std::size_t size, std::string name) : p_(data), end_(data + size), name_(std::move(name)) {}
+  public:
+    Reader(const std::uint8_t* data, std::size_t size, std::string name)
+        : p_(data), end_(data + size), name_(std::move(name))
+    {
+    }
     template <typename T> T get()
     {
         need(sizeof(T));
@@ -100,7 +103,7 @@ public:
     bool atEnd() const { return p_ == end_; }
     [[noreturn]] void fail(const std::string& problem) const { throw InputError(name_, "inspection map", problem); }
 
-private:
+  private:
     void need(std::size_t n) const
     {
         if (static_cast<std::size_t>(end_ - p_) < n) fail("file is truncated");
@@ -116,7 +119,7 @@ struct BuildNode {
     int ring = 255;
 };
 
-}  // namespace
+} // namespace
 
 const std::array<Eigen::Vector3i, 26>& neighbourOffsets()
 {
@@ -135,9 +138,12 @@ const std::array<Eigen::Vector3i, 26>& neighbourOffsets()
 const char* toString(ParameterKind kind)
 {
     switch (kind) {
-    case ParameterKind::Distance: return "distance";
-    case ParameterKind::Perimeter: return "perimeter";
-    case ParameterKind::Area: return "area";
+    case ParameterKind::Distance:
+        return "distance";
+    case ParameterKind::Perimeter:
+        return "perimeter";
+    case ParameterKind::Area:
+        return "area";
     }
     return "distance";
 }
@@ -150,7 +156,10 @@ ParameterKind parseParameterKind(const std::string& name)
     throw std::invalid_argument("unknown parameter kind '" + name + "' (expected distance, perimeter or area)");
 }
 
-double InspectionMap::voxelSize(int level) const { return geometry_.cubeSize / static_cast<double>(1u << level); }
+double InspectionMap::voxelSize(int level) const
+{
+    return geometry_.cubeSize / static_cast<double>(1u << level);
+}
 
 Eigen::AlignedBox3d InspectionMap::voxelBox(VoxelKey key) const
 {
@@ -171,8 +180,8 @@ VoxelKey InspectionMap::keyAt(const Eigen::Vector3d& point, int level) const
 
 std::int32_t InspectionMap::find(VoxelKey key) const
 {
-    auto it = std::lower_bound(nodes_.begin(), nodes_.end(), key,
-                               [](const MapNode& n, VoxelKey k) { return n.key < k; });
+    auto it =
+        std::lower_bound(nodes_.begin(), nodes_.end(), key, [](const MapNode& n, VoxelKey k) { return n.key < k; });
     if (it == nodes_.end() || it->key != key) return -1;
     return static_cast<std::int32_t>(it - nodes_.begin());
 }
@@ -181,7 +190,8 @@ std::int32_t InspectionMap::landmarkNode(std::size_t l, int level) const
 {
     if (level < geometry_.coarsestLevel || level > geometry_.depth || l >= landmarks_.size()) return -1;
     const int levels = geometry_.depth - geometry_.coarsestLevel + 1;
-    return landmarkNodes_[l * static_cast<std::size_t>(levels) + static_cast<std::size_t>(level - geometry_.coarsestLevel)];
+    return landmarkNodes_[l * static_cast<std::size_t>(levels) +
+                          static_cast<std::size_t>(level - geometry_.coarsestLevel)];
 }
 
 std::optional<std::size_t> InspectionMap::landmarkIndex(const std::string& id) const
@@ -195,7 +205,9 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
                                    std::vector<MapParameter> parameters, const LabelOracle& oracle)
 {
     return build(std::move(partName), g, std::move(landmarks), std::move(parameters),
-                 [&oracle](const Eigen::AlignedBox3d& box) { return VoxelExpectation{oracle(box), false, false}; });
+                 [&oracle](const Eigen::AlignedBox3d& box) {
+                     return VoxelExpectation{oracle(box), false, false};
+                 });
 }
 
 InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, std::vector<MapLandmark> landmarks,
@@ -267,8 +279,8 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
         if (b.onPath) {
             n.children = static_cast<std::int32_t>(map.children_.size());
             for (int c = 0; c < 8; ++c)
-                map.children_.push_back(map.find(makeKey(level + 1, 2 * ijk.x() + (c >> 2 & 1), 2 * ijk.y() + (c >> 1 & 1),
-                                                         2 * ijk.z() + (c & 1))));
+                map.children_.push_back(map.find(
+                    makeKey(level + 1, 2 * ijk.x() + (c >> 2 & 1), 2 * ijk.y() + (c >> 1 & 1), 2 * ijk.z() + (c & 1))));
         }
         if (n.ring <= A) {
             n.neighbours = static_cast<std::int32_t>(map.neighbours_.size());
@@ -293,7 +305,8 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
     map.landmarkNodes_.resize(landmarks.size() * static_cast<std::size_t>(levels));
     for (std::size_t l = 0; l < landmarks.size(); ++l)
         for (int level = g.coarsestLevel; level <= g.depth; ++level)
-            map.landmarkNodes_[l * static_cast<std::size_t>(levels) + static_cast<std::size_t>(level - g.coarsestLevel)] =
+            map.landmarkNodes_[l * static_cast<std::size_t>(levels) +
+                               static_cast<std::size_t>(level - g.coarsestLevel)] =
                 map.find(map.keyAt(landmarks[l].position, level));
     map.rootIndex_ = map.nodes_.empty() ? -1 : 0;
     map.landmarks_ = std::move(landmarks);
@@ -467,4 +480,4 @@ InspectionMap InspectionMap::deserialise(const std::vector<std::uint8_t>& bytes,
     return map;
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

@@ -20,12 +20,15 @@ double msSince(Clock::time_point t0)
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-int chebyshev(const Eigen::Vector3i& a, const Eigen::Vector3i& b) { return (a - b).cwiseAbs().maxCoeff(); }
+int chebyshev(const Eigen::Vector3i& a, const Eigen::Vector3i& b)
+{
+    return (a - b).cwiseAbs().maxCoeff();
+}
 
 /// Per-inspection memo of reconstructed labels, parallel to the map's nodes
 /// (3.3.1: "each voxel will be reconstructed only once").
 class Memo {
-public:
+  public:
     Memo(const InspectionMap& map, const VoxelOracle& oracle)
         : map_(map), oracle_(oracle), labels_(map.nodes().size(), VoxelLabel::Unknown)
     {
@@ -52,7 +55,7 @@ public:
     }
     std::uint64_t total() const { return total_; }
 
-private:
+  private:
     const InspectionMap& map_;
     const VoxelOracle& oracle_;
     std::vector<VoxelLabel> labels_;
@@ -65,17 +68,23 @@ struct LandmarkWork {
     bool objectFound = false;
 };
 
-}  // namespace
+} // namespace
 
 const char* toString(LandmarkStatus status)
 {
     switch (status) {
-    case LandmarkStatus::Ok: return "ok";
-    case LandmarkStatus::OutOfTolerance: return "out_of_tolerance";
-    case LandmarkStatus::Overflow: return "overflow";
-    case LandmarkStatus::NotFound: return "not_found";
-    case LandmarkStatus::NotObservable: return "not_observable";
-    case LandmarkStatus::NotInspected: return "not_inspected";
+    case LandmarkStatus::Ok:
+        return "ok";
+    case LandmarkStatus::OutOfTolerance:
+        return "out_of_tolerance";
+    case LandmarkStatus::Overflow:
+        return "overflow";
+    case LandmarkStatus::NotFound:
+        return "not_found";
+    case LandmarkStatus::NotObservable:
+        return "not_observable";
+    case LandmarkStatus::NotInspected:
+        return "not_inspected";
     }
     return "not_inspected";
 }
@@ -184,7 +193,8 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
     return r;
 }
 
-InspectionResult Inspector::inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const
+InspectionResult Inspector::inspect(const std::vector<SilhouetteView>& views,
+                                    const std::vector<std::string>& viewIds) const
 {
     const auto t0 = Clock::now();
     VoxelTester tester(&views, options_.method);
@@ -275,8 +285,10 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
                         const std::int32_t v = map.neighbour(u, s);
                         if (v < 0 || visited.count(v) || !within(v)) continue;
                         const VoxelLabel lab = visit(v);
-                        if (lab == VoxelLabel::Object) seeds.push_back(v);
-                        else next.push_back(v);
+                        if (lab == VoxelLabel::Object)
+                            seeds.push_back(v);
+                        else
+                            next.push_back(v);
                     }
                 front = std::move(next);
             }
@@ -322,7 +334,8 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             lineHidden = lineHidden || (map.nodes()[static_cast<std::size_t>(n)].hidden &&
                                         chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) <= 1);
             labels.push_back(lab);
-            sc.push_back((map.voxelBox(map.nodes()[static_cast<std::size_t>(n)].key).center() - lm.position).dot(lm.normal));
+            sc.push_back(
+                (map.voxelBox(map.nodes()[static_cast<std::size_t>(n)].key).center() - lm.position).dot(lm.normal));
         }
         lr.voxelsReconstructed = counter;
 
@@ -335,8 +348,8 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             lr.reason = "no view decides the voxels at the landmark (footprints outside the frames or behind a camera)";
         } else if (views && options_.requireResolution && (!lr.medMm || *lr.medMm > dv)) {
             lr.status = LandmarkStatus::NotObservable;
-            lr.reason = lr.medMm ? "no view resolves the voxel size (eq. 4.4.4-19: best MED " + std::to_string(*lr.medMm) +
-                                       " mm > ΔV " + std::to_string(dv) + " mm)"
+            lr.reason = lr.medMm ? "no view resolves the voxel size (eq. 4.4.4-19: best MED " +
+                                       std::to_string(*lr.medMm) + " mm > ΔV " + std::to_string(dv) + " mm)"
                                  : "no view sees the landmark";
         } else {
             double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -425,11 +438,17 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
         if (ok && !est.empty()) {
             switch (p.kind) {
             case ParameterKind::Distance:
-                if (est.size() == 2) pr.value = distanceBracket(est[0], est[1]);
-                else ok = false;
+                if (est.size() == 2)
+                    pr.value = distanceBracket(est[0], est[1]);
+                else
+                    ok = false;
                 break;
-            case ParameterKind::Perimeter: pr.value = perimeterBracket(est); break;
-            case ParameterKind::Area: pr.value = areaBracket(est); break;
+            case ParameterKind::Perimeter:
+                pr.value = perimeterBracket(est);
+                break;
+            case ParameterKind::Area:
+                pr.value = areaBracket(est);
+                break;
             }
         }
         pr.measured = ok && !est.empty();
@@ -444,8 +463,9 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
         if (pr.status != "ok") result.pass = false;
     result.voxelsReconstructed = memo.total();
     result.reconstructionMs = msSince(t0);
-    log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}", result.landmarks.size(),
-                                    level_, result.voxelsReconstructed, result.pass ? "pass" : "fail");
+    log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}",
+                                    result.landmarks.size(), level_, result.voxelsReconstructed,
+                                    result.pass ? "pass" : "fail");
     return result;
 }
 
@@ -489,8 +509,10 @@ nlohmann::json toJson(const InspectionResult& r)
                         {"distance_mm", v.discrimination.distanceMm},
                         {"theta_deg", v.discrimination.thetaDeg},
                         {"med_range_mm", v.discrimination.medRangeMm}};
-                if (std::isfinite(v.discrimination.medAngleMm)) jv["med_angle_mm"] = v.discrimination.medAngleMm;
-                else jv["med_angle_mm"] = nullptr;
+                if (std::isfinite(v.discrimination.medAngleMm))
+                    jv["med_angle_mm"] = v.discrimination.medAngleMm;
+                else
+                    jv["med_angle_mm"] = nullptr;
                 vs.push_back(std::move(jv));
             }
             l["views"] = std::move(vs);
@@ -499,14 +521,22 @@ nlohmann::json toJson(const InspectionResult& r)
     }
     j["landmarks"] = std::move(lms);
     const Statistics& s = r.statistics;
-    j["statistics"] = {{"ave_error_min_mm", s.aveErrorMin}, {"ave_error_max_mm", s.aveErrorMax},
-                       {"ave_error_mm", s.aveError},        {"std_error_min_mm", s.stdErrorMin},
-                       {"std_error_max_mm", s.stdErrorMax}, {"std_error_mm", s.stdError},
-                       {"max_error_mm", s.maxError},        {"min_error_mm", s.minError},
-                       {"total_volume_error_mm3", s.totalVolumeError}, {"landmarks_measured", s.landmarksMeasured}};
+    j["statistics"] = {{"ave_error_min_mm", s.aveErrorMin},
+                       {"ave_error_max_mm", s.aveErrorMax},
+                       {"ave_error_mm", s.aveError},
+                       {"std_error_min_mm", s.stdErrorMin},
+                       {"std_error_max_mm", s.stdErrorMax},
+                       {"std_error_mm", s.stdError},
+                       {"max_error_mm", s.maxError},
+                       {"min_error_mm", s.minError},
+                       {"total_volume_error_mm3", s.totalVolumeError},
+                       {"landmarks_measured", s.landmarksMeasured}};
     json ps = json::array();
     for (const ParameterResult& p : r.parameters) {
-        json jp{{"id", p.id}, {"kind", toString(p.kind)}, {"nominal_mm", p.nominal}, {"tolerance_mm", p.tolerance},
+        json jp{{"id", p.id},
+                {"kind", toString(p.kind)},
+                {"nominal_mm", p.nominal},
+                {"tolerance_mm", p.tolerance},
                 {"status", p.status}};
         if (p.measured) {
             jp["min_mm"] = p.value.min;
@@ -522,4 +552,4 @@ nlohmann::json toJson(const InspectionResult& r)
     return j;
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

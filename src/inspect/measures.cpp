@@ -23,7 +23,7 @@ ViewDiscrimination viewDiscrimination(const geometry::CameraModel& camera, const
     const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
     const double denom = 2.0 * f * (cosTheta - sinTheta) + 1.0;
     v.medAngleMm = (cosTheta > sinTheta && denom > 0.0) ? 2.0 * std::sqrt(2.0) * d * cosTheta / denom
-                                                       : std::numeric_limits<double>::infinity();
+                                                        : std::numeric_limits<double>::infinity();
     return v;
 }
 
@@ -37,7 +37,7 @@ Bracket distanceBracket(const LandmarkEstimate& a, const LandmarkEstimate& b)
     const double s0 = a.sLow, s1 = a.sHigh, t0 = b.sLow, t1 = b.sHigh;
     Bracket r;
     r.max = std::max({dist(s0, t0), dist(s0, t1), dist(s1, t0), dist(s1, t1)});
-    auto bestS = [&](double t) {  // argmin over s of |u − t nb + s na|
+    auto bestS = [&](double t) { // argmin over s of |u − t nb + s na|
         const double na2 = a.normal.squaredNorm();
         return std::clamp(-(u - t * b.normal).dot(a.normal) / na2, s0, s1);
     };
@@ -82,7 +82,7 @@ struct Interval {
     }
 };
 
-}  // namespace
+} // namespace
 
 Bracket areaBracket(const std::vector<LandmarkEstimate>& ring)
 {
@@ -139,4 +139,4 @@ Bracket areaBracket(const std::vector<LandmarkEstimate>& ring)
     return {0.5 * total.lo, 0.5 * total.hi};
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

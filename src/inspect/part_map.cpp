@@ -32,7 +32,7 @@ const std::vector<Eigen::Vector3d>& lineDirections()
         constexpr int n = 64;
         const double golden = M_PI * (3.0 - std::sqrt(5.0));
         for (int i = 0; i < n; ++i) {
-            const double z = (i + 0.5) / n;  // upper half sphere
+            const double z = (i + 0.5) / n; // upper half sphere
             const double r = std::sqrt(1.0 - z * z);
             d.emplace_back(r * std::cos(golden * i), r * std::sin(golden * i), z);
         }
@@ -67,7 +67,7 @@ bool someLineMisses(const model::Solid& solid, const Eigen::AlignedBox3d& bounds
     return std::any_of(lineDirections().begin(), lineDirections().end(), clear);
 }
 
-}  // namespace
+} // namespace
 
 ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid)
 {
@@ -78,8 +78,11 @@ ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid)
         // (including those touching a face); only boundary voxels need the
         // volume fraction.
         switch (solid->classify(box)) {
-        case model::Occupancy::Inside: e.object = true; return e;
-        case model::Occupancy::Outside: break;
+        case model::Occupancy::Inside:
+            e.object = true;
+            return e;
+        case model::Occupancy::Outside:
+            break;
         case model::Occupancy::Boundary: {
             const double f = solid->insideFraction(box).estimate;
             e.object = solid->isObjectVoxel(box);
@@ -129,4 +132,4 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     }
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

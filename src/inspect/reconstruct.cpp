@@ -55,7 +55,7 @@ HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, con
                 if (m.unknown <= 1e-9 * m.area && m.background >= m.area * (1.0 - 1e-9)) allBackgroundSomewhere = true;
                 if (m.unknown > 1e-9 * m.area || m.background > 1e-9 * m.area) allObjectEverywhere = false;
             }
-            if (allBackgroundSomewhere) continue;  // void, and every voxel below it
+            if (allBackgroundSomewhere) continue; // void, and every voxel below it
             if (allObjectEverywhere) {
                 // Every sub-voxel's footprint lies inside this one's: all object.
                 r.objectNodes.push_back(n);
@@ -70,4 +70,4 @@ HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, con
     return r;
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

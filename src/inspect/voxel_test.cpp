@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <string>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace hg::inspect {
 namespace {
@@ -50,7 +50,7 @@ void clipHalfPlane(const Poly& in, Poly& out, int axis, double bound, double sig
         if ((da >= 0) != (db >= 0)) {
             const double t = da / (da - db);
             Vec2 x = a + t * (b - a);
-            x[axis] = bound;  // exact on the clip line
+            x[axis] = bound; // exact on the clip line
             out.push(x);
         }
     }
@@ -133,7 +133,7 @@ double localBackgroundArea(const Poly& poly, const SilhouetteIndex::Region& reg,
             auto integral = [&](double u, double v) { return (v - u) * (alpha + beta * 0.5 * (u + v)); };
             const int ca = std::clamp(static_cast<int>(std::floor(xa)), 0, w - 1);
             int cb = static_cast<int>(std::floor(xb));
-            if (static_cast<double>(cb) >= xb) --cb;  // xb on a pixel edge ends in the pixel before
+            if (static_cast<double>(cb) >= xb) --cb; // xb on a pixel edge ends in the pixel before
             cb = std::clamp(cb, 0, w - 1);
             if (ca == cb) {
                 bg += bgAt(ca) * integral(xa, xb);
@@ -178,15 +178,19 @@ int monotoneChain(Vec2* pts, int n, Vec2* hull)
     return k - 1;
 }
 
-}  // namespace
+} // namespace
 
 const char* toString(VoxelLabel label)
 {
     switch (label) {
-    case VoxelLabel::Unknown: return "unknown";
-    case VoxelLabel::Void: return "void";
-    case VoxelLabel::Object: return "object";
-    case VoxelLabel::Undecided: return "undecided";
+    case VoxelLabel::Unknown:
+        return "unknown";
+    case VoxelLabel::Void:
+        return "void";
+    case VoxelLabel::Object:
+        return "object";
+    case VoxelLabel::Undecided:
+        return "undecided";
     }
     return "unknown";
 }
@@ -292,7 +296,8 @@ FootprintMeasure VoxelTester::measure(const Box3& voxel, std::size_t viewIndex, 
                         static_cast<int>(std::floor(ymax)) - static_cast<int>(std::floor(ymin)) + 1);
     const SilhouetteIndex::Region* reg = view.index.regionContaining(bbox);
     if (!reg) {
-        const cv::Point c(static_cast<int>(std::floor(0.5 * (xmin + xmax))), static_cast<int>(std::floor(0.5 * (ymin + ymax))));
+        const cv::Point c(static_cast<int>(std::floor(0.5 * (xmin + xmax))),
+                          static_cast<int>(std::floor(0.5 * (ymin + ymax))));
         reg = view.index.regionAt(c.x, c.y);
     }
     if (!reg) {
@@ -341,4 +346,4 @@ VoxelLabel VoxelTester::classify(const Box3& voxel) const
     return objectDecided ? VoxelLabel::Object : VoxelLabel::Undecided;
 }
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

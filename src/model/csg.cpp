@@ -24,8 +24,7 @@ using ExactMesh = CGAL::Surface_mesh<EK::Point_3>;
 ExactMesh toExact(const TriangleMesh& mesh, const std::string& operation, const char* operand)
 {
     const MeshCheck check = checkMesh(mesh);
-    if (!check.ok())
-        throw InputError("", std::string(operation) + " " + operand, check.problem());
+    if (!check.ok()) throw InputError("", std::string(operation) + " " + operand, check.problem());
     ExactMesh m;
     for (const auto& v : mesh.vertices) m.add_vertex(EK::Point_3(v.x(), v.y(), v.z()));
     for (const auto& t : mesh.triangles)
@@ -77,10 +76,19 @@ TriangleMesh boolean(const TriangleMesh& a, const TriangleMesh& b, Op op)
     return fromExact(result);
 }
 
-}  // namespace
+} // namespace
 
-TriangleMesh difference(const TriangleMesh& a, const TriangleMesh& b) { return boolean(a, b, Op::Difference); }
-TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b) { return boolean(a, b, Op::Union); }
-TriangleMesh intersectionOf(const TriangleMesh& a, const TriangleMesh& b) { return boolean(a, b, Op::Intersection); }
+TriangleMesh difference(const TriangleMesh& a, const TriangleMesh& b)
+{
+    return boolean(a, b, Op::Difference);
+}
+TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b)
+{
+    return boolean(a, b, Op::Union);
+}
+TriangleMesh intersectionOf(const TriangleMesh& a, const TriangleMesh& b)
+{
+    return boolean(a, b, Op::Intersection);
+}
 
-}  // namespace hg::model
+} // namespace hg::model

@@ -37,8 +37,7 @@ using Vec2 = Eigen::Vector2d;
 
 // Sutherland–Hodgman clipping of a convex polygon against one half-space
 // given by `inside(p)`; the boundary point is found by `cut(p, q)`.
-template <class Inside, class Cut, class P>
-void clip(std::vector<P>& poly, Inside inside, Cut cut)
+template <class Inside, class Cut, class P> void clip(std::vector<P>& poly, Inside inside, Cut cut)
 {
     if (poly.empty()) return;
     std::vector<P> out;
@@ -55,8 +54,7 @@ void clip(std::vector<P>& poly, Inside inside, Cut cut)
 
 // Point where the segment p-q crosses coordinate `axis` = `value`, with that
 // coordinate set exactly (so later classification sees it on the plane).
-template <class P>
-P crossAt(const P& p, const P& q, int axis, double value)
+template <class P> P crossAt(const P& p, const P& q, int axis, double value)
 {
     const double t = (value - p[axis]) / (q[axis] - p[axis]);
     P r = p + t * (q - p);
@@ -64,7 +62,7 @@ P crossAt(const P& p, const P& q, int axis, double value)
     return r;
 }
 
-}  // namespace
+} // namespace
 
 BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std::array<int, 3>>& triangles,
                        const std::vector<std::size_t>& candidates, const Eigen::AlignedBox3d& box)
@@ -75,9 +73,9 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
     const Vec3 size = box.max() - origin;
     const double X = size.x(), Y = size.y(), Z = size.z();
 
-    double volumeTerm = 0.0;  // Σ ∫ x n_x dA over the clipped triangles
-    double areaTerm = 0.0;    // Σ ∫ y dz over the clipped cross-section segments
-    double lengthTerm = 0.0;  // Σ w (Z - clamp(z))
+    double volumeTerm = 0.0; // Σ ∫ x n_x dA over the clipped triangles
+    double areaTerm = 0.0;   // Σ ∫ y dz over the clipped cross-section segments
+    double lengthTerm = 0.0; // Σ w (Z - clamp(z))
     double magnitude = std::max({X, Y, Z});
 
     for (std::size_t ti : candidates) {
@@ -90,12 +88,24 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
 
         // (1) ∫ x n_x dA over the triangle clipped to [0,X)×[0,Y]×[0,Z].
         std::vector<Vec3> poly{p[0], p[1], p[2]};
-        clip(poly, [&](const Vec3& v) { return v.x() < X; }, [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 0, X); });
-        clip(poly, [](const Vec3& v) { return v.x() >= 0.0; }, [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 0, 0.0); });
-        clip(poly, [](const Vec3& v) { return v.y() >= 0.0; }, [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 1, 0.0); });
-        clip(poly, [&](const Vec3& v) { return v.y() <= Y; }, [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 1, Y); });
-        clip(poly, [](const Vec3& v) { return v.z() >= 0.0; }, [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 2, 0.0); });
-        clip(poly, [&](const Vec3& v) { return v.z() <= Z; }, [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 2, Z); });
+        clip(
+            poly, [&](const Vec3& v) { return v.x() < X; },
+            [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 0, X); });
+        clip(
+            poly, [](const Vec3& v) { return v.x() >= 0.0; },
+            [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 0, 0.0); });
+        clip(
+            poly, [](const Vec3& v) { return v.y() >= 0.0; },
+            [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 1, 0.0); });
+        clip(
+            poly, [&](const Vec3& v) { return v.y() <= Y; },
+            [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 1, Y); });
+        clip(
+            poly, [](const Vec3& v) { return v.z() >= 0.0; },
+            [](const Vec3& a, const Vec3& b) { return crossAt(a, b, 2, 0.0); });
+        clip(
+            poly, [&](const Vec3& v) { return v.z() <= Z; },
+            [&](const Vec3& a, const Vec3& b) { return crossAt(a, b, 2, Z); });
         for (std::size_t k = 1; k + 1 < poly.size(); ++k) {
             const Vec3& a = poly[0];
             const Vec3& b = poly[k];
@@ -128,7 +138,7 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
         // (3) Signed crossing of the segment with the line y = Y (same
         // ε-rule: y >= Y is beyond). Going from below to beyond in y, the
         // solid lies towards +z: the line enters it.
-        const bool fromBeyond = from.x() >= Y, toBeyond = to.x() >= Y;  // (x, y) of a Vec2 are (y, z)
+        const bool fromBeyond = from.x() >= Y, toBeyond = to.x() >= Y; // (x, y) of a Vec2 are (y, z)
         if (fromBeyond != toBeyond) {
             const double z = crossAt(from, to, 0, Y).y();
             const double w = toBeyond ? 1.0 : -1.0;
@@ -140,9 +150,12 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
         auto clipSegment = [&](auto inside, int axis, double value) {
             if (seg.size() != 2) return;
             const bool a = inside(seg[0]), b = inside(seg[1]);
-            if (!a && !b) seg.clear();
-            else if (!a) seg[0] = crossAt(seg[0], seg[1], axis, value);
-            else if (!b) seg[1] = crossAt(seg[0], seg[1], axis, value);
+            if (!a && !b)
+                seg.clear();
+            else if (!a)
+                seg[0] = crossAt(seg[0], seg[1], axis, value);
+            else if (!b)
+                seg[1] = crossAt(seg[0], seg[1], axis, value);
         };
         clipSegment([&](const Vec2& v) { return v.x() < Y; }, 0, Y);
         clipSegment([](const Vec2& v) { return v.x() >= 0.0; }, 0, 0.0);
@@ -162,4 +175,4 @@ BoxVolume insideVolume(const std::vector<Vec3>& vertices, const std::vector<std:
     return result;
 }
 
-}  // namespace hg::model::detail
+} // namespace hg::model::detail

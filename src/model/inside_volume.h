@@ -12,8 +12,8 @@
 namespace hg::model::detail {
 
 struct BoxVolume {
-    double volume = 0.0;      // mm³ of the solid inside the box
-    double errorBound = 0.0;  // bound on the floating-point error of `volume`, mm³
+    double volume = 0.0;     // mm³ of the solid inside the box
+    double errorBound = 0.0; // bound on the floating-point error of `volume`, mm³
 };
 
 /// Volume of the solid bounded by `triangles` inside `box`.
@@ -24,4 +24,4 @@ struct BoxVolume {
 BoxVolume insideVolume(const std::vector<Eigen::Vector3d>& vertices, const std::vector<std::array<int, 3>>& triangles,
                        const std::vector<std::size_t>& candidates, const Eigen::AlignedBox3d& box);
 
-}  // namespace hg::model::detail
+} // namespace hg::model::detail

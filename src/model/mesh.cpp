@@ -43,7 +43,7 @@ void TriangleMesh::append(const TriangleMesh& other)
 void TriangleMesh::transform(const Eigen::Matrix3d& R, const Eigen::Vector3d& t)
 {
     for (auto& v : vertices) v = R * v + t;
-    if (R.determinant() < 0) flip();  // a reflection would turn the solid inside out
+    if (R.determinant() < 0) flip(); // a reflection would turn the solid inside out
 }
 
 void TriangleMesh::flip()
@@ -51,4 +51,4 @@ void TriangleMesh::flip()
     for (auto& t : triangles) std::swap(t[1], t[2]);
 }
 
-}  // namespace hg::model
+} // namespace hg::model

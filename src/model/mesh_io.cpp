@@ -33,7 +33,10 @@ using Point = Kernel::Point_3;
 using Polygon = std::vector<std::size_t>;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
 
-std::string str(const Eigen::Vector3d& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
+std::string str(const Eigen::Vector3d& p)
+{
+    return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z());
+}
 
 std::string lowerExtension(const std::filesystem::path& file)
 {
@@ -51,8 +54,8 @@ MeshCheck analyse(const std::vector<Eigen::Vector3d>& points, const std::vector<
     check.triangles = polygons.size();
 
     struct EdgeUse {
-        int forward = 0;   // traversed from the smaller to the larger index
-        int backward = 0;  // traversed the other way
+        int forward = 0;  // traversed from the smaller to the larger index
+        int backward = 0; // traversed the other way
     };
     std::unordered_map<std::uint64_t, EdgeUse> edges;
     edges.reserve(polygons.size() * 2);
@@ -102,7 +105,7 @@ MeshCheck analyse(const std::vector<Eigen::Vector3d>& points, const std::vector<
     // edges at the vertex. Two fans mean two sheets touch at a point.
     for (std::size_t v = 0; v < points.size(); ++v) {
         auto& inc = incidence[v];
-        if (inc.size() < 6) continue;  // a single polygon pair cannot form two closed fans
+        if (inc.size() < 6) continue; // a single polygon pair cannot form two closed fans
         std::vector<std::size_t> polys;
         for (auto& [p, w] : inc) polys.push_back(p);
         std::sort(polys.begin(), polys.end());
@@ -129,14 +132,18 @@ MeshCheck analyse(const std::vector<Eigen::Vector3d>& points, const std::vector<
     return check;
 }
 
-std::string describeEdge(const std::array<Eigen::Vector3d, 2>& e) { return "from " + str(e[0]) + " to " + str(e[1]); }
+std::string describeEdge(const std::array<Eigen::Vector3d, 2>& e)
+{
+    return "from " + str(e[0]) + " to " + str(e[1]);
+}
 
 std::vector<Polygon> toPolygons(const TriangleMesh& mesh)
 {
     std::vector<Polygon> polys;
     polys.reserve(mesh.triangles.size());
     for (const auto& t : mesh.triangles)
-        polys.push_back({static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]), static_cast<std::size_t>(t[2])});
+        polys.push_back(
+            {static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]), static_cast<std::size_t>(t[2])});
     return polys;
 }
 
@@ -152,13 +159,14 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
     std::uint64_t announced = 0;
     if (head.size() == 84) {
         for (int i = 3; i >= 0; --i) announced = (announced << 8) | static_cast<unsigned char>(head[80 + i]);
-        if (84 + 50 * announced == size) return;  // a well-formed binary STL
+        if (84 + 50 * announced == size) return; // a well-formed binary STL
     }
     // Not a binary STL of the announced size: ASCII when it starts with "solid".
     auto first = head.find_first_not_of(" \t\r\n");
     if (first != std::string::npos && head.compare(first, 5, "solid") == 0) return;
     if (head.size() < 84)
-        throw InputError(name, "header", fmt::format("file ends after {} of 84 bytes (80-byte header and facet count)", size));
+        throw InputError(name, "header",
+                         fmt::format("file ends after {} of 84 bytes (80-byte header and facet count)", size));
     const std::uintmax_t body = size - 84;
     if (body > 50 * announced) {
         log::category("model")->warn("{}: {} bytes after the {} facets the header announces are ignored", name,
@@ -167,13 +175,14 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
     }
     const std::uintmax_t complete = body / 50, rest = body % 50;
     if (rest != 0)
-        throw InputError(name, fmt::format("facet {}", complete + 1),
-                         fmt::format("file ends after {} of 50 bytes (the header announces {} facets)", rest, announced));
+        throw InputError(
+            name, fmt::format("facet {}", complete + 1),
+            fmt::format("file ends after {} of 50 bytes (the header announces {} facets)", rest, announced));
     throw InputError(name, fmt::format("facet {}", complete + 1),
                      fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
 }
 
-}  // namespace
+} // namespace
 
 std::string MeshCheck::problem() const
 {
@@ -196,7 +205,10 @@ std::string MeshCheck::problem() const
     return {};
 }
 
-MeshCheck checkMesh(const TriangleMesh& mesh) { return analyse(mesh.vertices, toPolygons(mesh)); }
+MeshCheck checkMesh(const TriangleMesh& mesh)
+{
+    return analyse(mesh.vertices, toPolygons(mesh));
+}
 
 void requireSolidMesh(TriangleMesh& mesh, const std::string& name)
 {
@@ -221,8 +233,7 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     if (ext == ".step" || ext == ".stp")
         throw InputError(name, "mesh", "STEP files are not supported; export the part as STL, OBJ or PLY");
     if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off")
-        throw InputError(name, "mesh",
-                         "unknown mesh format '" + ext + "' (expected .stl, .obj, .ply or .off)");
+        throw InputError(name, "mesh", "unknown mesh format '" + ext + "' (expected .stl, .obj, .ply or .off)");
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "mesh", "no such file");
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
@@ -292,8 +303,7 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     }
     for (auto f : sm.faces()) {
         auto h = sm.halfedge(f);
-        mesh.triangles.push_back(
-            {index[sm.source(h)], index[sm.target(h)], index[sm.target(sm.next(h))]});
+        mesh.triangles.push_back({index[sm.source(h)], index[sm.target(h)], index[sm.target(sm.next(h))]});
     }
     const double after = mesh.signedVolume();
     if (before < 0 && std::abs(after + before) <= 1e-9 * std::abs(before))
@@ -316,10 +326,10 @@ void saveMesh(const TriangleMesh& mesh, const std::filesystem::path& file, MeshE
     points.reserve(mesh.vertices.size());
     for (const auto& v : mesh.vertices) points.emplace_back(v.x(), v.y(), v.z());
     std::vector<Polygon> polygons = toPolygons(mesh);
-    if (!CGAL::IO::write_polygon_soup(file.string(), points, polygons,
-                                      CGAL::parameters::use_binary_mode(encoding == MeshEncoding::Binary)
-                                          .stream_precision(17)))
+    if (!CGAL::IO::write_polygon_soup(
+            file.string(), points, polygons,
+            CGAL::parameters::use_binary_mode(encoding == MeshEncoding::Binary).stream_precision(17)))
         throw FaultError(file.string() + ": cannot write the mesh");
 }
 
-}  // namespace hg::model
+} // namespace hg::model

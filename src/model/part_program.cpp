@@ -17,7 +17,10 @@
 namespace hg::model {
 namespace {
 
-std::string str(const Eigen::Vector3d& p) { return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z()); }
+std::string str(const Eigen::Vector3d& p)
+{
+    return fmt::format("({:.4f}, {:.4f}, {:.4f})", p.x(), p.y(), p.z());
+}
 
 OctreeSpec parseOctree(const ConfigNode& node, const Eigen::AlignedBox3d& bounds)
 {
@@ -40,7 +43,8 @@ OctreeSpec parseOctree(const ConfigNode& node, const Eigen::AlignedBox3d& bounds
     }
     spec.cubeSize = size->asPositive();
     // Without an origin the cube is centred on the part's bounding box.
-    spec.cubeOrigin = origin ? origin->asVector3() : Eigen::Vector3d(bounds.center() - Eigen::Vector3d::Constant(spec.cubeSize / 2));
+    spec.cubeOrigin =
+        origin ? origin->asVector3() : Eigen::Vector3d(bounds.center() - Eigen::Vector3d::Constant(spec.cubeSize / 2));
     const Eigen::AlignedBox3d cube(spec.cubeOrigin, spec.cubeOrigin + Eigen::Vector3d::Constant(spec.cubeSize));
     const ConfigNode& where = origin ? *origin : *size;
     if (!cube.contains(bounds))
@@ -141,10 +145,14 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     if (p.id.empty()) idNode.fail("parameter id is empty");
     const ConfigNode kindNode = node["kind"];
     const std::string kind = kindNode.asString();
-    if (kind == "distance") p.kind = ParameterKind::Distance;
-    else if (kind == "perimeter") p.kind = ParameterKind::Perimeter;
-    else if (kind == "area") p.kind = ParameterKind::Area;
-    else kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
+    if (kind == "distance")
+        p.kind = ParameterKind::Distance;
+    else if (kind == "perimeter")
+        p.kind = ParameterKind::Perimeter;
+    else if (kind == "area")
+        p.kind = ParameterKind::Area;
+    else
+        kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
     const ConfigNode list = node["landmarks"];
     for (const ConfigNode& item : list.items()) {
         const std::string id = item.asString();
@@ -156,8 +164,8 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     if (p.kind == ParameterKind::Distance && p.landmarkIds.size() != 2)
         list.fail(fmt::format("a distance needs exactly 2 landmarks, found {}", p.landmarkIds.size()));
     if (p.kind != ParameterKind::Distance && p.landmarkIds.size() < 3)
-        list.fail(fmt::format("a {} needs at least 3 landmarks (a closed polygon), found {}", kind,
-                              p.landmarkIds.size()));
+        list.fail(
+            fmt::format("a {} needs at least 3 landmarks (a closed polygon), found {}", kind, p.landmarkIds.size()));
     std::set<std::string> unique(p.landmarkIds.begin(), p.landmarkIds.end());
     if (unique.size() != p.landmarkIds.size()) list.fail("a landmark is listed twice");
     p.nominalMm = node["nominal_mm"].asDoubleIn(0.0, 1e12);
@@ -165,9 +173,12 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     return p;
 }
 
-}  // namespace
+} // namespace
 
-double OctreeSpec::voxelSize() const { return cubeSize / std::ldexp(1.0, depth); }
+double OctreeSpec::voxelSize() const
+{
+    return cubeSize / std::ldexp(1.0, depth);
+}
 
 std::string toString(ParameterKind kind)
 {
@@ -182,7 +193,10 @@ std::string toString(ParameterKind kind)
     return "?";
 }
 
-double PartProgram::surfaceToleranceMm() const { return std::max(0.01, octree.voxelSize() / 4.0); }
+double PartProgram::surfaceToleranceMm() const
+{
+    return std::max(0.01, octree.voxelSize() / 4.0);
+}
 
 const Landmark* PartProgram::findLandmark(const std::string& id) const
 {
@@ -220,8 +234,8 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     const ConfigNode meshNode = root["mesh"];
     const std::string meshText = meshNode.asString();
     if (meshText.empty()) meshNode.fail("mesh path is empty");
-    program.meshFile = std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText)
-                                                                      : file.parent_path() / meshText;
+    program.meshFile =
+        std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText) : file.parent_path() / meshText;
     TriangleMesh mesh;
     try {
         mesh = loadMesh(program.meshFile);
@@ -256,4 +270,4 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     return program;
 }
 
-}  // namespace hg::model
+} // namespace hg::model

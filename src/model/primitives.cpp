@@ -26,7 +26,7 @@ TriangleMesh makeSphere(const Eigen::Vector3d& c, double r, int segments, int ri
 {
     if (segments < 3 || rings < 2) throw std::invalid_argument("makeSphere: need segments >= 3 and rings >= 2");
     TriangleMesh m;
-    m.vertices.push_back(c + Eigen::Vector3d(0, 0, r));  // north pole
+    m.vertices.push_back(c + Eigen::Vector3d(0, 0, r)); // north pole
     for (int i = 1; i < rings; ++i) {
         double theta = kPi * i / rings;
         for (int j = 0; j < segments; ++j) {
@@ -35,7 +35,7 @@ TriangleMesh makeSphere(const Eigen::Vector3d& c, double r, int segments, int ri
                                                          std::sin(theta) * std::sin(phi), std::cos(theta)));
         }
     }
-    m.vertices.push_back(c - Eigen::Vector3d(0, 0, r));  // south pole
+    m.vertices.push_back(c - Eigen::Vector3d(0, 0, r)); // south pole
     const int south = static_cast<int>(m.vertices.size()) - 1;
     auto at = [&](int ring, int seg) { return 1 + (ring - 1) * segments + (seg % segments); };
     for (int j = 0; j < segments; ++j) m.triangles.push_back({0, at(1, j), at(1, j + 1)});
@@ -81,7 +81,7 @@ TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, d
         bool clipped = false;
         for (std::size_t k = 0; k < idx.size(); ++k) {
             int a = idx[(k + idx.size() - 1) % idx.size()], b = idx[k], c = idx[(k + 1) % idx.size()];
-            if (cross(a, b, c) <= 0) continue;  // reflex vertex
+            if (cross(a, b, c) <= 0) continue; // reflex vertex
             bool ear = true;
             for (int p : idx)
                 if (p != a && p != b && p != c && inside(p, a, b, c)) {
@@ -98,8 +98,8 @@ TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, d
     }
     cap.push_back({idx[0], idx[1], idx[2]});
     for (const auto& t : cap) {
-        m.triangles.push_back({t[0] + n, t[1] + n, t[2] + n});  // top, seen from +z: CCW
-        m.triangles.push_back({t[0], t[2], t[1]});              // bottom, reversed
+        m.triangles.push_back({t[0] + n, t[1] + n, t[2] + n}); // top, seen from +z: CCW
+        m.triangles.push_back({t[0], t[2], t[1]});             // bottom, reversed
     }
     for (int i = 0; i < n; ++i) {
         int j = (i + 1) % n;
@@ -109,4 +109,4 @@ TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, d
     return m;
 }
 
-}  // namespace hg::model
+} // namespace hg::model

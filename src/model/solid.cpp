@@ -30,18 +30,27 @@ using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 using Side = CGAL::Side_of_triangle_mesh<SurfaceMesh, K, CGAL::Default, Tree>;
 using EK = CGAL::Exact_predicates_exact_constructions_kernel;
 
-Point toPoint(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-Eigen::Vector3d toEigen(const Point& p) { return {p.x(), p.y(), p.z()}; }
-K::Iso_cuboid_3 toCuboid(const Eigen::AlignedBox3d& b) { return {toPoint(b.min()), toPoint(b.max())}; }
+Point toPoint(const Eigen::Vector3d& v)
+{
+    return {v.x(), v.y(), v.z()};
+}
+Eigen::Vector3d toEigen(const Point& p)
+{
+    return {p.x(), p.y(), p.z()};
+}
+K::Iso_cuboid_3 toCuboid(const Eigen::AlignedBox3d& b)
+{
+    return {toPoint(b.min()), toPoint(b.max())};
+}
 
-}  // namespace
+} // namespace
 
 struct Solid::Impl {
     TriangleMesh mesh;
     SurfaceMesh surface;
     Tree tree;
     std::unique_ptr<Side> side;
-    double scale = 1.0;  // largest bounding-box edge, for relative tolerances
+    double scale = 1.0; // largest bounding-box edge, for relative tolerances
 
     std::size_t faceIndex(SurfaceMesh::Face_index f) const { return static_cast<std::size_t>(f); }
 
@@ -51,8 +60,7 @@ struct Solid::Impl {
         return {toPoint(mesh.vertices[t[0]]), toPoint(mesh.vertices[t[1]]), toPoint(mesh.vertices[t[2]])};
     }
 
-    template <class Query>
-    std::vector<std::size_t> trianglesMeeting(const Query& query) const
+    template <class Query> std::vector<std::size_t> trianglesMeeting(const Query& query) const
     {
         std::vector<SurfaceMesh::Face_index> faces;
         tree.all_intersected_primitives(query, std::back_inserter(faces));
@@ -76,12 +84,14 @@ struct Solid::Impl {
         const EK::Triangle_3 tri(ep(0), ep(1), ep(2));
         const EK::Iso_cuboid_3 cube(EK::Point_3(box.min().x(), box.min().y(), box.min().z()),
                                     EK::Point_3(box.max().x(), box.max().y(), box.max().z()));
-        if (tri.is_degenerate()) return false;  // zero-area triangles bound nothing
+        if (tri.is_degenerate()) return false; // zero-area triangles bound nothing
         const auto result = CGAL::intersection(tri, cube);
         if (!result) return false;
         EK::Point_3 centre;
-        if (const auto* p = boost::get<EK::Point_3>(&*result)) centre = *p;
-        else if (const auto* s = boost::get<EK::Segment_3>(&*result)) centre = CGAL::midpoint(s->source(), s->target());
+        if (const auto* p = boost::get<EK::Point_3>(&*result))
+            centre = *p;
+        else if (const auto* s = boost::get<EK::Segment_3>(&*result))
+            centre = CGAL::midpoint(s->source(), s->target());
         else if (const auto* tr = boost::get<EK::Triangle_3>(&*result))
             centre = CGAL::centroid(tr->vertex(0), tr->vertex(1), tr->vertex(2));
         else if (const auto* poly = boost::get<std::vector<EK::Point_3>>(&*result)) {
@@ -89,7 +99,7 @@ struct Solid::Impl {
             for (const auto& q : *poly) sum = sum + (q - CGAL::ORIGIN);
             centre = CGAL::ORIGIN + sum / static_cast<int>(poly->size());
         } else
-            return true;  // unknown shape: be conservative (Boundary)
+            return true; // unknown shape: be conservative (Boundary)
         return cube.bounded_side(centre) == CGAL::ON_BOUNDED_SIDE;
     }
 };
@@ -122,7 +132,10 @@ Solid::~Solid() = default;
 Solid::Solid(Solid&&) noexcept = default;
 Solid& Solid::operator=(Solid&&) noexcept = default;
 
-const TriangleMesh& Solid::mesh() const { return impl_->mesh; }
+const TriangleMesh& Solid::mesh() const
+{
+    return impl_->mesh;
+}
 
 bool Solid::contains(const Eigen::Vector3d& point) const
 {
@@ -208,18 +221,18 @@ Eigen::Vector3d Solid::surfaceNormal(const Eigen::Vector3d& surfacePoint, double
         if (tri.is_degenerate()) continue;
         if (std::sqrt(CGAL::to_double(CGAL::squared_distance(tri, toPoint(surfacePoint)))) > radius) continue;
         const auto& t = impl_->mesh.triangles[i];
-        double angle = 2.0 * std::numbers::pi;  // interior of the face
+        double angle = 2.0 * std::numbers::pi; // interior of the face
         for (int k = 0; k < 3; ++k) {
             const Eigen::Vector3d& a = impl_->mesh.vertices[t[k]];
             const Eigen::Vector3d& b = impl_->mesh.vertices[t[(k + 1) % 3]];
             const Eigen::Vector3d& c = impl_->mesh.vertices[t[(k + 2) % 3]];
-            if ((a - surfacePoint).norm() <= radius) {  // at a corner: its interior angle
+            if ((a - surfacePoint).norm() <= radius) { // at a corner: its interior angle
                 angle = std::acos(std::clamp((b - a).normalized().dot((c - a).normalized()), -1.0, 1.0));
                 break;
             }
             const Eigen::Vector3d e = b - a;
             const double s = std::clamp((surfacePoint - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
-            if ((a + s * e - surfacePoint).norm() <= radius) angle = std::numbers::pi;  // on an edge
+            if ((a + s * e - surfacePoint).norm() <= radius) angle = std::numbers::pi; // on an edge
         }
         sum += angle * impl_->mesh.faceNormal(i);
     }
@@ -253,13 +266,14 @@ std::optional<RayHit> Solid::firstHit(const Eigen::Vector3d& origin, const Eigen
     auto consider = [&](const Point& p, std::size_t tri) {
         const Eigen::Vector3d q = toEigen(p);
         const double s = (q - origin).dot(d);
-        if (!(s > 0.0)) return;  // the ray starts on the surface: s = 0 is not a hit
+        if (!(s > 0.0)) return; // the ray starts on the surface: s = 0 is not a hit
         if (!best || s < best->distance) best = RayHit{s, q, tri};
     };
     for (const auto& [object, face] : hits) {
         const std::size_t tri = impl_->faceIndex(face);
-        if (const auto* p = boost::get<Point>(&object)) consider(*p, tri);
-        else if (const auto* s = boost::get<K::Segment_3>(&object)) {  // ray in the triangle's plane
+        if (const auto* p = boost::get<Point>(&object))
+            consider(*p, tri);
+        else if (const auto* s = boost::get<K::Segment_3>(&object)) { // ray in the triangle's plane
             consider(s->source(), tri);
             consider(s->target(), tri);
         }
@@ -282,11 +296,11 @@ bool Solid::segmentHits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) cons
         const auto oa = CGAL::orientation(tri[0], tri[1], tri[2], pa);
         const auto ob = CGAL::orientation(tri[0], tri[1], tri[2], pb);
         if (oa == CGAL::COPLANAR && ob == CGAL::COPLANAR) return true;
-        if (oa == CGAL::COPLANAR && tri.has_on(pa)) continue;  // met at a only
-        if (ob == CGAL::COPLANAR && tri.has_on(pb)) continue;  // met at b only
+        if (oa == CGAL::COPLANAR && tri.has_on(pa)) continue; // met at a only
+        if (ob == CGAL::COPLANAR && tri.has_on(pb)) continue; // met at b only
         return true;
     }
     return false;
 }
 
-}  // namespace hg::model
+} // namespace hg::model

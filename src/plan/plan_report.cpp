@@ -24,8 +24,7 @@ json vec(const Vec3& v)
 json mat(const geometry::Mat3& m)
 {
     json rows = json::array();
-    for (int r = 0; r < 3; ++r)
-        rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
+    for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
     return rows;
 }
 
@@ -119,8 +118,7 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         if (!a.reason.empty()) j["reason"] = a.reason;
         if (!a.unreachableWitnesses.empty()) {
             json u = json::array();
-            for (const auto& p : a.unreachableWitnesses)
-                u.push_back(poseJson(p, type));
+            for (const auto& p : a.unreachableWitnesses) u.push_back(poseJson(p, type));
             j["unreachable_witnesses"] = u;
         }
         if (a.blockingTriangle) j["blocking_triangle"] = *a.blockingTriangle;
@@ -170,8 +168,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     std::ostringstream s;
     s << "# View plan: " << problem.part << "\n\n";
     std::size_t inspectable = 0;
-    for (const auto& a : plan.landmarks)
-        inspectable += a.inspectable() ? 1 : 0;
+    for (const auto& a : plan.landmarks) inspectable += a.inspectable() ? 1 : 0;
     s << (plan.feasible ? "**Feasible.** " : "**Not feasible.** ") << plan.views.size() << " views observe "
       << inspectable << " of " << plan.landmarks.size() << " landmarks (voxel " << num(problem.grid.voxelSize)
       << " mm; " << plan.candidatePoses << " candidate poses; " << num(plan.seconds, 3) << " s).";
@@ -181,8 +178,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     s << "\n\n";
     if (!plan.problems.empty()) {
         s << "## Problems\n\n";
-        for (const auto& p : plan.problems)
-            s << "- " << p << "\n";
+        for (const auto& p : plan.problems) s << "- " << p << "\n";
         s << "\n";
     }
     s << "## Views (travel order)\n\n| view | pose | landmarks (predicted MED, mm) |\n|---|---|---|\n";
@@ -198,8 +194,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
         const auto& a = plan.landmarks[l];
         auto [ids, med] = observers(plan, l);
         std::string viewList;
-        for (const auto& id : ids)
-            viewList += (viewList.empty() ? "" : " ") + id;
+        for (const auto& id : ids) viewList += (viewList.empty() ? "" : " ") + id;
         s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(a.toleranceMm) << " | "
           << (a.witnessPoses.empty() ? "-" : num(a.bestMedMm, 3)) << " | " << (viewList.empty() ? "-" : viewList)
           << " | " << a.witnessPoses.size() << " | " << a.unseenVoids.size() << " |\n";

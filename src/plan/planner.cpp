@@ -69,8 +69,7 @@ std::string fmt(double v, int precision = 3)
     std::string out = s.str();
     // 12.500 -> 12.5, 30.000 -> 30
     if (out.find('.') != std::string::npos) {
-        while (!out.empty() && out.back() == '0')
-            out.pop_back();
+        while (!out.empty() && out.back() == '0') out.pop_back();
         if (!out.empty() && out.back() == '.') out.pop_back();
     }
     return out == "-0" ? "0" : out;
@@ -183,8 +182,7 @@ class Analyser {
                                                          [](double a, double b) { return std::abs(a - b) < 1e-9; }),
                                              poseGrid_.extraDeclinationsDeg.end());
         grid_ = gridPoses(station_.fixture, options_.grid);
-        for (const auto& p : grid_)
-            gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
+        for (const auto& p : grid_) gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
     }
 
     const ViewRules& rules() const { return rules_; }
@@ -439,8 +437,7 @@ class Analyser {
         const auto& grid = problem_.grid;
         // Witnesses first: they prove most neighbours void at once.
         std::vector<geometry::CameraModel> cameras;
-        for (const auto& p : r.a.witnessPoses)
-            cameras.push_back(station_.cameraAt(p));
+        for (const auto& p : r.a.witnessPoses) cameras.push_back(station_.cameraAt(p));
         for (std::size_t i = 0; i < r.candidates.size(); ++i)
             if (!r.checks[i].sees()) cameras.push_back(station_.cameraAt(r.candidates[i]));
         for (const auto& v : neighbourhood(r.a.voxel, std::max(1, options_.pareLayers))) {
@@ -495,8 +492,7 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
     double best = std::numeric_limits<double>::infinity();
     for (int p : variation) {
         double s = 0.0;
-        for (std::size_t l : landmarks)
-            s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
+        for (std::size_t l : landmarks) s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
         sums.emplace_back(s, p);
         best = std::min(best, s);
     }
@@ -520,8 +516,7 @@ std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const
     validate(problem);
     Analyser analyser(problem, options);
     std::vector<LandmarkAnalysis> out;
-    for (const auto& lm : problem.landmarks)
-        out.push_back(analyser.analyse(lm).a);
+    for (const auto& lm : problem.landmarks) out.push_back(analyser.analyse(lm).a);
     return out;
 }
 
@@ -651,8 +646,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
 
     // Final views (5.4.4), then every landmark each one observes.
     std::vector<std::size_t> chosen;
-    for (const auto& g : greedy.groups)
-        chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
+    for (const auto& g : greedy.groups) chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
     std::sort(chosen.begin(), chosen.end());
     chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
     {
@@ -668,8 +662,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
                                 " views but at most " + std::to_string(options.maxViews) +
                                 " were requested: allow more views or loosen the tightest tolerances.");
     std::vector<FixturePose> chosenPoses;
-    for (std::size_t p : chosen)
-        chosenPoses.push_back(poses[p]);
+    for (std::size_t p : chosen) chosenPoses.push_back(poses[p]);
     const auto order = orderForTravel(chosenPoses, type, homePose(station.fixture));
     for (std::size_t k = 0; k < order.size(); ++k) {
         const std::size_t p = chosen[order[k]];
@@ -701,15 +694,13 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
     for (const auto& req : requirements) {
         bool met = false;
         for (const auto& sub : req.anyOf)
-            for (std::size_t p : chosen)
-                met = met || std::binary_search(sub.begin(), sub.end(), static_cast<int>(p));
+            for (std::size_t p : chosen) met = met || std::binary_search(sub.begin(), sub.end(), static_cast<int>(p));
         if (!met)
             plan.problems.push_back("landmark " + analysed[req.landmark].a.id +
                                     ": a best view group is not met by the planned views.");
     }
 
-    for (auto& r : analysed)
-        plan.landmarks.push_back(std::move(r.a));
+    for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));
     plan.feasible = plan.problems.empty();
     plan.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     logger->info("plan: {} landmarks, {} candidate poses, {} views in {:.3f} s", plan.landmarks.size(),

@@ -82,8 +82,7 @@ std::vector<FixturePose> gridPoses(const FixtureKinematics& fixture, const PoseG
         rotations.pop_back();
     for (double d :
          gridValues(fixture.declinationRangeDeg.min, fixture.declinationRangeDeg.max, grid.declinationStepDeg))
-        for (double r : rotations)
-            poses.push_back({r, d, 0.0});
+        for (double r : rotations) poses.push_back({r, d, 0.0});
     return poses;
 }
 
@@ -131,20 +130,16 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
     for (double d : solveAt) {
         auto [a, b, e] = coefficients([&](double r) { return fixture.cameraCentreInPart({r, d, 0.0}); });
         bool all = false;
-        for (double r : solveTrig(a, b, target - e, rr.min, rr.max, scale, all))
-            addUnique(poses, {r, d, 0.0});
+        for (double r : solveTrig(a, b, target - e, rr.min, rr.max, scale, all)) addUnique(poses, {r, d, 0.0});
         if (all)
-            for (double r : rotations)
-                addUnique(poses, {r, d, 0.0});
+            for (double r : rotations) addUnique(poses, {r, d, 0.0});
     }
     for (double r : rotations) {
         auto [a, b, e] = coefficients([&](double d) { return fixture.cameraCentreInPart({r, d, 0.0}); });
         bool all = false;
-        for (double d : solveTrig(a, b, target - e, dr.min, dr.max, scale, all))
-            addUnique(poses, {r, d, 0.0});
+        for (double d : solveTrig(a, b, target - e, dr.min, dr.max, scale, all)) addUnique(poses, {r, d, 0.0});
         if (all)
-            for (double d : declinations)
-                addUnique(poses, {r, d, 0.0});
+            for (double d : declinations) addUnique(poses, {r, d, 0.0});
     }
     return poses;
 }
@@ -164,8 +159,7 @@ std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, F
     if (n < 2) return order;
     auto length = [&](const std::vector<std::size_t>& o) {
         double sum = travelDistance(start, poses[o[0]], type);
-        for (std::size_t i = 1; i < o.size(); ++i)
-            sum += travelDistance(poses[o[i - 1]], poses[o[i]], type);
+        for (std::size_t i = 1; i < o.size(); ++i) sum += travelDistance(poses[o[i - 1]], poses[o[i]], type);
         return sum;
     };
     if (n <= 8) {

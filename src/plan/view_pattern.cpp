@@ -139,8 +139,7 @@ GreedyResult greedyViewPattern(const std::vector<Requirement>& requirements, con
         g.variation = views[i].variation;
         g.requirements = views[i].requirements;
         std::sort(g.requirements.begin(), g.requirements.end());
-        for (std::size_t r : g.requirements)
-            g.landmarks.push_back(requirements[r].landmark);
+        for (std::size_t r : g.requirements) g.landmarks.push_back(requirements[r].landmark);
         std::sort(g.landmarks.begin(), g.landmarks.end());
         g.landmarks.erase(std::unique(g.landmarks.begin(), g.landmarks.end()), g.landmarks.end());
         result.groups.push_back(std::move(g));
@@ -165,8 +164,7 @@ std::vector<int> removeRedundantPoses(const std::vector<Requirement>& requiremen
                 ++served[i];
             }
     std::vector<std::size_t> order(poses.size());
-    for (std::size_t i = 0; i < order.size(); ++i)
-        order[i] = i;
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return served[a] < served[b]; });
     std::vector<bool> keep(poses.size(), true);
     for (std::size_t i : order) {
@@ -192,16 +190,14 @@ ExactResult exactViewCover(const std::vector<Requirement>& requirements, double 
     std::vector<PoseSet> rows;
     for (const auto& req : requirements) {
         PoseSet u;
-        for (const auto& sub : req.anyOf)
-            u.insert(u.end(), sub.begin(), sub.end());
+        for (const auto& sub : req.anyOf) u.insert(u.end(), sub.begin(), sub.end());
         std::sort(u.begin(), u.end());
         u.erase(std::unique(u.begin(), u.end()), u.end());
         if (u.empty()) {
             result.message = "a requirement has no candidate pose";
             return result;
         }
-        for (int p : u)
-            column.emplace(p, 0);
+        for (int p : u) column.emplace(p, 0);
         rows.push_back(std::move(u));
     }
     if (rows.empty()) {

@@ -136,8 +136,7 @@ ViewRules::ViewRules(const model::Solid& solid, const geometry::Station& station
     if (options_.floorRadiusMm) {
         floorRadius_ = *options_.floorRadiusMm;
     } else {
-        for (const auto& v : solid.mesh().vertices)
-            floorRadius_ = std::max(floorRadius_, std::hypot(v.x(), v.y()));
+        for (const auto& v : solid.mesh().vertices) floorRadius_ = std::max(floorRadius_, std::hypot(v.x(), v.y()));
     }
     ownRadius_ = options_.ownSurfaceRadiusMm.value_or(3.0 * voxelSizeMm);
 }

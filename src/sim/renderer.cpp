@@ -130,8 +130,7 @@ cv::Mat rasterise(std::vector<ScreenTriangle>& triangles, cv::Size size, int sub
         bool touched = false;
         for (int s = 0; s < sub; ++s) {
             const int k = row * sub + s;
-            while (next < triangles.size() && triangles[next].firstSub <= k)
-                active.push_back(next++);
+            while (next < triangles.size() && triangles[next].firstSub <= k) active.push_back(next++);
             if (active.empty()) continue;
             const double y = (k + 0.5) / sub - 0.5;
             intervals.clear();
@@ -363,8 +362,7 @@ cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const 
         // ones whose normals point away from the camera.
         const double orientation = mesh.signedVolume() < 0.0 ? -1.0 : 1.0;
         cam.resize(mesh.vertices.size());
-        for (std::size_t i = 0; i < cam.size(); ++i)
-            cam[i] = pose.apply(mesh.vertices[i]);
+        for (std::size_t i = 0; i < cam.size(); ++i) cam[i] = pose.apply(mesh.vertices[i]);
         if (!distorted) {
             pix.resize(cam.size());
             for (std::size_t i = 0; i < cam.size(); ++i)

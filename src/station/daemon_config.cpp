@@ -201,8 +201,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         n->allowOnlyKeys({"parts"});
         auto parts = (*n)["parts"];
         if (!parts.isMap()) parts.fail("expected a map of part names to mesh files (nominal and defect variants)");
-        for (const auto& name : parts.keys())
-            cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
+        for (const auto& name : parts.keys()) cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
         if (parts.keys().empty() || !parts.has("nominal")) parts.fail("the simulated parts must include 'nominal'");
     }
     return cfg;

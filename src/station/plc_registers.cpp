@@ -26,8 +26,7 @@ std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
         s.push_back(static_cast<char>(w >> 8));
         s.push_back(static_cast<char>(w & 0xFF));
     }
-    while (!s.empty() && (s.back() == '\0' || s.back() == ' '))
-        s.pop_back();
+    while (!s.empty() && (s.back() == '\0' || s.back() == ' ')) s.pop_back();
     // A NUL inside the serial ends it (C-string convention of most PLC string types).
     if (auto nul = s.find('\0'); nul != std::string::npos) s.resize(nul);
     return s;

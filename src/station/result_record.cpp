@@ -62,8 +62,7 @@ PublishedResult InspectionRecord::toPublished(PlcStatus statusAfter) const
     r.landmarksTotal = static_cast<std::uint16_t>(std::min<std::size_t>(landmarks.size(), kMax));
     r.cycleMs = cycleMs;
     r.landmarkOk.reserve(landmarks.size());
-    for (const auto& l : landmarks)
-        r.landmarkOk.push_back(l.ok());
+    for (const auto& l : landmarks) r.landmarkOk.push_back(l.ok());
     return r;
 }
 

@@ -13,12 +13,12 @@ using A = SequencerAction::Kind;
 
 // The allowed transitions (from, to); self-transitions are the retries.
 constexpr std::array<std::pair<S, S>, 26> kTransitions{{
-    {S::Starting, S::Ready}, {S::Starting, S::Fault},    {S::Ready, S::Moving},      {S::Ready, S::Fault},
-    {S::Done, S::Moving},    {S::Done, S::Fault},        {S::Moving, S::Moving},     {S::Moving, S::Settling},
-    {S::Moving, S::Done},    {S::Moving, S::Fault},      {S::Settling, S::Grabbing}, {S::Settling, S::Done},
-    {S::Settling, S::Fault}, {S::Grabbing, S::Grabbing}, {S::Grabbing, S::Moving},   {S::Grabbing, S::Processing},
-    {S::Grabbing, S::Done},  {S::Grabbing, S::Fault},    {S::Processing, S::Done},   {S::Processing, S::Fault},
-    {S::Fault, S::Ready},    {S::Fault, S::Fault},       {S::Ready, S::Calibrating}, {S::Done, S::Calibrating},
+    {S::Starting, S::Ready},    {S::Starting, S::Fault},    {S::Ready, S::Moving},      {S::Ready, S::Fault},
+    {S::Done, S::Moving},       {S::Done, S::Fault},        {S::Moving, S::Moving},     {S::Moving, S::Settling},
+    {S::Moving, S::Done},       {S::Moving, S::Fault},      {S::Settling, S::Grabbing}, {S::Settling, S::Done},
+    {S::Settling, S::Fault},    {S::Grabbing, S::Grabbing}, {S::Grabbing, S::Moving},   {S::Grabbing, S::Processing},
+    {S::Grabbing, S::Done},     {S::Grabbing, S::Fault},    {S::Processing, S::Done},   {S::Processing, S::Fault},
+    {S::Fault, S::Ready},       {S::Fault, S::Fault},       {S::Ready, S::Calibrating}, {S::Done, S::Calibrating},
     {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault},
 }};
 
@@ -46,11 +46,10 @@ std::string_view toString(SequencerState s)
 std::string_view toString(SequencerEvent e)
 {
     constexpr std::array<std::string_view, 22> names{
-        "devices-active", "devices-failed",  "trigger",      "in-position", "move-timeout",
-        "move-fault",     "move-comm-error", "move-refused", "settled",     "frame-ok",
-        "frame-timeout",  "frame-bad",       "frame-error",  "processed",   "processing-failed",
-        "program-failed", "abort",           "shutdown",     "recovered",   "recovery-failed",
-        "calibration-start", "calibration-end"};
+        "devices-active",  "devices-failed",  "trigger",           "in-position",    "move-timeout",  "move-fault",
+        "move-comm-error", "move-refused",    "settled",           "frame-ok",       "frame-timeout", "frame-bad",
+        "frame-error",     "processed",       "processing-failed", "program-failed", "abort",         "shutdown",
+        "recovered",       "recovery-failed", "calibration-start", "calibration-end"};
     return names[static_cast<std::size_t>(e)];
 }
 

@@ -86,8 +86,7 @@ class ManifestReader {
     {
         if (!j.is_array()) fail(field, "expected an array of numbers, found " + typeName(j));
         std::vector<double> out;
-        for (std::size_t i = 0; i < j.size(); ++i)
-            out.push_back(number(j[i], field + "[" + std::to_string(i) + "]"));
+        for (std::size_t i = 0; i < j.size(); ++i) out.push_back(number(j[i], field + "[" + std::to_string(i) + "]"));
         return out;
     }
 
@@ -242,8 +241,7 @@ json matrixJson(const Eigen::MatrixXd& m)
     json rows = json::array();
     for (Eigen::Index r = 0; r < m.rows(); ++r) {
         json row = json::array();
-        for (Eigen::Index c = 0; c < m.cols(); ++c)
-            row.push_back(m(r, c));
+        for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
         rows.push_back(row);
     }
     return rows;

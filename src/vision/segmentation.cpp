@@ -44,7 +44,7 @@ int otsuBin(const std::vector<double>& hist)
     return bestBin;
 }
 
-}  // namespace
+} // namespace
 
 SegmentationMethod parseSegmentationMethod(const std::string& name)
 {
@@ -57,9 +57,12 @@ SegmentationMethod parseSegmentationMethod(const std::string& name)
 std::string toString(SegmentationMethod method)
 {
     switch (method) {
-    case SegmentationMethod::Otsu: return "otsu";
-    case SegmentationMethod::Fixed: return "fixed";
-    case SegmentationMethod::Mask: return "mask";
+    case SegmentationMethod::Otsu:
+        return "otsu";
+    case SegmentationMethod::Fixed:
+        return "fixed";
+    case SegmentationMethod::Mask:
+        return "mask";
     }
     return "otsu";
 }
@@ -70,7 +73,8 @@ cv::Mat toGrey(const cv::Mat& frame)
     if (frame.depth() != CV_8U && frame.depth() != CV_16U)
         throw std::invalid_argument("frame must be 8- or 16-bit unsigned");
     switch (frame.channels()) {
-    case 1: return frame;
+    case 1:
+        return frame;
     case 3: {
         cv::Mat g;
         cv::cvtColor(frame, g, cv::COLOR_BGR2GRAY);
@@ -81,7 +85,8 @@ cv::Mat toGrey(const cv::Mat& frame)
         cv::cvtColor(frame, g, cv::COLOR_BGRA2GRAY);
         return g;
     }
-    default: throw std::invalid_argument("frame must have 1, 3 or 4 channels");
+    default:
+        throw std::invalid_argument("frame must have 1, 3 or 4 channels");
     }
 }
 
@@ -89,9 +94,12 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
 {
     if (grey.channels() != 1) throw std::invalid_argument("computeThreshold needs a single-channel frame");
     switch (settings.method) {
-    case SegmentationMethod::Fixed: return settings.threshold;
-    case SegmentationMethod::Mask: return 0.0;
-    case SegmentationMethod::Otsu: break;
+    case SegmentationMethod::Fixed:
+        return settings.threshold;
+    case SegmentationMethod::Mask:
+        return 0.0;
+    case SegmentationMethod::Otsu:
+        break;
     }
     const int stride = std::max(1, settings.otsuStride);
     const bool wide = grey.depth() == CV_16U;
@@ -116,8 +124,7 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
     return static_cast<double>(otsuBin(hist));
 }
 
-cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold,
-                      const SegmentationSettings& settings)
+cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold, const SegmentationSettings& settings)
 {
     if (grey.channels() != 1) throw std::invalid_argument("segmentRegion needs a single-channel frame");
     const cv::Rect r = roi & cv::Rect(0, 0, grey.cols, grey.rows);
@@ -141,4 +148,4 @@ cv::Mat segment(const cv::Mat& frame, const SegmentationSettings& settings)
     return segmentRegion(grey, cv::Rect(0, 0, grey.cols, grey.rows), computeThreshold(grey, settings), settings);
 }
 
-}  // namespace hg::vision
+} // namespace hg::vision

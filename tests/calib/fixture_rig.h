@@ -71,12 +71,12 @@ struct Rig {
                     pixels.emplace_back(static_cast<float>(px->x() + noise(rng)),
                                         static_cast<float>(px->y() + noise(rng)));
                 }
-                out.push_back({pose, viewFromCorners(board, "r" + std::to_string(int(theta)) + "_d" +
-                                                                std::to_string(int(phi)),
-                                                     pixels)});
+                out.push_back(
+                    {pose, viewFromCorners(board, "r" + std::to_string(int(theta)) + "_d" + std::to_string(int(phi)),
+                                           pixels)});
             }
         return out;
     }
 };
 
-}  // namespace calibtest
+} // namespace calibtest

@@ -45,7 +45,7 @@ fixture:
 environment: {floor_z_mm: 2.5}
 )";
 
-}  // namespace
+} // namespace
 
 TEST(CalibrateCli, IntrinsicsWritesTheStationAndKeepsABackup)
 {
@@ -55,7 +55,7 @@ TEST(CalibrateCli, IntrinsicsWritesTheStationAndKeepsABackup)
                          sampleImages() + " --out " + station.string());
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("RMS reprojection error"), std::string::npos) << r.out;
-    EXPECT_NE(r.err.find("[13/13]"), std::string::npos) << r.err;  // progress on stderr
+    EXPECT_NE(r.err.find("[13/13]"), std::string::npos) << r.err; // progress on stderr
     auto s = hg::geometry::loadStation(station);
     // OpenCV's published result for these images (samples/data/left_intrinsics.yml).
     EXPECT_NEAR(s.camera.K(0, 0), 535.9157, 0.01 * 535.9);
@@ -93,12 +93,14 @@ TEST(CalibrateCli, RailPrintsTheTablesAndNamesBadKeys)
     y << "horizontal:\n";
     for (double h : {-20.0, 20.0}) {
         y << "  - displacement_mm: " << h << "\n    samples:\n";
-        for (double d : {200.0, 250.0, 400.0}) y << "      - {range_mm: " << d << ", pixel: [" << 320 + 1000 * h / d << ", 240]}\n";
+        for (double d : {200.0, 250.0, 400.0})
+            y << "      - {range_mm: " << d << ", pixel: [" << 320 + 1000 * h / d << ", 240]}\n";
     }
     y << "vertical:\n";
     for (double w : {-10.0, 30.0}) {
         y << "  - displacement_mm: " << w << "\n    samples:\n";
-        for (double d : {200.0, 250.0, 400.0}) y << "      - {range_mm: " << d << ", pixel: [320, " << 240 + 1000 * w / d << "]}\n";
+        for (double d : {200.0, 250.0, 400.0})
+            y << "      - {range_mm: " << d << ", pixel: [320, " << 240 + 1000 * w / d << "]}\n";
     }
     auto obs = hgtest::writeFile(dir / "rail.yaml", y.str());
     auto r = hgtest::run(hullgauge() + " calibrate rail --observations " + obs.string());
@@ -122,7 +124,8 @@ TEST(CalibrateCli, FixtureFromCornerObservationsWritesTheAxes)
     st.precision(12);
     const auto& K = rig.camera.K;
     st << "camera:\n  image_size: [2048, 1536]\n  K: [[" << K(0, 0) << ", 0, " << K(0, 2) << "], [0, " << K(1, 1)
-       << ", " << K(1, 2) << "], [0, 0, 1]]\n  dist: [-0.05, 0.02, 0, 0, 0]\nlamps: {backend: sim, green: G, amber: A, red: R}\n";
+       << ", " << K(1, 2)
+       << "], [0, 0, 1]]\n  dist: [-0.05, 0.02, 0, 0, 0]\nlamps: {backend: sim, green: G, amber: A, red: R}\n";
     auto station = hgtest::writeFile(dir / "station.yaml", st.str());
     std::ostringstream obs;
     obs.precision(10);
@@ -140,7 +143,7 @@ TEST(CalibrateCli, FixtureFromCornerObservationsWritesTheAxes)
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("distance between axes"), std::string::npos) << r.out;
     auto root = hg::ConfigNode::loadFile(station);
-    EXPECT_EQ(root["lamps"]["green"].asString(), "G");  // untouched
+    EXPECT_EQ(root["lamps"]["green"].asString(), "G"); // untouched
     auto R = root["fixture"]["camera_from_fixture"]["R"].asMatrix3();
     auto t = root["fixture"]["camera_from_fixture"]["t"].asVector3();
     EXPECT_LT(hg::geometry::rotationAngleDeg(R, rig.cameraFromFixture.R), 0.05);
@@ -149,8 +152,9 @@ TEST(CalibrateCli, FixtureFromCornerObservationsWritesTheAxes)
     EXPECT_NEAR(root["fixture"]["calibration"]["axes_distance_mm"].asDouble(), 0.0, 0.1);
 
     // A view with a corner missing and no ids is refused with the key.
-    auto broken = hgtest::writeFile(dir / "broken.yaml", "pattern: chessboard:3x3:10\nviews:\n"
-                                                          "  - {rotation_deg: 0, declination_deg: 0, corners: [[1, 2]]}\n");
+    auto broken =
+        hgtest::writeFile(dir / "broken.yaml", "pattern: chessboard:3x3:10\nviews:\n"
+                                               "  - {rotation_deg: 0, declination_deg: 0, corners: [[1, 2]]}\n");
     r = hgtest::run(hullgauge() + " calibrate fixture --station " + station.string() + " --observations " +
                     broken.string());
     EXPECT_EQ(r.status, 2);

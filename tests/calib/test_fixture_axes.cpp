@@ -3,8 +3,8 @@
 #include <iostream>
 #include <random>
 
-#include "hullgauge/calib/fixture_axes.h"
 #include "fixture_rig.h"
+#include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/common/error.h"
 
 using namespace hg::calib;
@@ -53,7 +53,7 @@ void expectRecovered(const Rig& rig, const FixtureAxesResult& r)
     EXPECT_NEAR(r.rmsMm, r.rmsPx * 450.0 / 2400.0, 0.2 * r.rmsPx * 450.0 / 2400.0);
 }
 
-}  // namespace
+} // namespace
 
 TEST(FixtureAxes, SkewNonPerpendicularAxesAreRecovered)
 {
@@ -82,8 +82,8 @@ TEST(FixtureAxes, IntersectingPerpendicularAxesGiveTheContractModel)
     // With intersecting axes the CONTRACTS §2 kinematics reproduce the rig.
     auto k = result.kinematics();
     FixturePose pose{-20.0, 35.0, 0.0};
-    RigidTransform truth = rig.cameraFromFixture * rotationAboutLine(rig.declination, 35.0) *
-                           rotationAboutLine(rig.rotation, -20.0);
+    RigidTransform truth =
+        rig.cameraFromFixture * rotationAboutLine(rig.declination, 35.0) * rotationAboutLine(rig.rotation, -20.0);
     RigidTransform model = k.cameraFromPart(pose);
     EXPECT_LT(rotationAngleDeg(model.R, truth.R), 0.05);
     EXPECT_LT((model.t - truth.t).norm(), 0.1);

@@ -42,7 +42,7 @@ std::vector<TargetView> detectAll(const TargetSpec& spec, const std::vector<std:
     return views;
 }
 
-}  // namespace
+} // namespace
 
 TEST(TargetSpec, ParsesChessboardAndCharuco)
 {
@@ -52,12 +52,12 @@ TEST(TargetSpec, ParsesChessboardAndCharuco)
     EXPECT_EQ(c.rows, 6);
     EXPECT_DOUBLE_EQ(c.squareMm, 25.0);
     EXPECT_EQ(c.cornerCount(), 54);
-    EXPECT_EQ(c.cornerPosition(10), cv::Point3f(25.0f, 25.0f, 0.0f));  // column 1, row 1
+    EXPECT_EQ(c.cornerPosition(10), cv::Point3f(25.0f, 25.0f, 0.0f)); // column 1, row 1
     auto a = TargetSpec::parse("charuco:7x5:30:22");
     EXPECT_EQ(a.kind, TargetKind::Charuco);
     EXPECT_EQ(a.dictionary, "DICT_5X5_100");
     EXPECT_EQ(a.cornerCount(), 24);
-    EXPECT_EQ(a.cornerPosition(7), cv::Point3f(30.0f, 30.0f, 0.0f));  // 6 corners per row
+    EXPECT_EQ(a.cornerPosition(7), cv::Point3f(30.0f, 30.0f, 0.0f)); // 6 corners per row
 }
 
 TEST(TargetSpec, BadPatternsNameTheOption)
@@ -139,7 +139,7 @@ TEST(Intrinsics, CharucoRenderedViewsGiveBackTheCamera)
     auto spec = TargetSpec::parse("charuco:8x6:20:15:DICT_5X5_100");
     auto board = cv::aruco::CharucoBoard::create(8, 6, 20.0f, 15.0f,
                                                  cv::aruco::getPredefinedDictionary(cv::aruco::DICT_5X5_100));
-    const double pxPerMm = 10.0;  // board artwork resolution
+    const double pxPerMm = 10.0; // board artwork resolution
     cv::Mat art;
     board->draw(cv::Size(static_cast<int>(8 * 20 * pxPerMm), static_cast<int>(6 * 20 * pxPerMm)), art, 0, 1);
 

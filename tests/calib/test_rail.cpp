@@ -63,7 +63,7 @@ std::string toYaml(const RailObservations& obs)
     return y.str();
 }
 
-}  // namespace
+} // namespace
 
 TEST(RailSimilarTriangles, HandComputedEquation4311)
 {
@@ -77,7 +77,7 @@ TEST(RailSimilarTriangles, HandComputedEquation4311)
     EXPECT_EQ(t.rangePairs[0], std::make_pair(200.0, 100.0));
     ASSERT_TRUE(t.values[0][0].has_value());
     EXPECT_NEAR(*t.values[0][0], 1000.0, 1e-9);
-    EXPECT_FALSE(t.values[0][1].has_value());  // on the axis: no value, as in Table 4.3
+    EXPECT_FALSE(t.values[0][1].has_value()); // on the axis: no value, as in Table 4.3
     // v = -5: n = -50, n' = -25: (100/-5) * 1250 / -25 = 1000.
     EXPECT_NEAR(*t.values[0][2], 1000.0, 1e-9);
     EXPECT_EQ(t.overall.count, 2);
@@ -94,7 +94,7 @@ TEST(RailSimilarTriangles, RowsFollowTheDissertationsOrder)
     EXPECT_EQ(t.rangePairs[3], std::make_pair(49.0, 43.0));
     EXPECT_EQ(t.rangePairs[4], std::make_pair(37.0, 25.0));
     EXPECT_EQ(t.rangePairs[9], std::make_pair(49.0, 25.0));
-    EXPECT_EQ(t.overall.count, 0);  // the point never moved: n = n' everywhere
+    EXPECT_EQ(t.overall.count, 0); // the point never moved: n = n' everywhere
 }
 
 TEST(RailCalibration, SimulatedBenchWithNoiseRecoversCentreAndRatios)
@@ -106,13 +106,13 @@ TEST(RailCalibration, SimulatedBenchWithNoiseRecoversCentreAndRatios)
 
     EXPECT_NEAR(cal.centre.centre.x(), bench.cx, 0.5);
     EXPECT_NEAR(cal.centre.centre.y(), bench.cy, 0.5);
-    EXPECT_EQ(cal.centre.stationary, 2);  // the two points on the axis
+    EXPECT_EQ(cal.centre.stationary, 2); // the two points on the axis
     // Eq. 4.3.1-1 averaged over all range pairs and displacements.
     EXPECT_NEAR(cal.horizontal.overall.mean, bench.fx, 0.005 * bench.fx);
     EXPECT_NEAR(cal.vertical.overall.mean, bench.fy, 0.005 * bench.fy);
     EXPECT_EQ(cal.horizontal.rangePairs.size(), 10u);
     EXPECT_EQ(cal.horizontal.displacementsMm.size(), 7u);
-    EXPECT_EQ(cal.horizontal.overall.count, 60);  // 10 pairs x 6 displaced points
+    EXPECT_EQ(cal.horizontal.overall.count, 60); // 10 pairs x 6 displaced points
     // The least-squares fit over all observations.
     EXPECT_NEAR(cal.fit.fx, bench.fx, 0.005 * bench.fx);
     EXPECT_NEAR(cal.fit.fy, bench.fy, 0.005 * bench.fy);
@@ -127,7 +127,7 @@ TEST(RailCalibration, SimulatedBenchWithNoiseRecoversCentreAndRatios)
 TEST(RailCalibration, MisalignedMountIsAbsorbedByTheLeastSquaresFit)
 {
     Bench bench;
-    bench.h0 = 0.8;  // the mount's zero is 0.8 mm off the optical axis
+    bench.h0 = 0.8; // the mount's zero is 0.8 mm off the optical axis
     bench.w0 = -0.6;
     auto cal = calibrateRail(bench.simulate(99));
     // The per-pair ratios carry the offset (v is not measured from the axis);

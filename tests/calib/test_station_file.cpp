@@ -47,7 +47,7 @@ IntrinsicsResult sampleResult()
     return r;
 }
 
-}  // namespace
+} // namespace
 
 TEST(StationFile, IntrinsicsRewriteKeepsOtherKeysAndMakesABackup)
 {
@@ -58,7 +58,7 @@ TEST(StationFile, IntrinsicsRewriteKeepsOtherKeysAndMakesABackup)
     auto backup = update.commit();
 
     ASSERT_TRUE(backup.has_value());
-    EXPECT_EQ(readText(*backup), kStation);  // the old file, comment and all
+    EXPECT_EQ(readText(*backup), kStation); // the old file, comment and all
     auto station = hg::geometry::loadStation(file);
     EXPECT_DOUBLE_EQ(station.camera.K(0, 0), 812.5);
     EXPECT_DOUBLE_EQ(station.camera.K(1, 2), 241.5);

@@ -18,4 +18,4 @@ TEST(InputError, WithoutLineOrFile)
     EXPECT_STREQ(InputError("", "--depth", "must be 1..20").what(), "--depth: must be 1..20");
 }
 
-}  // namespace hg
+} // namespace hg

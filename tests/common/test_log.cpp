@@ -23,4 +23,4 @@ TEST(Log, UnknownLevelIsInputError)
     log::configure("info");
 }
 
-}  // namespace hg
+} // namespace hg

@@ -42,8 +42,7 @@ fixture:
     hgtest::writeFile(dir / "part.yaml", "part: fake-block\nmesh: block.stl\nlandmarks:\n"
                                          "  - {id: L0, position: [0, 0, 10], tolerance_mm: 0.2}\n");
     std::string poses;
-    for (int k = 0; k < views; ++k)
-        poses += "- {rotation_deg: " + std::to_string(k * 20) + ", declination_deg: 20}\n";
+    for (int k = 0; k < views; ++k) poses += "- {rotation_deg: " + std::to_string(k * 20) + ", declination_deg: 20}\n";
     hgtest::writeFile(dir / "views.yaml", poses);
     return hgtest::writeFile(dir / "hullgauged.yaml", "station: station.yaml\n"
                                                       "programs:\n"
@@ -67,8 +66,7 @@ DaemonProcess::DaemonProcess(const std::filesystem::path& config, std::map<std::
         int fd = open(log_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
         dup2(fd, 1);
         dup2(fd, 2);
-        for (auto& [k, v] : env)
-            setenv(k.c_str(), v == "$PID" ? std::to_string(getpid()).c_str() : v.c_str(), 1);
+        for (auto& [k, v] : env) setenv(k.c_str(), v == "$PID" ? std::to_string(getpid()).c_str() : v.c_str(), 1);
         execl(program.c_str(), program.c_str(), "--config", config.c_str(), "--log", "info", nullptr);
         _exit(127);
     }
@@ -126,8 +124,7 @@ nlohmann::json maintenance(const std::filesystem::path& socketPath, const nlohma
     std::string answer;
     char buf[4096];
     ssize_t n;
-    while ((n = read(fd, buf, sizeof buf)) > 0)
-        answer.append(buf, static_cast<std::size_t>(n));
+    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
     close(fd);
     return nlohmann::json::parse(answer, nullptr, false);
 }

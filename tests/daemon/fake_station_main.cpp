@@ -91,8 +91,7 @@ class FakeInspector : public Inspector {
         out.ok = !frames_.empty();
         out.part = "fake-block";
         bool dark = false;
-        for (const auto& f : frames_)
-            dark = dark || cv::mean(f)[0] < 150;
+        for (const auto& f : frames_) dark = dark || cv::mean(f)[0] < 150;
         out.pass = !dark;
         for (int i = 0; i < 20; ++i) {
             bool bad = dark && (i == 3 || i == 17);

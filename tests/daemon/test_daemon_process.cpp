@@ -225,8 +225,7 @@ TEST(DaemonProcess, NotifyProtocolReadyWatchdogStopping)
     auto pings = notify.times("WATCHDOG=1");
     EXPECT_GE(pings.size(), 7u);
     EXPECT_LE(pings.size(), 12u);
-    for (std::size_t i = 1; i < pings.size(); ++i)
-        EXPECT_LT(pings[i] - pings[i - 1], 400ms) << "gap before ping " << i;
+    for (std::size_t i = 1; i < pings.size(); ++i) EXPECT_LT(pings[i] - pings[i - 1], 400ms) << "gap before ping " << i;
     kill(daemon.pid(), SIGTERM);
     notify.collect(5s, [&] { return notify.seen("STOPPING=1"); });
     EXPECT_TRUE(notify.seen("STOPPING=1"));

@@ -182,15 +182,13 @@ TEST(PlcServer, SeveralClientsAtOnce)
 {
     Server s;
     std::vector<int> fds;
-    for (int i = 0; i < 5; ++i)
-        fds.push_back(connectTo(s.port()));
+    for (int i = 0; i < 5; ++i) fds.push_back(connectTo(s.port()));
     for (int round = 0; round < 20; ++round)
         for (int fd : fds) {
             auto a = roundTrip(fd, readFrame(100, 10));
             ASSERT_EQ(a.size(), 9u + 20u);
         }
-    for (int fd : fds)
-        close(fd);
+    for (int fd : fds) close(fd);
 }
 
 } // namespace

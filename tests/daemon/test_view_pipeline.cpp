@@ -93,8 +93,7 @@ TEST(ViewPipeline, NamesTheViewThatCouldNotBePrepared)
         if (v.id == "v1") throw std::runtime_error("lost 3 lines");
         return {v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
     });
-    for (int k = 0; k < 3; ++k)
-        pipeline.submit(view(k));
+    for (int k = 0; k < 3; ++k) pipeline.submit(view(k));
     auto prepared = pipeline.wait();
     EXPECT_EQ(prepared.error, "view 'v1': lost 3 lines");
     EXPECT_EQ(prepared.ids, (std::vector<std::string>{"v0", "v2"}));
@@ -119,8 +118,7 @@ TEST(ViewPipeline, CancelDropsQueuedViewsAndTheNextCycleSeesOnlyItsOwn)
         released.wait(); // the first view holds the worker until the test lets go
         return SilhouetteView{v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
     });
-    for (int k = 0; k < 4; ++k)
-        pipeline.submit(view(k));
+    for (int k = 0; k < 4; ++k) pipeline.submit(view(k));
     // cancel() must wait for the view in preparation: let it go from another thread.
     auto releaser = std::async(std::launch::async, [&] {
         std::this_thread::sleep_for(30ms);
@@ -152,8 +150,7 @@ TEST(ViewPipeline, QueueIsBounded)
     });
     pipeline.submit(view(0));
     // Bounded wait for the worker to hold view 0, so the queue holds exactly what follows.
-    for (int i = 0; i < 200 && started.load() == 0; ++i)
-        std::this_thread::sleep_for(5ms);
+    for (int i = 0; i < 200 && started.load() == 0; ++i) std::this_thread::sleep_for(5ms);
     ASSERT_EQ(started.load(), 1);
     pipeline.submit(view(1));
     pipeline.submit(view(2)); // the queue is full now (capacity 2)
@@ -210,8 +207,7 @@ class EnginePipeline : public ::testing::Test {
         std::string error;
         EXPECT_TRUE(inspector.begin(config_->programs.at(1), error)) << error;
         const auto& poses = config_->programs.at(1).views;
-        for (std::size_t k = 0; k < images.size(); ++k)
-            inspector.addView(k, poses[k], images[k]);
+        for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k]);
         return inspector.finish();
     }
 

@@ -57,7 +57,10 @@ void expectMatchesOpenCV(const std::vector<double>& dist, std::uint32_t seed)
     }
 }
 
-TEST(CameraModel, ProjectionEqualsOpenCVWithoutDistortion) { expectMatchesOpenCV({}, 1); }
+TEST(CameraModel, ProjectionEqualsOpenCVWithoutDistortion)
+{
+    expectMatchesOpenCV({}, 1);
+}
 TEST(CameraModel, ProjectionEqualsOpenCVWithFiveCoefficients)
 {
     expectMatchesOpenCV({-0.12, 0.08, 0.0007, -0.0004, -0.02}, 2);
@@ -161,7 +164,7 @@ TEST(CameraModel, Equation421WithLowerLeftOriginCountsRowsFromTheTop)
 {
     // The dissertation's display origin was the lower-left corner: v points
     // up and (h, v, a) is left-handed. The model reports row = (H-1) - n.
-    Vec3 h(1, 0, 0), v(0, -1, 0), a(0, 0, 1);  // v up: left-handed
+    Vec3 h(1, 0, 0), v(0, -1, 0), a(0, 0, 1); // v up: left-handed
     Vec3 C(0, 0, -400);
     auto cam = CameraModel::fromDissertation(900, 900, 264, 273, C, h, v, a, {512, 512});
     for (Vec3 P : {Vec3(1, 2, 3), Vec3(-10, 5, 20), Vec3(7, -7, 0)}) {
@@ -178,7 +181,7 @@ TEST(CameraModel, FromProjectionMatrixRecoversKRt)
     std::mt19937 rng(5);
     auto in = makeIntrinsics({});
     RigidTransform T = somePose(rng);
-    Eigen::Matrix<double, 3, 4> P = 3.7 * (in.K * T.matrix());  // any scale
+    Eigen::Matrix<double, 3, 4> P = 3.7 * (in.K * T.matrix()); // any scale
     auto cam = CameraModel::fromProjectionMatrix(P, in.imageSize);
     EXPECT_LT((cam.intrinsics().K - in.K).cwiseAbs().maxCoeff(), 1e-6);
     EXPECT_LT((cam.cameraFromPart().R - T.R).cwiseAbs().maxCoeff(), 1e-9);
@@ -198,5 +201,5 @@ TEST(Intrinsics, RejectsUnusableParameters)
     EXPECT_NO_THROW(in.validate());
 }
 
-}  // namespace
-}  // namespace hg::geometry
+} // namespace
+} // namespace hg::geometry

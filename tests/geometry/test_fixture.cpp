@@ -78,7 +78,7 @@ TEST(FixtureKinematics, RailTranslatesAlongItsAxis)
     FixtureKinematics k;
     k.type = FixtureType::Rail;
     k.cameraFromFixture.t = Vec3(0, 0, 200);
-    k.railAxis = Vec3(0, 0, 2);  // need not be unit
+    k.railAxis = Vec3(0, 0, 2); // need not be unit
     k.railRangeMm = {0, 300};
     expectNear(k.cameraFromPart({0, 0, 120}).apply({1, 2, 3}), {1, 2, 323});
     EXPECT_TRUE(k.reachable({0, 0, 300}));
@@ -96,5 +96,5 @@ TEST(FixtureKinematics, Reachability)
     EXPECT_FALSE(k.reachable({45, -1, 0}));
 }
 
-}  // namespace
-}  // namespace hg::geometry
+} // namespace
+} // namespace hg::geometry

@@ -62,7 +62,7 @@ TEST(Station, LoadsTheContractExample)
     EXPECT_EQ(s.fixture.declinationRangeDeg.max, 60);
     EXPECT_EQ(s.floorZMm, -2.5);
     ASSERT_TRUE(s.document);
-    EXPECT_EQ(s.document->raw()["plc"]["port"].as<int>(), 1502);  // driver sections kept
+    EXPECT_EQ(s.document->raw()["plc"]["port"].as<int>(), 1502); // driver sections kept
     auto cam = s.cameraAt({0, 0, 0});
     EXPECT_LT((cam.centre() - Vec3(0, -300, 0)).norm(), 1e-9);
 }
@@ -107,7 +107,8 @@ TEST(Poses, LoadAndCheckAgainstTheFixture)
 {
     hgtest::TempDir dir;
     auto station = loadStation(hgtest::writeFile(dir / "station.yaml", kStation));
-    auto ok = hgtest::writeFile(dir / "poses.yaml", "- {rotation_deg: 30, declination_deg: 20}\n- {rotation_deg: -90}\n");
+    auto ok =
+        hgtest::writeFile(dir / "poses.yaml", "- {rotation_deg: 30, declination_deg: 20}\n- {rotation_deg: -90}\n");
     auto poses = loadPoses(ok, &station.fixture);
     ASSERT_EQ(poses.size(), 2u);
     EXPECT_EQ(poses[0], (FixturePose{30, 20, 0}));
@@ -131,5 +132,5 @@ TEST(Poses, LoadAndCheckAgainstTheFixture)
     expectError("rotation_deg: 10\n", "bad.yaml:1: (document): expected a list of fixture poses");
 }
 
-}  // namespace
-}  // namespace hg::geometry
+} // namespace
+} // namespace hg::geometry

@@ -203,8 +203,7 @@ TEST(DissertationObjects, HoleSixteenLandmarksBracketPerimeterAndArea)
             EXPECT_EQ(ar.status, "ok");
         } else {
             // 0.6 mm > tolerance 0.3 + 2ΔV at every landmark; perimeter +3.8 mm, area +24 mm².
-            for (const LandmarkResult& l : r.landmarks)
-                EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
+            for (const LandmarkResult& l : r.landmarks) EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
             EXPECT_EQ(per.status, "out_of_tolerance");
             EXPECT_EQ(ar.status, "out_of_tolerance");
             EXPECT_FALSE(r.pass);
@@ -280,8 +279,7 @@ TEST(DontCareBand, MapFileKeepsTheFlagsAndReadsVersionOne)
     cup.geometry.adjacencyDepth = 2;
     const InspectionMap map = cup.map();
     std::size_t hidden = 0;
-    for (const MapNode& n : map.nodes())
-        hidden += n.hidden ? 1 : 0;
+    for (const MapNode& n : map.nodes()) hidden += n.hidden ? 1 : 0;
     EXPECT_GT(hidden, 0u); // the cup's cavity
     const auto bytes = map.serialise();
     ASSERT_EQ(bytes[8], 2); // format version 2
@@ -301,8 +299,7 @@ TEST(DontCareBand, MapFileKeepsTheFlagsAndReadsVersionOne)
     v1[8] = 1;
     const InspectionMap old = InspectionMap::deserialise(v1, "old.hgmap");
     ASSERT_EQ(old.nodes().size(), v1Map.nodes().size());
-    for (const MapNode& n : old.nodes())
-        EXPECT_FALSE(n.dontCare || n.hidden);
+    for (const MapNode& n : old.nodes()) EXPECT_FALSE(n.dontCare || n.hidden);
 
     auto v3 = bytes;
     v3[8] = 3;

@@ -39,7 +39,7 @@ json matrix(const Eigen::Matrix3d& m)
 }
 
 class InspectCommand : public ::testing::Test {
-protected:
+  protected:
     hgtest::TempDir dir;
     std::string exe = (hgtest::binaryDir() / "bin" / "hullgauge").string();
 
@@ -88,7 +88,7 @@ parameters:
     }
 };
 
-}  // namespace
+} // namespace
 
 TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
 {
@@ -108,8 +108,9 @@ TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
         for (const char* key : {"id", "error_number", "error_max_mm", "error_mm", "tolerance_mm"})
             EXPECT_TRUE(l.contains(key)) << key;
     }
-    for (const char* key : {"ave_error_min_mm", "ave_error_max_mm", "ave_error_mm", "std_error_min_mm",
-                            "std_error_max_mm", "std_error_mm", "max_error_mm", "min_error_mm", "total_volume_error_mm3"})
+    for (const char* key :
+         {"ave_error_min_mm", "ave_error_max_mm", "ave_error_mm", "std_error_min_mm", "std_error_max_mm",
+          "std_error_mm", "max_error_mm", "min_error_mm", "total_volume_error_mm3"})
         EXPECT_TRUE(r["statistics"].contains(key)) << key;
     ASSERT_EQ(r["parameters"].size(), 1u);
     EXPECT_EQ(r["parameters"][0]["status"], "ok");
@@ -118,7 +119,8 @@ TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
     for (const char* key : {"segmentation", "reconstruction", "total"}) EXPECT_TRUE(r["timing_ms"].contains(key));
 
     const auto raised = capture("up", 10.6);
-    const auto fail = hgtest::run(exe + " inspect --part " + (dir / "block.yaml").string() + " --views " + raised.string());
+    const auto fail =
+        hgtest::run(exe + " inspect --part " + (dir / "block.yaml").string() + " --views " + raised.string());
     EXPECT_EQ(fail.status, 1) << fail.err;
     const json rf = json::parse(fail.out);
     EXPECT_EQ(rf["verdict"], "fail");
@@ -131,7 +133,8 @@ TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
     const auto build = hgtest::run(exe + " build-map --part " + (dir / "block.yaml").string() + " --out " +
                                    (dir / "block.hgmap").string());
     ASSERT_EQ(build.status, 0) << build.err;
-    const auto viaMap = hgtest::run(exe + " inspect --map " + (dir / "block.hgmap").string() + " --views " + raised.string());
+    const auto viaMap =
+        hgtest::run(exe + " inspect --map " + (dir / "block.hgmap").string() + " --views " + raised.string());
     EXPECT_EQ(viaMap.status, 1) << viaMap.err;
     const json rm = json::parse(viaMap.out);
     EXPECT_EQ(rm["landmarks"], rf["landmarks"]);
@@ -167,8 +170,9 @@ TEST_F(InspectCommand, BadInputExitsTwoNamingTheView)
 TEST_F(InspectCommand, ReconstructWritesPlyAndStats)
 {
     const auto manifest = capture("nom", 10.0);
-    const auto r = hgtest::run(exe + " reconstruct --views " + manifest.string() + " --cube -6 -6 -11 32 --depth 6 --out " +
-                               (dir / "hull.ply").string() + " --stats " + (dir / "s.json").string());
+    const auto r =
+        hgtest::run(exe + " reconstruct --views " + manifest.string() + " --cube -6 -6 -11 32 --depth 6 --out " +
+                    (dir / "hull.ply").string() + " --stats " + (dir / "s.json").string());
     ASSERT_EQ(r.status, 0) << r.err;
     const json s = json::parse(std::ifstream(dir / "s.json"));
     // Two horizontal views in the plane of the top face: their silhouettes'

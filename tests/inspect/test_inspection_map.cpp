@@ -14,14 +14,17 @@ using namespace hg::inspect;
 namespace {
 
 /// Half-space z <= 10: a cube voxel is >= 50 % inside exactly when its centre is.
-bool halfSpace(const Eigen::AlignedBox3d& b) { return b.center().z() <= 10.0; }
+bool halfSpace(const Eigen::AlignedBox3d& b)
+{
+    return b.center().z() <= 10.0;
+}
 
 MapGeometry geometry32()
 {
     MapGeometry g;
     g.cubeOrigin = Eigen::Vector3d::Zero();
     g.cubeSize = 32.0;
-    g.depth = 5;  // ΔV = 1 mm
+    g.depth = 5; // ΔV = 1 mm
     g.adjacencyDepth = 3;
     g.coarsestLevel = 4;
     return g;
@@ -32,7 +35,7 @@ MapLandmark landmark(const std::string& id, double x, double y)
     return {id, Eigen::Vector3d(x, y, 10.0), Eigen::Vector3d::UnitZ(), 0.6};
 }
 
-}  // namespace
+} // namespace
 
 TEST(InspectionMap, SingleLandmarkHasPathNetworkAndLabels)
 {
@@ -53,7 +56,7 @@ TEST(InspectionMap, SingleLandmarkHasPathNetworkAndLabels)
     EXPECT_EQ(keyIndex(map.nodes()[n5].key), Eigen::Vector3i(16, 16, 10));
     // Landmark voxel z in [10, 11]: centre above the face, so void.
     EXPECT_FALSE(map.nodes()[n5].expectedObject);
-    const std::int32_t below = map.neighbour(n5, 12);  // offset (0, 0, -1)
+    const std::int32_t below = map.neighbour(n5, 12); // offset (0, 0, -1)
     ASSERT_EQ(neighbourOffsets()[12], Eigen::Vector3i(0, 0, -1));
     ASSERT_GE(below, 0);
     EXPECT_TRUE(map.nodes()[below].expectedObject);
@@ -65,7 +68,8 @@ TEST(InspectionMap, SingleLandmarkHasPathNetworkAndLabels)
         std::int32_t next = -1;
         for (int c = 0; c < 8; ++c) {
             const std::int32_t ch = map.children()[map.nodes()[n].children + c];
-            if (ch >= 0 && keyIndex(map.nodes()[ch].key) == target && keyLevel(map.nodes()[ch].key) == level + 1) next = ch;
+            if (ch >= 0 && keyIndex(map.nodes()[ch].key) == target && keyLevel(map.nodes()[ch].key) == level + 1)
+                next = ch;
         }
         ASSERT_GE(next, 0) << "level " << level;
         n = next;
@@ -108,8 +112,8 @@ TEST(InspectionMap, FileRoundTripAndCorruption)
 {
     hgtest::TempDir tmp;
     std::vector<MapParameter> params{{"gap", ParameterKind::Distance, {"a", "b"}, 2.0, 0.5}};
-    const auto map = InspectionMap::build("bracket", geometry32(), {landmark("a", 16.5, 16.5), landmark("b", 18.5, 16.5)},
-                                          params, halfSpace);
+    const auto map = InspectionMap::build("bracket", geometry32(),
+                                          {landmark("a", 16.5, 16.5), landmark("b", 18.5, 16.5)}, params, halfSpace);
     map.save(tmp / "m.hgmap");
     const auto back = InspectionMap::load(tmp / "m.hgmap");
     EXPECT_EQ(back.partName(), "bracket");
@@ -135,7 +139,7 @@ TEST(InspectionMap, FileRoundTripAndCorruption)
         EXPECT_NE(std::string(e.what()).find("checksum"), std::string::npos) << e.what();
     }
     bytes = map.serialise();
-    bytes[8] = 99;  // format version
+    bytes[8] = 99; // format version
     EXPECT_THROW(InspectionMap::deserialise(bytes, "m.hgmap"), hg::InputError);
     bytes = map.serialise();
     bytes.resize(bytes.size() - 3);

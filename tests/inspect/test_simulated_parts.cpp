@@ -28,7 +28,7 @@ namespace {
 CameraModel lookAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& forward, const Eigen::Vector3d& down)
 {
     Eigen::Matrix3d R;
-    R.row(0) = down.cross(forward).transpose();  // x = y × z
+    R.row(0) = down.cross(forward).transpose(); // x = y × z
     R.row(1) = down.transpose();
     R.row(2) = forward.transpose();
     Intrinsics in;
@@ -49,7 +49,7 @@ struct FaceFixture {
         MapGeometry g;
         g.cubeOrigin = Eigen::Vector3d(-6, -6, -11);
         g.cubeSize = 32.0;
-        g.depth = 8;  // ΔV = 0.125 mm
+        g.depth = 8; // ΔV = 0.125 mm
         g.adjacencyDepth = 6;
         g.coarsestLevel = 7;
         std::vector<MapLandmark> lms;
@@ -89,7 +89,7 @@ void expectContract(const InspectionResult& r, double e)
     }
 }
 
-}  // namespace
+} // namespace
 
 TEST(SimulatedFace, NominalPassesWithNoisyFrames)
 {
@@ -147,12 +147,15 @@ TEST(SimulatedFace, SmoothnessFromErrorSpreadAndVolumeSourceAgainstCentrePoint)
         if (v.z() > 5) v.z() += 0.05 * v.x();
     hg::sim::SilhouetteRenderer r({tilted});
     std::vector<CapturedView> views;
-    for (std::size_t i = 0; i < f.cameras.size(); ++i) views.push_back({"v" + std::to_string(i), f.cameras[i], r.render(f.cameras[i])});
+    for (std::size_t i = 0; i < f.cameras.size(); ++i)
+        views.push_back({"v" + std::to_string(i), f.cameras[i], r.render(f.cameras[i])});
     // The y-facing grazing view no longer grazes a tilted face everywhere:
     // look along the tilted face from its side instead.
     const Eigen::Vector3d slope = Eigen::Vector3d(1, 0, 0.05).normalized();
-    views[1] = {"v1", lookAt(Eigen::Vector3d(10, 310, FaceFixture::kTop + 0.5), {0, -1, 0},
-                             Eigen::Vector3d(0, 1, 0).cross(slope).normalized()), cv::Mat()};
+    views[1] = {"v1",
+                lookAt(Eigen::Vector3d(10, 310, FaceFixture::kTop + 0.5), {0, -1, 0},
+                       Eigen::Vector3d(0, 1, 0).cross(slope).normalized()),
+                cv::Mat()};
     views[1].frame = r.render(views[1].camera);
     hg::vision::SegmentationSettings seg;
     InspectionOptions o;

@@ -16,7 +16,7 @@ MapGeometry geometry32()
 {
     MapGeometry g;
     g.cubeSize = 32.0;
-    g.depth = 5;  // ΔV = 1 mm
+    g.depth = 5; // ΔV = 1 mm
     g.adjacencyDepth = 3;
     g.coarsestLevel = 3;
     return g;
@@ -24,9 +24,9 @@ MapGeometry geometry32()
 
 InspectionMap faceMap(double tolerance = 0.6)
 {
-    return InspectionMap::build(
-        "face", geometry32(), {{"a", Eigen::Vector3d(16.3, 16.7, 10.0), Eigen::Vector3d::UnitZ(), tolerance}}, {},
-        [](const Box3& b) { return b.center().z() <= 10.0; });
+    return InspectionMap::build("face", geometry32(),
+                                {{"a", Eigen::Vector3d(16.3, 16.7, 10.0), Eigen::Vector3d::UnitZ(), tolerance}}, {},
+                                [](const Box3& b) { return b.center().z() <= 10.0; });
 }
 
 /// The true part: z <= 10 + e, labelled exactly; counts the calls.
@@ -40,7 +40,7 @@ struct ShiftedFace {
     }
 };
 
-}  // namespace
+} // namespace
 
 TEST(Traversal, NominalFaceHasNoErrorAndHalfVoxelBracket)
 {
@@ -98,7 +98,7 @@ TEST(Traversal, LoweredFaceIsFoundByNeighbourSearch)
     EXPECT_DOUBLE_EQ(l.offsetHighMm, -1.5);
     EXPECT_DOUBLE_EQ(l.errorMinMm, 1.5);
     EXPECT_DOUBLE_EQ(l.errorMaxMm, 2.5);
-    EXPECT_EQ(l.status, LandmarkStatus::Ok);  // 2.0 mm mean error within 3 mm
+    EXPECT_EQ(l.status, LandmarkStatus::Ok); // 2.0 mm mean error within 3 mm
     // Every voxel is reconstructed at most once: the 7^3 network is the limit.
     EXPECT_LE(calls, 343);
 }
@@ -123,7 +123,7 @@ TEST(Traversal, CoarserLevelUsesLargerVoxelsWithoutRebuilding)
     const auto map = faceMap(1.5);
     int calls = 0;
     InspectionOptions o;
-    o.level = 4;  // ΔV = 2 mm
+    o.level = 4; // ΔV = 2 mm
     const auto r = Inspector(map, o).inspectWith(ShiftedFace{1.3, &calls});
     EXPECT_DOUBLE_EQ(r.voxelSizeMm, 2.0);
     const LandmarkResult& l = r.landmarks[0];

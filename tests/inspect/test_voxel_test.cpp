@@ -67,7 +67,7 @@ cv::Mat halfPlane(cv::Size size, int firstBackgroundColumn)
     return s;
 }
 
-}  // namespace
+} // namespace
 
 TEST(ConvexHull, KeepsOutlineOfProjectedCube)
 {
@@ -78,12 +78,14 @@ TEST(ConvexHull, KeepsOutlineOfProjectedCube)
         const Eigen::Vector3d v = a.cross(h);
         return CameraModel::fromDissertation(500, 500, 50, 50, -100.0 * a, h, v, a, {101, 101});
     }();
-    const std::vector<SilhouetteView> views{{diag, SilhouetteIndex::fromSilhouette(cv::Mat(101, 101, CV_8U, cv::Scalar(255)))}};
+    const std::vector<SilhouetteView> views{
+        {diag, SilhouetteIndex::fromSilhouette(cv::Mat(101, 101, CV_8U, cv::Scalar(255)))}};
     VoxelTester t(&views);
     const Box3 cube(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1));
     EXPECT_EQ(t.measure(cube, 0).outlineVertices, 6);
-    const std::vector<SilhouetteView> front{{frontCamera(500, 50, 50, {101, 101}, 100),
-                                             SilhouetteIndex::fromSilhouette(cv::Mat(101, 101, CV_8U, cv::Scalar(255)))}};
+    const std::vector<SilhouetteView> front{
+        {frontCamera(500, 50, 50, {101, 101}, 100),
+         SilhouetteIndex::fromSilhouette(cv::Mat(101, 101, CV_8U, cv::Scalar(255)))}};
     VoxelTester tf(&front);
     EXPECT_EQ(tf.measure(cube, 0).outlineVertices, 4);
 }
@@ -181,8 +183,8 @@ TEST(VoxelTest, FiftyPercentRuleOnFaceOnFootprint)
                           Case{50.0, 50, VoxelLabel::Void},      // 55.0 % background
                           Case{49.5, 50, VoxelLabel::Void},      // exactly 50 %: void (>= 50 %)
                           Case{49.4, 50, VoxelLabel::Object}}) { // 49.0 %: object
-        const std::vector<SilhouetteView> views{
-            {frontCamera(1000, c.cx, 50, size, 100), SilhouetteIndex::fromSilhouette(halfPlane(size, c.firstBackground))}};
+        const std::vector<SilhouetteView> views{{frontCamera(1000, c.cx, 50, size, 100),
+                                                 SilhouetteIndex::fromSilhouette(halfPlane(size, c.firstBackground))}};
         VoxelTester t(&views);
         const FootprintMeasure m = t.measure(voxel, 0);
         const double expectedFraction = (c.cx + half - (c.firstBackground - 0.5)) / (2 * half);
@@ -197,8 +199,9 @@ TEST(VoxelTest, VoidInAnySingleViewWins)
     const Box3 voxel(Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(0.5, 0.5, 0.5));
     const cv::Size size(101, 101);
     const cv::Mat allObject(size, CV_8U, cv::Scalar(255));
-    std::vector<SilhouetteView> views{{frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(allObject)},
-                                      {frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(allObject)}};
+    std::vector<SilhouetteView> views{
+        {frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(allObject)},
+        {frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(allObject)}};
     EXPECT_EQ(VoxelTester(&views).classify(voxel), VoxelLabel::Object);
     views.push_back({frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(halfPlane(size, 48))});
     EXPECT_EQ(VoxelTester(&views).classify(voxel), VoxelLabel::Void);
@@ -216,7 +219,8 @@ TEST(VoxelTest, FootprintLeavingTheFrameIsUnknown)
         // All-object frame: background 0, unknown 25 %: background + unknown < 50 %
         // still decides object.
         const std::vector<SilhouetteView> views{
-            {frontCamera(1000, 2, 50, size, 100), SilhouetteIndex::fromSilhouette(cv::Mat(size, CV_8U, cv::Scalar(255)))}};
+            {frontCamera(1000, 2, 50, size, 100),
+             SilhouetteIndex::fromSilhouette(cv::Mat(size, CV_8U, cv::Scalar(255)))}};
         VoxelTester t(&views);
         const FootprintMeasure m = t.measure(voxel, 0);
         EXPECT_NEAR(m.unknown / m.area, outside, 1e-12);
@@ -249,7 +253,8 @@ TEST(VoxelTest, CentrePointBaselineDisagreesWhereVolumeSourceUsesTheOverlap)
     const cv::Size size(101, 101);
     cv::Mat sil(size, CV_8U, cv::Scalar(255));
     sil.col(50).setTo(0);
-    const std::vector<SilhouetteView> views{{frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(sil)}};
+    const std::vector<SilhouetteView> views{
+        {frontCamera(1000, 50, 50, size, 100), SilhouetteIndex::fromSilhouette(sil)}};
     EXPECT_EQ(VoxelTester(&views, VoxelTestMethod::VolumeSource).classify(voxel), VoxelLabel::Object);
     EXPECT_EQ(VoxelTester(&views, VoxelTestMethod::CentrePoint).classify(voxel), VoxelLabel::Void);
 }

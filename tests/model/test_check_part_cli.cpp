@@ -12,7 +12,10 @@ namespace {
 
 using Eigen::Vector3d;
 
-std::string hullgauge() { return (hgtest::binaryDir() / "bin/hullgauge").string(); }
+std::string hullgauge()
+{
+    return (hgtest::binaryDir() / "bin/hullgauge").string();
+}
 
 const char* kPart = R"(part: block
 mesh: block.stl
@@ -51,7 +54,7 @@ TEST(CheckPartCli, BadInputExitsTwoWithOneLineNamingFileAndField)
     hgtest::TempDir dir;
     hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
     std::string text = kPart;
-    text.replace(text.find("[5, 5, 10]"), 10, "[5, 5, 15]");  // 5 mm above the top face
+    text.replace(text.find("[5, 5, 10]"), 10, "[5, 5, 15]"); // 5 mm above the top face
     hgtest::writeFile(dir / "part.yaml", text);
     auto r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
     EXPECT_EQ(r.status, 2);
@@ -70,4 +73,4 @@ TEST(CheckPartCli, BadInputExitsTwoWithOneLineNamingFileAndField)
     EXPECT_NE(r.err.find("block.stl: facet 4: file ends after 40 of 50 bytes"), std::string::npos) << r.err;
 }
 
-}  // namespace
+} // namespace

@@ -36,9 +36,11 @@ TEST(Csg, HoleThroughAPlateAndUnion)
     EXPECT_TRUE(checkMesh(holed).ok());
     EXPECT_NEAR(holed.signedVolume(), 1600.0 - polygonArea * 4.0, 1e-9);
 
-    const TriangleMesh both = unionOf(makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2)), makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
+    const TriangleMesh both =
+        unionOf(makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2)), makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
     EXPECT_NEAR(both.signedVolume(), 8.0 + 8.0 - 1.0, 1e-12);
-    const TriangleMesh common = intersectionOf(makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2)), makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
+    const TriangleMesh common =
+        intersectionOf(makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2)), makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
     EXPECT_NEAR(common.signedVolume(), 1.0, 1e-12);
 }
 
@@ -49,5 +51,5 @@ TEST(Csg, OpenOperandIsRefused)
     EXPECT_THROW(difference(makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2)), open), InputError);
 }
 
-}  // namespace
-}  // namespace hg::model
+} // namespace
+} // namespace hg::model

@@ -21,7 +21,7 @@ using Eigen::Vector3d;
 
 // Captures the "model" log category while alive.
 class LogCapture {
-public:
+  public:
     LogCapture() : sink_(std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(64))
     {
         log::category("model")->sinks().push_back(sink_);
@@ -38,7 +38,7 @@ public:
         return all;
     }
 
-private:
+  private:
     std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink_;
 };
 
@@ -64,20 +64,18 @@ TEST_P(MeshFormats, BoxRoundTripKeepsGeometry)
     saveMesh(box, dir / name, encoding);
     const TriangleMesh loaded = loadMesh(dir / name);
     EXPECT_EQ(loaded.triangles.size(), 12u);
-    EXPECT_EQ(loaded.vertices.size(), 8u);  // STL's per-facet vertices merged
+    EXPECT_EQ(loaded.vertices.size(), 8u); // STL's per-facet vertices merged
     EXPECT_NEAR(loaded.signedVolume(), 60.0, 1e-9);
     EXPECT_NEAR(loaded.area(), 94.0, 1e-9);
     EXPECT_TRUE(loaded.bounds().isApprox(Eigen::AlignedBox3d(Vector3d(1, 2, 3), Vector3d(4, 6, 8))));
     EXPECT_TRUE(checkMesh(loaded).ok());
 }
 
-INSTANTIATE_TEST_SUITE_P(AllFormats, MeshFormats,
-                         ::testing::Values(std::make_pair("b.stl", MeshEncoding::Binary),
-                                           std::make_pair("a.stl", MeshEncoding::Ascii),
-                                           std::make_pair("m.obj", MeshEncoding::Ascii),
-                                           std::make_pair("b.ply", MeshEncoding::Binary),
-                                           std::make_pair("a.ply", MeshEncoding::Ascii),
-                                           std::make_pair("m.off", MeshEncoding::Ascii)));
+INSTANTIATE_TEST_SUITE_P(
+    AllFormats, MeshFormats,
+    ::testing::Values(std::make_pair("b.stl", MeshEncoding::Binary), std::make_pair("a.stl", MeshEncoding::Ascii),
+                      std::make_pair("m.obj", MeshEncoding::Ascii), std::make_pair("b.ply", MeshEncoding::Binary),
+                      std::make_pair("a.ply", MeshEncoding::Ascii), std::make_pair("m.off", MeshEncoding::Ascii)));
 
 TEST(MeshIo, HandWrittenAsciiStlTetrahedron)
 {
@@ -110,7 +108,7 @@ TEST(MeshIo, ObjQuadsAreTriangulated)
 TEST(MeshIo, TruncatedBinaryStlNamesFacetAndBytes)
 {
     hgtest::TempDir dir;
-    saveMesh(makeSphere(Vector3d::Zero(), 5.0, 16, 8), dir / "s.stl");  // 16*2 + 16*6*2 = 224 facets
+    saveMesh(makeSphere(Vector3d::Zero(), 5.0, 16, 8), dir / "s.stl"); // 16*2 + 16*6*2 = 224 facets
     const auto size = fs::file_size(dir / "s.stl");
     ASSERT_EQ(size, 84u + 50u * 224u);
     // Keep the header and 5 whole facets plus 40 bytes of the sixth.
@@ -130,7 +128,7 @@ TEST(MeshIo, StlWithHoleNamesOpenEdges)
 {
     hgtest::TempDir dir;
     TriangleMesh box = makeBox(Vector3d::Zero(), Vector3d(1, 1, 1));
-    box.triangles.pop_back();  // one triangle missing: its 3 edges are open
+    box.triangles.pop_back(); // one triangle missing: its 3 edges are open
     saveMesh(box, dir / "hole.stl");
     const InputError e = loadError(dir / "hole.stl");
     EXPECT_NE(std::string(e.what()).find("hole.stl: mesh: not closed: 3 open edges"), std::string::npos) << e.what();
@@ -146,7 +144,7 @@ TEST(MeshIo, BoxesSharingAnEdgeAreNonManifold)
 {
     hgtest::TempDir dir;
     TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
-    m.append(makeBox(Vector3d(1, 1, 0), Vector3d(2, 2, 1)));  // shares the edge x = y = 1
+    m.append(makeBox(Vector3d(1, 1, 0), Vector3d(2, 2, 1))); // shares the edge x = y = 1
     saveMesh(m, dir / "edge.stl");
     const std::string what = loadError(dir / "edge.stl").what();
     EXPECT_NE(what.find("not a 2-manifold: 1 edge shared by more than two triangles"), std::string::npos) << what;
@@ -198,7 +196,7 @@ TEST(MeshIo, SelfIntersectingMeshIsRefused)
 {
     hgtest::TempDir dir;
     TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2));
-    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));  // two overlapping closed shells
+    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3))); // two overlapping closed shells
     saveMesh(m, dir / "overlap.stl");
     EXPECT_NE(std::string(loadError(dir / "overlap.stl").what()).find("intersects itself"), std::string::npos);
 }
@@ -209,8 +207,9 @@ TEST(MeshIo, BadFilesAreNamed)
     EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "m.xyz", "1 2 3\n")).what())
                   .find("m.xyz: mesh: unknown mesh format '.xyz'"),
               std::string::npos);
-    EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "e.stl", "")).what()).find("e.stl: mesh: the file is empty"),
-              std::string::npos);
+    EXPECT_NE(
+        std::string(loadError(hgtest::writeFile(dir / "e.stl", "")).what()).find("e.stl: mesh: the file is empty"),
+        std::string::npos);
     EXPECT_NE(std::string(loadError(dir / "missing.obj").what()).find("no such file"), std::string::npos);
     EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "p.step", "ISO-10303-21;")).what()).find("STEP"),
               std::string::npos);
@@ -242,5 +241,5 @@ TEST(MeshCheckTest, RequireSolidMeshFlipsOnlyInvertedMeshes)
     }
 }
 
-}  // namespace
-}  // namespace hg::model
+} // namespace
+} // namespace hg::model

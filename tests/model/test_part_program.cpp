@@ -18,7 +18,7 @@ using Eigen::Vector3d;
 
 // A 10 x 10 x 10 mm block at the origin, beside the YAML that names it.
 class PartProgramTest : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override
     {
         std::filesystem::create_directories(dir / "meshes");
@@ -90,7 +90,7 @@ TEST_F(PartProgramTest, LoadsEveryField)
     EXPECT_NEAR(p.octree.cubeSize, S, 1e-12);
     EXPECT_TRUE(p.octree.cubeOrigin.isApprox(Vector3d::Constant(5.0 - S / 2), 1e-12));
     EXPECT_NEAR(p.octree.voxelSize(), S / 64.0, 1e-15);
-    EXPECT_NEAR(p.octree.cubeOrigin.x() + 4 * p.octree.voxelSize(), 0.0, 1e-12);  // margin is exactly 4 voxels
+    EXPECT_NEAR(p.octree.cubeOrigin.x() + 4 * p.octree.voxelSize(), 0.0, 1e-12); // margin is exactly 4 voxels
     EXPECT_EQ(p.octree.depth, 6);
     EXPECT_EQ(p.octree.adjacencyDepth, 3);
     EXPECT_NEAR(p.surfaceToleranceMm(), S / 64.0 / 4.0, 1e-15);
@@ -101,7 +101,7 @@ TEST_F(PartProgramTest, LoadsEveryField)
     EXPECT_TRUE(face.normal.isApprox(Vector3d(1, 0, 0), 1e-12));
     EXPECT_DOUBLE_EQ(face.toleranceMm, 0.2);
     const Landmark& corner = *p.findLandmark("corner");
-    EXPECT_TRUE(corner.normal.isApprox(Vector3d(1, 1, 1).normalized(), 1e-12));  // corner: the bisector
+    EXPECT_TRUE(corner.normal.isApprox(Vector3d(1, 1, 1).normalized(), 1e-12)); // corner: the bisector
     ASSERT_EQ(corner.bestViews.size(), 2u);
     ASSERT_EQ(corner.bestViews[0].size(), 2u);
     EXPECT_DOUBLE_EQ(corner.bestViews[0][1].rotationDeg, 180.0);
@@ -126,7 +126,7 @@ TEST_F(PartProgramTest, GivenCubeIsKept)
     yaml.replace(yaml.find("  depth: 6"), 10, "  cube_origin: [-3, -3, -3]\n  cube_size: 16\n  depth: 7");
     const PartProgram p = loadPartProgram(write(yaml));
     EXPECT_FALSE(p.octree.cubeFromMesh);
-    EXPECT_DOUBLE_EQ(p.octree.voxelSize(), 0.125);  // 16 / 2^7, eq. 4.5.1-1
+    EXPECT_DOUBLE_EQ(p.octree.voxelSize(), 0.125); // 16 / 2^7, eq. 4.5.1-1
     EXPECT_TRUE(p.octree.cubeOrigin.isApprox(Vector3d(-3, -3, -3)));
     EXPECT_DOUBLE_EQ(p.octree.maxMeasurableErrorMm(), 0.375);
 }
@@ -187,8 +187,9 @@ TEST_F(PartProgramTest, EachMistakeIsNamed)
         {"landmarks: [face, corner, edge]", "landmarks: [face, corner]",
          "parameters[1].landmarks: a area needs at least 3 landmarks"},
         {"kind: area", "kind: volume", "parameters[1].kind: unknown kind 'volume'"},
-        {"normal: [-1, 0, 0]", "normal: [1, 0, 0]", "landmarks[2].normal: normal (1.0000, 0.0000, 0.0000) of landmark "
-                                                     "'edge' points into the part"},
+        {"normal: [-1, 0, 0]", "normal: [1, 0, 0]",
+         "landmarks[2].normal: normal (1.0000, 0.0000, 0.0000) of landmark "
+         "'edge' points into the part"},
         {"normal: [-1, 0, 0]", "normal: [0, 0, 0]", "landmarks[2].normal: normal has zero length"},
         {"- {rotation_deg: 90}", "- {rail_mm: 90}", "best views mix rail poses and rotation/declination poses"},
         {"- {rotation_deg: 90}", "- {rotation_deg: 90, rail_mm: 3}", "either rail_mm or rotation_deg"},
@@ -223,5 +224,5 @@ TEST_F(PartProgramTest, BrokenMeshIsReportedAtTheMeshKey)
     EXPECT_NE(std::string(e.what()).find("block.stl: mesh: not closed: 3 open edges"), std::string::npos) << e.what();
 }
 
-}  // namespace
-}  // namespace hg::model
+} // namespace
+} // namespace hg::model

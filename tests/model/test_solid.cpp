@@ -26,7 +26,10 @@ double overlapVolume(const AlignedBox3d& a, const AlignedBox3d& b)
     return v;
 }
 
-AlignedBox3d cubeAt(const Vector3d& lo, double edge) { return {lo, lo + Vector3d::Constant(edge)}; }
+AlignedBox3d cubeAt(const Vector3d& lo, double edge)
+{
+    return {lo, lo + Vector3d::Constant(edge)};
+}
 
 TEST(SolidFraction, CubeMeshAgainstAnalyticBoxOverlap)
 {
@@ -44,9 +47,9 @@ TEST(SolidFraction, CubeMeshAgainstAnalyticBoxOverlap)
     for (double x : {-1.0, 0.0, 9.0, 10.0})
         for (double y : {-1.0, 0.0, 7.0, 8.0})
             for (double z : {-1.0, 0.0, 5.0, 6.0}) boxes.push_back(cubeAt(Vector3d(x, y, z), 1.0));
-    boxes.emplace_back(Vector3d(0, 0, 0), Vector3d(10, 8, 6));   // the part itself
-    boxes.emplace_back(Vector3d(-1, -1, -1), Vector3d(11, 9, 7));  // around it
-    boxes.emplace_back(Vector3d(2, 2, 2), Vector3d(3, 3, 3));    // well inside
+    boxes.emplace_back(Vector3d(0, 0, 0), Vector3d(10, 8, 6));    // the part itself
+    boxes.emplace_back(Vector3d(-1, -1, -1), Vector3d(11, 9, 7)); // around it
+    boxes.emplace_back(Vector3d(2, 2, 2), Vector3d(3, 3, 3));     // well inside
     for (const auto& box : boxes) {
         const double expected = overlapVolume(box, part) / box.volume();
         const InsideFraction f = solid.insideFraction(box);
@@ -64,11 +67,11 @@ TEST(SolidFraction, RotatedCubeMatchesSquareCutByADiagonalLine)
     // t <= 1 and 1 - (2 - t)²/2 above (area of the square below the line).
     auto fractionBelow = [](double t) { return t <= 1.0 ? t * t / 2.0 : 1.0 - (2.0 - t) * (2.0 - t) / 2.0; };
     for (double t : {0.3, 0.98995, 1.0, 1.01005, 1.7}) {
-        TriangleMesh big = makeBox(Vector3d(-40, -20, -20), Vector3d(0, 20, 20));  // face x = 0, solid at x < 0
+        TriangleMesh big = makeBox(Vector3d(-40, -20, -20), Vector3d(0, 20, 20)); // face x = 0, solid at x < 0
         const double c = std::sqrt(0.5);
         Eigen::Matrix3d R;
-        R << c, -c, 0, c, c, 0, 0, 0, 1;  // face normal (1,0,0) -> (1,1,0)/√2
-        big.transform(R, Vector3d(t / 2.0, t / 2.0, 0));  // plane through (t/2, t/2): x + y = t
+        R << c, -c, 0, c, c, 0, 0, 0, 1;                 // face normal (1,0,0) -> (1,1,0)/√2
+        big.transform(R, Vector3d(t / 2.0, t / 2.0, 0)); // plane through (t/2, t/2): x + y = t
         const Solid solid(big);
         const AlignedBox3d voxel(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
         EXPECT_NEAR(solid.insideFraction(voxel).estimate, fractionBelow(t), 1e-12) << "t = " << t;
@@ -95,7 +98,7 @@ TEST(SolidFraction, SphereVoxelsAgainstMonteCarloOnThePolyhedron)
     const int samples = 20000;
     int boundaryVoxels = 0;
     for (const Vector3d& lo : {Vector3d(3, -1, 0), Vector3d(2, 2, 1), Vector3d(-1, -1, 3.5), Vector3d(-4, 0, 0),
-                              Vector3d(1.5, -3.5, -2), Vector3d(-2.5, -2.5, -2.5), Vector3d(0, 0, -4.3)}) {
+                               Vector3d(1.5, -3.5, -2), Vector3d(-2.5, -2.5, -2.5), Vector3d(0, 0, -4.3)}) {
         const AlignedBox3d voxel = cubeAt(lo, 1.0);
         std::uniform_real_distribution<double> u(0.0, 1.0);
         int in = 0;
@@ -106,7 +109,7 @@ TEST(SolidFraction, SphereVoxelsAgainstMonteCarloOnThePolyhedron)
         EXPECT_NEAR(f.estimate, mc, 5 * sigma + 1e-12) << "voxel at " << lo.transpose();
         boundaryVoxels += mc > 0.02 && mc < 0.98;
     }
-    EXPECT_GE(boundaryVoxels, 5);  // the test exercises cut voxels, not only empty or full ones
+    EXPECT_GE(boundaryVoxels, 5); // the test exercises cut voxels, not only empty or full ones
 }
 
 TEST(SolidFraction, VoxelGridSumsToTheSphereVolumeWithinTessellationError)
@@ -119,9 +122,9 @@ TEST(SolidFraction, VoxelGridSumsToTheSphereVolumeWithinTessellationError)
     double rIn = r;
     for (std::size_t i = 0; i < sphere.triangles.size(); ++i)
         rIn = std::min(rIn, sphere.faceNormal(i).dot(sphere.vertices[sphere.triangles[i][0]]));
-    const double ball = 4.0 / 3.0 * std::numbers::pi;  // volume of the unit ball
+    const double ball = 4.0 / 3.0 * std::numbers::pi; // volume of the unit ball
     double sum = 0.0;
-    const double h = 1.25;  // 8 x 8 x 8 voxels over [-5, 5]^3; the poles sit on voxel corners
+    const double h = 1.25; // 8 x 8 x 8 voxels over [-5, 5]^3; the poles sit on voxel corners
     for (int i = 0; i < 8; ++i)
         for (int j = 0; j < 8; ++j)
             for (int k = 0; k < 8; ++k) {
@@ -130,7 +133,7 @@ TEST(SolidFraction, VoxelGridSumsToTheSphereVolumeWithinTessellationError)
             }
     EXPECT_GT(sum, ball * rIn * rIn * rIn);
     EXPECT_LT(sum, ball * r * r * r);
-    EXPECT_GT(rIn, 0.99 * r);  // the bound is meaningful: within 3 % in volume
+    EXPECT_GT(rIn, 0.99 * r); // the bound is meaningful: within 3 % in volume
     EXPECT_NEAR(sum, sphere.signedVolume(), 1e-9 * sum);
 }
 
@@ -145,10 +148,10 @@ TEST(SolidFraction, GridSumsToMeshVolumeForAPrismWithVerticesOnVoxelPlanes)
             for (int k = -1; k < 3; ++k) {
                 const AlignedBox3d voxel = cubeAt(Vector3d(i, j, k), 1.0);
                 const double f = solid.insideFraction(voxel).estimate;
-                EXPECT_NEAR(f, std::round(f), 1e-12);  // every cell is wholly in or out
+                EXPECT_NEAR(f, std::round(f), 1e-12); // every cell is wholly in or out
                 sum += f;
             }
-    EXPECT_NEAR(sum, 12.0, 1e-12);  // 4 + 2 cells in the base, times 2 layers
+    EXPECT_NEAR(sum, 12.0, 1e-12); // 4 + 2 cells in the base, times 2 layers
 }
 
 TEST(SolidLabels, FiftyPercentRuleAtFortyNineAndFiftyOnePercent)
@@ -179,8 +182,8 @@ TEST(SolidClassify, InsideOutsideBoundaryAndTouchingBoxes)
     // Sharing a face plane with the part: the open box misses the surface.
     EXPECT_EQ(solid.classify(cubeAt(Vector3d(10, 2, 2), 1)), Occupancy::Outside);
     EXPECT_EQ(solid.classify(cubeAt(Vector3d(9, 2, 2), 1)), Occupancy::Inside);
-    EXPECT_EQ(solid.classify(cubeAt(Vector3d(9, 9, 9), 1)), Occupancy::Inside);  // in the corner
-    EXPECT_EQ(solid.classify(cubeAt(Vector3d(10, 10, 10), 1)), Occupancy::Outside);  // touches a corner
+    EXPECT_EQ(solid.classify(cubeAt(Vector3d(9, 9, 9), 1)), Occupancy::Inside);     // in the corner
+    EXPECT_EQ(solid.classify(cubeAt(Vector3d(10, 10, 10), 1)), Occupancy::Outside); // touches a corner
     // A box containing the whole part: boundary.
     EXPECT_EQ(solid.classify(AlignedBox3d(Vector3d(-1, -1, -1), Vector3d(11, 11, 11))), Occupancy::Boundary);
     // A thin plate crossing one edge only (no vertex of the part inside).
@@ -194,10 +197,10 @@ TEST(SolidQueries, ClosestPointOnABoxByHand)
     EXPECT_TRUE(s.point.isApprox(Vector3d(10, 5, 5), 1e-12));
     EXPECT_NEAR(s.distance, 5.0, 1e-12);
     EXPECT_TRUE(s.normal.isApprox(Vector3d(1, 0, 0), 1e-12));
-    s = solid.closestPoint(Vector3d(12, 13, 5));  // nearest to the edge x = y = 10
+    s = solid.closestPoint(Vector3d(12, 13, 5)); // nearest to the edge x = y = 10
     EXPECT_TRUE(s.point.isApprox(Vector3d(10, 10, 5), 1e-12));
     EXPECT_NEAR(s.distance, std::sqrt(13.0), 1e-12);
-    s = solid.closestPoint(Vector3d(5, 5, 9));  // from inside: the top face
+    s = solid.closestPoint(Vector3d(5, 5, 9)); // from inside: the top face
     EXPECT_TRUE(s.point.isApprox(Vector3d(5, 5, 10), 1e-12));
     EXPECT_NEAR(s.distance, 1.0, 1e-12);
     EXPECT_TRUE(s.normal.isApprox(Vector3d(0, 0, 1), 1e-12));
@@ -210,31 +213,31 @@ TEST(SolidQueries, ClosestPointOnABoxByHand)
 TEST(SolidQueries, RayAndSegmentHitsOnABoxByHand)
 {
     const Solid solid(makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)));
-    auto hit = solid.firstHit(Vector3d(-5, 5, 5), Vector3d(2, 0, 0));  // direction need not be unit
+    auto hit = solid.firstHit(Vector3d(-5, 5, 5), Vector3d(2, 0, 0)); // direction need not be unit
     ASSERT_TRUE(hit);
     EXPECT_NEAR(hit->distance, 5.0, 1e-12);
     EXPECT_TRUE(hit->point.isApprox(Vector3d(0, 5, 5), 1e-12));
     EXPECT_TRUE(solid.mesh().faceNormal(hit->triangle).isApprox(Vector3d(-1, 0, 0), 1e-12));
-    hit = solid.firstHit(Vector3d(5, 5, 5), Vector3d(0, 0, 1));  // from inside
+    hit = solid.firstHit(Vector3d(5, 5, 5), Vector3d(0, 0, 1)); // from inside
     ASSERT_TRUE(hit);
     EXPECT_NEAR(hit->distance, 5.0, 1e-12);
-    hit = solid.firstHit(Vector3d(0, 5, 5), Vector3d(1, 0, 0));  // starting on the surface: s = 0 does not count
+    hit = solid.firstHit(Vector3d(0, 5, 5), Vector3d(1, 0, 0)); // starting on the surface: s = 0 does not count
     ASSERT_TRUE(hit);
     EXPECT_NEAR(hit->distance, 10.0, 1e-12);
     EXPECT_FALSE(solid.firstHit(Vector3d(0, 5, 5), Vector3d(-1, 0, 0)));
     EXPECT_FALSE(solid.firstHit(Vector3d(-5, 5, 5), Vector3d(0, 1, 0)));
-    hit = solid.firstHit(Vector3d(-5, -5, 3), Vector3d(1, 1, 0));  // onto the edge x = y = 0
+    hit = solid.firstHit(Vector3d(-5, -5, 3), Vector3d(1, 1, 0)); // onto the edge x = y = 0
     ASSERT_TRUE(hit);
     EXPECT_NEAR(hit->distance, 5.0 * std::sqrt(2.0), 1e-12);
 
     EXPECT_TRUE(solid.segmentHits(Vector3d(-1, 5, 5), Vector3d(11, 5, 5)));
     EXPECT_TRUE(solid.segmentHits(Vector3d(-1, 5, 5), Vector3d(5, 5, 5)));
     EXPECT_FALSE(solid.segmentHits(Vector3d(-1, 5, 5), Vector3d(-1, 6, 12)));
-    EXPECT_FALSE(solid.segmentHits(Vector3d(0, 5, 5), Vector3d(-5, 7, 5)));  // leaves a landmark on the surface
-    EXPECT_TRUE(solid.segmentHits(Vector3d(-1, 5, 10), Vector3d(11, 5, 10)));  // grazes along the top face
+    EXPECT_FALSE(solid.segmentHits(Vector3d(0, 5, 5), Vector3d(-5, 7, 5)));   // leaves a landmark on the surface
+    EXPECT_TRUE(solid.segmentHits(Vector3d(-1, 5, 10), Vector3d(11, 5, 10))); // grazes along the top face
 
     EXPECT_TRUE(solid.contains(Vector3d(5, 5, 5)));
-    EXPECT_TRUE(solid.contains(Vector3d(10, 5, 5)));  // on the surface
+    EXPECT_TRUE(solid.contains(Vector3d(10, 5, 5))); // on the surface
     EXPECT_FALSE(solid.contains(Vector3d(10.001, 5, 5)));
 }
 
@@ -261,5 +264,5 @@ TEST(SolidQueries, ConcurrentConstQueriesAgree)
     EXPECT_EQ(b, serial);
 }
 
-}  // namespace
-}  // namespace hg::model
+} // namespace
+} // namespace hg::model

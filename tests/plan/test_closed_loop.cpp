@@ -2,11 +2,11 @@
 // renderer), inspect the renders against the inspection map. The nominal part
 // must pass with every landmark observed and ok; a part with material missing
 // on one face must fail at that face's landmarks only.
+#include "hgtest/parts.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
 #include "hullgauge/sim/renderer.h"
-#include "hgtest/parts.h"
 
 #include <gtest/gtest.h>
 
@@ -69,14 +69,12 @@ struct Loop {
     inspect::InspectionResult inspect(const model::TriangleMesh& part) const
     {
         std::vector<inspect::MapLandmark> mls;
-        for (const auto& l : landmarks)
-            mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
+        for (const auto& l : landmarks) mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
         auto map = inspect::InspectionMap::build(
             "cube", mapGeometry, mls, {}, [&](const Eigen::AlignedBox3d& b) { return nominal.isObjectVoxel(b); });
         sim::SilhouetteRenderer renderer({part});
         std::vector<inspect::CapturedView> views;
-        for (const auto& v : plan.views)
-            views.push_back({v.id, v.camera, renderer.render(v.camera)});
+        for (const auto& v : plan.views) views.push_back({v.id, v.camera, renderer.render(v.camera)});
         return inspect::Inspector(map).inspect(views, {});
     }
 };

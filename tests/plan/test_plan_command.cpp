@@ -70,16 +70,14 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
         // The camera centre from R and t (−Rᵀt) is the fixture's at that pose.
         geometry::Mat3 R;
         for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b)
-                R(a, b) = v["R"][a][b].get<double>();
+            for (int b = 0; b < 3; ++b) R(a, b) = v["R"][a][b].get<double>();
         const geometry::Vec3 t(v["t"][0].get<double>(), v["t"][1].get<double>(), v["t"][2].get<double>());
         const geometry::FixturePose pose{v["pose"]["rotation_deg"].get<double>(),
                                          v["pose"]["declination_deg"].get<double>(), 0.0};
         EXPECT_LT((-(R.transpose() * t) - station.fixture.cameraCentreInPart(pose)).norm(), 1e-6);
         EXPECT_EQ(v["K"][0][0].get<double>(), 4000.0);
         EXPECT_FALSE(v["landmarks"].empty());
-        for (const auto& id : v["landmarks"])
-            EXPECT_LE(v["predicted_med_mm"][id.get<std::string>()], 0.5);
+        for (const auto& id : v["landmarks"]) EXPECT_LE(v["predicted_med_mm"][id.get<std::string>()], 0.5);
     }
     for (const auto& l : j["landmarks"]) {
         EXPECT_EQ(l["status"], "inspectable");

@@ -69,8 +69,7 @@ TEST(PoseSpace, HorizontalTangentPlaneIsOneDeclination)
     auto poses = grazingPoses(f, Vec3(0, 0, 20), Vec3::UnitZ(), steps(10, 5, 5));
     ASSERT_FALSE(poses.empty());
     const double expected = geometry::radToDeg(std::asin(20.0 / 300.0));
-    for (const auto& p : poses)
-        EXPECT_NEAR(p.declinationDeg, expected, 1e-9) << p.rotationDeg;
+    for (const auto& p : poses) EXPECT_NEAR(p.declinationDeg, expected, 1e-9) << p.rotationDeg;
     EXPECT_GE(poses.size(), 36u); // one per grid rotation
 }
 
@@ -138,8 +137,7 @@ TEST(PoseSpace, TravelOrderImprovesLargeSets)
 {
     // 12 poses on a line, shuffled: the best path from 0 visits them in order.
     std::vector<FixturePose> poses;
-    for (int k : {7, 3, 11, 1, 9, 5, 12, 2, 8, 4, 10, 6})
-        poses.push_back({10.0 * k, 0, 0});
+    for (int k : {7, 3, 11, 1, 9, 5, 12, 2, 8, 4, 10, 6}) poses.push_back({10.0 * k, 0, 0});
     auto order = orderForTravel(poses, FixtureType::RotationDeclination, {0, 0, 0});
     for (std::size_t i = 1; i < order.size(); ++i)
         EXPECT_LT(poses[order[i - 1]].rotationDeg, poses[order[i]].rotationDeg);

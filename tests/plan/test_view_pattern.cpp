@@ -78,8 +78,7 @@ TEST(ViewPattern, ExactCoverFindsTheOptimum)
     EXPECT_EQ(e.poses.size(), 2u);
     for (const auto& r : reqs) {
         bool met = false;
-        for (int p : e.poses)
-            met = met || std::binary_search(r.anyOf[0].begin(), r.anyOf[0].end(), p);
+        for (int p : e.poses) met = met || std::binary_search(r.anyOf[0].begin(), r.anyOf[0].end(), p);
         EXPECT_TRUE(met);
     }
 }

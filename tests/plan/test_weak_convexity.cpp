@@ -83,11 +83,9 @@ TEST(WeakConvexity, CubeIsInspectableEverywhereFromGrazingPoses)
         EXPECT_TRUE(a.unseenVoids.empty()) << a.id << " " << a.unseenVoids.size();
     }
     const double grazing = geometry::radToDeg(std::asin(20.0 / 300.0));
-    for (const auto& p : find(all, "top").witnessPoses)
-        EXPECT_NEAR(p.declinationDeg, grazing, 1.0);
+    for (const auto& p : find(all, "top").witnessPoses) EXPECT_NEAR(p.declinationDeg, grazing, 1.0);
     // The -y face: lines of sight run in the plane y = -10, i.e. along x.
-    for (const auto& d : find(all, "ny").witnessDirections)
-        EXPECT_LT(std::abs(d.y()), 0.03);
+    for (const auto& d : find(all, "ny").witnessDirections) EXPECT_LT(std::abs(d.y()), 0.03);
 }
 
 // Stamp (fig. 5.2): a handle with a wider head on top; the impression face
@@ -102,8 +100,7 @@ TEST(WeakConvexity, StampIsInspectable)
     auto problem = problemFor(stamp, station,
                               {landmark("face", {0, 0, 38}, {0, 0, 1}), landmark("head-side", {12, 0, 34}, {1, 0, 0}),
                                landmark("handle", {5, 0, 15}, {1, 0, 0})});
-    for (const auto& a : analyseLandmarks(problem))
-        EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
+    for (const auto& a : analyseLandmarks(problem)) EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
 }
 
 // Open U channel (2.8.3, Proposition 2.3), channel along x: outer walls
@@ -134,8 +131,7 @@ TEST(WeakConvexity, UChannelInsideSeenOnlyAlongTheChannel)
                    {landmark("inner-wall", {0, -6, 8}, {0, 1, 0}), landmark("inner-floor", {0, 0, 4}, {0, 0, 1}),
                     landmark("outer-wall", {0, -10, 6}, {0, -1, 0})});
     auto all = analyseLandmarks(problem);
-    for (const auto& a : all)
-        EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
+    for (const auto& a : all) EXPECT_TRUE(a.inspectable()) << a.id << ": " << a.reason;
     // Inner wall: the tangent plane y = -6 holds the line of sight (its y
     // component is only the camera's 6 mm offset over 300 mm); in that plane
     // nothing but the floor (z = 4) and the channel's ends bound it, so a line
@@ -295,8 +291,8 @@ TEST(WeakConvexity, WitnessOutsideTheTangentBandIsFoundByTheFullPoseSearch)
 {
     model::Solid cube(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)));
     auto station = makeStation({-10, 10}, {0, 1});
-    auto problem = problemFor(cube, station,
-                              {landmark("near-edge", {0, -9.5, 20}, {0, 0, 1}), landmark("centre", {0, 0, 20}, {0, 0, 1})});
+    auto problem = problemFor(
+        cube, station, {landmark("near-edge", {0, -9.5, 20}, {0, 0, 1}), landmark("centre", {0, 0, 20}, {0, 0, 1})});
     auto all = analyseLandmarks(problem);
     const auto& edge = find(all, "near-edge");
     EXPECT_TRUE(edge.inspectable()) << edge.reason;
@@ -336,8 +332,7 @@ TEST(ViewPlan, CubePlanObservesEveryLandmark)
             EXPECT_GT(v.predictedMedMm[k], 0.1);
         }
     }
-    for (std::size_t l = 0; l < seen.size(); ++l)
-        EXPECT_GT(seen[l], 0) << problem.landmarks[l].id;
+    for (std::size_t l = 0; l < seen.size(); ++l) EXPECT_GT(seen[l], 0) << problem.landmarks[l].id;
     // px and px2 share the face plane x = 10: one view serves both.
     bool shared = false;
     for (const auto& v : plan.views)

@@ -43,8 +43,7 @@ std::vector<cv::Point2d> projectWithOpenCV(const CameraModel& cam, const std::ve
     const Vec3& t = cam.cameraFromPart().t;
     cv::Mat tvec = (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
     std::vector<cv::Point3d> obj;
-    for (const auto& p : points)
-        obj.emplace_back(p.x(), p.y(), p.z());
+    for (const auto& p : points) obj.emplace_back(p.x(), p.y(), p.z());
     std::vector<cv::Point2d> img;
     cv::projectPoints(obj, rvec, tvec, K, cam.intrinsics().dist, img);
     return img;
@@ -53,8 +52,7 @@ std::vector<cv::Point2d> projectWithOpenCV(const CameraModel& cam, const std::ve
 std::array<Vec3, 8> boxCorners(const Vec3& lo, const Vec3& hi)
 {
     std::array<Vec3, 8> c;
-    for (int i = 0; i < 8; ++i)
-        c[i] = Vec3(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+    for (int i = 0; i < 8; ++i) c[i] = Vec3(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
     return c;
 }
 
@@ -98,8 +96,7 @@ EdgeCheck checkEdge(const cv::Mat& cov, std::vector<cv::Point2d> curve, bool alo
     cv::Mat img = cov;
     if (alongColumns) {
         cv::transpose(cov, img);
-        for (auto& p : curve)
-            std::swap(p.x, p.y);
+        for (auto& p : curve) std::swap(p.x, p.y);
     }
     EdgeCheck result;
     const cv::Point2d a = curve.front(), b = curve.back();
@@ -115,8 +112,7 @@ EdgeCheck checkEdge(const cv::Mat& cov, std::vector<cv::Point2d> curve, bool alo
             if (row < 0 || row >= img.rows || c0 < 0 || c1 >= img.cols) continue;
             const float* line = img.ptr<float>(row);
             double sum = 0.0;
-            for (int c = c0; c <= c1; ++c)
-                sum += line[c];
+            for (int c = c0; c <= c1; ++c) sum += line[c];
             const bool insideLeft = line[c0] > line[c1];
             EXPECT_NEAR(std::abs(line[c0] - line[c1]), 1.0, 1e-6) << "window not across one clean edge";
             const double measured = insideLeft ? c0 - 0.5 + sum : c1 + 0.5 - sum;
@@ -142,8 +138,7 @@ EdgeCheck checkBoxOutline(const cv::Mat& cov, const CameraModel& cam, const Vec3
             << "hull corners " << hull[i] << ", " << hull[(i + 1) % hull.size()];
         std::vector<Vec3> samples;
         const int n = 4000;
-        for (int k = 0; k <= n; ++k)
-            samples.push_back(A + (B - A) * (static_cast<double>(k) / n));
+        for (int k = 0; k <= n; ++k) samples.push_back(A + (B - A) * (static_cast<double>(k) / n));
         auto curve = projectWithOpenCV(cam, samples);
         const cv::Point2d d = curve.back() - curve.front();
         EdgeCheck e = checkEdge(cov, curve, std::abs(d.x) > std::abs(d.y), 12.0);

@@ -42,8 +42,7 @@ std::string boxStl(double x0, double y0, double z0, double x1, double y1, double
     s << "solid box\n";
     for (const auto& f : faces) {
         s << " facet normal 0 0 0\n  outer loop\n";
-        for (int v : f)
-            s << "   vertex " << c[v][0] << ' ' << c[v][1] << ' ' << c[v][2] << '\n';
+        for (int v : f) s << "   vertex " << c[v][0] << ' ' << c[v][1] << ' ' << c[v][2] << '\n';
         s << "  endloop\n endfacet\n";
     }
     s << "endsolid box\n";

@@ -216,8 +216,7 @@ std::vector<PartAsMade> plateDefects(const TestPart& plate, double d)
 {
     auto made = [&](std::string name, TriangleMesh mesh, std::vector<std::pair<std::string, double>> offsets) {
         PartAsMade m{std::move(name), std::move(mesh), std::vector<double>(plate.landmarks.size(), 0.0)};
-        for (const auto& [id, e] : offsets)
-            m.offsetMm[plate.landmark(id)] = e;
+        for (const auto& [id, e] : offsets) m.offsetMm[plate.landmark(id)] = e;
         return m;
     };
     return {
@@ -367,8 +366,7 @@ std::vector<hg::geometry::CameraModel> grazingViewSet(const TestPart& part, cons
         if (auto c = grazingView(part.landmarks[i], clearOf, rng, options)) cameras.push_back(*c);
     }
     const Vector3d centre = part.mesh.bounds().center();
-    for (int i = 0; i < extraViews; ++i)
-        cameras.push_back(randomView(centre, rng, options));
+    for (int i = 0; i < extraViews; ++i) cameras.push_back(randomView(centre, rng, options));
     return cameras;
 }
 

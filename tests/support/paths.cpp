@@ -24,10 +24,16 @@ std::string slurp(const fs::path& p)
     ss << in.rdbuf();
     return ss.str();
 }
-}  // namespace
+} // namespace
 
-fs::path sourceDir() { return envPath("HULLGAUGE_SOURCE_DIR", fs::current_path()); }
-fs::path binaryDir() { return envPath("HULLGAUGE_BINARY_DIR", fs::current_path()); }
+fs::path sourceDir()
+{
+    return envPath("HULLGAUGE_SOURCE_DIR", fs::current_path());
+}
+fs::path binaryDir()
+{
+    return envPath("HULLGAUGE_BINARY_DIR", fs::current_path());
+}
 
 TempDir::TempDir()
 {
@@ -71,4 +77,4 @@ RunResult run(const std::string& command)
     return r;
 }
 
-}  // namespace hgtest
+} // namespace hgtest

@@ -24,7 +24,7 @@ cv::Mat backlit(int depth, double bg, double obj, double sigma, std::uint64_t se
     return out;
 }
 
-}  // namespace
+} // namespace
 
 TEST(Segmentation, OtsuSeparatesBacklitModes8Bit)
 {
@@ -68,7 +68,7 @@ TEST(Segmentation, FixedThresholdAndPolarity)
     s.method = SegmentationMethod::Fixed;
     s.threshold = 100.5;
     cv::Mat dark = segment(f, s);
-    EXPECT_EQ(dark.at<std::uint8_t>(0, 1), 255);  // 100 <= 100.5: object when dark
+    EXPECT_EQ(dark.at<std::uint8_t>(0, 1), 255); // 100 <= 100.5: object when dark
     EXPECT_EQ(dark.at<std::uint8_t>(0, 2), 0);
     s.objectIsDark = false;
     cv::Mat bright = segment(f, s);
@@ -99,7 +99,7 @@ TEST(Segmentation, RegionIsClippedToFrameAndMatchesWholeFrame)
     SegmentationSettings s;
     const double t = computeThreshold(f, s);
     const cv::Mat whole = segmentRegion(f, cv::Rect(0, 0, f.cols, f.rows), t, s);
-    const cv::Rect roi(140, 50, 40, 30);  // runs past the right edge
+    const cv::Rect roi(140, 50, 40, 30); // runs past the right edge
     const cv::Mat part = segmentRegion(f, roi, t, s);
     EXPECT_EQ(part.cols, 20);
     EXPECT_EQ(part.rows, 30);

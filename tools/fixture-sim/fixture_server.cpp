@@ -156,10 +156,8 @@ struct FixtureServer::Impl {
 
     ~Impl()
     {
-        for (int fd : deviceClients)
-            ::close(fd);
-        for (int fd : controlClients)
-            ::close(fd);
+        for (int fd : deviceClients) ::close(fd);
+        for (int fd : controlClients) ::close(fd);
         if (deviceListen >= 0) ::close(deviceListen);
         if (controlListen >= 0) ::close(controlListen);
         // The TCP contexts borrow client sockets; never let them close one twice.
@@ -186,8 +184,7 @@ struct FixtureServer::Impl {
         // A dropped device: connections are cut and new ones refused until the
         // fault clears (on RTU a dropped device simply stops answering).
         if (f == SimulatedFault::Disconnect && before != SimulatedFault::Disconnect) {
-            for (int fd : deviceClients)
-                ::close(fd);
+            for (int fd : deviceClients) ::close(fd);
             deviceClients.clear();
             ::close(deviceListen);
             deviceListen = -1;
@@ -371,10 +368,8 @@ struct FixtureServer::Impl {
             if (deviceListen >= 0) add(deviceListen, DeviceListen);
             if (controlListen >= 0) add(controlListen, ControlListen);
             if (!options.rtuDevice.empty()) add(modbus_get_socket(device), Rtu);
-            for (int fd : deviceClients)
-                add(fd, DeviceClient);
-            for (int fd : controlClients)
-                add(fd, ControlClient);
+            for (int fd : deviceClients) add(fd, DeviceClient);
+            for (int fd : controlClients) add(fd, ControlClient);
 
             int n = ::poll(fds.data(), fds.size(), kPollMs);
             if (n < 0 && errno != EINTR)

@@ -43,7 +43,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct ImageSource {
-    std::vector<cv::Mat> images;  // CV_8UC1 or CV_16UC1, all the same size
+    std::vector<cv::Mat> images; // CV_8UC1 or CV_16UC1, all the same size
     std::atomic<std::size_t> next{0};
     std::atomic<std::uint64_t> served{0};
 };
@@ -120,11 +120,11 @@ void fillFromImages(ArvBuffer* buffer, void* data, guint32 /*exposureUs*/, guint
         cv::Mat dst(h, w, CV_8UC1, out);
         if (eight)
             roi.copyTo(dst);
-        else  // truncating >> 8 (convertTo would round)
+        else // truncating >> 8 (convertTo would round)
             for (int r = 0; r < h; ++r)
                 for (int c = 0; c < w; ++c) dst.at<uint8_t>(r, c) = static_cast<uint8_t>(roi.at<uint16_t>(r, c) >> 8);
     } else if (format == ARV_PIXEL_FORMAT_MONO_12 || format == ARV_PIXEL_FORMAT_MONO_16) {
-        cv::Mat dst(h, w, CV_16UC1, out);  // little-endian words, as GVSP carries Mono12/Mono16
+        cv::Mat dst(h, w, CV_16UC1, out); // little-endian words, as GVSP carries Mono12/Mono16
         for (int r = 0; r < h; ++r)
             for (int c = 0; c < w; ++c) {
                 const unsigned v = eight ? roi.at<uint8_t>(r, c) : roi.at<uint16_t>(r, c);
@@ -163,8 +163,9 @@ std::string extendedDescription()
     g_object_unref(plain);
     if (xml.empty()) throw std::runtime_error("Aravis' fake camera has no GenICam description");
 
-    insertAt(xml, "<EnumEntry Name=\"Mono16\"",
-             "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\">\n\t\t\t<Value>17825797</Value>\n\t\t</EnumEntry>\n\t\t");
+    insertAt(
+        xml, "<EnumEntry Name=\"Mono16\"",
+        "<EnumEntry Name=\"Mono12\" NameSpace=\"Standard\">\n\t\t\t<Value>17825797</Value>\n\t\t</EnumEntry>\n\t\t");
     insertAt(xml, "<Float Name=\"ExposureTimeAbs\"",
              "<Float Name=\"ExposureTime\" NameSpace=\"Standard\">\n"
              "\t\t<Description>Exposure duration, in microseconds.</Description>\n"
@@ -184,7 +185,7 @@ std::string extendedDescription()
     return xml;
 }
 
-}  // namespace
+} // namespace
 
 int main(int argc, char** argv)
 {

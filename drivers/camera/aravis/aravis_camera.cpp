@@ -790,8 +790,7 @@ class AravisCamera final : public Camera {
     /// Frames finished before this grab are stale (the part may have moved since).
     static void drainStaleFrames(Link& link)
     {
-        while (ArvBuffer* stale = arv_stream_try_pop_buffer(link.stream))
-            arv_stream_push_buffer(link.stream, stale);
+        while (ArvBuffer* stale = arv_stream_try_pop_buffer(link.stream)) arv_stream_push_buffer(link.stream, stale);
     }
 
     Frame toFrame(const Link& link, ArvBuffer* buffer)
@@ -958,8 +957,7 @@ std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver)
     }
     if (auto n = driver.optional("features")) {
         require(n->isMap(), *n, "expected a map of GenICam feature names to values");
-        for (const auto& key : n->keys())
-            c.features.emplace_back(key, (*n)[key].asString());
+        for (const auto& key : n->keys()) c.features.emplace_back(key, (*n)[key].asString());
     }
     return std::make_unique<AravisCamera>(driver.path(), parseCameraSettings(driver), std::move(c));
 }

@@ -11,4 +11,4 @@ namespace hg::drivers {
 /// opens nothing. Throws hg::InputError naming the key.
 std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver);
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

@@ -144,8 +144,7 @@ class SimCameraImpl final : public SimCamera {
         auto r = find(name);
         if (!r) {
             std::string known;
-            for (const auto& [n, _] : renderers_)
-                known += (known.empty() ? "" : ", ") + n;
+            for (const auto& [n, _] : renderers_) known += (known.empty() ? "" : ", ") + n;
             return Status::failure("sim camera: no part named '" + name + "' (known: " + known + ")");
         }
         std::lock_guard lock(mutex_);
@@ -164,8 +163,7 @@ class SimCameraImpl final : public SimCamera {
     std::vector<std::string> partNames() const override
     {
         std::vector<std::string> out;
-        for (const auto& [n, _] : renderers_)
-            out.push_back(n);
+        for (const auto& [n, _] : renderers_) out.push_back(n);
         return out;
     }
 

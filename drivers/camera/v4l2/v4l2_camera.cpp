@@ -34,7 +34,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
-std::string errnoText(int e) { return std::strerror(e); }
+std::string errnoText(int e)
+{
+    return std::strerror(e);
+}
 
 /// ioctl that retries on EINTR.
 int xioctl(int fd, unsigned long request, void* arg)
@@ -62,10 +65,10 @@ struct MappedPool {
     struct Slot {
         void* start = MAP_FAILED;
         std::size_t length = 0;
-        cv::Mat grey;  ///< conversion target for YUYV
+        cv::Mat grey; ///< conversion target for YUYV
     };
     std::mutex mutex;
-    int fd = -1;  ///< -1 once the session ended
+    int fd = -1; ///< -1 once the session ended
     std::vector<Slot> slots;
 
     ~MappedPool()
@@ -92,7 +95,7 @@ struct MappedPool {
 };
 
 class V4l2Camera final : public Camera {
-public:
+  public:
     V4l2Camera(std::string configPath, CameraSettings settings, V4l2Config config)
         : Camera(std::move(configPath), std::move(settings)), config_(std::move(config))
     {
@@ -103,16 +106,18 @@ public:
         closeDevice();
     }
 
-protected:
+  protected:
     Status doConfigure() override
     {
         fd_ = ::open(config_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-        if (fd_ < 0) return Status::failure(configPath() + ".device: cannot open " + config_.device + ": " + errnoText(errno));
+        if (fd_ < 0)
+            return Status::failure(configPath() + ".device: cannot open " + config_.device + ": " + errnoText(errno));
         v4l2_capability cap{};
         if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) == -1) {
             int e = errno;
             closeDevice();
-            return Status::failure(configPath() + ".device: " + config_.device + " is not a V4L2 device: " + errnoText(e));
+            return Status::failure(configPath() + ".device: " + config_.device +
+                                   " is not a V4L2 device: " + errnoText(e));
         }
         const std::uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
         if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {
@@ -198,17 +203,17 @@ protected:
             pollfd p{fd_, POLLIN, 0};
             int r = ::poll(&p, 1, static_cast<int>(left));
             if (r < 0 && errno == EINTR) continue;
-            if (r < 0) return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": poll: " + errnoText(errno));
+            if (r < 0)
+                return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": poll: " + errnoText(errno));
             if (r == 0) continue;
             if (p.revents & (POLLERR | POLLHUP))
                 return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": device error or unplugged");
             if (dequeue(b)) return toFrame(b);
             if (errno != EAGAIN)
-                return Frame::failed(FrameStatus::Error,
-                                     "v4l2 " + config_.device + ": dequeue: " + errnoText(errno));
+                return Frame::failed(FrameStatus::Error, "v4l2 " + config_.device + ": dequeue: " + errnoText(errno));
         }
-        return Frame::failed(FrameStatus::Timeout, "v4l2 " + config_.device + ": no frame within " +
-                                                       std::to_string(timeout.count()) + " ms");
+        return Frame::failed(FrameStatus::Timeout,
+                             "v4l2 " + config_.device + ": no frame within " + std::to_string(timeout.count()) + " ms");
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override
@@ -220,8 +225,8 @@ protected:
             if (!(q.flags & V4L2_CTRL_FLAG_DISABLED) && q.type != V4L2_CTRL_TYPE_CTRL_CLASS) {
                 FeatureInfo f;
                 f.name = reinterpret_cast<const char*>(q.name);
-                f.type = q.type == V4L2_CTRL_TYPE_BOOLEAN ? "Boolean"
-                         : q.type == V4L2_CTRL_TYPE_MENU  ? "Enumeration"
+                f.type = q.type == V4L2_CTRL_TYPE_BOOLEAN  ? "Boolean"
+                         : q.type == V4L2_CTRL_TYPE_MENU   ? "Enumeration"
                          : q.type == V4L2_CTRL_TYPE_BUTTON ? "Command"
                                                            : "Integer";
                 f.access = (q.flags & V4L2_CTRL_FLAG_READ_ONLY)    ? "RO"
@@ -292,7 +297,7 @@ protected:
         return info;
     }
 
-private:
+  private:
     /// The control whose name (as VIDIOC_QUERYCTRL reports it) is `name`.
     std::optional<v4l2_queryctrl> findControl(const std::string& name)
     {
@@ -344,13 +349,15 @@ private:
         }
         v4l2_format fmt{};
         fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1) return Status::failure(where + "cannot read the format: " + errnoText(errno));
+        if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1)
+            return Status::failure(where + "cannot read the format: " + errnoText(errno));
         if (!s.roi.isFullSensor()) {
             // The capture crop is the ROI; the image size follows it (no scaling).
             v4l2_selection sel{};
             sel.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
             sel.target = V4L2_SEL_TGT_CROP;
-            sel.r = {s.roi.x, s.roi.y, static_cast<std::uint32_t>(s.roi.width), static_cast<std::uint32_t>(s.roi.height)};
+            sel.r = {s.roi.x, s.roi.y, static_cast<std::uint32_t>(s.roi.width),
+                     static_cast<std::uint32_t>(s.roi.height)};
             if (xioctl(fd_, VIDIOC_S_SELECTION, &sel) == -1 || sel.r.left != s.roi.x || sel.r.top != s.roi.y ||
                 static_cast<int>(sel.r.width) != s.roi.width || static_cast<int>(sel.r.height) != s.roi.height)
                 return Status::failure(where + "the device cannot crop to the ROI");
@@ -359,7 +366,8 @@ private:
         }
         fmt.fmt.pix.pixelformat = *chosen;
         fmt.fmt.pix.field = V4L2_FIELD_NONE;
-        if (xioctl(fd_, VIDIOC_S_FMT, &fmt) == -1) return Status::failure(where + "format refused: " + errnoText(errno));
+        if (xioctl(fd_, VIDIOC_S_FMT, &fmt) == -1)
+            return Status::failure(where + "format refused: " + errnoText(errno));
         if (fmt.fmt.pix.pixelformat != *chosen)
             return Status::failure(where + "asked for " + v4l2::fourccName(*chosen) + ", the device chose " +
                                    v4l2::fourccName(fmt.fmt.pix.pixelformat));
@@ -376,7 +384,7 @@ private:
                 return Status::failure(where + "exposure_us is set but the device has no absolute exposure control "
                                                "(V4L2_CID_EXPOSURE_ABSOLUTE); leave exposure_us unset");
             v4l2_control manual{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL};
-            xioctl(fd_, VIDIOC_S_CTRL, &manual);  // absent on many devices; the absolute value decides
+            xioctl(fd_, VIDIOC_S_CTRL, &manual); // absent on many devices; the absolute value decides
             v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<std::int32_t>(*s.exposureUs / 100.0 + 0.5)};
             if (xioctl(fd_, VIDIOC_S_CTRL, &c) == -1)
                 return Status::failure(where + "exposure refused: " + errnoText(errno));
@@ -406,7 +414,8 @@ private:
         auto recycle = [pool, index] { pool->requeue(index); };
         const auto ts = std::chrono::seconds(b.timestamp.tv_sec) + std::chrono::microseconds(b.timestamp.tv_usec);
         const FrameStatus status = (b.flags & V4L2_BUF_FLAG_ERROR) ? FrameStatus::Incomplete : FrameStatus::Ok;
-        const std::string message = status == FrameStatus::Ok ? "" : "v4l2 " + config_.device + ": frame marked corrupt";
+        const std::string message =
+            status == FrameStatus::Ok ? "" : "v4l2 " + config_.device + ": frame marked corrupt";
         const auto* data = static_cast<const std::uint8_t*>(slot.start);
         if (b.bytesused < static_cast<std::size_t>(bytesPerLine_) * (height_ - 1)) {
             pool->requeue(index);
@@ -432,7 +441,7 @@ private:
             v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
             xioctl(fd_, VIDIOC_STREAMOFF, &type);
         }
-        pool_.reset();  // mappings go when the last frame does; REQBUFS 0 needs them gone, so it waits for reopen
+        pool_.reset(); // mappings go when the last frame does; REQBUFS 0 needs them gone, so it waits for reopen
     }
 
     void closeDevice()
@@ -451,7 +460,7 @@ private:
     std::shared_ptr<MappedPool> pool_;
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
 {
@@ -480,4 +489,4 @@ std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
     return std::make_unique<V4l2Camera>(driver.path(), s, std::move(c));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

@@ -9,9 +9,12 @@ namespace hg::drivers::v4l2 {
 std::vector<std::uint32_t> candidateFourccs(PixelFormat want)
 {
     switch (want) {
-    case PixelFormat::Mono8: return {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV};
-    case PixelFormat::Mono12: return {V4L2_PIX_FMT_Y12};
-    case PixelFormat::Mono16: return {V4L2_PIX_FMT_Y16};
+    case PixelFormat::Mono8:
+        return {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV};
+    case PixelFormat::Mono12:
+        return {V4L2_PIX_FMT_Y12};
+    case PixelFormat::Mono16:
+        return {V4L2_PIX_FMT_Y16};
     }
     return {};
 }
@@ -23,7 +26,10 @@ std::optional<std::uint32_t> negotiate(PixelFormat want, const std::vector<std::
     return std::nullopt;
 }
 
-bool needsConversion(std::uint32_t fourcc) { return fourcc == V4L2_PIX_FMT_YUYV; }
+bool needsConversion(std::uint32_t fourcc)
+{
+    return fourcc == V4L2_PIX_FMT_YUYV;
+}
 
 std::string fourccName(std::uint32_t fourcc)
 {
@@ -41,8 +47,8 @@ void yuyvToGrey(const std::uint8_t* src, std::size_t bytesPerLine, int width, in
     for (int r = 0; r < height; ++r) {
         const std::uint8_t* row = src + static_cast<std::size_t>(r) * bytesPerLine;
         auto* out = dst.ptr<std::uint8_t>(r);
-        for (int c = 0; c < width; ++c) out[c] = row[2 * c];  // Y samples sit at even bytes
+        for (int c = 0; c < width; ++c) out[c] = row[2 * c]; // Y samples sit at even bytes
     }
 }
 
-}  // namespace hg::drivers::v4l2
+} // namespace hg::drivers::v4l2

@@ -32,4 +32,4 @@ std::string fourccName(std::uint32_t fourcc);
 /// `dst` must be CV_8UC1 of width x height.
 void yuyvToGrey(const std::uint8_t* src, std::size_t bytesPerLine, int width, int height, cv::Mat& dst);
 
-}  // namespace hg::drivers::v4l2
+} // namespace hg::drivers::v4l2

@@ -23,7 +23,7 @@ std::string errnoText(int err)
 }
 
 class GpiodLamps final : public Lamps {
-public:
+  public:
     explicit GpiodLamps(LampsConfig config) : Lamps(std::move(config)) {}
     ~GpiodLamps() override
     {
@@ -33,7 +33,7 @@ public:
 
     std::string_view backend() const override { return "gpiod"; }
 
-protected:
+  protected:
     LampResult onConfigure() override
     {
         const LampsConfig& c = config();
@@ -50,10 +50,9 @@ protected:
             if (want.offset) {
                 line = gpiod_chip_get_line(chip_, *want.offset);
                 if (!line)
-                    return {LampStatusCode::IoError,
-                            want.key + ": GPIO chip '" + c.chip + "' has no line at offset " +
-                                std::to_string(*want.offset) + " (it has " +
-                                std::to_string(gpiod_chip_num_lines(chip_)) + " lines)"};
+                    return {LampStatusCode::IoError, want.key + ": GPIO chip '" + c.chip + "' has no line at offset " +
+                                                         std::to_string(*want.offset) + " (it has " +
+                                                         std::to_string(gpiod_chip_num_lines(chip_)) + " lines)"};
             } else if (chip_) {
                 line = gpiod_chip_find_line(chip_, want.name->c_str());
                 if (!line)
@@ -94,7 +93,7 @@ protected:
         return LampResult::success();
     }
 
-private:
+  private:
     void release()
     {
         for (std::size_t i = 0; i < lines_.size(); ++i) {
@@ -115,11 +114,11 @@ private:
     std::array<bool, 3> ownsChip_{};
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config)
 {
     return std::make_unique<GpiodLamps>(std::move(config));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

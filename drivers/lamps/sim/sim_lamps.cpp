@@ -10,7 +10,7 @@ namespace hg::drivers {
 namespace {
 
 class SimLamps final : public SimulatedLamps {
-public:
+  public:
     explicit SimLamps(LampsConfig config) : SimulatedLamps(std::move(config)) {}
     ~SimLamps() override { shutdown(); }
 
@@ -39,7 +39,7 @@ public:
 
     void injectWriteFailure(bool fail) override { failWrites_.store(fail); }
 
-protected:
+  protected:
     LampResult onConfigure() override
     {
         if (failWrites_.load())
@@ -67,7 +67,7 @@ protected:
         return LampResult::success();
     }
 
-private:
+  private:
     mutable std::mutex levelsMutex_;
     bool requested_ = false;
     std::array<bool, 3> lit_{};
@@ -75,11 +75,11 @@ private:
     std::atomic<bool> failWrites_{false};
 };
 
-}  // namespace
+} // namespace
 
 std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config)
 {
     return std::make_unique<SimLamps>(std::move(config));
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

@@ -30,7 +30,7 @@
 namespace hg::calib {
 
 struct FixtureView {
-    geometry::FixturePose pose;  ///< commanded rotation and declination (degrees)
+    geometry::FixturePose pose; ///< commanded rotation and declination (degrees)
     TargetView target;
 };
 
@@ -51,8 +51,8 @@ struct FixtureAxesResult {
     AxisLine rotationAxisInCamera, declinationAxisInCamera;
     /// The target's pose on the turntable (fixture frame at rotation 0, declination 0).
     geometry::RigidTransform fixtureFromTarget;
-    double axesAngleDeg = 0.0;     ///< angle between the axes (90 for a perpendicular fixture)
-    double axesDistanceMm = 0.0;   ///< length of their common perpendicular (0 when they intersect)
+    double axesAngleDeg = 0.0;   ///< angle between the axes (90 for a perpendicular fixture)
+    double axesDistanceMm = 0.0; ///< length of their common perpendicular (0 when they intersect)
     double rmsPx = 0.0, maxPx = 0.0;
     /// Object-space residuals: each pixel residual scaled to its corner's depth.
     double rmsMm = 0.0, maxMm = 0.0;
@@ -79,4 +79,4 @@ geometry::RigidTransform rotationAboutLine(const AxisLine& line, double angleDeg
 
 std::string formatFixtureReport(const FixtureAxesResult& result);
 
-}  // namespace hg::calib
+} // namespace hg::calib

@@ -29,8 +29,8 @@ inline const std::vector<std::string>& intrinsicParameterNames()
 }
 
 struct IntrinsicsResult {
-    geometry::Intrinsics intrinsics;  ///< K, dist (k1, k2, p1, p2, k3) and image size
-    double rmsPx = 0.0;               ///< RMS reprojection error over all corners
+    geometry::Intrinsics intrinsics; ///< K, dist (k1, k2, p1, p2, k3) and image size
+    double rmsPx = 0.0;              ///< RMS reprojection error over all corners
     std::vector<std::string> viewNames;
     std::vector<double> perViewRmsPx;
     /// One standard deviation of fx, fy, cx, cy, k1, k2, p1, p2, k3 (0 for fixed ones).
@@ -48,4 +48,4 @@ IntrinsicsResult calibrateIntrinsics(const std::vector<TargetView>& views, cv::S
 /// A human-readable report (for stderr/stdout of the tool).
 std::string formatIntrinsicsReport(const IntrinsicsResult& result);
 
-}  // namespace hg::calib
+} // namespace hg::calib

@@ -37,8 +37,8 @@
 namespace hg::calib {
 
 struct RailSample {
-    double rangeMm = 0.0;   ///< rail reading: camera-to-target distance up to a constant, growing away from the target
-    geometry::Vec2 pixel;   ///< image of the target point (x = column, y = row)
+    double rangeMm = 0.0; ///< rail reading: camera-to-target distance up to a constant, growing away from the target
+    geometry::Vec2 pixel; ///< image of the target point (x = column, y = row)
 };
 
 /// One mount position: the point displaced `displacementMm` from the optical
@@ -62,9 +62,9 @@ struct RailObservations {
 
 struct OpticalCentreEstimate {
     geometry::Vec2 centre = geometry::Vec2::Zero();
-    double rmsPx = 0.0;  ///< RMS distance of the tracks (and stationary points) from the centre
-    int lines = 0;       ///< tracks used as lines
-    int stationary = 0;  ///< tracks that did not move (used as points)
+    double rmsPx = 0.0; ///< RMS distance of the tracks (and stationary points) from the centre
+    int lines = 0;      ///< tracks used as lines
+    int stationary = 0; ///< tracks that did not move (used as points)
 };
 
 /// Step 1 (4.3): least-squares intersection of the image tracks of every
@@ -75,7 +75,7 @@ OpticalCentreEstimate estimateOpticalCentre(const RailObservations& obs, double 
 
 struct SampleStatistics {
     double mean = 0.0;
-    double stdDev = 0.0;  ///< sample standard deviation (n − 1); 0 for one value
+    double stdDev = 0.0; ///< sample standard deviation (n − 1); 0 for one value
     int count = 0;
 };
 
@@ -83,11 +83,11 @@ struct SampleStatistics {
 /// "far/near") and displacement (columns), with Tables 4.5 and 4.6 beside it.
 struct SimilarTriangleTable {
     std::vector<double> displacementsMm;
-    std::vector<std::pair<double, double>> rangePairs;  ///< (far, near)
+    std::vector<std::pair<double, double>> rangePairs; ///< (far, near)
     /// values[row][column]; empty where undefined (on the axis, or n = n').
     std::vector<std::vector<std::optional<double>>> values;
-    std::vector<SampleStatistics> byRangePair;     ///< Table 4.5
-    std::vector<SampleStatistics> byDisplacement;  ///< Table 4.6
+    std::vector<SampleStatistics> byRangePair;    ///< Table 4.5
+    std::vector<SampleStatistics> byDisplacement; ///< Table 4.6
     SampleStatistics overall;
 };
 
@@ -97,8 +97,8 @@ SimilarTriangleTable similarTriangleTable(const std::vector<RailSeries>& series,
 
 struct RailPinholeFit {
     double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;
-    double rangeOffsetMm = 0.0;                   ///< d0: depth = range + d0
-    double mountOffsetHMm = 0.0, mountOffsetVMm = 0.0;  ///< h0, w0
+    double rangeOffsetMm = 0.0;                        ///< d0: depth = range + d0
+    double mountOffsetHMm = 0.0, mountOffsetVMm = 0.0; ///< h0, w0
     /// One standard deviation of fx, fy, cx, cy, d0, h0, w0.
     std::vector<double> stdDev;
     double rmsPx = 0.0;
@@ -107,8 +107,8 @@ struct RailPinholeFit {
 
 struct RailCalibration {
     OpticalCentreEstimate centre;
-    SimilarTriangleTable horizontal;  ///< f/Δp_h
-    SimilarTriangleTable vertical;    ///< f/Δp_v
+    SimilarTriangleTable horizontal; ///< f/Δp_h
+    SimilarTriangleTable vertical;   ///< f/Δp_v
     RailPinholeFit fit;
 };
 
@@ -119,4 +119,4 @@ RailCalibration calibrateRail(const RailObservations& obs);
 /// The tables of 4.3.1 as text (Tables 4.3–4.6 layout) and the fit.
 std::string formatRailReport(const RailCalibration& cal);
 
-}  // namespace hg::calib
+} // namespace hg::calib

@@ -19,7 +19,7 @@
 namespace hg::calib {
 
 class StationFileUpdate {
-public:
+  public:
     /// Loads `file` if it exists (syntax errors throw hg::InputError), else
     /// starts an empty document.
     explicit StationFileUpdate(std::filesystem::path file);
@@ -41,10 +41,10 @@ public:
     /// existed. Failures throw hg::FaultError naming the file.
     std::optional<std::filesystem::path> commit();
 
-private:
+  private:
     std::filesystem::path file_;
     YAML::Node root_;
     bool existed_ = false;
 };
 
-}  // namespace hg::calib
+} // namespace hg::calib

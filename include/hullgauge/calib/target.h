@@ -21,11 +21,11 @@ enum class TargetKind { Chessboard, Charuco };
 
 struct TargetSpec {
     TargetKind kind = TargetKind::Chessboard;
-    int cols = 0;  ///< chessboard: inner corners per row; ChArUco: squares per row
-    int rows = 0;  ///< chessboard: inner corners per column; ChArUco: squares per column
+    int cols = 0; ///< chessboard: inner corners per row; ChArUco: squares per row
+    int rows = 0; ///< chessboard: inner corners per column; ChArUco: squares per column
     double squareMm = 0.0;
-    double markerMm = 0.0;       ///< ChArUco only
-    std::string dictionary;      ///< ChArUco only, e.g. "DICT_5X5_100"
+    double markerMm = 0.0;  ///< ChArUco only
+    std::string dictionary; ///< ChArUco only, e.g. "DICT_5X5_100"
 
     /// Parses a pattern description; errors throw hg::InputError naming `field`.
     static TargetSpec parse(const std::string& text, const std::string& field = "--pattern");
@@ -56,4 +56,4 @@ std::optional<TargetView> detectTarget(const cv::Mat& image, const TargetSpec& s
 TargetView viewFromCorners(const TargetSpec& spec, const std::string& name, const std::vector<cv::Point2f>& pixels,
                            const std::vector<int>& ids = {});
 
-}  // namespace hg::calib
+} // namespace hg::calib

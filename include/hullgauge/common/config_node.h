@@ -18,7 +18,7 @@
 namespace hg {
 
 class ConfigNode {
-public:
+  public:
     /// Parses a YAML file; syntax errors and unreadable files throw InputError.
     static ConfigNode loadFile(const std::filesystem::path& file);
     /// Parses YAML text; `name` stands in for the file name in messages.
@@ -73,7 +73,7 @@ public:
     /// Throws InputError for this node: "file:line: path: problem".
     [[noreturn]] void fail(const std::string& problem) const;
 
-private:
+  private:
     YAML::Node node_;
     std::shared_ptr<const std::string> file_;
     std::string path_;
@@ -85,4 +85,4 @@ inline void require(bool ok, const ConfigNode& node, const std::string& problem)
     if (!ok) node.fail(problem);
 }
 
-}  // namespace hg
+} // namespace hg

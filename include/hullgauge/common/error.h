@@ -14,19 +14,18 @@
 namespace hg {
 
 class InputError : public std::runtime_error {
-public:
+  public:
     /// @param file   the file that was wrong (may be empty for command-line values)
     /// @param field  the key path ("landmarks[3].position") or record ("facet 12")
     /// @param line   1-based line in the file, when the format has lines
-    InputError(std::string file, std::string field, std::string problem,
-               std::optional<int> line = std::nullopt);
+    InputError(std::string file, std::string field, std::string problem, std::optional<int> line = std::nullopt);
 
     const std::string& file() const noexcept { return file_; }
     const std::string& field() const noexcept { return field_; }
     const std::string& problem() const noexcept { return problem_; }
     std::optional<int> line() const noexcept { return line_; }
 
-private:
+  private:
     std::string file_;
     std::string field_;
     std::string problem_;
@@ -35,11 +34,11 @@ private:
 
 /// A runtime or hardware fault (exit status 3).
 class FaultError : public std::runtime_error {
-public:
+  public:
     using std::runtime_error::runtime_error;
 };
 
 /// Exit statuses of every hullgauge program (CONTRACTS §5).
 enum class ExitStatus : int { Ok = 0, PartFails = 1, BadInput = 2, Fault = 3 };
 
-}  // namespace hg
+} // namespace hg

@@ -21,4 +21,4 @@ void configure(std::string_view spec);
 /// Send every category to the systemd journal instead of stderr.
 void useJournal();
 
-}  // namespace hg::log
+} // namespace hg::log

@@ -40,7 +40,7 @@ struct Ray {
 };
 
 class CameraModel {
-public:
+  public:
     CameraModel() = default;
     CameraModel(Intrinsics intrinsics, RigidTransform cameraFromPart);
 
@@ -82,7 +82,7 @@ public:
     /// (horizontal, vertical) — the quantity of eq. 4.4.4 (view range magnification).
     Vec2 millimetresPerPixelAt(double depthMm) const;
 
-private:
+  private:
     Vec2 distortNormalised(const Vec2& xy) const;
 
     Intrinsics intrinsics_;
@@ -91,4 +91,4 @@ private:
     bool distorted_ = false;
 };
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

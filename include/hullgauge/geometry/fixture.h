@@ -41,7 +41,7 @@ struct Range {
 };
 
 class FixtureKinematics {
-public:
+  public:
     FixtureType type = FixtureType::RotationDeclination;
     RigidTransform cameraFromFixture;
     Vec3 rotationAxis = Vec3::UnitZ();
@@ -62,4 +62,4 @@ public:
     Vec3 cameraCentreInPart(const FixturePose& pose) const;
 };
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -40,4 +40,4 @@ Station parseStation(const ConfigNode& root);
 /// type and ranges when `fixture` is given.
 std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const FixtureKinematics* fixture = nullptr);
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -40,7 +40,13 @@ Mat3 nearestRotation(const Mat3& M);
 /// Angle of the rotation R_a^T R_b in degrees.
 double rotationAngleDeg(const Mat3& Ra, const Mat3& Rb);
 
-inline double degToRad(double d) { return d * (3.14159265358979323846 / 180.0); }
-inline double radToDeg(double r) { return r * (180.0 / 3.14159265358979323846); }
+inline double degToRad(double d)
+{
+    return d * (3.14159265358979323846 / 180.0);
+}
+inline double radToDeg(double r)
+{
+    return r * (180.0 / 3.14159265358979323846);
+}
 
-}  // namespace hg::geometry
+} // namespace hg::geometry

@@ -47,10 +47,13 @@ constexpr int kMaxDepth = 15;
 
 inline VoxelKey makeKey(int level, int i, int j, int k)
 {
-    return (static_cast<VoxelKey>(level) << 60) | (static_cast<VoxelKey>(i) << 40) |
-           (static_cast<VoxelKey>(j) << 20) | static_cast<VoxelKey>(k);
+    return (static_cast<VoxelKey>(level) << 60) | (static_cast<VoxelKey>(i) << 40) | (static_cast<VoxelKey>(j) << 20) |
+           static_cast<VoxelKey>(k);
 }
-inline int keyLevel(VoxelKey key) { return static_cast<int>(key >> 60); }
+inline int keyLevel(VoxelKey key)
+{
+    return static_cast<int>(key >> 60);
+}
 inline Eigen::Vector3i keyIndex(VoxelKey key)
 {
     return {static_cast<int>((key >> 40) & 0xFFFFF), static_cast<int>((key >> 20) & 0xFFFFF),
@@ -88,8 +91,8 @@ const std::array<Eigen::Vector3i, 26>& neighbourOffsets();
 
 struct MapLandmark {
     std::string id;
-    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< on the CAD surface, mm
-    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();   ///< outward unit normal
+    Eigen::Vector3d position = Eigen::Vector3d::Zero(); ///< on the CAD surface, mm
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< outward unit normal
     double toleranceMm = 0.0;
 };
 
@@ -99,8 +102,8 @@ struct MapParameter {
     std::string id;
     ParameterKind kind = ParameterKind::Distance;
     std::vector<std::string> landmarks;
-    double nominal = 0.0;    ///< mm, or mm² for an area
-    double tolerance = 0.0;  ///< same unit as nominal
+    double nominal = 0.0;   ///< mm, or mm² for an area
+    double tolerance = 0.0; ///< same unit as nominal
 };
 
 const char* toString(ParameterKind kind);
@@ -109,10 +112,10 @@ ParameterKind parseParameterKind(const std::string& name);
 
 struct MapGeometry {
     Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();
-    double cubeSize = 1.0;    ///< mm
-    int depth = 8;            ///< finest level (ΔV = cubeSize / 2^depth)
-    int adjacencyDepth = 3;   ///< type-four layers
-    int coarsestLevel = 8;    ///< coarsest level with networks (<= depth)
+    double cubeSize = 1.0;  ///< mm
+    int depth = 8;          ///< finest level (ΔV = cubeSize / 2^depth)
+    int adjacencyDepth = 3; ///< type-four layers
+    int coarsestLevel = 8;  ///< coarsest level with networks (<= depth)
 };
 
 /// Expected label of a voxel: true = object (>= 50 % inside; Solid::isObjectVoxel).
@@ -134,7 +137,7 @@ struct VoxelExpectation {
 using ExpectationOracle = std::function<VoxelExpectation(const Eigen::AlignedBox3d&)>;
 
 class InspectionMap {
-public:
+  public:
     /// Builds the map (3.5.1): path nodes to every landmark, type-three nodes at
     /// each inspection level, type-four networks out to adjacencyDepth, labels
     /// from `oracle`. Throws std::invalid_argument for an impossible geometry
@@ -181,7 +184,7 @@ public:
     /// Index of a landmark by id, or std::nullopt.
     std::optional<std::size_t> landmarkIndex(const std::string& id) const;
 
-private:
+  private:
     std::string partName_;
     MapGeometry geometry_;
     std::vector<MapNode> nodes_;
@@ -194,4 +197,4 @@ private:
     std::int32_t rootIndex_ = -1;
 };
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

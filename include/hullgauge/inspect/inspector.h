@@ -64,19 +64,19 @@ struct ViewReport {
 struct LandmarkResult {
     std::string id;
     LandmarkStatus status = LandmarkStatus::NotInspected;
-    std::string reason;            ///< why a landmark is not ok (human readable)
-    int errorNumber = 0;           ///< wrongly reconstructed voxels near the landmark (3.3.6)
-    bool measured = false;         ///< the error fields hold values
+    std::string reason;    ///< why a landmark is not ok (human readable)
+    int errorNumber = 0;   ///< wrongly reconstructed voxels near the landmark (3.3.6)
+    bool measured = false; ///< the error fields hold values
     double errorMinMm = 0.0;
     double errorMaxMm = 0.0;
     double errorMm = 0.0;
     double toleranceMm = 0.0;
-    double offsetLowMm = 0.0;      ///< signed boundary bracket along the outward normal
+    double offsetLowMm = 0.0; ///< signed boundary bracket along the outward normal
     double offsetHighMm = 0.0;
-    bool overflowLow = false;      ///< the boundary lies deeper than the network reaches
-    bool overflowHigh = false;     ///< ... or farther out
-    int voxelsReconstructed = 0;   ///< voxels this landmark caused to be reconstructed
-    std::optional<double> medMm;   ///< best (smallest) eq. 4.4.4-19 MED over observing views
+    bool overflowLow = false;    ///< the boundary lies deeper than the network reaches
+    bool overflowHigh = false;   ///< ... or farther out
+    int voxelsReconstructed = 0; ///< voxels this landmark caused to be reconstructed
+    std::optional<double> medMm; ///< best (smallest) eq. 4.4.4-19 MED over observing views
     std::vector<ViewReport> views;
 };
 
@@ -87,14 +87,14 @@ struct ParameterResult {
     Bracket value;
     double nominal = 0.0;
     double tolerance = 0.0;
-    std::string status = "not_measured";  ///< ok | out_of_tolerance | not_measured
+    std::string status = "not_measured"; ///< ok | out_of_tolerance | not_measured
 };
 
 struct Statistics {
     double aveErrorMin = 0, aveErrorMax = 0, aveError = 0;
     double stdErrorMin = 0, stdErrorMax = 0, stdError = 0;
     double maxError = 0, minError = 0;
-    double totalVolumeError = 0;  ///< mm³: distinct wrong voxels × ΔV³
+    double totalVolumeError = 0; ///< mm³: distinct wrong voxels × ΔV³
     int landmarksMeasured = 0;
 };
 
@@ -126,7 +126,7 @@ struct CapturedView {
 };
 
 class Inspector {
-public:
+  public:
     /// Validates `options` against the map; throws std::invalid_argument.
     Inspector(const InspectionMap& map, InspectionOptions options = {});
 
@@ -152,7 +152,7 @@ public:
     int level() const { return level_; }
     int adjacency() const { return adjacency_; }
 
-private:
+  private:
     InspectionResult run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                          const std::vector<std::string>* viewIds) const;
 
@@ -163,4 +163,4 @@ private:
     std::vector<std::uint8_t> active_;
 };
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

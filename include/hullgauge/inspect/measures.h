@@ -57,4 +57,4 @@ Bracket perimeterBracket(const std::vector<LandmarkEstimate>& ring);
 /// to 16 landmarks, interval arithmetic (valid, wider) beyond.
 Bracket areaBracket(const std::vector<LandmarkEstimate>& ring);
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

@@ -22,4 +22,4 @@ ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid);
 /// its octree cannot be represented (depth above kMaxDepth).
 InspectionMap buildInspectionMap(const model::PartProgram& program, int levels = 3);
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

@@ -39,4 +39,4 @@ struct HullReconstruction {
 HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const Eigen::Vector3d& cubeOrigin,
                                    double cubeSize, int depth, VoxelTestMethod method = VoxelTestMethod::VolumeSource);
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

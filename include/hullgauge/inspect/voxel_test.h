@@ -51,7 +51,7 @@ const char* toString(VoxelLabel label);
 /// one frame. count(r, k) = Σ_{c<k} b(r, c); moment(r, k) = Σ_{c<k} b(r, c)·c
 /// (region-local columns), both exact integers.
 class SilhouetteIndex {
-public:
+  public:
     struct Region {
         cv::Rect rect;  ///< in frame pixels
         int stride = 0; ///< rect.width + 1
@@ -76,7 +76,7 @@ public:
     /// The region holding pixel (col, row), or nullptr.
     const Region* regionAt(int col, int row) const;
 
-private:
+  private:
     cv::Size frameSize_;
     std::vector<Region> regions_;
 };
@@ -89,11 +89,11 @@ struct SilhouetteView {
 
 /// How one view sees one voxel.
 struct FootprintMeasure {
-    bool inFront = false;     ///< all 8 corners in front of the camera
-    double area = 0.0;        ///< footprint area, pixels²
-    double background = 0.0;  ///< known background area (may stop early at the 50 % mark)
-    double unknown = 0.0;     ///< area outside the frame or the segmented regions
-    int outlineVertices = 0;  ///< 4 or 6 for a generic view (fewer when degenerate)
+    bool inFront = false;    ///< all 8 corners in front of the camera
+    double area = 0.0;       ///< footprint area, pixels²
+    double background = 0.0; ///< known background area (may stop early at the 50 % mark)
+    double unknown = 0.0;    ///< area outside the frame or the segmented regions
+    int outlineVertices = 0; ///< 4 or 6 for a generic view (fewer when degenerate)
 };
 
 /// Outline (convex hull, counter-clockwise in pixel coordinates) of points.
@@ -102,13 +102,12 @@ std::vector<Vec2> convexHull(std::vector<Vec2> points);
 /// Exact area of `polygon` (convex, pixel coordinates) covered by background
 /// pixels of `region`; the polygon must lie inside the region's rectangle.
 /// Stops once the area reaches `stopAt`.
-double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::Region& region,
-                      double stopAt = 1e300);
+double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::Region& region, double stopAt = 1e300);
 
 enum class VoxelTestMethod { VolumeSource, CentrePoint };
 
 class VoxelTester {
-public:
+  public:
     VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMethod method = VoxelTestMethod::VolumeSource)
         : views_(views), method_(method)
     {
@@ -126,10 +125,10 @@ public:
     /// Voxel tests performed (calls of classify).
     std::uint64_t testsPerformed() const { return tests_; }
 
-private:
+  private:
     const std::vector<SilhouetteView>* views_;
     VoxelTestMethod method_;
     mutable std::uint64_t tests_ = 0;
 };
 
-}  // namespace hg::inspect
+} // namespace hg::inspect

@@ -19,4 +19,4 @@ TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b);
 /// a intersected with b, under the same conditions.
 TriangleMesh intersectionOf(const TriangleMesh& a, const TriangleMesh& b);
 
-}  // namespace hg::model
+} // namespace hg::model

@@ -33,4 +33,4 @@ struct TriangleMesh {
     void flip();
 };
 
-}  // namespace hg::model
+} // namespace hg::model

@@ -41,8 +41,7 @@ struct MeshCheck {
 
     bool closedManifold() const
     {
-        return triangles > 0 && badIndices == 0 && openEdges == 0 && nonManifoldEdges == 0 &&
-               nonManifoldVertices == 0;
+        return triangles > 0 && badIndices == 0 && openEdges == 0 && nonManifoldEdges == 0 && nonManifoldVertices == 0;
     }
     bool consistentlyOriented() const { return inconsistentEdges == 0; }
     /// Closed, consistent, but oriented inward (negative volume): fixable by flipping.
@@ -75,4 +74,4 @@ enum class MeshEncoding { Binary, Ascii };
 void saveMesh(const TriangleMesh& mesh, const std::filesystem::path& file,
               MeshEncoding encoding = MeshEncoding::Binary);
 
-}  // namespace hg::model
+} // namespace hg::model

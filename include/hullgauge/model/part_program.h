@@ -19,11 +19,11 @@
 namespace hg::model {
 
 struct OctreeSpec {
-    Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();  // low corner of the reconstruction cube, mm
-    double cubeSize = 0.0;                                 // edge of the cube, mm
-    int depth = 0;                                         // octree levels below the cube, 1..20
-    int adjacencyDepth = 1;                                // layers of type-four nodes (3.3.2)
-    bool cubeFromMesh = false;  // true when cube_origin/cube_size were derived from the mesh
+    Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero(); // low corner of the reconstruction cube, mm
+    double cubeSize = 0.0;                                // edge of the cube, mm
+    int depth = 0;                                        // octree levels below the cube, 1..20
+    int adjacencyDepth = 1;                               // layers of type-four nodes (3.3.2)
+    bool cubeFromMesh = false;                            // true when cube_origin/cube_size were derived from the mesh
 
     /// Voxel edge ΔV = cube_size / 2^depth: the minimum a priori discrimination (MAD, eq. 4.5.1-1).
     double voxelSize() const;
@@ -37,8 +37,8 @@ using BestViewGroup = std::vector<geometry::FixturePose>;
 
 struct Landmark {
     std::string id;
-    Eigen::Vector3d position;  // part frame, mm, on the CAD surface
-    Eigen::Vector3d normal;    // unit, outward
+    Eigen::Vector3d position; // part frame, mm, on the CAD surface
+    Eigen::Vector3d normal;   // unit, outward
     bool normalFromMesh = false;
     double toleranceMm = 0.0;
     std::vector<BestViewGroup> bestViews;
@@ -55,15 +55,15 @@ struct GeometricParameter {
     std::string id;
     ParameterKind kind = ParameterKind::Distance;
     std::vector<std::string> landmarkIds;
-    std::vector<std::size_t> landmarkIndices;  // into PartProgram::landmarks
-    double nominalMm = 0.0;                    // mm, or mm² for an area
-    double toleranceMm = 0.0;                  // mm, or mm² for an area
+    std::vector<std::size_t> landmarkIndices; // into PartProgram::landmarks
+    double nominalMm = 0.0;                   // mm, or mm² for an area
+    double toleranceMm = 0.0;                 // mm, or mm² for an area
 };
 
 struct PartProgram {
-    std::filesystem::path file;      // the YAML file
-    std::string part;                // free-text name
-    std::filesystem::path meshFile;  // resolved relative to the YAML file
+    std::filesystem::path file;     // the YAML file
+    std::string part;               // free-text name
+    std::filesystem::path meshFile; // resolved relative to the YAML file
     std::shared_ptr<const Solid> solid;
     OctreeSpec octree;
     std::vector<Landmark> landmarks;
@@ -92,4 +92,4 @@ PartProgram loadPartProgram(const std::filesystem::path& file);
 /// is large enough).
 std::optional<OctreeSpec> boundingCube(const Eigen::AlignedBox3d& bounds, int depth, int adjacencyDepth);
 
-}  // namespace hg::model
+} // namespace hg::model

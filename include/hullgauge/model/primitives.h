@@ -21,4 +21,4 @@ TriangleMesh makeCylinder(const Eigen::Vector3d& base, double radius, double hei
 /// plane, seen from +z) extruded from z = z0 to z = z1.
 TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, double z1);
 
-}  // namespace hg::model
+} // namespace hg::model

@@ -30,19 +30,19 @@ struct InsideFraction {
 
 struct SurfacePoint {
     Eigen::Vector3d point;
-    Eigen::Vector3d normal;  // outward unit normal of the nearest triangle
+    Eigen::Vector3d normal; // outward unit normal of the nearest triangle
     std::size_t triangle = 0;
-    double distance = 0.0;   // from the query point
+    double distance = 0.0; // from the query point
 };
 
 struct RayHit {
-    double distance = 0.0;   // along the unit ray direction
+    double distance = 0.0; // along the unit ray direction
     Eigen::Vector3d point;
     std::size_t triangle = 0;
 };
 
 class Solid {
-public:
+  public:
     /// `mesh` must be closed and outward oriented (see mesh_io.h checkMesh);
     /// a mesh that is not a 2-manifold throws std::invalid_argument.
     explicit Solid(TriangleMesh mesh);
@@ -79,9 +79,9 @@ public:
     /// True when the open segment a-b meets the surface.
     bool segmentHits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace hg::model
+} // namespace hg::model

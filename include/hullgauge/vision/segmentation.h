@@ -19,9 +19,9 @@
 namespace hg::vision {
 
 enum class SegmentationMethod {
-    Otsu,   ///< threshold from Otsu's between-class variance criterion
-    Fixed,  ///< `threshold` as given
-    Mask,   ///< the frames already are silhouettes: non-zero = object
+    Otsu,  ///< threshold from Otsu's between-class variance criterion
+    Fixed, ///< `threshold` as given
+    Mask,  ///< the frames already are silhouettes: non-zero = object
 };
 
 struct SegmentationSettings {
@@ -51,10 +51,9 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
 
 /// Silhouette of `roi` (clipped to the frame) of a grey frame at threshold `t`:
 /// CV_8U of the roi's size, 255 = object.
-cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold,
-                      const SegmentationSettings& settings);
+cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold, const SegmentationSettings& settings);
 
 /// Silhouette of the whole frame (any depth and channel count accepted).
 cv::Mat segment(const cv::Mat& frame, const SegmentationSettings& settings);
 
-}  // namespace hg::vision
+} // namespace hg::vision

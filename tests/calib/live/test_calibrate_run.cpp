@@ -53,8 +53,7 @@ std::string yaml(const RigidTransform& T)
 {
     std::ostringstream s;
     s << "{R: [";
-    for (int r = 0; r < 3; ++r)
-        s << (r ? ", " : "") << yaml(Vec3(T.R.row(r).transpose()));
+    for (int r = 0; r < 3; ++r) s << (r ? ", " : "") << yaml(Vec3(T.R.row(r).transpose()));
     s << "], t: " << yaml(T.t) << "}";
     return s.str();
 }
@@ -78,8 +77,7 @@ std::vector<fs::path> backupsOf(const fs::path& file)
 int count(const std::string& text, const std::string& what)
 {
     int n = 0;
-    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
-        ++n;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
     return n;
 }
 
@@ -210,8 +208,7 @@ class CalibrateRun : public ::testing::Test {
 TEST_F(CalibrateRun, RecoversTheTrueSkewAxesThroughTheDriversAndKeepsABackup)
 {
     std::string line;
-    for (const auto& a : command())
-        line += a + " ";
+    for (const auto& a : command()) line += a + " ";
     auto r = hgtest::run(line);
     ASSERT_EQ(r.status, 0) << r.err;
     // Progress on stderr: homing, then one line per pose with the corners found.
@@ -242,8 +239,7 @@ TEST_F(CalibrateRun, FixtureFaultMidSequenceIsExitThreeNamingTheStepAndLeavesThe
         std::this_thread::sleep_for(5ms);
     ASSERT_NE(readText(log).find("[3/12]"), std::string::npos) << readText(log);
     sim->setControl(0, 5);
-    while (std::chrono::steady_clock::now() < deadline && run.running())
-        std::this_thread::sleep_for(10ms);
+    while (std::chrono::steady_clock::now() < deadline && run.running()) std::this_thread::sleep_for(10ms);
     ASSERT_FALSE(run.running()) << "calibrate run did not stop after the fault";
     const int status = run.terminate();
     const std::string text = readText(log);
@@ -264,8 +260,7 @@ TEST_F(CalibrateRun, SimulatedCameraWithoutATargetIsBadInputNamingTheKey)
     text.erase(from, to - from);
     hgtest::writeFile(station, text);
     std::string line;
-    for (const auto& a : command())
-        line += a + " ";
+    for (const auto& a : command()) line += a + " ";
     auto r = hgtest::run(line);
     EXPECT_EQ(r.status, 2) << r.err;
     EXPECT_NE(r.err.find("camera.driver.target"), std::string::npos) << r.err;
@@ -286,7 +281,7 @@ TEST_F(CalibrateRun, ThroughTheDaemonMaintenanceSocketWithProductionPaused)
         fs::copy_file(cfg / f, dir / f);
     // The daemon also drives the operator lamps.
     hgtest::writeFile(station, stationText + "lamps:\n  backend: sim\n  consumer: hullgauge\n  blink_period_s: 1.0\n"
-                               "  green: LAMP_GREEN\n  amber: LAMP_AMBER\n  red: LAMP_RED\n");
+                                             "  green: LAMP_GREEN\n  amber: LAMP_AMBER\n  red: LAMP_RED\n");
     const std::string before = readText(station);
     const fs::path socket = dir / "hg.sock";
     const int plcPort = 20000 + static_cast<int>(::getpid() % 20000);

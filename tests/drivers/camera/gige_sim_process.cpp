@@ -124,4 +124,4 @@ void GigeSim::stop()
     kill();
 }
 
-}  // namespace hgtest
+} // namespace hgtest

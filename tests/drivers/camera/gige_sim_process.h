@@ -16,7 +16,7 @@ std::string isolateNetwork();
 
 /// hullgauge-gige-sim as a child process.
 class GigeSim {
-public:
+  public:
     GigeSim() = default;
     ~GigeSim();
     GigeSim(const GigeSim&) = delete;
@@ -32,10 +32,10 @@ public:
     bool running() const { return pid_ > 0; }
     const std::string& readyLine() const { return ready_; }
 
-private:
+  private:
     int pid_ = -1;
     std::string ready_;
     std::filesystem::path errFile_;
 };
 
-}  // namespace hgtest
+} // namespace hgtest

@@ -234,8 +234,7 @@ TEST_F(AravisGige, FramesHeldByTheCallerAreNotOverwritten)
 void killAndRecover(Camera& cam, hgtest::GigeSim& sim, const std::function<void()>& restart,
                     const std::function<int(const cv::Mat&)>& match, std::chrono::seconds away)
 {
-    for (int k = 0; k < 10; ++k)
-        ASSERT_TRUE(cam.grab(2000ms).ok());
+    for (int k = 0; k < 10; ++k) ASSERT_TRUE(cam.grab(2000ms).ok());
 
     sim.kill();
     const auto timeout = 400ms;
@@ -323,8 +322,7 @@ TEST_F(AravisGige, DeactivatingWhileTheCameraIsLostIsBounded)
     ASSERT_TRUE(cam->activate());
     ASSERT_TRUE(cam->grab(2000ms).ok());
     sim_.kill();
-    for (int k = 0; k < 8; ++k)
-        (void)cam->grab(300ms); // probe and reopen attempts under way
+    for (int k = 0; k < 8; ++k) (void)cam->grab(300ms); // probe and reopen attempts under way
     const auto t0 = Clock::now();
     EXPECT_TRUE(cam->deactivate());
     EXPECT_TRUE(cam->cleanup());

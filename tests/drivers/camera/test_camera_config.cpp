@@ -83,8 +83,7 @@ TEST(CameraConfig, V4l2NeedsADeviceAndRefusesUnitlessGain)
     auto noDevice = errorOf("    backend: v4l2\n");
     EXPECT_EQ(noDevice.field(), "camera.driver");
     EXPECT_NE(noDevice.problem().find("device"), std::string::npos) << noDevice.what();
-    EXPECT_EQ(errorOf("    backend: v4l2\n    device: /dev/video0\n    gain_db: 3\n").field(),
-              "camera.driver.gain_db");
+    EXPECT_EQ(errorOf("    backend: v4l2\n    device: /dev/video0\n    gain_db: 3\n").field(), "camera.driver.gain_db");
 }
 
 TEST(CameraConfig, SharedSettingsAreParsed)
@@ -130,7 +129,7 @@ TEST(CameraFrame, ReleaseGivesTheBufferBackExactlyOnce)
     cv::Mat buffer(4, 4, CV_8UC1, cv::Scalar(7));
     {
         auto f = hg::drivers::Frame::over(buffer, 42, 1000ns, FrameStatus::Ok, [&] { ++recycled; });
-        EXPECT_EQ(f.image.data, buffer.data);  // a view, not a copy
+        EXPECT_EQ(f.image.data, buffer.data); // a view, not a copy
         EXPECT_EQ(f.frameId, 42u);
         hg::drivers::Frame moved = std::move(f);
         EXPECT_EQ(recycled, 0);
@@ -156,4 +155,4 @@ TEST(CameraFrame, PixelFormatNames)
     EXPECT_EQ(toString(FrameStatus::Incomplete), "incomplete");
 }
 
-}  // namespace
+} // namespace

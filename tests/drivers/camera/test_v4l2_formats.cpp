@@ -55,4 +55,4 @@ TEST(V4l2Formats, YuyvToGreyTakesTheLumaAndHonoursTheStride)
     EXPECT_EQ(cv::norm(grey, expected, cv::NORM_INF), 0.0) << grey;
 }
 
-}  // namespace
+} // namespace

@@ -51,7 +51,7 @@ std::string inputErrorOf(const std::string& yaml)
     return "no error";
 }
 
-}  // namespace
+} // namespace
 
 TEST(LampsConfig, ParsesNamesOffsetsPolarityAndPeriod)
 {
@@ -75,7 +75,7 @@ TEST(LampsConfig, SectionDefaultPolarityAndNumericShorthand)
     EXPECT_TRUE(c.lines[0].activeLow);
     EXPECT_TRUE(c.lines[1].activeLow);
     EXPECT_FALSE(c.lines[2].activeLow);
-    EXPECT_EQ(c.blinkPeriod, 1000ms);  // default
+    EXPECT_EQ(c.blinkPeriod, 1000ms); // default
 }
 
 TEST(LampsConfig, ErrorsNameFileLineAndKey)
@@ -96,8 +96,7 @@ TEST(LampsConfig, ErrorsNameFileLineAndKey)
     EXPECT_NE(inputErrorOf("lamps: {backend: sim, green: {line: A, offset: 2}, amber: B, red: C}")
                   .find("lamps.green: give exactly one of"),
               std::string::npos);
-    EXPECT_NE(inputErrorOf("lamps: {backend: sim, blink_period: 1, green: A, amber: B, red: C}")
-                  .find("blink_period"),
+    EXPECT_NE(inputErrorOf("lamps: {backend: sim, blink_period: 1, green: A, amber: B, red: C}").find("blink_period"),
               std::string::npos);
 }
 
@@ -113,7 +112,7 @@ TEST(Lamps, CyclicCallsNeedTheDriverActive)
     ASSERT_TRUE(lamps->activate().ok());
     EXPECT_EQ(lamps->state(), LifecycleState::Active);
     EXPECT_TRUE(lamps->set(Lamp::Red, LampState::On).ok());
-    EXPECT_EQ(lamps->cleanup().code, LampStatusCode::NotAllowed);  // must deactivate first
+    EXPECT_EQ(lamps->cleanup().code, LampStatusCode::NotAllowed); // must deactivate first
 }
 
 TEST(Lamps, StationIndicationsFollowContracts)
@@ -124,9 +123,9 @@ TEST(Lamps, StationIndicationsFollowContracts)
         StationIndication what;
         bool green, amber, red;
     };
-    for (auto c : {Case{StationIndication::Pass, true, false, false}, Case{StationIndication::Fail, false, false, true},
-                   Case{StationIndication::Busy, false, true, false},
-                   Case{StationIndication::Dark, false, false, false}}) {
+    for (auto c :
+         {Case{StationIndication::Pass, true, false, false}, Case{StationIndication::Fail, false, false, true},
+          Case{StationIndication::Busy, false, true, false}, Case{StationIndication::Dark, false, false, false}}) {
         ASSERT_TRUE(lamps->show(c.what).ok());
         EXPECT_EQ(s.lit(Lamp::Green), c.green) << toString(c.what);
         EXPECT_EQ(s.lit(Lamp::Amber), c.amber) << toString(c.what);
@@ -153,10 +152,10 @@ TEST(Lamps, ActiveLowLinesAreInverted)
 
 TEST(Lamps, FaultBlinksRedAndAmberTogetherAtTheConfiguredPeriod)
 {
-    auto lamps = activeSim();  // blink period 100 ms: a toggle every 50 ms
+    auto lamps = activeSim(); // blink period 100 ms: a toggle every 50 ms
     auto& s = sim(*lamps);
     ASSERT_TRUE(lamps->show(StationIndication::Fault).ok());
-    EXPECT_TRUE(s.lit(Lamp::Red));  // starts in the lit half
+    EXPECT_TRUE(s.lit(Lamp::Red)); // starts in the lit half
     EXPECT_TRUE(s.lit(Lamp::Amber));
     auto start = std::chrono::steady_clock::now();
     auto transitionsAtStart = s.transitions();
@@ -212,7 +211,7 @@ TEST(Lamps, WriteFailureFailsTheDriverAndCleanupRecovers)
     EXPECT_EQ(lamps->state(), LifecycleState::Failed);
     EXPECT_EQ(lamps->show(StationIndication::Pass).code, LampStatusCode::NotAllowed);
     ASSERT_TRUE(lamps->cleanup().ok());
-    EXPECT_EQ(lamps->configure().code, LampStatusCode::IoError);  // still unplugged
+    EXPECT_EQ(lamps->configure().code, LampStatusCode::IoError); // still unplugged
     EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
     s.injectWriteFailure(false);
     ASSERT_TRUE(lamps->configure().ok());

@@ -13,7 +13,7 @@ std::filesystem::path binaryDir();
 
 /// A fresh folder under the system temp dir, removed when the object dies.
 class TempDir {
-public:
+  public:
     TempDir();
     ~TempDir();
     TempDir(const TempDir&) = delete;
@@ -21,7 +21,7 @@ public:
     const std::filesystem::path& path() const { return path_; }
     std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
 
-private:
+  private:
     std::filesystem::path path_;
 };
 
@@ -38,4 +38,4 @@ struct RunResult {
 /// Runs `command` through /bin/sh with stdout and stderr captured.
 RunResult run(const std::string& command);
 
-}  // namespace hgtest
+} // namespace hgtest

@@ -58,22 +58,22 @@ struct Roi {
 /// What configure() applies to the device.
 struct CameraSettings {
     PixelFormat pixelFormat = PixelFormat::Mono8;
-    std::optional<double> exposureUs;  ///< µs; unset = leave the device's value
-    std::optional<double> gainDb;      ///< dB; unset = leave the device's value
+    std::optional<double> exposureUs; ///< µs; unset = leave the device's value
+    std::optional<double> gainDb;     ///< dB; unset = leave the device's value
     Roi roi;
     TriggerMode trigger = TriggerMode::Software;
 };
 
 /// Result of a driver call: success, or failure with a precise message.
 class [[nodiscard]] Status {
-public:
+  public:
     static Status success() { return Status(true, {}); }
     static Status failure(std::string message) { return Status(false, std::move(message)); }
     bool ok() const { return ok_; }
     explicit operator bool() const { return ok_; }
     const std::string& message() const { return message_; }
 
-private:
+  private:
     Status(bool ok, std::string message) : ok_(ok), message_(std::move(message)) {}
     bool ok_;
     std::string message_;
@@ -81,32 +81,32 @@ private:
 
 /// A value or a failure message (the cyclic path never throws).
 template <class T> class [[nodiscard]] Result {
-public:
-    Result(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
-    Result(Status failure) : status_(std::move(failure)) {}  // NOLINT
+  public:
+    Result(T value) : value_(std::move(value)) {}           // NOLINT: implicit by design
+    Result(Status failure) : status_(std::move(failure)) {} // NOLINT
     bool ok() const { return value_.has_value(); }
     explicit operator bool() const { return ok(); }
     const T& value() const { return *value_; }
     T& value() { return *value_; }
     const std::string& message() const { return status_.message(); }
 
-private:
+  private:
     std::optional<T> value_;
     Status status_ = Status::success();
 };
 
 enum class FrameStatus {
-    Ok,          ///< complete image
-    Timeout,     ///< no frame within the timeout (camera silent, unplugged, not triggered)
-    Incomplete,  ///< a frame arrived but with missing packets / wrong size; pixels unreliable
-    Error,       ///< the driver could not grab (wrong state, device lost and not yet back)
+    Ok,         ///< complete image
+    Timeout,    ///< no frame within the timeout (camera silent, unplugged, not triggered)
+    Incomplete, ///< a frame arrived but with missing packets / wrong size; pixels unreliable
+    Error,      ///< the driver could not grab (wrong state, device lost and not yet back)
 };
 std::string_view toString(FrameStatus s);
 
 /// One grabbed frame. `image` is a view of the driver's buffer (no copy); the
 /// buffer goes back to the pool on release() or destruction. Move-only.
 class Frame {
-public:
+  public:
     Frame() = default;
     Frame(Frame&& other) noexcept;
     Frame& operator=(Frame&& other) noexcept;
@@ -134,7 +134,7 @@ public:
     /// Gives the buffer back to the pool now; `image` becomes empty.
     void release();
 
-private:
+  private:
     std::function<void()> recycle_;
 };
 
@@ -144,7 +144,7 @@ struct CameraInfo {
     std::string vendor;
     std::string model;
     std::string serial;
-    std::string address;  ///< IP address, device node or "sim"
+    std::string address; ///< IP address, device node or "sim"
     int sensorWidth = 0;
     int sensorHeight = 0;
 };
@@ -152,15 +152,15 @@ struct CameraInfo {
 /// One device feature as the maintenance tool shows it.
 struct FeatureInfo {
     std::string name;
-    std::string type;  ///< Integer, Float, Enumeration, Boolean, String, Command
+    std::string type;   ///< Integer, Float, Enumeration, Boolean, String, Command
     std::string value;  ///< current value as text (empty for commands and unreadable features)
-    std::string access;  ///< RO, WO, RW
+    std::string access; ///< RO, WO, RW
 };
 
 /// The abstract camera. Public calls check the lifecycle state and wrap the
 /// backend's protected hooks, so the bookkeeping is written once.
 class Camera {
-public:
+  public:
     virtual ~Camera() = default;
     Camera(const Camera&) = delete;
     Camera& operator=(const Camera&) = delete;
@@ -194,7 +194,7 @@ public:
     Status setFeature(const std::string& name, const std::string& value);
     Result<CameraInfo> info();
 
-protected:
+  protected:
     Camera(std::string configPath, CameraSettings settings);
 
     virtual Status doConfigure() = 0;
@@ -208,7 +208,7 @@ protected:
     virtual Status doSetFeature(const std::string& name, const std::string& value) = 0;
     virtual Result<CameraInfo> doInfo() = 0;
 
-private:
+  private:
     Status transition(Transition t, const std::function<Status()>& hook);
 
     std::string configPath_;
@@ -240,7 +240,7 @@ struct SimCameraInputs {
 /// The simulated camera: renders the part under test at the fixture's current
 /// pose through the station calibration (backlit silhouette, hg::sim renderer).
 class SimCamera : public Camera {
-public:
+  public:
     /// Switches the part under test (thread-safe, also while streaming);
     /// fails for a name not in the inputs' parts.
     virtual Status setPart(const std::string& name) = 0;
@@ -249,7 +249,7 @@ public:
     /// Replaces the pose source (thread-safe).
     virtual void setPoseSource(std::function<std::optional<geometry::FixturePose>()> source) = 0;
 
-protected:
+  protected:
     using Camera::Camera;
 };
 
@@ -257,4 +257,4 @@ protected:
 /// Throws hg::InputError naming the key (e.g. camera.driver.part not among the parts).
 std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs);
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

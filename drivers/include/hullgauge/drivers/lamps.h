@@ -41,11 +41,11 @@ enum class LampState { Off, On, Blinking };
 
 /// What the station shows the operator (CONTRACTS §6).
 enum class StationIndication {
-    Dark,   ///< every lamp off
-    Pass,   ///< green
-    Fail,   ///< red
-    Busy,   ///< amber
-    Fault,  ///< red and amber blinking
+    Dark,  ///< every lamp off
+    Pass,  ///< green
+    Fail,  ///< red
+    Busy,  ///< amber
+    Fault, ///< red and amber blinking
 };
 
 std::string_view toString(Lamp lamp);
@@ -54,8 +54,8 @@ std::string_view toString(StationIndication indication);
 
 enum class LampStatusCode {
     Ok,
-    IoError,     ///< the chip or a line could not be opened, requested or written
-    NotAllowed,  ///< call not allowed in this lifecycle state
+    IoError,    ///< the chip or a line could not be opened, requested or written
+    NotAllowed, ///< call not allowed in this lifecycle state
 };
 
 std::string_view toString(LampStatusCode code);
@@ -81,13 +81,13 @@ struct LampLine {
 
 /// The parsed `lamps` section (docs/lamps.md lists every key).
 struct LampsConfig {
-    std::string backend;  ///< "gpiod" or "sim"
+    std::string backend; ///< "gpiod" or "sim"
     /// GPIO chip: name ("gpiochip0"), path ("/dev/gpiochip0"), label or number;
     /// empty when every line is given by name (then all chips are searched).
     std::string chip;
     std::string consumer = "hullgauge";
     std::chrono::milliseconds blinkPeriod{1000};
-    std::array<LampLine, 3> lines;  ///< indexed by Lamp
+    std::array<LampLine, 3> lines; ///< indexed by Lamp
     /// Key path of the section ("lamps") and the file, for messages.
     std::string key = "lamps";
     std::string file;
@@ -100,7 +100,7 @@ struct LampsConfig {
 std::array<LampState, 3> lampStatesFor(StationIndication indication);
 
 class Lamps {
-public:
+  public:
     virtual ~Lamps();
     Lamps(const Lamps&) = delete;
     Lamps& operator=(const Lamps&) = delete;
@@ -126,7 +126,7 @@ public:
     /// The backend name from the configuration (`gpiod`, `sim`).
     virtual std::string_view backend() const = 0;
 
-protected:
+  protected:
     explicit Lamps(LampsConfig config);
 
     /// Opens the chip and requests the lines as outputs, all dark.
@@ -141,7 +141,7 @@ protected:
     /// that no write reaches a half-destroyed object.
     void shutdown();
 
-private:
+  private:
     LampResult applyLocked();
     LampResult requireActiveLocked(std::string_view call) const;
     void blinkLoop();
@@ -152,7 +152,7 @@ private:
     std::condition_variable wake_;
     LifecycleState state_ = LifecycleState::Unconfigured;
     std::array<LampState, 3> commanded_{LampState::Off, LampState::Off, LampState::Off};
-    bool blinkLit_ = true;  ///< phase of the blinking lamps: lit in the first half period
+    bool blinkLit_ = true; ///< phase of the blinking lamps: lit in the first half period
     bool stopBlinker_ = false;
     std::thread blinker_;
 };
@@ -167,7 +167,7 @@ std::unique_ptr<Lamps> makeLamps(const ConfigNode& section);
 /// tests can read what the operator would see, including the blink phase.
 /// Obtain it with `dynamic_cast<SimulatedLamps*>`.
 class SimulatedLamps : public Lamps {
-public:
+  public:
     /// True when the lamp is lit right now (blink phase included).
     virtual bool lit(Lamp lamp) const = 0;
     /// The electrical level of the lamp's line (lit XOR active_low); false
@@ -180,8 +180,8 @@ public:
     /// Makes line writes (and configure) fail as an unplugged GPIO expander would.
     virtual void injectWriteFailure(bool fail) = 0;
 
-protected:
+  protected:
     using Lamps::Lamps;
 };
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

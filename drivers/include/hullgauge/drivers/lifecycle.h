@@ -25,11 +25,16 @@ constexpr LifecycleState nextState(LifecycleState from, Transition t)
 {
     using S = LifecycleState;
     switch (t) {
-    case Transition::Configure: return from == S::Unconfigured ? S::Inactive : from;
-    case Transition::Activate: return from == S::Inactive ? S::Active : from;
-    case Transition::Deactivate: return from == S::Active ? S::Inactive : from;
-    case Transition::Cleanup: return (from == S::Inactive || from == S::Failed) ? S::Unconfigured : from;
-    case Transition::Error: return S::Failed;
+    case Transition::Configure:
+        return from == S::Unconfigured ? S::Inactive : from;
+    case Transition::Activate:
+        return from == S::Inactive ? S::Active : from;
+    case Transition::Deactivate:
+        return from == S::Active ? S::Inactive : from;
+    case Transition::Cleanup:
+        return (from == S::Inactive || from == S::Failed) ? S::Unconfigured : from;
+    case Transition::Error:
+        return S::Failed;
     }
     return from;
 }
@@ -45,4 +50,4 @@ constexpr std::string_view toString(LifecycleState s)
     return names[static_cast<int>(s)];
 }
 
-}  // namespace hg::drivers
+} // namespace hg::drivers

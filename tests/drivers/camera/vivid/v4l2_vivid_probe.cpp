@@ -110,8 +110,7 @@ std::unique_ptr<Camera> makeCamera(const std::string& pixelFormat, const std::st
     std::string text = "camera:\n  driver:\n    backend: v4l2\n    device: " + std::string(kDevice) +
                        "\n    pixel_format: " + pixelFormat + "\n    trigger: free_run\n    buffer_count: 4\n" + extra +
                        "    features:\n";
-    for (const auto& [name, value] : all)
-        text += "      \"" + name + "\": " + value + "\n";
+    for (const auto& [name, value] : all) text += "      \"" + name + "\": " + value + "\n";
     return hg::drivers::makeCamera(hg::ConfigNode::parse(text, "station.yaml"));
 }
 
@@ -215,7 +214,7 @@ StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<voi
 }
 
 class Vivid : public ::testing::Test {
-protected:
+  protected:
     void SetUp() override { prepareVivid(); }
 };
 

@@ -21,8 +21,8 @@ FixtureSequenceResult runFixtureSequence(const std::vector<geometry::FixturePose
                                          const geometry::Intrinsics& camera, geometry::FixtureType type,
                                          const FixtureSequenceIo& io, const std::string& source)
 {
-    auto check = [](const SequenceStep& s, const std::string& step) {
-        if (!s.ok) throw FaultError("calibrate run: " + step + ": " + s.message);
+    auto check = [](const Status& s, const std::string& step) {
+        if (!s.ok()) throw FaultError("calibrate run: " + step + ": " + s.message());
     };
     FixtureSequenceResult out;
     for (std::size_t i = 0; i < poses.size(); ++i) {

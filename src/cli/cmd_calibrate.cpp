@@ -302,15 +302,15 @@ int runLive(const RunArgs& a)
         check(s.ok(), "camera activate", s.message());
     }
     calib::FixtureSequenceIo io;
-    io.moveTo = [&](const geometry::FixturePose& pose) -> calib::SequenceStep {
+    io.moveTo = [&](const geometry::FixturePose& pose) {
         auto r = fixture->moveTo(pose);
         if (r.ok()) r = fixture->waitInPosition(fixture->moveTimeout());
-        return {r.ok(), r.message};
+        return r.ok() ? Status::success() : Status::failure(r.message);
     };
-    io.grab = [&](cv::Mat& image) -> calib::SequenceStep {
+    io.grab = [&](cv::Mat& image) {
         auto frame = camera->grab(grabTimeout);
         if (frame.ok()) image = frame.image;
-        return {frame.ok(), frame.message};
+        return frame.ok() ? Status::success() : Status::failure(StatusCode::BadFrame, frame.message);
     };
     io.progress = [](std::size_t, std::size_t, const std::string& line) { std::cerr << line << std::endl; };
     if (!a.saveImages.empty())

@@ -40,30 +40,30 @@ double msSince(Clock::time_point t)
     return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
 
-SequencerEvent moveEvent(const StepResult& r)
+SequencerEvent moveEvent(const Status& r)
 {
-    switch (r.code) {
-    case StepResult::Code::Ok:
+    switch (r.code()) {
+    case StatusCode::Ok:
         return SequencerEvent::InPosition;
-    case StepResult::Code::Timeout:
+    case StatusCode::Timeout:
         return SequencerEvent::MoveTimeout;
-    case StepResult::Code::Fault:
+    case StatusCode::Fault:
         return SequencerEvent::MoveFault;
-    case StepResult::Code::Refused:
+    case StatusCode::NotAllowed:
         return SequencerEvent::MoveRefused;
     default:
         return SequencerEvent::MoveCommError;
     }
 }
 
-SequencerEvent grabEvent(const StepResult& r)
+SequencerEvent grabEvent(const Status& r)
 {
-    switch (r.code) {
-    case StepResult::Code::Ok:
+    switch (r.code()) {
+    case StatusCode::Ok:
         return SequencerEvent::FrameOk;
-    case StepResult::Code::Timeout:
+    case StatusCode::Timeout:
         return SequencerEvent::FrameTimeout;
-    case StepResult::Code::BadFrame:
+    case StatusCode::BadFrame:
         return SequencerEvent::FrameBad;
     default:
         return SequencerEvent::FrameError;
@@ -198,7 +198,7 @@ void CycleRunner::run()
         log->info("devices active; ready");
         if (onDevicesActive_) onDevicesActive_();
     } else {
-        log->error("devices failed to start: {}", started.message);
+        log->error("devices failed to start: {}", started.message());
         setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, action);
         registers_.setStatus(station::PlcStatus::Fault);
         devices_.showLamps(LampPattern::Fault);
@@ -304,17 +304,16 @@ void CycleRunner::runCalibration(CalibrationJob job)
     log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target.toString(),
               job.out.string());
     calib::FixtureSequenceIo io;
-    io.moveTo = [&](const geometry::FixturePose& pose) -> calib::SequenceStep {
+    io.moveTo = [&](const geometry::FixturePose& pose) {
         calibrationStepNs_ = nowNs();
         auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, false);
-        if (!r.ok()) return {false, r.message};
+        if (!r.ok()) return r;
         sleepUntil(Clock::now() + cfg->sequencer.settle, [this] { return abortRequested_.load(); });
-        return {};
+        return Status::success();
     };
-    io.grab = [&](cv::Mat& image) -> calib::SequenceStep {
+    io.grab = [&](cv::Mat& image) {
         calibrationStepNs_ = nowNs();
-        auto r = devices_.grab(cfg->sequencer.grabTimeout, image);
-        return {r.ok(), r.message};
+        return devices_.grab(cfg->sequencer.grabTimeout, image);
     };
     io.progress = [&](std::size_t, std::size_t, const std::string& line) {
         log->info("calibration {}", line);
@@ -376,7 +375,7 @@ void CycleRunner::recover()
         }
     } else {
         setState([&] { return sequencer_.onEvent(SequencerEvent::RecoveryFailed); }, action);
-        log->warn("recovery failed: {}", r.message);
+        log->warn("recovery failed: {}", r.message());
     }
 }
 
@@ -448,7 +447,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             auto pose = program->views[action.view];
             auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, action.retry);
             moveMs += msSince(stepStart);
-            if (!r.ok()) log->warn("view {}: move failed: {}", action.view, r.message);
+            if (!r.ok()) log->warn("view {}: move failed: {}", action.view, r.message());
             setState([&] { return sequencer_.onEvent(moveEvent(r)); }, action);
             break;
         }
@@ -466,7 +465,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                 lastFrameAt = Clock::now();
                 inspector_.addView(action.view, program->views[action.view], image);
             } else
-                log->warn("view {}: grab failed: {}", action.view, r.message);
+                log->warn("view {}: grab failed: {}", action.view, r.message());
             setState([&] { return sequencer_.onEvent(grabEvent(r)); }, action);
             break;
         }

@@ -3,10 +3,11 @@
 // daemon's implementation (driver_devices.cpp) sits on the drivers of
 // drivers/ chosen by the station file; tests use small fakes.
 //
-// Every call returns a status value and never throws (STYLE.md point 4);
+// Every call returns an hg::Status (common/status.h) and never throws;
 // only construction (configuration parsing) throws hg::InputError.
 #pragma once
 
+#include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
 
 #include <chrono>
@@ -17,14 +18,6 @@
 #include <vector>
 
 namespace hg::daemon {
-
-struct StepResult {
-    enum class Code { Ok, Timeout, Fault, CommunicationError, Refused, BadFrame, Error };
-    Code code = Code::Ok;
-    std::string message;
-    bool ok() const { return code == Code::Ok; }
-    static StepResult success() { return {}; }
-};
 
 /// Operator lamp patterns (CONTRACTS §6): green pass, red fail, amber busy,
 /// red and amber blinking on fault.
@@ -37,17 +30,17 @@ class StationDevices {
 
     /// Configure and activate every driver (and home the fixture). READY=1 is
     /// sent to systemd only after this succeeded.
-    virtual StepResult start() = 0;
+    virtual Status start() = 0;
     /// Deactivate and clean up every driver (stop motion first).
     virtual void shutdown() = 0;
     /// Move to `pose` and wait until in position or `timeout`. `retry`: a
     /// second attempt — reset a latched drive fault and re-home if needed first.
-    virtual StepResult moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) = 0;
+    virtual Status moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) = 0;
     virtual void stopMotion() = 0;
     /// Grab one frame into `image` (owned copy or a view the caller may keep).
-    virtual StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) = 0;
+    virtual Status grab(std::chrono::milliseconds timeout, cv::Mat& image) = 0;
     /// Bring the devices back after a fault (reset faults, re-home, restart streaming).
-    virtual StepResult recover() = 0;
+    virtual Status recover() = 0;
     virtual void showLamps(LampPattern pattern) = 0;
     /// What the lamps show, for the maintenance status: per lamp the commanded
     /// state ("off", "on", "blinking") and, where the driver can read its lines

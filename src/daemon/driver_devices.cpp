@@ -13,21 +13,21 @@ namespace {
 using drivers::FixtureStatusCode;
 using drivers::LifecycleState;
 
-StepResult fromFixture(const drivers::FixtureResult& r)
+Status fromFixture(const drivers::FixtureResult& r)
 {
-    switch (r.code) {
+    switch (r.code()) {
     case FixtureStatusCode::Ok:
-        return StepResult::success();
+        return Status::success();
     case FixtureStatusCode::Timeout:
-        return {StepResult::Code::Timeout, r.message};
+        return Status::failure(StatusCode::Timeout, r.message);
     case FixtureStatusCode::Fault:
-        return {StepResult::Code::Fault, r.message};
+        return Status::failure(StatusCode::Fault, r.message);
     case FixtureStatusCode::CommunicationError:
-        return {StepResult::Code::CommunicationError, r.message};
+        return Status::failure(StatusCode::CommunicationError, r.message);
     case FixtureStatusCode::NotAllowed:
-        return {StepResult::Code::Refused, r.message};
+        return Status::failure(StatusCode::NotAllowed, r.message);
     }
-    return {StepResult::Code::Error, r.message};
+    return Status::failure(StatusCode::Error, r.message);
 }
 
 drivers::StationIndication indication(LampPattern p)
@@ -77,30 +77,32 @@ class DriverDevices : public StationDevices {
         }
     }
 
-    StepResult start() override
+    Status start() override
     {
         auto log = hg::log::category("daemon");
         if (lamps_->state() == LifecycleState::Unconfigured) {
-            if (auto r = lamps_->configure(); !r.ok()) return {StepResult::Code::Error, "lamps: " + r.message};
+            if (auto r = lamps_->configure(); !r.ok()) return Status::failure(StatusCode::Error, "lamps: " + r.message);
         }
         if (lamps_->state() == LifecycleState::Inactive) {
-            if (auto r = lamps_->activate(); !r.ok()) return {StepResult::Code::Error, "lamps: " + r.message};
+            if (auto r = lamps_->activate(); !r.ok()) return Status::failure(StatusCode::Error, "lamps: " + r.message);
         }
         if (fixture_->state() == LifecycleState::Unconfigured) {
-            if (auto r = fixture_->configure(); !r.ok()) return {fromFixture(r).code, "fixture: " + r.message};
+            if (auto r = fixture_->configure(); !r.ok()) return fromFixture(r).prefixed("fixture: ");
         }
         if (fixture_->state() == LifecycleState::Inactive) {
-            if (auto r = fixture_->activate(); !r.ok()) return {fromFixture(r).code, "fixture: " + r.message};
+            if (auto r = fixture_->activate(); !r.ok()) return fromFixture(r).prefixed("fixture: ");
         }
         if (auto r = homeIfNeeded(); !r.ok()) return r;
         if (camera_->state() == LifecycleState::Unconfigured) {
-            if (auto r = camera_->configure(); !r.ok()) return {StepResult::Code::Error, "camera: " + r.message()};
+            if (auto r = camera_->configure(); !r.ok())
+                return Status::failure(StatusCode::Error, "camera: " + r.message());
         }
         if (camera_->state() == LifecycleState::Inactive) {
-            if (auto r = camera_->activate(); !r.ok()) return {StepResult::Code::Error, "camera: " + r.message()};
+            if (auto r = camera_->activate(); !r.ok())
+                return Status::failure(StatusCode::Error, "camera: " + r.message());
         }
         log->info("fixture ({}) and camera active", fixture_->backend());
-        return StepResult::success();
+        return Status::success();
     }
 
     void shutdown() override
@@ -114,7 +116,7 @@ class DriverDevices : public StationDevices {
         (void)lamps_->cleanup();
     }
 
-    StepResult moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) override
+    Status moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) override
     {
         if (retry) {
             // Second attempt: clear a latched drive fault and home again if the drive lost it.
@@ -130,25 +132,25 @@ class DriverDevices : public StationDevices {
         if (fixture_->state() == LifecycleState::Active) (void)fixture_->stop();
     }
 
-    StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    Status grab(std::chrono::milliseconds timeout, cv::Mat& image) override
     {
         auto frame = camera_->grab(timeout);
         switch (frame.status) {
         case drivers::FrameStatus::Ok:
             // The pipeline keeps the image after the buffer returns to the pool.
             image = frame.image.clone();
-            return StepResult::success();
+            return Status::success();
         case drivers::FrameStatus::Timeout:
-            return {StepResult::Code::Timeout, frame.message};
+            return Status::failure(StatusCode::Timeout, frame.message);
         case drivers::FrameStatus::Incomplete:
-            return {StepResult::Code::BadFrame, frame.message};
+            return Status::failure(StatusCode::BadFrame, frame.message);
         case drivers::FrameStatus::Error:
-            return {StepResult::Code::Error, frame.message};
+            return Status::failure(StatusCode::Error, frame.message);
         }
-        return {StepResult::Code::Error, frame.message};
+        return Status::failure(StatusCode::Error, frame.message);
     }
 
-    StepResult recover() override
+    Status recover() override
     {
         (void)fixture_->resetFault();
         if (fixture_->state() == LifecycleState::Failed) (void)fixture_->cleanup();
@@ -183,11 +185,11 @@ class DriverDevices : public StationDevices {
     }
 
   private:
-    StepResult homeIfNeeded()
+    Status homeIfNeeded()
     {
         drivers::FixtureStatus status;
         if (auto r = fixture_->status(status); !r.ok()) return fromFixture(r);
-        if (status.homed) return StepResult::success();
+        if (status.homed) return Status::success();
         if (auto r = fixture_->home(); !r.ok()) return fromFixture(r);
         return fromFixture(fixture_->waitInPosition(fixture_->homeTimeout()));
     }

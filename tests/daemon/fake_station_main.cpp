@@ -23,6 +23,8 @@
 namespace {
 
 using namespace hg::daemon;
+using hg::Status;
+using hg::StatusCode;
 
 std::string env(const char* name)
 {
@@ -32,37 +34,37 @@ std::string env(const char* name)
 
 class FakeDevices : public StationDevices {
   public:
-    StepResult start() override
+    Status start() override
     {
-        if (env("HG_FAKE_START_FAIL") == "1") return {StepResult::Code::Error, "fake: devices do not start"};
-        return StepResult::success();
+        if (env("HG_FAKE_START_FAIL") == "1") return Status::failure(StatusCode::Error, "fake: devices do not start");
+        return Status::success();
     }
     void shutdown() override {}
-    StepResult moveTo(const hg::geometry::FixturePose&, std::chrono::milliseconds timeout, bool) override
+    Status moveTo(const hg::geometry::FixturePose&, std::chrono::milliseconds timeout, bool) override
     {
         auto mode = env("HG_FAKE_MOVE_FAIL");
         if (mode == "timeout") {
             std::this_thread::sleep_for(timeout);
-            return {StepResult::Code::Timeout, "fake: not in position"};
+            return Status::failure(StatusCode::Timeout, "fake: not in position");
         }
-        if (mode == "fault") return {StepResult::Code::Fault, "fake: drive fault 7"};
+        if (mode == "fault") return Status::failure(StatusCode::Fault, "fake: drive fault 7");
         auto ms = env("HG_FAKE_MOVE_MS");
         std::this_thread::sleep_for(std::chrono::milliseconds(ms.empty() ? 2 : std::stoi(ms)));
-        return StepResult::success();
+        return Status::success();
     }
     void stopMotion() override {}
-    StepResult grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    Status grab(std::chrono::milliseconds timeout, cv::Mat& image) override
     {
         auto mode = env("HG_FAKE_GRAB_FAIL");
         if (mode == "timeout") {
             std::this_thread::sleep_for(timeout);
-            return {StepResult::Code::Timeout, "fake: no frame"};
+            return Status::failure(StatusCode::Timeout, "fake: no frame");
         }
-        if (mode == "bad") return {StepResult::Code::BadFrame, "fake: 12 packets missing"};
+        if (mode == "bad") return Status::failure(StatusCode::BadFrame, "fake: 12 packets missing");
         image = cv::Mat(48, 64, CV_8UC1, cv::Scalar(dented_ ? 100 : 200));
-        return StepResult::success();
+        return Status::success();
     }
-    StepResult recover() override { return start(); }
+    Status recover() override { return start(); }
     void showLamps(LampPattern) override {}
     std::vector<std::string> simulatedParts() const override { return {"nominal", "dented"}; }
     std::string simulatedPart() const override { return dented_ ? "dented" : "nominal"; }

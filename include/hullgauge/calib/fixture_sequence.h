@@ -8,6 +8,7 @@
 
 #include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/calib/target.h"
+#include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
 
 #include <cstddef>
@@ -18,17 +19,12 @@
 
 namespace hg::calib {
 
-/// The outcome of one hardware step: ok, or a message for people.
-struct SequenceStep {
-    bool ok = true;
-    std::string message;
-};
-
+/// The station's hardware as the sequence reaches it; each step answers an hg::Status.
 struct FixtureSequenceIo {
     /// Move to the pose and wait until in position.
-    std::function<SequenceStep(const geometry::FixturePose&)> moveTo;
+    std::function<Status(const geometry::FixturePose&)> moveTo;
     /// Grab one frame.
-    std::function<SequenceStep(cv::Mat&)> grab;
+    std::function<Status(cv::Mat&)> grab;
     /// Each pose's line: "[i/n] rotation … deg: 54 corners" (optional).
     std::function<void(std::size_t index, std::size_t count, const std::string& line)> progress;
     /// Each grabbed frame with its file-safe name (optional: keep the images).

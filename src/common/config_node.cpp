@@ -4,6 +4,8 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "hullgauge/common/error.h"
 
@@ -34,6 +36,41 @@ std::string fmtNumber(double v)
     return s.str();
 }
 
+std::string keyText(const YAML::Node& key)
+{
+    return key.IsScalar() ? key.Scalar() : describe(key);
+}
+
+/// Refuses a map that names one key twice. yaml-cpp keeps both entries and
+/// answers lookups with the first, so `depth: 8` then `depth: 3` would build
+/// depth 8 without a word; bad input must be named instead (docs/style.md
+/// point 4). `budget` bounds the walk over a document whose aliases repeat
+/// one subtree many times.
+void rejectDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path, long& budget)
+{
+    if (--budget < 0) throw InputError(file, path, "document too large (more than 1000000 nodes, aliases counted)");
+    if (node.IsSequence()) {
+        std::size_t i = 0;
+        for (const auto& item : node) rejectDuplicateKeys(item, file, path + "[" + std::to_string(i++) + "]", budget);
+        return;
+    }
+    if (!node.IsMap()) return;
+    std::vector<std::pair<std::string, int>> seen;
+    for (const auto& entry : node) {
+        const std::string key = keyText(entry.first);
+        const int line = entry.first.Mark().is_null() ? 0 : entry.first.Mark().line + 1;
+        const std::string childPath = path.empty() ? key : path + "." + key;
+        for (const auto& [k, firstLine] : seen)
+            if (k == key)
+                throw InputError(file, childPath,
+                                 "duplicate key '" + key + "'" +
+                                     (firstLine > 0 ? " (first given at line " + std::to_string(firstLine) + ")" : ""),
+                                 line > 0 ? std::optional<int>(line) : std::nullopt);
+        seen.emplace_back(key, line);
+        rejectDuplicateKeys(entry.second, file, childPath, budget);
+    }
+}
+
 } // namespace
 
 ConfigNode ConfigNode::loadFile(const std::filesystem::path& file)
@@ -51,6 +88,8 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)
     try {
         YAML::Node root = YAML::Load(text);
         if (!root || root.IsNull()) throw InputError(name, "", "file is empty");
+        long budget = 1000000;
+        rejectDuplicateKeys(root, name, "", budget);
         return ConfigNode(root, fileName, "");
     } catch (const YAML::Exception& e) {
         throw InputError(name, "", "YAML syntax error: " + e.msg,

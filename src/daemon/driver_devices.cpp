@@ -15,7 +15,7 @@ using drivers::LifecycleState;
 
 Status fromFixture(const drivers::FixtureResult& r)
 {
-    switch (r.code()) {
+    switch (r.code) {
     case FixtureStatusCode::Ok:
         return Status::success();
     case FixtureStatusCode::Timeout:

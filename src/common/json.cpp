@@ -43,10 +43,23 @@ std::string withoutId(const char* what)
     return s.rfind("[json.exception.", 0) == 0 && close != std::string::npos ? s.substr(close + 2) : s;
 }
 
-std::string joinPath(const std::vector<std::string>& path)
+/// One open object or array while parsing: the keys seen in an object, the
+/// index of the current element of an array.
+struct Open {
+    bool array = false;
+    int index = -1;
+    std::string key;
+    std::set<std::string> keys;
+};
+
+/// "views[1].image": the path of the member being parsed.
+std::string pathOf(const std::vector<Open>& open)
 {
     std::string out;
-    for (const auto& p : path) out += (out.empty() ? "" : ".") + p;
+    for (const auto& o : open) {
+        if (o.array && o.index >= 0) out += "[" + std::to_string(o.index) + "]";
+        if (!o.array && !o.key.empty()) out += (out.empty() ? "" : ".") + o.key;
+    }
     return out;
 }
 
@@ -55,31 +68,36 @@ std::string joinPath(const std::vector<std::string>& path)
 nlohmann::json parseJson(const std::string& text, const std::string& name)
 {
     constexpr int kMaxDepth = 64;
-    std::vector<std::set<std::string>> objects; // keys seen in each open object
-    std::vector<std::string> path;              // key of each open object's current member
-    std::map<std::string, int> keyCount;        // occurrences of each key so far, to find its line
+    std::vector<Open> open;
+    std::map<std::string, int> keyCount; // occurrences of each key so far, to find its line
     // The DOM parser's callback sees each key as the parsed value of its key event.
     auto check = [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
         using E = nlohmann::json::parse_event_t;
-        if (depth > kMaxDepth) throw InputError(name, joinPath(path), "nested deeper than 64 levels");
+        if (depth > kMaxDepth) throw InputError(name, pathOf(open), "nested deeper than 64 levels");
+        const bool startsElement = event == E::value || event == E::object_start || event == E::array_start;
+        if (startsElement && !open.empty() && open.back().array) ++open.back().index;
         switch (event) {
         case E::object_start:
-            objects.emplace_back();
-            path.emplace_back();
+            open.push_back({});
+            break;
+        case E::array_start:
+            open.push_back({true, -1, {}, {}});
             break;
         case E::object_end:
-            if (!objects.empty()) objects.pop_back();
-            if (!path.empty()) path.pop_back();
+        case E::array_end:
+            if (!open.empty()) open.pop_back();
             break;
         case E::key: {
             const std::string key = parsed.get<std::string>();
             const int occurrence = ++keyCount[key];
-            if (!path.empty()) path.back() = key;
-            if (!objects.empty() && !objects.back().insert(key).second)
-                throw InputError(name, joinPath(path), "duplicate key '" + key + "'", keyLine(text, key, occurrence));
+            if (open.empty()) break;
+            open.back().key = key;
+            if (!open.back().keys.insert(key).second)
+                throw InputError(name, pathOf(open), "duplicate key '" + key + "'", keyLine(text, key, occurrence));
             break;
         }
-        default: break;
+        default:
+            break;
         }
         return true;
     };
@@ -87,10 +105,9 @@ nlohmann::json parseJson(const std::string& text, const std::string& name)
         return nlohmann::json::parse(text, check);
     } catch (const nlohmann::json::parse_error& e) {
         // e.byte is 1-based: the character where the parser stopped.
-        throw InputError(name, joinPath(path), "JSON " + withoutId(e.what()),
-                         lineAt(text, e.byte > 0 ? e.byte - 1 : 0));
+        throw InputError(name, pathOf(open), "JSON " + withoutId(e.what()), lineAt(text, e.byte > 0 ? e.byte - 1 : 0));
     } catch (const nlohmann::json::out_of_range& e) {
-        throw InputError(name, joinPath(path), withoutId(e.what()));
+        throw InputError(name, pathOf(open), withoutId(e.what()));
     }
 }
 

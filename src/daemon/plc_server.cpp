@@ -3,30 +3,40 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 
+#include <algorithm>
 #include <arpa/inet.h>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <modbus/modbus.h>
 #include <mutex>
 #include <netinet/in.h>
-#include <sys/select.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
+
+#ifndef HULLGAUGE_VERSION
+#define HULLGAUGE_VERSION "0"
+#endif
 
 namespace hg::daemon {
 namespace {
 
 using station::ModbusException;
+using Clock = std::chrono::steady_clock;
 
-constexpr int kHeader = 7; // MBAP header: transaction (2), protocol (2), length (2), unit (1)
+constexpr int kHeader = 7;          // MBAP header: transaction (2), protocol (2), length (2), unit (1)
+constexpr int kMaxMbapLength = 254; // unit id + the longest PDU (253 bytes)
 constexpr std::uint8_t kGatewayTargetFailed = 0x0B;
+constexpr std::uint8_t kEncapsulatedInterface = 0x2B;
+constexpr std::uint8_t kReadDeviceIdentification = 0x0E;
 
 std::int64_t nowNs()
 {
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
 }
 
 std::uint16_t be16(const std::uint8_t* p)
@@ -44,7 +54,41 @@ std::string peerText(int fd)
     return std::string(buf) + ":" + std::to_string(ntohs(addr.sin_port));
 }
 
+/// At most one journal line per kind every 10 s: a scanner's thousand connects
+/// are one line and a count, not two thousand lines (the counters keep every one).
+class RateLimitedLog {
+  public:
+    template <class... Args> void warn(Clock::time_point now, fmt::format_string<Args...> f, Args&&... args)
+    {
+        if (now < next_) {
+            ++suppressed_;
+            return;
+        }
+        auto log = hg::log::category("plc");
+        if (suppressed_ > 0) log->warn("({} similar messages in the last 10 s not shown)", suppressed_);
+        log->warn(f, std::forward<Args>(args)...);
+        suppressed_ = 0;
+        next_ = now + std::chrono::seconds(10);
+    }
+
+  private:
+    Clock::time_point next_{};
+    std::uint64_t suppressed_ = 0;
+};
+
+/// The basic device identification objects (Modbus application protocol, 6.21):
+/// vendor name, product code, major.minor revision.
+const std::array<std::string, 3> kIdentification{"hullgauge", "hullgauged", HULLGAUGE_VERSION};
+
 } // namespace
+
+struct PlcServer::Connection {
+    int fd = -1;
+    std::string peer;
+    std::vector<std::uint8_t> buffer; ///< bytes of the request being assembled
+    Clock::time_point partialSince{}; ///< when the first byte of the pending request came
+    Clock::time_point lastRequest{};  ///< when the last complete request came (or the connect)
+};
 
 struct PlcServer::Impl {
     modbus_t* ctx = nullptr;
@@ -52,7 +96,9 @@ struct PlcServer::Impl {
     int listenFd = -1;
     int wakeRead = -1;
     int wakeWrite = -1;
-    std::vector<int> clients;
+    std::vector<Connection> clients;
+    RateLimitedLog refusals;
+    RateLimitedLog drops;
     mutable std::mutex countersMutex;
     Counters counters;
 };
@@ -75,10 +121,6 @@ void PlcServer::start()
     if (!impl_->ctx)
         throw FaultError("plc: cannot create the Modbus TCP context: " + std::string(modbus_strerror(errno)));
     impl_->scratch = modbus_mapping_new_start_address(0, 0, 0, 0, 0, station::reg::Count, 0, 0);
-    auto frameS = static_cast<std::uint32_t>(config_.frameTimeout.count() / 1000);
-    auto frameUs = static_cast<std::uint32_t>((config_.frameTimeout.count() % 1000) * 1000);
-    modbus_set_byte_timeout(impl_->ctx, frameS, frameUs);
-    modbus_set_indication_timeout(impl_->ctx, frameS, frameUs);
     impl_->listenFd = modbus_tcp_listen(impl_->ctx, config_.maxClients);
     if (impl_->listenFd < 0) {
         std::string why = modbus_strerror(errno);
@@ -87,6 +129,7 @@ void PlcServer::start()
                          why);
     }
     fcntl(impl_->listenFd, F_SETFD, FD_CLOEXEC);
+    fcntl(impl_->listenFd, F_SETFL, fcntl(impl_->listenFd, F_GETFL) | O_NONBLOCK);
     sockaddr_in bound{};
     socklen_t len = sizeof bound;
     getsockname(impl_->listenFd, reinterpret_cast<sockaddr*>(&bound), &len);
@@ -114,10 +157,10 @@ void PlcServer::stop()
         (void)!write(impl_->wakeWrite, &c, 1);
     }
     if (thread_.joinable()) thread_.join();
-    for (int fd : impl_->clients) close(fd);
-    if (impl_->listenFd >= 0) close(impl_->listenFd);
-    if (impl_->wakeRead >= 0) close(impl_->wakeRead);
-    if (impl_->wakeWrite >= 0) close(impl_->wakeWrite);
+    for (const auto& c : impl_->clients) ::close(c.fd);
+    if (impl_->listenFd >= 0) ::close(impl_->listenFd);
+    if (impl_->wakeRead >= 0) ::close(impl_->wakeRead);
+    if (impl_->wakeWrite >= 0) ::close(impl_->wakeWrite);
     if (impl_->scratch) modbus_mapping_free(impl_->scratch);
     if (impl_->ctx) modbus_free(impl_->ctx);
     delete impl_;
@@ -142,149 +185,240 @@ bool PlcServer::allowed(std::uint32_t hostOrderAddress) const
 void PlcServer::serve()
 {
     auto log = hg::log::category("plc");
+    std::vector<pollfd> fds;
     while (running_) {
         lastLoopNs_ = nowNs();
-        fd_set readSet;
-        FD_ZERO(&readSet);
-        FD_SET(impl_->listenFd, &readSet);
-        FD_SET(impl_->wakeRead, &readSet);
-        int maxFd = std::max(impl_->listenFd, impl_->wakeRead);
-        for (int fd : impl_->clients) {
-            FD_SET(fd, &readSet);
-            maxFd = std::max(maxFd, fd);
-        }
-        // Wake up at least twice a second so the watchdog sees the loop turn.
-        timeval tv{0, 500'000};
-        int n = select(maxFd + 1, &readSet, nullptr, nullptr, &tv);
+        fds.assign({{impl_->wakeRead, POLLIN, 0}, {impl_->listenFd, POLLIN, 0}});
+        for (const auto& c : impl_->clients) fds.push_back({c.fd, POLLIN, 0});
+        // Wake up at least every 100 ms: the watchdog sees the loop turn, and
+        // straggling frames and idle connections are closed on time.
+        int n = poll(fds.data(), fds.size(), 100);
         if (n < 0) {
             if (errno == EINTR) continue;
-            log->error("select failed: {}", std::strerror(errno));
+            log->error("poll failed: {}", std::strerror(errno));
             std::this_thread::sleep_for(std::chrono::milliseconds(50));
             continue;
         }
-        if (FD_ISSET(impl_->wakeRead, &readSet)) break;
+        if (fds[0].revents) break;
+        // Clients first, in the order polled: an accept below may close one to make room.
+        for (std::size_t i = impl_->clients.size(); i-- > 0;)
+            if (fds[i + 2].revents && !receive(impl_->clients[i])) close(i, nullptr);
+        if (fds[1].revents & POLLIN) accept();
+        expire();
+    }
+}
 
-        if (FD_ISSET(impl_->listenFd, &readSet)) {
-            sockaddr_in addr{};
-            socklen_t len = sizeof addr;
-            int fd = accept4(impl_->listenFd, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_CLOEXEC);
-            if (fd >= 0) {
-                std::lock_guard lock(impl_->countersMutex);
-                auto who = peerText(fd);
-                if (!allowed(ntohl(addr.sin_addr.s_addr))) {
-                    log->warn("refused connection from {}: not in plc.allowed_clients", who);
-                    ++impl_->counters.refusedConnections;
-                    close(fd);
-                } else if (static_cast<int>(impl_->clients.size()) >= config_.maxClients || fd >= FD_SETSIZE) {
-                    log->warn("refused connection from {}: {} clients already connected", who, impl_->clients.size());
-                    ++impl_->counters.refusedConnections;
-                    close(fd);
-                } else {
-                    log->info("client {} connected", who);
-                    impl_->clients.push_back(fd);
-                    impl_->counters.clients = static_cast<int>(impl_->clients.size());
-                }
-            }
+void PlcServer::accept()
+{
+    sockaddr_in addr{};
+    socklen_t len = sizeof addr;
+    int fd = accept4(impl_->listenFd, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_CLOEXEC | SOCK_NONBLOCK);
+    if (fd < 0) return;
+    const auto now = Clock::now();
+    const std::string who = peerText(fd);
+    auto refuse = [&](const std::string& why) {
+        impl_->refusals.warn(now, "refused connection from {}: {}", who, why);
+        std::lock_guard lock(impl_->countersMutex);
+        ++impl_->counters.refusedConnections;
+        ::close(fd);
+    };
+    if (!allowed(ntohl(addr.sin_addr.s_addr))) return refuse("not in plc.allowed_clients");
+    if (static_cast<int>(impl_->clients.size()) >= config_.maxClients) {
+        // The connection silent the longest yields, if it has been silent long enough to be idle.
+        auto oldest = std::min_element(impl_->clients.begin(), impl_->clients.end(),
+                                       [](const auto& a, const auto& b) { return a.lastRequest < b.lastRequest; });
+        if (oldest == impl_->clients.end() || now - oldest->lastRequest < config_.yieldAfter)
+            return refuse(std::to_string(impl_->clients.size()) + " clients already connected, none idle");
+        {
+            std::lock_guard lock(impl_->countersMutex);
+            ++impl_->counters.yielded;
         }
+        close(static_cast<std::size_t>(oldest - impl_->clients.begin()), "idle, yields its slot to a new client");
+    }
+    hg::log::category("plc")->debug("client {} connected", who);
+    impl_->clients.push_back({fd, who, {}, {}, now});
+    std::lock_guard lock(impl_->countersMutex);
+    ++impl_->counters.acceptedConnections;
+    impl_->counters.clients = static_cast<int>(impl_->clients.size());
+}
 
-        for (std::size_t i = 0; i < impl_->clients.size();) {
-            int fd = impl_->clients[i];
-            if (FD_ISSET(fd, &readSet) && !handle(fd)) {
-                close(fd);
-                impl_->clients.erase(impl_->clients.begin() + static_cast<std::ptrdiff_t>(i));
+void PlcServer::close(std::size_t index, const char* why)
+{
+    auto& c = impl_->clients[index];
+    if (why) hg::log::category("plc")->debug("client {} closed: {}", c.peer, why);
+    ::close(c.fd);
+    impl_->clients.erase(impl_->clients.begin() + static_cast<std::ptrdiff_t>(index));
+    std::lock_guard lock(impl_->countersMutex);
+    impl_->counters.clients = static_cast<int>(impl_->clients.size());
+}
+
+void PlcServer::expire()
+{
+    const auto now = Clock::now();
+    for (std::size_t i = impl_->clients.size(); i-- > 0;) {
+        const auto& c = impl_->clients[i];
+        if (!c.buffer.empty() && now - c.partialSince > config_.frameTimeout) {
+            impl_->drops.warn(now, "client {} dropped: request incomplete after {} ms ({} bytes)", c.peer,
+                              config_.frameTimeout.count(), c.buffer.size());
+            {
                 std::lock_guard lock(impl_->countersMutex);
-                impl_->counters.clients = static_cast<int>(impl_->clients.size());
-                continue;
+                ++impl_->counters.droppedConnections;
             }
-            ++i;
+            close(i, nullptr);
+        } else if (now - c.lastRequest > config_.idleTimeout) {
+            {
+                std::lock_guard lock(impl_->countersMutex);
+                ++impl_->counters.idleClosed;
+            }
+            close(i, "no request within plc.idle_timeout_s");
         }
     }
 }
 
-bool PlcServer::handle(int fd)
+bool PlcServer::receive(Connection& c)
 {
-    auto log = hg::log::category("plc");
-    std::uint8_t req[MODBUS_TCP_MAX_ADU_LENGTH];
-    modbus_set_socket(impl_->ctx, fd);
-    int rc = modbus_receive(impl_->ctx, req);
-    if (rc <= 0) {
-        // -1: connection closed, frame timeout or a frame libmodbus cannot parse; 0: ignored.
-        if (rc < 0) {
-            if (errno == ECONNRESET || errno == 0 || errno == EBADF)
-                log->info("client {} disconnected", peerText(fd));
-            else
-                log->warn("client {} dropped: {}", peerText(fd), modbus_strerror(errno));
+    std::uint8_t chunk[1024];
+    const ssize_t n = recv(c.fd, chunk, sizeof chunk, MSG_DONTWAIT);
+    if (n == 0) {
+        hg::log::category("plc")->debug("client {} disconnected", c.peer);
+        return false;
+    }
+    if (n < 0) {
+        if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return true;
+        hg::log::category("plc")->debug("client {} disconnected: {}", c.peer, std::strerror(errno));
+        return false;
+    }
+    const auto now = Clock::now();
+    if (c.buffer.empty()) c.partialSince = now;
+    c.buffer.insert(c.buffer.end(), chunk, chunk + n);
+    // The frame is delimited by the MBAP header's length, whatever the function code.
+    while (c.buffer.size() >= 6) {
+        const int length = be16(c.buffer.data() + 4);
+        if (be16(c.buffer.data() + 2) != 0 || length < 2 || length > kMaxMbapLength) {
+            impl_->drops.warn(now, "client {} dropped: malformed MBAP header (protocol {}, length {})", c.peer,
+                              be16(c.buffer.data() + 2), length);
             std::lock_guard lock(impl_->countersMutex);
             ++impl_->counters.droppedConnections;
             return false;
         }
-        return true;
+        if (c.buffer.size() < static_cast<std::size_t>(6 + length)) break;
+        c.lastRequest = now;
+        if (!handle(c, c.buffer.data(), 6 + length)) return false;
+        c.buffer.erase(c.buffer.begin(), c.buffer.begin() + 6 + length);
+        c.partialSince = now;
     }
-    // libmodbus delimits TCP frames by function code, not by the MBAP length:
-    // check the header ourselves so a forged frame cannot desynchronise the stream.
-    if (rc < kHeader + 1 || be16(req + 2) != 0 || be16(req + 4) != rc - 6) {
-        log->warn("client {} dropped: malformed MBAP header ({} bytes, protocol {}, length {})", peerText(fd), rc,
-                  be16(req + 2), be16(req + 4));
+    return true;
+}
+
+bool PlcServer::replyException(Connection& c, const std::uint8_t* req, std::uint8_t code)
+{
+    {
         std::lock_guard lock(impl_->countersMutex);
-        ++impl_->counters.droppedConnections;
-        return false;
+        ++impl_->counters.exceptions;
     }
+    // A function code with the top bit already set keeps it (0x83 answers 0x83, never 0x03).
+    const std::uint8_t reply[9] = {req[0], req[1], 0, 0, 0, 3, req[6], static_cast<std::uint8_t>(req[7] | 0x80), code};
+    return send(c.fd, reply, sizeof reply, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(sizeof reply);
+}
+
+bool PlcServer::replyDeviceIdentification(Connection& c, const std::uint8_t* req, int length)
+{
+    // Request PDU: 2B 0E <read device id code> <object id>.
+    if (length != kHeader + 4) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+    const std::uint8_t code = req[kHeader + 2];
+    std::uint8_t first = req[kHeader + 3];
+    if (code < 1 || code > 4) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+    if (code == 4 && first >= kIdentification.size())
+        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+    // Basic conformity with stream and individual access (0x81); the regular and
+    // extended codes answer the basic objects, as a basic device must.
+    if (code != 4 && first >= kIdentification.size()) first = 0;
+    const std::size_t last = code == 4 ? first + 1u : kIdentification.size();
+    std::vector<std::uint8_t> pdu{kEncapsulatedInterface,
+                                  kReadDeviceIdentification,
+                                  code,
+                                  0x81,
+                                  0x00,
+                                  0x00,
+                                  static_cast<std::uint8_t>(last - first)};
+    for (std::size_t id = first; id < last; ++id) {
+        pdu.push_back(static_cast<std::uint8_t>(id));
+        pdu.push_back(static_cast<std::uint8_t>(kIdentification[id].size()));
+        pdu.insert(pdu.end(), kIdentification[id].begin(), kIdentification[id].end());
+    }
+    std::vector<std::uint8_t> reply{req[0],
+                                    req[1],
+                                    0,
+                                    0,
+                                    static_cast<std::uint8_t>((pdu.size() + 1) >> 8),
+                                    static_cast<std::uint8_t>(pdu.size() + 1),
+                                    req[6]};
+    reply.insert(reply.end(), pdu.begin(), pdu.end());
+    return send(c.fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(reply.size());
+}
+
+bool PlcServer::handle(Connection& c, const std::uint8_t* req, int length)
+{
+    auto log = hg::log::category("plc");
     {
         std::lock_guard lock(impl_->countersMutex);
         ++impl_->counters.requests;
     }
-    auto reject = [&](std::uint8_t code) {
-        std::lock_guard lock(impl_->countersMutex);
-        ++impl_->counters.exceptions;
-        return modbus_reply_exception(impl_->ctx, req, code) >= 0;
-    };
     const std::uint8_t unit = req[kHeader - 1];
     const std::uint8_t function = req[kHeader];
     if (unit != config_.unitId) {
         log->debug("request for unit {} (ours is {})", unit, config_.unitId);
-        return reject(kGatewayTargetFailed);
+        return replyException(c, req, kGatewayTargetFailed);
     }
     const std::uint8_t* pdu = req + kHeader;
+    // libmodbus builds the normal replies on this connection's socket (non-blocking:
+    // a client that does not read its answers is closed rather than stalling the loop).
+    modbus_set_socket(impl_->ctx, c.fd);
+    auto reply = [&] { return modbus_reply(impl_->ctx, req, length, impl_->scratch) >= 0; };
     switch (function) {
     case MODBUS_FC_READ_HOLDING_REGISTERS: {
-        if (rc != kHeader + 5) return false;
+        if (length != kHeader + 5) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         auto count = be16(pdu + 3);
-        if (count < 1 || count > MODBUS_MAX_READ_REGISTERS) return reject(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (count < 1 || count > MODBUS_MAX_READ_REGISTERS)
+            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values;
         if (registers_.read(address, count, values) != ModbusException::None)
-            return reject(MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
         // One snapshot, taken under the register lock, is what the reply carries.
         std::copy(values.begin(), values.end(), impl_->scratch->tab_registers + address);
         log->trace("read {}+{}", address, count);
-        return modbus_reply(impl_->ctx, req, rc, impl_->scratch) >= 0;
+        return reply();
     }
     case MODBUS_FC_WRITE_SINGLE_REGISTER: {
-        if (rc != kHeader + 5) return false;
+        if (length != kHeader + 5) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         std::uint16_t value = be16(pdu + 3);
         auto ex = registers_.write(address, std::span<const std::uint16_t>(&value, 1));
-        if (ex != ModbusException::None) return reject(static_cast<std::uint8_t>(ex));
+        if (ex != ModbusException::None) return replyException(c, req, static_cast<std::uint8_t>(ex));
         log->debug("write {} = {}", address, value);
-        if (address >= station::reg::Count) return false; // cannot happen: write() refused it
-        return modbus_reply(impl_->ctx, req, rc, impl_->scratch) >= 0;
+        return reply();
     }
     case MODBUS_FC_WRITE_MULTIPLE_REGISTERS: {
-        if (rc < kHeader + 6) return false;
+        if (length < kHeader + 6) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         auto count = be16(pdu + 3);
         auto bytes = pdu[5];
-        if (count < 1 || count > MODBUS_MAX_WRITE_REGISTERS || bytes != count * 2 || rc != kHeader + 6 + bytes)
-            return reject(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (count < 1 || count > MODBUS_MAX_WRITE_REGISTERS || bytes != count * 2 || length != kHeader + 6 + bytes)
+            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values(count);
         for (std::size_t i = 0; i < count; ++i) values[i] = be16(pdu + 6 + 2 * i);
         auto ex = registers_.write(address, values);
-        if (ex != ModbusException::None) return reject(static_cast<std::uint8_t>(ex));
+        if (ex != ModbusException::None) return replyException(c, req, static_cast<std::uint8_t>(ex));
         log->debug("write {}+{}", address, count);
-        return modbus_reply(impl_->ctx, req, rc, impl_->scratch) >= 0;
+        return reply();
     }
+    case kEncapsulatedInterface:
+        if (length > kHeader + 1 && pdu[1] == kReadDeviceIdentification)
+            return replyDeviceIdentification(c, req, length);
+        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
     default:
-        return reject(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
     }
 }
 

@@ -1,16 +1,21 @@
 // The Modbus TCP server the PLC talks to (CONTRACTS §6), over libmodbus.
 //
-// One thread serves every client with select(): a listening socket, up to
-// `max_clients` connections, and a wake-up pipe for stop(). Each request is
-// parsed by libmodbus (modbus_receive), checked here (unit id, function code,
-// address range, values via PlcRegisters) and answered with modbus_reply or
-// modbus_reply_exception. A reply to FC03 is built from one snapshot taken
-// under the register lock, so the PLC never reads a half-published result.
+// One thread serves every client with poll(): a listening socket, up to
+// `max_clients` non-blocking connections, and a wake-up pipe for stop(). Each
+// connection assembles its own frames from the MBAP header's length, so a
+// client that sends a request a byte at a time never holds up the others
+// (docs/plc.md, "Connections"). A complete request is checked here (unit id,
+// function code, address range, values via PlcRegisters) and answered with
+// libmodbus' modbus_reply; exceptions and device identification (FC 43/14)
+// are built here. A reply to FC03 is built from one snapshot taken under the
+// register lock, so the PLC never reads a half-published result.
 //
 // Robustness: a connection from an address outside `allowed_clients` is
 // closed at once; a malformed frame (bad protocol id, bad length) or a frame
-// whose bytes straggle past `frame_timeout_s` closes that client only; every
-// other client keeps being served and new clients are accepted.
+// whose bytes straggle past `frame_timeout_s` closes that client only; a
+// connection silent for `idle_timeout_s` is closed; when every slot is taken,
+// the connection idle the longest (silent for `yield_after_s` or more) yields
+// to the new one. Every other client keeps being served.
 #pragma once
 
 #include "hullgauge/station/daemon_config.h"
@@ -45,17 +50,29 @@ class PlcServer {
     struct Counters {
         std::uint64_t requests = 0;
         std::uint64_t exceptions = 0;
+        std::uint64_t acceptedConnections = 0;
         std::uint64_t refusedConnections = 0;
-        std::uint64_t droppedConnections = 0;
+        std::uint64_t droppedConnections = 0; ///< closed for a malformed or straggling frame, or a failed send
+        std::uint64_t idleClosed = 0;         ///< closed after `idle_timeout_s` without a request
+        std::uint64_t yielded = 0;            ///< idle connections closed to make room for a new one
         int clients = 0;
     };
     Counters counters() const;
 
   private:
+    struct Connection;
     void serve();
+    void accept();
     bool allowed(std::uint32_t hostOrderAddress) const;
-    /// Handles one request on `fd`; false when the client must be closed.
-    bool handle(int fd);
+    /// Reads what `c` sent and answers every complete request; false when it must be closed.
+    bool receive(Connection& c);
+    /// Answers one complete request (MBAP header + PDU); false when the client must be closed.
+    bool handle(Connection& c, const std::uint8_t* req, int length);
+    bool replyException(Connection& c, const std::uint8_t* req, std::uint8_t code);
+    bool replyDeviceIdentification(Connection& c, const std::uint8_t* req, int length);
+    /// Closes connections whose frame straggles or which stayed silent too long.
+    void expire();
+    void close(std::size_t index, const char* why);
 
     station::PlcRegisters& registers_;
     station::PlcConfig config_;

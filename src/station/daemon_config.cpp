@@ -35,8 +35,8 @@ fs::path existingFile(const ConfigNode& node, const fs::path& base)
 
 void parsePlc(const ConfigNode& node, PlcConfig& plc)
 {
-    node.allowOnlyKeys(
-        {"bind", "port", "unit_id", "allowed_clients", "max_clients", "frame_timeout_s", "heartbeat_period_s"});
+    node.allowOnlyKeys({"bind", "port", "unit_id", "allowed_clients", "max_clients", "frame_timeout_s",
+                        "idle_timeout_s", "yield_after_s", "heartbeat_period_s"});
     if (auto n = node.optional("bind")) {
         plc.bindAddress = n->asString();
         in_addr tmp{};
@@ -55,6 +55,8 @@ void parsePlc(const ConfigNode& node, PlcConfig& plc)
     }
     if (auto n = node.optional("max_clients")) plc.maxClients = static_cast<int>(n->asIntIn(1, 64));
     if (auto n = node.optional("frame_timeout_s")) plc.frameTimeout = seconds(*n, 0.01, 10.0);
+    if (auto n = node.optional("idle_timeout_s")) plc.idleTimeout = seconds(*n, 1.0, 86400.0);
+    if (auto n = node.optional("yield_after_s")) plc.yieldAfter = seconds(*n, 0.1, 3600.0);
     // CONTRACTS §6: HEARTBEAT increments at least once a second.
     if (auto n = node.optional("heartbeat_period_s")) plc.heartbeatPeriod = seconds(*n, 0.05, 1.0);
 }

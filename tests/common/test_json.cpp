@@ -41,7 +41,7 @@ TEST(Json, DuplicateKeyDeepInsideNamesItsPathAndLine)
                              "  {\"id\": \"v1\",\n"
                              "   \"image\": \"b.png\", \"image\": \"c.png\"}]}";
     auto e = parseError(text);
-    EXPECT_EQ(e.field(), "views.image");
+    EXPECT_EQ(e.field(), "views[1].image");
     EXPECT_EQ(e.line().value_or(0), 4);
 }
 

@@ -49,6 +49,11 @@ struct PlcConfig {
     int maxClients = 8;
     /// A request whose bytes straggle longer than this is dropped (its client closed).
     std::chrono::milliseconds frameTimeout{500};
+    /// A connection without a complete request for this long is closed.
+    std::chrono::milliseconds idleTimeout{60'000};
+    /// When every slot is taken, the connection silent the longest yields to a
+    /// new one if it has been silent this long (a polling PLC never is).
+    std::chrono::milliseconds yieldAfter{5'000};
     std::chrono::milliseconds heartbeatPeriod{500};
 };
 

@@ -1,0 +1,342 @@
+#!/usr/bin/python3
+"""The robustness suite: faults and hostile clients against the real daemon on
+the simulated line (docs/fault-matrix.md).
+
+  robustness.py --source S --bin B [--out FILE] [--only NAME ...]
+
+Each scenario starts from a running line (tools/simline with config/sim-fast),
+does one kind of harm, and checks what the PLC and the operator see, that the
+daemon keeps serving, how long recovery takes and that nothing recorded is
+lost. Every wait is bounded. The rows of the fault matrix (fault, what the PLC
+sees, recovery, anything lost) go to --out as Markdown; docs/fault-matrix.md
+holds one run of it. Exit status 0 when every check held, 1 otherwise.
+"""
+import argparse
+import ctypes
+import json
+import os
+import signal
+import socket
+import sqlite3
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from pymodbus.client import ModbusTcpClient
+from pymodbus.diag_message import ReturnQueryDataRequest
+from pymodbus.exceptions import ModbusException
+from pymodbus.file_message import ReadFifoQueueRequest, ReadFileRecordRequest, FileRecord
+from pymodbus.mei_message import ReadDeviceInformationRequest
+from pymodbus.pdu import ExceptionResponse
+
+TRIGGER_SEQ, ACK_SEQ, DONE_SEQ, STATUS, RESULT, FAULT_CODE = 0, 100, 101, 102, 103, 104
+
+failures = []
+matrix = []  # rows: fault, PLC sees, recovery, lost
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAILED: {message}", file=sys.stderr, flush=True)
+    return condition
+
+
+def row(fault, plc_sees, recovery, lost):
+    matrix.append((fault, plc_sees, recovery, lost))
+    print(f"| {fault} | {plc_sees} | {recovery} | {lost} |", flush=True)
+
+
+def die_with_parent():
+    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def encode_serial(text):
+    raw = text.encode("ascii")[:16].ljust(16, b"\0")
+    return [(raw[i] << 8) | raw[i + 1] for i in range(0, 16, 2)]
+
+
+class Line:
+    """tools/simline in a work folder of its own, stopped (and killed if need be) at the end."""
+
+    def __init__(self, args, extra_config=()):
+        self.args = args
+        self.workdir = Path(tempfile.mkdtemp(prefix="hg-robust-"))
+        self.plc_port = free_port()
+        self.out = open(self.workdir / "simline.out", "w")
+        configs = []
+        for c in [args.source / "config" / "sim-fast", *extra_config]:
+            configs += ["--config", str(c)]
+        self.proc = subprocess.Popen(
+            [str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(self.workdir),
+             "--plc-port", str(self.plc_port), "--fixture-port", "0", *configs],
+            stdout=self.out, stderr=subprocess.STDOUT, start_new_session=True, preexec_fn=die_with_parent)
+        deadline = time.monotonic() + 90
+        while not (self.workdir / "simline.ready").exists():
+            if self.proc.poll() is not None:
+                raise SystemExit(f"tools/simline exited ({self.proc.returncode}):\n" +
+                                 (self.workdir / "simline.out").read_text())
+            if time.monotonic() > deadline:
+                raise SystemExit("the simulated line was not ready within 90 s")
+            time.sleep(0.1)
+        ready = dict(l.split("=", 1) for l in (self.workdir / "simline.ready").read_text().split())
+        self.daemon_pid = int(ready["daemon_pid"])
+        self.socket = str(self.workdir / "hullgauged.sock")
+
+    def alive(self):
+        try:
+            os.kill(self.daemon_pid, 0)
+            return True
+        except ProcessLookupError:
+            return False
+
+    def rss_kib(self):
+        for line in Path(f"/proc/{self.daemon_pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+        return 0
+
+    def stored_rows(self):
+        db = sqlite3.connect(f"file:{self.workdir / 'results.db'}?mode=ro", uri=True)
+        try:
+            return db.execute("SELECT trigger_seq, verdict FROM inspections WHERE manual = 0 ORDER BY id").fetchall()
+        finally:
+            db.close()
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=40)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait()
+        self.out.close()
+        if not failures:
+            subprocess.run(["rm", "-rf", str(self.workdir)])
+
+
+class Plc:
+    """A PLC over pymodbus that times every request it makes."""
+
+    def __init__(self, port, connect_deadline_s=30):
+        self.latencies = []
+        deadline = time.monotonic() + connect_deadline_s
+        while True:
+            self.client = ModbusTcpClient("127.0.0.1", port=port, timeout=3)
+            try:
+                if self.client.connect() and not self.client.read_holding_registers(STATUS, 1, slave=1).isError():
+                    break
+            except ModbusException:
+                pass  # refused: every slot taken
+
+            self.client.close()
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"the PLC was not served within {connect_deadline_s} s")
+            time.sleep(0.2)
+        self.connected_at = time.monotonic()
+
+    def read(self, address, count):
+        t0 = time.monotonic()
+        r = self.client.read_holding_registers(address, count, slave=1)
+        self.latencies.append(time.monotonic() - t0)
+        if r.isError():
+            raise RuntimeError(f"read {address}+{count}: {r}")
+        return r.registers
+
+    def cycle(self, serial, timeout_s=30):
+        """One inspection the way a PLC runs it; (result, fault code, cycle s as the PLC saw it)."""
+        seq = (self.read(TRIGGER_SEQ, 1)[0] + 1) % 65536 or 1
+        t0 = time.monotonic()
+        w = self.client.write_registers(TRIGGER_SEQ, [seq, 1] + encode_serial(serial), slave=1)
+        if w.isError():
+            raise RuntimeError(f"trigger write: {w}")
+        deadline = t0 + timeout_s
+        while True:
+            r = self.read(ACK_SEQ, 5)
+            if r[1] == seq:
+                return seq, r[3], r[4], time.monotonic() - t0
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"no result for trigger {seq} within {timeout_s} s (status {r[2]})")
+            time.sleep(0.005)
+
+    def close(self):
+        self.client.close()
+
+
+def percentile(values, p):
+    values = sorted(values)
+    return values[min(len(values) - 1, int(round(p / 100 * (len(values) - 1))))] if values else 0.0
+
+
+def scenario_slow_clients(args):
+    """8 idle connections and a client trickling a byte every 0.3 s while the PLC runs 20 cycles."""
+    line = Line(args)
+    try:
+        plc = Plc(line.plc_port)
+        baseline = [plc.cycle(f"BASE{i:04d}")[3] for i in range(args.cycles)]
+        plc.close()
+        idle = []
+        for _ in range(8):  # plc.max_clients of config/sim
+            s = socket.create_connection(("127.0.0.1", line.plc_port), timeout=5)
+            idle.append(s)
+        t_full = time.monotonic()
+        plc = Plc(line.plc_port, connect_deadline_s=30)
+        waited = plc.connected_at - t_full
+        stop = threading.Event()
+        trickled = {"bytes": 0, "reconnects": 0}
+
+        def trickle():
+            frame = bytes([0, 1, 0, 0, 0, 6, 1, 3, 0, 102, 0, 1])
+            s = None
+            while not stop.is_set():
+                try:
+                    if s is None:
+                        s = socket.create_connection(("127.0.0.1", line.plc_port), timeout=2)
+                        trickled["reconnects"] += 1
+                    s.sendall(frame[trickled["bytes"] % len(frame):][:1])
+                    trickled["bytes"] += 1
+                except OSError:
+                    s = None
+                stop.wait(0.3)
+            if s:
+                s.close()
+
+        t = threading.Thread(target=trickle, daemon=True)
+        t.start()
+        plc.latencies.clear()
+        loaded = []
+        for i in range(args.cycles):
+            seq, result, fault, seconds = plc.cycle(f"SLOW{i:04d}")
+            check(result == 1 and fault == 0, f"slow clients: cycle {seq} result {result} fault {fault}")
+            loaded.append(seconds)
+        stop.set()
+        t.join(timeout=5)
+        for s in idle:
+            s.close()
+        worst = max(plc.latencies)
+        ratio = statistics.median(loaded) / statistics.median(baseline)
+        # A served loop answers in milliseconds; a loop waiting on a trickled frame in seconds.
+        check(worst < 1.0, f"slow clients: a PLC read took {worst * 1000:.0f} ms")
+        check(ratio < 1.5, f"slow clients: cycles took {ratio:.2f} times as long")
+        check(waited < 20, f"slow clients: the PLC waited {waited:.1f} s for a slot")
+        check(line.alive(), "slow clients: the daemon died")
+        row("8 idle connections fill `plc.max_clients`",
+            f"its connect served once the oldest idle one yields (`plc.yield_after_s` 5 s): after {waited:.1f} s",
+            "—", "nothing")
+        row("a client trickles a request a byte every 0.3 s, 8 idle clients connected",
+            f"{len(plc.latencies)} reads: median {statistics.median(plc.latencies) * 1000:.1f} ms, "
+            f"p99 {percentile(plc.latencies, 99) * 1000:.1f} ms, max {worst * 1000:.1f} ms; "
+            f"cycle median {statistics.median(loaded):.2f} s vs {statistics.median(baseline):.2f} s alone "
+            f"({(ratio - 1) * 100:+.1f} %)",
+            f"trickler dropped after `plc.frame_timeout_s` ({trickled['reconnects']} connections)", "nothing")
+        plc.close()
+        check(len(line.stored_rows()) == 2 * args.cycles, "slow clients: not every cycle was stored")
+    finally:
+        line.stop()
+
+
+def exception_code(response):
+    return response.exception_code if isinstance(response, ExceptionResponse) else None
+
+
+def scenario_modbus_conformance(args):
+    """Function codes HMIs and scanners probe: 08, 20, 24 answer exception 01; 43/14 names the device."""
+    line = Line(args)
+    try:
+        plc = Plc(line.plc_port)
+        c = plc.client
+        answers = {
+            "08 diagnostics": exception_code(c.execute(ReturnQueryDataRequest(0x1234, unit=1))),
+            "20 read file record": exception_code(c.execute(ReadFileRecordRequest(
+                [FileRecord(reference_type=6, file_number=1, record_number=0, record_length=2)], unit=1))),
+            "24 read FIFO queue": exception_code(c.execute(ReadFifoQueueRequest(100, unit=1))),
+            "01 read coils": exception_code(c.read_coils(0, 1, slave=1)),
+            "04 read input registers": exception_code(c.read_input_registers(0, 1, slave=1)),
+        }
+        for name, code in answers.items():
+            check(code == 1, f"conformance: FC {name} answered {code}, expected exception 01")
+        info = c.execute(ReadDeviceInformationRequest(read_code=1, object_id=0, unit=1))
+        objects = getattr(info, "information", {}) or {}
+        check(objects.get(0) == b"hullgauge" and objects.get(1) == b"hullgauged" and objects.get(2),
+              f"conformance: device identification {objects}")
+        check(plc.read(STATUS, 1)[0] in (0, 2), "conformance: the connection did not survive the probes")
+        row("function codes 01, 04, 08, 20, 24 from a scanner",
+            "exception 01 each, the connection stays", "—", "nothing")
+        row("FC 43/14 read device identification",
+            f"vendor {objects.get(0, b'?').decode()}, product {objects.get(1, b'?').decode()}, "
+            f"revision {objects.get(2, b'?').decode()}", "—", "nothing")
+        plc.close()
+    finally:
+        line.stop()
+
+
+def scenario_duplicate_keys(args):
+    """A configuration that names a key twice is refused naming the key and its line."""
+    work = Path(tempfile.mkdtemp(prefix="hg-robust-keys-"))
+    try:
+        src = (args.source / "config" / "sim" / "stepped-block.yaml").read_text()
+        (work / "stepped-block.stl").symlink_to(args.source / "config" / "sim" / "stepped-block.stl")
+        doubled = src.replace("octree:\n", "octree:\n  depth: 3\n", 1)
+        check(doubled != src, "duplicate keys: the sample part program has no octree section")
+        part = work / "stepped-block.yaml"
+        part.write_text(doubled)
+        r = subprocess.run([str(args.bin / "hullgauge"), "check-part", "--part", str(part)], capture_output=True,
+                           text=True, timeout=60)
+        line_no = doubled.splitlines().index("  depth: 3") + 1
+        second = [i + 1 for i, l in enumerate(doubled.splitlines()) if l.strip().startswith("depth:")][-1]
+        check(r.returncode == 2, f"duplicate keys: check-part exit {r.returncode}: {r.stderr}")
+        check(f":{second}: octree.depth: duplicate key 'depth' (first given at line {line_no})" in r.stderr,
+              f"duplicate keys: message {r.stderr.strip()!r}")
+        row("a part program names `octree.depth` twice", "`check-part` exit 2: "
+            f"`{r.stderr.strip().replace(str(work) + '/', '')}`", "—", "nothing (refused before use)")
+    finally:
+        subprocess.run(["rm", "-rf", str(work)])
+
+
+SCENARIOS = {
+    "slow_clients": scenario_slow_clients,
+    "modbus_conformance": scenario_modbus_conformance,
+    "duplicate_keys": scenario_duplicate_keys,
+}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--source", required=True, type=Path)
+    ap.add_argument("--bin", required=True, type=Path)
+    ap.add_argument("--out", type=Path)
+    ap.add_argument("--cycles", type=int, default=20)
+    ap.add_argument("--only", nargs="*", choices=sorted(SCENARIOS))
+    args = ap.parse_args()
+    for name in args.only or SCENARIOS:
+        print(f"== {name}", flush=True)
+        t0 = time.monotonic()
+        try:
+            SCENARIOS[name](args)
+        except Exception as e:  # noqa: BLE001 - one scenario's surprise must not hide the others
+            check(False, f"{name}: {type(e).__name__}: {e}")
+        print(f"== {name}: {time.monotonic() - t0:.1f} s", flush=True)
+    if args.out:
+        lines = ["| fault | what the PLC sees | recovery | lost |", "|---|---|---|---|"]
+        lines += [f"| {a} | {b} | {c} | {d} |" for a, b, c, d in matrix]
+        args.out.write_text("\n".join(lines) + "\n")
+    if failures:
+        print(f"{len(failures)} checks failed", file=sys.stderr)
+        return 1
+    print(f"robustness: {len(matrix)} faults, every check held")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -36,6 +36,18 @@ void Intrinsics::validate() const
                                     std::to_string(dist.size()));
     }
     if (imageSize.width <= 0 || imageSize.height <= 0) throw std::invalid_argument("image_size: must be positive");
+    // Plausibility, so that a typo (or a fuzzer's 1e308) is named here rather
+    // than overflowing a projection far downstream: focal lengths below 10^7 px,
+    // the principal point within ten image sizes of the image, coefficients
+    // within 10^6.
+    if (K(0, 0) > 1e7 || K(1, 1) > 1e7 || std::abs(K(0, 1)) > 1e7)
+        throw std::invalid_argument("K: fx, fy and the skew must be below 1e7 px");
+    const double w = imageSize.width, h = imageSize.height;
+    if (std::abs(K(0, 2) - w / 2) > 10 * w || std::abs(K(1, 2) - h / 2) > 10 * h)
+        throw std::invalid_argument("K: the principal point (cx, cy) lies more than ten image sizes from the image");
+    for (double d : dist)
+        if (!std::isfinite(d) || std::abs(d) > 1e6)
+            throw std::invalid_argument("dist: coefficients must lie within ±1e6");
 }
 
 CameraModel::CameraModel(Intrinsics intrinsics, RigidTransform cameraFromPart)

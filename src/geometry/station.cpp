@@ -8,9 +8,27 @@
 namespace hg::geometry {
 namespace {
 
+/// Lengths and angles of a station lie within 10^5 (100 m, or 277 turns): a
+/// value past that is a typo, named here rather than blamed on the part later.
+constexpr double kMaxMagnitude = 1e5;
+
+void checkMagnitude(const ConfigNode& node, const Eigen::VectorXd& v, const char* unit)
+{
+    if (v.cwiseAbs().maxCoeff() > kMaxMagnitude)
+        node.fail(std::string("values must lie within ±1e5 ") + unit + " (a station is not that large)");
+}
+
+Vec3 parsePosition(const ConfigNode& node)
+{
+    Vec3 p = node.asVector3();
+    checkMagnitude(node, p, "mm");
+    return p;
+}
+
 Range parseRange(const ConfigNode& node)
 {
     auto v = node.asDoubles(2);
+    checkMagnitude(node, Eigen::Vector2d(v[0], v[1]), "mm or degrees");
     if (!(v[0] <= v[1])) node.fail("range [min, max] must have min <= max");
     return {v[0], v[1]};
 }
@@ -70,12 +88,12 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
     // re-orthonormalise, reject anything that is not a rotation.
     if (!isRotation(R, 1e-4)) rNode.fail("not a rotation matrix (must be orthonormal with determinant +1)");
     k.cameraFromFixture.R = nearestRotation(R);
-    k.cameraFromFixture.t = cff["t"].asVector3();
+    k.cameraFromFixture.t = parsePosition(cff["t"]);
 
     if (auto n = fix.optional("rotation_axis")) k.rotationAxis = parseAxis(*n);
     if (auto n = fix.optional("declination_axis")) k.declinationAxis = parseAxis(*n);
-    if (auto n = fix.optional("rotation_axis_point")) k.rotationAxisPoint = n->asVector3();
-    if (auto n = fix.optional("declination_axis_point")) k.declinationAxisPoint = n->asVector3();
+    if (auto n = fix.optional("rotation_axis_point")) k.rotationAxisPoint = parsePosition(*n);
+    if (auto n = fix.optional("declination_axis_point")) k.declinationAxisPoint = parsePosition(*n);
     if (auto n = fix.optional("rotation_range_deg")) k.rotationRangeDeg = parseRange(*n);
     if (auto n = fix.optional("declination_range_deg")) k.declinationRangeDeg = parseRange(*n);
     if (auto n = fix.optional("rail_axis")) k.railAxis = parseAxis(*n);
@@ -108,7 +126,7 @@ Station parseStation(const ConfigNode& root)
     s.fixture = parseFixture(root["fixture"]);
     if (auto env = root.optional("environment")) {
         env->allowOnlyKeys({"floor_z_mm"});
-        if (auto f = env->optional("floor_z_mm")) s.floorZMm = f->asDouble();
+        if (auto f = env->optional("floor_z_mm")) s.floorZMm = f->asDoubleIn(-kMaxMagnitude, kMaxMagnitude);
     }
     s.document = root;
     return s;
@@ -131,10 +149,11 @@ std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const Fixt
         bool angles = item.has("rotation_deg") || item.has("declination_deg");
         if (rail == angles) item.fail("a pose gives either rotation_deg/declination_deg or rail_mm");
         if (rail) {
-            p.railMm = item["rail_mm"].asDouble();
+            p.railMm = item["rail_mm"].asDoubleIn(-kMaxMagnitude, kMaxMagnitude);
         } else {
-            if (auto r = item.optional("rotation_deg")) p.rotationDeg = r->asDouble();
-            if (auto d = item.optional("declination_deg")) p.declinationDeg = d->asDouble();
+            if (auto r = item.optional("rotation_deg")) p.rotationDeg = r->asDoubleIn(-kMaxMagnitude, kMaxMagnitude);
+            if (auto d = item.optional("declination_deg"))
+                p.declinationDeg = d->asDoubleIn(-kMaxMagnitude, kMaxMagnitude);
         }
         if (fixture) {
             bool railFixture = fixture->type == FixtureType::Rail;

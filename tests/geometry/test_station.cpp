@@ -90,6 +90,25 @@ TEST(Station, BadValuesAreRefused)
               "station.yaml:3: camera.K: fx and fy must be positive");
 }
 
+TEST(Station, AbsurdMagnitudesAreNamedWhereTheyAre)
+{
+    // 9.2e18 mm: once accepted, `plan` blamed the part for what was a typo in the station.
+    EXPECT_EQ(loadError(replaced(kStation, "t: [0, 0, 300]", "t: [0, 0, 9.2e18]")),
+              "station.yaml:9: fixture.camera_from_fixture.t: values must lie within ±1e5 mm (a station is not that "
+              "large)");
+    EXPECT_EQ(loadError(replaced(kStation, "[0, 2400, 1024]", "[0, 2400, -9.2e18]")),
+              "station.yaml:3: camera.K: the principal point (cx, cy) lies more than ten image sizes from the image");
+    EXPECT_EQ(loadError(replaced(kStation, "[[2400, 0, 1224]", "[[1e308, 0, 1224]")),
+              "station.yaml:3: camera.K: fx, fy and the skew must be below 1e7 px");
+    EXPECT_EQ(loadError(replaced(kStation, "[-180, 180]", "[-1e308, 180]")),
+              "station.yaml:12: fixture.rotation_range_deg: values must lie within ±1e5 mm or degrees (a station is "
+              "not that large)");
+    EXPECT_EQ(loadError(replaced(kStation, "floor_z_mm: -2.5", "floor_z_mm: 1e300")),
+              "station.yaml:15: environment.floor_z_mm: value 1e+300 is outside [-100000, 100000]");
+    // A principal point outside the image but within reach stays legal (decentred optics).
+    EXPECT_EQ(loadError(replaced(kStation, "[0, 2400, 1024]", "[0, 2400, 3000]")), "");
+}
+
 TEST(Station, MissingAndUnknownKeys)
 {
     EXPECT_EQ(loadError(replaced(kStation, "  type: rotation_declination\n", "")),

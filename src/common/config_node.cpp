@@ -75,11 +75,25 @@ void rejectDuplicateKeys(const YAML::Node& node, const std::string& file, const 
 
 ConfigNode ConfigNode::loadFile(const std::filesystem::path& file)
 {
+    // Configuration files are small: a device node (/dev/zero), a FIFO or a
+    // file past the limit is refused before a byte is read, so a wrong path
+    // can never grow the reader without bound.
+    constexpr std::uintmax_t kMaxBytes = 16u << 20;
+    std::error_code ec;
+    const auto status = std::filesystem::status(file, ec);
+    if (ec || !std::filesystem::exists(status)) throw InputError(file.string(), "", "cannot open file");
+    if (!std::filesystem::is_regular_file(status)) throw InputError(file.string(), "", "not a regular file");
+    const auto size = std::filesystem::file_size(file, ec);
+    if (!ec && size > kMaxBytes) throw InputError(file.string(), "", "file larger than 16 MiB");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw InputError(file.string(), "", "cannot open file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return parse(ss.str(), file.string());
+    std::string text;
+    char chunk[65536];
+    while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+        text.append(chunk, static_cast<std::size_t>(in.gcount()));
+        if (text.size() > kMaxBytes) throw InputError(file.string(), "", "file larger than 16 MiB");
+    }
+    return parse(text, file.string());
 }
 
 ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)

@@ -71,4 +71,28 @@ TEST(ConfigNode, AliasBombIsRefusedNotWalkedForever)
     EXPECT_NE(e.problem().find("too large"), std::string::npos) << e.problem();
 }
 
+TEST(ConfigNode, DeviceNodesAndFoldersAreRefusedWithoutReading)
+{
+    // /dev/zero once grew a reader without bound; it is not a configuration file.
+    for (const char* path : {"/dev/zero", "/dev/null", "/"}) {
+        try {
+            (void)hg::ConfigNode::loadFile(path);
+            ADD_FAILURE() << path << " was read";
+        } catch (const hg::InputError& e) {
+            EXPECT_EQ(e.problem(), "not a regular file") << path;
+            EXPECT_EQ(e.file(), path);
+        }
+    }
+}
+
+TEST(ConfigNode, MissingFileNamesIt)
+{
+    try {
+        (void)hg::ConfigNode::loadFile("/nonexistent/station.yaml");
+        ADD_FAILURE() << "no error";
+    } catch (const hg::InputError& e) {
+        EXPECT_EQ(e.problem(), "cannot open file");
+    }
+}
+
 } // namespace

@@ -4,9 +4,9 @@
 // publishes it to the PLC, and sets the lamps. One thread of its own.
 #pragma once
 
+#include "daemon_config.h"
 #include "devices.h"
 #include "hullgauge/calib/fixture_sequence.h"
-#include "hullgauge/station/daemon_config.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
 #include "image_archive.h"

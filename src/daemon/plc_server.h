@@ -13,7 +13,7 @@
 // other client keeps being served and new clients are accepted.
 #pragma once
 
-#include "hullgauge/station/daemon_config.h"
+#include "daemon_config.h"
 #include "hullgauge/station/plc_registers.h"
 
 #include <atomic>

@@ -3,11 +3,11 @@
 // ViewPipeline with a stand-in preparation whose timing the test controls,
 // then the daemon's engine inspector on the simulated line's part program with
 // rendered frames, against the defects the variant meshes were built with.
+#include "daemon_config.h"
 #include "engine_inspector.h"
 #include "hgtest/paths.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/sim/renderer.h"
-#include "hullgauge/station/daemon_config.h"
 #include "view_pipeline.h"
 
 #include <atomic>

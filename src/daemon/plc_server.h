@@ -14,7 +14,7 @@
 #pragma once
 
 #include "daemon_config.h"
-#include "hullgauge/station/plc_registers.h"
+#include "plc_registers.h"
 
 #include <atomic>
 #include <cstdint>
@@ -27,7 +27,7 @@ namespace hg::daemon {
 
 class PlcServer {
   public:
-    PlcServer(station::PlcRegisters& registers, station::PlcConfig config);
+    PlcServer(PlcRegisters& registers, station::PlcConfig config);
     ~PlcServer();
     PlcServer(const PlcServer&) = delete;
     PlcServer& operator=(const PlcServer&) = delete;
@@ -57,7 +57,7 @@ class PlcServer {
     /// Handles one request on `fd`; false when the client must be closed.
     bool handle(int fd);
 
-    station::PlcRegisters& registers_;
+    PlcRegisters& registers_;
     station::PlcConfig config_;
     struct Impl;
     Impl* impl_ = nullptr;

@@ -58,7 +58,7 @@ std::vector<std::uint8_t> readFrame(std::uint16_t address, std::uint16_t count, 
 }
 
 struct Server {
-    station::PlcRegisters registers;
+    PlcRegisters registers;
     std::unique_ptr<PlcServer> server;
     explicit Server(station::PlcConfig cfg = {})
     {

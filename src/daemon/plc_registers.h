@@ -16,65 +16,57 @@ class PlcRegisters {
   public:
     using Map = station::RegisterMap;
 
-    /// Runs `f(map)` under the lock and returns what it returns; wakes a
-    /// waiting runner when the call left a trigger or a command behind.
-    template <class F> auto locked(F&& f)
-    {
-        std::lock_guard lock(mutex_);
-        struct Notify {
-            PlcRegisters& self;
-            ~Notify()
-            {
-                if (self.map_.hasWork()) self.work_.notify_all();
-            }
-        } notify{*this};
-        return f(map_);
-    }
-    template <class F> auto locked(F&& f) const
-    {
-        std::lock_guard lock(mutex_);
-        return f(static_cast<const Map&>(map_));
-    }
-
+    // The PLC server's requests; a write may leave a trigger or a command for the runner.
     station::ModbusException read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const
     {
-        return locked([&](const Map& m) { return m.read(address, count, out); });
+        std::lock_guard lock(mutex_);
+        return map_.read(address, count, out);
     }
     station::ModbusException write(std::uint16_t address, std::span<const std::uint16_t> values)
     {
-        return locked([&](Map& m) { return m.write(address, values); });
+        std::lock_guard lock(mutex_);
+        return notifying(map_.write(address, values));
     }
     station::RejectReason triggerManually(std::uint16_t program, const std::string& serial)
     {
-        return locked([&](Map& m) { return m.triggerManually(program, serial); });
+        std::lock_guard lock(mutex_);
+        return notifying(map_.triggerManually(program, serial));
     }
+
     void setKnownPrograms(std::set<std::uint16_t> programs)
     {
-        locked([&](Map& m) { m.setKnownPrograms(std::move(programs)); });
+        std::lock_guard lock(mutex_);
+        map_.setKnownPrograms(std::move(programs));
     }
     void setStatus(station::PlcStatus status)
     {
-        locked([&](Map& m) { m.setStatus(status); });
+        std::lock_guard lock(mutex_);
+        map_.setStatus(status);
     }
     bool enterMaintenance()
     {
-        return locked([](Map& m) { return m.enterMaintenance(); });
+        std::lock_guard lock(mutex_);
+        return map_.enterMaintenance();
     }
     void publishResult(const station::PublishedResult& r)
     {
-        locked([&](Map& m) { m.publishResult(r); });
+        std::lock_guard lock(mutex_);
+        map_.publishResult(r);
     }
     void beat()
     {
-        locked([](Map& m) { m.beat(); });
+        std::lock_guard lock(mutex_);
+        map_.beat();
     }
     station::PlcCommands takeCommands()
     {
-        return locked([](Map& m) { return m.takeCommands(); });
+        std::lock_guard lock(mutex_);
+        return map_.takeCommands();
     }
     std::array<std::uint16_t, station::reg::Count> snapshot() const
     {
-        return locked([](const Map& m) { return m.snapshot(); });
+        std::lock_guard lock(mutex_);
+        return map_.snapshot();
     }
 
     /// Waits up to `timeout` for an accepted trigger and takes it; returns
@@ -87,6 +79,12 @@ class PlcRegisters {
     }
 
   private:
+    template <class T> T notifying(T result)
+    {
+        if (map_.hasWork()) work_.notify_all();
+        return result;
+    }
+
     mutable std::mutex mutex_;
     std::condition_variable work_;
     Map map_;

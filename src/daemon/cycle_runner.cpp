@@ -1,12 +1,10 @@
 #include "cycle_runner.h"
 
-#include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/station/cycle_rules.h"
+#include "image_archive.h"
 
 #include <cmath>
-#include <functional>
-#include <optional>
-#include <thread>
 
 namespace hg::daemon {
 namespace {
@@ -14,20 +12,7 @@ namespace {
 using station::SequencerAction;
 using station::SequencerEvent;
 using station::SequencerState;
-using Clock = std::chrono::steady_clock;
 using Kind = SequencerAction::Kind;
-
-/// Settle time: sleeps in short slices so an abort is not delayed by it.
-void sleepUntil(Clock::time_point until, const std::function<bool()>& stop)
-{
-    while (Clock::now() < until && !stop())
-        std::this_thread::sleep_for(std::min<Clock::duration>(std::chrono::milliseconds(5), until - Clock::now()));
-}
-
-std::int64_t nowNs()
-{
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 std::int64_t wallMs()
 {
@@ -35,64 +20,32 @@ std::int64_t wallMs()
         .count();
 }
 
-double msSince(Clock::time_point t)
+std::int64_t ns(std::chrono::milliseconds d)
 {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
-
-SequencerEvent moveEvent(const Status& r)
-{
-    switch (r.code()) {
-    case StatusCode::Ok:
-        return SequencerEvent::InPosition;
-    case StatusCode::Timeout:
-        return SequencerEvent::MoveTimeout;
-    case StatusCode::Fault:
-        return SequencerEvent::MoveFault;
-    case StatusCode::NotAllowed:
-        return SequencerEvent::MoveRefused;
-    default:
-        return SequencerEvent::MoveCommError;
-    }
-}
-
-SequencerEvent grabEvent(const Status& r)
-{
-    switch (r.code()) {
-    case StatusCode::Ok:
-        return SequencerEvent::FrameOk;
-    case StatusCode::Timeout:
-        return SequencerEvent::FrameTimeout;
-    case StatusCode::BadFrame:
-        return SequencerEvent::FrameBad;
-    default:
-        return SequencerEvent::FrameError;
-    }
+    return std::chrono::nanoseconds(d).count();
 }
 
 } // namespace
 
-std::string_view toString(LampPattern p)
-{
-    switch (p) {
-    case LampPattern::Off:
-        return "off";
-    case LampPattern::Busy:
-        return "busy";
-    case LampPattern::Pass:
-        return "pass";
-    case LampPattern::Fail:
-        return "fail";
-    case LampPattern::Fault:
-        return "fault";
-    }
-    return "off";
-}
+/// One cycle's working state, from the trigger to the published record.
+struct CycleRunner::Cycle {
+    std::shared_ptr<const station::DaemonConfig> cfg; ///< the configuration the cycle keeps to its end
+    const station::PartProgramRef* program = nullptr;
+    station::InspectionRecord record;
+    Clock::time_point started;
+    std::optional<Clock::time_point> lastFrameAt; ///< when the last good frame was in (the latency)
+    double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0, commitMs = 0, publishMs = 0;
+    double lastFrameToPublishMs = -1;
+    InspectionOutcome outcome;
+    bool interruptFed = false; ///< the abort or the shutdown was fed to the sequencer
+    bool saveImages = false;
+    std::string imagesDir;
+};
 
-CycleRunner::CycleRunner(station::PlcRegisters& registers, StationDevices& devices, Inspector& inspector,
-                         ResultStore& store, std::shared_ptr<const station::DaemonConfig> config)
-    : registers_(registers), devices_(devices), inspector_(inspector), store_(store), config_(std::move(config)),
-      sequencer_(config_->sequencer.retries)
+CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
+                         std::shared_ptr<const station::DaemonConfig> config, Clock& clock)
+    : registers_(registers), devices_(devices), inspector_(inspector), store_(store), clock_(clock),
+      config_(std::move(config)), sequencer_(config_->sequencer.retries)
 {
 }
 
@@ -104,14 +57,14 @@ CycleRunner::~CycleRunner()
 void CycleRunner::start(std::function<void()> onDevicesActive)
 {
     onDevicesActive_ = std::move(onDevicesActive);
-    lastLoopNs_ = nowNs();
+    lastLoopNs_ = clock_.nowNs();
     thread_ = std::thread([this] { run(); });
 }
 
 void CycleRunner::stop()
 {
     if (!thread_.joinable()) return;
-    stopRequestedNs_ = nowNs();
+    stopRequestedNs_ = clock_.nowNs();
     stopRequested_ = true;
     thread_.join();
 }
@@ -130,28 +83,21 @@ station::SequencerState CycleRunner::state() const
 
 bool CycleRunner::healthy() const
 {
-    std::chrono::milliseconds maxCycle;
+    std::shared_ptr<const station::DaemonConfig> cfg;
     {
         std::lock_guard lock(mutex_);
-        maxCycle = config_->watchdog.maxCycle;
+        cfg = config_;
     }
-    auto now = nowNs();
-    auto cycleStart = cycleStartNs_.load();
-    if (cycleStart != 0 && now - cycleStart > std::chrono::nanoseconds(maxCycle).count()) return false;
+    const auto now = clock_.nowNs();
+    const auto cycleStart = cycleStartNs_.load();
+    if (cycleStart != 0 && now - cycleStart > ns(cfg->watchdog.maxCycle)) return false;
     // A calibration step (move, settle, grab) is bounded by its timeouts.
-    if (auto step = calibrationStepNs_.load(); step != 0) {
-        std::chrono::milliseconds bound;
-        {
-            std::lock_guard lock(mutex_);
-            bound = config_->sequencer.moveTimeout + config_->sequencer.settle + config_->sequencer.grabTimeout +
-                    std::chrono::seconds(5);
-        }
-        return now - step <= std::chrono::nanoseconds(bound).count();
+    if (auto step = calibration_.stepStartNs(); step != 0) {
+        const auto& s = cfg->sequencer;
+        return now - step <= ns(s.moveTimeout + s.settle + s.grabTimeout + std::chrono::seconds(5));
     }
     // Outside a cycle the thread turns at least every 200 ms; inside one each step is bounded by its timeout.
-    if (cycleStart == 0 && now - lastLoopNs_.load() > std::chrono::nanoseconds(std::chrono::seconds(5)).count())
-        return false;
-    return true;
+    return cycleStart != 0 || now - lastLoopNs_.load() <= ns(std::chrono::seconds(5));
 }
 
 nlohmann::json CycleRunner::describe() const
@@ -161,10 +107,12 @@ nlohmann::json CycleRunner::describe() const
     // operator sees "processing": "done" promises a result that is already stored.
     auto shown = sequencer_.state();
     if (cycleStartNs_.load() != 0 && !station::isBusy(shown)) shown = SequencerState::Processing;
+    auto last = lastCycle_;
+    if (lastImagesMs_ && lastImagesMs_->load() >= 0) last["timing_ms"]["images"] = lastImagesMs_->load();
     nlohmann::json j{{"state", std::string(station::toString(shown))},
                      {"cycles", cycles_},
                      {"faults", faults_},
-                     {"last_cycle", lastCycle_}};
+                     {"last_cycle", last}};
     if (station::isBusy(sequencer_.state())) {
         j["view"] = sequencer_.view();
         j["views"] = sequencer_.viewCount();
@@ -176,397 +124,368 @@ nlohmann::json CycleRunner::describe() const
     return j;
 }
 
-void CycleRunner::setState(std::function<SequencerAction()> step, SequencerAction& action)
+bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
+{
+    return calibration_.request(std::move(job), state(), why);
+}
+
+// ---- the sequencer, the commands, the lamps ---------------------------------
+
+SequencerAction CycleRunner::transition(const std::function<SequencerAction()>& step)
 {
     auto log = hg::log::category("seq");
     std::lock_guard lock(mutex_);
-    auto before = sequencer_.state();
-    action = step();
+    const auto before = sequencer_.state();
+    const auto refusedBefore = sequencer_.refusedTransition();
+    auto action = step();
     if (sequencer_.state() != before)
         log->debug("{} -> {}", station::toString(before), station::toString(sequencer_.state()));
+    if (auto refused = sequencer_.refusedTransition(); refused != refusedBefore)
+        log->error("the sequencer refused {} -> {}: internal fault", station::toString(refused.first),
+                   station::toString(refused.second));
+    return action;
 }
+
+SequencerAction CycleRunner::feed(SequencerEvent event)
+{
+    return transition([&] { return sequencer_.onEvent(event); });
+}
+
+// The one place the PLC's commands are taken: an abort acts on the running
+// cycle; a fault reset waits for the station to be between cycles.
+void CycleRunner::takeCommands()
+{
+    const auto commands = registers_.takeCommands();
+    if (commands.abort) abortRequested_ = true;
+    if (commands.resetFault) resetRequested_ = true;
+}
+
+void CycleRunner::schedule(const SequencerAction& action)
+{
+    if (action.kind == Kind::Recover) recoverAt_ = clock_.now() + action.delay;
+}
+
+void CycleRunner::showState(station::Verdict lastVerdict)
+{
+    const auto s = state();
+    devices_.showLamps(station::lampPattern(s, lastVerdict));
+    registers_.setStatus(station::plcStatus(s));
+}
+
+// ---- between cycles ---------------------------------------------------------
 
 void CycleRunner::run()
 {
-    auto log = hg::log::category("seq");
-    SequencerAction action;
-    auto started = devices_.start();
-    if (started.ok()) {
-        setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesActive); }, action);
-        registers_.setStatus(station::PlcStatus::Ready);
-        devices_.showLamps(LampPattern::Off);
-        log->info("devices active; ready");
-        if (onDevicesActive_) onDevicesActive_();
-    } else {
-        log->error("devices failed to start: {}", started.message());
-        setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, action);
-        registers_.setStatus(station::PlcStatus::Fault);
-        devices_.showLamps(LampPattern::Fault);
-    }
-
-    auto lastRecovery = Clock::now();
-    while (!stopRequested_) {
-        lastLoopNs_ = nowNs();
-        auto command = registers_.takeCommand();
-        if (state() == SequencerState::Fault) {
-            // Retry recovery every 2 s, or at once when the PLC asks for a fault reset.
-            if (command == station::PlcCommand::ResetFault || Clock::now() - lastRecovery > std::chrono::seconds(2)) {
-                recover();
-                lastRecovery = Clock::now();
-            }
-        }
-        bool calibrationQueued = false;
-        {
-            std::lock_guard lock(mutex_);
-            calibrationQueued = calibrationJob_.has_value();
-        }
-        if (!calibrationQueued) abortRequested_ = false; // an abort outside a cycle has nothing to abort
-        // Triggers first: a queued calibration starts only when none is pending.
-        if (auto trigger = registers_.waitTrigger(std::chrono::milliseconds(calibrationQueued ? 0 : 200))) {
-            runCycle(*trigger);
-            continue;
-        }
-        if (calibrationQueued) {
-            std::optional<CalibrationJob> job;
-            {
-                std::lock_guard lock(mutex_);
-                job.swap(calibrationJob_);
-                // A cycle before it faulted the station: the calibration is not started.
-                if (job && sequencer_.state() == SequencerState::Fault) {
-                    calibration_["state"] = "failed";
-                    calibration_["error"] = "the station went into fault before the calibration started";
-                    job.reset();
-                }
-            }
-            if (job) runCalibration(std::move(*job));
-        }
-    }
+    startDevices();
+    while (!stopRequested_) serveBetweenCycles();
     devices_.showLamps(LampPattern::Off);
     devices_.shutdown();
-    log->info("devices shut down");
+    hg::log::category("seq")->info("devices shut down");
 }
 
-bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
+void CycleRunner::startDevices()
 {
-    std::lock_guard lock(mutex_);
-    const auto st = sequencer_.state();
-    if (calibrationJob_ || st == SequencerState::Calibrating) {
-        why = "a calibration is already queued or running";
-        return false;
-    }
-    if (st == SequencerState::Fault || st == SequencerState::Starting) {
-        why = std::string("the station is not ready (") + std::string(station::toString(st)) + ")";
-        return false;
-    }
-    calibration_ = {{"state", "queued"},
-                    {"poses", job.poses.size()},
-                    {"out", job.out.string()},
-                    {"progress", nlohmann::json::array()}};
-    calibrationJob_ = std::move(job);
-    return true;
-}
-
-nlohmann::json CycleRunner::calibration() const
-{
-    std::lock_guard lock(mutex_);
-    return calibration_;
-}
-
-// The live fixture calibration (calib::runFixtureSequence) through the
-// station's own devices, between cycles: STATUS 5 refuses triggers, the amber
-// lamp shows the station busy, the sequencer sits in `calibrating`. The
-// station file is written with a backup only when the axes were solved; the
-// running configuration is not touched (a reload takes the new calibration).
-void CycleRunner::runCalibration(CalibrationJob job)
-{
-    auto log = hg::log::category("calib");
-    auto finish = [&](const char* state, nlohmann::json extra) {
-        std::lock_guard lock(mutex_);
-        calibration_["state"] = state;
-        calibration_.update(extra);
-    };
-    if (!registers_.enterMaintenance()) {
-        // A trigger was accepted in the meantime: its cycle runs first.
-        std::lock_guard lock(mutex_);
-        calibrationJob_ = std::move(job);
+    auto log = hg::log::category("seq");
+    auto started = devices_.start();
+    if (!started.ok()) {
+        log->error("devices failed to start: {}", started.message());
+        schedule(feed(SequencerEvent::DevicesFailed));
+        showState();
         return;
     }
-    SequencerAction action;
-    setState([&] { return sequencer_.onEvent(SequencerEvent::CalibrationStart); }, action);
-    devices_.showLamps(LampPattern::Busy);
-    abortRequested_ = false;
-    std::shared_ptr<const station::DaemonConfig> cfg;
-    {
-        std::lock_guard lock(mutex_);
-        cfg = config_;
-        calibration_["state"] = "running";
-    }
-    log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target.toString(),
-              job.out.string());
-    calib::FixtureSequenceIo io;
-    io.moveTo = [&](const geometry::FixturePose& pose) {
-        calibrationStepNs_ = nowNs();
-        auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, false);
-        if (!r.ok()) return r;
-        sleepUntil(Clock::now() + cfg->sequencer.settle, [this] { return abortRequested_.load(); });
-        return Status::success();
+    feed(SequencerEvent::DevicesActive);
+    showState();
+    log->info("devices active; ready");
+    if (auto ready = std::exchange(onDevicesActive_, nullptr)) ready();
+}
+
+void CycleRunner::serveBetweenCycles()
+{
+    lastLoopNs_ = clock_.nowNs();
+    takeCommands();
+    // An abort outside a cycle has nothing to abort (a queued calibration clears it when it starts).
+    if (!calibration_.queued()) abortRequested_ = false;
+    auto recoverIfDue = [this] {
+        if (!recoverAt_ || clock_.now() < *recoverAt_) return;
+        recoverAt_.reset();
+        recover();
     };
-    io.grab = [&](cv::Mat& image) {
-        calibrationStepNs_ = nowNs();
-        return devices_.grab(cfg->sequencer.grabTimeout, image);
-    };
-    io.progress = [&](std::size_t, std::size_t, const std::string& line) {
-        log->info("calibration {}", line);
-        std::lock_guard lock(mutex_);
-        calibration_["progress"].push_back(line);
-    };
-    io.cancelled = [&] { return abortRequested_.load() || stopRequested_.load(); };
-    bool ok = false;
-    try {
-        auto result = calib::runFixtureSequence(job.poses, job.target, cfg->station.camera, cfg->station.fixture.type,
-                                                io, "poses");
-        calib::StationFileUpdate update(job.out);
-        update.setFixtureAxes(result.axes);
-        const auto backup = update.commit();
-        finish("done", {{"report", calib::formatFixtureReport(result.axes)},
-                        {"views_used", result.views.size()},
-                        {"backup", backup ? backup->string() : std::string()}});
-        log->info("calibration written to {}", job.out.string());
-        ok = true;
-    } catch (const std::exception& e) {
-        log->error("calibration failed: {}", e.what());
-        finish("failed", {{"error", e.what()}});
+    recoverIfDue();
+    // A fault reset (also one written during the cycle that just ended) retries at once.
+    if (std::exchange(resetRequested_, false)) {
+        schedule(feed(SequencerEvent::FaultReset));
+        recoverIfDue();
     }
-    calibrationStepNs_ = 0;
-    abortRequested_ = false;
-    setState([&] { return sequencer_.onEvent(SequencerEvent::CalibrationEnd); }, action);
-    registers_.setStatus(station::PlcStatus::Ready);
-    devices_.showLamps(LampPattern::Off);
-    // A failed step may have left the drive faulted or the camera stopped: bring
-    // the station back the way a cycle fault does before production resumes.
-    if (!ok) {
-        auto r = devices_.recover();
-        if (!r.ok()) {
-            setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, action);
-            registers_.setStatus(station::PlcStatus::Fault);
-            devices_.showLamps(LampPattern::Fault);
-        }
-    }
+    const bool calibrationQueued = calibration_.queued();
+    auto wait = std::chrono::milliseconds(calibrationQueued ? 0 : 200);
+    if (recoverAt_)
+        wait = std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(*recoverAt_ - clock_.now()),
+                          std::chrono::milliseconds(0), wait);
+    // Triggers first: a queued calibration starts only when none is pending.
+    if (auto trigger = registers_.waitTrigger(wait)) return runCycle(*trigger);
+    if (!calibrationQueued) return;
+    auto job = calibration_.take();
+    if (!job) return;
+    if (state() == SequencerState::Fault)
+        return calibration_.refuse("the station went into fault before the calibration started");
+    runCalibration(std::move(*job));
 }
 
 void CycleRunner::recover()
 {
     auto log = hg::log::category("seq");
-    SequencerAction action;
     auto r = devices_.recover();
-    if (r.ok()) {
-        setState([&] { return sequencer_.onEvent(SequencerEvent::Recovered); }, action);
-        registers_.setStatus(station::PlcStatus::Ready);
-        devices_.showLamps(LampPattern::Off);
-        bool first = false;
-        {
-            std::lock_guard lock(mutex_);
-            first = cycles_ == 0 && faults_ == 0;
-        }
-        log->info("recovered; ready");
-        if (first && onDevicesActive_) {
-            onDevicesActive_();
-            onDevicesActive_ = nullptr;
-        }
-    } else {
-        setState([&] { return sequencer_.onEvent(SequencerEvent::RecoveryFailed); }, action);
+    if (!r.ok()) {
         log->warn("recovery failed: {}", r.message());
+        schedule(feed(SequencerEvent::RecoveryFailed));
+        return;
     }
+    feed(SequencerEvent::Recovered);
+    showState();
+    log->info("recovered; ready");
+    if (auto ready = std::exchange(onDevicesActive_, nullptr)) ready();
 }
 
-bool CycleRunner::interrupted()
+// The live fixture calibration between cycles: STATUS 5 refuses triggers, the
+// amber lamp shows the station busy, the sequencer sits in `calibrating`.
+void CycleRunner::runCalibration(CalibrationJob job)
 {
-    if (registers_.takeCommand() == station::PlcCommand::Abort) abortRequested_ = true;
-    return abortRequested_ || stopRequested_;
-}
-
-void CycleRunner::runCycle(const station::TriggerRequest& trigger)
-{
-    auto log = hg::log::category("seq");
-    const auto cycleStart = Clock::now();
-    cycleStartNs_ = nowNs();
+    // A trigger accepted in the meantime runs its cycle first.
+    if (!registers_.enterMaintenance()) return calibration_.requeue(std::move(job));
+    feed(SequencerEvent::CalibrationStart);
+    devices_.showLamps(LampPattern::Busy);
+    abortRequested_ = false;
     std::shared_ptr<const station::DaemonConfig> cfg;
     {
         std::lock_guard lock(mutex_);
         cfg = config_;
     }
-    station::InspectionRecord record;
-    record.startedUnixMs = wallMs();
-    record.triggerSeq = trigger.seq;
-    record.manual = trigger.manual;
-    record.serial = trigger.serial;
-    record.program = trigger.program;
-    double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0;
-    std::optional<Clock::time_point> lastFrameAt; // when the last good frame was in (latency, issue 6)
-
-    log->info("cycle {}{}: program {}, serial '{}'", trigger.manual ? "manual" : "seq ",
-              trigger.manual ? std::string() : std::to_string(trigger.seq), trigger.program, trigger.serial);
-    devices_.showLamps(LampPattern::Busy);
-
-    auto programIt = cfg->programs.find(trigger.program);
-    const station::PartProgramRef* program = programIt == cfg->programs.end() ? nullptr : &programIt->second;
-    SequencerAction action;
-    setState([&] { return sequencer_.trigger(program ? program->views.size() : 1); }, action);
-    std::string programError;
-    if (!program)
-        programError = "part program " + std::to_string(trigger.program) + " is no longer configured";
-    else if (!inspector_.begin(*program, programError) && programError.empty())
-        programError = "the part program could not be loaded";
-    if (!programError.empty()) {
-        log->error("{}", programError);
-        setState([&] { return sequencer_.onEvent(SequencerEvent::ProgramFailed); }, action);
+    const bool written = calibration_.run(job, devices_, *cfg, clock_,
+                                          [this] { return abortRequested_.load() || stopRequested_.load(); });
+    abortRequested_ = false;
+    feed(SequencerEvent::CalibrationEnd);
+    showState();
+    if (written) return;
+    // A failed step may have left the drive faulted or the camera stopped: bring
+    // the station back the way a cycle fault does before production resumes.
+    if (auto r = devices_.recover(); !r.ok()) {
+        schedule(feed(SequencerEvent::DevicesFailed));
+        showState();
     }
+}
 
-    InspectionOutcome outcome;
-    bool abortFed = false;
+// ---- a cycle ----------------------------------------------------------------
+
+void CycleRunner::runCycle(const station::TriggerRequest& trigger)
+{
+    Cycle cycle;
+    cycle.started = clock_.now();
+    cycleStartNs_ = clock_.nowNs();
+    {
+        std::lock_guard lock(mutex_);
+        cycle.cfg = config_;
+    }
+    cycle.record.startedUnixMs = wallMs();
+    cycle.record.triggerSeq = trigger.seq;
+    cycle.record.manual = trigger.manual;
+    cycle.record.serial = trigger.serial;
+    cycle.record.program = trigger.program;
+    auto action = beginCycle(cycle);
     while (action.kind != Kind::Publish) {
-        if (!abortFed && interrupted()) {
-            // SIGTERM gets the grace period to let the cycle finish; the PLC's abort acts at once.
-            bool graceOver = !stopRequested_ || nowNs() - stopRequestedNs_.load() >=
-                                                    std::chrono::nanoseconds(cfg->sequencer.shutdownGrace).count();
-            if (abortRequested_ || graceOver) {
-                abortFed = true;
-                auto event = abortRequested_ ? SequencerEvent::Abort : SequencerEvent::Shutdown;
-                log->warn("{} during {}", station::toString(event), station::toString(state()));
-                SequencerAction next;
-                setState([&] { return sequencer_.onEvent(event); }, next);
-                if (next.kind != Kind::None) {
-                    action = next;
-                    continue;
-                }
-            }
-        }
-        const auto stepStart = Clock::now();
-        switch (action.kind) {
-        case Kind::MoveTo: {
-            auto pose = program->views[action.view];
-            auto r = devices_.moveTo(pose, cfg->sequencer.moveTimeout, action.retry);
-            moveMs += msSince(stepStart);
-            if (!r.ok()) log->warn("view {}: move failed: {}", action.view, r.message());
-            setState([&] { return sequencer_.onEvent(moveEvent(r)); }, action);
-            break;
-        }
-        case Kind::Settle: {
-            sleepUntil(stepStart + cfg->sequencer.settle, [this] { return interrupted(); });
-            settleMs += msSince(stepStart);
-            setState([&] { return sequencer_.onEvent(SequencerEvent::Settled); }, action);
-            break;
-        }
-        case Kind::Grab: {
-            cv::Mat image;
-            auto r = devices_.grab(cfg->sequencer.grabTimeout, image);
-            grabMs += msSince(stepStart);
-            if (r.ok()) {
-                lastFrameAt = Clock::now();
-                inspector_.addView(action.view, program->views[action.view], image);
-            } else
-                log->warn("view {}: grab failed: {}", action.view, r.message());
-            setState([&] { return sequencer_.onEvent(grabEvent(r)); }, action);
-            break;
-        }
-        case Kind::Finish: {
-            outcome = inspector_.finish();
-            finishMs += msSince(stepStart);
-            if (!outcome.ok) log->error("inspection failed: {}", outcome.error);
-            setState(
-                [&] {
-                    return sequencer_.onEvent(outcome.ok ? SequencerEvent::Processed
-                                                         : SequencerEvent::ProcessingFailed);
-                },
-                action);
-            break;
-        }
-        default: {
-            // Nothing to perform: an event was ignored in a state that has no action. Cannot
-            // happen with a consistent table; end the cycle as an internal error rather than spin.
-            log->error("sequencer stalled in {}", station::toString(state()));
-            SequencerAction next;
-            setState([&] { return sequencer_.onEvent(SequencerEvent::DevicesFailed); }, next);
-            action = next;
-            break;
-        }
-        }
+        auto next = interruption(cycle);
+        action = next ? *next : perform(cycle, action);
     }
+    endCycle(cycle, action.stopMotion);
+}
 
-    if (action.stopMotion) devices_.stopMotion();
+SequencerAction CycleRunner::beginCycle(Cycle& cycle)
+{
+    auto log = hg::log::category("seq");
+    const auto& r = cycle.record;
+    log->info("cycle {}{}: program {}, serial '{}'", r.manual ? "manual" : "seq ",
+              r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial);
+    devices_.showLamps(LampPattern::Busy);
+    auto it = cycle.cfg->programs.find(r.program);
+    cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
+    auto action = transition([&] { return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1); });
+    std::string error;
+    if (!cycle.program)
+        error = "part program " + std::to_string(r.program) + " is no longer configured";
+    else if (!inspector_.begin(*cycle.program, error) && error.empty())
+        error = "the part program could not be loaded";
+    if (error.empty()) return action;
+    log->error("{}", error);
+    return feed(SequencerEvent::ProgramFailed);
+}
+
+// The PLC's abort acts at once; SIGTERM gives the cycle the grace period to finish.
+std::optional<SequencerAction> CycleRunner::interruption(Cycle& cycle)
+{
+    takeCommands();
+    if (cycle.interruptFed) return std::nullopt;
+    const bool abort = abortRequested_;
+    const bool graceOver =
+        stopRequested_ && clock_.nowNs() - stopRequestedNs_.load() >= ns(cycle.cfg->sequencer.shutdownGrace);
+    if (!abort && !graceOver) return std::nullopt;
+    cycle.interruptFed = true;
+    const auto event = abort ? SequencerEvent::Abort : SequencerEvent::Shutdown;
+    hg::log::category("seq")->warn("{} during {}", station::toString(event), station::toString(state()));
+    auto next = feed(event);
+    if (next.kind == Kind::None) return std::nullopt; // processing: let it finish
+    return next;
+}
+
+SequencerAction CycleRunner::perform(Cycle& cycle, const SequencerAction& action)
+{
+    switch (action.kind) {
+    case Kind::MoveTo:
+        return move(cycle, action);
+    case Kind::Settle:
+        return settle(cycle, action);
+    case Kind::Grab:
+        return grab(cycle, action);
+    case Kind::Finish:
+        return finishInspection(cycle);
+    default:
+        break;
+    }
+    // Nothing to perform: an event was ignored in a state that has no action. Cannot happen
+    // with a consistent table; end the cycle as an internal error rather than spin.
+    hg::log::category("seq")->error("sequencer stalled in {}", station::toString(state()));
+    auto next = feed(SequencerEvent::DevicesFailed);
+    return next.kind == Kind::Publish ? next : SequencerAction{Kind::Publish, action.view, false, true};
+}
+
+SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
+{
+    const auto start = clock_.now();
+    auto r = devices_.moveTo(cycle.program->views[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
+    cycle.moveMs += clock_.msSince(start);
+    if (!r.ok()) hg::log::category("seq")->warn("view {}: move failed: {}", action.view, r.message());
+    return feed(station::moveEvent(r.code()));
+}
+
+SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
+{
+    const auto start = clock_.now();
+    clock_.sleepUntil(start + cycle.cfg->sequencer.settle, [this] {
+        takeCommands();
+        return abortRequested_ || stopRequested_;
+    });
+    cycle.settleMs += clock_.msSince(start);
+    return feed(SequencerEvent::Settled);
+}
+
+SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
+{
+    const auto start = clock_.now();
+    cv::Mat image;
+    auto r = devices_.grab(cycle.cfg->sequencer.grabTimeout, image);
+    cycle.grabMs += clock_.msSince(start);
+    if (r.ok()) {
+        cycle.lastFrameAt = clock_.now();
+        inspector_.addView(action.view, cycle.program->views[action.view], image);
+    } else {
+        hg::log::category("seq")->warn("view {}: grab failed: {}", action.view, r.message());
+    }
+    return feed(station::grabEvent(r.code()));
+}
+
+SequencerAction CycleRunner::finishInspection(Cycle& cycle)
+{
+    const auto start = clock_.now();
+    cycle.outcome = inspector_.finish();
+    cycle.finishMs += clock_.msSince(start);
+    if (!cycle.outcome.ok) hg::log::category("seq")->error("inspection failed: {}", cycle.outcome.error);
+    return feed(cycle.outcome.ok ? SequencerEvent::Processed : SequencerEvent::ProcessingFailed);
+}
+
+void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
+{
+    if (stopMotion) devices_.stopMotion();
+    recordOutcome(cycle);
+    commitAndPublish(cycle);
+    report(cycle);
+    if (cycle.saveImages) saveFailedImages(cycle);
+    // A cycle that left the station in fault: the sequencer says recover (at once).
+    if (!stopRequested_) schedule(sequencer_.afterPublish());
+}
+
+void CycleRunner::recordOutcome(Cycle& cycle)
+{
     station::CycleOutcome how;
-    station::FaultCode code;
-    station::SequencerState after;
     {
         std::lock_guard lock(mutex_);
         how = sequencer_.outcome();
-        code = sequencer_.faultCode();
-        after = sequencer_.state();
+        cycle.record.faultCode = sequencer_.faultCode();
     }
     if (how != station::CycleOutcome::Inspected) inspector_.cancel();
+    auto& record = cycle.record;
+    const auto& outcome = cycle.outcome;
     record.part = outcome.part;
-    record.faultCode = code;
-    if (how == station::CycleOutcome::Inspected) {
-        record.verdict = outcome.pass ? station::Verdict::Pass : station::Verdict::Fail;
-        record.landmarks = outcome.landmarks;
-    } else {
-        record.verdict = how == station::CycleOutcome::Aborted ? station::Verdict::Aborted : station::Verdict::Error;
-    }
-    record.cycleMs = static_cast<std::uint32_t>(std::lround(msSince(cycleStart)));
+    record.verdict = station::verdictOf(how, outcome.pass);
+    if (how == station::CycleOutcome::Inspected) record.landmarks = outcome.landmarks;
+    record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
     // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
     // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.
-    record.timingMs = {{"move", moveMs},
-                       {"settle", settleMs},
-                       {"grab", grabMs},
+    record.timingMs = {{"move", cycle.moveMs},
+                       {"settle", cycle.settleMs},
+                       {"grab", cycle.grabMs},
                        {"prepare", outcome.prepareMs},
                        {"traversal", outcome.traversalMs},
                        {"processing", outcome.processingMs},
-                       {"wait_for_verdict", finishMs}};
+                       {"wait_for_verdict", cycle.finishMs}};
+    // A failed part's images are written after the result is shown: the record names their
+    // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
+    cycle.saveImages = record.verdict == station::Verdict::Fail && cycle.cfg->results.saveFailedImages &&
+                       (!outcome.views.empty() || outcome.evidence);
+    if (cycle.saveImages)
+        cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
+                              .folderFor(record.startedUnixMs, record.serial)
+                              .string();
+}
 
-    // A failed part's images are written after the result is shown (below): the record names
-    // their folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
-    std::string imagesDir;
-    ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
-    const bool saveImages = record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages &&
-                            (!outcome.views.empty() || outcome.evidence);
-    if (saveImages) imagesDir = archive.folderFor(record.startedUnixMs, record.serial).string();
-    // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6, issue 6).
-    const auto commitStart = Clock::now();
+void CycleRunner::commitAndPublish(Cycle& cycle)
+{
+    auto& record = cycle.record;
+    // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6).
+    const auto commitStart = clock_.now();
     try {
-        store_.commit(record, imagesDir);
+        store_.commit(record, cycle.imagesDir);
     } catch (const std::exception& e) {
-        log->error("{}", e.what());
+        hg::log::category("seq")->error("{}", e.what());
         record.verdict = station::Verdict::Error;
         record.faultCode = station::FaultCode::ResultStore;
     }
-    const double commitMs = msSince(commitStart);
+    cycle.commitMs = clock_.msSince(commitStart);
     // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
-    LampPattern lamps = LampPattern::Off;
-    if (after == SequencerState::Fault)
-        lamps = LampPattern::Fault;
-    else if (record.verdict == station::Verdict::Pass)
-        lamps = LampPattern::Pass;
-    else if (record.verdict == station::Verdict::Fail)
-        lamps = LampPattern::Fail;
-    devices_.showLamps(lamps);
-    auto statusAfter = after == SequencerState::Fault ? station::PlcStatus::Fault : station::PlcStatus::Done;
-    const auto publishStart = Clock::now();
-    registers_.publishResult(record.toPublished(statusAfter));
-    const auto published = Clock::now();
-    // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
-    lastLoopNs_ = nowNs();
-    cycleStartNs_ = 0;
-    auto timing = record.timingMs;
-    timing["commit"] = commitMs;
-    timing["publish"] = std::chrono::duration<double, std::milli>(published - publishStart).count();
+    const auto after = state();
+    devices_.showLamps(station::lampPattern(after, record.verdict));
+    const auto publishStart = clock_.now();
+    registers_.publishResult(record.toPublished(station::plcStatus(after)));
+    const auto published = clock_.now();
+    cycle.publishMs = std::chrono::duration<double, std::milli>(published - publishStart).count();
     // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
-    if (lastFrameAt)
-        timing["last_frame_to_publish"] = std::chrono::duration<double, std::milli>(published - *lastFrameAt).count();
+    if (cycle.lastFrameAt)
+        cycle.lastFrameToPublishMs = std::chrono::duration<double, std::milli>(published - *cycle.lastFrameAt).count();
+    // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
+    lastLoopNs_ = clock_.nowNs();
+    cycleStartNs_ = 0;
+}
+
+void CycleRunner::report(Cycle& cycle)
+{
+    const auto& record = cycle.record;
+    auto timing = record.timingMs;
+    timing["commit"] = cycle.commitMs;
+    timing["publish"] = cycle.publishMs;
+    if (cycle.lastFrameToPublishMs >= 0) timing["last_frame_to_publish"] = cycle.lastFrameToPublishMs;
     abortRequested_ = false;
     {
         std::lock_guard lock(mutex_);
         ++cycles_;
         if (record.verdict == station::Verdict::Error) ++faults_;
+        lastImagesMs_ = cycle.saveImages ? std::make_shared<std::atomic<double>>(-1.0) : nullptr;
         lastCycle_ = {{"trigger_seq", record.triggerSeq},
                       {"serial", record.serial},
                       {"program", record.program},
@@ -576,37 +495,40 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
                       {"manual", record.manual},
-                      {"images_dir", imagesDir},
+                      {"images_dir", cycle.imagesDir},
                       {"timing_ms", timing}};
     }
-    if (saveImages) {
-        // On the writer's thread: the runner is free for the next trigger meanwhile.
-        auto evidence =
-            outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
-        images_.post([this, archive, evidence = std::move(evidence), startedUnixMs = record.startedUnixMs,
-                      serial = record.serial, imagesDir, seq = record.triggerSeq, manual = record.manual]() mutable {
-            auto storeLog = hg::log::category("store");
-            const auto imagesStart = Clock::now();
-            try {
-                if (archive.saveFailed(startedUnixMs, serial, evidence()).empty())
-                    storeLog->error("the images of the failed part '{}' could not be written to {}", serial, imagesDir);
-                archive.enforceRetention();
-            } catch (const std::exception& e) {
-                storeLog->error("the images of the failed part '{}': {}", serial, e.what());
-            }
-            const double ms = msSince(imagesStart);
-            storeLog->debug("images of '{}' written in {:.0f} ms", serial, ms);
-            std::lock_guard lock(mutex_);
-            if (lastCycle_.is_object() && lastCycle_.value("trigger_seq", -1) == seq &&
-                lastCycle_.value("manual", !manual) == manual)
-                lastCycle_["timing_ms"]["images"] = ms;
-        });
-    }
-    log->info("cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
-              "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
-              station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, moveMs, settleMs,
-              grabMs, outcome.prepareMs, finishMs, commitMs, timing.value("last_frame_to_publish", 0.0));
-    if (sequencer_.afterPublish().kind == Kind::Recover && !stopRequested_) recover();
+    hg::log::category("seq")->info(
+        "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
+        "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
+        station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.moveMs,
+        cycle.settleMs, cycle.grabMs, cycle.outcome.prepareMs, cycle.finishMs, cycle.commitMs,
+        std::max(cycle.lastFrameToPublishMs, 0.0));
+}
+
+// On the writer's thread: the runner is free for the next trigger meanwhile. The job
+// touches only what it was given and reports its time through its own counter.
+void CycleRunner::saveFailedImages(Cycle& cycle)
+{
+    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention);
+    auto& outcome = cycle.outcome;
+    auto evidence =
+        outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
+    images_.post([archive, evidence = std::move(evidence), startedUnixMs = cycle.record.startedUnixMs,
+                  serial = cycle.record.serial, dir = cycle.imagesDir, done = lastImagesMs_]() mutable {
+        auto log = hg::log::category("store");
+        const auto start = std::chrono::steady_clock::now();
+        try {
+            if (archive.saveFailed(startedUnixMs, serial, evidence()).empty())
+                log->error("the images of the failed part '{}' could not be written to {}", serial, dir);
+            archive.enforceRetention();
+        } catch (const std::exception& e) {
+            log->error("the images of the failed part '{}': {}", serial, e.what());
+        }
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        log->debug("images of '{}' written in {:.0f} ms", serial, ms);
+        done->store(ms);
+    });
 }
 
 } // namespace hg::daemon

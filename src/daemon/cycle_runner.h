@@ -1,46 +1,42 @@
 // Runs inspection cycles: takes accepted triggers from the register map,
-// drives the CaptureSequencer's actions against the devices and the
+// performs the CaptureSequencer's actions against the devices and the
 // inspection pipeline, commits each record to the result store and only then
-// publishes it to the PLC, and sets the lamps. One thread of its own.
+// publishes it to the PLC, and sets the lamps (the rules of
+// hullgauge/station/cycle_rules.h). One thread of its own.
+//
+// The PLC's commands (docs/plc.md, COMMAND) are taken in one place,
+// takeCommands(), before every step of a cycle and every turn between cycles:
+// an abort ends the running cycle; a fault reset written during a cycle is
+// kept and applied once the cycle has ended (when the station is then in
+// fault). Recovery runs when the sequencer's Recover action says, on the
+// runner's clock (injected; the tests move it by hand).
 #pragma once
 
+#include "clock.h"
+#include "daemon_config.h"
 #include "devices.h"
-#include "hullgauge/calib/fixture_sequence.h"
-#include "hullgauge/station/daemon_config.h"
-#include "hullgauge/station/plc_registers.h"
+#include "fixture_calibration.h"
 #include "hullgauge/station/sequencer.h"
-#include "image_archive.h"
 #include "image_writer.h"
 #include "inspector.h"
+#include "plc_registers.h"
 #include "result_store.h"
 
 #include <atomic>
-#include <chrono>
 #include <cstdint>
-#include <filesystem>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
-#include <vector>
 
 namespace hg::daemon {
 
-/// A live fixture calibration requested on the maintenance socket: the poses
-/// to visit, the target the fixture carries, and the station file to write
-/// (the old one is kept as a backup; the daemon uses it after a reload).
-struct CalibrationJob {
-    std::vector<geometry::FixturePose> poses;
-    calib::TargetSpec target;
-    std::filesystem::path out;
-};
-
 class CycleRunner {
   public:
-    CycleRunner(station::PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
-                std::shared_ptr<const station::DaemonConfig> config);
+    CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
+                std::shared_ptr<const station::DaemonConfig> config, Clock& clock = Clock::steady());
     ~CycleRunner();
     CycleRunner(const CycleRunner&) = delete;
     CycleRunner& operator=(const CycleRunner&) = delete;
@@ -63,9 +59,8 @@ class CycleRunner {
     /// triggers refused as not ready). False with `why` when one is queued or
     /// running, or the station is faulted or starting.
     bool requestCalibration(CalibrationJob job, std::string& why);
-    /// The last calibration: state (queued, running, done, failed), progress
-    /// lines, the report or the error, the file written and its backup.
-    nlohmann::json calibration() const;
+    /// The last calibration (FixtureCalibration::status).
+    nlohmann::json calibration() const { return calibration_.status(); }
 
     station::SequencerState state() const;
     /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
@@ -74,26 +69,52 @@ class CycleRunner {
     nlohmann::json describe() const;
 
   private:
+    struct Cycle;
+
     void run();
-    void runCycle(const station::TriggerRequest& trigger);
+    void startDevices();
+    void serveBetweenCycles();
+    void takeCommands();
+    station::SequencerAction feed(station::SequencerEvent event);
+    station::SequencerAction transition(const std::function<station::SequencerAction()>& step);
+    void schedule(const station::SequencerAction& action);
+    void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
     void runCalibration(CalibrationJob job);
-    bool interrupted();
-    void setState(std::function<station::SequencerAction()> step, station::SequencerAction& action);
 
-    station::PlcRegisters& registers_;
+    void runCycle(const station::TriggerRequest& trigger);
+    station::SequencerAction beginCycle(Cycle& cycle);
+    std::optional<station::SequencerAction> interruption(Cycle& cycle);
+    station::SequencerAction perform(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction move(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction settle(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction grab(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction finishInspection(Cycle& cycle);
+    void endCycle(Cycle& cycle, bool stopMotion);
+    void recordOutcome(Cycle& cycle);
+    void commitAndPublish(Cycle& cycle);
+    void report(Cycle& cycle);
+    void saveFailedImages(Cycle& cycle);
+
+    PlcRegisters& registers_;
     StationDevices& devices_;
     Inspector& inspector_;
     ResultStore& store_;
+    Clock& clock_;
+    FixtureCalibration calibration_;
 
-    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters
+    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_
     std::shared_ptr<const station::DaemonConfig> config_;
     station::CaptureSequencer sequencer_;
     std::uint64_t cycles_ = 0;
     std::uint64_t faults_ = 0;
     nlohmann::json lastCycle_ = nullptr;
-    std::optional<CalibrationJob> calibrationJob_;
-    nlohmann::json calibration_ = nullptr;
+    /// Written by the last failed part's image job when it is done (ms; < 0 until then).
+    std::shared_ptr<std::atomic<double>> lastImagesMs_;
+
+    // Runner thread only.
+    bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
+    std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
 
     std::thread thread_;
     std::function<void()> onDevicesActive_;
@@ -101,10 +122,7 @@ class CycleRunner {
     std::atomic<std::int64_t> stopRequestedNs_{0};
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
-    std::atomic<std::int64_t> cycleStartNs_{0};      ///< 0 when idle
-    std::atomic<std::int64_t> calibrationStepNs_{0}; ///< start of the calibration's current step, 0 when none runs
-    // Declared last, destroyed first: the images still queued are written while the members
-    // their jobs touch (mutex_, lastCycle_) are alive.
+    std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
     ImageWriter images_;
 };
 

@@ -1,10 +1,8 @@
 #include "daemon.h"
 
 #include "cycle_runner.h"
-#include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
-#include "hullgauge/geometry/station.h"
 #include "maintenance.h"
 #include "notify.h"
 #include "plc_server.h"
@@ -23,6 +21,7 @@ namespace hg::daemon {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using ConfigPtr = std::shared_ptr<const station::DaemonConfig>;
 
 std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
 {
@@ -50,227 +49,210 @@ std::int64_t ageNs(std::int64_t thenNs)
     return now - thenNs;
 }
 
-} // namespace
-
-int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector)
-{
-    CLI::App app{"hullgauged: the inspection station daemon (PLC over Modbus TCP, capture, inspection, results)"};
+struct Options {
     std::string configFile = "/etc/hullgauge/hullgauged.yaml";
     std::string logSpec;
     bool checkOnly = false;
-    app.add_option("--config", configFile, "daemon configuration (YAML)")->capture_default_str();
-    app.add_option("--log", logSpec, "log levels, e.g. 'info' or 'warn,plc=debug' (also $HULLGAUGE_LOG)");
-    app.add_flag("--check", checkOnly, "validate the configuration and exit (0 valid, 2 invalid)");
+};
+
+/// The command line; an exit status when the program ends here (help, bad arguments).
+std::optional<int> parseArguments(int argc, char** argv, Options& options)
+{
+    CLI::App app{"hullgauged: the inspection station daemon (PLC over Modbus TCP, capture, inspection, results)"};
+    app.add_option("--config", options.configFile, "daemon configuration (YAML)")->capture_default_str();
+    app.add_option("--log", options.logSpec, "log levels, e.g. 'info' or 'warn,plc=debug' (also $HULLGAUGE_LOG)");
+    app.add_flag("--check", options.checkOnly, "validate the configuration and exit (0 valid, 2 invalid)");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         int rc = app.exit(e);
         return rc == 0 ? 0 : static_cast<int>(ExitStatus::BadInput);
     }
+    return std::nullopt;
+}
 
+/// Signals are taken synchronously by the main loop; they are blocked before any thread starts.
+int blockSignals()
+{
+    sigset_t signals;
+    sigemptyset(&signals);
+    for (int s : {SIGTERM, SIGINT, SIGHUP, SIGPIPE}) sigaddset(&signals, s);
+    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+    return signalfd(-1, &signals, SFD_CLOEXEC | SFD_NONBLOCK);
+}
+
+/// The daemon's parts once started, and its main loop: HEARTBEAT, WATCHDOG=1
+/// while healthy, STATUS lines, signals and the maintenance socket.
+class MainLoop {
+  public:
+    MainLoop(ConfigPtr config, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner, Notifier& notifier,
+             int sigFd)
+        : config_(std::move(config)), registers_(registers), plc_(plc), runner_(runner), notifier_(notifier),
+          sigFd_(sigFd)
+    {
+    }
+    const ConfigPtr& config() const { return config_; }
+    void serve(MaintenanceServer& maintenance);
+
+  private:
+    bool healthy();
+    /// Takes the pending signals; false on SIGTERM/SIGINT.
+    bool takeSignals();
+    void reload();
+
+    ConfigPtr config_;
+    PlcRegisters& registers_;
+    PlcServer& plc_;
+    CycleRunner& runner_;
+    Notifier& notifier_;
+    int sigFd_;
+    bool wasHealthy_ = true;
+};
+
+void MainLoop::serve(MaintenanceServer& maintenance)
+{
+    const auto heartbeat = config_->plc.heartbeatPeriod;
+    auto watchdogPeriod = std::chrono::milliseconds(1000);
+    if (auto wd = notifier_.watchdogInterval())
+        watchdogPeriod = std::chrono::duration_cast<std::chrono::milliseconds>(*wd / 2);
+    auto nextBeat = Clock::now();
+    auto nextPing = Clock::now();
+    for (;;) {
+        auto now = Clock::now();
+        if (now >= nextBeat) {
+            registers_.beat();
+            nextBeat = now + heartbeat;
+        }
+        const bool ok = healthy();
+        if (ok && now >= nextPing && notifier_.watchdogInterval()) {
+            notifier_.watchdog();
+            nextPing = now + watchdogPeriod;
+        }
+        const auto state = std::string(station::toString(runner_.state()));
+        notifier_.status(ok ? state : "unhealthy: " + state);
+
+        auto wake = std::min(nextBeat, notifier_.watchdogInterval() ? nextPing : nextBeat);
+        auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
+        pollfd fds[2] = {{sigFd_, POLLIN, 0}, {maintenance.fd(), POLLIN, 0}};
+        int n = poll(fds, 2, static_cast<int>(std::clamp<long long>(timeoutMs, 1, 1000)));
+        if (n <= 0) continue;
+        if (fds[1].revents & POLLIN) maintenance.serveOne();
+        if ((fds[0].revents & POLLIN) && !takeSignals()) return;
+    }
+}
+
+// Healthy: the PLC server loop turns (it wakes every 0.5 s) and no cycle is stuck.
+bool MainLoop::healthy()
+{
+    const bool healthy =
+        ageNs(plc_.lastLoopNs()) < std::chrono::nanoseconds(std::chrono::seconds(3)).count() && runner_.healthy();
+    if (healthy != wasHealthy_) {
+        if (healthy)
+            hg::log::category("daemon")->info("healthy again; watchdog pings resume");
+        else
+            hg::log::category("daemon")->error(
+                "unhealthy (PLC server loop stalled or cycle longer than watchdog.max_cycle_s); watchdog pings stop");
+        wasHealthy_ = healthy;
+    }
+    return healthy;
+}
+
+bool MainLoop::takeSignals()
+{
+    signalfd_siginfo info{};
+    bool running = true;
+    while (read(sigFd_, &info, sizeof info) == sizeof info) {
+        if (info.ssi_signo == SIGHUP) {
+            reload();
+        } else if (info.ssi_signo == SIGTERM || info.ssi_signo == SIGINT) {
+            hg::log::category("daemon")->info("stopping on signal {}", info.ssi_signo);
+            running = false;
+        }
+    }
+    return running;
+}
+
+// SIGHUP: a configuration that does not validate is refused; the running one stays.
+void MainLoop::reload()
+{
+    auto log = hg::log::category("daemon");
+    notifier_.reloading();
+    try {
+        auto fresh = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(config_->file));
+        for (const auto& key : needsRestart(*config_, *fresh))
+            log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
+        registers_.setKnownPrograms(programNumbers(*fresh));
+        runner_.setConfig(fresh);
+        config_ = fresh;
+        log->info("configuration reloaded from {} ({} part programs)", config_->file.string(),
+                  config_->programs.size());
+    } catch (const InputError& e) {
+        log->error("reload refused, keeping the running configuration: {}", e.what());
+    }
+    notifier_.ready(std::string(station::toString(runner_.state())));
+}
+
+/// Opens the store, starts the PLC server, the runner and the maintenance socket, and serves until stopped.
+void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
+                Notifier& notifier, int sigFd)
+{
+    ResultStore store(config->results.database);
+    PlcRegisters registers;
+    registers.setKnownPrograms(programNumbers(*config));
+    auto devices = makeDevices(*config);
+    auto inspector = makeInspector(*config);
+    PlcServer plc(registers, config->plc);
+    plc.start();
+    CycleRunner runner(registers, *devices, *inspector, store, config);
+    MainLoop loop(config, registers, plc, runner, notifier, sigFd);
+    MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group,
+                                  maintenanceCommands({registers, plc, runner, store, *devices, loop.config()}));
+    notifier.status("starting devices");
+    runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
+    loop.serve(maintenance);
+    notifier.stopping("stopping: finishing or aborting the cycle");
+    runner.stop();
+    plc.stop();
+    hg::log::category("daemon")->info("stopped");
+}
+
+} // namespace
+
+int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector)
+{
+    Options options;
+    if (auto exit = parseArguments(argc, argv, options)) return *exit;
     // Under systemd (INVOCATION_ID is set for every unit) stderr is the journal.
     if (std::getenv("INVOCATION_ID")) hg::log::useJournal();
     auto log = hg::log::category("daemon");
-    std::shared_ptr<const station::DaemonConfig> config;
+    ConfigPtr config;
     try {
-        if (!logSpec.empty()) hg::log::configure(logSpec);
-        config = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(configFile));
+        if (!options.logSpec.empty()) hg::log::configure(options.logSpec);
+        config = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(options.configFile));
     } catch (const InputError& e) {
         std::cerr << "hullgauged: " << e.what() << '\n';
         return static_cast<int>(ExitStatus::BadInput);
     }
-    if (checkOnly) {
-        std::cout << configFile << ": valid (" << config->programs.size() << " part programs)\n";
+    if (options.checkOnly) {
+        std::cout << options.configFile << ": valid (" << config->programs.size() << " part programs)\n";
         return 0;
     }
 
-    // Signals are taken synchronously by the main loop; block them before any thread starts.
-    sigset_t signals;
-    sigemptyset(&signals);
-    sigaddset(&signals, SIGTERM);
-    sigaddset(&signals, SIGINT);
-    sigaddset(&signals, SIGHUP);
-    sigaddset(&signals, SIGPIPE);
-    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-    int sigFd = signalfd(-1, &signals, SFD_CLOEXEC | SFD_NONBLOCK);
-
+    const int sigFd = blockSignals();
     Notifier notifier;
+    int status = 0;
     try {
-        ResultStore store(config->results.database);
-        station::PlcRegisters registers;
-        registers.setKnownPrograms(programNumbers(*config));
-        auto devices = makeDevices(*config);
-        auto inspector = makeInspector(*config);
-        PlcServer plc(registers, config->plc);
-        plc.start();
-        CycleRunner runner(registers, *devices, *inspector, store, config);
-
-        auto handle = [&](const nlohmann::json& request) -> nlohmann::json {
-            auto command = request.at("command").get<std::string>();
-            if (command == "status") {
-                auto regs = registers.snapshot();
-                auto counters = plc.counters();
-                return {{"ok", true},
-                        {"pid", getpid()},
-                        {"config", config->file.string()},
-                        {"sequencer", runner.describe()},
-                        {"plc",
-                         {{"port", plc.port()},
-                          {"status", regs[station::reg::Status]},
-                          {"ack_seq", regs[station::reg::AckSeq]},
-                          {"done_seq", regs[station::reg::DoneSeq]},
-                          {"result", regs[station::reg::Result]},
-                          {"fault_code", regs[station::reg::FaultCode]},
-                          {"heartbeat", regs[station::reg::Heartbeat]},
-                          {"rejected_triggers", regs[station::reg::RejectedTriggers]},
-                          {"clients", counters.clients},
-                          {"requests", counters.requests},
-                          {"exceptions", counters.exceptions},
-                          {"accepted_connections", counters.acceptedConnections},
-                          {"refused_connections", counters.refusedConnections},
-                          {"dropped_connections", counters.droppedConnections},
-                          {"idle_closed", counters.idleClosed},
-                          {"yielded", counters.yielded}}},
-                        {"results", {{"database", store.file().string()}, {"records", store.count()}}},
-                        {"lamps", devices->lampStatus()},
-                        {"calibration", runner.calibration()},
-                        {"simulated_part", devices->simulatedPart()}};
-            }
-            if (command == "results") {
-                int limit = request.value("limit", 10);
-                return {{"ok", true}, {"results", store.recent(std::clamp(limit, 1, 1000))}};
-            }
-            if (command == "trigger") {
-                auto program = request.value("program", 0);
-                if (program < 1 || program > 65535) return {{"ok", false}, {"error", "program must be 1..65535"}};
-                auto reason = registers.triggerManually(static_cast<std::uint16_t>(program),
-                                                        request.value("serial", std::string()));
-                if (reason == station::RejectReason::None) return {{"ok", true}};
-                static constexpr const char* why[] = {"", "busy", "unknown part program",
-                                                      "not ready (fault or starting)"};
-                return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
-            }
-            if (command == "abort") {
-                runner.abort();
-                return {{"ok", true}};
-            }
-            if (command == "calibrate") {
-                // The live fixture calibration (docs/calibration.md), run by the
-                // cycle runner between cycles. Bad input is answered at once.
-                CalibrationJob job;
-                try {
-                    job.target = calib::TargetSpec::parse(request.value("pattern", std::string()), "pattern");
-                    const auto poses = request.value("poses", std::string());
-                    if (poses.empty()) return {{"ok", false}, {"error", "poses: the poses YAML file is required"}};
-                    job.poses = geometry::loadPoses(poses, &config->station.fixture);
-                } catch (const std::exception& e) {
-                    return {{"ok", false}, {"error", e.what()}};
-                }
-                if (config->station.fixture.type != geometry::FixtureType::RotationDeclination)
-                    return {{"ok", false}, {"error", "calibrate solves rotation/declination fixtures"}};
-                job.out = request.value("out", config->stationFile.string());
-                std::string why;
-                if (!runner.requestCalibration(std::move(job), why)) return {{"ok", false}, {"error", why}};
-                return {{"ok", true}, {"calibration", runner.calibration()}};
-            }
-            if (command == "calibration") return {{"ok", true}, {"calibration", runner.calibration()}};
-            if (command == "sim-part") {
-                auto parts = devices->simulatedParts();
-                if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};
-                if (request.value("list", false))
-                    return {{"ok", true}, {"parts", parts}, {"current", devices->simulatedPart()}};
-                auto name = request.value("name", std::string());
-                if (!devices->selectSimulatedPart(name))
-                    return {{"ok", false}, {"error", "unknown simulated part '" + name + "' (see sim-part --list)"}};
-                return {{"ok", true}, {"current", name}};
-            }
-            return {{"ok", false}, {"error", "unknown command '" + command + "'"}};
-        };
-        MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, handle);
-
-        notifier.status("starting devices");
-        runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
-
-        const auto heartbeat = config->plc.heartbeatPeriod;
-        auto watchdogPeriod = std::chrono::milliseconds(1000);
-        if (auto wd = notifier.watchdogInterval())
-            watchdogPeriod = std::chrono::duration_cast<std::chrono::milliseconds>(*wd / 2);
-        auto nextBeat = Clock::now();
-        auto nextPing = Clock::now();
-        bool wasHealthy = true;
-        bool running = true;
-        while (running) {
-            auto now = Clock::now();
-            if (now >= nextBeat) {
-                registers.beat();
-                nextBeat = now + heartbeat;
-            }
-            // Healthy: the PLC server loop turns (it wakes every 0.5 s) and no cycle is stuck.
-            bool healthy =
-                ageNs(plc.lastLoopNs()) < std::chrono::nanoseconds(std::chrono::seconds(3)).count() && runner.healthy();
-            if (healthy != wasHealthy) {
-                if (healthy)
-                    log->info("healthy again; watchdog pings resume");
-                else
-                    log->error("unhealthy (PLC server loop stalled or cycle longer than watchdog.max_cycle_s); "
-                               "watchdog pings stop");
-                wasHealthy = healthy;
-            }
-            if (healthy && now >= nextPing && notifier.watchdogInterval()) {
-                notifier.watchdog();
-                nextPing = now + watchdogPeriod;
-            }
-            auto state = runner.state();
-            notifier.status(healthy ? std::string(station::toString(state))
-                                    : "unhealthy: " + std::string(station::toString(state)));
-
-            auto wake = std::min(nextBeat, notifier.watchdogInterval() ? nextPing : nextBeat);
-            auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
-            pollfd fds[2] = {{sigFd, POLLIN, 0}, {maintenance.fd(), POLLIN, 0}};
-            int n = poll(fds, 2, static_cast<int>(std::clamp<long long>(timeoutMs, 1, 1000)));
-            if (n <= 0) continue;
-            if (fds[1].revents & POLLIN) maintenance.serveOne();
-            if (!(fds[0].revents & POLLIN)) continue;
-            signalfd_siginfo info{};
-            while (read(sigFd, &info, sizeof info) == sizeof info) {
-                if (info.ssi_signo == SIGHUP) {
-                    notifier.reloading();
-                    try {
-                        auto fresh =
-                            std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(config->file));
-                        for (const auto& key : needsRestart(*config, *fresh))
-                            log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
-                        registers.setKnownPrograms(programNumbers(*fresh));
-                        runner.setConfig(fresh);
-                        config = fresh;
-                        log->info("configuration reloaded from {} ({} part programs)", config->file.string(),
-                                  config->programs.size());
-                    } catch (const InputError& e) {
-                        log->error("reload refused, keeping the running configuration: {}", e.what());
-                    }
-                    notifier.ready(std::string(station::toString(runner.state())));
-                } else if (info.ssi_signo == SIGTERM || info.ssi_signo == SIGINT) {
-                    log->info("stopping on signal {}", info.ssi_signo);
-                    running = false;
-                }
-            }
-        }
-        notifier.stopping("stopping: finishing or aborting the cycle");
-        runner.stop();
-        plc.stop();
-        log->info("stopped");
+        runStation(config, makeDevices, makeInspector, notifier, sigFd);
     } catch (const FaultError& e) {
         log->critical("{}", e.what());
         notifier.stopping(std::string("failed: ") + e.what());
-        close(sigFd);
-        return static_cast<int>(ExitStatus::Fault);
+        status = static_cast<int>(ExitStatus::Fault);
     } catch (const InputError& e) {
         log->critical("{}", e.what());
-        close(sigFd);
-        return static_cast<int>(ExitStatus::BadInput);
+        status = static_cast<int>(ExitStatus::BadInput);
     }
     close(sigFd);
-    return 0;
+    return status;
 }
 
 } // namespace hg::daemon

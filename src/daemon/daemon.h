@@ -11,8 +11,8 @@
 // the maintenance socket.
 #pragma once
 
+#include "daemon_config.h"
 #include "devices.h"
-#include "hullgauge/station/daemon_config.h"
 #include "inspector.h"
 
 #include <functional>

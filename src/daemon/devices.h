@@ -9,6 +9,7 @@
 
 #include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
+#include "hullgauge/station/cycle_rules.h"
 
 #include <chrono>
 #include <memory>
@@ -19,10 +20,8 @@
 
 namespace hg::daemon {
 
-/// Operator lamp patterns (CONTRACTS §6): green pass, red fail, amber busy,
-/// red and amber blinking on fault.
-enum class LampPattern { Off, Busy, Pass, Fail, Fault };
-std::string_view toString(LampPattern p);
+/// Operator lamp patterns (CONTRACTS §6), chosen by station::lampPattern.
+using station::LampPattern;
 
 class StationDevices {
   public:

@@ -2,8 +2,8 @@
 // the station file (camera.driver, fixture.driver, the lamps section).
 #pragma once
 
+#include "daemon_config.h"
 #include "devices.h"
-#include "hullgauge/station/daemon_config.h"
 
 #include <memory>
 

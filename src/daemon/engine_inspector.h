@@ -7,7 +7,7 @@
 // kept for the failed-part images.
 #pragma once
 
-#include "hullgauge/station/daemon_config.h"
+#include "daemon_config.h"
 #include "inspector.h"
 
 #include <memory>

@@ -3,7 +3,7 @@
 // kept within the retention limits (count, age, bytes; oldest removed first).
 #pragma once
 
-#include "hullgauge/station/daemon_config.h"
+#include "daemon_config.h"
 #include "inspector.h"
 
 #include <cstdint>

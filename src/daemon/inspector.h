@@ -4,8 +4,8 @@
 // finish() waits for the verdict.
 #pragma once
 
+#include "daemon_config.h"
 #include "hullgauge/geometry/fixture.h"
-#include "hullgauge/station/daemon_config.h"
 #include "hullgauge/station/result_record.h"
 
 #include <cstddef>

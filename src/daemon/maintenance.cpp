@@ -1,11 +1,18 @@
 #include "maintenance.h"
 
+#include "cycle_runner.h"
+#include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/geometry/station.h"
+#include "plc_server.h"
+#include "result_store.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <grp.h>
+#include <map>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -94,6 +101,123 @@ void MaintenanceServer::serveOne()
         sent += static_cast<std::size_t>(n);
     }
     close(client);
+}
+
+} // namespace hg::daemon
+
+namespace hg::daemon {
+namespace {
+
+using nlohmann::json;
+
+json status(const MaintenanceContext& c, const json&)
+{
+    const auto regs = c.registers.snapshot();
+    const auto counters = c.plc.counters();
+    return {{"ok", true},
+            {"pid", getpid()},
+            {"config", c.config->file.string()},
+            {"sequencer", c.runner.describe()},
+            {"plc",
+             {{"port", c.plc.port()},
+              {"status", regs[station::reg::Status]},
+              {"ack_seq", regs[station::reg::AckSeq]},
+              {"done_seq", regs[station::reg::DoneSeq]},
+              {"result", regs[station::reg::Result]},
+              {"fault_code", regs[station::reg::FaultCode]},
+              {"heartbeat", regs[station::reg::Heartbeat]},
+              {"rejected_triggers", regs[station::reg::RejectedTriggers]},
+              {"clients", counters.clients},
+              {"requests", counters.requests},
+              {"exceptions", counters.exceptions},
+              {"accepted_connections", counters.acceptedConnections},
+              {"refused_connections", counters.refusedConnections},
+              {"dropped_connections", counters.droppedConnections},
+              {"idle_closed", counters.idleClosed},
+              {"yielded", counters.yielded}}},
+            {"results", {{"database", c.store.file().string()}, {"records", c.store.count()}}},
+            {"lamps", c.devices.lampStatus()},
+            {"calibration", c.runner.calibration()},
+            {"simulated_part", c.devices.simulatedPart()}};
+}
+
+json results(const MaintenanceContext& c, const json& request)
+{
+    const int limit = request.value("limit", 10);
+    return {{"ok", true}, {"results", c.store.recent(std::clamp(limit, 1, 1000))}};
+}
+
+json trigger(const MaintenanceContext& c, const json& request)
+{
+    const auto program = request.value("program", 0);
+    if (program < 1 || program > 65535) return {{"ok", false}, {"error", "program must be 1..65535"}};
+    const auto reason =
+        c.registers.triggerManually(static_cast<std::uint16_t>(program), request.value("serial", std::string()));
+    if (reason == station::RejectReason::None) return {{"ok", true}};
+    static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
+    return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
+}
+
+json abortCycle(const MaintenanceContext& c, const json&)
+{
+    c.runner.abort();
+    return {{"ok", true}};
+}
+
+// The live fixture calibration (docs/calibration.md), run by the cycle runner
+// between cycles. Bad input is answered at once.
+json calibrate(const MaintenanceContext& c, const json& request)
+{
+    const auto& config = *c.config;
+    CalibrationJob job;
+    try {
+        job.target = calib::TargetSpec::parse(request.value("pattern", std::string()), "pattern");
+        const auto poses = request.value("poses", std::string());
+        if (poses.empty()) return {{"ok", false}, {"error", "poses: the poses YAML file is required"}};
+        job.poses = geometry::loadPoses(poses, &config.station.fixture);
+    } catch (const std::exception& e) {
+        return {{"ok", false}, {"error", e.what()}};
+    }
+    if (config.station.fixture.type != geometry::FixtureType::RotationDeclination)
+        return {{"ok", false}, {"error", "calibrate solves rotation/declination fixtures"}};
+    job.out = request.value("out", config.stationFile.string());
+    std::string why;
+    if (!c.runner.requestCalibration(std::move(job), why)) return {{"ok", false}, {"error", why}};
+    return {{"ok", true}, {"calibration", c.runner.calibration()}};
+}
+
+json calibration(const MaintenanceContext& c, const json&)
+{
+    return {{"ok", true}, {"calibration", c.runner.calibration()}};
+}
+
+json simPart(const MaintenanceContext& c, const json& request)
+{
+    auto parts = c.devices.simulatedParts();
+    if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};
+    if (request.value("list", false)) return {{"ok", true}, {"parts", parts}, {"current", c.devices.simulatedPart()}};
+    auto name = request.value("name", std::string());
+    if (!c.devices.selectSimulatedPart(name))
+        return {{"ok", false}, {"error", "unknown simulated part '" + name + "' (see sim-part --list)"}};
+    return {{"ok", true}, {"current", name}};
+}
+
+using Command = json (*)(const MaintenanceContext&, const json&);
+const std::map<std::string, Command, std::less<>> kCommands{
+    {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
+    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart},
+};
+
+} // namespace
+
+MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context)
+{
+    return [context](const json& request) -> json {
+        const auto command = request.at("command").get<std::string>();
+        const auto it = kCommands.find(command);
+        if (it == kCommands.end()) return {{"ok", false}, {"error", "unknown command '" + command + "'"}};
+        return it->second(context, request);
+    };
 }
 
 } // namespace hg::daemon

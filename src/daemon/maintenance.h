@@ -5,12 +5,21 @@
 // daemon's main loop; a client gets at most one second to send its request.
 #pragma once
 
+#include "daemon_config.h"
+
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 namespace hg::daemon {
+
+class CycleRunner;
+class PlcRegisters;
+class PlcServer;
+class ResultStore;
+class StationDevices;
 
 class MaintenanceServer {
   public:
@@ -32,5 +41,21 @@ class MaintenanceServer {
     Handler handler_;
     int fd_ = -1;
 };
+
+/// What the maintenance commands act on; all of it lives as long as the server.
+struct MaintenanceContext {
+    PlcRegisters& registers;
+    const PlcServer& plc;
+    CycleRunner& runner;
+    ResultStore& store;
+    StationDevices& devices;
+    /// The running configuration (replaced by a reload).
+    const std::shared_ptr<const station::DaemonConfig>& config;
+};
+
+/// The command table of docs/daemon.md ("Maintenance socket"): status,
+/// results, trigger, abort, calibrate, calibration, sim-part; any other
+/// command is answered as unknown.
+MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context);
 
 } // namespace hg::daemon

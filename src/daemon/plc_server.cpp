@@ -103,7 +103,7 @@ struct PlcServer::Impl {
     Counters counters;
 };
 
-PlcServer::PlcServer(station::PlcRegisters& registers, station::PlcConfig config)
+PlcServer::PlcServer(PlcRegisters& registers, station::PlcConfig config)
     : registers_(registers), config_(std::move(config))
 {
 }

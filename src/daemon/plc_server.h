@@ -18,8 +18,8 @@
 // to the new one. Every other client keeps being served.
 #pragma once
 
-#include "hullgauge/station/daemon_config.h"
-#include "hullgauge/station/plc_registers.h"
+#include "daemon_config.h"
+#include "plc_registers.h"
 
 #include <atomic>
 #include <cstdint>
@@ -32,7 +32,7 @@ namespace hg::daemon {
 
 class PlcServer {
   public:
-    PlcServer(station::PlcRegisters& registers, station::PlcConfig config);
+    PlcServer(PlcRegisters& registers, station::PlcConfig config);
     ~PlcServer();
     PlcServer(const PlcServer&) = delete;
     PlcServer& operator=(const PlcServer&) = delete;
@@ -74,7 +74,7 @@ class PlcServer {
     void expire();
     void close(std::size_t index, const char* why);
 
-    station::PlcRegisters& registers_;
+    PlcRegisters& registers_;
     station::PlcConfig config_;
     struct Impl;
     Impl* impl_ = nullptr;

@@ -77,6 +77,12 @@ ViewPipeline::Prepared ViewPipeline::wait()
     return out;
 }
 
+std::size_t ViewPipeline::queued()
+{
+    std::lock_guard lock(mutex_);
+    return queue_.size();
+}
+
 void ViewPipeline::cancel()
 {
     std::unique_lock lock(mutex_);

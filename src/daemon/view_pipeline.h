@@ -76,6 +76,8 @@ class ViewPipeline {
     void cancel();
 
     std::size_t capacity() const { return capacity_; }
+    /// Views submitted and not yet taken by the worker.
+    std::size_t queued();
 
   private:
     struct Job {

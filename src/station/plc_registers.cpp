@@ -42,26 +42,25 @@ std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& seri
     return words;
 }
 
-PlcRegisters::PlcRegisters()
+RegisterMap::RegisterMap()
 {
     regs_[reg::Status] = u16(PlcStatus::Starting);
 }
 
-bool PlcRegisters::writable(std::uint16_t address)
+bool RegisterMap::writable(std::uint16_t address)
 {
     return address == reg::TriggerSeq || address == reg::PartProgram ||
            (address >= reg::Serial && address < reg::Serial + reg::SerialWords) || address == reg::Command;
 }
 
-ModbusException PlcRegisters::read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const
+ModbusException RegisterMap::read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const
 {
     if (count == 0 || static_cast<unsigned>(address) + count > reg::Count) return ModbusException::IllegalDataAddress;
-    std::lock_guard lock(mutex_);
     out.assign(regs_.begin() + address, regs_.begin() + address + count);
     return ModbusException::None;
 }
 
-ModbusException PlcRegisters::write(std::uint16_t address, std::span<const std::uint16_t> values)
+ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::uint16_t> values)
 {
     if (values.empty()) return ModbusException::IllegalDataValue;
     // Check every address and value before changing anything: a block write is all or nothing.
@@ -79,7 +78,6 @@ ModbusException PlcRegisters::write(std::uint16_t address, std::span<const std::
         }
     }
 
-    std::lock_guard lock(mutex_);
     std::optional<std::uint16_t> newTrigger;
     for (std::size_t i = 0; i < values.size(); ++i) {
         auto a = static_cast<std::uint16_t>(address + i);
@@ -88,10 +86,8 @@ ModbusException PlcRegisters::write(std::uint16_t address, std::span<const std::
         } else if (a == reg::Command) {
             // The command acts on the write; the register itself reads 0.
             auto command = static_cast<PlcCommand>(values[i]);
-            if (command != PlcCommand::None) {
-                pendingCommand_ = command;
-                triggerReady_.notify_all();
-            }
+            if (command == PlcCommand::Abort) commands_.abort = true;
+            if (command == PlcCommand::ResetFault) commands_.resetFault = true;
             continue;
         }
         regs_[a] = values[i];
@@ -102,12 +98,12 @@ ModbusException PlcRegisters::write(std::uint16_t address, std::span<const std::
                                decodeSerial(std::span<const std::uint16_t, reg::SerialWords>(regs_.data() + reg::Serial,
                                                                                              reg::SerialWords)),
                                false};
-        acceptLocked(std::move(request));
+        accept(std::move(request));
     }
     return ModbusException::None;
 }
 
-RejectReason PlcRegisters::acceptLocked(TriggerRequest request)
+RejectReason RegisterMap::accept(TriggerRequest request)
 {
     auto status = static_cast<PlcStatus>(regs_[reg::Status]);
     RejectReason reason = RejectReason::None;
@@ -127,46 +123,39 @@ RejectReason PlcRegisters::acceptLocked(TriggerRequest request)
     if (!request.manual) regs_[reg::AckSeq] = request.seq;
     regs_[reg::Status] = u16(PlcStatus::Busy);
     pending_.push_back(std::move(request));
-    triggerReady_.notify_all();
     return RejectReason::None;
 }
 
-RejectReason PlcRegisters::triggerManually(std::uint16_t program, const std::string& serial)
+RejectReason RegisterMap::triggerManually(std::uint16_t program, const std::string& serial)
 {
-    std::lock_guard lock(mutex_);
-    return acceptLocked(TriggerRequest{0, program, serial, true});
+    return accept(TriggerRequest{0, program, serial, true});
 }
 
-void PlcRegisters::setKnownPrograms(std::set<std::uint16_t> programs)
+void RegisterMap::setKnownPrograms(std::set<std::uint16_t> programs)
 {
-    std::lock_guard lock(mutex_);
     knownPrograms_ = std::move(programs);
 }
 
-void PlcRegisters::setStatus(PlcStatus status)
+void RegisterMap::setStatus(PlcStatus status)
 {
-    std::lock_guard lock(mutex_);
     regs_[reg::Status] = u16(status);
 }
 
-bool PlcRegisters::enterMaintenance()
+bool RegisterMap::enterMaintenance()
 {
-    std::lock_guard lock(mutex_);
     const auto status = static_cast<PlcStatus>(regs_[reg::Status]);
     if ((status != PlcStatus::Ready && status != PlcStatus::Done) || !pending_.empty()) return false;
     regs_[reg::Status] = u16(PlcStatus::Maintenance);
     return true;
 }
 
-PlcStatus PlcRegisters::status() const
+PlcStatus RegisterMap::status() const
 {
-    std::lock_guard lock(mutex_);
     return static_cast<PlcStatus>(regs_[reg::Status]);
 }
 
-void PlcRegisters::publishResult(const PublishedResult& r)
+void RegisterMap::publishResult(const PublishedResult& r)
 {
-    std::lock_guard lock(mutex_);
     regs_[reg::Status] = u16(r.statusAfter);
     if (r.manual) return;
     regs_[reg::Result] = u16(r.result);
@@ -186,36 +175,31 @@ void PlcRegisters::publishResult(const PublishedResult& r)
     regs_[reg::DoneSeq] = r.seq;
 }
 
-void PlcRegisters::beat()
+void RegisterMap::beat()
 {
-    std::lock_guard lock(mutex_);
     regs_[reg::Heartbeat] = u16(regs_[reg::Heartbeat] + 1);
 }
 
-std::optional<TriggerRequest> PlcRegisters::waitTrigger(std::chrono::milliseconds timeout)
+std::optional<TriggerRequest> RegisterMap::takeTrigger()
 {
-    std::unique_lock lock(mutex_);
-    if (!triggerReady_.wait_for(lock, timeout, [&] { return !pending_.empty(); })) return std::nullopt;
+    if (pending_.empty()) return std::nullopt;
     auto request = std::move(pending_.front());
     pending_.pop_front();
     return request;
 }
 
-PlcCommand PlcRegisters::takeCommand()
+PlcCommands RegisterMap::takeCommands()
 {
-    std::lock_guard lock(mutex_);
-    return std::exchange(pendingCommand_, PlcCommand::None);
+    return std::exchange(commands_, PlcCommands{});
 }
 
-std::uint16_t PlcRegisters::rejectedTriggers() const
+std::uint16_t RegisterMap::rejectedTriggers() const
 {
-    std::lock_guard lock(mutex_);
     return regs_[reg::RejectedTriggers];
 }
 
-std::array<std::uint16_t, reg::Count> PlcRegisters::snapshot() const
+std::array<std::uint16_t, reg::Count> RegisterMap::snapshot() const
 {
-    std::lock_guard lock(mutex_);
     return regs_;
 }
 

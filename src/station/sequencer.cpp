@@ -1,7 +1,6 @@
 #include "hullgauge/station/sequencer.h"
 
 #include <array>
-#include <cassert>
 #include <utility>
 
 namespace hg::station {
@@ -11,15 +10,16 @@ using S = SequencerState;
 using E = SequencerEvent;
 using A = SequencerAction::Kind;
 
-// The allowed transitions (from, to); self-transitions are the retries.
-constexpr std::array<std::pair<S, S>, 26> kTransitions{{
+// The allowed transitions (from, to); self-transitions are the retries (and, from
+// Done, a trigger whose plan has no views, which ends at once as program-load).
+constexpr std::array<std::pair<S, S>, 28> kTransitions{{
     {S::Starting, S::Ready},    {S::Starting, S::Fault},    {S::Ready, S::Moving},      {S::Ready, S::Fault},
     {S::Done, S::Moving},       {S::Done, S::Fault},        {S::Moving, S::Moving},     {S::Moving, S::Settling},
     {S::Moving, S::Done},       {S::Moving, S::Fault},      {S::Settling, S::Grabbing}, {S::Settling, S::Done},
     {S::Settling, S::Fault},    {S::Grabbing, S::Grabbing}, {S::Grabbing, S::Moving},   {S::Grabbing, S::Processing},
     {S::Grabbing, S::Done},     {S::Grabbing, S::Fault},    {S::Processing, S::Done},   {S::Processing, S::Fault},
     {S::Fault, S::Ready},       {S::Fault, S::Fault},       {S::Ready, S::Calibrating}, {S::Done, S::Calibrating},
-    {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault},
+    {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault}, {S::Ready, S::Done},        {S::Done, S::Done},
 }};
 
 } // namespace
@@ -45,11 +45,11 @@ std::string_view toString(SequencerState s)
 
 std::string_view toString(SequencerEvent e)
 {
-    constexpr std::array<std::string_view, 22> names{
-        "devices-active",  "devices-failed",  "trigger",           "in-position",    "move-timeout",  "move-fault",
-        "move-comm-error", "move-refused",    "settled",           "frame-ok",       "frame-timeout", "frame-bad",
-        "frame-error",     "processed",       "processing-failed", "program-failed", "abort",         "shutdown",
-        "recovered",       "recovery-failed", "calibration-start", "calibration-end"};
+    constexpr std::array<std::string_view, 23> names{
+        "devices-active",  "devices-failed",  "trigger",           "in-position",     "move-timeout",  "move-fault",
+        "move-comm-error", "move-refused",    "settled",           "frame-ok",        "frame-timeout", "frame-bad",
+        "frame-error",     "processed",       "processing-failed", "program-failed",  "abort",         "shutdown",
+        "recovered",       "recovery-failed", "calibration-start", "calibration-end", "fault-reset"};
     return names[static_cast<std::size_t>(e)];
 }
 
@@ -127,15 +127,35 @@ std::string_view describe(FaultCode c)
     return "unknown fault";
 }
 
-CaptureSequencer::CaptureSequencer(int retries) : retries_(retries < 0 ? 0 : retries)
+CaptureSequencer::CaptureSequencer(int retries, std::chrono::milliseconds recoveryRetry, TransitionCheck allowed)
+    : retries_(retries < 0 ? 0 : retries), recoveryRetry_(recoveryRetry), allowed_(allowed)
 {
 }
 
 SequencerAction CaptureSequencer::go(SequencerState to, SequencerAction action)
 {
-    assert(transitionAllowed(state_, to));
+    if (!allowed_(state_, to)) return internalFault(to);
     state_ = to;
     return action;
+}
+
+SequencerAction CaptureSequencer::internalFault(SequencerState refusedTo)
+{
+    // Fault is entered directly: it is the state every other one may fall into.
+    refused_ = {state_, refusedTo};
+    const bool inCycle = isBusy(state_);
+    state_ = S::Fault;
+    faultCode_ = FaultCode::Internal;
+    if (!inCycle) return recoverAfter(std::chrono::milliseconds(0));
+    outcome_ = CycleOutcome::Faulted;
+    return {A::Publish, view_, false, true};
+}
+
+SequencerAction CaptureSequencer::recoverAfter(std::chrono::milliseconds delay)
+{
+    SequencerAction a{A::Recover, 0, false, false};
+    a.delay = delay;
+    return a;
 }
 
 SequencerAction CaptureSequencer::trigger(std::size_t viewCount)
@@ -187,7 +207,7 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::DevicesDown, true, true);
         if (state_ == S::Fault) return {};
         faultCode_ = FaultCode::DevicesDown;
-        return go(S::Fault, {A::Recover, 0, false, false});
+        return go(S::Fault, recoverAfter(recoveryRetry_));
     case E::Trigger:
         return {}; // use trigger(viewCount)
     case E::Abort:
@@ -201,7 +221,10 @@ SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
         if (state_ == S::Fault) return go(S::Ready, {});
         return {};
     case E::RecoveryFailed:
-        if (state_ == S::Fault) return go(S::Fault, {A::Recover, 0, false, false});
+        if (state_ == S::Fault) return go(S::Fault, recoverAfter(recoveryRetry_));
+        return {};
+    case E::FaultReset:
+        if (state_ == S::Fault) return go(S::Fault, recoverAfter(std::chrono::milliseconds(0)));
         return {};
     case E::ProgramFailed:
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, true, false);

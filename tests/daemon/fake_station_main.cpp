@@ -3,6 +3,8 @@
 // sd_notify and maintenance socket, with hardware whose behaviour the test
 // sets through the environment:
 //   HG_FAKE_MOVE_MS        time a move takes (default 2)
+//   HG_FAKE_MOVE_HOLD      a path: every move waits until that file exists
+//                          (the test holds the station busy as long as it needs)
 //   HG_FAKE_MOVE_FAIL      "timeout" | "fault" : every move fails so
 //   HG_FAKE_GRAB_FAIL      "timeout" | "bad"   : every grab fails so
 //   HG_FAKE_START_FAIL     "1": the devices never start
@@ -15,6 +17,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
+#include <filesystem>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
@@ -48,6 +51,8 @@ class FakeDevices : public StationDevices {
             return Status::failure(StatusCode::Timeout, "fake: not in position");
         }
         if (mode == "fault") return Status::failure(StatusCode::Fault, "fake: drive fault 7");
+        if (auto hold = env("HG_FAKE_MOVE_HOLD"); !hold.empty())
+            while (!std::filesystem::exists(hold)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
         auto ms = env("HG_FAKE_MOVE_MS");
         std::this_thread::sleep_for(std::chrono::milliseconds(ms.empty() ? 2 : std::stoi(ms)));
         return Status::success();

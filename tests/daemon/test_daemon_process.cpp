@@ -20,19 +20,39 @@ namespace {
 using namespace std::chrono_literals;
 using hgdaemon::DaemonProcess;
 
-std::vector<nlohmann::json> jsonLines(const std::string& text)
+/// The JSON lines of `text`; `complete`: skip a last line still being written.
+std::vector<nlohmann::json> jsonLines(const std::string& text, bool complete = false)
 {
     std::vector<nlohmann::json> lines;
     std::istringstream in(text);
     std::string line;
-    while (std::getline(in, line))
-        if (!line.empty()) lines.push_back(nlohmann::json::parse(line));
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        if (complete && in.eof()) break; // no newline yet: not a whole line
+        lines.push_back(nlohmann::json::parse(line));
+    }
     return lines;
 }
 
 std::string sql(const std::filesystem::path& db, const std::string& query)
 {
     return hgtest::run("sqlite3 " + db.string() + " \"" + query + "\"").out;
+}
+
+/// Polls `condition` until it holds or `deadline` passes (the deadline decides, never a sleep).
+bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds deadline = 10s)
+{
+    const auto until = std::chrono::steady_clock::now() + deadline;
+    while (!condition()) {
+        if (std::chrono::steady_clock::now() > until) return false;
+        std::this_thread::sleep_for(10ms);
+    }
+    return true;
+}
+
+int heartbeat(int port)
+{
+    return nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
 }
 
 TEST(DaemonProcess, HundredCyclesAlternatingNominalAndDefective)
@@ -82,7 +102,8 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
 {
     hgtest::TempDir dir;
     int port = hgdaemon::freePort();
-    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"HG_FAKE_MOVE_MS", "150"}});
+    // Every move waits for the file `go`: the station stays busy until the test lets it go on.
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"HG_FAKE_MOVE_HOLD", (dir / "go").string()}});
     ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << daemon.logText();
     // Unknown program 9: refused, counted, nothing else changes.
     auto refused = hgdaemon::plcClient(port, "cycles 1 --program 9");
@@ -92,7 +113,7 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
     EXPECT_EQ(regs[10], 1); // REJECTED_TRIGGERS
     EXPECT_EQ(regs[11], 2); // LAST_REJECT_REASON unknown program
     EXPECT_EQ(regs[1], 0);  // DONE_SEQ untouched
-    // A manual trigger makes the station busy (3 views x 150 ms); a PLC trigger meanwhile is refused.
+    // A manual trigger makes the station busy (held at its first move); a PLC trigger meanwhile is refused.
     auto manual = hgdaemon::maintenance(dir / "hg.sock", {{"command", "trigger"}, {"program", 1}, {"serial", "M1"}});
     ASSERT_TRUE(manual["ok"].get<bool>()) << manual.dump();
     auto busy = hgdaemon::plcClient(port, "cycles 1");
@@ -100,7 +121,8 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
     regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 100 12").out);
     EXPECT_EQ(regs[10], 2);
     EXPECT_EQ(regs[11], 1); // busy
-    // The cycle in progress finished undisturbed and the station serves the next trigger.
+    // The cycle in progress finishes undisturbed and the station serves the next trigger.
+    hgtest::writeFile(dir / "go", "");
     ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "done", 10s));
     auto next = hgdaemon::plcClient(port, "cycles 1 --bad-every 0");
     EXPECT_EQ(next.status, 0) << next.err;
@@ -131,11 +153,9 @@ TEST_P(DaemonFaults, DeviceFaultIsReportedWithItsCodeAndTheDaemonKeepsServing)
     EXPECT_TRUE(cycle["consistent"].get<bool>());
     EXPECT_EQ(sql(dir / "results.db", "SELECT verdict, fault_code FROM inspections"),
               "error|" + std::to_string(c.faultCode) + "\n");
-    // Still serving: the heartbeat moves and the register map answers.
-    auto a = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
-    std::this_thread::sleep_for(450ms);
-    auto b = nlohmann::json::parse(hgdaemon::plcClient(port, "read 109 1").out)[0].get<int>();
-    EXPECT_GE(b - a, 2); // heartbeat_period_s 0.2
+    // Still serving: the heartbeat moves (heartbeat_period_s 0.2) and the register map answers.
+    const int a = heartbeat(port);
+    EXPECT_TRUE(eventually([&] { return heartbeat(port) - a >= 2; }));
 }
 
 INSTANTIATE_TEST_SUITE_P(Codes, DaemonFaults,
@@ -148,13 +168,15 @@ TEST(DaemonProcess, AbortCommandFromThePlcEndsTheCycleAsAborted)
 {
     hgtest::TempDir dir;
     int port = hgdaemon::freePort();
-    DaemonProcess daemon(hgdaemon::writeConfig(dir, port, {}, 8), {{"HG_FAKE_MOVE_MS", "100"}});
+    // The first move of the cycle waits for the file `go`: the abort lands mid-cycle.
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port, {}, 8), {{"HG_FAKE_MOVE_HOLD", (dir / "go").string()}});
     ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s));
     auto manual = hgdaemon::maintenance(dir / "hg.sock", {{"command", "trigger"}, {"program", 1}});
     ASSERT_TRUE(manual["ok"].get<bool>());
-    std::this_thread::sleep_for(150ms);
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "moving", 10s));
     auto abort = hgtest::run("mbpoll -m tcp -p " + std::to_string(port) + " -a 1 -t 4 -r 10 -0 -1 127.0.0.1 1");
     EXPECT_EQ(abort.status, 0) << abort.out << abort.err;
+    hgtest::writeFile(dir / "go", "");
     ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "done", 5s));
     EXPECT_EQ(sql(dir / "results.db", "SELECT verdict, fault_code FROM inspections"), "aborted|40\n");
 }
@@ -239,10 +261,14 @@ TEST(DaemonProcess, NoReadyWhileDevicesDoNotStart)
     FakeNotifySocket notify(dir / "notify.sock");
     DaemonProcess daemon(hgdaemon::writeConfig(dir, port),
                          {{"NOTIFY_SOCKET", (dir / "notify.sock").string()}, {"HG_FAKE_START_FAIL", "1"}});
-    notify.collect(1500ms);
-    EXPECT_FALSE(notify.seen("READY=1"));
+    // The devices failed to start: the sequencer is in fault (the daemon retries every 2 s).
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "fault", 10s)) << daemon.logText();
     auto regs = nlohmann::json::parse(hgdaemon::plcClient(port, "read 102 3").out);
     EXPECT_EQ(regs[0], 3); // STATUS fault
+    // Everything the daemon sent up to its fault status (the main loop sends it within a turn).
+    notify.collect(5s, [&] { return notify.seen("STATUS=fault"); });
+    ASSERT_TRUE(notify.seen("STATUS=fault"));
+    EXPECT_FALSE(notify.seen("READY=1"));
     auto refused = hgdaemon::plcClient(port, "cycles 1");
     EXPECT_NE(refused.status, 0);
 }
@@ -259,8 +285,8 @@ TEST(DaemonProcess, SighupWithABadConfigurationKeepsTheRunningOne)
     // Bad: a typo in a key. The daemon logs why and keeps program 1.
     hgtest::writeFile(config, good + "watchdog: {max_cycel_s: 3}\n");
     daemon.signal(SIGHUP);
-    std::this_thread::sleep_for(500ms);
-    EXPECT_NE(daemon.logText().find("reload refused"), std::string::npos) << daemon.logText();
+    EXPECT_TRUE(eventually([&] { return daemon.logText().find("reload refused") != std::string::npos; }))
+        << daemon.logText();
     EXPECT_NE(daemon.logText().find("max_cycel_s"), std::string::npos);
     EXPECT_EQ(hgdaemon::plcClient(port, "cycles 1 --bad-every 0").status, 0);
 
@@ -270,7 +296,8 @@ TEST(DaemonProcess, SighupWithABadConfigurationKeepsTheRunningOne)
     withTwo.replace(withTwo.find("plc:"), 0, "  2: {part: part.yaml, views: views.yaml}\n");
     hgtest::writeFile(config, withTwo);
     daemon.signal(SIGHUP);
-    std::this_thread::sleep_for(500ms);
+    ASSERT_TRUE(eventually([&] { return daemon.logText().find("configuration reloaded") != std::string::npos; }))
+        << daemon.logText();
     auto r = hgdaemon::plcClient(port, "cycles 1 --program 2 --bad-every 0");
     EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
 }
@@ -291,10 +318,16 @@ TEST(DaemonProcess, KillNineMidCycleLosesNoReportedResult)
                    " cycles 1000 --bad-every 3 --sim-socket " + (dir / "hg.sock").string() + " > " + out.string() +
                    " 2>/dev/null &";
         (void)!std::system(cmd.c_str());
-        std::this_thread::sleep_for(2s);
+        // Kill it once the PLC has seen a few results (a line per result).
+        auto results = [&] {
+            int n = 0;
+            for (const auto& line : jsonLines(hgtest::run("cat " + out.string()).out, true)) n += line.contains("seq");
+            return n;
+        };
+        ASSERT_TRUE(eventually([&] { return results() > 5; }, 30s)) << daemon.logText();
         daemon.signal(SIGKILL);
-        std::this_thread::sleep_for(300ms);
-        for (const auto& line : jsonLines(hgtest::run("cat " + out.string()).out))
+        // Every result the PLC reported until the kill (a line it prints later names a result it had seen too).
+        for (const auto& line : jsonLines(hgtest::run("cat " + out.string()).out, true))
             if (line.contains("seq")) reported.push_back(line["seq"].get<int>());
     }
     ASSERT_GT(reported.size(), 5u);

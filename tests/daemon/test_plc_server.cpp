@@ -67,7 +67,7 @@ station::PlcConfig withFrameTimeout(std::chrono::milliseconds t)
 }
 
 struct Server {
-    station::PlcRegisters registers;
+    PlcRegisters registers;
     std::unique_ptr<PlcServer> server;
     explicit Server(station::PlcConfig cfg = withFrameTimeout(200ms))
     {

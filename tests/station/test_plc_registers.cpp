@@ -1,39 +1,36 @@
 // The PLC register map of CONTRACTS §6: access rules, exception codes, the
-// trigger handshake and the all-together publication of a result.
+// trigger handshake and the publication of a result (the lock around it is the
+// daemon's, tests/daemon/test_plc_registers.cpp).
 #include "hullgauge/station/plc_registers.h"
 
-#include <atomic>
 #include <gtest/gtest.h>
-#include <thread>
 
 namespace hg::station {
 namespace {
 
-using std::chrono::milliseconds;
-
-std::uint16_t readOne(const PlcRegisters& r, std::uint16_t address)
+std::uint16_t readOne(const RegisterMap& r, std::uint16_t address)
 {
     std::vector<std::uint16_t> v;
     EXPECT_EQ(r.read(address, 1, v), ModbusException::None);
     return v.empty() ? 0xFFFF : v[0];
 }
 
-ModbusException writeOne(PlcRegisters& r, std::uint16_t address, std::uint16_t value)
+ModbusException writeOne(RegisterMap& r, std::uint16_t address, std::uint16_t value)
 {
     std::array<std::uint16_t, 1> v{value};
     return r.write(address, v);
 }
 
 // Programs 1 and 7 configured, STATUS ready.
-void makeReady(PlcRegisters& r)
+void makeReady(RegisterMap& r)
 {
     r.setKnownPrograms({1, 7});
     r.setStatus(PlcStatus::Ready);
 }
 
-TEST(PlcRegisters, StartsInStartingWithEverythingElseZero)
+TEST(PlcRegisterMap, StartsInStartingWithEverythingElseZero)
 {
-    PlcRegisters r;
+    RegisterMap r;
     auto s = r.snapshot();
     EXPECT_EQ(s[102], 4); // STATUS starting (CONTRACTS §6)
     for (std::size_t a = 0; a < s.size(); ++a) {
@@ -43,9 +40,9 @@ TEST(PlcRegisters, StartsInStartingWithEverythingElseZero)
     }
 }
 
-TEST(PlcRegisters, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
+TEST(PlcRegisterMap, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     for (std::uint16_t a : {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 120, 135})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "read-only " << a;
@@ -59,9 +56,9 @@ TEST(PlcRegisters, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
     EXPECT_EQ(readOne(r, 2), 0);
 }
 
-TEST(PlcRegisters, BadValuesAnswerIllegalDataValueAndChangeNothing)
+TEST(PlcRegisterMap, BadValuesAnswerIllegalDataValueAndChangeNothing)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     EXPECT_EQ(writeOne(r, 2, 0x4101), ModbusException::IllegalDataValue);  // control character in SERIAL
     EXPECT_EQ(writeOne(r, 9, 0x80'41), ModbusException::IllegalDataValue); // non-ASCII byte
@@ -73,9 +70,9 @@ TEST(PlcRegisters, BadValuesAnswerIllegalDataValueAndChangeNothing)
     EXPECT_EQ(readOne(r, 2), 0);
 }
 
-TEST(PlcRegisters, ReadsInsideTheMapSucceedAndPastItFail)
+TEST(PlcRegisterMap, ReadsInsideTheMapSucceedAndPastItFail)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     std::vector<std::uint16_t> v;
     EXPECT_EQ(r.read(0, 136, v), ModbusException::None);
@@ -85,7 +82,7 @@ TEST(PlcRegisters, ReadsInsideTheMapSucceedAndPastItFail)
     EXPECT_EQ(r.read(0, 0, v), ModbusException::IllegalDataAddress);
 }
 
-TEST(PlcRegisters, SerialIsTwoCharactersPerRegisterHighByteFirst)
+TEST(PlcRegisterMap, SerialIsTwoCharactersPerRegisterHighByteFirst)
 {
     auto words = encodeSerial("AB12");
     EXPECT_EQ(words[0], 0x4142); // 'A' = 0x41 high, 'B' = 0x42 low
@@ -97,9 +94,9 @@ TEST(PlcRegisters, SerialIsTwoCharactersPerRegisterHighByteFirst)
     EXPECT_EQ(decodeSerial(padded), "X");
 }
 
-TEST(PlcRegisters, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
+TEST(PlcRegisterMap, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     auto serial = encodeSerial("PART-0001");
     std::array<std::uint16_t, 10> block{};
@@ -109,7 +106,7 @@ TEST(PlcRegisters, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
     ASSERT_EQ(r.write(0, block), ModbusException::None);
     EXPECT_EQ(readOne(r, 100), 5); // ACK_SEQ
     EXPECT_EQ(readOne(r, 102), 1); // STATUS busy at once
-    auto t = r.waitTrigger(milliseconds(100));
+    auto t = r.takeTrigger();
     ASSERT_TRUE(t);
     EXPECT_EQ(t->seq, 5);
     EXPECT_EQ(t->program, 7);
@@ -120,22 +117,22 @@ TEST(PlcRegisters, ChangedTriggerIsAcceptedAndLatchedWithProgramAndSerial)
     EXPECT_EQ(t->program, 7);
 }
 
-TEST(PlcRegisters, SameTriggerValueDoesNothing)
+TEST(PlcRegisterMap, SameTriggerValueDoesNothing)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
     ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);
-    ASSERT_TRUE(r.waitTrigger(milliseconds(10)));
+    ASSERT_TRUE(r.takeTrigger());
     r.setStatus(PlcStatus::Ready);
     ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);
-    EXPECT_FALSE(r.waitTrigger(milliseconds(10)));
+    EXPECT_FALSE(r.takeTrigger());
     EXPECT_EQ(r.rejectedTriggers(), 0);
 }
 
-TEST(PlcRegisters, RefusedTriggersAreCountedWithTheirReason)
+TEST(PlcRegisterMap, RefusedTriggersAreCountedWithTheirReason)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     ASSERT_EQ(writeOne(r, 1, 9), ModbusException::None); // program 9 is not configured
     ASSERT_EQ(writeOne(r, 0, 1), ModbusException::None);
@@ -150,8 +147,8 @@ TEST(PlcRegisters, RefusedTriggersAreCountedWithTheirReason)
     EXPECT_EQ(readOne(r, 100), 2);
     EXPECT_EQ(readOne(r, 110), 2);
     EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::Busy));
-    ASSERT_TRUE(r.waitTrigger(milliseconds(10)));
-    EXPECT_FALSE(r.waitTrigger(milliseconds(10))); // the refused one was never queued
+    ASSERT_TRUE(r.takeTrigger());
+    EXPECT_FALSE(r.takeTrigger()); // the refused one was never queued
 
     r.setStatus(PlcStatus::Fault);
     ASSERT_EQ(writeOne(r, 0, 4), ModbusException::None);
@@ -159,9 +156,9 @@ TEST(PlcRegisters, RefusedTriggersAreCountedWithTheirReason)
     EXPECT_EQ(readOne(r, 111), static_cast<std::uint16_t>(RejectReason::NotReady));
 }
 
-TEST(PlcRegisters, PublishedResultAppearsWithDoneSeqAndBits)
+TEST(PlcRegisterMap, PublishedResultAppearsWithDoneSeqAndBits)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     PublishedResult p;
     p.seq = 42;
@@ -188,12 +185,12 @@ TEST(PlcRegisters, PublishedResultAppearsWithDoneSeqAndBits)
     EXPECT_EQ(v[22], 0);
 }
 
-TEST(PlcRegisters, ManualTriggerLeavesThePlcHandshakeAlone)
+TEST(PlcRegisterMap, ManualTriggerLeavesThePlcHandshakeAlone)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     EXPECT_EQ(r.triggerManually(1, "BENCH"), RejectReason::None);
-    auto t = r.waitTrigger(milliseconds(10));
+    auto t = r.takeTrigger();
     ASSERT_TRUE(t);
     EXPECT_TRUE(t->manual);
     EXPECT_EQ(readOne(r, 100), 0);
@@ -208,46 +205,24 @@ TEST(PlcRegisters, ManualTriggerLeavesThePlcHandshakeAlone)
     EXPECT_EQ(r.triggerManually(3, "X"), RejectReason::UnknownProgram);
 }
 
-TEST(PlcRegisters, CommandRegisterQueuesAbortAndReadsZero)
+TEST(PlcRegisterMap, CommandRegisterQueuesAbortAndReadsZero)
 {
-    PlcRegisters r;
+    RegisterMap r;
     makeReady(r);
     ASSERT_EQ(writeOne(r, 10, 1), ModbusException::None);
     EXPECT_EQ(readOne(r, 10), 0);
-    EXPECT_EQ(r.takeCommand(), PlcCommand::Abort);
-    EXPECT_EQ(r.takeCommand(), PlcCommand::None);
-}
-
-// A reader never sees DONE_SEQ of one cycle with RESULT of another.
-TEST(PlcRegisters, ConcurrentReadersSeeConsistentResults)
-{
-    PlcRegisters r;
-    makeReady(r);
-    std::atomic<bool> stop{false};
-    std::atomic<int> inconsistent{0};
-    std::thread reader([&] {
-        std::vector<std::uint16_t> v;
-        while (!stop) {
-            if (r.read(101, 6, v) != ModbusException::None) continue;
-            // Odd sequences pass with 0 failed, even ones fail with seq % 7 + 1 failed.
-            auto seq = v[0];
-            if (seq == 0) continue;
-            bool pass = seq % 2 == 1;
-            if (v[2] != (pass ? 1 : 2) || v[4] != (pass ? 0 : seq % 7 + 1)) ++inconsistent;
-        }
-    });
-    for (std::uint16_t seq = 1; seq < 20000; ++seq) {
-        PublishedResult p;
-        p.seq = seq;
-        bool pass = seq % 2 == 1;
-        p.result = pass ? PlcResult::Pass : PlcResult::Fail;
-        p.landmarksFailed = pass ? 0 : static_cast<std::uint16_t>(seq % 7 + 1);
-        p.landmarksTotal = 10;
-        r.publishResult(p);
-    }
-    stop = true;
-    reader.join();
-    EXPECT_EQ(inconsistent.load(), 0);
+    EXPECT_TRUE(r.hasWork());
+    auto c = r.takeCommands();
+    EXPECT_TRUE(c.abort);
+    EXPECT_FALSE(c.resetFault);
+    EXPECT_FALSE(r.takeCommands().any());
+    EXPECT_FALSE(r.hasWork());
+    // An abort and a fault reset written before either is taken: both are kept.
+    ASSERT_EQ(writeOne(r, 10, 1), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 10, 2), ModbusException::None);
+    c = r.takeCommands();
+    EXPECT_TRUE(c.abort);
+    EXPECT_TRUE(c.resetFault);
 }
 
 } // namespace
@@ -259,9 +234,9 @@ namespace {
 // STATUS 5 (maintenance, an extension): entered only from an idle map with no
 // trigger pending, atomically with trigger acceptance; triggers meanwhile are
 // refused as not ready (LAST_REJECT_REASON 3) and counted.
-TEST(PlcRegisters, MaintenanceRefusesTriggersAndIsEnteredOnlyWhenIdle)
+TEST(PlcRegisterMap, MaintenanceRefusesTriggersAndIsEnteredOnlyWhenIdle)
 {
-    PlcRegisters r;
+    RegisterMap r;
     EXPECT_FALSE(r.enterMaintenance()); // still starting
     makeReady(r);
     ASSERT_TRUE(r.enterMaintenance());

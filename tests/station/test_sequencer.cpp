@@ -3,6 +3,8 @@
 #include "hullgauge/station/sequencer.h"
 
 #include <gtest/gtest.h>
+#include <set>
+#include <vector>
 
 namespace hg::station {
 namespace {
@@ -232,6 +234,144 @@ TEST(Sequencer, CalibrationRunsOnlyFromAnIdleStationAndReturnsToReady)
     ASSERT_EQ(fault.state(), SequencerState::Fault);
     fault.onEvent(SequencerEvent::CalibrationStart);
     EXPECT_EQ(fault.state(), SequencerState::Fault);
+}
+
+} // namespace
+} // namespace hg::station
+
+namespace hg::station {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Recovery (docs/plc.md): at once after a faulted cycle and on COMMAND = 2,
+// after the retry wait when the devices failed to start or a recovery failed.
+TEST(Sequencer, RecoveryTimingIsTheSequencersDecision)
+{
+    CaptureSequencer s(1, 1500ms);
+    auto a = s.onEvent(E::DevicesFailed);
+    EXPECT_EQ(a.kind, A::Recover);
+    EXPECT_EQ(a.delay, 1500ms);
+    a = s.onEvent(E::RecoveryFailed);
+    EXPECT_EQ(a.kind, A::Recover);
+    EXPECT_EQ(a.delay, 1500ms);
+    a = s.onEvent(E::FaultReset);
+    EXPECT_EQ(a.kind, A::Recover);
+    EXPECT_EQ(a.delay, 0ms);
+    EXPECT_EQ(s.state(), S::Fault);
+    (void)s.onEvent(E::Recovered);
+    ASSERT_EQ(s.state(), S::Ready);
+    // Outside a fault a reset has nothing to do.
+    EXPECT_EQ(s.onEvent(E::FaultReset).kind, A::None);
+    EXPECT_EQ(s.state(), S::Ready);
+
+    (void)s.trigger(1);
+    (void)s.onEvent(E::MoveFault);
+    (void)s.onEvent(E::MoveFault);
+    ASSERT_EQ(s.state(), S::Fault);
+    EXPECT_EQ(s.afterPublish().kind, A::Recover);
+    EXPECT_EQ(s.afterPublish().delay, 0ms);
+}
+
+TEST(Sequencer, PlanWithoutViewsEndsTheCycleAsProgramLoad)
+{
+    auto s = readySequencer();
+    auto a = s.trigger(0);
+    EXPECT_EQ(a.kind, A::Publish);
+    EXPECT_EQ(s.state(), S::Done);
+    EXPECT_EQ(s.faultCode(), FaultCode::ProgramLoad);
+    EXPECT_EQ(s.trigger(0).kind, A::Publish); // from Done too
+    EXPECT_EQ(s.faultCode(), FaultCode::ProgramLoad);
+}
+
+// A table without Moving -> Settling: the check runs in every build and turns
+// the refused transition into an internal fault that ends the cycle.
+bool withoutSettling(SequencerState from, SequencerState to)
+{
+    return !(from == S::Moving && to == S::Settling) && transitionAllowed(from, to);
+}
+
+TEST(Sequencer, RefusedTransitionIsAnInternalFault)
+{
+    CaptureSequencer s(1, 2s, withoutSettling);
+    (void)s.onEvent(E::DevicesActive);
+    (void)s.trigger(2);
+    auto a = s.onEvent(E::InPosition);
+    EXPECT_EQ(a.kind, A::Publish);
+    EXPECT_TRUE(a.stopMotion);
+    EXPECT_EQ(s.state(), S::Fault);
+    EXPECT_EQ(s.faultCode(), FaultCode::Internal);
+    EXPECT_EQ(s.outcome(), CycleOutcome::Faulted);
+    EXPECT_EQ(s.refusedTransition(), std::make_pair(S::Moving, S::Settling));
+    EXPECT_EQ(s.afterPublish().kind, A::Recover);
+
+    // Outside a cycle the refused transition asks for recovery at once.
+    CaptureSequencer idle(1, 2s, [](SequencerState from, SequencerState to) {
+        return !(from == S::Starting && to == S::Ready) && transitionAllowed(from, to);
+    });
+    a = idle.onEvent(E::DevicesActive);
+    EXPECT_EQ(a.kind, A::Recover);
+    EXPECT_EQ(a.delay, 0ms);
+    EXPECT_EQ(idle.state(), S::Fault);
+    EXPECT_EQ(idle.faultCode(), FaultCode::Internal);
+}
+
+// Every event in every reachable state: the rules never ask for a transition
+// the table refuses (no internal fault anywhere).
+TEST(Sequencer, RulesStayInsideTheTable)
+{
+    // Reach each state by a known path, then feed every event to a copy.
+    std::vector<CaptureSequencer> states;
+    CaptureSequencer s;
+    states.push_back(s); // starting
+    (void)s.onEvent(E::DevicesActive);
+    states.push_back(s); // ready
+    auto moving = s;
+    (void)moving.trigger(2);
+    states.push_back(moving);
+    auto settling = moving;
+    (void)settling.onEvent(E::InPosition);
+    states.push_back(settling);
+    auto grabbing = settling;
+    (void)grabbing.onEvent(E::Settled);
+    states.push_back(grabbing);
+    auto lastGrab = grabbing;
+    (void)lastGrab.onEvent(E::FrameOk);
+    (void)lastGrab.onEvent(E::InPosition);
+    (void)lastGrab.onEvent(E::Settled);
+    states.push_back(lastGrab);
+    auto processing = lastGrab;
+    (void)processing.onEvent(E::FrameOk);
+    states.push_back(processing);
+    auto done = processing;
+    (void)done.onEvent(E::Processed);
+    states.push_back(done);
+    auto fault = s;
+    (void)fault.onEvent(E::DevicesFailed);
+    states.push_back(fault);
+    auto calibrating = s;
+    (void)calibrating.onEvent(E::CalibrationStart);
+    states.push_back(calibrating);
+    std::set<S> seen;
+    for (const auto& start : states) seen.insert(start.state());
+    EXPECT_EQ(seen.size(), 9u) << "every state is reached";
+
+    for (const auto& start : states) {
+        for (int e = 0; e <= static_cast<int>(E::FaultReset); ++e) {
+            auto copy = start;
+            (void)copy.onEvent(static_cast<E>(e));
+            EXPECT_NE(copy.faultCode(), FaultCode::Internal)
+                << toString(start.state()) << " + " << toString(static_cast<E>(e));
+            // Three failures in a row exhaust the retry from any state.
+            (void)copy.onEvent(static_cast<E>(e));
+            (void)copy.onEvent(static_cast<E>(e));
+            EXPECT_NE(copy.faultCode(), FaultCode::Internal)
+                << toString(start.state()) << " + 3 x " << toString(static_cast<E>(e));
+        }
+        auto copy = start;
+        (void)copy.trigger(0);
+        EXPECT_NE(copy.faultCode(), FaultCode::Internal) << toString(start.state()) << " + trigger(0)";
+    }
 }
 
 } // namespace

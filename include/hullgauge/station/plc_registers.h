@@ -1,12 +1,10 @@
 // The PLC's view of the station: the holding-register map of CONTRACTS §6 and
-// its rules, independent of the Modbus transport (the daemon's libmodbus server
-// calls in here for every request).
-//
-// Every access takes one lock, so a read of any block of registers sees one
-// consistent state: RESULT, FAULT_CODE, the landmark counts, CYCLE_MS,
-// LANDMARK_OK_BITS and DONE_SEQ of a cycle are written together by
-// publishResult(), and a PLC that reads DONE_SEQ == its TRIGGER_SEQ in the same
-// block reads that cycle's result.
+// its rules, independent of the Modbus transport and of threads. A pure value:
+// the daemon's PlcRegisters (src/daemon/plc_registers.h) holds one under a
+// lock, so a read of any block of registers sees one consistent state: RESULT,
+// FAULT_CODE, the landmark counts, CYCLE_MS, LANDMARK_OK_BITS and DONE_SEQ of a
+// cycle are written together by publishResult(), and a PLC that reads
+// DONE_SEQ == its TRIGGER_SEQ in the same block reads that cycle's result.
 //
 // Trigger rule (CONTRACTS §6): a write that changes TRIGGER_SEQ asks for an
 // inspection with the PART_PROGRAM and SERIAL in the registers after that write
@@ -19,11 +17,8 @@
 #pragma once
 
 #include <array>
-#include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <deque>
-#include <mutex>
 #include <optional>
 #include <set>
 #include <span>
@@ -68,6 +63,13 @@ enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3,
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
 /// COMMAND register values (extension).
 enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2 };
+/// The commands written to COMMAND and not taken yet: each is latched until
+/// taken, so an abort and a fault reset written back to back are both seen.
+struct PlcCommands {
+    bool abort = false;
+    bool resetFault = false;
+    bool any() const { return abort || resetFault; }
+};
 /// LAST_REJECT_REASON register values (extension).
 enum class RejectReason : std::uint16_t { None = 0, Busy = 1, UnknownProgram = 2, NotReady = 3 };
 
@@ -105,9 +107,9 @@ struct PublishedResult {
     bool manual = false;
 };
 
-class PlcRegisters {
+class RegisterMap {
   public:
-    PlcRegisters();
+    RegisterMap();
 
     /// FC03. Fills `out` with `count` registers from `address`; any block
     /// inside [0, reg::Count) may be read (unmapped gaps read 0).
@@ -126,15 +128,17 @@ class PlcRegisters {
     bool enterMaintenance();
     PlcStatus status() const;
     /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, LANDMARK_OK_BITS, DONE_SEQ
-    /// and STATUS together (one lock).
+    /// and STATUS together.
     void publishResult(const PublishedResult& r);
     /// HEARTBEAT += 1 (wraps at 65536).
     void beat();
 
-    /// Waits up to `timeout` for an accepted trigger.
-    std::optional<TriggerRequest> waitTrigger(std::chrono::milliseconds timeout);
-    /// Takes a pending PLC command (abort / reset fault), if any.
-    PlcCommand takeCommand();
+    /// Takes the oldest accepted trigger, if any.
+    std::optional<TriggerRequest> takeTrigger();
+    /// Takes the commands written since the last call (abort, reset fault).
+    PlcCommands takeCommands();
+    /// True when a trigger or a command waits to be taken.
+    bool hasWork() const { return !pending_.empty() || commands_.any(); }
 
     /// Counters for the maintenance socket and logs.
     std::uint16_t rejectedTriggers() const;
@@ -146,15 +150,13 @@ class PlcRegisters {
     RejectReason triggerManually(std::uint16_t program, const std::string& serial);
 
   private:
-    RejectReason acceptLocked(TriggerRequest request);
+    RejectReason accept(TriggerRequest request);
     static bool writable(std::uint16_t address);
 
-    mutable std::mutex mutex_;
-    std::condition_variable triggerReady_;
     std::array<std::uint16_t, reg::Count> regs_{};
     std::set<std::uint16_t> knownPrograms_;
     std::deque<TriggerRequest> pending_;
-    PlcCommand pendingCommand_ = PlcCommand::None;
+    PlcCommands commands_;
 };
 
 /// The serial number in SERIAL (2 ASCII characters per register, high byte

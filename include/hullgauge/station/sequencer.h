@@ -14,14 +14,25 @@
 //   busy --program or inspection error--> Done (result error; devices are fine)
 //   Moving/Settling/Grabbing --abort--> Done (result aborted)
 //   Fault --recovered--> Ready;  any --devices failed--> Fault
-// The table of allowed transitions is transitionAllowed(); the runner's
-// view of "busy" is Moving, Settling, Grabbing and Processing together.
+// The table of allowed transitions is transitionAllowed(), checked on every
+// transition in every build: a transition the table does not list is not
+// taken; the sequencer goes to Fault with FaultCode::Internal instead (Fault
+// is reachable from every state), so a bug in the table or the rules shows as
+// a recorded internal error, not as a silently inconsistent state. The
+// runner's view of "busy" is Moving, Settling, Grabbing and Processing together.
+//
+// Recovery (docs/plc.md, "The handshake"): the sequencer says when the runner
+// recovers the devices — at once after a faulted cycle or on COMMAND = 2
+// (FaultReset), after `recoveryRetry` (2 s by default) when the devices failed
+// to start or a recovery failed.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace hg::station {
 
@@ -52,6 +63,7 @@ enum class SequencerEvent {
     RecoveryFailed,   ///< recovery after a fault failed (the runner tries again later)
     CalibrationStart, ///< a calibration requested on the maintenance socket begins (idle station only)
     CalibrationEnd,   ///< the calibration sequence ended (solved, failed or cancelled)
+    FaultReset,       ///< COMMAND = 2 from the PLC: retry the recovery now (in Fault only)
 };
 
 /// FAULT_CODE register values (docs/plc.md lists them for PLC programmers).
@@ -95,13 +107,15 @@ struct SequencerAction {
         Grab,    ///< grab `view`; hand the frame to the pipeline as soon as it is in
         Finish,  ///< all views grabbed: wait for the pipeline's verdict
         Publish, ///< the cycle ended: commit the record, then show the result to the PLC
-        Recover, ///< bring the devices back (reset faults, re-home, restart streaming)
+        Recover, ///< bring the devices back (reset faults, re-home, restart streaming) after `delay`
     };
     Kind kind = Kind::None;
     std::size_t view = 0;
     bool retry = false;
     /// Publish: stop the fixture first (the cycle ended while it may be moving).
     bool stopMotion = false;
+    /// Recover: wait this long first (0: at once).
+    std::chrono::milliseconds delay{0};
     bool operator==(const SequencerAction&) const = default;
 };
 
@@ -110,8 +124,13 @@ enum class CycleOutcome { Inspected, Aborted, Faulted };
 
 class CaptureSequencer {
   public:
-    /// `retries`: extra attempts of a failed move or grab (the station's default is 1).
-    explicit CaptureSequencer(int retries = 1);
+    /// The transition check; tests pass a stricter one to see an illegal transition handled.
+    using TransitionCheck = bool (*)(SequencerState from, SequencerState to);
+
+    /// `retries`: extra attempts of a failed move or grab (the station's default is 1);
+    /// `recoveryRetry`: the wait before another recovery after one failed.
+    explicit CaptureSequencer(int retries = 1, std::chrono::milliseconds recoveryRetry = std::chrono::seconds(2),
+                              TransitionCheck allowed = transitionAllowed);
 
     SequencerState state() const { return state_; }
     /// Current view (0-based) while busy.
@@ -122,6 +141,8 @@ class CaptureSequencer {
     /// Why the last cycle faulted or was aborted (None after a clean cycle).
     FaultCode faultCode() const { return faultCode_; }
     CycleOutcome outcome() const { return outcome_; }
+    /// The last transition the table refused ({from, to}); equal states when none was.
+    std::pair<SequencerState, SequencerState> refusedTransition() const { return refused_; }
 
     /// Starts a cycle over `viewCount` views (only from Ready or Done; a
     /// trigger in any other state is the caller's bug: the register map refuses it).
@@ -129,17 +150,22 @@ class CaptureSequencer {
     /// Feeds an event; returns the next action. Events that do not apply in
     /// the current state (a late frame after an abort) change nothing and return None.
     SequencerAction onEvent(SequencerEvent event);
-    /// After the runner published a cycle: Recover when the cycle left the
-    /// station in Fault, None otherwise.
+    /// After the runner published a cycle: Recover at once when the cycle left
+    /// the station in Fault, None otherwise.
     SequencerAction afterPublish() const;
 
   private:
     SequencerAction go(SequencerState to, SequencerAction action);
+    SequencerAction internalFault(SequencerState refusedTo);
+    SequencerAction recoverAfter(std::chrono::milliseconds delay);
     SequencerAction failStep(FaultCode code, SequencerAction retryAction);
     /// `toFault`: the devices need recovery before the next cycle (else Done).
     SequencerAction endCycle(CycleOutcome outcome, FaultCode code, bool stopMotion, bool toFault);
 
     int retries_;
+    std::chrono::milliseconds recoveryRetry_;
+    TransitionCheck allowed_;
+    std::pair<SequencerState, SequencerState> refused_{SequencerState::Starting, SequencerState::Starting};
     SequencerState state_ = SequencerState::Starting;
     std::size_t view_ = 0;
     std::size_t viewCount_ = 0;

@@ -1,8 +1,8 @@
 // The daemon configuration: a complete file loads with its values; every kind
 // of bad value is refused naming file, line and key.
+#include "daemon_config.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
-#include "hullgauge/station/daemon_config.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "hullgauge/station/daemon_config.h"
+#include "daemon_config.h"
 
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"

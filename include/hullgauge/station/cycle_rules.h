@@ -1,0 +1,37 @@
+// The rules that turn what a cycle's steps reported into what the station
+// shows: the sequencer's events from the devices' status codes, the verdict of
+// a cycle, the operator lamps (CONTRACTS §6) and the PLC's STATUS for a
+// sequencer state (docs/plc.md). Pure functions beside the sequencer; the
+// daemon's cycle runner applies them.
+#pragma once
+
+#include "hullgauge/common/status.h"
+#include "hullgauge/station/plc_registers.h"
+#include "hullgauge/station/result_record.h"
+#include "hullgauge/station/sequencer.h"
+
+#include <string_view>
+
+namespace hg::station {
+
+/// Operator lamp patterns (CONTRACTS §6): green pass, red fail, amber busy,
+/// red and amber blinking on fault.
+enum class LampPattern { Off, Busy, Pass, Fail, Fault };
+std::string_view toString(LampPattern p);
+
+/// The event a move's status feeds to the sequencer.
+SequencerEvent moveEvent(StatusCode code);
+/// The event a grab's status feeds to the sequencer.
+SequencerEvent grabEvent(StatusCode code);
+
+/// A published cycle's verdict: pass or fail when it was inspected, aborted, else error.
+Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed);
+
+/// The lamps for the sequencer's state; in Done they show the last verdict
+/// (an aborted or failed cycle leaves them off).
+LampPattern lampPattern(SequencerState state, Verdict lastVerdict);
+
+/// STATUS for the sequencer's state: busy while a cycle runs, maintenance while calibrating.
+PlcStatus plcStatus(SequencerState state);
+
+} // namespace hg::station

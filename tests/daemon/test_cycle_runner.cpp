@@ -1,0 +1,339 @@
+// The cycle runner in-process with scripted devices and a hand-moved clock:
+// retries, faults with their codes, aborts and fault resets from the PLC's
+// COMMAND register, and recovery when the sequencer says — asserted on the
+// PLC registers, the lamps, the stored records and the sequencer's state.
+// Waiting is polling under a deadline; time on the runner's clock passes only
+// when the test moves it (settle times pass at once).
+#include "cycle_runner.h"
+#include "hgtest/paths.h"
+
+#include <deque>
+#include <gtest/gtest.h>
+#include <mutex>
+
+namespace hg::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+using station::LampPattern;
+using station::SequencerState;
+namespace reg = station::reg;
+
+/// A clock only the test moves; sleeps end at once, at their deadline.
+class ManualClock : public Clock {
+  public:
+    time_point now() const override { return time_point(std::chrono::nanoseconds(ns_.load())); }
+    void sleepUntil(time_point until, const std::function<bool()>& stop) override
+    {
+        if (stop()) return;
+        auto target = std::chrono::duration_cast<std::chrono::nanoseconds>(until.time_since_epoch()).count();
+        auto current = ns_.load();
+        while (current < target && !ns_.compare_exchange_weak(current, target)) {}
+    }
+    void advance(std::chrono::milliseconds d) { ns_ += std::chrono::nanoseconds(d).count(); }
+
+  private:
+    std::atomic<std::int64_t> ns_{std::chrono::nanoseconds(1h).count()}; // 0 means "idle" to the runner
+};
+
+/// Devices whose answers the test scripts call by call; every call is recorded.
+class ScriptedDevices : public StationDevices {
+  public:
+    using Step = std::function<Status()>;
+    explicit ScriptedDevices(const Clock& clock) : clock_(clock) {}
+
+    std::deque<Step> moves, grabs, recoveries; ///< the next answers; success when empty
+    Status startStatus;
+
+    Status start() override { return startStatus; }
+    void shutdown() override {}
+    Status moveTo(const geometry::FixturePose&, std::chrono::milliseconds, bool retry) override
+    {
+        std::lock_guard lock(mutex_);
+        moveRetries_.push_back(retry);
+        return next(moves);
+    }
+    void stopMotion() override { stopped_ = true; }
+    Status grab(std::chrono::milliseconds, cv::Mat& image) override
+    {
+        std::lock_guard lock(mutex_);
+        ++grabCount_;
+        image = cv::Mat(8, 8, CV_8UC1, cv::Scalar(200));
+        return next(grabs);
+    }
+    Status recover() override
+    {
+        std::lock_guard lock(mutex_);
+        recoverTimes_.push_back(clock_.now());
+        return next(recoveries);
+    }
+    void showLamps(LampPattern pattern) override
+    {
+        std::lock_guard lock(mutex_);
+        lamps_.push_back(pattern);
+    }
+
+    std::vector<LampPattern> lamps() const
+    {
+        std::lock_guard lock(mutex_);
+        return lamps_;
+    }
+    std::vector<bool> moveRetries() const
+    {
+        std::lock_guard lock(mutex_);
+        return moveRetries_;
+    }
+    int grabCount() const
+    {
+        std::lock_guard lock(mutex_);
+        return grabCount_;
+    }
+    std::vector<Clock::time_point> recoverTimes() const
+    {
+        std::lock_guard lock(mutex_);
+        return recoverTimes_;
+    }
+    bool stopped() const { return stopped_; }
+
+  private:
+    static Status next(std::deque<Step>& script)
+    {
+        if (script.empty()) return Status::success();
+        auto step = std::move(script.front());
+        script.pop_front();
+        return step();
+    }
+    const Clock& clock_;
+    mutable std::mutex mutex_;
+    std::vector<LampPattern> lamps_;
+    std::vector<bool> moveRetries_;
+    std::vector<Clock::time_point> recoverTimes_;
+    int grabCount_ = 0;
+    std::atomic<bool> stopped_{false};
+};
+
+/// Passes every part with three landmarks.
+class PassingInspector : public Inspector {
+  public:
+    bool begin(const station::PartProgramRef&, std::string&) override { return true; }
+    void addView(std::size_t, const geometry::FixturePose&, cv::Mat) override {}
+    InspectionOutcome finish() override
+    {
+        InspectionOutcome out;
+        out.ok = true;
+        out.part = "block";
+        out.pass = true;
+        for (const char* id : {"A", "B", "C"}) out.landmarks.push_back({id, "ok", 0.0, 0.1, 0.05, 0.2});
+        return out;
+    }
+    void cancel() override {}
+};
+
+Status fails(StatusCode code)
+{
+    return Status::failure(code, "scripted failure");
+}
+
+bool eventually(const std::function<bool()>& condition, std::chrono::seconds deadline = 10s)
+{
+    const auto until = std::chrono::steady_clock::now() + deadline;
+    while (!condition()) {
+        if (std::chrono::steady_clock::now() > until) return false;
+        std::this_thread::sleep_for(1ms); // polling; the deadline decides, not the sleep
+    }
+    return true;
+}
+
+class CycleRunnerTest : public ::testing::Test {
+  protected:
+    CycleRunnerTest() : devices(clock), store(dir / "results.db")
+    {
+        auto cfg = std::make_shared<station::DaemonConfig>();
+        station::PartProgramRef program;
+        program.number = 1;
+        program.views = {{0, 20, 0}, {20, 20, 0}, {40, 20, 0}};
+        cfg->programs[1] = program;
+        cfg->results.database = dir / "results.db";
+        cfg->results.imageDir = dir / "images";
+        cfg->sequencer.settle = 50ms;
+        config = cfg;
+        registers.setKnownPrograms({1});
+    }
+    ~CycleRunnerTest() override { runner.reset(); }
+
+    void start()
+    {
+        runner = std::make_unique<CycleRunner>(registers, devices, inspector, store, config, clock);
+        runner->start([this] { ++readyCalls; });
+    }
+    void startReady()
+    {
+        start();
+        // STATUS is the runner's last word on a state change: the lamps and the sequencer are set before it.
+        ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+        EXPECT_EQ(runner->state(), SequencerState::Ready);
+    }
+    /// The PLC's trigger: program 1 and a new TRIGGER_SEQ in one block.
+    void trigger(std::uint16_t seq)
+    {
+        std::array<std::uint16_t, 2> block{seq, 1};
+        ASSERT_EQ(registers.write(reg::TriggerSeq, block), station::ModbusException::None);
+    }
+    void command(std::uint16_t value)
+    {
+        std::array<std::uint16_t, 1> v{value};
+        ASSERT_EQ(registers.write(reg::Command, v), station::ModbusException::None);
+    }
+    std::uint16_t at(std::uint16_t address) const { return registers.snapshot()[address]; }
+    bool done(std::uint16_t seq) const { return at(reg::DoneSeq) == seq; }
+    nlohmann::json lastRecord() const { return store.recent(1).at(0); }
+
+    hgtest::TempDir dir;
+    ManualClock clock;
+    ScriptedDevices devices;
+    PassingInspector inspector;
+    ResultStore store;
+    PlcRegisters registers;
+    std::shared_ptr<const station::DaemonConfig> config;
+    std::unique_ptr<CycleRunner> runner;
+    std::atomic<int> readyCalls{0};
+};
+
+TEST_F(CycleRunnerTest, FailTheFirstMovePassTheRetry)
+{
+    devices.moves.push_back([] { return fails(StatusCode::Timeout); });
+    startReady();
+    EXPECT_EQ(at(reg::Status), 0); // ready
+    trigger(5);
+    ASSERT_TRUE(eventually([&] { return done(5); }));
+    // The first move of view 0 timed out, its retry passed; views 1 and 2 moved once each.
+    EXPECT_EQ(devices.moveRetries(), (std::vector<bool>{false, true, false, false}));
+    EXPECT_EQ(devices.grabCount(), 3);
+    EXPECT_EQ(at(reg::Result), 1); // pass
+    EXPECT_EQ(at(reg::FaultCode), 0);
+    EXPECT_EQ(at(reg::Status), 2); // done
+    EXPECT_EQ(at(reg::LandmarksTotal), 3);
+    EXPECT_EQ(at(reg::LandmarkOkBits), 0b111);
+    EXPECT_EQ(runner->state(), SequencerState::Done);
+    EXPECT_EQ(devices.lamps(), (std::vector<LampPattern>{LampPattern::Off, LampPattern::Busy, LampPattern::Pass}));
+    auto record = lastRecord();
+    EXPECT_EQ(record["trigger_seq"], 5);
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["landmarks_total"], 3);
+    // Three settle times of 50 ms passed on the runner's clock, nothing else did.
+    EXPECT_EQ(record["cycle_ms"], 150);
+    EXPECT_EQ(readyCalls.load(), 1);
+}
+
+TEST_F(CycleRunnerTest, GrabTimesOutTwiceFaultsWithItsCodeThenRecovers)
+{
+    devices.grabs.push_back([] { return Status::success(); });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::Result), 3);     // aborted / error
+    EXPECT_EQ(at(reg::FaultCode), 10); // camera-timeout
+    EXPECT_TRUE(devices.stopped());
+    auto record = lastRecord();
+    EXPECT_EQ(record["verdict"], "error");
+    EXPECT_EQ(record["fault_code"], 10);
+    // The sequencer recovers at once after a faulted cycle; the scripted recovery passes.
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    EXPECT_EQ(runner->state(), SequencerState::Ready);
+    EXPECT_EQ(devices.recoverTimes().size(), 1u);
+    EXPECT_EQ(devices.lamps(),
+              (std::vector<LampPattern>{LampPattern::Off, LampPattern::Busy, LampPattern::Fault, LampPattern::Off}));
+    EXPECT_EQ(devices.grabCount(), 3);
+}
+
+TEST_F(CycleRunnerTest, AbortMidCycleEndsItAsAbortedByThePlc)
+{
+    // The PLC writes COMMAND = 1 while the fixture moves to view 1.
+    devices.moves.push_back([] { return Status::success(); });
+    devices.moves.push_back([this] {
+        command(1);
+        return Status::success();
+    });
+    startReady();
+    trigger(9);
+    ASSERT_TRUE(eventually([&] { return done(9); }));
+    EXPECT_EQ(at(reg::Result), 3);
+    EXPECT_EQ(at(reg::FaultCode), 40); // aborted-by-plc
+    EXPECT_EQ(at(reg::Status), 2);     // done: an abort is not a station fault
+    EXPECT_EQ(devices.grabCount(), 1); // view 1 was never grabbed
+    EXPECT_TRUE(devices.stopped());
+    EXPECT_EQ(runner->state(), SequencerState::Done);
+    EXPECT_EQ(lastRecord()["verdict"], "aborted");
+    EXPECT_EQ(devices.lamps(), (std::vector<LampPattern>{LampPattern::Off, LampPattern::Busy, LampPattern::Off}));
+    EXPECT_TRUE(devices.recoverTimes().empty());
+}
+
+TEST_F(CycleRunnerTest, FaultResetSentMidCycleIsAppliedAfterIt)
+{
+    // COMMAND = 2 arrives during the first grab; the grabs of view 1 then time out twice.
+    devices.grabs.push_back([this] {
+        command(2);
+        return Status::success();
+    });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    // The recovery right after the faulted cycle fails; the sequencer would wait 2 s to retry.
+    devices.recoveries.push_back([] { return fails(StatusCode::Fault); });
+    startReady();
+    trigger(3);
+    ASSERT_TRUE(eventually([&] { return done(3); }));
+    EXPECT_EQ(at(reg::FaultCode), 10);
+    // The reset was kept through the cycle: the second attempt follows at once, with no
+    // time passing on the runner's clock, and brings the station back.
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    EXPECT_EQ(runner->state(), SequencerState::Ready);
+    auto times = devices.recoverTimes();
+    ASSERT_EQ(times.size(), 2u);
+    EXPECT_EQ(times[1], times[0]);
+    EXPECT_EQ(devices.lamps().back(), LampPattern::Off);
+}
+
+TEST_F(CycleRunnerTest, RecoverFailsThenSucceedsAfterTheSequencersWait)
+{
+    devices.startStatus = fails(StatusCode::CommunicationError);
+    devices.recoveries.push_back([] { return fails(StatusCode::CommunicationError); });
+    start();
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 3; }));
+    EXPECT_EQ(runner->state(), SequencerState::Fault);
+    EXPECT_EQ(runner->describe()["fault_code"], 43); // devices-down
+    EXPECT_EQ(readyCalls.load(), 0);
+    const auto t0 = clock.now();
+    // Time passes on the runner's clock, 10 ms per poll, until the station is back: the
+    // devices failed to start, so the first recovery is due 2 s later; it fails, and the
+    // next one is due 2 s after that failure, and passes.
+    ASSERT_TRUE(eventually([&] {
+        clock.advance(10ms);
+        return at(reg::Status) == 0;
+    }));
+    EXPECT_EQ(runner->state(), SequencerState::Ready);
+    auto times = devices.recoverTimes();
+    ASSERT_EQ(times.size(), 2u);
+    EXPECT_GE(times[0] - t0, 2s);
+    EXPECT_GE(times[1] - times[0], 2s);
+    EXPECT_EQ(readyCalls.load(), 1); // READY=1 once, when the devices first came up
+    EXPECT_EQ(devices.lamps(), (std::vector<LampPattern>{LampPattern::Fault, LampPattern::Off}));
+    // And the station serves triggers.
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::Result), 1);
+}
+
+TEST_F(CycleRunnerTest, AFaultResetOutsideAFaultChangesNothing)
+{
+    startReady();
+    command(2);
+    trigger(4);
+    ASSERT_TRUE(eventually([&] { return done(4); }));
+    EXPECT_EQ(at(reg::Result), 1);
+    EXPECT_TRUE(devices.recoverTimes().empty());
+}
+
+} // namespace
+} // namespace hg::daemon

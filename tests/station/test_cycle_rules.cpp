@@ -1,0 +1,65 @@
+// The rules beside the sequencer: device status -> event, verdict, lamps
+// (CONTRACTS §6) and STATUS (docs/plc.md), each case written out by hand.
+#include "hullgauge/station/cycle_rules.h"
+
+#include <gtest/gtest.h>
+
+namespace hg::station {
+namespace {
+
+using S = SequencerState;
+
+TEST(CycleRules, DeviceStatusCodesBecomeTheirEvents)
+{
+    EXPECT_EQ(moveEvent(StatusCode::Ok), SequencerEvent::InPosition);
+    EXPECT_EQ(moveEvent(StatusCode::Timeout), SequencerEvent::MoveTimeout);
+    EXPECT_EQ(moveEvent(StatusCode::Fault), SequencerEvent::MoveFault);
+    EXPECT_EQ(moveEvent(StatusCode::NotAllowed), SequencerEvent::MoveRefused);
+    EXPECT_EQ(moveEvent(StatusCode::CommunicationError), SequencerEvent::MoveCommError);
+    EXPECT_EQ(moveEvent(StatusCode::Error), SequencerEvent::MoveCommError);
+    EXPECT_EQ(grabEvent(StatusCode::Ok), SequencerEvent::FrameOk);
+    EXPECT_EQ(grabEvent(StatusCode::Timeout), SequencerEvent::FrameTimeout);
+    EXPECT_EQ(grabEvent(StatusCode::BadFrame), SequencerEvent::FrameBad);
+    EXPECT_EQ(grabEvent(StatusCode::IoError), SequencerEvent::FrameError);
+    EXPECT_EQ(grabEvent(StatusCode::NotAllowed), SequencerEvent::FrameError);
+}
+
+TEST(CycleRules, VerdictOfACycle)
+{
+    EXPECT_EQ(verdictOf(CycleOutcome::Inspected, true), Verdict::Pass);
+    EXPECT_EQ(verdictOf(CycleOutcome::Inspected, false), Verdict::Fail);
+    EXPECT_EQ(verdictOf(CycleOutcome::Aborted, true), Verdict::Aborted);
+    EXPECT_EQ(verdictOf(CycleOutcome::Faulted, true), Verdict::Error);
+    EXPECT_EQ(verdictOf(CycleOutcome::Faulted, false), Verdict::Error);
+}
+
+TEST(CycleRules, LampsFollowTheStateAndInDoneTheVerdict)
+{
+    for (auto v : {Verdict::Pass, Verdict::Fail, Verdict::Aborted, Verdict::Error}) {
+        EXPECT_EQ(lampPattern(S::Fault, v), LampPattern::Fault);
+        EXPECT_EQ(lampPattern(S::Starting, v), LampPattern::Off);
+        EXPECT_EQ(lampPattern(S::Ready, v), LampPattern::Off);
+        for (auto busy : {S::Moving, S::Settling, S::Grabbing, S::Processing, S::Calibrating})
+            EXPECT_EQ(lampPattern(busy, v), LampPattern::Busy);
+    }
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Pass), LampPattern::Pass);
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Fail), LampPattern::Fail);
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Aborted), LampPattern::Off);
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Error), LampPattern::Off);
+    EXPECT_EQ(toString(LampPattern::Fault), "fault");
+}
+
+TEST(CycleRules, StatusRegisterForEachState)
+{
+    // STATUS values of CONTRACTS §6 (and 5, maintenance, docs/plc.md).
+    EXPECT_EQ(static_cast<int>(plcStatus(S::Ready)), 0);
+    for (auto busy : {S::Moving, S::Settling, S::Grabbing, S::Processing})
+        EXPECT_EQ(static_cast<int>(plcStatus(busy)), 1);
+    EXPECT_EQ(static_cast<int>(plcStatus(S::Done)), 2);
+    EXPECT_EQ(static_cast<int>(plcStatus(S::Fault)), 3);
+    EXPECT_EQ(static_cast<int>(plcStatus(S::Starting)), 4);
+    EXPECT_EQ(static_cast<int>(plcStatus(S::Calibrating)), 5);
+}
+
+} // namespace
+} // namespace hg::station

@@ -527,8 +527,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     // their folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
     std::string imagesDir;
     ImageArchive archive(cfg->results.imageDir, cfg->results.retention);
-    const bool saveImages = record.verdict == station::Verdict::Fail && cfg->results.saveFailedImages &&
-                            (!outcome.views.empty() || outcome.evidence);
+    const bool saveImages = archivesPart(cfg->results, record.verdict) && (!outcome.views.empty() || outcome.evidence);
     if (saveImages) imagesDir = archive.folderFor(record.startedUnixMs, record.serial).string();
     // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6, issue 6).
     const auto commitStart = Clock::now();
@@ -588,7 +587,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             auto storeLog = hg::log::category("store");
             const auto imagesStart = Clock::now();
             try {
-                if (archive.saveFailed(startedUnixMs, serial, evidence()).empty())
+                if (archive.save(startedUnixMs, serial, evidence()).empty())
                     storeLog->error("the images of the failed part '{}' could not be written to {}", serial, imagesDir);
                 archive.enforceRetention();
             } catch (const std::exception& e) {

@@ -12,6 +12,7 @@
 
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/vision/segmentation.h"
 
 #include <chrono>
 #include <cstdint>
@@ -62,6 +63,8 @@ struct ResultsConfig {
     std::filesystem::path database;
     std::filesystem::path imageDir;
     bool saveFailedImages = true;
+    /// Archive every part, passed or failed, as a re-inspectable capture (audits).
+    bool archiveAll = false;
     RetentionConfig retention;
 };
 
@@ -90,6 +93,8 @@ struct DaemonConfig {
     std::filesystem::path file; ///< the configuration file itself
     std::filesystem::path stationFile;
     geometry::Station station;
+    /// The station file's `segmentation` section (vision::stationSegmentation).
+    vision::SegmentationSettings segmentation;
     /// Name of the station section that lists the operator lamps (default "lamps").
     std::string lampsSection = "lamps";
     std::map<std::uint16_t, PartProgramRef> programs;

@@ -588,10 +588,10 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
             const auto imagesStart = Clock::now();
             try {
                 if (archive.save(startedUnixMs, serial, evidence()).empty())
-                    storeLog->error("the images of the failed part '{}' could not be written to {}", serial, imagesDir);
+                    storeLog->error("the archive of part '{}' could not be written to {}", serial, imagesDir);
                 archive.enforceRetention();
             } catch (const std::exception& e) {
-                storeLog->error("the images of the failed part '{}': {}", serial, e.what());
+                storeLog->error("the archive of part '{}': {}", serial, e.what());
             }
             const double ms = msSince(imagesStart);
             storeLog->debug("images of '{}' written in {:.0f} ms", serial, ms);

@@ -18,7 +18,7 @@
 
 namespace hg::daemon {
 
-/// A landmark drawn on a failed part's image: pixel position and status.
+/// A landmark drawn on an archived part's picture: pixel position and status.
 struct LandmarkMark {
     cv::Point2d pixel;
     std::string id;

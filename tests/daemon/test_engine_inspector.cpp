@@ -17,8 +17,8 @@
 #include "image_archive.h"
 
 #include <fstream>
-#include <iterator>
 #include <gtest/gtest.h>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -85,9 +85,9 @@ fs::path archive(const DaemonConfig& config, InspectionOutcome& outcome, const f
 nlohmann::json inspectOffline(const fs::path& partFile, const fs::path& folder)
 {
     const fs::path out = folder.parent_path() / (folder.filename().string() + "-offline.json");
-    const auto r = hgtest::run((hgtest::binaryDir() / "bin" / "hullgauge").string() + " inspect --part " +
-                               partFile.string() + " --views " + (folder / "manifest.json").string() + " --out " +
-                               out.string());
+    const auto r =
+        hgtest::run((hgtest::binaryDir() / "bin" / "hullgauge").string() + " inspect --part " + partFile.string() +
+                    " --views " + (folder / "manifest.json").string() + " --out " + out.string());
     EXPECT_TRUE(r.status == 0 || r.status == 1) << r.err;
     std::ifstream in(out);
     return in ? nlohmann::json::parse(in) : nlohmann::json::object();
@@ -195,19 +195,18 @@ TEST_F(EngineParity, StationFixedThresholdIsWhatTheDaemonSegmentsWith)
     // 0.92 x 255 = 235 backlight. Half way between them the silhouettes are Otsu's: the nominal
     // part passes. Below the part's grey level no pixel is dark enough to be part: no view
     // holds the part, so no landmark finds its surface.
-    const std::map<std::string, std::map<std::string, std::string>> expected = {
-        {"{method: fixed, threshold: 122}", {}},
-        {"{method: fixed, threshold: 2}",
-         {{"tall-top", "not_found"},
-          {"tall-corner", "not_found"},
-          {"tall-side", "not_found"},
-          {"tall-foot", "not_found"},
-          {"riser", "not_found"},
-          {"step-top", "not_found"},
-          {"step-side", "not_found"},
-          {"end-front", "not_found"},
-          {"end-back", "not_found"},
-          {"step-top-back", "not_found"}}}};
+    const std::map<std::string, std::map<std::string, std::string>> expected = {{"{method: fixed, threshold: 122}", {}},
+                                                                                {"{method: fixed, threshold: 2}",
+                                                                                 {{"tall-top", "not_found"},
+                                                                                  {"tall-corner", "not_found"},
+                                                                                  {"tall-side", "not_found"},
+                                                                                  {"tall-foot", "not_found"},
+                                                                                  {"riser", "not_found"},
+                                                                                  {"step-top", "not_found"},
+                                                                                  {"step-side", "not_found"},
+                                                                                  {"end-front", "not_found"},
+                                                                                  {"end-back", "not_found"},
+                                                                                  {"step-top-back", "not_found"}}}};
     for (const auto& [segmentation, failing] : expected) {
         SCOPED_TRACE(segmentation);
         hgtest::TempDir dir;

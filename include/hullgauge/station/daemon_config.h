@@ -54,9 +54,9 @@ struct PlcConfig {
 };
 
 struct RetentionConfig {
-    std::size_t maxCount = 2000;         ///< failed-part image sets kept
+    std::size_t maxCount = 2000;         ///< archived part folders kept
     std::chrono::hours maxAge{24 * 30};  ///< older image sets are removed
-    std::uint64_t maxBytes = 2ull << 30; ///< total size of the image folder
+    std::uint64_t maxBytes = 2ull << 30; ///< total size of the archive folder
 };
 
 struct ResultsConfig {

@@ -1,15 +1,14 @@
 #include "hullgauge/calib/station_file.h"
 
-#include <fcntl.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <ctime>
 #include <fstream>
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 
@@ -53,27 +52,6 @@ std::string timestamp()
     char b[32];
     std::strftime(b, sizeof b, "%Y%m%dT%H%M%SZ", &tm);
     return b;
-}
-
-void writeDurably(const std::filesystem::path& path, const std::string& text)
-{
-    int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw FaultError(path.string() + ": cannot create: " + std::strerror(errno));
-    const char* p = text.data();
-    std::size_t left = text.size();
-    while (left > 0) {
-        ssize_t n = ::write(fd, p, left);
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            int err = errno;
-            ::close(fd);
-            throw FaultError(path.string() + ": write failed: " + std::strerror(err));
-        }
-        p += n;
-        left -= static_cast<std::size_t>(n);
-    }
-    if (::fsync(fd) != 0 || ::close(fd) != 0)
-        throw FaultError(path.string() + ": cannot flush to disk: " + std::strerror(errno));
 }
 
 } // namespace
@@ -189,7 +167,7 @@ std::optional<std::filesystem::path> StationFileUpdate::commit()
     std::filesystem::path tmp = file_;
     tmp += ".tmp-" + std::to_string(::getpid());
     try {
-        writeDurably(tmp, text);
+        writeFileDurably(tmp, text);
     } catch (...) {
         std::filesystem::remove(tmp, ec);
         throw;

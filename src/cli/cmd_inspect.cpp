@@ -28,23 +28,37 @@ struct InspectArgs {
     int adjacency = -1;
     std::vector<std::string> mask;
     bool earlyExit = false;
-    std::string method = "volume";
+    std::string method;
     bool noResolutionCheck = false;
 };
+
+// The part program's `inspection` section (defaults with --map), each option
+// given replacing its key (docs/inspection.md, "Which settings apply").
+model::InspectionSettings withFlags(model::InspectionSettings s, const InspectArgs& args)
+{
+    if (args.level >= 0) s.level = args.level;
+    if (args.adjacency >= 0) s.adjacency = args.adjacency;
+    if (args.earlyExit) s.earlyExit = true;
+    if (!args.method.empty()) s.centrePointTest = args.method == "centre";
+    if (args.noResolutionCheck) s.requireResolution = false;
+    return s;
+}
 
 int run(const InspectArgs& args)
 {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     std::optional<inspect::InspectionMap> map;
+    inspect::InspectionOptions options;
     if (!args.map.empty()) {
         map = inspect::InspectionMap::load(args.map);
+        options = inspect::inspectionOptions(withFlags({}, args));
     } else {
         const model::PartProgram program = model::loadPartProgram(args.part);
-        // Only the requested level is needed for one inspection.
-        const int level = args.level < 0 ? program.octree.depth : args.level;
-        map = inspect::buildInspectionMap(program, std::max(1, program.octree.depth - level + 1));
+        options = inspect::inspectionOptions(withFlags(program.inspection, args));
+        map = inspect::buildInspectionMap(program, options);
     }
+    options.maskedLandmarks = args.mask;
 
     const vision::CaptureManifest manifest = vision::readManifest(args.views);
     std::vector<inspect::CapturedView> views;
@@ -57,14 +71,6 @@ int run(const InspectArgs& args)
     }
     if (views.empty()) throw InputError(args.views, "views", "no views");
 
-    inspect::InspectionOptions options;
-    options.level = args.level;
-    options.adjacency = args.adjacency;
-    options.maskedLandmarks = args.mask;
-    options.earlyExit = args.earlyExit;
-    options.method =
-        args.method == "centre" ? inspect::VoxelTestMethod::CentrePoint : inspect::VoxelTestMethod::VolumeSource;
-    options.requireResolution = !args.noResolutionCheck;
     const std::string source = args.map.empty() ? args.part : args.map;
     std::optional<inspect::Inspector> inspector;
     try {
@@ -107,13 +113,14 @@ std::function<int()> factory(CLI::App& app)
     map->excludes(part);
     cmd->add_option("--views", args->views, "capture manifest (JSON, CONTRACTS §3)")->required();
     cmd->add_option("--out", args->out, "result JSON (default: stdout)");
-    cmd->add_option("--level", args->level, "octree level to inspect at (default: the map's depth)");
-    cmd->add_option("--adjacency", args->adjacency, "type-four layers to search (default: the map's)");
+    // Each option replaces the part program's `inspection` key of the same meaning.
+    cmd->add_option("--level", args->level, "octree level to inspect at (default: inspection.level, else the depth)");
+    cmd->add_option("--adjacency", args->adjacency, "type-four layers to search (default: inspection.adjacency)");
     cmd->add_option("--mask", args->mask, "landmark ids to leave out")->delimiter(',');
     cmd->add_flag("--early-exit", args->earlyExit, "stop at the first landmark that is not ok");
-    cmd->add_option("--method", args->method, "voxel test: volume (volume source) or centre (centre point)")
-        ->check(CLI::IsMember({"volume", "centre"}))
-        ->capture_default_str();
+    cmd->add_option("--method", args->method,
+                    "voxel test: volume (volume source) or centre (centre point); default: inspection.method")
+        ->check(CLI::IsMember({"volume", "centre"}));
     cmd->add_flag("--no-resolution-check", args->noResolutionCheck,
                   "do not require a view that resolves ΔV (eq. 4.4.4-19) per landmark");
     return [args] {

@@ -406,7 +406,7 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
     recordOutcome(cycle);
     commitAndPublish(cycle);
     report(cycle);
-    if (cycle.saveImages) saveFailedImages(cycle);
+    if (cycle.saveImages) archivePart(cycle);
     // A cycle that left the station in fault: the sequencer says recover (at once).
     if (!stopRequested_) schedule(sequencer_.afterPublish());
 }
@@ -437,8 +437,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
                        {"wait_for_verdict", cycle.finishMs}};
     // A failed part's images are written after the result is shown: the record names their
     // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
-    cycle.saveImages = record.verdict == station::Verdict::Fail && cycle.cfg->results.saveFailedImages &&
-                       (!outcome.views.empty() || outcome.evidence);
+    cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) && (!outcome.views.empty() || outcome.evidence);
     if (cycle.saveImages)
         cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
                               .folderFor(record.startedUnixMs, record.serial)
@@ -508,7 +507,7 @@ void CycleRunner::report(Cycle& cycle)
 
 // On the writer's thread: the runner is free for the next trigger meanwhile. The job
 // touches only what it was given and reports its time through its own counter.
-void CycleRunner::saveFailedImages(Cycle& cycle)
+void CycleRunner::archivePart(Cycle& cycle)
 {
     ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention);
     auto& outcome = cycle.outcome;
@@ -519,11 +518,11 @@ void CycleRunner::saveFailedImages(Cycle& cycle)
         auto log = hg::log::category("store");
         const auto start = std::chrono::steady_clock::now();
         try {
-            if (archive.saveFailed(startedUnixMs, serial, evidence()).empty())
-                log->error("the images of the failed part '{}' could not be written to {}", serial, dir);
+            if (archive.save(startedUnixMs, serial, evidence()).empty())
+                log->error("the archive of part '{}' could not be written to {}", serial, dir);
             archive.enforceRetention();
         } catch (const std::exception& e) {
-            log->error("the images of the failed part '{}': {}", serial, e.what());
+            log->error("the archive of part '{}': {}", serial, e.what());
         }
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         log->debug("images of '{}' written in {:.0f} ms", serial, ms);

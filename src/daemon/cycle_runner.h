@@ -94,7 +94,7 @@ class CycleRunner {
     void recordOutcome(Cycle& cycle);
     void commitAndPublish(Cycle& cycle);
     void report(Cycle& cycle);
-    void saveFailedImages(Cycle& cycle);
+    void archivePart(Cycle& cycle);
 
     PlcRegisters& registers_;
     StationDevices& devices_;

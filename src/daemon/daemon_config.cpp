@@ -63,10 +63,11 @@ void parsePlc(const ConfigNode& node, PlcConfig& plc)
 
 void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& results)
 {
-    node.allowOnlyKeys({"database", "images", "save_failed_images", "retention"});
+    node.allowOnlyKeys({"database", "images", "save_failed_images", "archive_all", "retention"});
     results.database = resolve(node["database"], base);
     results.imageDir = resolve(node["images"], base);
     if (auto n = node.optional("save_failed_images")) results.saveFailedImages = n->asBool();
+    if (auto n = node.optional("archive_all")) results.archiveAll = n->asBool();
     if (auto r = node.optional("retention")) {
         r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes"});
         if (auto n = r->optional("max_count"))
@@ -168,6 +169,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
 
     cfg.stationFile = existingFile(root["station"], base);
     cfg.station = geometry::loadStation(cfg.stationFile);
+    cfg.segmentation = vision::stationSegmentation(cfg.station);
     if (auto n = root.optional("lamps_section")) {
         cfg.lampsSection = n->asString();
         if (cfg.station.document && !cfg.station.document->has(cfg.lampsSection))

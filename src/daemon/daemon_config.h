@@ -12,6 +12,7 @@
 
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/vision/segmentation.h"
 
 #include <chrono>
 #include <cstdint>
@@ -58,15 +59,17 @@ struct PlcConfig {
 };
 
 struct RetentionConfig {
-    std::size_t maxCount = 2000;         ///< failed-part image sets kept
+    std::size_t maxCount = 2000;         ///< archived part folders kept
     std::chrono::hours maxAge{24 * 30};  ///< older image sets are removed
-    std::uint64_t maxBytes = 2ull << 30; ///< total size of the image folder
+    std::uint64_t maxBytes = 2ull << 30; ///< total size of the archive folder
 };
 
 struct ResultsConfig {
     std::filesystem::path database;
     std::filesystem::path imageDir;
     bool saveFailedImages = true;
+    /// Archive every part, passed or failed, as a re-inspectable capture (audits).
+    bool archiveAll = false;
     RetentionConfig retention;
 };
 
@@ -95,6 +98,8 @@ struct DaemonConfig {
     std::filesystem::path file; ///< the configuration file itself
     std::filesystem::path stationFile;
     geometry::Station station;
+    /// The station file's `segmentation` section (vision::stationSegmentation).
+    vision::SegmentationSettings segmentation;
     /// Name of the station section that lists the operator lamps (default "lamps").
     std::string lampsSection = "lamps";
     std::map<std::uint16_t, PartProgramRef> programs;

@@ -23,7 +23,10 @@ struct LoadedProgram {
 
 class EngineInspector : public Inspector {
   public:
-    explicit EngineInspector(const station::DaemonConfig& config) : station_(config.station) {}
+    explicit EngineInspector(const station::DaemonConfig& config)
+        : station_(config.station), segmentation_(config.segmentation)
+    {
+    }
 
     bool begin(const station::PartProgramRef& ref, std::string& error) override
     {
@@ -39,8 +42,10 @@ class EngineInspector : public Inspector {
                 LoadedProgram p;
                 p.file = ref.partFile;
                 p.program = model::loadPartProgram(ref.partFile);
-                p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program));
-                p.inspector = std::make_unique<inspect::Inspector>(*p.map);
+                // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
+                const auto options = inspect::inspectionOptions(p.program.inspection);
+                p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
+                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options);
                 hg::log::category("inspect")->info(
                     "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
@@ -62,7 +67,13 @@ class EngineInspector : public Inspector {
     void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) override
     {
         inspect::CapturedView view{"v" + std::to_string(index), station_.cameraAt(pose), std::move(image)};
-        views_.push_back(view); // kept (shared pixels) for the failed-part images
+        // Kept (shared pixels) for the archive, with the camera and pose as inspected.
+        ViewEvidence kept;
+        kept.image = view.frame;
+        kept.capture = vision::ManifestView{
+            view.id, {}, view.camera, false, vision::ManifestFixturePose{station_.fixture.type, pose}};
+        kept.segmentation = segmentation_;
+        views_.push_back(std::move(kept));
         pipeline_.submit(std::move(view));
     }
 
@@ -91,7 +102,7 @@ class EngineInspector : public Inspector {
             for (const auto& l : result.landmarks)
                 out.landmarks.push_back(
                     {l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm});
-            if (!result.pass) out.evidence = evidence(result);
+            out.evidence = evidence(result);
         } catch (const std::exception& e) {
             out.error = e.what();
         }
@@ -106,23 +117,21 @@ class EngineInspector : public Inspector {
     }
 
   private:
-    // The failed part's frames with silhouettes and landmark projections (docs/daemon.md). The
-    // projections are taken now (they need the program); the whole-frame segmentation for the
-    // outline is left to the returned function, which the cycle runs after the result is shown.
-    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result) const
+    // The part's archive (docs/daemon.md): frames, cameras, silhouettes and landmark
+    // projections. The projections are taken now (they need the program); the
+    // whole-frame segmentation for the outline is left to the returned function,
+    // which the cycle runs after the result is shown, if it archives the part.
+    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result)
     {
         std::map<std::string, std::string> status;
         for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
-        std::vector<ViewEvidence> views;
-        for (const auto& v : views_) {
-            ViewEvidence e{v.frame, cv::Mat(), {}};
+        std::vector<ViewEvidence> views = std::move(views_);
+        for (auto& e : views)
             for (const auto& l : current_->program.landmarks)
-                if (auto px = v.camera.project(l.position))
+                if (auto px = e.capture->camera.project(l.position))
                     e.landmarks.push_back({cv::Point2d((*px).x(), (*px).y()), l.id, status[l.id]});
-            views.push_back(std::move(e));
-        }
-        return [views = std::move(views), settings = segmentation_]() mutable {
-            for (auto& e : views) e.silhouette = vision::segment(e.image, settings);
+        return [views = std::move(views)]() mutable {
+            for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);
             return views;
         };
     }
@@ -131,7 +140,7 @@ class EngineInspector : public Inspector {
     vision::SegmentationSettings segmentation_;
     std::map<std::uint16_t, LoadedProgram> loaded_;
     LoadedProgram* current_ = nullptr;
-    std::vector<inspect::CapturedView> views_;
+    std::vector<ViewEvidence> views_;
     // Declared last: destroyed first, so its worker has stopped before the programs it prepares with go.
     ViewPipeline pipeline_;
 };

@@ -3,8 +3,10 @@
 // inspection map are loaded once per program and kept; each grabbed view goes
 // with its posed camera to the ViewPipeline's worker (view_pipeline.h), which
 // segments its regions of interest while the fixture moves to the next view;
-// finish() waits for the worker and runs only the traversal. The frames are
-// kept for the failed-part images.
+// finish() waits for the worker and runs only the traversal. The map and the
+// options are those `hullgauge inspect --part` takes from the part program, the
+// segmentation the station file's (DaemonConfig::segmentation); the frames are
+// kept, with the cameras as inspected, for the part's archive (docs/daemon.md).
 #pragma once
 
 #include "daemon_config.h"

@@ -1,5 +1,7 @@
 #include "image_archive.h"
 
+#include "hullgauge/common/durable_file.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 
 #include <algorithm>
@@ -9,6 +11,49 @@
 
 namespace hg::daemon {
 namespace fs = std::filesystem;
+namespace {
+
+/// A folder being written is named so: hidden, skipped and, once stale, removed by the retention.
+constexpr std::string_view kPartialPrefix = ".partial-";
+
+bool isPartial(const fs::path& dir)
+{
+    return dir.filename().string().rfind(kPartialPrefix, 0) == 0;
+}
+
+/// `image` as a lossless PNG in `file` (8 or 16 bit as the Mat holds it).
+void writePng(const fs::path& file, const cv::Mat& image)
+{
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".png", image, bytes)) throw FaultError("cannot encode " + file.string());
+    writeFileDurably(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+/// Every file of an archived part into `dir` (docs/daemon.md, "Archived parts").
+void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
+{
+    const bool capture = std::all_of(views.begin(), views.end(), [](const ViewEvidence& v) { return v.capture; });
+    vision::CaptureManifest manifest;
+    manifest.segmentation = views.front().segmentation;
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        writePng(dir / ("view_" + std::to_string(k) + ".png"), annotate(views[k]));
+        if (!capture) continue;
+        vision::ManifestView view = *views[k].capture;
+        view.image = dir / (view.id + ".png");
+        writePng(view.image, views[k].image);
+        manifest.views.push_back(std::move(view));
+    }
+    if (capture) writeFileDurably(dir / "manifest.json", vision::manifestJson(manifest, dir));
+    syncFolder(dir);
+}
+
+} // namespace
+
+bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict)
+{
+    if (verdict == station::Verdict::Fail) return results.archiveAll || results.saveFailedImages;
+    return verdict == station::Verdict::Pass && results.archiveAll;
+}
 
 cv::Scalar statusColour(const std::string& status)
 {
@@ -64,25 +109,24 @@ fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& 
     return root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
 }
 
-fs::path ImageArchive::saveFailed(std::int64_t startedUnixMs, const std::string& serial,
-                                  const std::vector<ViewEvidence>& views)
+fs::path ImageArchive::save(std::int64_t startedUnixMs, const std::string& serial,
+                            const std::vector<ViewEvidence>& views)
 {
     if (views.empty()) return {};
-    auto log = hg::log::category("store");
-    auto dir = folderFor(startedUnixMs, serial);
+    const fs::path dir = folderFor(startedUnixMs, serial);
+    // Written whole into a hidden folder, then renamed: a reader never sees half an archive.
+    const fs::path partial = root_ / (std::string(kPartialPrefix) + dir.filename().string());
     std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) {
-        log->error("cannot create image folder {}: {}", dir.string(), ec.message());
+    try {
+        fs::remove_all(partial);
+        fs::create_directories(partial);
+        writeArchive(partial, views);
+        fs::rename(partial, dir);
+        syncFolder(root_);
+    } catch (const std::exception& e) {
+        hg::log::category("store")->error("cannot write the archive {}: {}", dir.string(), e.what());
+        fs::remove_all(partial, ec);
         return {};
-    }
-    for (std::size_t k = 0; k < views.size(); ++k) {
-        auto file = dir / ("view_" + std::to_string(k) + ".png");
-        try {
-            if (!cv::imwrite(file.string(), annotate(views[k]))) log->error("cannot write {}", file.string());
-        } catch (const cv::Exception& e) {
-            log->error("cannot write {}: {}", file.string(), e.what());
-        }
     }
     return dir;
 }
@@ -95,14 +139,21 @@ std::size_t ImageArchive::enforceRetention()
         std::uintmax_t bytes = 0;
     };
     std::vector<Entry> entries;
+    std::vector<fs::path> stale;
     std::error_code ec;
     for (const auto& d : fs::directory_iterator(root_, ec)) {
         if (!d.is_directory()) continue;
+        // Saves and the retention run on one thread: a partial folder here was cut short by a crash.
+        if (isPartial(d.path())) {
+            stale.push_back(d.path());
+            continue;
+        }
         Entry e{d.path(), d.last_write_time(ec), 0};
         for (const auto& f : fs::recursive_directory_iterator(d.path(), ec))
             if (f.is_regular_file()) e.bytes += f.file_size(ec);
         entries.push_back(std::move(e));
     }
+    for (const auto& dir : stale) fs::remove_all(dir, ec);
     // Newest first; walk and keep while every limit holds.
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.time > b.time; });
     const auto cutoff = fs::file_time_type::clock::now() - retention_.maxAge;

@@ -1,6 +1,12 @@
-// Failed-part images: one folder per failed inspection holding a PNG per view
-// with the silhouette outline and the landmarks drawn in their status colours,
-// kept within the retention limits (count, age, bytes; oldest removed first).
+// The parts' archive (docs/daemon.md, "Archived parts"): one folder per
+// archived inspection holding, per view, the frame as grabbed and a PNG with
+// the silhouette outline and the landmarks drawn in their status colours, and a
+// capture manifest (CONTRACTS §3) with the cameras and the segmentation the
+// daemon inspected with, so `hullgauge inspect --part P --views
+// <folder>/manifest.json` reproduces its landmark results. A folder is written
+// whole or not at all (a hidden partial folder renamed when complete), and the
+// archive is kept within the retention limits (count, age, bytes; oldest
+// removed first).
 #pragma once
 
 #include "daemon_config.h"
@@ -21,20 +27,27 @@ cv::Scalar statusColour(const std::string& status);
 /// The annotated picture of one view (BGR, the frame scaled to 8 bit).
 cv::Mat annotate(const ViewEvidence& view);
 
+/// Whether a part with `verdict` is archived: every inspected part with
+/// `archive_all`, else a failed one with `save_failed_images`.
+bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict);
+
 class ImageArchive {
   public:
     ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
 
-    /// The folder of a failed inspection: `<root>/<startedUnixMs>_<serial>`
+    /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
     /// (serial characters other than letters, digits and '-' become '_').
     std::filesystem::path folderFor(std::int64_t startedUnixMs, const std::string& serial) const;
-    /// Writes `views` as view_<k>.png into folderFor(startedUnixMs, serial);
-    /// returns the folder (empty when there was nothing to write).
-    /// Never throws: a failure is logged and the record keeps an empty path.
-    std::filesystem::path saveFailed(std::int64_t startedUnixMs, const std::string& serial,
-                                     const std::vector<ViewEvidence>& views);
+    /// Writes `views` into folderFor(startedUnixMs, serial): view_<k>.png (annotated),
+    /// and when every view carries its capture, <id>.png (the frame, lossless) and
+    /// manifest.json. Returns the folder, or an empty path when there was nothing
+    /// to write or the folder could not be written whole (logged; nothing is left).
+    /// Never throws.
+    std::filesystem::path save(std::int64_t startedUnixMs, const std::string& serial,
+                               const std::vector<ViewEvidence>& views);
     /// Removes the oldest folders beyond max_count, older than max_age_days,
-    /// or beyond max_bytes in total. Returns how many were removed.
+    /// or beyond max_bytes in total, and any partial folder a crash left.
+    /// Returns how many archived folders were removed.
     std::size_t enforceRetention();
 
   private:

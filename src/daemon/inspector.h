@@ -7,6 +7,7 @@
 #include "daemon_config.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
+#include "hullgauge/vision/manifest.h"
 
 #include <cstddef>
 #include <functional>
@@ -17,18 +18,24 @@
 
 namespace hg::daemon {
 
-/// A landmark drawn on a failed part's image: pixel position and status.
+/// A landmark drawn on an archived part's picture: pixel position and status.
 struct LandmarkMark {
     cv::Point2d pixel;
     std::string id;
     std::string status;
 };
 
-/// What a view contributes to the failed-part images.
+/// What a view contributes to the part's archive (docs/daemon.md, "Archived parts").
 struct ViewEvidence {
-    cv::Mat image;      ///< the grabbed frame
+    cv::Mat image;      ///< the grabbed frame, as grabbed
     cv::Mat silhouette; ///< CV_8U mask, non-zero = part
     std::vector<LandmarkMark> landmarks;
+    /// The view as the archive's manifest lists it: id, the posed camera the
+    /// inspection used, the fixture pose (the archive sets the image). Absent:
+    /// the archive holds the annotated picture only.
+    std::optional<vision::ManifestView> capture{};
+    /// How the inspection segmented the frame (the silhouette is drawn so too).
+    vision::SegmentationSettings segmentation{};
 };
 
 struct InspectionOutcome {
@@ -37,8 +44,8 @@ struct InspectionOutcome {
     std::string part; ///< the part program's name
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
-    /// A failed part's views for its images: either `views` (ready) or `evidence`, which
-    /// builds them (whole-frame segmentation) when the cycle writes the images, after
+    /// An inspected part's views for its archive: either `views` (ready) or `evidence`,
+    /// which builds them (whole-frame segmentation) when the cycle writes the archive, after
     /// the result is shown — that work is not on the path from the last frame to the verdict.
     std::vector<ViewEvidence> views;
     std::function<std::vector<ViewEvidence>()> evidence;

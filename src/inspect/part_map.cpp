@@ -132,4 +132,22 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     }
 }
 
+InspectionOptions inspectionOptions(const model::InspectionSettings& settings)
+{
+    InspectionOptions options;
+    options.level = settings.level;
+    options.adjacency = settings.adjacency;
+    options.earlyExit = settings.earlyExit;
+    options.method = settings.centrePointTest ? VoxelTestMethod::CentrePoint : VoxelTestMethod::VolumeSource;
+    options.requireResolution = settings.requireResolution;
+    return options;
+}
+
+InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options)
+{
+    const int depth = program.octree.depth;
+    const int level = options.level < 0 ? depth : options.level;
+    return buildInspectionMap(program, std::max(1, depth - level + 1));
+}
+
 } // namespace hg::inspect

@@ -173,6 +173,24 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     return p;
 }
 
+// The `inspection` section, checked against the octree.
+InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& octree)
+{
+    node.allowOnlyKeys({"level", "adjacency", "method", "resolution_check", "early_exit"});
+    InspectionSettings s;
+    if (auto n = node.optional("level")) s.level = static_cast<int>(n->asIntIn(1, octree.depth));
+    if (auto n = node.optional("adjacency")) s.adjacency = static_cast<int>(n->asIntIn(1, octree.adjacencyDepth));
+    if (auto n = node.optional("method")) {
+        const std::string method = n->asString();
+        if (method != "volume" && method != "centre")
+            n->fail("unknown method '" + method + "' (expected volume or centre)");
+        s.centrePointTest = method == "centre";
+    }
+    if (auto n = node.optional("resolution_check")) s.requireResolution = n->asBool();
+    if (auto n = node.optional("early_exit")) s.earlyExit = n->asBool();
+    return s;
+}
+
 } // namespace
 
 double OctreeSpec::voxelSize() const
@@ -223,7 +241,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters"});
+    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters", "inspection"});
 
     PartProgram program;
     program.file = file;
@@ -267,6 +285,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
             program.parameters.push_back(std::move(p));
         }
     }
+    if (auto n = root.optional("inspection")) program.inspection = parseInspection(*n, program.octree);
     return program;
 }
 

@@ -18,6 +18,9 @@ using nlohmann::json;
 
 namespace {
 
+/// |RᵀR − I| and |det R − 1| of a product of rotations computed in doubles.
+constexpr double kOrthonormalToRounding = 1e-12;
+
 std::string typeName(const json& j)
 {
     if (j.is_number()) return "a number";
@@ -128,9 +131,11 @@ class ManifestReader {
     {
         geometry::Mat3 R = matrix(j, 3, 3, field);
         // Hand-written or rounded matrices are accepted to 1e-5 and made
-        // exactly orthonormal; anything further off is a wrong matrix.
+        // exactly orthonormal; anything further off is a wrong matrix. One
+        // orthonormal to rounding is kept bit for bit: a capture the daemon
+        // archives then holds the very cameras it inspected with (docs/daemon.md).
         if (!geometry::isRotation(R, 1e-5)) fail(field, "not a rotation matrix (orthonormal with determinant +1)");
-        return geometry::nearestRotation(R);
+        return geometry::isRotation(R, kOrthonormalToRounding) ? R : geometry::nearestRotation(R);
     }
 
     cv::Size imageSize(const json& j, const std::string& field) const
@@ -222,7 +227,7 @@ class ManifestReader {
         }
         if (j.contains("threshold")) {
             s.threshold = number(j["threshold"], at + ".threshold");
-            if (s.threshold < 0.0 || s.threshold > 65535.0)
+            if (s.threshold < 0.0 || s.threshold > kMaxThreshold)
                 fail(at + ".threshold", "expected a grey level within [0, 65535]");
         } else if (s.method == SegmentationMethod::Fixed) {
             fail(at + ".threshold", "missing (method 'fixed' needs a threshold)");
@@ -308,9 +313,8 @@ CaptureManifest readManifest(const fs::path& file)
     return manifest;
 }
 
-void writeManifest(const CaptureManifest& manifest, const fs::path& file)
+std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder)
 {
-    const fs::path folder = file.parent_path();
     json views = json::array();
     for (const ManifestView& v : manifest.views) {
         const geometry::Intrinsics& in = v.camera.intrinsics();
@@ -338,10 +342,14 @@ void writeManifest(const CaptureManifest& manifest, const fs::path& file)
     if (manifest.segmentation.method == SegmentationMethod::Fixed) seg["threshold"] = manifest.segmentation.threshold;
     seg["object_is_dark"] = manifest.segmentation.objectIsDark;
     const json root = {{"views", views}, {"segmentation", seg}};
+    return root.dump(2) + '\n';
+}
 
+void writeManifest(const CaptureManifest& manifest, const fs::path& file)
+{
     std::ofstream out(file, std::ios::binary | std::ios::trunc);
     if (!out) throw FaultError("cannot write manifest " + file.string());
-    out << root.dump(2) << '\n';
+    out << manifestJson(manifest, file.parent_path());
     out.close();
     if (!out) throw FaultError("cannot write manifest " + file.string());
 }

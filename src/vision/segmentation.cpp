@@ -7,6 +7,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/geometry/station.h"
+
 namespace hg::vision {
 namespace {
 
@@ -65,6 +68,32 @@ std::string toString(SegmentationMethod method)
         return "mask";
     }
     return "otsu";
+}
+
+SegmentationSettings parseSegmentation(const ConfigNode& node)
+{
+    node.allowOnlyKeys({"method", "threshold", "object_is_dark"});
+    SegmentationSettings s;
+    if (auto n = node.optional("method")) {
+        try {
+            s.method = parseSegmentationMethod(n->asString());
+        } catch (const std::invalid_argument&) {
+            n->fail("expected otsu, fixed or mask, found '" + n->asString() + "'");
+        }
+    }
+    if (auto n = node.optional("threshold"))
+        s.threshold = n->asDoubleIn(0.0, kMaxThreshold);
+    else if (s.method == SegmentationMethod::Fixed)
+        node.fail("threshold: missing (method 'fixed' needs a threshold)");
+    if (auto n = node.optional("object_is_dark")) s.objectIsDark = n->asBool();
+    return s;
+}
+
+SegmentationSettings stationSegmentation(const geometry::Station& station)
+{
+    if (!station.document) return {};
+    const auto section = station.document->optional("segmentation");
+    return section ? parseSegmentation(*section) : SegmentationSettings{};
 }
 
 cv::Mat toGrey(const cv::Mat& frame)

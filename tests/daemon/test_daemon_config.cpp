@@ -41,6 +41,7 @@ plc:
 results:
   database: data/results.db
   images: /var/tmp/hg-images
+  archive_all: true
   retention: {max_count: 50, max_age_days: 2, max_bytes: 1.0e6}
 sequencer: {move_timeout_s: 4, grab_timeout_s: 0.5, settle_s: 0.02, retries: 1}
 maintenance: {socket: run/hg.sock, group: hullgauge}
@@ -92,6 +93,7 @@ TEST(DaemonConfig, LoadsAllSections)
     EXPECT_EQ(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(250));
     EXPECT_EQ(cfg.results.database, f.dir.path() / "data/results.db");
     EXPECT_EQ(cfg.results.imageDir, "/var/tmp/hg-images");
+    EXPECT_TRUE(cfg.results.archiveAll);
     EXPECT_EQ(cfg.results.retention.maxCount, 50u);
     EXPECT_EQ(cfg.results.retention.maxAge, std::chrono::hours(48));
     EXPECT_EQ(cfg.results.retention.maxBytes, 1'000'000u);
@@ -115,6 +117,23 @@ TEST(DaemonConfig, DefaultsFollowTheContract)
     EXPECT_LE(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(1000));
     EXPECT_EQ(cfg.sequencer.retries, 1);
     EXPECT_EQ(cfg.lampsSection, "lamps");
+    EXPECT_TRUE(cfg.results.saveFailedImages);
+    EXPECT_FALSE(cfg.results.archiveAll);
+    EXPECT_EQ(cfg.segmentation.method, vision::SegmentationMethod::Otsu);
+    EXPECT_TRUE(cfg.segmentation.objectIsDark);
+}
+
+TEST(DaemonConfig, StationSegmentationIsReadAtLoadAndNamedWhenBad)
+{
+    Fixture f;
+    hgtest::writeFile(f.dir / "station.yaml", std::string(kStation) + "segmentation: {method: fixed, threshold: 40}\n");
+    auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", kDaemon));
+    EXPECT_EQ(cfg.segmentation.method, vision::SegmentationMethod::Fixed);
+    EXPECT_EQ(cfg.segmentation.threshold, 40.0);
+    // kStation has 11 lines: the section is line 12 (`hullgauged --check` exits 2 with this).
+    hgtest::writeFile(f.dir / "station.yaml", std::string(kStation) + "segmentation: {method: fixed}\n");
+    auto message = f.error(kDaemon);
+    EXPECT_NE(message.find("station.yaml:12: segmentation: threshold: missing"), std::string::npos) << message;
 }
 
 TEST(DaemonConfig, BadValuesNameFileLineAndKey)
@@ -137,6 +156,7 @@ TEST(DaemonConfig, BadValuesNameFileLineAndKey)
         {"grab_timeout_s: 0.5", "grab_timeout_s: -1", "sequencer.grab_timeout_s"},
         {"max_cycle_s: 30", "max_cycel_s: 30", "max_cycel_s"},
         {"station: station.yaml", "station: nowhere.yaml", "station"},
+        {"archive_all: true", "archive_all: sometimes", "hullgauged.yaml:14: results.archive_all"},
     };
     for (const auto& c : cases) {
         auto message = f.error(replaced(kDaemon, c.from, c.to));

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iterator>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -138,6 +139,29 @@ TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
     EXPECT_EQ(viaMap.status, 1) << viaMap.err;
     const json rm = json::parse(viaMap.out);
     EXPECT_EQ(rm["landmarks"], rf["landmarks"]);
+}
+
+TEST_F(InspectCommand, PartProgramInspectionSectionAppliesAndEachOptionReplacesItsKey)
+{
+    std::ifstream program(dir / "block.yaml");
+    const std::string text((std::istreambuf_iterator<char>(program)), std::istreambuf_iterator<char>());
+    hgtest::writeFile(dir / "block.yaml", text + "inspection: {level: 7, adjacency: 3}\n");
+    const auto views = capture("nom", 10.0);
+    const std::string inspect = exe + " inspect --part " + (dir / "block.yaml").string() + " --views " + views.string();
+    // The section's level 7 of the 32 mm cube: ΔV = 32 / 2^7 = 0.25 mm, searched 3 layers deep.
+    const auto bySection = hgtest::run(inspect);
+    ASSERT_EQ(bySection.status, 0) << bySection.err;
+    const json r = json::parse(bySection.out);
+    EXPECT_EQ(r["level"], 7);
+    EXPECT_EQ(r["adjacency"], 3);
+    EXPECT_DOUBLE_EQ(r["voxel_size_mm"].get<double>(), 0.25);
+    // --level replaces the section's level (ΔV 0.125 mm); its adjacency still applies.
+    const auto byOption = hgtest::run(inspect + " --level 8");
+    ASSERT_EQ(byOption.status, 0) << byOption.err;
+    const json o = json::parse(byOption.out);
+    EXPECT_EQ(o["level"], 8);
+    EXPECT_EQ(o["adjacency"], 3);
+    EXPECT_DOUBLE_EQ(o["voxel_size_mm"].get<double>(), 0.125);
 }
 
 TEST_F(InspectCommand, BadInputExitsTwoNamingTheView)

@@ -73,4 +73,15 @@ TEST(CheckPartCli, BadInputExitsTwoWithOneLineNamingFileAndField)
     EXPECT_NE(r.err.find("block.stl: facet 4: file ends after 40 of 50 bytes"), std::string::npos) << r.err;
 }
 
+TEST(CheckPartCli, BadInspectionKeyExitsTwoNamingFileLineAndKey)
+{
+    hgtest::TempDir dir;
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    // kPart has 11 lines: the section's key is line 13.
+    hgtest::writeFile(dir / "part.yaml", std::string(kPart) + "inspection:\n  level: 8\n");
+    const auto r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("part.yaml:13: inspection.level: value 8 is outside [1, 7]"), std::string::npos) << r.err;
+}
+
 } // namespace

@@ -213,6 +213,44 @@ TEST_F(PartProgramTest, EachMistakeIsNamed)
     }
 }
 
+TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
+{
+    const InspectionSettings defaults = loadPartProgram(write(kGood)).inspection;
+    EXPECT_EQ(defaults.level, -1);
+    EXPECT_EQ(defaults.adjacency, -1);
+    EXPECT_FALSE(defaults.centrePointTest);
+    EXPECT_TRUE(defaults.requireResolution);
+    EXPECT_FALSE(defaults.earlyExit);
+
+    const InspectionSettings s = loadPartProgram(write(kGood + "inspection:\n  level: 5\n  adjacency: 2\n"
+                                                               "  method: centre\n  resolution_check: false\n"
+                                                               "  early_exit: true\n"))
+                                     .inspection;
+    EXPECT_EQ(s.level, 5);
+    EXPECT_EQ(s.adjacency, 2);
+    EXPECT_TRUE(s.centrePointTest);
+    EXPECT_FALSE(s.requireResolution);
+    EXPECT_TRUE(s.earlyExit);
+}
+
+TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
+{
+    // kGood has 32 lines: "inspection:" is line 33, its key line 34.
+    const std::vector<Mistake> mistakes = {
+        {"level: 7", "", "part.yaml:34: inspection.level: value 7 is outside [1, 6]"},
+        {"adjacency: 4", "", "part.yaml:34: inspection.adjacency: value 4 is outside [1, 3]"},
+        {"method: volume-source", "", "part.yaml:34: inspection.method: unknown method 'volume-source'"},
+        {"resolution_check: maybe", "", "part.yaml:34: inspection.resolution_check"},
+        {"masked_landmarks: [face]", "", "part.yaml:34: inspection.masked_landmarks: unknown key"},
+        {"early_exit: 1.5", "", "part.yaml:34: inspection.early_exit"},
+    };
+    for (const auto& m : mistakes) {
+        const InputError e = error(kGood + "inspection:\n  " + m.from + "\n");
+        EXPECT_NE(std::string(e.what()).find(m.expected), std::string::npos)
+            << "expected '" << m.expected << "' in: " << e.what();
+    }
+}
+
 TEST_F(PartProgramTest, BrokenMeshIsReportedAtTheMeshKey)
 {
     TriangleMesh open = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));

@@ -1,9 +1,12 @@
 // Segmentation: Otsu on 8- and 16-bit frames, fixed thresholds, polarity,
-// masks, colour frames and region-limited silhouettes.
+// masks, colour frames and region-limited silhouettes; the station file's
+// segmentation section.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
 
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/vision/segmentation.h"
 
 using namespace hg::vision;
@@ -104,4 +107,48 @@ TEST(Segmentation, RegionIsClippedToFrameAndMatchesWholeFrame)
     EXPECT_EQ(part.cols, 20);
     EXPECT_EQ(part.rows, 30);
     EXPECT_EQ(cv::countNonZero(part != whole(cv::Rect(140, 50, 20, 30))), 0);
+}
+
+namespace {
+
+// The error of parsing `text` as a station file's segmentation section, or "" when it parses.
+std::string sectionError(const std::string& text)
+{
+    try {
+        parseSegmentation(hg::ConfigNode::parse(text, "station.yaml")["segmentation"]);
+    } catch (const hg::InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+} // namespace
+
+TEST(Segmentation, StationSectionHasTheManifestsKeysAndDefaults)
+{
+    const auto fixed = parseSegmentation(hg::ConfigNode::parse(
+        "segmentation: {method: fixed, threshold: 812, object_is_dark: false}", "station.yaml")["segmentation"]);
+    EXPECT_EQ(fixed.method, SegmentationMethod::Fixed);
+    EXPECT_EQ(fixed.threshold, 812.0);
+    EXPECT_FALSE(fixed.objectIsDark);
+    const auto empty = parseSegmentation(hg::ConfigNode::parse("segmentation: {}", "station.yaml")["segmentation"]);
+    EXPECT_EQ(empty.method, SegmentationMethod::Otsu);
+    EXPECT_TRUE(empty.objectIsDark);
+    EXPECT_EQ(empty.otsuStride, SegmentationSettings{}.otsuStride);
+}
+
+TEST(Segmentation, StationSectionMistakesNameFileLineAndKey)
+{
+    const std::pair<std::string, std::string> mistakes[] = {
+        {"segmentation:\n  method: triangle\n", "station.yaml:2: segmentation.method: expected otsu, fixed or mask"},
+        {"segmentation:\n  method: fixed\n", "station.yaml:2: segmentation: threshold: missing"},
+        {"segmentation:\n  method: fixed\n  threshold: 70000\n", "station.yaml:3: segmentation.threshold"},
+        {"segmentation:\n  treshold: 9\n", "station.yaml:2: segmentation.treshold: unknown key"},
+        {"segmentation:\n  object_is_dark: dark\n", "station.yaml:2: segmentation.object_is_dark"},
+        {"segmentation: otsu\n", "station.yaml:1: segmentation"},
+    };
+    for (const auto& [text, expected] : mistakes) {
+        const std::string e = sectionError(text);
+        EXPECT_NE(e.find(expected), std::string::npos) << "expected '" << expected << "' in: " << e;
+    }
 }

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "hullgauge/inspect/inspection_map.h"
+#include "hullgauge/inspect/inspector.h"
 #include "hullgauge/model/part_program.h"
 
 namespace hg::inspect {
@@ -21,5 +22,13 @@ ExpectationOracle cadLabels(std::shared_ptr<const model::Solid> solid);
 /// (clamped to level 0). Throws hg::InputError naming the part program when
 /// its octree cannot be represented (depth above kMaxDepth).
 InspectionMap buildInspectionMap(const model::PartProgram& program, int levels = 3);
+
+/// The options a part program's `inspection` section sets (docs/part-program.md).
+InspectionOptions inspectionOptions(const model::InspectionSettings& settings);
+
+/// The map of inspections at `options.level` (-1: the depth): only the levels
+/// from there to the depth. The daemon and `hullgauge inspect --part` both
+/// build their map so, so both inspect the same map.
+InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options);
 
 } // namespace hg::inspect

@@ -60,6 +60,20 @@ struct GeometricParameter {
     double toleranceMm = 0.0;                 // mm, or mm² for an area
 };
 
+/// How the part is inspected: the optional `inspection` section
+/// (docs/part-program.md), the run-time adaptation of the map (3.4). The daemon
+/// and `hullgauge inspect` both inspect with it; an absent key keeps the
+/// default given here, which is the behaviour before the section existed.
+/// Masking stays an offline experiment (`inspect --mask`): the PLC's landmark
+/// bits follow the program's landmark list.
+struct InspectionSettings {
+    int level = -1;                ///< octree level, 1..depth; -1 = octree.depth
+    int adjacency = -1;            ///< type-four layers searched, 1..adjacency_depth; -1 = all
+    bool centrePointTest = false;  ///< `method: centre`: the centre-point voxel test, not the volume source
+    bool requireResolution = true; ///< `resolution_check`: eq. 4.4.4-19 required per landmark
+    bool earlyExit = false;        ///< stop at the first landmark that is not ok (3.3.6)
+};
+
 struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
@@ -68,6 +82,7 @@ struct PartProgram {
     OctreeSpec octree;
     std::vector<Landmark> landmarks;
     std::vector<GeometricParameter> parameters;
+    InspectionSettings inspection;
     /// Kind of fixture the best views are written for (rotation/declination or rail), when any are given.
     std::optional<geometry::FixtureType> bestViewFixture;
 

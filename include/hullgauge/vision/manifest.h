@@ -70,6 +70,8 @@ CaptureManifest readManifest(const std::filesystem::path& file);
 /// relative to the manifest's folder where possible). Throws FaultError when
 /// the file cannot be written.
 void writeManifest(const CaptureManifest& manifest, const std::filesystem::path& file);
+/// The JSON text writeManifest writes into a file in `folder`.
+std::string manifestJson(const CaptureManifest& manifest, const std::filesystem::path& folder);
 
 /// Reads the image of view `index` (8- or 16-bit, grey or colour, converted
 /// to one channel of the same depth). An unreadable image, or one whose size

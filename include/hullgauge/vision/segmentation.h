@@ -16,6 +16,13 @@
 
 #include <opencv2/core.hpp>
 
+namespace hg {
+class ConfigNode;
+}
+namespace hg::geometry {
+struct Station;
+}
+
 namespace hg::vision {
 
 enum class SegmentationMethod {
@@ -38,6 +45,21 @@ struct SegmentationSettings {
 /// "otsu", "fixed", "mask"; throws std::invalid_argument for anything else.
 SegmentationMethod parseSegmentationMethod(const std::string& name);
 std::string toString(SegmentationMethod method);
+
+/// Largest `threshold` accepted in a file: the top grey level of a 16-bit frame.
+constexpr double kMaxThreshold = 65535.0;
+
+/// A `segmentation` map with the keys of the capture manifest's (CONTRACTS §3):
+/// `method` (otsu | fixed | mask), `threshold` (required for fixed, grey
+/// levels 0..65535), `object_is_dark`. Absent keys keep the defaults; a bad
+/// value or an unknown key throws InputError naming file, line and key.
+SegmentationSettings parseSegmentation(const ConfigNode& node);
+
+/// How the station segments its frames: the station file's optional
+/// `segmentation` section (docs/config-reference.md), else the defaults (Otsu,
+/// dark object). The daemon inspects with it and writes it into each archived
+/// capture's manifest.
+SegmentationSettings stationSegmentation(const geometry::Station& station);
 
 /// A single-channel frame of the same depth (8 or 16 bit); colour frames are
 /// converted by luminance. Throws std::invalid_argument for other depths.

@@ -1,0 +1,20 @@
+// Files that are whole on the disk or not there at all: the bytes are written
+// and flushed (fsync) before the caller renames them into place, so a full disk
+// or a power cut leaves the old state, never a truncated file (the station
+// file update of docs/calibration.md, the parts' archive of docs/daemon.md).
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+namespace hg {
+
+/// Writes `bytes` into `file` (created or truncated) and flushes it to the
+/// disk. Throws FaultError naming the file (a full disk shows here).
+void writeFileDurably(const std::filesystem::path& file, std::string_view bytes);
+
+/// Flushes a folder's entries (files created or renamed in it) to the disk.
+/// Throws FaultError naming the folder.
+void syncFolder(const std::filesystem::path& folder);
+
+} // namespace hg

@@ -1,0 +1,266 @@
+// The daemon judges as the offline tool does (docs/daemon.md, "Archived
+// parts"): the daemon's engine inspector is fed the frames the simulated camera
+// renders of the simulated line's parts (config/sim) at the planned poses, each
+// part is archived as the daemon archives it, and `hullgauge inspect --part P
+// --views <archive>/manifest.json` — the program itself — must give every
+// landmark the same status and the same error figures, to the last bit. The
+// verdicts themselves are checked against the defects the variant meshes were
+// built with (config/sim/README.md), and a station file's fixed threshold
+// against what it must do to the silhouettes.
+#include "daemon_config.h"
+#include "engine_inspector.h"
+#include "hgtest/paths.h"
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/sim/renderer.h"
+#include "hullgauge/vision/manifest.h"
+#include "image_archive.h"
+
+#include <fstream>
+#include <gtest/gtest.h>
+#include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+using hg::daemon::InspectionOutcome;
+using hg::station::DaemonConfig;
+
+fs::path simFolder()
+{
+    return hgtest::sourceDir() / "config" / "sim";
+}
+
+// The frames the simulated camera grabs of `part`: the renderer with the grey
+// levels, blur and noise of the station's camera.driver, a fresh seed per frame.
+std::vector<cv::Mat> frames(const DaemonConfig& config, const std::string& part)
+{
+    fs::path mesh;
+    for (const auto& [name, file] : config.simulatedParts)
+        if (name == part) mesh = file;
+    const hg::ConfigNode driver = (*config.station.document)["camera"]["driver"];
+    hg::sim::SilhouetteRenderer renderer({hg::model::loadMesh(mesh)});
+    hg::sim::RenderOptions options;
+    options.backgroundLevel = driver["background_level"].asDouble();
+    options.objectLevel = driver["object_level"].asDouble();
+    options.blurSigmaPx = driver["blur_sigma_px"].asDouble();
+    options.noiseSigma = driver["noise_sigma"].asDouble();
+    std::vector<cv::Mat> out;
+    for (const auto& pose : config.programs.at(1).views) {
+        options.seed = static_cast<std::uint64_t>(driver["seed"].asInt()) + out.size();
+        out.push_back(renderer.render(config.station.cameraAt(pose), options));
+    }
+    return out;
+}
+
+InspectionOutcome inspect(hg::daemon::Inspector& inspector, const DaemonConfig& config,
+                          const std::vector<cv::Mat>& images)
+{
+    std::string error;
+    EXPECT_TRUE(inspector.begin(config.programs.at(1), error)) << error;
+    const auto& poses = config.programs.at(1).views;
+    for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k]);
+    return inspector.finish();
+}
+
+std::map<std::string, std::string> notOk(const InspectionOutcome& outcome)
+{
+    std::map<std::string, std::string> out;
+    for (const auto& l : outcome.landmarks)
+        if (l.status != "ok") out[l.id] = l.status;
+    return out;
+}
+
+// The daemon's archive of the part, as the cycle writes it when it archives the part.
+fs::path archive(const DaemonConfig& config, InspectionOutcome& outcome, const fs::path& root, const std::string& name)
+{
+    EXPECT_TRUE(outcome.evidence) << "an inspected part can be archived";
+    if (!outcome.evidence) return {};
+    return hg::daemon::ImageArchive(root, config.results.retention).save(1'700'000'000'000, name, outcome.evidence());
+}
+
+// `hullgauge inspect` on the archive: the offline tool, not a call inside this process.
+nlohmann::json inspectOffline(const fs::path& partFile, const fs::path& folder)
+{
+    const fs::path out = folder.parent_path() / (folder.filename().string() + "-offline.json");
+    const auto r =
+        hgtest::run((hgtest::binaryDir() / "bin" / "hullgauge").string() + " inspect --part " + partFile.string() +
+                    " --views " + (folder / "manifest.json").string() + " --out " + out.string());
+    EXPECT_TRUE(r.status == 0 || r.status == 1) << r.err;
+    std::ifstream in(out);
+    return in ? nlohmann::json::parse(in) : nlohmann::json::object();
+}
+
+// A landmark the inspection did not measure has null error figures offline and zeros in the daemon's record.
+double figure(const nlohmann::json& j)
+{
+    return j.is_null() ? 0.0 : j.get<double>();
+}
+
+// Every landmark's status and error figures, compared exactly; returns how many were compared.
+std::size_t expectSameLandmarks(const InspectionOutcome& daemon, const nlohmann::json& offline)
+{
+    EXPECT_EQ(offline.value("verdict", ""), daemon.pass ? "pass" : "fail");
+    const auto& landmarks = offline["landmarks"];
+    EXPECT_EQ(landmarks.size(), daemon.landmarks.size());
+    std::size_t compared = 0;
+    for (std::size_t i = 0; i < std::min(landmarks.size(), daemon.landmarks.size()); ++i) {
+        const auto& d = daemon.landmarks[i];
+        const auto& o = landmarks[i];
+        EXPECT_EQ(o["id"], d.id);
+        EXPECT_EQ(o["status"], d.status) << d.id;
+        EXPECT_EQ(figure(o["error_min_mm"]), d.errorMinMm) << d.id;
+        EXPECT_EQ(figure(o["error_max_mm"]), d.errorMaxMm) << d.id;
+        EXPECT_EQ(figure(o["error_mm"]), d.errorMm) << d.id;
+        EXPECT_EQ(o["tolerance_mm"].get<double>(), d.toleranceMm) << d.id;
+        ++compared;
+    }
+    return compared;
+}
+
+class EngineParity : public ::testing::Test {
+  protected:
+    static void SetUpTestSuite()
+    {
+        config_ = new DaemonConfig(hg::station::loadDaemonConfig(simFolder() / "hullgauged.yaml"));
+    }
+    static void TearDownTestSuite()
+    {
+        delete config_;
+        config_ = nullptr;
+    }
+    static DaemonConfig* config_;
+};
+
+DaemonConfig* EngineParity::config_ = nullptr;
+
+TEST_F(EngineParity, EveryVariantsArchiveReproducesTheDaemonsLandmarksExactly)
+{
+    // What the variants were built to show (config/sim/README.md), independent of the code under test.
+    const std::map<std::string, std::map<std::string, std::string>> expected = {
+        {"nominal", {}},
+        {"face-low", {{"step-top", "out_of_tolerance"}, {"step-top-back", "out_of_tolerance"}}},
+        {"corner-missing", {{"tall-corner", "not_found"}, {"tall-side", "not_found"}}}};
+    ASSERT_EQ(config_->simulatedParts.size(), expected.size());
+    hgtest::TempDir dir;
+    auto inspector = hg::daemon::makeEngineInspector(*config_);
+    std::size_t compared = 0;
+    for (const auto& [part, mesh] : config_->simulatedParts) {
+        SCOPED_TRACE(part);
+        const auto images = frames(*config_, part);
+        auto outcome = inspect(*inspector, *config_, images);
+        ASSERT_TRUE(outcome.ok) << outcome.error;
+        EXPECT_EQ(notOk(outcome), expected.at(part));
+        EXPECT_EQ(outcome.pass, expected.at(part).empty());
+
+        const fs::path folder = archive(*config_, outcome, dir / "images", part);
+        ASSERT_FALSE(folder.empty());
+        // The frames as grabbed, lossless, with the cameras and the segmentation the daemon used.
+        const auto manifest = hg::vision::readManifest(folder / "manifest.json");
+        ASSERT_EQ(manifest.views.size(), images.size());
+        EXPECT_EQ(manifest.segmentation.method, hg::vision::SegmentationMethod::Otsu);
+        for (std::size_t k = 0; k < images.size(); ++k) {
+            EXPECT_EQ(cv::norm(hg::vision::readViewImage(manifest, k), images[k], cv::NORM_INF), 0.0);
+            const auto camera = config_->station.cameraAt(config_->programs.at(1).views[k]);
+            EXPECT_EQ(manifest.views[k].camera.cameraFromPart().R, camera.cameraFromPart().R);
+            EXPECT_EQ(manifest.views[k].camera.cameraFromPart().t, camera.cameraFromPart().t);
+            EXPECT_TRUE(fs::exists(folder / ("view_" + std::to_string(k) + ".png")));
+        }
+        compared += expectSameLandmarks(outcome, inspectOffline(config_->programs.at(1).partFile, folder));
+    }
+    EXPECT_EQ(compared, 30u) << "3 parts x 10 landmarks";
+}
+
+// A copy of the simulated line whose station file's `segmentation` section is `segmentation`.
+fs::path lineWithSegmentation(const hgtest::TempDir& dir, const std::string& segmentation)
+{
+    fs::copy(simFolder(), dir.path() / "sim", fs::copy_options::recursive);
+    const fs::path station = dir.path() / "sim" / "station.yaml";
+    std::ifstream in(station);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string section = "\nsegmentation: {method: otsu, object_is_dark: true}\n";
+    const auto at = text.find(section);
+    EXPECT_NE(at, std::string::npos) << "config/sim/station.yaml names its segmentation";
+    if (at != std::string::npos) text.replace(at, section.size(), "\nsegmentation: " + segmentation + "\n");
+    hgtest::writeFile(station, text);
+    return dir.path() / "sim" / "hullgauged.yaml";
+}
+
+TEST_F(EngineParity, StationFixedThresholdIsWhatTheDaemonSegmentsWith)
+{
+    const auto images = frames(*config_, "nominal");
+    // config/sim/station.yaml renders the part at 0.04 x 255 = 10 grey levels (noise σ 1.5) on a
+    // 0.92 x 255 = 235 backlight. Half way between them the silhouettes are Otsu's: the nominal
+    // part passes. Below the part's grey level no pixel is dark enough to be part: no view
+    // holds the part, so no landmark finds its surface.
+    const std::map<std::string, std::map<std::string, std::string>> expected = {{"{method: fixed, threshold: 122}", {}},
+                                                                                {"{method: fixed, threshold: 2}",
+                                                                                 {{"tall-top", "not_found"},
+                                                                                  {"tall-corner", "not_found"},
+                                                                                  {"tall-side", "not_found"},
+                                                                                  {"tall-foot", "not_found"},
+                                                                                  {"riser", "not_found"},
+                                                                                  {"step-top", "not_found"},
+                                                                                  {"step-side", "not_found"},
+                                                                                  {"end-front", "not_found"},
+                                                                                  {"end-back", "not_found"},
+                                                                                  {"step-top-back", "not_found"}}}};
+    for (const auto& [segmentation, failing] : expected) {
+        SCOPED_TRACE(segmentation);
+        hgtest::TempDir dir;
+        const auto config = hg::station::loadDaemonConfig(lineWithSegmentation(dir, segmentation));
+        ASSERT_EQ(config.segmentation.method, hg::vision::SegmentationMethod::Fixed);
+        auto inspector = hg::daemon::makeEngineInspector(config);
+        auto outcome = inspect(*inspector, config, images);
+        ASSERT_TRUE(outcome.ok) << outcome.error;
+        EXPECT_EQ(notOk(outcome), failing);
+        // The archive says how the daemon segmented, and the offline tool follows it.
+        const fs::path folder = archive(config, outcome, dir / "images", "nominal");
+        ASSERT_FALSE(folder.empty());
+        const auto manifest = hg::vision::readManifest(folder / "manifest.json");
+        EXPECT_EQ(manifest.segmentation.method, hg::vision::SegmentationMethod::Fixed);
+        EXPECT_EQ(manifest.segmentation.threshold, config.segmentation.threshold);
+        EXPECT_EQ(expectSameLandmarks(outcome, inspectOffline(config.programs.at(1).partFile, folder)), 10u);
+    }
+}
+
+TEST_F(EngineParity, PartProgramInspectionSectionIsWhatTheDaemonInspectsWith)
+{
+    // early_exit in the part program: the daemon stops at face-low's first moved landmark in
+    // the program's order (step-top, the sixth); the four after it are not inspected.
+    hgtest::TempDir dir;
+    auto config = hg::station::loadDaemonConfig(lineWithSegmentation(dir, "{method: otsu}"));
+    std::ofstream(dir.path() / "sim" / "stepped-block.yaml", std::ios::app) << "inspection: {early_exit: true}\n";
+    auto inspector = hg::daemon::makeEngineInspector(config);
+    auto outcome = inspect(*inspector, config, frames(config, "face-low"));
+    ASSERT_TRUE(outcome.ok) << outcome.error;
+    const std::map<std::string, std::string> expected = {{"step-top", "out_of_tolerance"},
+                                                         {"step-side", "not_inspected"},
+                                                         {"end-front", "not_inspected"},
+                                                         {"end-back", "not_inspected"},
+                                                         {"step-top-back", "not_inspected"}};
+    EXPECT_EQ(notOk(outcome), expected);
+    const fs::path folder = archive(config, outcome, dir / "images", "face-low");
+    ASSERT_FALSE(folder.empty());
+    EXPECT_EQ(expectSameLandmarks(outcome, inspectOffline(config.programs.at(1).partFile, folder)), 10u);
+}
+
+TEST(ArchiveRule, FailedPartsWithSaveFailedImagesAndEveryInspectedPartWithArchiveAll)
+{
+    using hg::station::Verdict;
+    hg::station::ResultsConfig results; // save_failed_images: true, archive_all: false
+    EXPECT_TRUE(hg::daemon::archivesPart(results, Verdict::Fail));
+    EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Pass));
+    results.saveFailedImages = false;
+    EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Fail));
+    results.archiveAll = true;
+    EXPECT_TRUE(hg::daemon::archivesPart(results, Verdict::Fail));
+    EXPECT_TRUE(hg::daemon::archivesPart(results, Verdict::Pass));
+    // A cycle that inspected nothing has nothing to archive.
+    EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Aborted));
+    EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Error));
+}
+
+} // namespace

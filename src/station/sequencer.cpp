@@ -1,6 +1,7 @@
 #include "hullgauge/station/sequencer.h"
 
 #include <array>
+#include <optional>
 #include <utility>
 
 namespace hg::station {
@@ -198,47 +199,58 @@ SequencerAction CaptureSequencer::afterPublish() const
 
 SequencerAction CaptureSequencer::onEvent(SequencerEvent event)
 {
+    if (auto action = onStationEvent(event)) return *action;
+    return onStepEvent(event);
+}
+
+// The events that mean the same in every state: devices, commands, recovery, calibration.
+std::optional<SequencerAction> CaptureSequencer::onStationEvent(SequencerEvent event)
+{
     const bool busy = isBusy(state_);
     switch (event) {
     case E::DevicesActive:
         if (state_ == S::Starting) return go(S::Ready, {});
-        return {};
+        return SequencerAction{};
     case E::DevicesFailed:
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::DevicesDown, true, true);
-        if (state_ == S::Fault) return {};
+        if (state_ == S::Fault) return SequencerAction{};
         faultCode_ = FaultCode::DevicesDown;
         return go(S::Fault, recoverAfter(recoveryRetry_));
     case E::Trigger:
-        return {}; // use trigger(viewCount)
+        return SequencerAction{}; // use trigger(viewCount)
     case E::Abort:
     case E::Shutdown:
         // Processing takes milliseconds and needs no device: let it finish so its result is recorded.
         if (state_ == S::Moving || state_ == S::Settling || state_ == S::Grabbing)
             return endCycle(CycleOutcome::Aborted,
                             event == E::Abort ? FaultCode::AbortedByPlc : FaultCode::AbortedByShutdown, true, false);
-        return {};
+        return SequencerAction{};
     case E::Recovered:
         if (state_ == S::Fault) return go(S::Ready, {});
-        return {};
+        return SequencerAction{};
     case E::RecoveryFailed:
         if (state_ == S::Fault) return go(S::Fault, recoverAfter(recoveryRetry_));
-        return {};
+        return SequencerAction{};
     case E::FaultReset:
         if (state_ == S::Fault) return go(S::Fault, recoverAfter(std::chrono::milliseconds(0)));
-        return {};
+        return SequencerAction{};
     case E::ProgramFailed:
         if (busy) return endCycle(CycleOutcome::Faulted, FaultCode::ProgramLoad, true, false);
-        return {};
+        return SequencerAction{};
     case E::CalibrationStart:
         if (state_ == S::Ready || state_ == S::Done) return go(S::Calibrating, {});
-        return {};
+        return SequencerAction{};
     case E::CalibrationEnd:
         if (state_ == S::Calibrating) return go(S::Ready, {});
-        return {};
+        return SequencerAction{};
     default:
-        break;
+        return std::nullopt;
     }
+}
 
+// The outcomes of the cycle's steps, in the state that performs the step.
+SequencerAction CaptureSequencer::onStepEvent(SequencerEvent event)
+{
     switch (state_) {
     case S::Moving:
         switch (event) {

@@ -30,6 +30,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -155,6 +156,8 @@ class CaptureSequencer {
     SequencerAction afterPublish() const;
 
   private:
+    std::optional<SequencerAction> onStationEvent(SequencerEvent event);
+    SequencerAction onStepEvent(SequencerEvent event);
     SequencerAction go(SequencerState to, SequencerAction action);
     SequencerAction internalFault(SequencerState refusedTo);
     SequencerAction recoverAfter(std::chrono::milliseconds delay);

@@ -99,7 +99,9 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
         ResultStore store(config->results.database);
         station::PlcRegisters registers;
         registers.setKnownPrograms(programNumbers(*config));
-        auto devices = makeDevices(*config);
+        StationHardware hardware = makeDevices(*config);
+        auto& devices = hardware.devices;
+        SimulationControl* simulation = hardware.simulation;
         auto inspector = makeInspector(*config);
         PlcServer plc(registers, config->plc);
         plc.start();
@@ -131,7 +133,7 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
                         {"results", {{"database", store.file().string()}, {"records", store.count()}}},
                         {"lamps", devices->lampStatus()},
                         {"calibration", runner.calibration()},
-                        {"simulated_part", devices->simulatedPart()}};
+                        {"simulated_part", simulation ? simulation->part() : std::string()}};
             }
             if (command == "results") {
                 int limit = request.value("limit", 10);
@@ -172,12 +174,12 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
             }
             if (command == "calibration") return {{"ok", true}, {"calibration", runner.calibration()}};
             if (command == "sim-part") {
-                auto parts = devices->simulatedParts();
-                if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};
+                if (!simulation || simulation->parts().empty())
+                    return {{"ok", false}, {"error", "the camera is not simulated"}};
                 if (request.value("list", false))
-                    return {{"ok", true}, {"parts", parts}, {"current", devices->simulatedPart()}};
+                    return {{"ok", true}, {"parts", simulation->parts()}, {"current", simulation->part()}};
                 auto name = request.value("name", std::string());
-                if (!devices->selectSimulatedPart(name))
+                if (!simulation->selectPart(name))
                     return {{"ok", false}, {"error", "unknown simulated part '" + name + "' (see sim-part --list)"}};
                 return {{"ok", true}, {"current", name}};
             }

@@ -407,7 +407,11 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
                           "fault", "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed",
                           "sub_scanlines", "target", "truth_station"});
-    geometry::Station station = geometry::parseStation(root);
+    // Initialised, never assigned: a Station's document shares its YAML nodes
+    // with `root`, and assigning one over the other would overwrite `root`.
+    const auto truthNode = driver.optional("truth_station");
+    geometry::Station station =
+        truthNode ? loadTruthStation(*truthNode, geometry::parseStation(root)) : geometry::parseStation(root);
     auto& parts = environment.parts;
     SimConfig c;
     if (auto n = driver.optional("buffer_count")) c.bufferCount = static_cast<int>(n->asIntIn(1, 64));
@@ -417,7 +421,6 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
     if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
     if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
-    if (auto n = driver.optional("truth_station")) station = loadTruthStation(*n, station);
     if (auto n = driver.optional("fault")) {
         auto fault = faultFromString(n->asString());
         if (!fault) n->fail("unknown fault '" + n->asString() + "' (expected none, timeout, incomplete or dropped)");

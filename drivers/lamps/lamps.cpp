@@ -80,32 +80,14 @@ std::string_view toString(Lamp lamp)
 
 std::string_view toString(LampState state)
 {
-    switch (state) {
-    case LampState::Off:
-        return "off";
-    case LampState::On:
-        return "on";
-    case LampState::Blinking:
-        return "blinking";
-    }
-    return "?";
+    constexpr std::array<std::string_view, 3> names{"off", "on", "blinking"};
+    return names[static_cast<std::size_t>(state)];
 }
 
 std::string_view toString(StationIndication indication)
 {
-    switch (indication) {
-    case StationIndication::Dark:
-        return "dark";
-    case StationIndication::Pass:
-        return "pass";
-    case StationIndication::Fail:
-        return "fail";
-    case StationIndication::Busy:
-        return "busy";
-    case StationIndication::Fault:
-        return "fault";
-    }
-    return "?";
+    constexpr std::array<std::string_view, 5> names{"dark", "pass", "fail", "busy", "fault"};
+    return names[static_cast<std::size_t>(indication)];
 }
 
 std::string LampLine::describe() const
@@ -157,19 +139,13 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
 std::array<LampState, 3> lampStatesFor(StationIndication indication)
 {
     using S = LampState;
-    switch (indication) {
-    case StationIndication::Dark:
-        return {S::Off, S::Off, S::Off};
-    case StationIndication::Pass:
-        return {S::On, S::Off, S::Off};
-    case StationIndication::Fail:
-        return {S::Off, S::Off, S::On};
-    case StationIndication::Busy:
-        return {S::Off, S::On, S::Off};
-    case StationIndication::Fault:
-        return {S::Off, S::Blinking, S::Blinking};
-    }
-    return {S::Off, S::Off, S::Off};
+    // CONTRACTS §6, indexed by StationIndication; each row green, amber, red.
+    constexpr std::array<std::array<LampState, 3>, 5> table{{{S::Off, S::Off, S::Off},
+                                                             {S::On, S::Off, S::Off},
+                                                             {S::Off, S::Off, S::On},
+                                                             {S::Off, S::On, S::Off},
+                                                             {S::Off, S::Blinking, S::Blinking}}};
+    return table[static_cast<std::size_t>(indication)];
 }
 
 Lamps::Lamps(LampsConfig config, LampClock clock)

@@ -5,6 +5,8 @@
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/mesh_io.h"
 
+#include <array>
+
 namespace hg::daemon {
 namespace {
 
@@ -12,19 +14,9 @@ using drivers::LifecycleState;
 
 drivers::StationIndication indication(LampPattern p)
 {
-    switch (p) {
-    case LampPattern::Off:
-        return drivers::StationIndication::Dark;
-    case LampPattern::Busy:
-        return drivers::StationIndication::Busy;
-    case LampPattern::Pass:
-        return drivers::StationIndication::Pass;
-    case LampPattern::Fail:
-        return drivers::StationIndication::Fail;
-    case LampPattern::Fault:
-        return drivers::StationIndication::Fault;
-    }
-    return drivers::StationIndication::Dark;
+    using I = drivers::StationIndication;
+    constexpr std::array<I, 5> byPattern{I::Dark, I::Busy, I::Pass, I::Fail, I::Fault}; // LampPattern order
+    return byPattern[static_cast<std::size_t>(p)];
 }
 
 class DriverDevices : public StationDevices, public SimulationControl {

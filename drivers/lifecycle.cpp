@@ -89,21 +89,4 @@ Status Device::run(Transition t)
     return r.status();
 }
 
-Status Device::configure()
-{
-    return run(Transition::Configure);
-}
-Status Device::activate()
-{
-    return run(Transition::Activate);
-}
-Status Device::deactivate()
-{
-    return run(Transition::Deactivate);
-}
-Status Device::cleanup()
-{
-    return run(Transition::Cleanup);
-}
-
 } // namespace hg::drivers

@@ -51,11 +51,8 @@ std::string_view toString(FrameStatus s)
 // Frame
 
 Frame::Frame(Frame&& other) noexcept
-    : status(other.status), image(std::move(other.image)), frameId(other.frameId), timestamp(other.timestamp),
-      message(std::move(other.message)), recycle_(std::move(other.recycle_))
 {
-    other.recycle_ = nullptr;
-    other.image = cv::Mat();
+    *this = std::move(other);
 }
 
 Frame& Frame::operator=(Frame&& other) noexcept

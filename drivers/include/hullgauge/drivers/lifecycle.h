@@ -87,13 +87,13 @@ class Device {
     LifecycleState state() const { return state_.load(); }
 
     /// Unconfigured -> Inactive. A failure runs the cleanup hook (nothing stays half open).
-    Status configure();
+    Status configure() { return run(Transition::Configure); }
     /// Inactive -> Active.
-    Status activate();
+    Status activate() { return run(Transition::Activate); }
     /// Active -> Inactive.
-    Status deactivate();
+    Status deactivate() { return run(Transition::Deactivate); }
     /// Inactive/Failed -> Unconfigured, always: the hook releases what it can.
-    Status cleanup();
+    Status cleanup() { return run(Transition::Cleanup); }
 
     /// The device kind ("camera", "fixture", "lamps"): message prefix and log category.
     const std::string& kind() const { return kind_; }

@@ -6,9 +6,11 @@
 
 #include <opencv2/core.hpp>
 
+#include "../backend_table.h"
 #include "aravis/aravis_camera.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "sim/sim_camera.h"
 #include "v4l2/v4l2_camera.h"
 
 namespace hg::drivers {
@@ -49,11 +51,8 @@ std::string_view toString(FrameStatus s)
 // Frame
 
 Frame::Frame(Frame&& other) noexcept
-    : status(other.status), image(std::move(other.image)), frameId(other.frameId), timestamp(other.timestamp),
-      message(std::move(other.message)), recycle_(std::move(other.recycle_))
 {
-    other.recycle_ = nullptr;
-    other.image = cv::Mat();
+    *this = std::move(other);
 }
 
 Frame& Frame::operator=(Frame&& other) noexcept
@@ -113,109 +112,52 @@ Frame Frame::over(cv::Mat view, std::uint64_t frameId, std::chrono::nanoseconds 
 // Camera: state checks around the hooks (libcamera's isAccessAllowed pattern).
 
 Camera::Camera(std::string configPath, CameraSettings settings)
-    : configPath_(std::move(configPath)), settings_(std::move(settings))
+    : Device("camera"), configPath_(std::move(configPath)), settings_(std::move(settings))
 {
-}
-
-Status Camera::transition(Transition t, const std::function<Status()>& hook)
-{
-    if (!allowed(state_, t))
-        return Status::failure("camera: cannot " +
-                               std::string(t == Transition::Configure    ? "configure"
-                                           : t == Transition::Activate   ? "activate"
-                                           : t == Transition::Deactivate ? "deactivate"
-                                                                         : "clean up") +
-                               " while " + std::string(toString(state_)));
-    Status s = hook();
-    if (s.ok()) {
-        state_ = nextState(state_, t);
-    } else if (t != Transition::Cleanup) {
-        // A failed open/start leaves the device in an unknown state: Failed, cleanup() to retry.
-        state_ = nextState(state_, Transition::Error);
-        log::category("camera")->error("{}", s.message());
-    }
-    return s;
-}
-
-Status Camera::configure()
-{
-    return transition(Transition::Configure, [this] { return doConfigure(); });
-}
-Status Camera::activate()
-{
-    return transition(Transition::Activate, [this] { return doActivate(); });
-}
-Status Camera::deactivate()
-{
-    return transition(Transition::Deactivate, [this] { return doDeactivate(); });
-}
-
-Status Camera::cleanup()
-{
-    Status s = transition(Transition::Cleanup, [this] { return doCleanup(); });
-    // Closing never leaves a half-open device behind: the hook releases what it can.
-    if (!s.ok() && (state_ == LifecycleState::Inactive || state_ == LifecycleState::Failed))
-        state_ = LifecycleState::Unconfigured;
-    return s;
 }
 
 Status Camera::setSettings(const CameraSettings& settings)
 {
-    switch (state_) {
-    case LifecycleState::Unconfigured:
-        settings_ = settings;
-        return Status::success();
-    case LifecycleState::Inactive: {
-        Status s = doApplySettings(settings);
-        if (s.ok()) settings_ = settings;
-        return s;
-    }
-    default:
-        return Status::failure("camera: settings can change only while not streaming (state " +
-                               std::string(toString(state_)) + ")");
-    }
+    std::lock_guard lock(mutex());
+    if (auto s = require({LifecycleState::Unconfigured, LifecycleState::Inactive}, "changing settings"); !s) return s;
+    if (state() == LifecycleState::Inactive)
+        if (Status s = doApplySettings(settings); !s) return s;
+    settings_ = settings;
+    return Status::success();
 }
 
 Frame Camera::grab(std::chrono::milliseconds timeout)
 {
-    if (state_ != LifecycleState::Active)
-        return Frame::failed(FrameStatus::Error,
-                             "camera: grab needs an active camera (state " + std::string(toString(state_)) + ")");
+    if (auto s = require({LifecycleState::Active}, "grab"); !s) return Frame::failed(FrameStatus::Error, s.message());
     return doGrab(timeout);
 }
 
-namespace {
-bool deviceOpen(LifecycleState s)
+Status Camera::requireOpen(std::string_view call) const
 {
-    return s == LifecycleState::Inactive || s == LifecycleState::Active;
+    return require({LifecycleState::Inactive, LifecycleState::Active}, call);
 }
-std::string closedMessage(LifecycleState s)
-{
-    return "camera: the device is not open (state " + std::string(toString(s)) + "); configure it first";
-}
-} // namespace
 
 Result<std::vector<FeatureInfo>> Camera::listFeatures()
 {
-    if (!deviceOpen(state_)) return Status::failure(closedMessage(state_));
+    if (auto s = requireOpen("listing features"); !s) return s;
     return doListFeatures();
 }
 
 Result<std::string> Camera::getFeature(const std::string& name)
 {
-    if (!deviceOpen(state_)) return Status::failure(closedMessage(state_));
+    if (auto s = requireOpen("reading " + name); !s) return s;
     return doGetFeature(name);
 }
 
 Status Camera::setFeature(const std::string& name, const std::string& value)
 {
-    if (!deviceOpen(state_)) return Status::failure(closedMessage(state_));
+    if (auto s = requireOpen("setting " + name); !s) return s;
     return doSetFeature(name, value);
 }
 
 Result<CameraInfo> Camera::info()
 {
-    if (!deviceOpen(state_)) return Status::failure(closedMessage(state_));
+    if (auto s = requireOpen("info"); !s) return s;
     return doInfo();
 }
 
@@ -253,18 +195,20 @@ CameraSettings parseCameraSettings(const ConfigNode& driver)
     return s;
 }
 
-std::unique_ptr<Camera> makeCamera(const ConfigNode& root)
+using CameraFactory = std::unique_ptr<Camera> (*)(const ConfigNode& root, CameraEnvironment& environment);
+
+/// The camera backends (docs/camera.md); the simulated twin is always built.
+constexpr Backend<CameraFactory> kCameraBackends[] = {
+    {"aravis", [](const ConfigNode& root, CameraEnvironment&) { return makeAravisCamera(root["camera"]["driver"]); }},
+    {"v4l2", [](const ConfigNode& root, CameraEnvironment&) { return makeV4l2Camera(root["camera"]["driver"]); }},
+    {"sim", makeSimCamera},
+};
+
+std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment)
 {
     ConfigNode driver = root["camera"]["driver"];
     require(driver.isMap(), driver, "expected a map with at least 'backend'");
-    ConfigNode backendNode = driver["backend"];
-    std::string backend = backendNode.asString();
-    if (backend == "aravis") return makeAravisCamera(driver);
-    if (backend == "v4l2") return makeV4l2Camera(driver);
-    if (backend == "sim")
-        backendNode.fail("the sim backend renders the part at the fixture pose and is built with the station "
-                         "(hg::drivers::makeSimCamera), not from the driver section alone");
-    backendNode.fail("unknown camera backend '" + backend + "' (expected aravis, v4l2 or sim)");
+    return chooseBackend(kCameraBackends, driver["backend"], "camera")(root, environment);
 }
 
 } // namespace hg::drivers

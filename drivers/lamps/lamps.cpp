@@ -7,6 +7,7 @@
 #include <cmath>
 #include <utility>
 
+#include "../backend_table.h"
 #include "backends.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
@@ -26,9 +27,18 @@ bool isUnsignedInteger(const std::string& s)
     return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-LampResult failure(LampStatusCode code, std::string message)
+using LampsFactory = std::unique_ptr<Lamps> (*)(LampsConfig config, SimulationControls* simulation, LampClock clock);
+
+/// The lamp backends (docs/lamps.md); the simulated twin is always built.
+constexpr Backend<LampsFactory> kLampBackends[] = {
+    {"gpiod", [](LampsConfig config, SimulationControls*,
+                 LampClock clock) { return makeGpiodLamps(std::move(config), std::move(clock)); }},
+    {"sim", makeSimulatedLamps},
+};
+
+bool anyBlinking(const std::array<LampState, 3>& states)
 {
-    return {code, std::move(message)};
+    return std::ranges::any_of(states, [](LampState x) { return x == LampState::Blinking; });
 }
 
 LampLine parseLine(const ConfigNode& node, bool defaultActiveLow)
@@ -70,45 +80,14 @@ std::string_view toString(Lamp lamp)
 
 std::string_view toString(LampState state)
 {
-    switch (state) {
-    case LampState::Off:
-        return "off";
-    case LampState::On:
-        return "on";
-    case LampState::Blinking:
-        return "blinking";
-    }
-    return "?";
+    constexpr std::array<std::string_view, 3> names{"off", "on", "blinking"};
+    return names[static_cast<std::size_t>(state)];
 }
 
 std::string_view toString(StationIndication indication)
 {
-    switch (indication) {
-    case StationIndication::Dark:
-        return "dark";
-    case StationIndication::Pass:
-        return "pass";
-    case StationIndication::Fail:
-        return "fail";
-    case StationIndication::Busy:
-        return "busy";
-    case StationIndication::Fault:
-        return "fault";
-    }
-    return "?";
-}
-
-std::string_view toString(LampStatusCode code)
-{
-    switch (code) {
-    case LampStatusCode::Ok:
-        return "ok";
-    case LampStatusCode::IoError:
-        return "I/O error";
-    case LampStatusCode::NotAllowed:
-        return "not allowed";
-    }
-    return "?";
+    constexpr std::array<std::string_view, 5> names{"dark", "pass", "fail", "busy", "fault"};
+    return names[static_cast<std::size_t>(indication)];
 }
 
 std::string LampLine::describe() const
@@ -126,8 +105,7 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
     c.file = section.file();
     auto backendNode = section["backend"];
     c.backend = backendNode.asString();
-    if (c.backend != "gpiod" && c.backend != "sim")
-        backendNode.fail("unknown lamp backend '" + c.backend + "' (gpiod or sim)");
+    (void)chooseBackend(kLampBackends, backendNode, "lamp");
     if (auto n = section.optional("chip")) {
         c.chip = n->asString();
         if (c.chip.empty()) n->fail("chip must not be empty");
@@ -161,23 +139,19 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
 std::array<LampState, 3> lampStatesFor(StationIndication indication)
 {
     using S = LampState;
-    switch (indication) {
-    case StationIndication::Dark:
-        return {S::Off, S::Off, S::Off};
-    case StationIndication::Pass:
-        return {S::On, S::Off, S::Off};
-    case StationIndication::Fail:
-        return {S::Off, S::Off, S::On};
-    case StationIndication::Busy:
-        return {S::Off, S::On, S::Off};
-    case StationIndication::Fault:
-        return {S::Off, S::Blinking, S::Blinking};
-    }
-    return {S::Off, S::Off, S::Off};
+    // CONTRACTS §6, indexed by StationIndication; each row green, amber, red.
+    constexpr std::array<std::array<LampState, 3>, 5> table{{{S::Off, S::Off, S::Off},
+                                                             {S::On, S::Off, S::Off},
+                                                             {S::Off, S::Off, S::On},
+                                                             {S::Off, S::On, S::Off},
+                                                             {S::Off, S::Blinking, S::Blinking}}};
+    return table[static_cast<std::size_t>(indication)];
 }
 
-Lamps::Lamps(LampsConfig config) : config_(std::move(config))
+Lamps::Lamps(LampsConfig config, LampClock clock)
+    : Device("lamps"), config_(std::move(config)), clock_(std::move(clock)), ownTimer_(!clock_)
 {
+    if (!clock_) clock_ = [] { return std::chrono::steady_clock::now(); };
 }
 
 Lamps::~Lamps()
@@ -188,177 +162,142 @@ Lamps::~Lamps()
 void Lamps::shutdown()
 {
     {
-        std::lock_guard lock(mutex_);
+        std::lock_guard lock(mutex());
         stopBlinker_ = true;
     }
     wake_.notify_all();
     if (blinker_.joinable()) blinker_.join();
 }
 
-LifecycleState Lamps::state() const
-{
-    std::lock_guard lock(mutex_);
-    return state_;
-}
-
 LampState Lamps::commanded(Lamp lamp) const
 {
-    std::lock_guard lock(mutex_);
+    std::lock_guard lock(mutex());
     return commanded_[index(lamp)];
 }
 
-LampResult Lamps::configure()
+HookResult Lamps::onConfigure()
 {
-    std::lock_guard lock(mutex_);
-    if (!allowed(state_, Transition::Configure))
-        return failure(LampStatusCode::NotAllowed,
-                       "lamps: configure is not allowed while " + std::string(toString(state_)));
     commanded_.fill(LampState::Off);
-    blinkLit_ = true;
-    auto r = onConfigure();
-    if (!r.ok()) {
-        onCleanup();
-        hg::log::category("lamps")->error("{}", r.message);
-        return r;
-    }
-    state_ = nextState(state_, Transition::Configure);
-    hg::log::category("lamps")->info("{} lamps configured", backend());
-    return r;
+    written_.fill(false);
+    return openLines();
 }
 
-LampResult Lamps::activate()
+HookResult Lamps::onActivate()
 {
-    {
-        std::lock_guard lock(mutex_);
-        if (!allowed(state_, Transition::Activate))
-            return failure(LampStatusCode::NotAllowed,
-                           "lamps: activate is not allowed while " + std::string(toString(state_)));
-        state_ = nextState(state_, Transition::Activate);
-        auto r = applyLocked();
-        if (!r.ok()) return r;
-        startBlinkerLocked();
+    if (Status s = writeLocked(/*always=*/true); !s) return HookResult::error(s);
+    if (ownTimer_ && !blinker_.joinable()) {
+        stopBlinker_ = false;
+        blinker_ = std::thread([this] { blinkLoop(); });
     }
-    wake_.notify_all();
-    return LampResult::success();
+    return Status::success();
 }
 
-LampResult Lamps::deactivate()
+HookResult Lamps::onDeactivate()
 {
-    std::lock_guard lock(mutex_);
-    if (!allowed(state_, Transition::Deactivate))
-        return failure(LampStatusCode::NotAllowed,
-                       "lamps: deactivate is not allowed while " + std::string(toString(state_)));
     commanded_.fill(LampState::Off);
-    auto r = writeOutputs({false, false, false});
-    if (!r.ok()) {
-        state_ = LifecycleState::Failed;
-        return r;
-    }
-    state_ = nextState(state_, Transition::Deactivate);
-    return r;
+    if (Status s = writeLocked(/*always=*/true); !s) return HookResult::error(s);
+    return Status::success();
 }
 
-LampResult Lamps::cleanup()
+void Lamps::onCleanup()
 {
-    std::lock_guard lock(mutex_);
-    if (!allowed(state_, Transition::Cleanup))
-        return failure(LampStatusCode::NotAllowed,
-                       "lamps: cleanup is not allowed while " + std::string(toString(state_)));
-    onCleanup();
+    closeLines();
     commanded_.fill(LampState::Off);
-    state_ = nextState(state_, Transition::Cleanup);
-    return LampResult::success();
+    written_.fill(false);
 }
 
-LampResult Lamps::requireActiveLocked(std::string_view call) const
+void Lamps::command(const std::array<LampState, 3>& states)
 {
-    if (state_ == LifecycleState::Active) return LampResult::success();
-    return failure(LampStatusCode::NotAllowed, "lamps: " + std::string(call) + " needs the driver active (it is " +
-                                                   std::string(toString(state_)) + ")");
-}
-
-LampResult Lamps::set(Lamp lamp, LampState s)
-{
-    std::unique_lock lock(mutex_);
-    if (auto r = requireActiveLocked("set"); !r.ok()) return r;
-    bool blinkedBefore = std::ranges::any_of(commanded_, [](LampState x) { return x == LampState::Blinking; });
-    commanded_[index(lamp)] = s;
+    if (states == commanded_) return;
     // A lamp that starts blinking while none blinked starts lit, so the
-    // operator sees the change at once.
-    if (!blinkedBefore && s == LampState::Blinking) blinkLit_ = true;
-    auto r = applyLocked();
-    lock.unlock();
-    wake_.notify_all();
-    return r;
-}
-
-LampResult Lamps::show(StationIndication indication)
-{
-    std::unique_lock lock(mutex_);
-    if (auto r = requireActiveLocked("show " + std::string(toString(indication))); !r.ok()) return r;
-    auto states = lampStatesFor(indication);
-    bool blinkedBefore = std::ranges::any_of(commanded_, [](LampState x) { return x == LampState::Blinking; });
-    if (states != commanded_ && !blinkedBefore) blinkLit_ = true;
+    // operator sees the change at once; any change keeps the phase the
+    // blinking lamps show and restarts its half period.
+    const auto now = clock_();
+    const auto half = config_.blinkPeriod / 2;
+    const bool dark = anyBlinking(commanded_) && ((now - phaseStart_) / half) % 2 == 1;
+    phaseStart_ = dark ? now - half : now;
     commanded_ = states;
+}
+
+Status Lamps::set(Lamp lamp, LampState s)
+{
+    std::unique_lock lock(mutex());
+    if (auto r = require({LifecycleState::Active}, "set " + std::string(toString(lamp))); !r) return r;
+    auto states = commanded_;
+    states[index(lamp)] = s;
+    command(states);
     auto r = applyLocked();
     lock.unlock();
     wake_.notify_all();
     return r;
 }
 
-LampResult Lamps::applyLocked()
+Status Lamps::show(StationIndication indication)
 {
+    std::unique_lock lock(mutex());
+    if (auto r = require({LifecycleState::Active}, "show " + std::string(toString(indication))); !r) return r;
+    command(lampStatesFor(indication));
+    auto r = applyLocked();
+    lock.unlock();
+    wake_.notify_all();
+    return r;
+}
+
+Status Lamps::tick()
+{
+    std::lock_guard lock(mutex());
+    if (state() != LifecycleState::Active) return Status::success();
+    return applyLocked();
+}
+
+bool Lamps::blinking() const
+{
+    return state() == LifecycleState::Active && anyBlinking(commanded_);
+}
+
+Status Lamps::writeLocked(bool always)
+{
+    const bool litPhase = ((clock_() - phaseStart_) / (config_.blinkPeriod / 2)) % 2 == 0;
     std::array<bool, 3> lit{};
     for (std::size_t i = 0; i < lit.size(); ++i)
-        lit[i] = commanded_[i] == LampState::On || (commanded_[i] == LampState::Blinking && blinkLit_);
-    auto r = writeOutputs(lit);
-    if (!r.ok()) {
-        // A lamp that cannot be driven is a hardware fault the operator must
-        // hear about; the driver stays Failed until cleanup() and configure().
-        state_ = nextState(state_, Transition::Error);
-        hg::log::category("lamps")->error("{}", r.message);
-    }
-    return r;
+        lit[i] = commanded_[i] == LampState::On || (commanded_[i] == LampState::Blinking && litPhase);
+    if (lit == written_ && !always) return Status::success();
+    if (Status s = writeOutputs(lit); !s) return s;
+    written_ = lit;
+    return Status::success();
 }
 
-void Lamps::startBlinkerLocked()
+Status Lamps::applyLocked()
 {
-    if (blinker_.joinable()) return;
-    stopBlinker_ = false;
-    blinker_ = std::thread([this] { blinkLoop(); });
+    // A lamp that cannot be driven is a hardware fault the operator must
+    // hear about; the driver stays Failed until cleanup() and configure().
+    if (Status s = writeLocked(/*always=*/false); !s) return fail(s);
+    return Status::success();
 }
 
 void Lamps::blinkLoop()
 {
-    std::unique_lock lock(mutex_);
+    std::unique_lock lock(mutex());
     const auto half = config_.blinkPeriod / 2;
     while (!stopBlinker_) {
-        auto blinking = [&] {
-            return state_ == LifecycleState::Active &&
-                   std::ranges::any_of(commanded_, [](LampState x) { return x == LampState::Blinking; });
-        };
         if (!blinking()) {
             wake_.wait(lock, [&] { return stopBlinker_ || blinking(); });
             continue;
         }
-        // Toggle on a fixed schedule so the period does not drift with the
-        // time the writes take; a change of the commanded states restarts it.
-        auto commandedAtStart = commanded_;
-        auto deadline = std::chrono::steady_clock::now() + half;
-        bool interrupted = wake_.wait_until(lock, deadline, [&] {
-            return stopBlinker_ || commanded_ != commandedAtStart || state_ != LifecycleState::Active;
-        });
-        if (interrupted) continue;
-        blinkLit_ = !blinkLit_;
-        (void)applyLocked();
+        // Wake at the next half-period boundary of the phase, so the period does
+        // not drift with the time the writes take; a new command moves the phase.
+        const auto origin = phaseStart_;
+        const auto next = origin + ((clock_() - origin) / half + 1) * half;
+        wake_.wait_until(lock, next, [&] { return stopBlinker_ || phaseStart_ != origin || !blinking(); });
+        if (blinking()) (void)applyLocked();
     }
 }
 
-std::unique_ptr<Lamps> makeLamps(const ConfigNode& section)
+std::unique_ptr<Lamps> makeLamps(const ConfigNode& section, SimulationControls* simulation, LampClock clock)
 {
     LampsConfig config = LampsConfig::parse(section);
-    if (config.backend == "gpiod") return makeGpiodLamps(std::move(config));
-    return makeSimulatedLamps(std::move(config));
+    auto make = chooseBackend(kLampBackends, section["backend"], "lamp");
+    return make(std::move(config), simulation, std::move(clock));
 }
 
 } // namespace hg::drivers

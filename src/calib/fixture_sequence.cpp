@@ -3,19 +3,8 @@
 #include "hullgauge/common/error.h"
 
 #include <cstdio>
-#include <sstream>
 
 namespace hg::calib {
-
-std::string describeFixturePose(const geometry::FixturePose& pose, geometry::FixtureType type)
-{
-    std::ostringstream s;
-    if (type == geometry::FixtureType::Rail)
-        s << "rail " << pose.railMm << " mm";
-    else
-        s << "rotation " << pose.rotationDeg << " deg, declination " << pose.declinationDeg << " deg";
-    return s.str();
-}
 
 FixtureSequenceResult runFixtureSequence(const std::vector<geometry::FixturePose>& poses, const TargetSpec& target,
                                          const geometry::Intrinsics& camera, geometry::FixtureType type,
@@ -28,7 +17,7 @@ FixtureSequenceResult runFixtureSequence(const std::vector<geometry::FixturePose
     for (std::size_t i = 0; i < poses.size(); ++i) {
         if (io.cancelled && io.cancelled()) throw FaultError("calibrate run: cancelled");
         const auto& pose = poses[i];
-        const std::string where = describeFixturePose(pose, type);
+        const std::string where = geometry::toString(pose, type);
         check(io.moveTo(pose), "move to " + where);
         cv::Mat frame;
         check(io.grab(frame), "grab at " + where);

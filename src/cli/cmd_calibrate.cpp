@@ -8,8 +8,8 @@
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
-#include "hullgauge/drivers/camera.h"
 #include "hullgauge/drivers/fixture.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/geometry/station.h"
 
 #include <filesystem>
@@ -240,30 +240,28 @@ void check(bool ok, const std::string& step, const std::string& message)
     if (!ok) throw FaultError("calibrate run: " + step + ": " + message);
 }
 
-/// The station's camera for the live sequence: its driver, or with
-/// `backend: sim` the simulated twin showing the target it carries
-/// (`camera.driver.target`) at the pose the fixture driver reports — so the
-/// whole sequence runs against the fixture simulator as against the station.
-std::unique_ptr<drivers::Camera> makeRunCamera(const ConfigNode& root, const geometry::Station& station,
-                                               drivers::Fixture& fixture)
+/// The station's camera for the live sequence, from the backend table. The
+/// simulated twin shows the target it carries (`camera.driver.target`) at the
+/// pose the fixture driver reports, so the whole sequence runs against the
+/// fixture simulator as against the station.
+std::unique_ptr<drivers::Camera> makeRunCamera(const ConfigNode& root, drivers::Fixture& fixture)
 {
-    auto driver = root["camera"]["driver"];
-    if (!driver.isMap() || !driver.has("backend") || driver["backend"].asString() != "sim")
-        return drivers::makeCamera(root);
-    if (!driver.has("target"))
-        throw InputError(driver.file(), driver.path() + ".target",
-                         "the simulated camera shows no calibration target: describe the chessboard the fixture "
-                         "carries (docs/camera.md)",
-                         driver.line());
-    drivers::SimCameraInputs inputs;
-    inputs.station = station;
-    inputs.poseSource = [&fixture]() -> std::optional<geometry::FixturePose> {
+    drivers::SimulationControls sim;
+    drivers::CameraEnvironment environment;
+    environment.poseSource = [&fixture]() -> std::optional<geometry::FixturePose> {
         drivers::FixtureStatus status;
         if (!fixture.status(status).ok() || status.busy || status.fault) return std::nullopt;
         return status.position;
     };
-    auto camera = drivers::makeSimCamera(driver, std::move(inputs));
-    if (auto s = camera->setPart("target"); !s) throw FaultError("calibrate run: " + s.message());
+    environment.simulation = &sim;
+    auto camera = drivers::makeCamera(root, std::move(environment));
+    if (sim.camera && !sim.camera->setPart("target")) {
+        auto driver = root["camera"]["driver"];
+        throw InputError(driver.file(), driver.path() + ".target",
+                         "the simulated camera shows no calibration target: describe the chessboard the fixture "
+                         "carries (docs/camera.md)",
+                         driver.line());
+    }
     return camera;
 }
 
@@ -279,7 +277,7 @@ int runLive(const RunArgs& a)
     if (!a.saveImages.empty()) fs::create_directories(a.saveImages);
     auto root = ConfigNode::loadFile(a.station);
     auto fixture = drivers::makeFixture(station);
-    auto camera = makeRunCamera(root, station, *fixture);
+    auto camera = makeRunCamera(root, *fixture);
     const auto grabTimeout = std::chrono::milliseconds(static_cast<long long>(a.grabTimeoutS * 1000.0));
 
     {
@@ -288,14 +286,14 @@ int runLive(const RunArgs& a)
     }
     {
         auto r = fixture->configure();
-        check(r.ok(), "fixture configure", r.message);
+        check(r.ok(), "fixture configure", r.message());
         r = fixture->activate();
-        check(r.ok(), "fixture activate", r.message);
+        check(r.ok(), "fixture activate", r.message());
         std::cerr << "homing the fixture ..." << std::endl;
         r = fixture->home();
-        check(r.ok(), "home", r.message);
+        check(r.ok(), "home", r.message());
         r = fixture->waitInPosition(fixture->homeTimeout());
-        check(r.ok(), "home", r.message);
+        check(r.ok(), "home", r.message());
     }
     {
         auto s = camera->activate();
@@ -304,8 +302,7 @@ int runLive(const RunArgs& a)
     calib::FixtureSequenceIo io;
     io.moveTo = [&](const geometry::FixturePose& pose) {
         auto r = fixture->moveTo(pose);
-        if (r.ok()) r = fixture->waitInPosition(fixture->moveTimeout());
-        return r.ok() ? Status::success() : Status::failure(r.message);
+        return r.ok() ? fixture->waitInPosition(fixture->moveTimeout()) : r;
     };
     io.grab = [&](cv::Mat& image) {
         auto frame = camera->grab(grabTimeout);

@@ -1,6 +1,6 @@
 // hullgauge camera list|get|set|grab — maintenance access to the camera named
-// by the station's camera.driver section (GigE Vision through Aravis, V4L2, or
-// the GigE Vision simulator). Results go to stdout as JSON; progress and
+// by the station's camera.driver section, from the camera backend table
+// (GigE Vision through Aravis, V4L2, or the simulated twin; docs/camera.md). Results go to stdout as JSON; progress and
 // errors to stderr. Exit status: 0 done, 2 bad station file or arguments,
 // 3 camera fault (unreachable, refused value, no frame) (CONTRACTS §5).
 #include <chrono>

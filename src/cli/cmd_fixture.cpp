@@ -35,9 +35,9 @@ std::string fmt(double v)
 }
 
 /// Turns a failed call into the exception main() maps to exit status 3.
-void check(const drivers::FixtureResult& r, const std::string& what)
+void check(const Status& r, const std::string& what)
 {
-    if (!r.ok()) throw FaultError("fixture " + what + ": " + std::string(drivers::toString(r.code)) + ": " + r.message);
+    if (!r.ok()) throw FaultError("fixture " + what + ": " + std::string(toString(r.code())) + ": " + r.message());
 }
 
 nlohmann::json statusJson(const drivers::Fixture& fixture, const drivers::FixtureStatus& st)
@@ -110,7 +110,7 @@ int runFixture(const std::string& action, const FixtureArgs& a)
             auto timeout = a.timeoutS         ? std::chrono::milliseconds(static_cast<long long>(*a.timeoutS * 1000.0))
                            : action == "home" ? fixture->homeTimeout()
                                               : fixture->moveTimeout();
-            std::cerr << (action == "home" ? "homing" : "moving to " + drivers::describePose(*pose, fixture->type()))
+            std::cerr << (action == "home" ? "homing" : "moving to " + geometry::toString(*pose, fixture->type()))
                       << " ..." << std::endl;
             check(fixture->waitInPosition(timeout), action);
         }

@@ -199,14 +199,15 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     ResultStore store(config->results.database);
     PlcRegisters registers;
     registers.setKnownPrograms(programNumbers(*config));
-    auto devices = makeDevices(*config);
+    StationHardware hardware = makeDevices(*config);
     auto inspector = makeInspector(*config);
     PlcServer plc(registers, config->plc);
     plc.start();
-    CycleRunner runner(registers, *devices, *inspector, store, config);
+    CycleRunner runner(registers, *hardware.devices, *inspector, store, config);
     MainLoop loop(config, registers, plc, runner, notifier, sigFd);
-    MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group,
-                                  maintenanceCommands({registers, plc, runner, store, *devices, loop.config()}));
+    MaintenanceServer maintenance(
+        config->maintenance.socket, config->maintenance.group,
+        maintenanceCommands({registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config()}));
     notifier.status("starting devices");
     runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
     loop.serve(maintenance);

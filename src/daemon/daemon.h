@@ -20,7 +20,7 @@
 
 namespace hg::daemon {
 
-using DevicesFactory = std::function<std::unique_ptr<StationDevices>(const station::DaemonConfig&)>;
+using DevicesFactory = std::function<StationHardware(const station::DaemonConfig&)>;
 using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station::DaemonConfig&)>;
 
 /// Runs the daemon until SIGTERM/SIGINT; returns the process exit status.

@@ -1,7 +1,8 @@
 // What the cycle runner needs from the station's hardware: the fixture, the
 // camera and the operator lamps, behind one narrow port in domain types. The
 // daemon's implementation (driver_devices.cpp) sits on the drivers of
-// drivers/ chosen by the station file; tests use small fakes.
+// drivers/ chosen by the station file; tests use small fakes. The simulated
+// line's own switch (the part under test) is a separate port beside it.
 //
 // Every call returns an hg::Status (common/status.h) and never throws;
 // only construction (configuration parsing) throws hg::InputError.
@@ -45,16 +46,25 @@ class StationDevices {
     /// state ("off", "on", "blinking") and, where the driver can read its lines
     /// back (the simulated twin), whether the lamp is lit right now.
     virtual nlohmann::json lampStatus() const { return nullptr; }
+};
 
-    /// The simulated camera's part variants (empty on real hardware).
-    virtual std::vector<std::string> simulatedParts() const { return {}; }
-    virtual std::string simulatedPart() const { return {}; }
-    /// Switches the simulated part under test; false when unknown or not simulated.
-    virtual bool selectSimulatedPart(const std::string& name)
-    {
-        (void)name;
-        return false;
-    }
+/// The simulated line's control (`hullgauge ctl sim-part`, docs/daemon.md):
+/// which part the simulated camera shows.
+class SimulationControl {
+  public:
+    virtual ~SimulationControl() = default;
+    /// The part variants ("nominal" and the defect variants).
+    virtual std::vector<std::string> parts() const = 0;
+    virtual std::string part() const = 0;
+    /// Switches the part under test; false for an unknown name.
+    virtual bool selectPart(const std::string& name) = 0;
+};
+
+/// What the daemon's device factory returns: the production port and, on the
+/// simulated line only, its control (owned by `devices`; null on real hardware).
+struct StationHardware {
+    std::unique_ptr<StationDevices> devices;
+    SimulationControl* simulation = nullptr;
 };
 
 } // namespace hg::daemon

@@ -2,106 +2,56 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
-#include "hullgauge/drivers/camera.h"
-#include "hullgauge/drivers/fixture.h"
-#include "hullgauge/drivers/lamps.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/mesh_io.h"
+
+#include <array>
 
 namespace hg::daemon {
 namespace {
 
-using drivers::FixtureStatusCode;
 using drivers::LifecycleState;
-
-Status fromFixture(const drivers::FixtureResult& r)
-{
-    switch (r.code) {
-    case FixtureStatusCode::Ok:
-        return Status::success();
-    case FixtureStatusCode::Timeout:
-        return Status::failure(StatusCode::Timeout, r.message);
-    case FixtureStatusCode::Fault:
-        return Status::failure(StatusCode::Fault, r.message);
-    case FixtureStatusCode::CommunicationError:
-        return Status::failure(StatusCode::CommunicationError, r.message);
-    case FixtureStatusCode::NotAllowed:
-        return Status::failure(StatusCode::NotAllowed, r.message);
-    }
-    return Status::failure(StatusCode::Error, r.message);
-}
 
 drivers::StationIndication indication(LampPattern p)
 {
-    switch (p) {
-    case LampPattern::Off:
-        return drivers::StationIndication::Dark;
-    case LampPattern::Busy:
-        return drivers::StationIndication::Busy;
-    case LampPattern::Pass:
-        return drivers::StationIndication::Pass;
-    case LampPattern::Fail:
-        return drivers::StationIndication::Fail;
-    case LampPattern::Fault:
-        return drivers::StationIndication::Fault;
-    }
-    return drivers::StationIndication::Dark;
+    using I = drivers::StationIndication;
+    constexpr std::array<I, 5> byPattern{I::Dark, I::Busy, I::Pass, I::Fail, I::Fault}; // LampPattern order
+    return byPattern[static_cast<std::size_t>(p)];
 }
 
-class DriverDevices : public StationDevices {
+class DriverDevices : public StationDevices, public SimulationControl {
   public:
     explicit DriverDevices(const station::DaemonConfig& config)
     {
         const auto& doc = *config.station.document;
-        fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture);
-        lamps_ = drivers::makeLamps(doc[config.lampsSection]);
-        auto cameraDriver = doc["camera"]["driver"];
-        if (cameraDriver.has("backend") && cameraDriver["backend"].asString() == "sim") {
-            // The simulated line: the camera renders the selected part at the fixture's actual pose.
-            drivers::SimCameraInputs inputs;
-            inputs.station = config.station;
-            for (const auto& [name, file] : config.simulatedParts)
-                inputs.parts.emplace_back(name, model::loadMesh(file));
-            if (inputs.parts.empty())
-                throw InputError(config.file.string(), "simulation.parts",
-                                 "the simulated camera needs the parts it can render (nominal and variants)");
-            inputs.poseSource = [this]() -> std::optional<geometry::FixturePose> {
-                drivers::FixtureStatus status;
-                if (!fixture_->status(status).ok() || status.busy || status.fault) return std::nullopt;
-                return status.position;
-            };
-            auto sim = drivers::makeSimCamera(cameraDriver, std::move(inputs));
-            simCamera_ = sim.get();
-            camera_ = std::move(sim);
-        } else {
-            camera_ = drivers::makeCamera(doc);
-        }
+        fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture, &sim_);
+        lamps_ = drivers::makeLamps(doc[config.lampsSection], &sim_);
+        // The simulated line: the camera renders the selected part at the fixture's actual pose.
+        drivers::CameraEnvironment environment;
+        for (const auto& [name, file] : config.simulatedParts)
+            environment.parts.emplace_back(name, model::loadMesh(file));
+        environment.poseSource = [this]() -> std::optional<geometry::FixturePose> {
+            drivers::FixtureStatus status;
+            if (!fixture_->status(status).ok() || status.busy || status.fault) return std::nullopt;
+            return status.position;
+        };
+        environment.simulation = &sim_;
+        camera_ = drivers::makeCamera(doc, std::move(environment));
+        if (sim_.camera && config.simulatedParts.empty())
+            throw InputError(config.file.string(), "simulation.parts",
+                             "the simulated camera needs the parts it can render (nominal and variants)");
     }
+
+    /// The part switch of the simulated camera, or null on real hardware.
+    SimulationControl* simulation() { return sim_.camera ? this : nullptr; }
 
     Status start() override
     {
-        auto log = hg::log::category("daemon");
-        if (lamps_->state() == LifecycleState::Unconfigured) {
-            if (auto r = lamps_->configure(); !r.ok()) return Status::failure(StatusCode::Error, "lamps: " + r.message);
-        }
-        if (lamps_->state() == LifecycleState::Inactive) {
-            if (auto r = lamps_->activate(); !r.ok()) return Status::failure(StatusCode::Error, "lamps: " + r.message);
-        }
-        if (fixture_->state() == LifecycleState::Unconfigured) {
-            if (auto r = fixture_->configure(); !r.ok()) return fromFixture(r).prefixed("fixture: ");
-        }
-        if (fixture_->state() == LifecycleState::Inactive) {
-            if (auto r = fixture_->activate(); !r.ok()) return fromFixture(r).prefixed("fixture: ");
-        }
-        if (auto r = homeIfNeeded(); !r.ok()) return r;
-        if (camera_->state() == LifecycleState::Unconfigured) {
-            if (auto r = camera_->configure(); !r.ok())
-                return Status::failure(StatusCode::Error, "camera: " + r.message());
-        }
-        if (camera_->state() == LifecycleState::Inactive) {
-            if (auto r = camera_->activate(); !r.ok())
-                return Status::failure(StatusCode::Error, "camera: " + r.message());
-        }
-        log->info("fixture ({}) and camera active", fixture_->backend());
+        if (auto r = bringUp(*lamps_); !r.ok()) return r;
+        if (auto r = bringUp(*fixture_); !r.ok()) return r;
+        if (auto r = homeIfNeeded(); !r.ok()) return r.prefixed("fixture: ");
+        if (auto r = bringUp(*camera_); !r.ok()) return r;
+        hg::log::category("daemon")->info("fixture ({}) and camera active", fixture_->backend());
         return Status::success();
     }
 
@@ -123,8 +73,8 @@ class DriverDevices : public StationDevices {
             (void)fixture_->resetFault();
             if (auto r = homeIfNeeded(); !r.ok()) return r;
         }
-        if (auto r = fixture_->moveTo(pose); !r.ok()) return fromFixture(r);
-        return fromFixture(fixture_->waitInPosition(timeout));
+        if (auto r = fixture_->moveTo(pose); !r.ok()) return r;
+        return fixture_->waitInPosition(timeout);
     }
 
     void stopMotion() override
@@ -158,54 +108,60 @@ class DriverDevices : public StationDevices {
         return start();
     }
 
-    std::vector<std::string> simulatedParts() const override
-    {
-        return simCamera_ ? simCamera_->partNames() : std::vector<std::string>{};
-    }
-    std::string simulatedPart() const override { return simCamera_ ? simCamera_->part() : std::string(); }
-    bool selectSimulatedPart(const std::string& name) override { return simCamera_ && simCamera_->setPart(name).ok(); }
+    std::vector<std::string> parts() const override { return sim_.camera->partNames(); }
+    std::string part() const override { return sim_.camera->part(); }
+    bool selectPart(const std::string& name) override { return sim_.camera->setPart(name).ok(); }
 
     void showLamps(LampPattern pattern) override
     {
-        if (auto r = lamps_->show(indication(pattern)); !r.ok())
-            hg::log::category("daemon")->warn("lamps: {}", r.message);
+        if (auto r = lamps_->show(indication(pattern)); !r.ok()) hg::log::category("daemon")->warn("{}", r.message());
     }
 
     nlohmann::json lampStatus() const override
     {
         nlohmann::json j{{"backend", std::string(lamps_->backend())}};
-        const auto* sim = dynamic_cast<const drivers::SimulatedLamps*>(lamps_.get());
         for (auto lamp : drivers::kAllLamps) {
             auto name = std::string(drivers::toString(lamp));
             j[name] = std::string(drivers::toString(lamps_->commanded(lamp)));
             // The simulated lines' levels: what an operator would see now (blink phase included).
-            if (sim) j["lit"][name] = sim->lit(lamp);
+            if (sim_.lamps) j["lit"][name] = sim_.lamps->lit(lamp);
         }
         return j;
     }
 
   private:
+    /// Configures and activates a driver from wherever it is (start and recovery).
+    static Status bringUp(drivers::Device& device)
+    {
+        Status r;
+        if (device.state() == LifecycleState::Unconfigured) r = device.configure();
+        if (r.ok() && device.state() == LifecycleState::Inactive) r = device.activate();
+        return r.prefixed(device.kind() + ": ");
+    }
+
     Status homeIfNeeded()
     {
         drivers::FixtureStatus status;
-        if (auto r = fixture_->status(status); !r.ok()) return fromFixture(r);
+        if (auto r = fixture_->status(status); !r.ok()) return r;
         if (status.homed) return Status::success();
-        if (auto r = fixture_->home(); !r.ok()) return fromFixture(r);
-        return fromFixture(fixture_->waitInPosition(fixture_->homeTimeout()));
+        if (auto r = fixture_->home(); !r.ok()) return r;
+        return fixture_->waitInPosition(fixture_->homeTimeout());
     }
 
+    drivers::SimulationControls sim_; ///< the twins' controls, where a driver is simulated
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;
-    drivers::SimCamera* simCamera_ = nullptr; ///< camera_ when it is the simulated one
     std::unique_ptr<drivers::Lamps> lamps_;
 };
 
 } // namespace
 
-std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& config)
+StationHardware makeDriverDevices(const station::DaemonConfig& config)
 {
     if (!config.station.document) throw InputError(config.stationFile.string(), "", "station document missing");
-    return std::make_unique<DriverDevices>(config);
+    auto devices = std::make_unique<DriverDevices>(config);
+    SimulationControl* simulation = devices->simulation();
+    return {std::move(devices), simulation};
 }
 
 } // namespace hg::daemon

@@ -9,7 +9,8 @@
 
 namespace hg::daemon {
 
-/// Builds the drivers (parsing only; throws hg::InputError naming the key).
-std::unique_ptr<StationDevices> makeDriverDevices(const station::DaemonConfig& config);
+/// Builds the drivers from their backend tables (parsing only; throws
+/// hg::InputError naming the key); with the simulated camera, its part switch.
+StationHardware makeDriverDevices(const station::DaemonConfig& config);
 
 } // namespace hg::daemon

@@ -138,7 +138,7 @@ json status(const MaintenanceContext& c, const json&)
             {"results", {{"database", c.store.file().string()}, {"records", c.store.count()}}},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
-            {"simulated_part", c.devices.simulatedPart()}};
+            {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
 }
 
 json results(const MaintenanceContext& c, const json& request)
@@ -193,11 +193,11 @@ json calibration(const MaintenanceContext& c, const json&)
 
 json simPart(const MaintenanceContext& c, const json& request)
 {
-    auto parts = c.devices.simulatedParts();
+    auto parts = c.simulation ? c.simulation->parts() : std::vector<std::string>{};
     if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};
-    if (request.value("list", false)) return {{"ok", true}, {"parts", parts}, {"current", c.devices.simulatedPart()}};
+    if (request.value("list", false)) return {{"ok", true}, {"parts", parts}, {"current", c.simulation->part()}};
     auto name = request.value("name", std::string());
-    if (!c.devices.selectSimulatedPart(name))
+    if (!c.simulation->selectPart(name))
         return {{"ok", false}, {"error", "unknown simulated part '" + name + "' (see sim-part --list)"}};
     return {{"ok", true}, {"current", name}};
 }

@@ -20,6 +20,7 @@ class PlcRegisters;
 class PlcServer;
 class ResultStore;
 class StationDevices;
+class SimulationControl;
 
 class MaintenanceServer {
   public:
@@ -49,6 +50,8 @@ struct MaintenanceContext {
     CycleRunner& runner;
     ResultStore& store;
     StationDevices& devices;
+    /// The simulated line's part switch; null on real hardware.
+    SimulationControl* simulation;
     /// The running configuration (replaced by a reload).
     const std::shared_ptr<const station::DaemonConfig>& config;
 };

@@ -21,7 +21,7 @@ std::string toString(const FixturePose& pose, FixtureType type)
     if (type == FixtureType::Rail)
         s << "rail " << pose.railMm << " mm";
     else
-        s << "rotation " << pose.rotationDeg << "°, declination " << pose.declinationDeg << "°";
+        s << "rotation " << pose.rotationDeg << " deg, declination " << pose.declinationDeg << " deg";
     return s.str();
 }
 

@@ -35,7 +35,7 @@ std::string env(const char* name)
     return v ? v : "";
 }
 
-class FakeDevices : public StationDevices {
+class FakeDevices : public StationDevices, public SimulationControl {
   public:
     Status start() override
     {
@@ -71,9 +71,9 @@ class FakeDevices : public StationDevices {
     }
     Status recover() override { return start(); }
     void showLamps(LampPattern) override {}
-    std::vector<std::string> simulatedParts() const override { return {"nominal", "dented"}; }
-    std::string simulatedPart() const override { return dented_ ? "dented" : "nominal"; }
-    bool selectSimulatedPart(const std::string& name) override
+    std::vector<std::string> parts() const override { return {"nominal", "dented"}; }
+    std::string part() const override { return dented_ ? "dented" : "nominal"; }
+    bool selectPart(const std::string& name) override
     {
         if (name != "nominal" && name != "dented") return false;
         dented_ = name == "dented";
@@ -125,6 +125,11 @@ class FakeInspector : public Inspector {
 int main(int argc, char** argv)
 {
     return runDaemon(
-        argc, argv, [](const hg::station::DaemonConfig&) { return std::make_unique<FakeDevices>(); },
+        argc, argv,
+        [](const hg::station::DaemonConfig&) {
+            auto devices = std::make_unique<FakeDevices>();
+            SimulationControl* simulation = devices.get();
+            return StationHardware{std::move(devices), simulation};
+        },
         [](const hg::station::DaemonConfig&) { return std::make_unique<FakeInspector>(); });
 }

@@ -144,7 +144,7 @@ TEST(Poses, LoadAndCheckAgainstTheFixture)
         }
     };
     expectError("- {rotation_deg: 30, declination_deg: 75}\n",
-                "bad.yaml:1: [0]: pose rotation 30°, declination 75° is outside the fixture's range");
+                "bad.yaml:1: [0]: pose rotation 30 deg, declination 75 deg is outside the fixture's range");
     expectError("- {rotation_deg: 0}\n- {rail_mm: 10}\n",
                 "bad.yaml:2: [1]: the station's fixture turns and tilts: give rotation_deg/declination_deg");
     expectError("- {rotation_deg: ten}\n", "bad.yaml:1: [0].rotation_deg: expected a finite number, found 'ten'");

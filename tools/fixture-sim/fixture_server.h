@@ -7,7 +7,7 @@
 // channel the driver under test uses.
 #pragma once
 
-#include "hullgauge/drivers/fixture.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/geometry/station.h"
 
 #include <atomic>

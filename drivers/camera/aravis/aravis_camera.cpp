@@ -222,7 +222,7 @@ class AravisCamera final : public Camera {
     }
 
   protected:
-    Status doConfigure() override
+    HookResult onConfigure() override
     {
         auto link = std::make_shared<Link>();
         if (Status s = openDevice(*link); !s) return s;
@@ -240,7 +240,7 @@ class AravisCamera final : public Camera {
         return applyAll(*link, s);
     }
 
-    Status doActivate() override
+    HookResult onActivate() override
     {
         std::shared_ptr<Link> link;
         {
@@ -253,9 +253,9 @@ class AravisCamera final : public Camera {
             link = std::make_shared<Link>();
             Status s = openDevice(*link);
             if (s) s = applyAll(*link, settings());
-            if (!s) return s;
+            if (!s) return HookResult::error(s); // the device is closed now
         }
-        if (Status s = startStream(*link); !s) return s;
+        if (Status s = startStream(*link); !s) return HookResult::error(s);
         {
             std::lock_guard lock(mutex_);
             link_ = std::move(link);
@@ -269,7 +269,7 @@ class AravisCamera final : public Camera {
         return Status::success();
     }
 
-    Status doDeactivate() override
+    HookResult onDeactivate() override
     {
         const bool healthy = stopWorker();
         auto link = currentLink();
@@ -281,11 +281,10 @@ class AravisCamera final : public Camera {
         return Status::success();
     }
 
-    Status doCleanup() override
+    void onCleanup() override
     {
         stopWorker();
         closeAll();
-        return Status::success();
     }
 
     Frame doGrab(milliseconds timeout) override

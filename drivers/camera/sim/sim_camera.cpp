@@ -7,7 +7,10 @@
 //
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
 // and read back but do not change the image; Part switches the part under
-// test; PixelFormat, OffsetX/Y, Width/Height, SensorWidth/Height are read-only.
+// test and Fault the fault switch (simulation.h); PixelFormat, OffsetX/Y,
+// Width/Height, SensorWidth/Height are read-only. Without parts (`hullgauge
+// camera` on a station file alone) the twin shows the bare back light, or the
+// `target`; without a pose source it renders at the zero pose.
 //
 // Two optional keys make the twin stand for a physical rig in calibration:
 // `target` adds a backlit chessboard carried by the fixture as the part named
@@ -17,16 +20,21 @@
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
-#include "hullgauge/drivers/camera.h"
+#include "hullgauge/drivers/simulation.h"
+#include "hullgauge/geometry/station.h"
 #include "hullgauge/geometry/transform.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/sim/renderer.h"
 
+#include "sim_camera.h"
+
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <sstream>
+#include <thread>
 
 namespace hg::drivers {
 namespace {
@@ -100,8 +108,24 @@ geometry::Station loadTruthStation(const ConfigNode& node, const geometry::Stati
 struct SimConfig {
     sim::RenderOptions render;
     int bufferCount = 4;
-    std::string initialPart = "nominal";
+    std::string initialPart;
+    SimulatedCameraFault fault = SimulatedCameraFault::None;
 };
+
+constexpr std::array<std::string_view, 4> kFaultNames{"none", "timeout", "incomplete", "dropped"};
+
+std::optional<SimulatedCameraFault> faultFromString(std::string_view name)
+{
+    for (std::size_t i = 0; i < kFaultNames.size(); ++i)
+        if (kFaultNames[i] == name) return static_cast<SimulatedCameraFault>(i);
+    return std::nullopt;
+}
+
+/// Rows a frame with missing packets lacks: every fourth band of 8 rows reads 0.
+void dropPackets(cv::Mat& image)
+{
+    for (int y = 0; y < image.rows; y += 32) image.rowRange(y, std::min(y + 8, image.rows)).setTo(0);
+}
 
 /// Preallocated frame slots; a slot is busy while a Frame views it.
 struct SlotPool {
@@ -126,13 +150,14 @@ struct SlotPool {
     }
 };
 
-class SimCameraImpl final : public SimCamera {
+class SimCameraImpl final : public Camera, public SimCameraControl {
   public:
-    SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, SimCameraInputs inputs)
-        : SimCamera(std::move(configPath), std::move(settings)), config_(std::move(config)),
-          station_(std::move(inputs.station)), poseSource_(std::move(inputs.poseSource))
+    SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, geometry::Station station,
+                  CameraEnvironment& environment)
+        : Camera(std::move(configPath), std::move(settings)), config_(std::move(config)), station_(std::move(station)),
+          poseSource_(std::move(environment.poseSource)), fault_(config_.fault)
     {
-        for (auto& [name, mesh] : inputs.parts)
+        for (auto& [name, mesh] : environment.parts)
             renderers_.emplace_back(name, std::make_shared<const sim::SilhouetteRenderer>(
                                               std::vector<model::TriangleMesh>{std::move(mesh)}));
         current_ = find(config_.initialPart);
@@ -167,14 +192,15 @@ class SimCameraImpl final : public SimCamera {
         return out;
     }
 
-    void setPoseSource(std::function<std::optional<geometry::FixturePose>()> source) override
+    void injectFault(SimulatedCameraFault fault) override
     {
         std::lock_guard lock(mutex_);
-        poseSource_ = std::move(source);
+        fault_ = fault;
+        log::category("camera")->info("sim camera: fault switch {}", toString(fault));
     }
 
   protected:
-    Status doConfigure() override { return doApplySettings(settings()); }
+    HookResult onConfigure() override { return doApplySettings(settings()); }
 
     Status doApplySettings(const CameraSettings& s) override
     {
@@ -193,7 +219,7 @@ class SimCameraImpl final : public SimCamera {
         return Status::success();
     }
 
-    Status doActivate() override
+    HookResult onActivate() override
     {
         pool_ = std::make_shared<SlotPool>();
         for (int i = 0; i < config_.bufferCount; ++i)
@@ -202,64 +228,80 @@ class SimCameraImpl final : public SimCamera {
         return Status::success();
     }
 
-    Status doDeactivate() override
+    HookResult onDeactivate() override
     {
         pool_.reset(); // slots still viewed by frames stay alive with them
         return Status::success();
     }
 
-    Status doCleanup() override
-    {
-        pool_.reset();
-        return Status::success();
-    }
+    void onCleanup() override { pool_.reset(); }
 
-    Frame doGrab(milliseconds /*timeout*/) override
+    Frame doGrab(milliseconds timeout) override
     {
         std::shared_ptr<const sim::SilhouetteRenderer> renderer;
-        std::function<std::optional<geometry::FixturePose>()> source;
+        PoseSource source;
+        SimulatedCameraFault fault;
         {
             std::lock_guard lock(mutex_);
             renderer = current_;
             source = poseSource_;
+            fault = fault_;
+            if (fault_ == SimulatedCameraFault::Dropped) fault_ = SimulatedCameraFault::None;
         }
-        if (!renderer) return Frame::failed(FrameStatus::Error, "sim camera: no part under test");
-        if (!source) return Frame::failed(FrameStatus::Error, "sim camera: no pose source is connected");
-        const auto pose = source();
+        if (fault == SimulatedCameraFault::Timeout || fault == SimulatedCameraFault::Dropped) {
+            // A silent camera costs the caller its whole timeout, as a real one does.
+            std::this_thread::sleep_for(timeout);
+            if (fault == SimulatedCameraFault::Dropped) ++frameCount_;
+            return Frame::failed(FrameStatus::Timeout, "sim camera: no frame within " +
+                                                           std::to_string(timeout.count()) + " ms (fault switch " +
+                                                           std::string(toString(fault)) + ")");
+        }
+        const auto pose = source ? source() : std::optional<geometry::FixturePose>(geometry::FixturePose{});
         if (!pose)
             return Frame::failed(FrameStatus::Timeout, "sim camera: the fixture pose is unknown (moving or faulted)");
         auto slot = pool_->take();
         if (!slot)
             return Frame::failed(FrameStatus::Timeout, "sim camera: all " + std::to_string(config_.bufferCount) +
                                                            " buffers are held by the caller");
-        sim::RenderOptions options = config_.render;
+        cv::Mat& out = pool_->slots[*slot];
+        render(renderer.get(), *pose, out);
+        const auto id = ++frameCount_;
+        const bool incomplete = fault == SimulatedCameraFault::Incomplete;
+        if (incomplete) dropPackets(out);
+        auto pool = pool_;
+        const std::size_t index = *slot;
+        return Frame::over(
+            out, id, std::chrono::steady_clock::now().time_since_epoch(),
+            incomplete ? FrameStatus::Incomplete : FrameStatus::Ok, [pool, index] { pool->give(index); },
+            incomplete ? "sim camera: packets missing (fault switch incomplete)" : "");
+    }
+
+    /// The part at `pose` (or the bare back light without a part) into `out`, cropped to the ROI.
+    void render(const sim::SilhouetteRenderer* renderer, const geometry::FixturePose& pose, cv::Mat& out) const
+    {
         const PixelFormat format = settings().pixelFormat;
+        sim::RenderOptions options = config_.render;
         options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
         options.seed = config_.render.seed + frameCount_; // fresh, reproducible noise per frame
-        cv::Mat image = renderer->render(station_.cameraAt(*pose), options);
-        cv::Mat& out = pool_->slots[*slot];
+        const cv::Mat image = (renderer ? *renderer : backlight_).render(station_.cameraAt(pose), options);
         if (format == PixelFormat::Mono12)
             image(roi_).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
         else
             image(roi_).copyTo(out);
-        const auto id = ++frameCount_;
-        auto pool = pool_;
-        const std::size_t index = *slot;
-        return Frame::over(out, id, std::chrono::steady_clock::now().time_since_epoch(), FrameStatus::Ok,
-                           [pool, index] { pool->give(index); });
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override
     {
         std::vector<FeatureInfo> out;
-        for (const char* name : {"Part", "PixelFormat", "ExposureTime", "Gain", "OffsetX", "OffsetY", "Width", "Height",
-                                 "SensorWidth", "SensorHeight"}) {
+        for (const char* name : {"Part", "Fault", "PixelFormat", "ExposureTime", "Gain", "OffsetX", "OffsetY", "Width",
+                                 "Height", "SensorWidth", "SensorHeight"}) {
             FeatureInfo f;
             f.name = name;
-            f.type = f.name == "Part" || f.name == "PixelFormat"    ? "Enumeration"
-                     : f.name == "ExposureTime" || f.name == "Gain" ? "Float"
-                                                                    : "Integer";
-            f.access = f.name == "Part" || f.name == "ExposureTime" || f.name == "Gain" ? "RW" : "RO";
+            const bool writable = f.name == "Part" || f.name == "Fault" || f.name == "ExposureTime" || f.name == "Gain";
+            f.type = f.name == "Part" || f.name == "Fault" || f.name == "PixelFormat" ? "Enumeration"
+                     : f.name == "ExposureTime" || f.name == "Gain"                   ? "Float"
+                                                                                      : "Integer";
+            f.access = writable ? "RW" : "RO";
             f.value = doGetFeature(name).value();
             out.push_back(std::move(f));
         }
@@ -274,6 +316,10 @@ class SimCameraImpl final : public SimCamera {
             return s.str();
         };
         if (name == "Part") return part();
+        if (name == "Fault") {
+            std::lock_guard lock(mutex_);
+            return std::string(toString(fault_));
+        }
         if (name == "PixelFormat") return std::string(toString(settings().pixelFormat));
         if (name == "ExposureTime") return num(exposureUs_);
         if (name == "Gain") return num(gainDb_);
@@ -289,6 +335,15 @@ class SimCameraImpl final : public SimCamera {
     Status doSetFeature(const std::string& name, const std::string& value) override
     {
         if (name == "Part") return setPart(value);
+        if (name == "Fault") {
+            auto fault = faultFromString(value);
+            if (!fault)
+                return Status::failure(StatusCode::NotAllowed,
+                                       "sim camera: Fault is one of none, timeout, incomplete, dropped; got '" + value +
+                                           "'");
+            injectFault(*fault);
+            return Status::success();
+        }
         if (name == "ExposureTime" || name == "Gain") {
             char* end = nullptr;
             const double v = std::strtod(value.c_str(), &end);
@@ -325,11 +380,13 @@ class SimCameraImpl final : public SimCamera {
 
     SimConfig config_;
     geometry::Station station_;
+    const sim::SilhouetteRenderer backlight_{}; ///< nothing in front of the back light
     std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
-    mutable std::mutex mutex_; // guards current_, partName_, poseSource_
+    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
-    std::function<std::optional<geometry::FixturePose>()> poseSource_;
+    PoseSource poseSource_;
+    SimulatedCameraFault fault_;
     cv::Rect roi_;
     double exposureUs_ = 10000.0;
     double gainDb_ = 0.0;
@@ -339,12 +396,23 @@ class SimCameraImpl final : public SimCamera {
 
 } // namespace
 
-std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs)
+std::string_view toString(SimulatedCameraFault fault)
 {
+    return kFaultNames[static_cast<std::size_t>(fault)];
+}
+
+std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment)
+{
+    const ConfigNode driver = root["camera"]["driver"];
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
-                          "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed", "sub_scanlines",
-                          "target", "truth_station"});
-    if (driver["backend"].asString() != "sim") driver["backend"].fail("makeSimCamera needs backend: sim");
+                          "fault", "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed",
+                          "sub_scanlines", "target", "truth_station"});
+    // Initialised, never assigned: a Station's document shares its YAML nodes
+    // with `root`, and assigning one over the other would overwrite `root`.
+    const auto truthNode = driver.optional("truth_station");
+    geometry::Station station =
+        truthNode ? loadTruthStation(*truthNode, geometry::parseStation(root)) : geometry::parseStation(root);
+    auto& parts = environment.parts;
     SimConfig c;
     if (auto n = driver.optional("buffer_count")) c.bufferCount = static_cast<int>(n->asIntIn(1, 64));
     if (auto n = driver.optional("background_level")) c.render.backgroundLevel = n->asDoubleIn(0.0, 1.0);
@@ -353,20 +421,28 @@ std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInpu
     if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
     if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
-    if (auto n = driver.optional("truth_station")) inputs.station = loadTruthStation(*n, inputs.station);
+    if (auto n = driver.optional("fault")) {
+        auto fault = faultFromString(n->asString());
+        if (!fault) n->fail("unknown fault '" + n->asString() + "' (expected none, timeout, incomplete or dropped)");
+        c.fault = *fault;
+    }
     if (auto n = driver.optional("target")) {
         const bool taken =
-            std::any_of(inputs.parts.begin(), inputs.parts.end(), [](const auto& p) { return p.first == kTargetPart; });
+            std::any_of(parts.begin(), parts.end(), [](const auto& p) { return p.first == kTargetPart; });
         if (taken) n->fail("a part is already named 'target'");
-        inputs.parts.emplace_back(kTargetPart, parseTarget(*n));
+        parts.emplace_back(kTargetPart, parseTarget(*n));
     }
-    if (inputs.parts.empty()) driver.fail("the sim camera needs at least one part to render (or a target)");
     auto partNode = driver.optional("part");
-    c.initialPart = partNode ? partNode->asString() : inputs.parts.front().first;
-    const bool known =
-        std::any_of(inputs.parts.begin(), inputs.parts.end(), [&](const auto& p) { return p.first == c.initialPart; });
-    if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
-    return std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c), std::move(inputs));
+    if (partNode || !parts.empty()) {
+        c.initialPart = partNode ? partNode->asString() : parts.front().first;
+        const bool known =
+            std::any_of(parts.begin(), parts.end(), [&](const auto& p) { return p.first == c.initialPart; });
+        if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
+    }
+    auto camera = std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c),
+                                                  std::move(station), environment);
+    if (environment.simulation) environment.simulation->camera = camera.get();
+    return camera;
 }
 
 } // namespace hg::drivers

@@ -107,7 +107,7 @@ class V4l2Camera final : public Camera {
     }
 
   protected:
-    Status doConfigure() override
+    HookResult onConfigure() override
     {
         fd_ = ::open(config_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
         if (fd_ < 0)
@@ -145,7 +145,7 @@ class V4l2Camera final : public Camera {
 
     Status doApplySettings(const CameraSettings& s) override { return applyAll(s); }
 
-    Status doActivate() override
+    HookResult onActivate() override
     {
         v4l2_requestbuffers req{};
         req.count = static_cast<std::uint32_t>(config_.bufferCount);
@@ -175,17 +175,16 @@ class V4l2Camera final : public Camera {
         return Status::success();
     }
 
-    Status doDeactivate() override
+    HookResult onDeactivate() override
     {
         stopStream();
         return Status::success();
     }
 
-    Status doCleanup() override
+    void onCleanup() override
     {
         stopStream();
         closeDevice();
-        return Status::success();
     }
 
     Frame doGrab(milliseconds timeout) override

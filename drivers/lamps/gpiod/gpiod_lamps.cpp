@@ -24,7 +24,7 @@ std::string errnoText(int err)
 
 class GpiodLamps final : public Lamps {
   public:
-    explicit GpiodLamps(LampsConfig config) : Lamps(std::move(config)) {}
+    GpiodLamps(LampsConfig config, LampClock clock) : Lamps(std::move(config), std::move(clock)) {}
     ~GpiodLamps() override
     {
         shutdown();
@@ -34,15 +34,15 @@ class GpiodLamps final : public Lamps {
     std::string_view backend() const override { return "gpiod"; }
 
   protected:
-    LampResult onConfigure() override
+    Status openLines() override
     {
         const LampsConfig& c = config();
         if (!c.chip.empty()) {
             // Accepts a name (gpiochip0), a path (/dev/gpiochip0), a label or a number.
             chip_ = gpiod_chip_open_lookup(c.chip.c_str());
             if (!chip_)
-                return {LampStatusCode::IoError,
-                        c.key + ".chip: cannot open GPIO chip '" + c.chip + "': " + errnoText(errno)};
+                return Status::failure(StatusCode::IoError,
+                                       c.key + ".chip: cannot open GPIO chip '" + c.chip + "': " + errnoText(errno));
         }
         for (std::size_t i = 0; i < lines_.size(); ++i) {
             const LampLine& want = c.lines[i];
@@ -50,20 +50,21 @@ class GpiodLamps final : public Lamps {
             if (want.offset) {
                 line = gpiod_chip_get_line(chip_, *want.offset);
                 if (!line)
-                    return {LampStatusCode::IoError, want.key + ": GPIO chip '" + c.chip + "' has no line at offset " +
-                                                         std::to_string(*want.offset) + " (it has " +
-                                                         std::to_string(gpiod_chip_num_lines(chip_)) + " lines)"};
+                    return Status::failure(StatusCode::IoError,
+                                           want.key + ": GPIO chip '" + c.chip + "' has no line at offset " +
+                                               std::to_string(*want.offset) + " (it has " +
+                                               std::to_string(gpiod_chip_num_lines(chip_)) + " lines)");
             } else if (chip_) {
                 line = gpiod_chip_find_line(chip_, want.name->c_str());
                 if (!line)
-                    return {LampStatusCode::IoError,
-                            want.key + ": GPIO chip '" + c.chip + "' has no line named '" + *want.name + "'"};
+                    return Status::failure(StatusCode::IoError, want.key + ": GPIO chip '" + c.chip +
+                                                                    "' has no line named '" + *want.name + "'");
             } else {
                 line = gpiod_line_find(want.name->c_str());
                 if (!line)
-                    return {LampStatusCode::IoError,
-                            want.key + ": no GPIO chip has a line named '" + *want.name + "'" +
-                                (errno != ENOENT ? " (" + errnoText(errno) + ")" : std::string())};
+                    return Status::failure(StatusCode::IoError,
+                                           want.key + ": no GPIO chip has a line named '" + *want.name + "'" +
+                                               (errno != ENOENT ? " (" + errnoText(errno) + ")" : std::string()));
                 ownsChip_[i] = true;
             }
             lines_[i] = line;
@@ -71,26 +72,26 @@ class GpiodLamps final : public Lamps {
             if (gpiod_line_request_output_flags(line, c.consumer.c_str(), flags, 0) != 0) {
                 int err = errno;
                 const char* holder = gpiod_line_consumer(line);
-                return {LampStatusCode::IoError, want.key + ": cannot request " + want.describe() +
-                                                     " as an output: " + errnoText(err) +
-                                                     (holder ? std::string(" (held by '") + holder + "')" : "")};
+                return Status::failure(StatusCode::IoError,
+                                       want.key + ": cannot request " + want.describe() + " as an output: " +
+                                           errnoText(err) + (holder ? std::string(" (held by '") + holder + "')" : ""));
             }
             requested_[i] = true;
         }
-        return LampResult::success();
+        return Status::success();
     }
 
-    void onCleanup() override { release(); }
+    void closeLines() override { release(); }
 
-    LampResult writeOutputs(const std::array<bool, 3>& lit) override
+    Status writeOutputs(const std::array<bool, 3>& lit) override
     {
         for (std::size_t i = 0; i < lines_.size(); ++i) {
             if (!requested_[i]) continue;
             if (gpiod_line_set_value(lines_[i], lit[i] ? 1 : 0) != 0)
-                return {LampStatusCode::IoError, config().lines[i].key + ": cannot set " +
-                                                     config().lines[i].describe() + ": " + errnoText(errno)};
+                return Status::failure(StatusCode::IoError, config().lines[i].key + ": cannot set " +
+                                                                config().lines[i].describe() + ": " + errnoText(errno));
         }
-        return LampResult::success();
+        return Status::success();
     }
 
   private:
@@ -116,9 +117,9 @@ class GpiodLamps final : public Lamps {
 
 } // namespace
 
-std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config)
+std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config, LampClock clock)
 {
-    return std::make_unique<GpiodLamps>(std::move(config));
+    return std::make_unique<GpiodLamps>(std::move(config), std::move(clock));
 }
 
 } // namespace hg::drivers

@@ -9,9 +9,9 @@
 namespace hg::drivers {
 namespace {
 
-class SimLamps final : public SimulatedLamps {
+class SimLamps final : public Lamps, public SimLampsControl {
   public:
-    explicit SimLamps(LampsConfig config) : SimulatedLamps(std::move(config)) {}
+    SimLamps(LampsConfig config, LampClock clock) : Lamps(std::move(config), std::move(clock)) {}
     ~SimLamps() override { shutdown(); }
 
     std::string_view backend() const override { return "sim"; }
@@ -40,31 +40,31 @@ class SimLamps final : public SimulatedLamps {
     void injectWriteFailure(bool fail) override { failWrites_.store(fail); }
 
   protected:
-    LampResult onConfigure() override
+    Status openLines() override
     {
         if (failWrites_.load())
-            return {LampStatusCode::IoError, config().key + ": simulated GPIO chip does not answer"};
+            return Status::failure(StatusCode::IoError, config().key + ": simulated GPIO chip does not answer");
         std::lock_guard lock(levelsMutex_);
         requested_ = true;
         lit_.fill(false);
-        return LampResult::success();
+        return Status::success();
     }
 
-    void onCleanup() override
+    void closeLines() override
     {
         std::lock_guard lock(levelsMutex_);
         requested_ = false;
         lit_.fill(false);
     }
 
-    LampResult writeOutputs(const std::array<bool, 3>& lit) override
+    Status writeOutputs(const std::array<bool, 3>& lit) override
     {
         if (failWrites_.load())
-            return {LampStatusCode::IoError, config().key + ": simulated write to the lamp lines failed"};
+            return Status::failure(StatusCode::IoError, config().key + ": simulated write to the lamp lines failed");
         std::lock_guard lock(levelsMutex_);
         if (lit != lit_) ++transitions_;
         lit_ = lit;
-        return LampResult::success();
+        return Status::success();
     }
 
   private:
@@ -77,9 +77,11 @@ class SimLamps final : public SimulatedLamps {
 
 } // namespace
 
-std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config)
+std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config, SimulationControls* simulation, LampClock clock)
 {
-    return std::make_unique<SimLamps>(std::move(config));
+    auto lamps = std::make_unique<SimLamps>(std::move(config), std::move(clock));
+    if (simulation) simulation->lamps = lamps.get();
+    return lamps;
 }
 
 } // namespace hg::drivers

@@ -38,10 +38,6 @@ struct FixtureSequenceResult {
     FixtureAxesResult axes;
 };
 
-/// "rotation 30 deg, declination 10 deg" (or "rail 120 mm"): how every
-/// driver message and progress line names a pose.
-std::string describeFixturePose(const geometry::FixturePose& pose, geometry::FixtureType type);
-
 /// Runs the sequence over `poses` and solves the axes (calibrateFixtureAxes,
 /// `source` names the poses in its errors). A failed step throws
 /// hg::FaultError "calibrate run: <step>: <message>" naming the pose; a

@@ -32,6 +32,8 @@ struct FixturePose {
     bool operator==(const FixturePose&) const = default;
 };
 
+/// "rotation 30 deg, declination 10 deg" (or "rail 120 mm"): how every
+/// message, log and progress line names a pose.
 std::string toString(const FixturePose& pose, FixtureType type);
 
 struct Range {

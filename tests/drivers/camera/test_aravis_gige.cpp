@@ -349,8 +349,7 @@ TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("camera.driver.address"), std::string::npos) << s.message();
     EXPECT_LE(Clock::now() - t0, 10s);
-    EXPECT_EQ(cam->state(), LifecycleState::Failed);
-    EXPECT_TRUE(cam->cleanup());
+    // A failed configure changes nothing (docs/drivers.md): configure again to retry.
     EXPECT_EQ(cam->state(), LifecycleState::Unconfigured);
 }
 

@@ -118,8 +118,7 @@ TEST(CameraConfig, ConstructionOpensNothingAndStateIsChecked)
     auto s = cam->configure();
     EXPECT_FALSE(s);
     EXPECT_NE(s.message().find("camera.driver.device"), std::string::npos) << s.message();
-    EXPECT_EQ(cam->state(), LifecycleState::Failed);
-    EXPECT_TRUE(cam->cleanup());
+    // A failed configure changes nothing (docs/drivers.md): configure again to retry.
     EXPECT_EQ(cam->state(), LifecycleState::Unconfigured);
 }
 

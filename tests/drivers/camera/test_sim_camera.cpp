@@ -4,7 +4,7 @@
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
-#include "hullgauge/drivers/camera.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/primitives.h"
 
 #include <cmath>
@@ -57,20 +57,24 @@ double halfWidthPx(double a)
 
 class SimCameraTest : public ::testing::Test {
   protected:
-    std::unique_ptr<hg::drivers::SimCamera> make(const std::string& extraDriver = "")
+    /// The sim camera from the camera backend table; its controls land in `sim_`.
+    std::unique_ptr<hg::drivers::Camera> make(const std::string& extraDriver = "")
     {
         std::string text = kStation;
         text.insert(text.find("fixture:"), extraDriver);
         auto root = hg::ConfigNode::parse(text, "station.yaml");
-        hg::drivers::SimCameraInputs in;
-        in.station = hg::geometry::parseStation(root);
+        hg::drivers::CameraEnvironment in;
         in.poseSource = [this] { return pose_; };
         in.parts.emplace_back("nominal", hg::model::makeBox({-20, -20, -20}, {20, 20, 20}));
         in.parts.emplace_back("short", hg::model::makeBox({-10, -10, -10}, {10, 10, 10}));
-        return hg::drivers::makeSimCamera(root["camera"]["driver"], std::move(in));
+        in.simulation = &sim_;
+        auto camera = hg::drivers::makeCamera(root, std::move(in));
+        if (!sim_.camera) throw std::logic_error("the sim backend published no controls");
+        return camera;
     }
 
     std::optional<hg::geometry::FixturePose> pose_ = hg::geometry::FixturePose{};
+    hg::drivers::SimulationControls sim_;
 };
 
 TEST_F(SimCameraTest, FaceOnCubeProjectsToTheSquareOfSimilarTriangles)
@@ -115,12 +119,12 @@ TEST_F(SimCameraTest, PartIsSwitchableWhileStreaming)
     ASSERT_TRUE(cam->activate());
     const double big = 2 * halfWidthPx(20.0), small = 2 * halfWidthPx(10.0);
     EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, big, 2.0);
-    ASSERT_TRUE(cam->setPart("short"));
-    EXPECT_EQ(cam->part(), "short");
+    ASSERT_TRUE(sim_.camera->setPart("short"));
+    EXPECT_EQ(sim_.camera->part(), "short");
     EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, small, 2.0);
     ASSERT_TRUE(cam->setFeature("Part", "nominal"));
     EXPECT_NEAR(measure(cam->grab(100ms).image).box.width, big, 2.0);
-    auto bad = cam->setPart("cracked");
+    auto bad = sim_.camera->setPart("cracked");
     EXPECT_FALSE(bad);
     EXPECT_NE(bad.message().find("short"), std::string::npos) << bad.message();
 }
@@ -181,7 +185,7 @@ const char* kTarget = "    target:\n      pattern: chessboard:9x6:12\n"
 TEST_F(SimCameraTest, BacklitChessboardTargetIsDetectedAtItsProjectedCorners)
 {
     auto cam = make(std::string(kTarget) + "    part: target\n    blur_sigma_px: 0.6\n    noise_sigma: 1\n");
-    EXPECT_EQ(cam->part(), "target");
+    EXPECT_EQ(sim_.camera->part(), "target");
     ASSERT_TRUE(cam->configure());
     ASSERT_TRUE(cam->activate());
     auto f = cam->grab(100ms);
@@ -217,11 +221,10 @@ TEST_F(SimCameraTest, TruthStationGeometryIsWhatTheTwinRenders)
     text.insert(text.find("fixture:"), "    truth_station: truth.yaml\n");
     auto file = hgtest::writeFile(dir / "station.yaml", text);
     auto root = hg::ConfigNode::loadFile(file);
-    hg::drivers::SimCameraInputs in;
-    in.station = hg::geometry::parseStation(root);
+    hg::drivers::CameraEnvironment in;
     in.poseSource = [] { return hg::geometry::FixturePose{}; };
     in.parts.emplace_back("nominal", hg::model::makeBox({-20, -20, -20}, {20, 20, 20}));
-    auto cam = hg::drivers::makeSimCamera(root["camera"]["driver"], std::move(in));
+    auto cam = hg::drivers::makeCamera(root, std::move(in));
     ASSERT_TRUE(cam->configure());
     ASSERT_TRUE(cam->activate());
     auto f = cam->grab(100ms);
@@ -229,6 +232,57 @@ TEST_F(SimCameraTest, TruthStationGeometryIsWhatTheTwinRenders)
     auto box = measure(f.image).box;
     // The near face (20 mm closer) bounds the silhouette.
     EXPECT_NEAR(box.x + box.width / 2.0, 320.0 + kF * 10.0 / (kDistance - 20.0), 1.0);
+}
+
+TEST_F(SimCameraTest, FaultSwitchesTimeOutCutPacketsAndDropAFrame)
+{
+    auto cam = make();
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto first = cam->grab(100ms);
+    ASSERT_TRUE(first.ok()) << first.message;
+    const auto id = first.frameId;
+    first.release();
+
+    // Silent camera: the grab costs its whole timeout and says so.
+    sim_.camera->injectFault(hg::drivers::SimulatedCameraFault::Timeout);
+    const auto t0 = std::chrono::steady_clock::now();
+    auto silent = cam->grab(30ms);
+    EXPECT_GE(std::chrono::steady_clock::now() - t0, 30ms);
+    EXPECT_EQ(silent.status, FrameStatus::Timeout);
+    EXPECT_TRUE(silent.image.empty());
+
+    // Missing packets: a frame arrives but is flagged, bands of rows read 0
+    // (row 0 lies in the background, 85 % of full scale without the fault).
+    ASSERT_TRUE(cam->setFeature("Fault", "incomplete"));
+    EXPECT_EQ(cam->getFeature("Fault").value(), "incomplete");
+    auto cut = cam->grab(100ms);
+    EXPECT_EQ(cut.status, FrameStatus::Incomplete);
+    ASSERT_FALSE(cut.image.empty());
+    EXPECT_EQ(cut.image.at<std::uint8_t>(0, 0), 0);
+    EXPECT_EQ(cut.frameId, id + 1);
+    cut.release();
+
+    // One dropped frame: that grab times out, the next frame's id skips it.
+    sim_.camera->injectFault(hg::drivers::SimulatedCameraFault::Dropped);
+    EXPECT_EQ(cam->grab(10ms).status, FrameStatus::Timeout);
+    auto next = cam->grab(100ms);
+    ASSERT_TRUE(next.ok()) << next.message;
+    EXPECT_EQ(next.frameId, id + 3);
+    EXPECT_GT(next.image.at<std::uint8_t>(0, 0), 200);
+    EXPECT_FALSE(cam->setFeature("Fault", "sometimes"));
+}
+
+TEST(SimCameraTable, OpensFromTheStationAloneAndShowsTheBareBackLight)
+{
+    // `hullgauge camera` builds the sim with nothing but the station file.
+    auto cam = hg::drivers::makeCamera(hg::ConfigNode::parse(kStation, "station.yaml"));
+    ASSERT_TRUE(cam->configure());
+    EXPECT_EQ(cam->info().value().backend, "sim");
+    ASSERT_TRUE(cam->activate());
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    EXPECT_EQ(measure(f.image).area, 0.0);
 }
 
 TEST_F(SimCameraTest, BadTargetAndTruthKeysNameTheKey)
@@ -255,6 +309,7 @@ TEST_F(SimCameraTest, BadTargetAndTruthKeysNameTheKey)
     EXPECT_EQ(
         field("    truth_station: /nonexistent/truth.yaml\n").rfind("camera.driver.truth_station: no such file", 0),
         0u);
+    EXPECT_EQ(field("    fault: sometimes\n").rfind("camera.driver.fault: unknown fault 'sometimes'", 0), 0u);
 }
 
 } // namespace

@@ -5,7 +5,7 @@
 
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
-#include "hullgauge/drivers/lamps.h"
+#include "hullgauge/drivers/simulation.h"
 
 using namespace hg::drivers;
 using namespace std::chrono_literals;
@@ -26,20 +26,26 @@ const char* kSim = R"(lamps:
   red: {offset: 7, active_low: true}
 )";
 
-std::unique_ptr<Lamps> activeSim(const char* yaml = kSim)
-{
-    auto lamps = makeLamps(section(yaml));
-    EXPECT_TRUE(lamps->configure().ok());
-    EXPECT_TRUE(lamps->activate().ok());
-    return lamps;
-}
+/// The simulated lamps on a clock the test steps (no timer thread): the
+/// blink pattern is checked against hand-computed instants.
+struct SteppedLamps {
+    std::chrono::steady_clock::time_point now{std::chrono::hours(1)};
+    SimulationControls controls;
+    std::unique_ptr<Lamps> lamps = makeLamps(section(kSim), &controls, [this] { return now; });
+    SimLampsControl& sim = *controls.lamps;
 
-SimulatedLamps& sim(Lamps& lamps)
-{
-    auto* s = dynamic_cast<SimulatedLamps*>(&lamps);
-    if (!s) throw std::logic_error("not the simulated twin");
-    return *s;
-}
+    SteppedLamps()
+    {
+        EXPECT_TRUE(lamps->configure().ok());
+        EXPECT_TRUE(lamps->activate().ok());
+    }
+    /// Advances the clock by `dt` and lets the driver step the blink.
+    void after(std::chrono::milliseconds dt)
+    {
+        now += dt;
+        EXPECT_TRUE(lamps->tick().ok());
+    }
+};
 
 std::string inputErrorOf(const std::string& yaml)
 {
@@ -81,7 +87,7 @@ TEST(LampsConfig, SectionDefaultPolarityAndNumericShorthand)
 TEST(LampsConfig, ErrorsNameFileLineAndKey)
 {
     EXPECT_EQ(inputErrorOf("lamps:\n  backend: relay\n  green: A\n  amber: B\n  red: C\n"),
-              "station.yaml:2: lamps.backend: unknown lamp backend 'relay' (gpiod or sim)");
+              "station.yaml:2: lamps.backend: unknown lamp backend 'relay' (expected gpiod or sim)");
     EXPECT_NE(inputErrorOf("lamps: {backend: sim, green: A, amber: B}").find("lamps: missing required key 'red'"),
               std::string::npos);
     EXPECT_NE(inputErrorOf("lamps:\n  backend: sim\n  green: A\n  amber: 4\n  red: C\n")
@@ -102,23 +108,26 @@ TEST(LampsConfig, ErrorsNameFileLineAndKey)
 
 TEST(Lamps, CyclicCallsNeedTheDriverActive)
 {
-    auto lamps = makeLamps(section(kSim));
-    EXPECT_EQ(lamps->show(StationIndication::Pass).code, LampStatusCode::NotAllowed);
-    EXPECT_EQ(lamps->activate().code, LampStatusCode::NotAllowed);
+    SimulationControls controls;
+    auto lamps = makeLamps(section(kSim), &controls);
+    ASSERT_NE(controls.lamps, nullptr);
+    EXPECT_EQ(lamps->show(StationIndication::Pass).code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(lamps->activate().code(), hg::StatusCode::NotAllowed);
     ASSERT_TRUE(lamps->configure().ok());
-    EXPECT_TRUE(sim(*lamps).linesRequested());
-    EXPECT_EQ(lamps->set(Lamp::Red, LampState::On).code, LampStatusCode::NotAllowed);
-    EXPECT_EQ(lamps->configure().code, LampStatusCode::NotAllowed);
+    EXPECT_TRUE(controls.lamps->linesRequested());
+    auto r = lamps->set(Lamp::Red, LampState::On);
+    EXPECT_EQ(r.code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(r.message(), "lamps: set red is not allowed while inactive (needs active)");
+    EXPECT_EQ(lamps->configure().code(), hg::StatusCode::NotAllowed);
     ASSERT_TRUE(lamps->activate().ok());
     EXPECT_EQ(lamps->state(), LifecycleState::Active);
     EXPECT_TRUE(lamps->set(Lamp::Red, LampState::On).ok());
-    EXPECT_EQ(lamps->cleanup().code, LampStatusCode::NotAllowed); // must deactivate first
+    EXPECT_EQ(lamps->cleanup().code(), hg::StatusCode::NotAllowed); // must deactivate first
 }
 
 TEST(Lamps, StationIndicationsFollowContracts)
 {
-    auto lamps = activeSim();
-    auto& s = sim(*lamps);
+    SteppedLamps l;
     struct Case {
         StationIndication what;
         bool green, amber, red;
@@ -126,98 +135,123 @@ TEST(Lamps, StationIndicationsFollowContracts)
     for (auto c :
          {Case{StationIndication::Pass, true, false, false}, Case{StationIndication::Fail, false, false, true},
           Case{StationIndication::Busy, false, true, false}, Case{StationIndication::Dark, false, false, false}}) {
-        ASSERT_TRUE(lamps->show(c.what).ok());
-        EXPECT_EQ(s.lit(Lamp::Green), c.green) << toString(c.what);
-        EXPECT_EQ(s.lit(Lamp::Amber), c.amber) << toString(c.what);
-        EXPECT_EQ(s.lit(Lamp::Red), c.red) << toString(c.what);
+        ASSERT_TRUE(l.lamps->show(c.what).ok());
+        EXPECT_EQ(l.sim.lit(Lamp::Green), c.green) << toString(c.what);
+        EXPECT_EQ(l.sim.lit(Lamp::Amber), c.amber) << toString(c.what);
+        EXPECT_EQ(l.sim.lit(Lamp::Red), c.red) << toString(c.what);
     }
-    ASSERT_TRUE(lamps->show(StationIndication::Fault).ok());
-    EXPECT_EQ(lamps->commanded(Lamp::Red), LampState::Blinking);
-    EXPECT_EQ(lamps->commanded(Lamp::Amber), LampState::Blinking);
-    EXPECT_EQ(lamps->commanded(Lamp::Green), LampState::Off);
+    ASSERT_TRUE(l.lamps->show(StationIndication::Fault).ok());
+    EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Blinking);
+    EXPECT_EQ(l.lamps->commanded(Lamp::Amber), LampState::Blinking);
+    EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
 }
 
 TEST(Lamps, ActiveLowLinesAreInverted)
 {
-    auto lamps = activeSim();
-    auto& s = sim(*lamps);
+    SteppedLamps l;
     // Red is active-low: dark means a high line.
-    EXPECT_FALSE(s.lit(Lamp::Red));
-    EXPECT_TRUE(s.lineLevel(Lamp::Red));
-    EXPECT_FALSE(s.lineLevel(Lamp::Green));
-    ASSERT_TRUE(lamps->show(StationIndication::Fail).ok());
-    EXPECT_TRUE(s.lit(Lamp::Red));
-    EXPECT_FALSE(s.lineLevel(Lamp::Red));
+    EXPECT_FALSE(l.sim.lit(Lamp::Red));
+    EXPECT_TRUE(l.sim.lineLevel(Lamp::Red));
+    EXPECT_FALSE(l.sim.lineLevel(Lamp::Green));
+    ASSERT_TRUE(l.lamps->show(StationIndication::Fail).ok());
+    EXPECT_TRUE(l.sim.lit(Lamp::Red));
+    EXPECT_FALSE(l.sim.lineLevel(Lamp::Red));
 }
 
 TEST(Lamps, FaultBlinksRedAndAmberTogetherAtTheConfiguredPeriod)
 {
-    auto lamps = activeSim(); // blink period 100 ms: a toggle every 50 ms
-    auto& s = sim(*lamps);
-    ASSERT_TRUE(lamps->show(StationIndication::Fault).ok());
-    EXPECT_TRUE(s.lit(Lamp::Red)); // starts in the lit half
-    EXPECT_TRUE(s.lit(Lamp::Amber));
-    auto start = std::chrono::steady_clock::now();
-    auto transitionsAtStart = s.transitions();
-    bool sawDark = false, sawLit = false;
-    while (std::chrono::steady_clock::now() - start < 400ms) {
-        bool red = s.lit(Lamp::Red), amber = s.lit(Lamp::Amber);
-        EXPECT_EQ(red, amber) << "red and amber must blink in phase";
-        EXPECT_FALSE(s.lit(Lamp::Green));
-        (red ? sawLit : sawDark) = true;
-        std::this_thread::sleep_for(5ms);
-    }
-    auto elapsed = std::chrono::steady_clock::now() - start;
-    auto toggles = s.transitions() - transitionsAtStart;
-    EXPECT_TRUE(sawDark && sawLit);
-    // The timer never toggles early (deadline schedule); a loaded machine may
-    // make it late, so the lower bound is lenient.
-    auto maxToggles = static_cast<std::uint64_t>(elapsed / 50ms) + 1;
-    EXPECT_LE(toggles, maxToggles);
-    EXPECT_GE(toggles, 3u);
+    SteppedLamps l; // blink period 100 ms: lit for [0, 50) ms, dark for [50, 100) ms
+    ASSERT_TRUE(l.lamps->show(StationIndication::Fault).ok());
+    auto both = [&](bool lit) {
+        return l.sim.lit(Lamp::Red) == lit && l.sim.lit(Lamp::Amber) == lit && !l.sim.lit(Lamp::Green);
+    };
+    EXPECT_TRUE(both(true)); // starts in the lit half
+    const auto writes = l.sim.transitions();
+    l.after(std::chrono::milliseconds(49));
+    EXPECT_TRUE(both(true));
+    EXPECT_EQ(l.sim.transitions(), writes); // nothing changed, nothing written
+    l.after(std::chrono::milliseconds(1));  // 50 ms
+    EXPECT_TRUE(both(false));
+    l.after(std::chrono::milliseconds(49)); // 99 ms
+    EXPECT_TRUE(both(false));
+    l.after(std::chrono::milliseconds(1)); // 100 ms
+    EXPECT_TRUE(both(true));
+    l.after(std::chrono::milliseconds(150)); // 250 ms: the sixth half period
+    EXPECT_TRUE(both(false));
+    EXPECT_EQ(l.sim.transitions(), writes + 3);
 
     // Leaving the fault stops the blinking at once.
-    ASSERT_TRUE(lamps->show(StationIndication::Busy).ok());
-    auto after = s.transitions();
-    std::this_thread::sleep_for(150ms);
-    EXPECT_EQ(s.transitions(), after);
-    EXPECT_TRUE(s.lit(Lamp::Amber));
-    EXPECT_FALSE(s.lit(Lamp::Red));
+    ASSERT_TRUE(l.lamps->show(StationIndication::Busy).ok());
+    const auto after = l.sim.transitions();
+    for (int i = 0; i < 10; ++i) l.after(std::chrono::milliseconds(25));
+    EXPECT_EQ(l.sim.transitions(), after);
+    EXPECT_TRUE(l.sim.lit(Lamp::Amber));
+    EXPECT_FALSE(l.sim.lit(Lamp::Red));
+}
+
+TEST(Lamps, ANewCommandKeepsTheBlinkPhaseAndRestartsItsHalfPeriod)
+{
+    SteppedLamps l;
+    ASSERT_TRUE(l.lamps->set(Lamp::Red, LampState::Blinking).ok());
+    l.after(std::chrono::milliseconds(60)); // dark half, 10 ms in
+    ASSERT_FALSE(l.sim.lit(Lamp::Red));
+    ASSERT_TRUE(l.lamps->set(Lamp::Green, LampState::On).ok()); // the dark half starts again now
+    EXPECT_FALSE(l.sim.lit(Lamp::Red));
+    l.after(std::chrono::milliseconds(49));
+    EXPECT_FALSE(l.sim.lit(Lamp::Red));
+    l.after(std::chrono::milliseconds(1));
+    EXPECT_TRUE(l.sim.lit(Lamp::Red));
+    EXPECT_TRUE(l.sim.lit(Lamp::Green));
+}
+
+TEST(Lamps, TheTimerThreadBlinksOnTheSteadyClock)
+{
+    SimulationControls controls;
+    auto lamps = makeLamps(section(kSim), &controls); // the driver's own timer
+    ASSERT_TRUE(lamps->configure().ok());
+    ASSERT_TRUE(lamps->activate().ok());
+    ASSERT_TRUE(lamps->show(StationIndication::Fault).ok());
+    // Only that it blinks at all (the pattern is checked on a stepped clock
+    // above): polled under a generous deadline, never early, never a sleep.
+    const auto writes = controls.lamps->transitions();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (controls.lamps->transitions() < writes + 2 && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    EXPECT_GE(controls.lamps->transitions(), writes + 2);
+    ASSERT_TRUE(lamps->deactivate().ok());
 }
 
 TEST(Lamps, DeactivateDarkensAndStopsBlinking)
 {
-    auto lamps = activeSim();
-    auto& s = sim(*lamps);
-    ASSERT_TRUE(lamps->set(Lamp::Green, LampState::Blinking).ok());
-    ASSERT_TRUE(lamps->deactivate().ok());
-    EXPECT_FALSE(s.lit(Lamp::Green));
-    auto after = s.transitions();
-    std::this_thread::sleep_for(120ms);
-    EXPECT_EQ(s.transitions(), after);
-    ASSERT_TRUE(lamps->cleanup().ok());
-    EXPECT_FALSE(s.linesRequested());
-    EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
+    SteppedLamps l;
+    ASSERT_TRUE(l.lamps->set(Lamp::Green, LampState::Blinking).ok());
+    ASSERT_TRUE(l.lamps->deactivate().ok());
+    EXPECT_FALSE(l.sim.lit(Lamp::Green));
+    const auto after = l.sim.transitions();
+    for (int i = 0; i < 10; ++i) l.after(std::chrono::milliseconds(25));
+    EXPECT_EQ(l.sim.transitions(), after);
+    ASSERT_TRUE(l.lamps->cleanup().ok());
+    EXPECT_FALSE(l.sim.linesRequested());
+    EXPECT_EQ(l.lamps->state(), LifecycleState::Unconfigured);
 }
 
 TEST(Lamps, WriteFailureFailsTheDriverAndCleanupRecovers)
 {
-    auto lamps = activeSim();
-    auto& s = sim(*lamps);
-    s.injectWriteFailure(true);
-    auto r = lamps->show(StationIndication::Pass);
-    EXPECT_EQ(r.code, LampStatusCode::IoError);
-    EXPECT_NE(r.message.find("lamps"), std::string::npos);
-    EXPECT_EQ(lamps->state(), LifecycleState::Failed);
-    EXPECT_EQ(lamps->show(StationIndication::Pass).code, LampStatusCode::NotAllowed);
-    ASSERT_TRUE(lamps->cleanup().ok());
-    EXPECT_EQ(lamps->configure().code, LampStatusCode::IoError); // still unplugged
-    EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
-    s.injectWriteFailure(false);
-    ASSERT_TRUE(lamps->configure().ok());
-    ASSERT_TRUE(lamps->activate().ok());
-    ASSERT_TRUE(lamps->show(StationIndication::Pass).ok());
-    EXPECT_TRUE(s.lit(Lamp::Green));
+    SteppedLamps l;
+    l.sim.injectWriteFailure(true);
+    auto r = l.lamps->show(StationIndication::Pass);
+    EXPECT_EQ(r.code(), hg::StatusCode::IoError);
+    EXPECT_NE(r.message().find("lamps"), std::string::npos);
+    EXPECT_EQ(l.lamps->state(), LifecycleState::Failed);
+    EXPECT_EQ(l.lamps->show(StationIndication::Pass).code(), hg::StatusCode::NotAllowed);
+    ASSERT_TRUE(l.lamps->cleanup().ok());
+    EXPECT_EQ(l.lamps->configure().code(), hg::StatusCode::IoError); // still unplugged
+    EXPECT_EQ(l.lamps->state(), LifecycleState::Unconfigured);
+    l.sim.injectWriteFailure(false);
+    ASSERT_TRUE(l.lamps->configure().ok());
+    ASSERT_TRUE(l.lamps->activate().ok());
+    ASSERT_TRUE(l.lamps->show(StationIndication::Pass).ok());
+    EXPECT_TRUE(l.sim.lit(Lamp::Green));
 }
 
 TEST(GpiodLamps, MissingChipFailsConfigureNamingTheKey)
@@ -225,10 +259,11 @@ TEST(GpiodLamps, MissingChipFailsConfigureNamingTheKey)
     auto lamps = makeLamps(section("lamps: {backend: gpiod, chip: hg-no-such-chip, green: 1, amber: 2, red: 3}"));
     EXPECT_EQ(lamps->backend(), "gpiod");
     auto r = lamps->configure();
-    EXPECT_EQ(r.code, LampStatusCode::IoError);
-    EXPECT_NE(r.message.find("lamps.chip: cannot open GPIO chip 'hg-no-such-chip'"), std::string::npos) << r.message;
+    EXPECT_EQ(r.code(), hg::StatusCode::IoError);
+    EXPECT_NE(r.message().find("lamps.chip: cannot open GPIO chip 'hg-no-such-chip'"), std::string::npos)
+        << r.message();
     EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
-    EXPECT_EQ(lamps->show(StationIndication::Fault).code, LampStatusCode::NotAllowed);
+    EXPECT_EQ(lamps->show(StationIndication::Fault).code(), hg::StatusCode::NotAllowed);
 }
 
 TEST(GpiodLamps, UnknownLineNameFailsConfigureNamingTheLamp)
@@ -236,8 +271,8 @@ TEST(GpiodLamps, UnknownLineNameFailsConfigureNamingTheLamp)
     auto lamps = makeLamps(
         section("lamps: {backend: gpiod, green: HG_NO_SUCH_LINE_G, amber: HG_NO_SUCH_LINE_A, red: HG_NO_SUCH_LINE_R}"));
     auto r = lamps->configure();
-    EXPECT_EQ(r.code, LampStatusCode::IoError);
-    EXPECT_NE(r.message.find("lamps.green: no GPIO chip has a line named 'HG_NO_SUCH_LINE_G'"), std::string::npos)
-        << r.message;
+    EXPECT_EQ(r.code(), hg::StatusCode::IoError);
+    EXPECT_NE(r.message().find("lamps.green: no GPIO chip has a line named 'HG_NO_SUCH_LINE_G'"), std::string::npos)
+        << r.message();
     EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
 }

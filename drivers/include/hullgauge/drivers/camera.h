@@ -1,12 +1,12 @@
 // The camera interface every backend implements (STYLE.md: one small interface
 // per device kind, in domain types; no ArvCamera* or V4L2 handle crosses it).
 //
-// Lifecycle (lifecycle.h): constructing a camera from `camera.driver` only
-// parses and validates (throws hg::InputError naming the key); configure()
-// opens the device and applies the settings; activate() starts streaming;
-// grab() returns one frame; deactivate() stops streaming; cleanup() closes.
-// Every call after construction returns a [[nodiscard]] status and never
-// throws: the capture loop decides what a failure means.
+// Lifecycle (lifecycle.h, docs/drivers.md): constructing a camera from
+// `camera.driver` only parses and validates (throws hg::InputError naming the
+// key); configure() opens the device and applies the settings; activate()
+// starts streaming; grab() returns one frame; deactivate() stops streaming;
+// cleanup() closes. Every call after construction returns an hg::Status (or a
+// Frame) and never throws: the capture loop decides what a failure means.
 //
 // Frames are views of driver-owned buffers from a pool preallocated at
 // activate() (no copy between the network/DMA buffer and the cv::Mat). A Frame
@@ -28,7 +28,7 @@
 
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/lifecycle.h"
-#include "hullgauge/geometry/station.h"
+#include "hullgauge/geometry/fixture.h"
 #include "hullgauge/model/mesh.h"
 
 namespace hg::drivers {
@@ -62,37 +62,6 @@ struct CameraSettings {
     std::optional<double> gainDb;     ///< dB; unset = leave the device's value
     Roi roi;
     TriggerMode trigger = TriggerMode::Software;
-};
-
-/// Result of a driver call: success, or failure with a precise message.
-class [[nodiscard]] Status {
-  public:
-    static Status success() { return Status(true, {}); }
-    static Status failure(std::string message) { return Status(false, std::move(message)); }
-    bool ok() const { return ok_; }
-    explicit operator bool() const { return ok_; }
-    const std::string& message() const { return message_; }
-
-  private:
-    Status(bool ok, std::string message) : ok_(ok), message_(std::move(message)) {}
-    bool ok_;
-    std::string message_;
-};
-
-/// A value or a failure message (the cyclic path never throws).
-template <class T> class [[nodiscard]] Result {
-  public:
-    Result(T value) : value_(std::move(value)) {}           // NOLINT: implicit by design
-    Result(Status failure) : status_(std::move(failure)) {} // NOLINT
-    bool ok() const { return value_.has_value(); }
-    explicit operator bool() const { return ok(); }
-    const T& value() const { return *value_; }
-    T& value() { return *value_; }
-    const std::string& message() const { return status_.message(); }
-
-  private:
-    std::optional<T> value_;
-    Status status_ = Status::success();
 };
 
 enum class FrameStatus {
@@ -157,27 +126,13 @@ struct FeatureInfo {
     std::string access; ///< RO, WO, RW
 };
 
-/// The abstract camera. Public calls check the lifecycle state and wrap the
-/// backend's protected hooks, so the bookkeeping is written once.
-class Camera {
+/// The abstract camera: the lifecycle of Device around the backends' hooks,
+/// and state checks around the cyclic and maintenance calls.
+class Camera : public Device {
   public:
-    virtual ~Camera() = default;
-    Camera(const Camera&) = delete;
-    Camera& operator=(const Camera&) = delete;
-
-    LifecycleState state() const { return state_; }
     const CameraSettings& settings() const { return settings_; }
     /// "camera.driver" section this camera was built from (for messages).
     const std::string& configPath() const { return configPath_; }
-
-    /// Unconfigured -> Inactive: open the device, apply settings().
-    Status configure();
-    /// Inactive -> Active: allocate the buffer pool and start streaming.
-    Status activate();
-    /// Active -> Inactive: stop streaming.
-    Status deactivate();
-    /// Inactive/Failed -> Unconfigured: close the device.
-    Status cleanup();
 
     /// Replaces the settings; applied to the device now when Inactive, at configure() when Unconfigured.
     /// Refused while Active (stop first: ROI and format change the payload).
@@ -197,11 +152,10 @@ class Camera {
   protected:
     Camera(std::string configPath, CameraSettings settings);
 
-    virtual Status doConfigure() = 0;
+    // Lifecycle hooks (Device): onConfigure opens the device and applies
+    // settings(); onActivate allocates the pool and starts streaming;
+    // onDeactivate stops streaming; onCleanup closes the device.
     virtual Status doApplySettings(const CameraSettings& settings) = 0;
-    virtual Status doActivate() = 0;
-    virtual Status doDeactivate() = 0;
-    virtual Status doCleanup() = 0;
     virtual Frame doGrab(std::chrono::milliseconds timeout) = 0;
     virtual Result<std::vector<FeatureInfo>> doListFeatures() = 0;
     virtual Result<std::string> doGetFeature(const std::string& name) = 0;
@@ -209,52 +163,37 @@ class Camera {
     virtual Result<CameraInfo> doInfo() = 0;
 
   private:
-    Status transition(Transition t, const std::function<Status()>& hook);
+    Status requireOpen(std::string_view call) const;
 
     std::string configPath_;
     CameraSettings settings_;
-    LifecycleState state_ = LifecycleState::Unconfigured;
 };
 
 /// Parses the settings keys shared by every backend (pixel_format, exposure_us,
 /// gain_db, roi, trigger) from a `camera.driver` map.
 CameraSettings parseCameraSettings(const ConfigNode& driver);
 
-/// Builds the camera named by `camera.driver.backend` (aravis | v4l2 | sim).
-/// `root` is the whole station document. Only parses and validates: throws
-/// hg::InputError naming the key (unknown backend -> camera.driver.backend).
-/// The sim backend needs the station and a pose source: use makeSimCamera.
-std::unique_ptr<Camera> makeCamera(const ConfigNode& root);
+struct SimulationControls;
 
-/// What the simulated camera (`backend: sim`) needs besides its config section.
-struct SimCameraInputs {
-    /// The station calibration: intrinsics (image size, K, dist) and fixture kinematics.
-    geometry::Station station;
-    /// The fixture's current pose, or std::nullopt while it is unknown (moving,
-    /// faulted); set by whoever wires the station (the fixture driver's status).
-    std::function<std::optional<geometry::FixturePose>()> poseSource;
+/// The fixture's current pose, or std::nullopt while it is unknown (moving, faulted).
+using PoseSource = std::function<std::optional<geometry::FixturePose>()>;
+
+/// What a backend may need besides its configuration section. Only the
+/// simulated camera uses it: it renders `parts` at the pose `poseSource`
+/// reports, through the station calibration of the document.
+struct CameraEnvironment {
+    /// Where the fixture is; unset: the sim renders at the zero pose.
+    PoseSource poseSource;
     /// Parts that can be under test, by name: "nominal" and defect variants (part frame, mm).
     std::vector<std::pair<std::string, model::TriangleMesh>> parts;
+    /// Where the simulated camera publishes its controls (simulation.h); may be null.
+    SimulationControls* simulation = nullptr;
 };
 
-/// The simulated camera: renders the part under test at the fixture's current
-/// pose through the station calibration (backlit silhouette, hg::sim renderer).
-class SimCamera : public Camera {
-  public:
-    /// Switches the part under test (thread-safe, also while streaming);
-    /// fails for a name not in the inputs' parts.
-    virtual Status setPart(const std::string& name) = 0;
-    virtual std::string part() const = 0;
-    virtual std::vector<std::string> partNames() const = 0;
-    /// Replaces the pose source (thread-safe).
-    virtual void setPoseSource(std::function<std::optional<geometry::FixturePose>()> source) = 0;
-
-  protected:
-    using Camera::Camera;
-};
-
-/// Builds the sim camera from `camera.driver` (backend: sim) and its inputs.
-/// Throws hg::InputError naming the key (e.g. camera.driver.part not among the parts).
-std::unique_ptr<SimCamera> makeSimCamera(const ConfigNode& driver, SimCameraInputs inputs);
+/// Builds the camera named by `camera.driver.backend` from the backend table
+/// (aravis | v4l2 | sim; docs/camera.md). `root` is the whole station
+/// document. Only parses and validates: throws hg::InputError naming the key
+/// (unknown backend -> camera.driver.backend).
+std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment = {});
 
 } // namespace hg::drivers

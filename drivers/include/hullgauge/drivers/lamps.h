@@ -3,25 +3,27 @@
 // blinking). One small interface in domain types; no GPIO handle crosses it
 // (STYLE.md point 1).
 //
-// Lifecycle (lifecycle.h): constructing a driver from the station's `lamps`
-// section only parses and validates it (bad sections throw hg::InputError
-// naming file, line and key); configure() opens the GPIO chip and requests the
-// three lines as outputs, all lamps off; activate() lets the lamps light;
-// deactivate() switches every lamp off; cleanup() releases the lines.
+// Lifecycle (lifecycle.h, docs/drivers.md): constructing a driver from the
+// station's `lamps` section only parses and validates it (bad sections throw
+// hg::InputError naming file, line and key); configure() opens the GPIO chip
+// and requests the three lines as outputs, all lamps off; activate() lets the
+// lamps light; deactivate() switches every lamp off; cleanup() releases the
+// lines. A line that cannot be written is an error: the driver is Failed.
 //
-// Blinking is driven by a timer thread owned by the driver: every blinking
-// lamp is lit for the first half of `blink_period_s` and dark for the second,
-// all in the same phase (red and amber blink together). The thread runs only
-// while the driver is Active and some lamp blinks.
+// Blinking: every blinking lamp is lit for the first half of `blink_period_s`
+// and dark for the second, all in the same phase (red and amber blink
+// together), on the driver's clock. A timer thread owned by the driver steps
+// the phase (tick()) while it is Active and some lamp blinks; a driver built
+// with an injected clock has no thread and its caller steps it.
 //
-// The cyclic calls (set, show) never throw; they return a small LampResult.
+// The cyclic calls (set, show, tick) never throw; they return an hg::Status.
 // A driver may be used from several threads.
 #pragma once
 
 #include <array>
 #include <chrono>
 #include <condition_variable>
-#include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -51,22 +53,6 @@ enum class StationIndication {
 std::string_view toString(Lamp lamp);
 std::string_view toString(LampState state);
 std::string_view toString(StationIndication indication);
-
-enum class LampStatusCode {
-    Ok,
-    IoError,    ///< the chip or a line could not be opened, requested or written
-    NotAllowed, ///< call not allowed in this lifecycle state
-};
-
-std::string_view toString(LampStatusCode code);
-
-struct [[nodiscard]] LampResult {
-    LampStatusCode code = LampStatusCode::Ok;
-    std::string message;
-
-    bool ok() const { return code == LampStatusCode::Ok; }
-    static LampResult success() { return {}; }
-};
 
 /// Where one lamp is wired: a GPIO line by name or by offset on the chip.
 struct LampLine {
@@ -99,89 +85,79 @@ struct LampsConfig {
 /// The lamp states that show `indication` (indexed by Lamp).
 std::array<LampState, 3> lampStatesFor(StationIndication indication);
 
-class Lamps {
-  public:
-    virtual ~Lamps();
-    Lamps(const Lamps&) = delete;
-    Lamps& operator=(const Lamps&) = delete;
+/// The blink timer's clock: the steady clock unless a test injects one.
+using LampClock = std::function<std::chrono::steady_clock::time_point()>;
 
-    // Lifecycle transitions (lifecycle.h). A transition not allowed in the
-    // current state returns NotAllowed and changes nothing. A failed configure
-    // leaves the driver Unconfigured; a write failure while Active enters
-    // Failed, from which cleanup() and configure() recover.
-    LampResult configure();
-    LampResult activate();
-    LampResult deactivate();
-    LampResult cleanup();
-    LifecycleState state() const;
+class Lamps : public Device {
+  public:
+    ~Lamps() override;
 
     /// Sets one lamp (Active only).
-    LampResult set(Lamp lamp, LampState state);
+    Status set(Lamp lamp, LampState state);
     /// Sets all three lamps at once to show `indication` (Active only).
-    LampResult show(StationIndication indication);
+    Status show(StationIndication indication);
     /// The commanded state of a lamp.
     LampState commanded(Lamp lamp) const;
+    /// Drives the blinking lamps to their phase at the clock's now (a write
+    /// only when a line changes). The timer thread calls it at every half
+    /// period; with an injected clock the caller does. Nothing while not Active.
+    Status tick();
 
     const LampsConfig& config() const { return config_; }
     /// The backend name from the configuration (`gpiod`, `sim`).
     virtual std::string_view backend() const = 0;
 
   protected:
-    explicit Lamps(LampsConfig config);
+    /// Without `clock` the driver runs its own blink timer on the steady clock.
+    Lamps(LampsConfig config, LampClock clock);
 
     /// Opens the chip and requests the lines as outputs, all dark.
-    virtual LampResult onConfigure() = 0;
+    virtual Status openLines() = 0;
     /// Releases the lines and closes the chip; never fails.
-    virtual void onCleanup() = 0;
+    virtual void closeLines() = 0;
     /// Drives the three lines: `lit[i]` true lights lamp i (active-low lines
     /// are inverted by the backend). Called with the driver's lock held.
-    virtual LampResult writeOutputs(const std::array<bool, 3>& lit) = 0;
+    virtual Status writeOutputs(const std::array<bool, 3>& lit) = 0;
 
     /// Stops the blink thread; backends call it first in their destructor so
     /// that no write reaches a half-destroyed object.
     void shutdown();
 
   private:
-    LampResult applyLocked();
-    LampResult requireActiveLocked(std::string_view call) const;
+    HookResult onConfigure() final;
+    HookResult onActivate() final;
+    HookResult onDeactivate() final;
+    void onCleanup() final;
+
+    void command(const std::array<LampState, 3>& states);
+    bool blinking() const;
+    /// Writes the lines for the commanded states at the clock's now; unless
+    /// `always`, only when a line changes.
+    Status writeLocked(bool always);
+    Status applyLocked();
     void blinkLoop();
-    void startBlinkerLocked();
 
     LampsConfig config_;
-    mutable std::mutex mutex_;
+    LampClock clock_;
+    bool ownTimer_;
     std::condition_variable wake_;
-    LifecycleState state_ = LifecycleState::Unconfigured;
     std::array<LampState, 3> commanded_{LampState::Off, LampState::Off, LampState::Off};
-    bool blinkLit_ = true; ///< phase of the blinking lamps: lit in the first half period
+    std::array<bool, 3> written_{};
+    /// Start of a lit half period of the blinking lamps (the phase origin).
+    std::chrono::steady_clock::time_point phaseStart_;
     bool stopBlinker_ = false;
     std::thread blinker_;
 };
 
-/// Builds the driver named by `lamps.backend` (`gpiod` or `sim`) from the
-/// station's `lamps` section. Parses and validates only (lifecycle `init`):
-/// unknown backends and bad line descriptions throw hg::InputError naming
-/// file, line and key.
-std::unique_ptr<Lamps> makeLamps(const ConfigNode& section);
+struct SimulationControls;
 
-/// The simulated twin (`backend: sim`): records the level of each line so that
-/// tests can read what the operator would see, including the blink phase.
-/// Obtain it with `dynamic_cast<SimulatedLamps*>`.
-class SimulatedLamps : public Lamps {
-  public:
-    /// True when the lamp is lit right now (blink phase included).
-    virtual bool lit(Lamp lamp) const = 0;
-    /// The electrical level of the lamp's line (lit XOR active_low); false
-    /// while the line is not requested.
-    virtual bool lineLevel(Lamp lamp) const = 0;
-    /// True between configure() and cleanup() (lines requested).
-    virtual bool linesRequested() const = 0;
-    /// Number of writes that changed some line, for blink-timing checks.
-    virtual std::uint64_t transitions() const = 0;
-    /// Makes line writes (and configure) fail as an unplugged GPIO expander would.
-    virtual void injectWriteFailure(bool fail) = 0;
-
-  protected:
-    using Lamps::Lamps;
-};
+/// Builds the driver named by `lamps.backend` from the backend table (`gpiod`
+/// or `sim`) from the station's `lamps` section. Parses and validates only
+/// (lifecycle `init`): unknown backends and bad line descriptions throw
+/// hg::InputError naming file, line and key. The simulated twin publishes its
+/// controls in `simulation` when given; `clock` replaces the blink timer
+/// (tests step it with tick()).
+std::unique_ptr<Lamps> makeLamps(const ConfigNode& section, SimulationControls* simulation = nullptr,
+                                 LampClock clock = {});
 
 } // namespace hg::drivers

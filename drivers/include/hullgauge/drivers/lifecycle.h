@@ -1,53 +1,129 @@
-// The lifecycle every driver follows (after ros2_control's hardware_interface):
+// The lifecycle every driver follows, written once (after ros2_control's
+// hardware components; docs/drivers.md):
 //
 //   Unconfigured --configure--> Inactive --activate--> Active
 //   Active --deactivate--> Inactive --cleanup--> Unconfigured
-//   any --error--> Failed --cleanup--> Unconfigured (then configure again to recover)
+//   any hook's error --> Failed --cleanup--> Unconfigured (configure again to recover)
 //
-// `init` (constructing the driver from its configuration section) only parses
-// and validates — it opens nothing. `configure` opens communication, `activate`
-// starts motion/streaming/power. The cyclic path (grab, moveTo, setLamp, ...)
-// returns small status values and never throws; only load-time errors throw.
+// Constructing a driver from its configuration section only parses and
+// validates (throws hg::InputError naming the key); it opens nothing.
+// `configure` opens communication, `activate` starts motion, streaming or
+// power. Each backend hook answers success, failure (the transition did not
+// happen: the driver stays where it was) or error (the device is in an unknown
+// state: Failed); only this class sets the state. Every call after
+// construction returns an hg::Status and never throws.
 #pragma once
 
-#include <array>
+#include <atomic>
+#include <initializer_list>
+#include <mutex>
+#include <string>
 #include <string_view>
+
+#include "hullgauge/common/status.h"
 
 namespace hg::drivers {
 
 enum class LifecycleState { Unconfigured, Inactive, Active, Failed };
 
-enum class Transition { Configure, Activate, Deactivate, Cleanup, Error };
+enum class Transition { Configure, Activate, Deactivate, Cleanup };
 
-/// The transition table: the state reached by `t` from `from`, or `from`
-/// itself when the transition is not allowed there (callers check).
-constexpr LifecycleState nextState(LifecycleState from, Transition t)
+std::string_view toString(LifecycleState s);
+std::string_view toString(Transition t);
+
+/// The transition table: where `t` may start from (cleanup: Inactive or Failed).
+constexpr bool allowed(LifecycleState from, Transition t)
 {
     using S = LifecycleState;
     switch (t) {
     case Transition::Configure:
-        return from == S::Unconfigured ? S::Inactive : from;
+        return from == S::Unconfigured;
     case Transition::Activate:
-        return from == S::Inactive ? S::Active : from;
+        return from == S::Inactive;
     case Transition::Deactivate:
-        return from == S::Active ? S::Inactive : from;
+        return from == S::Active;
     case Transition::Cleanup:
-        return (from == S::Inactive || from == S::Failed) ? S::Unconfigured : from;
-    case Transition::Error:
-        return S::Failed;
+        return from == S::Inactive || from == S::Failed;
     }
-    return from;
+    return false;
 }
 
-constexpr bool allowed(LifecycleState from, Transition t)
+/// The state a successful `t` leads to.
+constexpr LifecycleState target(Transition t)
 {
-    return t == Transition::Error || nextState(from, t) != from;
+    using S = LifecycleState;
+    constexpr LifecycleState to[] = {S::Inactive, S::Active, S::Inactive, S::Unconfigured};
+    return to[static_cast<int>(t)];
 }
 
-constexpr std::string_view toString(LifecycleState s)
-{
-    constexpr std::array<std::string_view, 4> names{"unconfigured", "inactive", "active", "failed"};
-    return names[static_cast<int>(s)];
-}
+/// What a lifecycle hook answers: success, failure (stay) or error (Failed).
+class [[nodiscard]] HookResult {
+  public:
+    /// Success, or a failure after which the driver stays in its state.
+    HookResult(Status status) : status_(std::move(status)) {} // NOLINT: implicit by design
+    /// The device is left in an unknown state: the driver enters Failed.
+    static HookResult error(Status status)
+    {
+        HookResult r(std::move(status));
+        r.error_ = true;
+        return r;
+    }
+    const Status& status() const { return status_; }
+    bool isError() const { return error_ && !status_.ok(); }
+
+  private:
+    Status status_;
+    bool error_ = false;
+};
+
+/// The base of Camera, Fixture and Lamps: the public transitions around the
+/// backends' hooks, and the one state check of every public call.
+class Device {
+  public:
+    virtual ~Device() = default;
+    Device(const Device&) = delete;
+    Device& operator=(const Device&) = delete;
+
+    LifecycleState state() const { return state_.load(); }
+
+    /// Unconfigured -> Inactive. A failure runs the cleanup hook (nothing stays half open).
+    Status configure() { return run(Transition::Configure); }
+    /// Inactive -> Active.
+    Status activate() { return run(Transition::Activate); }
+    /// Active -> Inactive.
+    Status deactivate() { return run(Transition::Deactivate); }
+    /// Inactive/Failed -> Unconfigured, always: the hook releases what it can.
+    Status cleanup() { return run(Transition::Cleanup); }
+
+    /// The device kind ("camera", "fixture", "lamps"): message prefix and log category.
+    const std::string& kind() const { return kind_; }
+
+  protected:
+    explicit Device(std::string kind) : kind_(std::move(kind)) {}
+
+    virtual HookResult onConfigure() = 0;
+    virtual HookResult onActivate() = 0;
+    virtual HookResult onDeactivate() = 0;
+    virtual void onCleanup() = 0;
+
+    /// Success when the driver is in one of `states`, else NotAllowed naming
+    /// the call, the current state and the states it needs.
+    Status require(std::initializer_list<LifecycleState> states, std::string_view call) const;
+    /// A failure of a cyclic call that leaves the device unusable: enters
+    /// Failed (cleanup and configure recover) and returns `failure`.
+    Status fail(Status failure);
+    /// Held by every transition while its hook runs; drivers used from several
+    /// threads (the lamps' blink timer) hold it for their own calls too.
+    std::mutex& mutex() const { return mutex_; }
+
+  private:
+    Status run(Transition t);
+    HookResult hook(Transition t);
+    Status notAllowed(std::string_view call, const std::string& needs) const;
+
+    std::string kind_;
+    mutable std::mutex mutex_;
+    std::atomic<LifecycleState> state_{LifecycleState::Unconfigured};
+};
 
 } // namespace hg::drivers

@@ -38,11 +38,11 @@
 namespace {
 
 using namespace std::chrono_literals;
+using hg::Status;
 using hg::drivers::Camera;
 using hg::drivers::Frame;
 using hg::drivers::FrameStatus;
 using hg::drivers::LifecycleState;
-using hg::drivers::Status;
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* kDevice = "/dev/video0";
@@ -389,7 +389,7 @@ TEST_F(Vivid, GainIsSetByNameAndExposureIsRefusedWithoutTheControl)
     Status s = exposed->configure();
     EXPECT_FALSE(s.ok());
     EXPECT_NE(s.message().find("no absolute exposure control"), std::string::npos) << s.message();
-    EXPECT_EQ(exposed->state(), LifecycleState::Failed);
+    EXPECT_EQ(exposed->state(), LifecycleState::Unconfigured);
 }
 
 TEST_F(Vivid, RoiIsRefusedWhenTheDeviceCannotCropExactly)

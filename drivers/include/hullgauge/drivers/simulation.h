@@ -1,0 +1,85 @@
+// The controls of the simulated twins, beside the production interfaces:
+// what the simulated line, tests and maintenance switch that no real device
+// has (the part under test, fault switches, the lamps' line levels). The
+// backend tables build the twins like any backend and publish their controls
+// in a SimulationControls the caller passes in (docs/drivers.md); production
+// code never casts a driver to its twin.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "hullgauge/drivers/camera.h"
+#include "hullgauge/drivers/fixture.h"
+#include "hullgauge/drivers/lamps.h"
+
+namespace hg::drivers {
+
+/// Fault switches of the simulated camera (docs/camera.md, `camera.driver.fault`).
+enum class SimulatedCameraFault {
+    None,
+    Timeout,    ///< the camera is silent: every grab waits out its timeout
+    Incomplete, ///< frames arrive with missing packets (status incomplete, rows missing)
+    Dropped,    ///< the next frame is lost: that grab times out, the frame counter skips it (one-shot)
+};
+std::string_view toString(SimulatedCameraFault fault);
+
+/// The simulated camera's controls.
+class SimCameraControl {
+  public:
+    virtual ~SimCameraControl() = default;
+    /// Switches the part under test (thread-safe, also while streaming);
+    /// fails for a name not among the parts.
+    virtual Status setPart(const std::string& name) = 0;
+    virtual std::string part() const = 0;
+    virtual std::vector<std::string> partNames() const = 0;
+    /// Switches a fault on, or off with SimulatedCameraFault::None (thread-safe).
+    virtual void injectFault(SimulatedCameraFault fault) = 0;
+};
+
+/// Fault switches of the simulated drive (the in-process twin and the Modbus
+/// fixture simulator share them; numbers are the simulator's FAULT_MODE values).
+enum class SimulatedFault {
+    None = 0,
+    NoAnswer = 1,        ///< requests are not answered
+    ExceptionReply = 2,  ///< requests are answered with a Modbus exception
+    Disconnect = 3,      ///< the connection is dropped and refused
+    NeverInPosition = 4, ///< axes stall half-way, busy stays set
+    DriveFault = 5,      ///< the drive latches a fault (fault bit and code)
+};
+
+/// The in-process fixture twin's controls.
+class SimFixtureControl {
+  public:
+    virtual ~SimFixtureControl() = default;
+    /// Switches a fault on (or off with SimulatedFault::None); `code` is the
+    /// drive fault code (DriveFault) or Modbus exception code (ExceptionReply).
+    virtual void injectFault(SimulatedFault fault, int code = 0) = 0;
+};
+
+/// The simulated lamps' controls: what the operator would see.
+class SimLampsControl {
+  public:
+    virtual ~SimLampsControl() = default;
+    /// True when the lamp is lit right now (blink phase included).
+    virtual bool lit(Lamp lamp) const = 0;
+    /// The electrical level of the lamp's line (lit XOR active_low); false
+    /// while the line is not requested.
+    virtual bool lineLevel(Lamp lamp) const = 0;
+    /// True between configure() and cleanup() (lines requested).
+    virtual bool linesRequested() const = 0;
+    /// Number of writes that changed some line, for blink-timing checks.
+    virtual std::uint64_t transitions() const = 0;
+    /// Makes line writes (and configure) fail as an unplugged GPIO expander would.
+    virtual void injectWriteFailure(bool fail) = 0;
+};
+
+/// Filled by the factories of the simulated backends; null where the driver is real.
+struct SimulationControls {
+    SimCameraControl* camera = nullptr;
+    SimFixtureControl* fixture = nullptr;
+    SimLampsControl* lamps = nullptr;
+};
+
+} // namespace hg::drivers

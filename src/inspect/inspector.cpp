@@ -208,40 +208,27 @@ namespace {
 
 /// One landmark's share of the traversal: the voxels it labels (each once per
 /// inspection through the memo), those found wrong, and the count it caused.
-class LandmarkSearch {
-  public:
-    LandmarkSearch(const InspectionMap& map, Memo& memo, std::int32_t landmarkNode, int adjacency)
-        : map_(map), memo_(memo), node0_(landmarkNode), c0_(indexOf(landmarkNode)), A_(adjacency)
-    {
-    }
-    std::int32_t landmarkNode() const { return node0_; }
+struct LandmarkSearch {
+    const InspectionMap& map;
+    Memo& memo;
+    std::int32_t node0; ///< the landmark voxel
+    int A;              ///< adjacency layers searched
+    Eigen::Vector3i c0 = keyIndex(map.nodes()[static_cast<std::size_t>(node0)].key);
+    std::unordered_set<std::int32_t> visited = {};
+    std::vector<std::int32_t> wrong = {};
+    int counter = 0; ///< voxels this landmark caused to be reconstructed
+
     /// 26-neighbour layers from the landmark voxel.
-    int layer(std::int32_t n) const { return chebyshev(indexOf(n), c0_); }
-    bool within(std::int32_t n) const { return layer(n) <= A_; }
-    bool seen(std::int32_t n) const { return visited_.count(n) != 0; }
+    int layer(std::int32_t n) const { return chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0); }
+    bool within(std::int32_t n) const { return layer(n) <= A; }
+    bool seen(std::int32_t n) const { return visited.count(n) != 0; }
     VoxelLabel visit(std::int32_t n)
     {
-        const VoxelLabel lab = memo_.label(n, counter_);
-        visited_.insert(n);
-        if (memo_.wrong(n, lab)) wrong_.push_back(n);
+        const VoxelLabel lab = memo.label(n, counter);
+        visited.insert(n);
+        if (memo.wrong(n, lab)) wrong.push_back(n);
         return lab;
     }
-    bool wrong(std::int32_t n, VoxelLabel lab) const { return memo_.wrong(n, lab); }
-    const std::vector<std::int32_t>& wrongNodes() const { return wrong_; }
-    int reconstructed() const { return counter_; }
-    int adjacency() const { return A_; }
-
-  private:
-    Eigen::Vector3i indexOf(std::int32_t n) const { return keyIndex(map_.nodes()[static_cast<std::size_t>(n)].key); }
-
-    const InspectionMap& map_;
-    Memo& memo_;
-    std::int32_t node0_;
-    Eigen::Vector3i c0_;
-    int A_;
-    std::unordered_set<std::int32_t> visited_;
-    std::vector<std::int32_t> wrong_;
-    int counter_ = 0;
 };
 
 struct TraversalOutcome {
@@ -260,12 +247,12 @@ struct TraversalOutcome {
 TraversalOutcome traverseLandmark(const InspectionMap& map, LandmarkSearch& search)
 {
     TraversalOutcome out;
-    const std::int32_t n0 = search.landmarkNode();
+    const std::int32_t n0 = search.node0;
     const VoxelLabel l0 = search.visit(n0);
     out.landmarkLabel = l0;
     out.objectFound = l0 == VoxelLabel::Object;
     std::vector<std::int32_t> seeds;
-    if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !search.wrong(n0, l0))) {
+    if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !search.memo.wrong(n0, l0))) {
         seeds.push_back(n0);
     } else if (l0 == VoxelLabel::Void) {
         map.walkNetwork(
@@ -283,8 +270,8 @@ TraversalOutcome traverseLandmark(const InspectionMap& map, LandmarkSearch& sear
         std::move(seeds),
         [&](std::int32_t v) {
             if (search.seen(v) || !search.within(v)) return false;
-            if (!search.wrong(v, search.visit(v))) return false;
-            if (search.layer(v) >= search.adjacency()) out.frontAtLimit = true;
+            if (!search.memo.wrong(v, search.visit(v))) return false;
+            if (search.layer(v) >= search.A) out.frontAtLimit = true;
             return true;
         },
         [] { return false; });
@@ -316,7 +303,7 @@ struct NormalLine {
 NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& search, const MapLandmark& lm, int level)
 {
     const double dv = map.frame().voxelSize(level);
-    const double reach = (search.adjacency() + 1.0) * dv * std::sqrt(3.0);
+    const double reach = (search.A + 1.0) * dv * std::sqrt(3.0);
     const double step = dv / 16.0;
     std::vector<std::int32_t> nodes;
     for (double s = -reach; s <= reach; s += step) {
@@ -410,24 +397,22 @@ Statistics errorStatistics(const std::vector<LandmarkResult>& landmarks, std::si
     for (const LandmarkResult& lr : landmarks)
         if (lr.measured) measured.push_back(&lr);
     st.landmarksMeasured = static_cast<int>(measured.size());
+    const double N = static_cast<double>(measured.size());
+    // Mean and population standard deviation of one measure (eq. 4.6.3-1..6).
+    auto meanAndStd = [&](double LandmarkResult::*f, double& mean, double& sd) {
+        for (const LandmarkResult* m : measured) mean += m->*f / N;
+        for (const LandmarkResult* m : measured) sd += (m->*f - mean) * (m->*f - mean) / N;
+        sd = std::sqrt(sd);
+    };
     if (!measured.empty()) {
-        const double N = static_cast<double>(measured.size());
+        meanAndStd(&LandmarkResult::errorMinMm, st.aveErrorMin, st.stdErrorMin);
+        meanAndStd(&LandmarkResult::errorMaxMm, st.aveErrorMax, st.stdErrorMax);
+        meanAndStd(&LandmarkResult::errorMm, st.aveError, st.stdError);
         st.minError = std::numeric_limits<double>::infinity();
         for (const LandmarkResult* m : measured) {
-            st.aveErrorMin += m->errorMinMm / N;
-            st.aveErrorMax += m->errorMaxMm / N;
-            st.aveError += m->errorMm / N;
             st.maxError = std::max(st.maxError, m->errorMaxMm);
             st.minError = std::min(st.minError, m->errorMinMm);
         }
-        for (const LandmarkResult* m : measured) {
-            st.stdErrorMin += (m->errorMinMm - st.aveErrorMin) * (m->errorMinMm - st.aveErrorMin) / N;
-            st.stdErrorMax += (m->errorMaxMm - st.aveErrorMax) * (m->errorMaxMm - st.aveErrorMax) / N;
-            st.stdError += (m->errorMm - st.aveError) * (m->errorMm - st.aveError) / N;
-        }
-        st.stdErrorMin = std::sqrt(st.stdErrorMin);
-        st.stdErrorMax = std::sqrt(st.stdErrorMax);
-        st.stdError = std::sqrt(st.stdError);
     }
     st.totalVolumeError = static_cast<double>(wrongVoxels) * dv * dv * dv;
     return st;
@@ -481,10 +466,10 @@ LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, 
     lr.toleranceMm = lm.toleranceMm;
     if (views) discriminate(lr, lm, *views, *viewIds);
     const TraversalOutcome t = traverseLandmark(map, search);
-    lr.errorNumber = static_cast<int>(search.wrongNodes().size());
-    allWrong.insert(search.wrongNodes().begin(), search.wrongNodes().end());
+    lr.errorNumber = static_cast<int>(search.wrong.size());
+    allWrong.insert(search.wrong.begin(), search.wrong.end());
     const NormalLine line = reconstructNormalLine(map, search, lm, level);
-    lr.voxelsReconstructed = search.reconstructed();
+    lr.voxelsReconstructed = search.counter;
     if (!notObservable(lr, t, line, checkResolution, dv)) measureAlongNormal(lr, lm, line, t.objectFound, dv);
     if (t.frontAtLimit && lr.status != LandmarkStatus::Ok && lr.reason.empty())
         lr.reason = "wrongly reconstructed voxels reach the outermost adjacency layer";
@@ -519,7 +504,7 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             result.landmarks.push_back(std::move(lr));
             continue;
         }
-        LandmarkSearch search(map, memo, map.landmarkNode(l, level_), adjacency_);
+        LandmarkSearch search{map, memo, map.landmarkNode(l, level_), adjacency_};
         result.landmarks.push_back(inspectLandmark(map, map.landmarks()[l], search, level_, views, viewIds,
                                                    views && options_.requireResolution, allWrong));
         stopped = options_.earlyExit && result.landmarks.back().status != LandmarkStatus::Ok;
@@ -558,16 +543,13 @@ nlohmann::json toJson(const InspectionResult& r)
         l["id"] = lr.id;
         l["status"] = toString(lr.status);
         l["error_number"] = lr.errorNumber;
+        auto measured = [&](double v) { return lr.measured ? json(v) : json(nullptr); };
+        l["error_min_mm"] = measured(lr.errorMinMm);
+        l["error_max_mm"] = measured(lr.errorMaxMm);
+        l["error_mm"] = measured(lr.errorMm);
         if (lr.measured) {
-            l["error_min_mm"] = lr.errorMinMm;
-            l["error_max_mm"] = lr.errorMaxMm;
-            l["error_mm"] = lr.errorMm;
             l["offset_low_mm"] = lr.offsetLowMm;
             l["offset_high_mm"] = lr.offsetHighMm;
-        } else {
-            l["error_min_mm"] = nullptr;
-            l["error_max_mm"] = nullptr;
-            l["error_mm"] = nullptr;
         }
         l["tolerance_mm"] = lr.toleranceMm;
         if (!lr.reason.empty()) l["reason"] = lr.reason;
@@ -581,10 +563,8 @@ nlohmann::json toJson(const InspectionResult& r)
                         {"distance_mm", v.discrimination.distanceMm},
                         {"theta_deg", v.discrimination.thetaDeg},
                         {"med_range_mm", v.discrimination.medRangeMm}};
-                if (std::isfinite(v.discrimination.medAngleMm))
-                    jv["med_angle_mm"] = v.discrimination.medAngleMm;
-                else
-                    jv["med_angle_mm"] = nullptr;
+                const double angle = v.discrimination.medAngleMm;
+                jv["med_angle_mm"] = std::isfinite(angle) ? json(angle) : json(nullptr);
                 vs.push_back(std::move(jv));
             }
             l["views"] = std::move(vs);
@@ -610,13 +590,8 @@ nlohmann::json toJson(const InspectionResult& r)
                 {"nominal_mm", p.nominal},
                 {"tolerance_mm", p.tolerance},
                 {"status", p.status}};
-        if (p.measured) {
-            jp["min_mm"] = p.value.min;
-            jp["max_mm"] = p.value.max;
-        } else {
-            jp["min_mm"] = nullptr;
-            jp["max_mm"] = nullptr;
-        }
+        jp["min_mm"] = p.measured ? json(p.value.min) : json(nullptr);
+        jp["max_mm"] = p.measured ? json(p.value.max) : json(nullptr);
         ps.push_back(std::move(jp));
     }
     j["parameters"] = std::move(ps);

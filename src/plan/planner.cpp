@@ -377,7 +377,7 @@ class Analyser {
                                            fmt(f.rotationRangeDeg.max) + "]°, declination range [" +
                                            fmt(f.declinationRangeDeg.min) + ", " + fmt(f.declinationRangeDeg.max) +
                                            "]°";
-            a.reason = "landmark " + lm(a) +
+            a.reason = "landmark " + a.id +
                        " is seen against background only from poses the fixture cannot "
                        "reach (e.g. " +
                        fmtPose(a.unreachableWitnesses.front(), type) + "; the " + ranges +
@@ -403,8 +403,6 @@ class Analyser {
         s << ". Move the landmark to a visible edge or inspect this feature another way.";
         a.reason = s.str();
     }
-
-    static const std::string& lm(const LandmarkAnalysis& a) { return a.id; }
 
     /// The nearest surface point (triangle centroids, nearest first) seen from
     /// a reachable grazing pose.

@@ -306,8 +306,13 @@ NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& searc
     const double reach = (search.A + 1.0) * dv * std::sqrt(3.0);
     const double step = dv / 16.0;
     std::vector<std::int32_t> nodes;
+    VoxelKey previous = ~VoxelKey{0};
     for (double s = -reach; s <= reach; s += step) {
-        const std::int32_t n = map.find(map.frame().keyAt(lm.position + s * lm.normal, level));
+        // Consecutive samples mostly share a voxel: look each voxel up once.
+        const VoxelKey key = map.frame().keyAt(lm.position + s * lm.normal, level);
+        if (key == previous) continue;
+        previous = key;
+        const std::int32_t n = map.find(key);
         if (n < 0 || !search.within(n)) continue;
         if (nodes.empty() || nodes.back() != n) nodes.push_back(n);
     }

@@ -88,7 +88,7 @@ void BM_ReconstructOctree(benchmark::State& state)
         views.push_back({f.camera, SilhouetteIndex::fromSilhouette(hg::vision::segment(f.frame, {}))});
     HullReconstruction h;
     for (auto _ : state) {
-        h = reconstructHull(views, kCubeOrigin, kCubeSize, depth);
+        h = reconstructHull(views, {kCubeOrigin, kCubeSize, depth});
         benchmark::DoNotOptimize(h.objectVoxels);
     }
     // Disagreement with the true solid, voxel by voxel at the finest level.

@@ -86,9 +86,7 @@ plan::PlanProblem problem(const geometry::Station& s, std::vector<plan::PlanLand
     p.part = "stamp";
     p.solid = &stamp();
     p.station = &s;
-    p.grid.origin = Vector3d(-64, -64, -64);
-    p.grid.voxelSize = 0.25;
-    p.grid.depth = 9;
+    p.frame = {Vector3d(-64, -64, -64), 128.0, 9}; // ΔV = 0.25 mm
     p.landmarks = std::move(lms);
     return p;
 }

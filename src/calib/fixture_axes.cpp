@@ -156,62 +156,41 @@ RigidTransform FixtureAxesResult::cameraFromTarget(const geometry::FixturePose& 
            fixtureFromTarget;
 }
 
-FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, const geometry::Intrinsics& camera,
-                                       const std::string& field)
+namespace {
+
+enum class Turn { Declination, Rotation };
+
+/// Screw axes (camera frame) of the relative motions T_j T_i^-1 between two
+/// views that differ in one fixture angle only, weighted by |sin Δ|. Same
+/// rotation, different declination: a turn about the declination axis. Same
+/// declination, different rotation: a turn about the rotation axis as tilted
+/// by that declination, turned back to declination 0 (needs `declination`).
+std::vector<std::pair<AxisLine, double>> turnAxes(const std::vector<FixtureView>& views,
+                                                  const std::vector<RigidTransform>& poses, Turn turn,
+                                                  const AxisLine* declination)
 {
-    auto log = hg::log::category("calib");
-    cv::Mat K, dist;
-    cv::eigen2cv(camera.K, K);
-    dist = cv::Mat(camera.dist, true);
-    if (dist.empty()) dist = cv::Mat::zeros(5, 1, CV_64F);
-
-    std::vector<RigidTransform> poses;
-    for (const auto& v : views) {
-        if (v.target.imagePoints.size() < 6)
-            throw InputError(v.target.name, field, "a view needs at least 6 target corners");
-        poses.push_back(poseFromPnP(v.target, K, dist));
-    }
-
-    // Screw axes of the relative motions T_j T_i^-1 (camera frame).
-    // Same rotation, different declination: a turn about the declination axis.
-    std::vector<std::pair<AxisLine, double>> declinationLines;
+    std::vector<std::pair<AxisLine, double>> lines;
     for (std::size_t i = 0; i < views.size(); ++i)
         for (std::size_t j = i + 1; j < views.size(); ++j) {
             const auto &pi = views[i].pose, &pj = views[j].pose;
-            double dPhi = pj.declinationDeg - pi.declinationDeg;
-            if (std::abs(pj.rotationDeg - pi.rotationDeg) > kSameAngleDeg || std::abs(dPhi) < 1.0 ||
-                std::abs(dPhi) > 179.0)
-                continue;
+            const bool aboutDeclination = turn == Turn::Declination;
+            const double moved =
+                aboutDeclination ? pj.declinationDeg - pi.declinationDeg : pj.rotationDeg - pi.rotationDeg;
+            const double held =
+                aboutDeclination ? pj.rotationDeg - pi.rotationDeg : pj.declinationDeg - pi.declinationDeg;
+            if (std::abs(held) > kSameAngleDeg || std::abs(moved) < 1.0 || std::abs(moved) > 179.0) continue;
             RigidTransform G = poses[j] * poses[i].inverse();
-            declinationLines.emplace_back(screwAxis(G, dPhi), std::abs(std::sin(geometry::degToRad(dPhi))));
+            AxisLine axis = screwAxis(G, moved);
+            if (!aboutDeclination) axis = transformLine(rotationAboutLine(*declination, -pi.declinationDeg), axis);
+            lines.emplace_back(axis, std::abs(std::sin(geometry::degToRad(moved))));
         }
-    if (declinationLines.empty())
-        throw InputError("", field,
-                         "need two views at the same rotation and different declinations (1 to 179 degrees apart)");
-    AxisLine declination = averageLines(declinationLines);
+    return lines;
+}
 
-    // Same declination, different rotation: a turn about the rotation axis as
-    // tilted by that declination; turned back to declination 0.
-    std::vector<std::pair<AxisLine, double>> rotationLines;
-    for (std::size_t i = 0; i < views.size(); ++i)
-        for (std::size_t j = i + 1; j < views.size(); ++j) {
-            const auto &pi = views[i].pose, &pj = views[j].pose;
-            double dTheta = pj.rotationDeg - pi.rotationDeg;
-            if (std::abs(pj.declinationDeg - pi.declinationDeg) > kSameAngleDeg || std::abs(dTheta) < 1.0 ||
-                std::abs(dTheta) > 179.0)
-                continue;
-            RigidTransform G = poses[j] * poses[i].inverse();
-            AxisLine atPhi = screwAxis(G, dTheta);
-            rotationLines.emplace_back(transformLine(rotationAboutLine(declination, -pi.declinationDeg), atPhi),
-                                       std::abs(std::sin(geometry::degToRad(dTheta))));
-        }
-    if (rotationLines.empty())
-        throw InputError("", field,
-                         "need two views at the same declination and different rotations (1 to 179 degrees apart)");
-    AxisLine rotation = averageLines(rotationLines);
-
-    // M from every view, averaged (chordal mean of the rotations).
-    Model model{declination, rotation, {}};
+/// The target's mount M from every view, averaged (chordal mean of the rotations).
+RigidTransform meanMount(const std::vector<FixtureView>& views, const std::vector<RigidTransform>& poses,
+                         const AxisLine& declination, const AxisLine& rotation)
+{
     Mat3 sumR = Mat3::Zero();
     Vec3 sumT = Vec3::Zero();
     for (std::size_t i = 0; i < views.size(); ++i) {
@@ -222,12 +201,16 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
         sumR += Mi.R;
         sumT += Mi.t;
     }
-    model.M.R = geometry::nearestRotation(sumR);
-    model.M.t = sumT / static_cast<double>(views.size());
+    RigidTransform M;
+    M.R = geometry::nearestRotation(sumR);
+    M.t = sumT / static_cast<double>(views.size());
+    return M;
+}
 
-    // Joint refinement on the reprojection error of every corner.
-    std::size_t corners = 0;
-    for (const auto& v : views) corners += v.target.imagePoints.size();
+/// Joint refinement of both axes and the mount on the reprojection error of every corner.
+std::pair<Model, detail::LeastSquaresResult> refineOnCorners(const Model& model, const std::vector<FixtureView>& views,
+                                                             const geometry::Intrinsics& camera, std::size_t corners)
+{
     auto residuals = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r) {
         Model m = applyDelta(model, x);
         r.resize(static_cast<Eigen::Index>(2 * corners));
@@ -248,12 +231,16 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
     Eigen::VectorXd step(14);
     step << 1e-7, 1e-7, 1e-5, 1e-5, 1e-7, 1e-7, 1e-5, 1e-5, 1e-7, 1e-7, 1e-7, 1e-5, 1e-5, 1e-5;
     auto ls = detail::levenbergMarquardt(residuals, x0, step, 100);
-    model = applyDelta(model, ls.x);
+    return {applyDelta(model, ls.x), std::move(ls)};
+}
 
-    FixtureAxesResult out;
+/// The fixture frame: origin at the rotation axis' foot of the common
+/// perpendicular of the two axes, z along the rotation axis, x towards the
+/// declination axis' direction; the axes and the mount expressed in it.
+void fixtureFrame(FixtureAxesResult& out, const Model& model, const std::string& field)
+{
     out.rotationAxisInCamera = normalised(model.rotation);
     out.declinationAxisInCamera = normalised(model.declination);
-
     // Common perpendicular of the two axes (closest points o on L_r, q on L_d).
     const Vec3 ar = model.rotation.direction, ad = model.declination.direction;
     const Vec3 w0 = model.rotation.point - model.declination.point;
@@ -279,9 +266,13 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
     out.declinationAxis = fixtureFromCamera.applyToDirection(ad).normalized();
     out.declinationAxisPoint = fixtureFromCamera.apply(q);
     out.fixtureFromTarget = fixtureFromCamera * model.M;
+}
 
-    // Residuals in pixels and, scaled by each corner's depth over the focal
-    // length, in millimetres on the target.
+/// Residuals in pixels and, scaled by each corner's depth over the focal
+/// length, in millimetres on the target.
+void residualStatistics(FixtureAxesResult& out, const Eigen::VectorXd& residuals, const Model& model,
+                        const std::vector<FixtureView>& views, const geometry::Intrinsics& camera, std::size_t corners)
+{
     double focal = 0.5 * (camera.K(0, 0) + camera.K(1, 1));
     double ssPx = 0.0, ssMm = 0.0;
     Eigen::Index k = 0;
@@ -289,7 +280,7 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
         RigidTransform T = model.cameraFromTarget(v.pose);
         double ssView = 0.0;
         for (const auto& o3 : v.target.objectPoints) {
-            double rx = ls.residuals[k++], ry = ls.residuals[k++];
+            double rx = residuals[k++], ry = residuals[k++];
             double px2 = rx * rx + ry * ry;
             double depth = T.apply(Vec3(o3.x, o3.y, o3.z)).z();
             double mm = std::sqrt(px2) * depth / focal;
@@ -306,8 +297,45 @@ FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, co
     out.corners = static_cast<int>(corners);
     out.rmsPx = std::sqrt(ssPx / static_cast<double>(corners));
     out.rmsMm = std::sqrt(ssMm / static_cast<double>(corners));
-    log->info("fixture axes from {} views: angle {:.3f} deg, distance {:.3f} mm, RMS {:.3f} px / {:.4f} mm", out.views,
-              out.axesAngleDeg, out.axesDistanceMm, out.rmsPx, out.rmsMm);
+}
+
+} // namespace
+
+FixtureAxesResult calibrateFixtureAxes(const std::vector<FixtureView>& views, const geometry::Intrinsics& camera,
+                                       const std::string& field)
+{
+    cv::Mat K, dist;
+    cv::eigen2cv(camera.K, K);
+    dist = cv::Mat(camera.dist, true);
+    if (dist.empty()) dist = cv::Mat::zeros(5, 1, CV_64F);
+    std::vector<RigidTransform> poses;
+    std::size_t corners = 0;
+    for (const auto& v : views) {
+        if (v.target.imagePoints.size() < 6)
+            throw InputError(v.target.name, field, "a view needs at least 6 target corners");
+        poses.push_back(poseFromPnP(v.target, K, dist));
+        corners += v.target.imagePoints.size();
+    }
+
+    const auto declinationLines = turnAxes(views, poses, Turn::Declination, nullptr);
+    if (declinationLines.empty())
+        throw InputError("", field,
+                         "need two views at the same rotation and different declinations (1 to 179 degrees apart)");
+    const AxisLine declination = averageLines(declinationLines);
+    const auto rotationLines = turnAxes(views, poses, Turn::Rotation, &declination);
+    if (rotationLines.empty())
+        throw InputError("", field,
+                         "need two views at the same declination and different rotations (1 to 179 degrees apart)");
+    const AxisLine rotation = averageLines(rotationLines);
+
+    const Model initial{declination, rotation, meanMount(views, poses, declination, rotation)};
+    const auto [model, ls] = refineOnCorners(initial, views, camera, corners);
+    FixtureAxesResult out;
+    fixtureFrame(out, model, field);
+    residualStatistics(out, ls.residuals, model, views, camera, corners);
+    hg::log::category("calib")->info(
+        "fixture axes from {} views: angle {:.3f} deg, distance {:.3f} mm, RMS {:.3f} px / {:.4f} mm", out.views,
+        out.axesAngleDeg, out.axesDistanceMm, out.rmsPx, out.rmsMm);
     return out;
 }
 

@@ -56,18 +56,9 @@ int run(const PlanArgs& args)
     problem.part = program.part;
     problem.solid = program.solid.get();
     problem.station = &station;
-    problem.grid.origin = program.octree.cubeOrigin;
-    problem.grid.voxelSize = program.octree.voxelSize();
-    problem.grid.depth = program.octree.depth;
-    for (const auto& lm : program.landmarks) {
-        plan::PlanLandmark p;
-        p.id = lm.id;
-        p.position = lm.position;
-        p.normal = lm.normal;
-        p.toleranceMm = lm.toleranceMm;
-        p.bestViews = lm.bestViews;
-        problem.landmarks.push_back(std::move(p));
-    }
+    problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
+    for (const auto& lm : program.landmarks)
+        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, lm.toleranceMm}, lm.bestViews});
 
     plan::PlanOptions options;
     options.grid.rotationStepDeg = args.rotationStep;

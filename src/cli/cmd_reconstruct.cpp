@@ -45,7 +45,7 @@ int run(const ReconstructArgs& args)
     }
     if (views.empty()) throw InputError(args.views, "views", "no views");
     const auto hull = inspect::reconstructHull(
-        views, Eigen::Vector3d(args.cube[0], args.cube[1], args.cube[2]), args.cube[3], args.depth,
+        views, {Eigen::Vector3d(args.cube[0], args.cube[1], args.cube[2]), args.cube[3], args.depth},
         args.method == "centre" ? inspect::VoxelTestMethod::CentrePoint : inspect::VoxelTestMethod::VolumeSource);
 
     std::ofstream ply(args.out);

@@ -156,28 +156,6 @@ ParameterKind parseParameterKind(const std::string& name)
     throw std::invalid_argument("unknown parameter kind '" + name + "' (expected distance, perimeter or area)");
 }
 
-double InspectionMap::voxelSize(int level) const
-{
-    return geometry_.cubeSize / static_cast<double>(1u << level);
-}
-
-Eigen::AlignedBox3d InspectionMap::voxelBox(VoxelKey key) const
-{
-    const double s = voxelSize(keyLevel(key));
-    const Eigen::Vector3d lo = geometry_.cubeOrigin + s * keyIndex(key).cast<double>();
-    return {lo, lo + Eigen::Vector3d::Constant(s)};
-}
-
-VoxelKey InspectionMap::keyAt(const Eigen::Vector3d& point, int level) const
-{
-    const double s = voxelSize(level);
-    const int n = 1 << level;
-    Eigen::Vector3i ijk;
-    for (int a = 0; a < 3; ++a)
-        ijk[a] = std::clamp(static_cast<int>(std::floor((point[a] - geometry_.cubeOrigin[a]) / s)), 0, n - 1);
-    return makeKey(level, ijk.x(), ijk.y(), ijk.z());
-}
-
 std::int32_t InspectionMap::find(VoxelKey key) const
 {
     auto it =
@@ -224,6 +202,7 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
     InspectionMap map;
     map.partName_ = std::move(partName);
     map.geometry_ = g;
+    map.frame_ = g.frame();
     const Eigen::AlignedBox3d cube(g.cubeOrigin, g.cubeOrigin + Eigen::Vector3d::Constant(g.cubeSize));
     for (MapLandmark& lm : landmarks) {
         if (!cube.contains(lm.position))
@@ -237,7 +216,7 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
     const int A = g.adjacencyDepth;
     for (const MapLandmark& lm : landmarks) {
         for (int level = 0; level <= g.depth; ++level) {
-            const VoxelKey key = map.keyAt(lm.position, level);
+            const VoxelKey key = map.frame_.landmarkKey(lm, level);
             BuildNode& n = build[key];
             n.onPath = n.onPath || level < g.depth;
             if (level < g.coarsestLevel) continue;
@@ -294,7 +273,7 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
                 }
                 map.neighbours_.push_back(idx);
             }
-            const VoxelExpectation e = oracle(map.voxelBox(n.key));
+            const VoxelExpectation e = oracle(map.frame_.box(n.key));
             n.expectedObject = e.object;
             n.dontCare = e.dontCare;
             n.hidden = e.hidden && !e.object;
@@ -307,7 +286,7 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
         for (int level = g.coarsestLevel; level <= g.depth; ++level)
             map.landmarkNodes_[l * static_cast<std::size_t>(levels) +
                                static_cast<std::size_t>(level - g.coarsestLevel)] =
-                map.find(map.keyAt(landmarks[l].position, level));
+                map.find(map.frame_.landmarkKey(landmarks[l], level));
     map.rootIndex_ = map.nodes_.empty() ? -1 : 0;
     map.landmarks_ = std::move(landmarks);
     map.parameters_ = std::move(parameters);
@@ -414,6 +393,7 @@ InspectionMap InspectionMap::deserialise(const std::vector<std::uint8_t>& bytes,
     map.geometry_.adjacencyDepth = r.get<std::int32_t>();
     map.geometry_.coarsestLevel = r.get<std::int32_t>();
     const MapGeometry& g = map.geometry_;
+    map.frame_ = g.frame();
     if (!(g.cubeSize > 0) || g.depth < 0 || g.depth > kMaxDepth || g.coarsestLevel < 0 || g.coarsestLevel > g.depth ||
         g.adjacencyDepth < 1 || g.adjacencyDepth > 64)
         r.fail("octree geometry out of range");

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <stdexcept>
 #include <unordered_set>
@@ -37,7 +36,7 @@ class Memo {
     {
         VoxelLabel& l = labels_[static_cast<std::size_t>(node)];
         if (l == VoxelLabel::Unknown) {
-            l = oracle_(map_.voxelBox(map_.nodes()[static_cast<std::size_t>(node)].key));
+            l = oracle_(map_.frame().box(map_.nodes()[static_cast<std::size_t>(node)].key));
             ++counter;
             ++total_;
         }
@@ -60,12 +59,6 @@ class Memo {
     const VoxelOracle& oracle_;
     std::vector<VoxelLabel> labels_;
     std::uint64_t total_ = 0;
-};
-
-struct LandmarkWork {
-    LandmarkResult result;
-    std::vector<std::int32_t> wrongNodes;
-    bool objectFound = false;
 };
 
 } // namespace
@@ -111,7 +104,8 @@ Inspector::Inspector(const InspectionMap& map, InspectionOptions options) : map_
 std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& camera) const
 {
     const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
-    const double s = map_->voxelSize(level_);
+    const VoxelFrame& voxels = map_->frame();
+    const double s = voxels.voxelSize(level_);
     const int nmax = (1 << level_) - 1;
     std::vector<cv::Rect> rects;
     for (std::size_t l = 0; l < map_->landmarks().size(); ++l) {
@@ -120,8 +114,7 @@ std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& 
         const Eigen::Vector3i c = keyIndex(map_->nodes()[static_cast<std::size_t>(n)].key);
         const Eigen::Vector3i lo = (c.array() - adjacency_).max(0).matrix();
         const Eigen::Vector3i hi = (c.array() + adjacency_).min(nmax).matrix() + Eigen::Vector3i::Ones();
-        const Box3 box(map_->geometry().cubeOrigin + s * lo.cast<double>(),
-                       map_->geometry().cubeOrigin + s * hi.cast<double>());
+        const Box3 box(voxels.origin + s * lo.cast<double>(), voxels.origin + s * hi.cast<double>());
         double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
         bool ok = true;
         for (int i = 0; i < 8 && ok; ++i) {
@@ -211,250 +204,319 @@ InspectionResult Inspector::inspectWith(const VoxelOracle& oracle) const
     return r;
 }
 
+namespace {
+
+/// One landmark's share of the traversal: the voxels it labels (each once per
+/// inspection through the memo), those found wrong, and the count it caused.
+struct LandmarkSearch {
+    const InspectionMap& map;
+    Memo& memo;
+    std::int32_t node0; ///< the landmark voxel
+    int A;              ///< adjacency layers searched
+    Eigen::Vector3i c0 = keyIndex(map.nodes()[static_cast<std::size_t>(node0)].key);
+    std::unordered_set<std::int32_t> visited = {};
+    std::vector<std::int32_t> wrong = {};
+    int counter = 0; ///< voxels this landmark caused to be reconstructed
+
+    /// 26-neighbour layers from the landmark voxel.
+    int layer(std::int32_t n) const { return chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0); }
+    bool within(std::int32_t n) const { return layer(n) <= A; }
+    bool seen(std::int32_t n) const { return visited.count(n) != 0; }
+    VoxelLabel visit(std::int32_t n)
+    {
+        const VoxelLabel lab = memo.label(n, counter);
+        visited.insert(n);
+        if (memo.wrong(n, lab)) wrong.push_back(n);
+        return lab;
+    }
+};
+
+struct TraversalOutcome {
+    VoxelLabel landmarkLabel = VoxelLabel::Unknown;
+    bool objectFound = false;
+    bool frontAtLimit = false; ///< wrong voxels reach the outermost layer
+};
+
+/// The traversal of 3.3.8 for one landmark: reconstruct the landmark voxel;
+/// if it is object (or void as the map expects: a landmark in the outer half
+/// of its voxel, or in a don't-care voxel), check its neighbours; if it
+/// should be object but is void, look ring by ring for object voxels nearby
+/// — the candidate places of the displaced landmark. From each object seed,
+/// reconstruct the neighbours and go on only from those reconstructed wrongly
+/// (the walk prunes every branch that matches the map), out to A layers.
+TraversalOutcome traverseLandmark(const InspectionMap& map, LandmarkSearch& search)
+{
+    TraversalOutcome out;
+    const std::int32_t n0 = search.node0;
+    const VoxelLabel l0 = search.visit(n0);
+    out.landmarkLabel = l0;
+    out.objectFound = l0 == VoxelLabel::Object;
+    std::vector<std::int32_t> seeds;
+    if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !search.memo.wrong(n0, l0))) {
+        seeds.push_back(n0);
+    } else if (l0 == VoxelLabel::Void) {
+        map.walkNetwork(
+            {n0},
+            [&](std::int32_t v) {
+                if (search.seen(v) || !search.within(v)) return false;
+                if (search.visit(v) != VoxelLabel::Object) return true;
+                seeds.push_back(v);
+                return false;
+            },
+            [&] { return !seeds.empty(); });
+        out.objectFound = !seeds.empty();
+    }
+    map.walkNetwork(
+        std::move(seeds),
+        [&](std::int32_t v) {
+            if (search.seen(v) || !search.within(v)) return false;
+            if (!search.memo.wrong(v, search.visit(v))) return false;
+            if (search.layer(v) >= search.A) out.frontAtLimit = true;
+            return true;
+        },
+        [] { return false; });
+    return out;
+}
+
+/// Discrimination (4.5.2): which views observe the landmark, and the best
+/// eq. 4.4.4-19 MED among them.
+void discriminate(LandmarkResult& lr, const MapLandmark& lm, const std::vector<SilhouetteView>& views,
+                  const std::vector<std::string>& viewIds)
+{
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        ViewReport vr{viewIds[v], viewDiscrimination(views[v].camera, lm.position)};
+        if (vr.discrimination.observes && (!lr.medMm || vr.discrimination.medRangeMm < *lr.medMm))
+            lr.medMm = vr.discrimination.medRangeMm;
+        lr.views.push_back(std::move(vr));
+    }
+}
+
+/// The network voxels on the landmark's normal line, in order, with their
+/// labels and normal coordinates s_c (docs/inspection.md, "boundary bracket").
+struct NormalLine {
+    std::vector<VoxelLabel> labels;
+    std::vector<double> sc;
+    bool undecided = false;
+    bool hidden = false; ///< a hidden voxel next to the landmark voxel
+};
+
+NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& search, const MapLandmark& lm, int level)
+{
+    const double dv = map.frame().voxelSize(level);
+    const double reach = (search.A + 1.0) * dv * std::sqrt(3.0);
+    const double step = dv / 16.0;
+    std::vector<std::int32_t> nodes;
+    VoxelKey previous = ~VoxelKey{0};
+    for (double s = -reach; s <= reach; s += step) {
+        // Consecutive samples mostly share a voxel: look each voxel up once.
+        const VoxelKey key = map.frame().keyAt(lm.position + s * lm.normal, level);
+        if (key == previous) continue;
+        previous = key;
+        const std::int32_t n = map.find(key);
+        if (n < 0 || !search.within(n)) continue;
+        if (nodes.empty() || nodes.back() != n) nodes.push_back(n);
+    }
+    NormalLine line;
+    for (std::int32_t n : nodes) {
+        const MapNode& node = map.nodes()[static_cast<std::size_t>(n)];
+        const VoxelLabel lab = search.visit(n);
+        line.undecided = line.undecided || lab == VoxelLabel::Undecided;
+        // The void next to the landmark is enclosed by the part: no view can carve it.
+        line.hidden = line.hidden || (node.hidden && search.layer(n) <= 1);
+        line.labels.push_back(lab);
+        line.sc.push_back((map.frame().box(node.key).center() - lm.position).dot(lm.normal));
+    }
+    return line;
+}
+
+/// The bracket [sLow, sHigh] of the surface along the normal and the error
+/// measures over it (3.3.6, 4.6.2), then the status they give.
+void measureAlongNormal(LandmarkResult& lr, const MapLandmark& lm, const NormalLine& line, bool objectFound, double dv)
+{
+    const auto& labels = line.labels;
+    const auto& sc = line.sc;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t i = 0; i + 1 < labels.size(); ++i)
+        if (labels[i] != labels[i + 1]) {
+            lo = std::min({lo, sc[i], sc[i + 1]});
+            hi = std::max({hi, sc[i], sc[i + 1]});
+        }
+    const bool anyObject = std::find(labels.begin(), labels.end(), VoxelLabel::Object) != labels.end();
+    const bool changes = lo <= hi;
+    lr.overflowLow = !labels.empty() && labels.front() == VoxelLabel::Void;
+    lr.overflowHigh = !labels.empty() && labels.back() == VoxelLabel::Object;
+    if (lr.overflowLow) lo = sc.front() - 0.5 * dv;
+    if (lr.overflowHigh) hi = sc.back() + 0.5 * dv;
+    // A line of one label: the surface lies beyond its outermost object voxel's
+    // centre, or short of its innermost void voxel's centre.
+    if (!changes && lr.overflowHigh) lo = sc.back();
+    if (!changes && lr.overflowLow) hi = sc.front();
+    if (!(lo <= hi)) lo = hi = 0.0;
+    lr.offsetLowMm = lo;
+    lr.offsetHighMm = hi;
+    lr.errorMinMm = (lo <= 0.0 && hi >= 0.0) ? 0.0 : std::min(std::abs(lo), std::abs(hi));
+    lr.errorMaxMm = std::max(std::abs(lo), std::abs(hi));
+    lr.errorMm = 0.5 * (lr.errorMinMm + lr.errorMaxMm);
+    lr.measured = true;
+    if (!anyObject && !objectFound) {
+        lr.status = LandmarkStatus::NotFound;
+        lr.reason = "no object voxel within the adjacency layers of the landmark";
+    } else if (lr.overflowLow || lr.overflowHigh) {
+        lr.status = LandmarkStatus::Overflow;
+        lr.reason = "the boundary lies beyond the adjacency layers";
+    } else if (lr.errorMm > lm.toleranceMm) {
+        lr.status = LandmarkStatus::OutOfTolerance;
+    } else {
+        lr.status = LandmarkStatus::Ok;
+    }
+}
+
+/// A landmark no view can measure (docs/inspection.md, status order): hidden
+/// void beside it, undecided voxels, or no view resolving ΔV (eq. 4.4.4-19).
+/// Returns false when the landmark is observable.
+bool notObservable(LandmarkResult& lr, const TraversalOutcome& t, const NormalLine& line, bool checkResolution,
+                   double dv)
+{
+    if (line.hidden) {
+        lr.reason = "the void next to the landmark is enclosed by the part: no line of sight through it misses "
+                    "the part, so no silhouette can reconstruct it (not weakly convex, 3.3.8)";
+    } else if (t.landmarkLabel == VoxelLabel::Undecided || line.undecided) {
+        lr.reason = "no view decides the voxels at the landmark (footprints outside the frames or behind a camera)";
+    } else if (checkResolution && (!lr.medMm || *lr.medMm > dv)) {
+        lr.reason = lr.medMm ? "no view resolves the voxel size (eq. 4.4.4-19: best MED " + std::to_string(*lr.medMm) +
+                                   " mm > ΔV " + std::to_string(dv) + " mm)"
+                             : "no view sees the landmark";
+    } else {
+        return false;
+    }
+    lr.status = LandmarkStatus::NotObservable;
+    return true;
+}
+
+/// Statistics (4.6.3) over the landmarks with a measured error; the volume
+/// error counts distinct wrong voxels (3.3.6).
+Statistics errorStatistics(const std::vector<LandmarkResult>& landmarks, std::size_t wrongVoxels, double dv)
+{
+    Statistics st;
+    std::vector<const LandmarkResult*> measured;
+    for (const LandmarkResult& lr : landmarks)
+        if (lr.measured) measured.push_back(&lr);
+    st.landmarksMeasured = static_cast<int>(measured.size());
+    const double N = static_cast<double>(measured.size());
+    // Mean and population standard deviation of one measure (eq. 4.6.3-1..6).
+    auto meanAndStd = [&](double LandmarkResult::*f, double& mean, double& sd) {
+        for (const LandmarkResult* m : measured) mean += m->*f / N;
+        for (const LandmarkResult* m : measured) sd += (m->*f - mean) * (m->*f - mean) / N;
+        sd = std::sqrt(sd);
+    };
+    if (!measured.empty()) {
+        meanAndStd(&LandmarkResult::errorMinMm, st.aveErrorMin, st.stdErrorMin);
+        meanAndStd(&LandmarkResult::errorMaxMm, st.aveErrorMax, st.stdErrorMax);
+        meanAndStd(&LandmarkResult::errorMm, st.aveError, st.stdError);
+        st.minError = std::numeric_limits<double>::infinity();
+        for (const LandmarkResult* m : measured) {
+            st.maxError = std::max(st.maxError, m->errorMaxMm);
+            st.minError = std::min(st.minError, m->errorMinMm);
+        }
+    }
+    st.totalVolumeError = static_cast<double>(wrongVoxels) * dv * dv * dv;
+    return st;
+}
+
+/// One geometric parameter (4.6.4) from its landmarks' bounded brackets.
+ParameterResult measureParameter(const InspectionMap& map, const MapParameter& p,
+                                 const std::vector<LandmarkResult>& landmarks)
+{
+    ParameterResult pr;
+    pr.id = p.id;
+    pr.kind = p.kind;
+    pr.nominal = p.nominal;
+    pr.tolerance = p.tolerance;
+    std::vector<LandmarkEstimate> est;
+    for (const std::string& id : p.landmarks) {
+        const auto idx = map.landmarkIndex(id);
+        const auto it =
+            std::find_if(landmarks.begin(), landmarks.end(), [&](const LandmarkResult& x) { return x.id == id; });
+        if (!idx || it == landmarks.end() || !it->measured || it->overflowLow || it->overflowHigh) return pr;
+        const MapLandmark& lm = map.landmarks()[*idx];
+        est.push_back({lm.position, lm.normal, it->offsetLowMm, it->offsetHighMm});
+    }
+    if (est.empty()) return pr;
+    switch (p.kind) {
+    case ParameterKind::Distance:
+        if (est.size() != 2) return pr;
+        pr.value = distanceBracket(est[0], est[1]);
+        break;
+    case ParameterKind::Perimeter:
+        pr.value = perimeterBracket(est);
+        break;
+    case ParameterKind::Area:
+        pr.value = areaBracket(est);
+        break;
+    }
+    pr.measured = true;
+    pr.status = std::abs(pr.value.mid() - p.nominal) > p.tolerance ? "out_of_tolerance" : "ok";
+    return pr;
+}
+
+/// One landmark (3.3.8, then 4.5.2 and 4.6.2): discrimination of the views,
+/// the traversal, the bracket along the normal and the status.
+LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, LandmarkSearch& search, int level,
+                               const std::vector<SilhouetteView>* views, const std::vector<std::string>* viewIds,
+                               bool checkResolution, std::unordered_set<std::int32_t>& allWrong)
+{
+    const double dv = map.frame().voxelSize(level);
+    LandmarkResult lr;
+    lr.id = lm.id;
+    lr.toleranceMm = lm.toleranceMm;
+    if (views) discriminate(lr, lm, *views, *viewIds);
+    const TraversalOutcome t = traverseLandmark(map, search);
+    lr.errorNumber = static_cast<int>(search.wrong.size());
+    allWrong.insert(search.wrong.begin(), search.wrong.end());
+    const NormalLine line = reconstructNormalLine(map, search, lm, level);
+    lr.voxelsReconstructed = search.counter;
+    if (!notObservable(lr, t, line, checkResolution, dv)) measureAlongNormal(lr, lm, line, t.objectFound, dv);
+    if (t.frontAtLimit && lr.status != LandmarkStatus::Ok && lr.reason.empty())
+        lr.reason = "wrongly reconstructed voxels reach the outermost adjacency layer";
+    return lr;
+}
+
+} // namespace
+
 InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                                 const std::vector<std::string>* viewIds) const
 {
     const auto t0 = Clock::now();
     const InspectionMap& map = *map_;
-    const int A = adjacency_;
-    const double dv = map.voxelSize(level_);
+    const double dv = map.frame().voxelSize(level_);
     Memo memo(map, oracle);
     InspectionResult result;
     result.part = map.partName();
     result.level = level_;
-    result.adjacency = A;
+    result.adjacency = adjacency_;
     result.voxelSizeMm = dv;
     result.viewsUsed = views ? static_cast<int>(views->size()) : 0;
 
     std::unordered_set<std::int32_t> allWrong;
     bool stopped = false;
     for (std::size_t l = 0; l < map.landmarks().size(); ++l) {
-        const MapLandmark& lm = map.landmarks()[l];
         if (!active_[l]) continue;
-        LandmarkResult lr;
-        lr.id = lm.id;
-        lr.toleranceMm = lm.toleranceMm;
         if (stopped) {
+            LandmarkResult lr;
+            lr.id = map.landmarks()[l].id;
+            lr.toleranceMm = map.landmarks()[l].toleranceMm;
             lr.reason = "inspection stopped at an earlier failing landmark";
             result.landmarks.push_back(std::move(lr));
             continue;
         }
-        int counter = 0;
-        const std::int32_t n0 = map.landmarkNode(l, level_);
-        const Eigen::Vector3i c0 = keyIndex(map.nodes()[static_cast<std::size_t>(n0)].key);
-        auto within = [&](std::int32_t n) {
-            return chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) <= A;
-        };
-
-        // Discrimination (4.5.2): which views observe the landmark and resolve ΔV.
-        if (views) {
-            for (std::size_t v = 0; v < views->size(); ++v) {
-                ViewReport vr{(*viewIds)[v], viewDiscrimination((*views)[v].camera, lm.position)};
-                if (vr.discrimination.observes && (!lr.medMm || vr.discrimination.medRangeMm < *lr.medMm))
-                    lr.medMm = vr.discrimination.medRangeMm;
-                lr.views.push_back(std::move(vr));
-            }
-        }
-
-        // --- The traversal of 3.3.8 -------------------------------------------
-        std::unordered_set<std::int32_t> visited;
-        std::vector<std::int32_t> wrong;
-        auto visit = [&](std::int32_t n) {
-            const VoxelLabel lab = memo.label(n, counter);
-            visited.insert(n);
-            if (memo.wrong(n, lab)) wrong.push_back(n);
-            return lab;
-        };
-        const VoxelLabel l0 = visit(n0);
-        std::vector<std::int32_t> seeds;
-        bool objectFound = l0 == VoxelLabel::Object;
-        if (l0 == VoxelLabel::Object || (l0 == VoxelLabel::Void && !memo.wrong(n0, l0))) {
-            // The landmark voxel is object, or void as the map expects (a landmark
-            // on a voxel face can fall in the outer voxel, one on a mid-plane in
-            // a don't-care voxel): check its neighbours.
-            seeds.push_back(n0);
-        } else if (l0 == VoxelLabel::Void) {
-            // The landmark voxel should be object but is void: look ring by ring
-            // for object voxels nearby, the candidate locations of the displaced
-            // landmark (3.3.8).
-            std::vector<std::int32_t> front{n0};
-            while (!front.empty() && seeds.empty()) {
-                std::vector<std::int32_t> next;
-                for (std::int32_t u : front)
-                    for (int s = 0; s < 26; ++s) {
-                        const std::int32_t v = map.neighbour(u, s);
-                        if (v < 0 || visited.count(v) || !within(v)) continue;
-                        const VoxelLabel lab = visit(v);
-                        if (lab == VoxelLabel::Object)
-                            seeds.push_back(v);
-                        else
-                            next.push_back(v);
-                    }
-                front = std::move(next);
-            }
-            objectFound = !seeds.empty();
-        }
-        // From each object seed: reconstruct its neighbours, and recurse outward
-        // from every neighbour whose label differs from the map's.
-        bool frontAtLimit = false;
-        std::deque<std::int32_t> queue(seeds.begin(), seeds.end());
-        while (!queue.empty()) {
-            const std::int32_t u = queue.front();
-            queue.pop_front();
-            for (int s = 0; s < 26; ++s) {
-                const std::int32_t v = map.neighbour(u, s);
-                if (v < 0 || visited.count(v) || !within(v)) continue;
-                const VoxelLabel lab = visit(v);
-                if (!memo.wrong(v, lab)) continue;
-                if (chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(v)].key), c0) >= A) frontAtLimit = true;
-                queue.push_back(v);
-            }
-        }
-        lr.errorNumber = static_cast<int>(wrong.size());
-        allWrong.insert(wrong.begin(), wrong.end());
-
-        // --- Boundary bracket along the normal (docs/inspection.md) -----------
-        const double reach = (A + 1.0) * dv * std::sqrt(3.0);
-        const double step = dv / 16.0;
-        std::vector<std::int32_t> line;
-        for (double s = -reach; s <= reach; s += step) {
-            const VoxelKey key = map.keyAt(lm.position + s * lm.normal, level_);
-            const std::int32_t n = map.find(key);
-            if (n < 0 || !within(n)) continue;
-            if (line.empty() || line.back() != n) line.push_back(n);
-        }
-        bool lineUndecided = false;
-        bool lineHidden = false;
-        std::vector<VoxelLabel> labels;
-        std::vector<double> sc;
-        for (std::int32_t n : line) {
-            const VoxelLabel lab = visit(n);
-            lineUndecided = lineUndecided || lab == VoxelLabel::Undecided;
-            // The void next to the landmark is enclosed by the part: no view can carve it.
-            lineHidden = lineHidden || (map.nodes()[static_cast<std::size_t>(n)].hidden &&
-                                        chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) <= 1);
-            labels.push_back(lab);
-            sc.push_back(
-                (map.voxelBox(map.nodes()[static_cast<std::size_t>(n)].key).center() - lm.position).dot(lm.normal));
-        }
-        lr.voxelsReconstructed = counter;
-
-        if (lineHidden) {
-            lr.status = LandmarkStatus::NotObservable;
-            lr.reason = "the void next to the landmark is enclosed by the part: no line of sight through it misses "
-                        "the part, so no silhouette can reconstruct it (not weakly convex, 3.3.8)";
-        } else if (l0 == VoxelLabel::Undecided || lineUndecided) {
-            lr.status = LandmarkStatus::NotObservable;
-            lr.reason = "no view decides the voxels at the landmark (footprints outside the frames or behind a camera)";
-        } else if (views && options_.requireResolution && (!lr.medMm || *lr.medMm > dv)) {
-            lr.status = LandmarkStatus::NotObservable;
-            lr.reason = lr.medMm ? "no view resolves the voxel size (eq. 4.4.4-19: best MED " +
-                                       std::to_string(*lr.medMm) + " mm > ΔV " + std::to_string(dv) + " mm)"
-                                 : "no view sees the landmark";
-        } else {
-            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-            for (std::size_t i = 0; i + 1 < labels.size(); ++i)
-                if (labels[i] != labels[i + 1]) {
-                    lo = std::min({lo, sc[i], sc[i + 1]});
-                    hi = std::max({hi, sc[i], sc[i + 1]});
-                }
-            const bool anyObject = std::find(labels.begin(), labels.end(), VoxelLabel::Object) != labels.end();
-            lr.overflowLow = !labels.empty() && labels.front() == VoxelLabel::Void;
-            lr.overflowHigh = !labels.empty() && labels.back() == VoxelLabel::Object;
-            if (lr.overflowLow) lo = sc.front() - 0.5 * dv;
-            if (lr.overflowHigh) hi = sc.back() + 0.5 * dv;
-            if (!(lo <= hi)) lo = hi = 0.0;
-            lr.offsetLowMm = lo;
-            lr.offsetHighMm = hi;
-            lr.errorMinMm = (lo <= 0.0 && hi >= 0.0) ? 0.0 : std::min(std::abs(lo), std::abs(hi));
-            lr.errorMaxMm = std::max(std::abs(lo), std::abs(hi));
-            lr.errorMm = 0.5 * (lr.errorMinMm + lr.errorMaxMm);
-            lr.measured = true;
-            if (!anyObject && !objectFound) {
-                lr.status = LandmarkStatus::NotFound;
-                lr.reason = "no object voxel within the adjacency layers of the landmark";
-            } else if (lr.overflowLow || lr.overflowHigh) {
-                lr.status = LandmarkStatus::Overflow;
-                lr.reason = "the boundary lies beyond the adjacency layers";
-            } else if (lr.errorMm > lm.toleranceMm) {
-                lr.status = LandmarkStatus::OutOfTolerance;
-            } else {
-                lr.status = LandmarkStatus::Ok;
-            }
-        }
-        if (frontAtLimit && lr.status != LandmarkStatus::Ok && lr.reason.empty())
-            lr.reason = "wrongly reconstructed voxels reach the outermost adjacency layer";
-        if (lr.status != LandmarkStatus::Ok && options_.earlyExit) stopped = true;
-        result.landmarks.push_back(std::move(lr));
+        LandmarkSearch search{map, memo, map.landmarkNode(l, level_), adjacency_};
+        result.landmarks.push_back(inspectLandmark(map, map.landmarks()[l], search, level_, views, viewIds,
+                                                   views && options_.requireResolution, allWrong));
+        stopped = options_.earlyExit && result.landmarks.back().status != LandmarkStatus::Ok;
     }
-
-    // --- Statistics (4.6.3) over the landmarks with a measured error ----------
-    Statistics& st = result.statistics;
-    std::vector<const LandmarkResult*> measured;
-    for (const LandmarkResult& lr : result.landmarks)
-        if (lr.measured) measured.push_back(&lr);
-    st.landmarksMeasured = static_cast<int>(measured.size());
-    if (!measured.empty()) {
-        const double N = static_cast<double>(measured.size());
-        st.minError = std::numeric_limits<double>::infinity();
-        for (const LandmarkResult* m : measured) {
-            st.aveErrorMin += m->errorMinMm / N;
-            st.aveErrorMax += m->errorMaxMm / N;
-            st.aveError += m->errorMm / N;
-            st.maxError = std::max(st.maxError, m->errorMaxMm);
-            st.minError = std::min(st.minError, m->errorMinMm);
-        }
-        for (const LandmarkResult* m : measured) {
-            st.stdErrorMin += (m->errorMinMm - st.aveErrorMin) * (m->errorMinMm - st.aveErrorMin) / N;
-            st.stdErrorMax += (m->errorMaxMm - st.aveErrorMax) * (m->errorMaxMm - st.aveErrorMax) / N;
-            st.stdError += (m->errorMm - st.aveError) * (m->errorMm - st.aveError) / N;
-        }
-        st.stdErrorMin = std::sqrt(st.stdErrorMin);
-        st.stdErrorMax = std::sqrt(st.stdErrorMax);
-        st.stdError = std::sqrt(st.stdError);
-    }
-    st.totalVolumeError = static_cast<double>(allWrong.size()) * dv * dv * dv;
-
-    // --- Parameters (4.6.4) ----------------------------------------------------
-    for (const MapParameter& p : map.parameters()) {
-        ParameterResult pr;
-        pr.id = p.id;
-        pr.kind = p.kind;
-        pr.nominal = p.nominal;
-        pr.tolerance = p.tolerance;
-        std::vector<LandmarkEstimate> est;
-        bool ok = true;
-        for (const std::string& id : p.landmarks) {
-            const auto idx = map.landmarkIndex(id);
-            const auto it = std::find_if(result.landmarks.begin(), result.landmarks.end(),
-                                         [&](const LandmarkResult& x) { return x.id == id; });
-            if (!idx || it == result.landmarks.end() || !it->measured || it->overflowLow || it->overflowHigh) {
-                ok = false;
-                break;
-            }
-            const MapLandmark& lm = map.landmarks()[*idx];
-            est.push_back({lm.position, lm.normal, it->offsetLowMm, it->offsetHighMm});
-        }
-        if (ok && !est.empty()) {
-            switch (p.kind) {
-            case ParameterKind::Distance:
-                if (est.size() == 2)
-                    pr.value = distanceBracket(est[0], est[1]);
-                else
-                    ok = false;
-                break;
-            case ParameterKind::Perimeter:
-                pr.value = perimeterBracket(est);
-                break;
-            case ParameterKind::Area:
-                pr.value = areaBracket(est);
-                break;
-            }
-        }
-        pr.measured = ok && !est.empty();
-        if (pr.measured) pr.status = std::abs(pr.value.mid() - p.nominal) > p.tolerance ? "out_of_tolerance" : "ok";
-        result.parameters.push_back(std::move(pr));
-    }
+    result.statistics = errorStatistics(result.landmarks, allWrong.size(), dv);
+    for (const MapParameter& p : map.parameters())
+        result.parameters.push_back(measureParameter(map, p, result.landmarks));
 
     result.pass = true;
     for (const LandmarkResult& lr : result.landmarks)
@@ -486,16 +548,13 @@ nlohmann::json toJson(const InspectionResult& r)
         l["id"] = lr.id;
         l["status"] = toString(lr.status);
         l["error_number"] = lr.errorNumber;
+        auto measured = [&](double v) { return lr.measured ? json(v) : json(nullptr); };
+        l["error_min_mm"] = measured(lr.errorMinMm);
+        l["error_max_mm"] = measured(lr.errorMaxMm);
+        l["error_mm"] = measured(lr.errorMm);
         if (lr.measured) {
-            l["error_min_mm"] = lr.errorMinMm;
-            l["error_max_mm"] = lr.errorMaxMm;
-            l["error_mm"] = lr.errorMm;
             l["offset_low_mm"] = lr.offsetLowMm;
             l["offset_high_mm"] = lr.offsetHighMm;
-        } else {
-            l["error_min_mm"] = nullptr;
-            l["error_max_mm"] = nullptr;
-            l["error_mm"] = nullptr;
         }
         l["tolerance_mm"] = lr.toleranceMm;
         if (!lr.reason.empty()) l["reason"] = lr.reason;
@@ -509,10 +568,8 @@ nlohmann::json toJson(const InspectionResult& r)
                         {"distance_mm", v.discrimination.distanceMm},
                         {"theta_deg", v.discrimination.thetaDeg},
                         {"med_range_mm", v.discrimination.medRangeMm}};
-                if (std::isfinite(v.discrimination.medAngleMm))
-                    jv["med_angle_mm"] = v.discrimination.medAngleMm;
-                else
-                    jv["med_angle_mm"] = nullptr;
+                const double angle = v.discrimination.medAngleMm;
+                jv["med_angle_mm"] = std::isfinite(angle) ? json(angle) : json(nullptr);
                 vs.push_back(std::move(jv));
             }
             l["views"] = std::move(vs);
@@ -538,13 +595,8 @@ nlohmann::json toJson(const InspectionResult& r)
                 {"nominal_mm", p.nominal},
                 {"tolerance_mm", p.tolerance},
                 {"status", p.status}};
-        if (p.measured) {
-            jp["min_mm"] = p.value.min;
-            jp["max_mm"] = p.value.max;
-        } else {
-            jp["min_mm"] = nullptr;
-            jp["max_mm"] = nullptr;
-        }
+        jp["min_mm"] = p.measured ? json(p.value.min) : json(nullptr);
+        jp["max_mm"] = p.measured ? json(p.value.max) : json(nullptr);
         ps.push_back(std::move(jp));
     }
     j["parameters"] = std::move(ps);

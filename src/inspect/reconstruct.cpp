@@ -10,22 +10,14 @@ double HullReconstruction::volumeMm3() const
     return static_cast<double>(objectVoxels) * v * v * v;
 }
 
-Box3 HullReconstruction::box(const HullNode& n) const
+HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const VoxelFrame& frame,
+                                   VoxelTestMethod method)
 {
-    const double s = cubeSize / static_cast<double>(std::uint64_t{1} << n.level);
-    const Eigen::Vector3d lo = cubeOrigin + s * n.index.cast<double>();
-    return {lo, lo + Eigen::Vector3d::Constant(s)};
-}
-
-HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const Eigen::Vector3d& cubeOrigin,
-                                   double cubeSize, int depth, VoxelTestMethod method)
-{
-    if (!(cubeSize > 0.0)) throw std::invalid_argument("cube size must be positive");
-    if (depth < 0 || depth > 20) throw std::invalid_argument("depth must be within 0..20");
+    if (!(frame.cubeSize > 0.0)) throw std::invalid_argument("cube size must be positive");
+    if (frame.depth < 0 || frame.depth > 20) throw std::invalid_argument("depth must be within 0..20");
+    const int depth = frame.depth;
     HullReconstruction r;
-    r.cubeOrigin = cubeOrigin;
-    r.cubeSize = cubeSize;
-    r.depth = depth;
+    r.frame = frame;
     const VoxelTester tester(&views, method);
     std::vector<HullNode> level{HullNode{}};
     for (int L = 0; L <= depth && !level.empty(); ++L) {

@@ -66,8 +66,8 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
     out["part"] = problem.part;
     out["feasible"] = plan.feasible;
     out["fixture_type"] = type == FixtureType::Rail ? "rail" : "rotation_declination";
-    out["voxel_size_mm"] = problem.grid.voxelSize;
-    out["voxel_level"] = problem.grid.depth;
+    out["voxel_size_mm"] = problem.frame.voxelSize();
+    out["voxel_level"] = problem.frame.depth;
     out["problems"] = plan.problems;
 
     json views = json::array();
@@ -170,7 +170,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
     std::size_t inspectable = 0;
     for (const auto& a : plan.landmarks) inspectable += a.inspectable() ? 1 : 0;
     s << (plan.feasible ? "**Feasible.** " : "**Not feasible.** ") << plan.views.size() << " views observe "
-      << inspectable << " of " << plan.landmarks.size() << " landmarks (voxel " << num(problem.grid.voxelSize)
+      << inspectable << " of " << plan.landmarks.size() << " landmarks (voxel " << num(problem.frame.voxelSize())
       << " mm; " << plan.candidatePoses << " candidate poses; " << num(plan.seconds, 3) << " s).";
     if (plan.exactViews)
         s << " Integer-program optimum: " << *plan.exactViews << " views" << (plan.exactOptimal ? "" : " (not proven)")

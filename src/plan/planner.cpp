@@ -16,24 +16,6 @@
 
 namespace hg::plan {
 
-Eigen::Vector3i VoxelGrid::indexOf(const Vec3& point) const
-{
-    const Vec3 q = (point - origin) / voxelSize;
-    return {static_cast<int>(std::floor(q.x())), static_cast<int>(std::floor(q.y())),
-            static_cast<int>(std::floor(q.z()))};
-}
-
-Eigen::AlignedBox3d VoxelGrid::box(const Eigen::Vector3i& index) const
-{
-    const Vec3 lo = origin + voxelSize * index.cast<double>();
-    return {lo, lo + Vec3::Constant(voxelSize)};
-}
-
-inspect::VoxelKey VoxelGrid::key(const Eigen::Vector3i& index) const
-{
-    return inspect::makeKey(depth, index.x(), index.y(), index.z());
-}
-
 const char* toString(LandmarkVerdict verdict)
 {
     switch (verdict) {
@@ -130,13 +112,13 @@ std::vector<Eigen::Vector3i> neighbourhood(const Eigen::Vector3i& centre, int la
 /// The void 26-neighbour of the landmark voxel lying most nearly along the
 /// outward normal: the voxel whose proof of void bounds the surface at the
 /// landmark (3.3.2 type four nodes).
-std::optional<Eigen::Vector3i> findWitnessVoxel(const model::Solid& solid, const VoxelGrid& grid,
+std::optional<Eigen::Vector3i> findWitnessVoxel(const model::Solid& solid, const inspect::VoxelFrame& frame,
                                                 const Eigen::Vector3i& voxel, const Vec3& x, const Vec3& n)
 {
     std::optional<Eigen::Vector3i> best;
     double bestScore = -2.0;
     for (const auto& v : neighbourhood(voxel, 1)) {
-        const auto box = grid.box(v);
+        const auto box = frame.box(frame.depth, v);
         const Vec3 d = box.center() - x;
         const double score = n.dot(d.normalized());
         if (score <= bestScore || score <= 0.0) continue;
@@ -160,7 +142,7 @@ class Analyser {
   public:
     Analyser(const PlanProblem& problem, const PlanOptions& options)
         : problem_(problem), options_(options), station_(*problem.station),
-          rules_(*problem.solid, *problem.station, problem.grid.voxelSize, options.rules), poseGrid_(options.grid)
+          rules_(*problem.solid, *problem.station, problem.frame.voxelSize(), options.rules), poseGrid_(options.grid)
     {
         // A face square to the turntable axis is grazed at one declination for
         // every rotation; solving every other landmark's grazing rotations at
@@ -169,11 +151,10 @@ class Analyser {
         const auto& fixture = station_.fixture;
         if (fixture.type == FixtureType::RotationDeclination)
             for (const auto& lm : problem.landmarks) {
-                if (!lm.normal) continue;
-                if (lm.normal->normalized().cross(fixture.rotationAxis.normalized()).norm() > 1e-9) continue;
+                if (lm.normal.normalized().cross(fixture.rotationAxis.normalized()).norm() > 1e-9) continue;
                 PoseGrid single = options.grid;
                 single.rotationStepDeg = 360.0;
-                for (const auto& p : grazingPoses(fixture, lm.position, *lm.normal, single))
+                for (const auto& p : grazingPoses(fixture, lm.position, lm.normal, single))
                     poseGrid_.extraDeclinationsDeg.push_back(p.declinationDeg);
             }
         std::sort(poseGrid_.extraDeclinationsDeg.begin(), poseGrid_.extraDeclinationsDeg.end());
@@ -203,48 +184,66 @@ class Analyser {
     {
         Analysed r;
         auto& a = r.a;
-        const auto& solid = *problem_.solid;
-        const auto& grid = problem_.grid;
-        const FixtureType type = station_.fixture.type;
+        const auto& frame = problem_.frame;
         a.id = lm.id;
         a.position = lm.position;
-        a.normal = lm.normal ? lm.normal->normalized() : solid.closestPoint(lm.position).normal;
+        a.normal = lm.normal.normalized();
         a.toleranceMm = lm.toleranceMm;
-        // The landmark's voxel is the one on the object side of the surface
-        // (a landmark exactly on a voxel face belongs to the voxel behind it).
-        a.voxel = grid.indexOf(lm.position - 0.25 * grid.voxelSize * a.normal);
+        a.voxel = frame.landmarkVoxel(lm.position, a.normal, frame.depth);
         a.designerBestViews = !lm.bestViews.empty();
-        a.witnessVoxel = findWitnessVoxel(solid, grid, a.voxel, a.position, a.normal);
+        a.witnessVoxel = findWitnessVoxel(*problem_.solid, frame, a.voxel, a.position, a.normal);
         if (!a.witnessVoxel) {
             a.verdict = LandmarkVerdict::NoVoidNeighbour;
             a.reason = "landmark " + lm.id + " at " + fmtPoint(lm.position) +
-                       " has no void neighbour voxel at the inspection depth (ΔV = " + fmt(grid.voxelSize) +
+                       " has no void neighbour voxel at the inspection depth (ΔV = " + fmt(frame.voxelSize()) +
                        " mm): it is not on the part's boundary at this resolution; move it onto the surface or "
                        "refine octree.depth.";
             return r;
         }
-        r.target = {a.position, a.normal, grid.box(*a.witnessVoxel), lm.toleranceMm};
+        r.target = {a.position, a.normal, frame.box(frame.depth, *a.witnessVoxel), lm.toleranceMm};
+        r.candidates = candidatePoses(lm, a);
+        WitnessSearch search = searchWitnesses(r);
+        warnFailingDesignerViews(lm, r);
+        judge(lm, r, search);
+        a.unseenVoids = unseenVoids(r);
+        return r;
+    }
 
-        // Candidate poses: grazing, the band of the grid, the designer's best views.
-        r.candidates = candidatesFor(station_.fixture, a.position, a.normal, true);
-        for (const auto& term : lm.bestViews)
-            for (const auto& v : term) {
-                if (!station_.fixture.reachable(v)) {
-                    a.warnings.push_back("designer best view " + fmtPose(v, type) +
-                                         " lies outside the fixture's ranges and is ignored");
-                    continue;
-                }
-                r.candidates.push_back(v);
-            }
-        dedupe(r.candidates);
-
+  private:
+    /// What the rule checks of one landmark's candidates found (Rules 1, 2, 4).
+    struct WitnessSearch {
         std::map<std::size_t, std::size_t> blockers;
         std::map<std::size_t, Vec3> blockerPoints;
         std::size_t dofOnly = 0;
-        a.bestMedMm = std::numeric_limits<double>::infinity();
+        double nearestDepth = 0.0;
         double bestRangeMed = std::numeric_limits<double>::infinity();
         bool anyPasses = false;
-        double nearestDepth = 0.0;
+    };
+
+    /// Candidate poses: grazing, the band of the grid, the designer's reachable best views.
+    std::vector<FixturePose> candidatePoses(const PlanLandmark& lm, LandmarkAnalysis& a) const
+    {
+        auto poses = candidatesFor(station_.fixture, a.position, a.normal, true);
+        for (const auto& term : lm.bestViews)
+            for (const auto& v : term) {
+                if (!station_.fixture.reachable(v)) {
+                    a.warnings.push_back("designer best view " + fmtPose(v, station_.fixture.type) +
+                                         " lies outside the fixture's ranges and is ignored");
+                    continue;
+                }
+                poses.push_back(v);
+            }
+        dedupe(poses);
+        return poses;
+    }
+
+    /// Judges every candidate by the rules; the poses that see the witness
+    /// voxel against background are the witnesses of weak convexity.
+    WitnessSearch searchWitnesses(Analysed& r) const
+    {
+        auto& a = r.a;
+        WitnessSearch w;
+        a.bestMedMm = std::numeric_limits<double>::infinity();
         auto consider = [&](const FixturePose& p) {
             const auto chk = rules_.check(r.target, p);
             r.checks.push_back(chk);
@@ -252,13 +251,13 @@ class Analyser {
                 a.witnessPoses.push_back(p);
                 a.witnessDirections.push_back((a.position - station_.fixture.cameraCentreInPart(p)).normalized());
                 a.bestMedMm = std::min(a.bestMedMm, chk.predictedMedMm);
-                bestRangeMed = std::min(bestRangeMed, chk.rangeMedMm);
-                anyPasses = anyPasses || chk.passes();
+                w.bestRangeMed = std::min(w.bestRangeMed, chk.rangeMedMm);
+                w.anyPasses = w.anyPasses || chk.passes();
             } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.rule4) {
-                if (dofOnly++ == 0) nearestDepth = chk.depthMm;
+                if (w.dofOnly++ == 0) w.nearestDepth = chk.depthMm;
             } else if (chk.obstruction == Blocker::Part && chk.blockingTriangle) {
-                ++blockers[*chk.blockingTriangle];
-                blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
+                ++w.blockers[*chk.blockingTriangle];
+                w.blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
             }
         };
         for (const auto& p : r.candidates) consider(p);
@@ -276,39 +275,49 @@ class Analyser {
                     consider(p);
                 }
         }
-        // Designer best views that do not pass the rules are kept (the designer
-        // vouched for them) but reported.
+        return w;
+    }
+
+    /// Designer best views that do not pass the rules are kept (the designer
+    /// vouched for them) but reported.
+    void warnFailingDesignerViews(const PlanLandmark& lm, Analysed& r) const
+    {
         for (const auto& term : lm.bestViews)
             for (const auto& v : term)
                 if (station_.fixture.reachable(v)) {
                     const auto chk = rules_.check(r.target, v);
                     if (!chk.passes())
-                        a.warnings.push_back("designer best view " + fmtPose(v, type) + " fails: " + chk.failure());
+                        r.a.warnings.push_back("designer best view " + fmtPose(v, station_.fixture.type) +
+                                               " fails: " + chk.failure());
                 }
+    }
 
-        r.usable = true;
-        if (lm.toleranceMm < grid.voxelSize) {
-            const int more = static_cast<int>(std::ceil(std::log2(grid.voxelSize / lm.toleranceMm) - 1e-12));
+    /// The verdict of a landmark with a witness voxel (eq. 5.3.6-1, Definition
+    /// 2, Rule 4, eq. 5.3.6-3 / 4.4.4-19, in that order).
+    void judge(const PlanLandmark& lm, Analysed& r, WitnessSearch& w) const
+    {
+        auto& a = r.a;
+        const auto& frame = problem_.frame;
+        const double dv = frame.voxelSize();
+        r.usable = false;
+        if (lm.toleranceMm < dv) {
+            const int more = static_cast<int>(std::ceil(std::log2(dv / lm.toleranceMm) - 1e-12));
             a.verdict = LandmarkVerdict::VoxelTooCoarse;
             a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
-                       " mm is below the inspection voxel ΔV = " + fmt(grid.voxelSize) +
+                       " mm is below the inspection voxel ΔV = " + fmt(dv) +
                        " mm (eq. 5.3.6-1: ΔV <= MED); raise octree.depth to at least " +
-                       std::to_string(grid.depth + more) + " or loosen the tolerance.";
-            r.usable = false;
+                       std::to_string(frame.depth + more) + " or loosen the tolerance.";
+        } else if (a.witnessPoses.empty() && w.dofOnly > 0) {
+            const auto& dof = *station_.depthOfFieldMm;
+            a.verdict = LandmarkVerdict::OutsideDepthOfField;
+            a.reason = "landmark " + lm.id +
+                       " is seen against background only at depths outside the depth of "
+                       "field [" +
+                       fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(w.nearestDepth) +
+                       " mm): refocus the camera or move the part (Rule 4).";
         } else if (a.witnessPoses.empty()) {
-            r.usable = false;
-            if (dofOnly > 0) {
-                const auto& dof = *station_.depthOfFieldMm;
-                a.verdict = LandmarkVerdict::OutsideDepthOfField;
-                a.reason = "landmark " + lm.id +
-                           " is seen against background only at depths outside the depth of "
-                           "field [" +
-                           fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(nearestDepth) +
-                           " mm): refocus the camera or move the part (Rule 4).";
-            } else {
-                explainUnseen(r, blockers, blockerPoints);
-            }
-        } else if (!anyPasses) {
+            explainUnseen(r, w.blockers, w.blockerPoints);
+        } else if (!w.anyPasses) {
             a.verdict = LandmarkVerdict::BelowStationMed;
             if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm)
                 a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
@@ -317,19 +326,16 @@ class Analyser {
                            " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
                            "closer / use a longer lens.";
             else
-                a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " + fmt(grid.voxelSize) +
-                           " mm there (best MED " + fmt(bestRangeMed) +
+                a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " + fmt(dv) +
+                           " mm there (best MED " + fmt(w.bestRangeMed) +
                            " mm, eq. 4.4.4-19); use a smaller octree.depth, or bring the camera closer / use a "
                            "longer lens.";
-            r.usable = false;
         } else {
             a.verdict = LandmarkVerdict::Inspectable;
+            r.usable = true;
         }
-        if (a.verdict != LandmarkVerdict::NoVoidNeighbour) a.unseenVoids = unseenVoids(r);
-        return r;
     }
 
-  private:
     static void dedupe(std::vector<FixturePose>& poses)
     {
         std::map<std::tuple<long long, long long, long long>, bool> seen;
@@ -371,7 +377,7 @@ class Analyser {
                                            fmt(f.rotationRangeDeg.max) + "]°, declination range [" +
                                            fmt(f.declinationRangeDeg.min) + ", " + fmt(f.declinationRangeDeg.max) +
                                            "]°";
-            a.reason = "landmark " + lm(a) +
+            a.reason = "landmark " + a.id +
                        " is seen against background only from poses the fixture cannot "
                        "reach (e.g. " +
                        fmtPose(a.unreachableWitnesses.front(), type) + "; the " + ranges +
@@ -398,8 +404,6 @@ class Analyser {
         a.reason = s.str();
     }
 
-    static const std::string& lm(const LandmarkAnalysis& a) { return a.id; }
-
     /// The nearest surface point (triangle centroids, nearest first) seen from
     /// a reachable grazing pose.
     std::optional<Vec3> nearestInspectable(const Vec3& x) const
@@ -412,7 +416,7 @@ class Analyser {
             order.emplace_back((c - x).norm(), t);
         }
         std::sort(order.begin(), order.end());
-        const auto& grid = problem_.grid;
+        const auto& frame = problem_.frame;
         std::size_t tried = 0;
         for (const auto& [dist, t] : order) {
             if (tried++ >= options_.nearestSearchLimit) break;
@@ -420,10 +424,10 @@ class Analyser {
             const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
             const Vec3 n = mesh.faceNormal(t);
             if (n.isZero()) continue;
-            const auto voxel = grid.indexOf(c - 0.25 * grid.voxelSize * n);
-            auto witness = findWitnessVoxel(*problem_.solid, grid, voxel, c, n);
+            const auto voxel = frame.landmarkVoxel(c, n, frame.depth);
+            auto witness = findWitnessVoxel(*problem_.solid, frame, voxel, c, n);
             if (!witness) continue;
-            LandmarkTarget target{c, n, grid.box(*witness), 1e9};
+            LandmarkTarget target{c, n, frame.box(frame.depth, *witness), 1e9};
             for (const auto& p : candidatesFor(station_.fixture, c, n, false))
                 if (rules_.check(target, p).sees()) return c;
         }
@@ -434,14 +438,14 @@ class Analyser {
     std::vector<inspect::VoxelKey> unseenVoids(const Analysed& r) const
     {
         std::vector<inspect::VoxelKey> out;
-        const auto& grid = problem_.grid;
+        const auto& frame = problem_.frame;
         // Witnesses first: they prove most neighbours void at once.
         std::vector<geometry::CameraModel> cameras;
         for (const auto& p : r.a.witnessPoses) cameras.push_back(station_.cameraAt(p));
         for (std::size_t i = 0; i < r.candidates.size(); ++i)
             if (!r.checks[i].sees()) cameras.push_back(station_.cameraAt(r.candidates[i]));
         for (const auto& v : neighbourhood(r.a.voxel, std::max(1, options_.pareLayers))) {
-            const auto box = grid.box(v);
+            const auto box = frame.box(frame.depth, v);
             if (objectVoxel(*problem_.solid, box)) continue;
             bool seen = false;
             for (const auto& cam : cameras)
@@ -460,7 +464,7 @@ class Analyser {
                         break;
                     }
             }
-            if (!seen) out.push_back(grid.key(v));
+            if (!seen) out.push_back(inspect::makeKey(frame.depth, v));
         }
         std::sort(out.begin(), out.end());
         return out;
@@ -478,7 +482,7 @@ class Analyser {
 void validate(const PlanProblem& problem)
 {
     if (!problem.solid || !problem.station) throw std::invalid_argument("plan: solid and station are required");
-    if (!(problem.grid.voxelSize > 0.0)) throw std::invalid_argument("plan: voxel size must be positive");
+    if (!(problem.frame.cubeSize > 0.0)) throw std::invalid_argument("plan: voxel size must be positive");
 }
 
 /// Final pose of a group (5.4.4, fig. 5.19): the pose of its variation list
@@ -509,107 +513,111 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
     return static_cast<std::size_t>(ties[(ties.size() - 1) / 2]);
 }
 
-} // namespace
-
-std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const PlanOptions& options)
-{
-    validate(problem);
-    Analyser analyser(problem, options);
-    std::vector<LandmarkAnalysis> out;
-    for (const auto& lm : problem.landmarks) out.push_back(analyser.analyse(lm).a);
-    return out;
-}
-
-ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
-{
-    validate(problem);
-    const auto start = Clock::now();
-    auto logger = log::category("plan");
-    const auto& station = *problem.station;
-    const FixtureType type = station.fixture.type;
-    Analyser analyser(problem, options);
-    const auto& rules = analyser.rules();
-
-    ViewPlan plan;
-    std::vector<Analysed> analysed;
-    for (const auto& lm : problem.landmarks) {
-        analysed.push_back(analyser.analyse(lm));
-        const auto& a = analysed.back().a;
-        logger->debug("landmark {}: {} ({} witnesses)", a.id, toString(a.verdict), a.witnessPoses.size());
-        if (!a.inspectable()) plan.problems.push_back(a.reason);
-    }
-
-    // The candidate pose list: every landmark's tried poses, deduplicated.
+/// The candidate pose list of the view pattern analysis (5.5.1): every
+/// landmark's tried poses, pooled and deduplicated.
+struct PosePool {
     std::map<std::tuple<long long, long long, long long>, int> index;
     std::vector<FixturePose> poses;
     std::vector<Vec3> centres;
-    std::vector<std::vector<int>> ownIndex(analysed.size());
+    /// ownIndex[l][k]: pool index of landmark l's candidate k.
+    std::vector<std::vector<int>> ownIndex;
+};
+
+PosePool poolCandidates(const std::vector<Analysed>& analysed, const geometry::Station& station)
+{
+    PosePool pool;
+    pool.ownIndex.resize(analysed.size());
     for (std::size_t l = 0; l < analysed.size(); ++l)
         for (const auto& p : analysed[l].candidates) {
-            auto [it, fresh] = index.emplace(poseKey(p), static_cast<int>(poses.size()));
+            auto [it, fresh] = pool.index.emplace(poseKey(p), static_cast<int>(pool.poses.size()));
             if (fresh) {
-                poses.push_back(p);
-                centres.push_back(station.fixture.cameraCentreInPart(p));
+                pool.poses.push_back(p);
+                pool.centres.push_back(station.fixture.cameraCentreInPart(p));
             }
-            ownIndex[l].push_back(it->second);
+            pool.ownIndex[l].push_back(it->second);
         }
-    plan.candidatePoses = poses.size();
+    return pool;
+}
 
-    // View variation of each landmark (5.4, 5.5.1): the candidates passing Rules 1-4.
-    std::vector<PoseSet> passing(analysed.size());
-    std::vector<std::map<int, RuleCheck>> checkAt(analysed.size());
+/// View variation of each usable landmark (5.4, 5.5.1): the pooled poses at
+/// which it passes Rules 1-4, with every rule check kept for the final views.
+struct ViewVariations {
+    std::vector<PoseSet> passing;
+    std::vector<std::map<int, RuleCheck>> checkAt;
+};
+
+ViewVariations viewVariations(const std::vector<Analysed>& analysed, const PosePool& pool, const ViewRules& rules,
+                              double bandDeg)
+{
+    ViewVariations vv;
+    vv.passing.resize(analysed.size());
+    vv.checkAt.resize(analysed.size());
     for (std::size_t l = 0; l < analysed.size(); ++l) {
-        auto& r = analysed[l];
+        const auto& r = analysed[l];
         if (!r.usable) continue;
-        std::vector<bool> tried(poses.size(), false);
+        auto& passing = vv.passing[l];
+        std::vector<bool> tried(pool.poses.size(), false);
         for (std::size_t k = 0; k < r.candidates.size(); ++k) {
-            const int p = ownIndex[l][k];
+            const int p = pool.ownIndex[l][k];
             tried[static_cast<std::size_t>(p)] = true;
-            checkAt[l][p] = r.checks[k];
-            if (r.checks[k].passes()) passing[l].push_back(p);
+            vv.checkAt[l][p] = r.checks[k];
+            if (r.checks[k].passes()) passing.push_back(p);
         }
-        for (std::size_t p = 0; p < poses.size(); ++p) {
-            if (tried[p] || std::abs(tangentAngleDeg(centres[p], r.a.position, r.a.normal)) > options.bandDeg) continue;
-            const auto chk = rules.check(r.target, poses[p]);
-            checkAt[l][static_cast<int>(p)] = chk;
-            if (chk.passes()) passing[l].push_back(static_cast<int>(p));
+        for (std::size_t p = 0; p < pool.poses.size(); ++p) {
+            if (tried[p] || std::abs(tangentAngleDeg(pool.centres[p], r.a.position, r.a.normal)) > bandDeg) continue;
+            const auto chk = rules.check(r.target, pool.poses[p]);
+            vv.checkAt[l][static_cast<int>(p)] = chk;
+            if (chk.passes()) passing.push_back(static_cast<int>(p));
         }
-        std::sort(passing[l].begin(), passing[l].end());
-        passing[l].erase(std::unique(passing[l].begin(), passing[l].end()), passing[l].end());
+        std::sort(passing.begin(), passing.end());
+        passing.erase(std::unique(passing.begin(), passing.end()), passing.end());
     }
+    return vv;
+}
 
-    // Best views as requirements (eq. 5.3.2-1/2).
+/// View variation of a designer best view (5.4.1): the passing candidates
+/// whose line of sight turns from the designer's by no more than Θ, the
+/// largest angle eq. 5.3.6-3 allows at this distance — the closed form
+/// C = D tan Θ (eq. 5.4.1-1/2) as an angle.
+PoseSet designerViewVariation(int designer, const Analysed& r, const PoseSet& passing, const PosePool& pool,
+                              double focal)
+{
+    const Vec3 dv = (r.a.position - pool.centres[static_cast<std::size_t>(designer)]);
+    const double theta = maxViewAngleRad(focal, dv.norm(), r.a.toleranceMm);
+    PoseSet sub{designer};
+    for (int p : passing) {
+        const Vec3 dp = r.a.position - pool.centres[static_cast<std::size_t>(p)];
+        if (std::acos(std::clamp(dp.normalized().dot(dv.normalized()), -1.0, 1.0)) <= theta + 1e-12) sub.push_back(p);
+    }
+    std::sort(sub.begin(), sub.end());
+    sub.erase(std::unique(sub.begin(), sub.end()), sub.end());
+    return sub;
+}
+
+/// Best views as AND-of-OR requirements (eq. 5.3.2-1/2): a derived landmark
+/// needs one pose of its variation list; a designer's landmark one pose of
+/// each AND group's OR views. A group without a reachable pose fails the
+/// landmark (best_views_fail), which then drops all its requirements.
+std::vector<Requirement> bestViewRequirements(const PlanProblem& problem, std::vector<Analysed>& analysed,
+                                              const PosePool& pool, const ViewVariations& vv, ViewPlan& plan)
+{
     std::vector<Requirement> requirements;
-    const auto& K = station.camera.K;
+    const auto& K = problem.station->camera.K;
     const double focal = std::min(K(0, 0), K(1, 1));
     for (std::size_t l = 0; l < analysed.size(); ++l) {
         auto& r = analysed[l];
         if (!r.usable) continue;
         const auto& lm = problem.landmarks[l];
         if (lm.bestViews.empty()) {
-            requirements.push_back({l, {passing[l]}});
+            requirements.push_back({l, {vv.passing[l]}});
             continue;
         }
         for (std::size_t t = 0; t < lm.bestViews.size(); ++t) {
             Requirement req{l, {}};
             for (const auto& v : lm.bestViews[t]) {
-                auto it = index.find(poseKey(v));
-                if (it == index.end()) continue; // unreachable, reported already
-                // View variation of a designer best view (5.4.1): the passing
-                // candidates whose line of sight turns from the designer's by no
-                // more than Θ, the largest angle eq. 5.3.6-3 allows at this
-                // distance — the closed form C = D tan Θ (eq. 5.4.1-1/2) as an angle.
-                const Vec3 dv = (r.a.position - centres[static_cast<std::size_t>(it->second)]);
-                const double theta = maxViewAngleRad(focal, dv.norm(), lm.toleranceMm);
-                PoseSet sub{it->second};
-                for (int p : passing[l]) {
-                    const Vec3 dp = r.a.position - centres[static_cast<std::size_t>(p)];
-                    if (std::acos(std::clamp(dp.normalized().dot(dv.normalized()), -1.0, 1.0)) <= theta + 1e-12)
-                        sub.push_back(p);
-                }
-                std::sort(sub.begin(), sub.end());
-                sub.erase(std::unique(sub.begin(), sub.end()), sub.end());
-                req.anyOf.push_back(std::move(sub));
+                auto it = pool.index.find(poseKey(v));
+                if (it == pool.index.end()) continue; // unreachable, reported already
+                req.anyOf.push_back(designerViewVariation(it->second, r, vv.passing[l], pool, focal));
             }
             if (req.anyOf.empty()) {
                 r.a.verdict = LandmarkVerdict::BestViewsFail;
@@ -622,11 +630,20 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
             requirements.push_back(std::move(req));
         }
     }
-    // A landmark marked unusable while its terms were built drops its requirements.
     requirements.erase(std::remove_if(requirements.begin(), requirements.end(),
                                       [&](const Requirement& q) { return !analysed[q.landmark].usable; }),
                        requirements.end());
+    return requirements;
+}
 
+/// AND-OR reduction (5.6.1: OR removal, AND combination by largest
+/// intersection), one final pose per group (5.4.4), the redundancy check and
+/// the requested view count (5.5); `--exact` adds the GLPK optimum. Returns
+/// the chosen pool indices, sorted.
+std::vector<std::size_t> reduceViews(const std::vector<Requirement>& requirements,
+                                     const std::vector<Analysed>& analysed, const PosePool& pool,
+                                     const PlanOptions& options, ViewPlan& plan)
+{
     PatternOptions pattern;
     pattern.minIntersection = options.minIntersection;
     const auto greedy = greedyViewPattern(requirements, pattern);
@@ -640,20 +657,15 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
             plan.exactViews = exact.poses.size();
             plan.exactOptimal = exact.optimal;
         } else {
-            logger->warn("exact view cover not solved: {}", exact.message);
+            log::category("plan")->warn("exact view cover not solved: {}", exact.message);
         }
     }
-
-    // Final views (5.4.4), then every landmark each one observes.
-    std::vector<std::size_t> chosen;
-    for (const auto& g : greedy.groups) chosen.push_back(finalPose(g.variation, g.landmarks, centres, poses, analysed));
+    std::vector<int> chosen;
+    for (const auto& g : greedy.groups)
+        chosen.push_back(static_cast<int>(finalPose(g.variation, g.landmarks, pool.centres, pool.poses, analysed)));
     std::sort(chosen.begin(), chosen.end());
     chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
-    {
-        std::vector<int> asInt(chosen.begin(), chosen.end());
-        asInt = removeRedundantPoses(requirements, asInt);
-        chosen.assign(asInt.begin(), asInt.end());
-    }
+    chosen = removeRedundantPoses(requirements, chosen);
     plan.greedyViews = chosen.size();
     // 5.5: terminate on the requested view count, or fail when keeping every
     // landmark's accuracy needs more views than that.
@@ -661,19 +673,27 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
         plan.problems.push_back("the landmarks' tolerances need " + std::to_string(chosen.size()) +
                                 " views but at most " + std::to_string(options.maxViews) +
                                 " were requested: allow more views or loosen the tightest tolerances.");
+    return {chosen.begin(), chosen.end()};
+}
+
+/// The final views in travel order, each with every usable landmark it
+/// observes under Rules 1-4 and the predicted MED.
+void finalViews(const std::vector<std::size_t>& chosen, const std::vector<Analysed>& analysed, const PosePool& pool,
+                const ViewVariations& vv, const ViewRules& rules, const geometry::Station& station, ViewPlan& plan)
+{
     std::vector<FixturePose> chosenPoses;
-    for (std::size_t p : chosen) chosenPoses.push_back(poses[p]);
-    const auto order = orderForTravel(chosenPoses, type, homePose(station.fixture));
+    for (std::size_t p : chosen) chosenPoses.push_back(pool.poses[p]);
+    const auto order = orderForTravel(chosenPoses, station.fixture.type, homePose(station.fixture));
     for (std::size_t k = 0; k < order.size(); ++k) {
         const std::size_t p = chosen[order[k]];
         PlannedView view;
         view.id = "v" + std::to_string(k);
-        view.pose = poses[p];
+        view.pose = pool.poses[p];
         view.camera = station.cameraAt(view.pose);
         for (std::size_t l = 0; l < analysed.size(); ++l) {
             if (!analysed[l].usable) continue;
-            auto it = checkAt[l].find(static_cast<int>(p));
-            const RuleCheck chk = it != checkAt[l].end() ? it->second : rules.check(analysed[l].target, view.camera);
+            auto it = vv.checkAt[l].find(static_cast<int>(p));
+            const RuleCheck chk = it != vv.checkAt[l].end() ? it->second : rules.check(analysed[l].target, view.camera);
             if (chk.passes()) {
                 view.landmarks.push_back(l);
                 view.predictedMedMm.push_back(chk.predictedMedMm);
@@ -681,8 +701,12 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
         }
         plan.views.push_back(std::move(view));
     }
+}
 
-    // Every usable landmark must be observed, and every designer AND term met.
+/// Every usable landmark must be observed, and every designer AND term met.
+void checkCoverage(const std::vector<Analysed>& analysed, const std::vector<Requirement>& requirements,
+                   const std::vector<std::size_t>& chosen, ViewPlan& plan)
+{
     for (std::size_t l = 0; l < analysed.size(); ++l) {
         if (!analysed[l].usable) continue;
         bool observed = false;
@@ -699,6 +723,43 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
             plan.problems.push_back("landmark " + analysed[req.landmark].a.id +
                                     ": a best view group is not met by the planned views.");
     }
+}
+
+} // namespace
+
+std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const PlanOptions& options)
+{
+    validate(problem);
+    Analyser analyser(problem, options);
+    std::vector<LandmarkAnalysis> out;
+    for (const auto& lm : problem.landmarks) out.push_back(analyser.analyse(lm).a);
+    return out;
+}
+
+ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
+{
+    validate(problem);
+    const auto start = Clock::now();
+    auto logger = log::category("plan");
+    Analyser analyser(problem, options);
+
+    // Weak convexity and witnesses of every landmark (chapter 2, 5.3).
+    ViewPlan plan;
+    std::vector<Analysed> analysed;
+    for (const auto& lm : problem.landmarks) {
+        analysed.push_back(analyser.analyse(lm));
+        const auto& a = analysed.back().a;
+        logger->debug("landmark {}: {} ({} witnesses)", a.id, toString(a.verdict), a.witnessPoses.size());
+        if (!a.inspectable()) plan.problems.push_back(a.reason);
+    }
+    // View pattern analysis (5.5): variations, AND-OR requirements, reduction, final views.
+    const PosePool pool = poolCandidates(analysed, *problem.station);
+    plan.candidatePoses = pool.poses.size();
+    const ViewVariations vv = viewVariations(analysed, pool, analyser.rules(), options.bandDeg);
+    const auto requirements = bestViewRequirements(problem, analysed, pool, vv, plan);
+    const auto chosen = reduceViews(requirements, analysed, pool, options, plan);
+    finalViews(chosen, analysed, pool, vv, analyser.rules(), *problem.station, plan);
+    checkCoverage(analysed, requirements, chosen, plan);
 
     for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));
     plan.feasible = plan.problems.empty();

@@ -142,7 +142,7 @@ TEST_F(EngineParity, EveryVariantsArchiveReproducesTheDaemonsLandmarksExactly)
     const std::map<std::string, std::map<std::string, std::string>> expected = {
         {"nominal", {}},
         {"face-low", {{"step-top", "out_of_tolerance"}, {"step-top-back", "out_of_tolerance"}}},
-        {"corner-missing", {{"tall-corner", "not_found"}, {"tall-side", "not_found"}}}};
+        {"corner-missing", {{"tall-corner", "not_found"}, {"tall-side", "overflow"}}}};
     ASSERT_EQ(config_->simulatedParts.size(), expected.size());
     hgtest::TempDir dir;
     auto inspector = hg::daemon::makeEngineInspector(*config_);

@@ -237,7 +237,7 @@ TEST(DontCareBand, FaceOnVoxelMidPlaneHasNoWrongVoxels)
     // The tie layer is don't care in the map; no other network voxel is.
     for (const MapNode& n : map.nodes()) {
         if (n.neighbours < 0) continue;
-        const Box3 b = map.voxelBox(n.key);
+        const Box3 b = map.frame().box(n.key);
         const bool tie = std::abs(b.center().z() - top) < 1e-9 && b.min().x() > 0 && b.max().x() < 20 &&
                          b.min().y() > 0 && b.max().y() < 20;
         if (b.min().x() > 0 && b.max().x() < 20 && b.min().y() > 0 && b.max().y() < 20) {

@@ -117,7 +117,7 @@ TEST(SimulatedFace, RaisedAndLoweredFacesAreBracketedAndJudged)
     const FaceFixture f;
     const Inspector inspector(f.map);
     hg::vision::SegmentationSettings seg;
-    const double dv = f.map.voxelSize(8);
+    const double dv = f.map.frame().voxelSize(8);
     for (double e : {0.6, 0.2, -0.45, -0.6}) {
         const InspectionResult r = inspector.inspect(f.render(FaceFixture::kTop + e, 2.0, 7), seg);
         expectContract(r, e);
@@ -197,7 +197,7 @@ TEST(Reconstruct, BoxVolumeFromThreeOrthogonalViews)
     views.push_back({lookAt({300, 0, 0}, {-1, 0, 0}, {0, 0, -1}), {}});
     views.push_back({lookAt({0, 300, 0}, {0, -1, 0}, {0, 0, -1}), {}});
     for (auto& v : views) v.index = SilhouetteIndex::fromSilhouette(hg::vision::segment(r.render(v.camera), {}));
-    const HullReconstruction hull = reconstructHull(views, Eigen::Vector3d(-8, -8, -8), 16.0, 6);
+    const HullReconstruction hull = reconstructHull(views, {Eigen::Vector3d(-8, -8, -8), 16.0, 6});
     EXPECT_NEAR(hull.volumeMm3(), 240.0, 2 * 0.25 * (2 * (10 * 6 + 10 * 4 + 6 * 4)) / 2);
     EXPECT_EQ(hull.undecidedVoxels, 0u);
     // The octree decides large parts of the cube above the finest level.

@@ -58,8 +58,9 @@ TEST(Traversal, NominalFaceHasNoErrorAndHalfVoxelBracket)
     EXPECT_DOUBLE_EQ(l.errorMaxMm, 0.5);
     EXPECT_DOUBLE_EQ(l.errorMm, 0.25);
     EXPECT_TRUE(r.pass);
-    // Landmark voxel + its 26 neighbours (all correct: recursion stops) + the
-    // normal line's voxels beyond the first layer (z index 7, 8 and 12, 13).
+    // Landmark voxel (z index 9, just inside the face) + its 26 neighbours (all
+    // correct: recursion stops) + the normal line's voxels beyond the first
+    // layer (z index 6, 7 and 11, 12).
     EXPECT_EQ(calls, 27 + 4);
     EXPECT_EQ(r.voxelsReconstructed, 31u);
 }
@@ -91,8 +92,9 @@ TEST(Traversal, LoweredFaceIsFoundByNeighbourSearch)
     int calls = 0;
     const auto r = Inspector(map).inspectWith(ShiftedFace{-2.2, &calls});
     const LandmarkResult& l = r.landmarks[0];
-    // Object only at z centre 7.5 (the outermost layer below): found by the
-    // ring-by-ring search; layers 8.5 and 9.5 are missing material: 2 x 49.
+    // Object only at z centres 7.5 and below (two layers under the landmark
+    // voxel): found by the ring-by-ring search; layers 8.5 and 9.5 are missing
+    // material: 2 x 49.
     EXPECT_EQ(l.errorNumber, 98);
     EXPECT_DOUBLE_EQ(l.offsetLowMm, -2.5);
     EXPECT_DOUBLE_EQ(l.offsetHighMm, -1.5);
@@ -109,13 +111,51 @@ TEST(Traversal, ErrorsBeyondTheAdjacencyLayersOverflowOrAreNotFound)
     int calls = 0;
     EXPECT_EQ(Inspector(map).inspectWith(ShiftedFace{4.0, &calls}).landmarks[0].status, LandmarkStatus::Overflow);
     EXPECT_EQ(Inspector(map).inspectWith(ShiftedFace{-4.0, &calls}).landmarks[0].status, LandmarkStatus::NotFound);
-    // With only one adjacency layer (voxel centres up to 1.5 mm above the
-    // landmark) a 1.3 mm raise is still measured, a 1.7 mm raise overflows.
+    // With only one adjacency layer around the landmark voxel (the voxel just
+    // inside the face, z in [9, 10]) the normal line's voxel centres lie at
+    // z = 8.5, 9.5 and 10.5: a 1.3 mm cut is still measured, a 0.7 mm raise
+    // overflows, and a 1.7 mm cut leaves no object voxel to find.
     InspectionOptions o;
     o.adjacency = 1;
-    EXPECT_EQ(Inspector(map, o).inspectWith(ShiftedFace{1.3, &calls}).landmarks[0].status,
-              LandmarkStatus::OutOfTolerance);
-    EXPECT_EQ(Inspector(map, o).inspectWith(ShiftedFace{1.7, &calls}).landmarks[0].status, LandmarkStatus::Overflow);
+    const LandmarkResult cut = Inspector(map, o).inspectWith(ShiftedFace{-1.3, &calls}).landmarks[0];
+    EXPECT_EQ(cut.status, LandmarkStatus::OutOfTolerance);
+    EXPECT_DOUBLE_EQ(cut.offsetLowMm, -1.5);
+    EXPECT_DOUBLE_EQ(cut.offsetHighMm, -0.5);
+    // Every voxel on the line is object: the surface lies above the last
+    // centre (0.5 mm); the bracket runs to the line's reach (1.0 mm).
+    const LandmarkResult raised = Inspector(map, o).inspectWith(ShiftedFace{0.7, &calls}).landmarks[0];
+    EXPECT_EQ(raised.status, LandmarkStatus::Overflow);
+    EXPECT_TRUE(raised.overflowHigh);
+    EXPECT_DOUBLE_EQ(raised.offsetLowMm, 0.5);
+    EXPECT_DOUBLE_EQ(raised.offsetHighMm, 1.0);
+    EXPECT_DOUBLE_EQ(raised.errorMinMm, 0.5);
+    EXPECT_DOUBLE_EQ(raised.errorMaxMm, 1.0);
+    EXPECT_EQ(Inspector(map, o).inspectWith(ShiftedFace{-1.7, &calls}).landmarks[0].status, LandmarkStatus::NotFound);
+}
+
+TEST(Traversal, FacesOnTheGridAreReachedAlikeWhicheverWayTheirNormalPoints)
+{
+    // The same face, part above it (normal -z): the landmark voxel is again
+    // the one inside (z in [10, 11]), so the line reaches 1.5 mm into the
+    // part and 0.5 mm out of it, as for the +z face.
+    const auto map = InspectionMap::build("face", geometry32(),
+                                          {{"a", Eigen::Vector3d(16.3, 16.7, 10.0), -Eigen::Vector3d::UnitZ(), 0.6}},
+                                          {}, [](const Box3& b) { return b.center().z() >= 10.0; });
+    EXPECT_EQ(keyIndex(map.nodes()[map.landmarkNode(0, 5)].key), Eigen::Vector3i(16, 16, 10));
+    InspectionOptions o;
+    o.adjacency = 1;
+    int calls = 0;
+    auto above = [&calls](double z0) {
+        return [z0, &calls](const Box3& b) {
+            ++calls;
+            return b.center().z() >= z0 ? VoxelLabel::Object : VoxelLabel::Void;
+        };
+    };
+    const LandmarkResult cut = Inspector(map, o).inspectWith(above(11.3)).landmarks[0];
+    EXPECT_EQ(cut.status, LandmarkStatus::OutOfTolerance);
+    EXPECT_DOUBLE_EQ(cut.offsetLowMm, -1.5);
+    EXPECT_DOUBLE_EQ(cut.offsetHighMm, -0.5);
+    EXPECT_EQ(Inspector(map, o).inspectWith(above(9.3)).landmarks[0].status, LandmarkStatus::Overflow);
 }
 
 TEST(Traversal, CoarserLevelUsesLargerVoxelsWithoutRebuilding)

@@ -59,17 +59,14 @@ struct Loop {
         problem.part = "cube";
         problem.solid = &nominal;
         problem.station = &station;
-        problem.grid.origin = mapGeometry.cubeOrigin;
-        problem.grid.voxelSize = 0.25;
-        problem.grid.depth = 9;
+        problem.frame = mapGeometry.frame();
         problem.landmarks = landmarks;
         plan = planViews(problem);
     }
 
     inspect::InspectionResult inspect(const model::TriangleMesh& part) const
     {
-        std::vector<inspect::MapLandmark> mls;
-        for (const auto& l : landmarks) mls.push_back({l.id, l.position, *l.normal, l.toleranceMm});
+        const std::vector<inspect::MapLandmark> mls(landmarks.begin(), landmarks.end());
         auto map = inspect::InspectionMap::build(
             "cube", mapGeometry, mls, {}, [&](const Eigen::AlignedBox3d& b) { return nominal.isObjectVoxel(b); });
         sim::SilhouetteRenderer renderer({part});
@@ -102,6 +99,28 @@ TEST(ClosedLoop, NominalPassesDefectFailsAtItsLandmark)
     }
 }
 
+// The planner proves void the neighbours of the very voxel the inspection
+// map holds as each landmark's type-three node (VoxelFrame::landmarkVoxel):
+// on this grid (ΔV = 0.25 mm, faces on voxel faces) the voxel just inside the
+// face, whichever way the face's normal points.
+TEST(ClosedLoop, PlannerAndMapShareEachLandmarkVoxel)
+{
+    Loop loop;
+    const std::vector<inspect::MapLandmark> mls(loop.landmarks.begin(), loop.landmarks.end());
+    const auto map = inspect::InspectionMap::build(
+        "cube", loop.mapGeometry, mls, {}, [&](const Eigen::AlignedBox3d& b) { return loop.nominal.isObjectVoxel(b); });
+    ASSERT_EQ(loop.plan.landmarks.size(), mls.size());
+    for (std::size_t l = 0; l < mls.size(); ++l) {
+        const auto& node = map.nodes()[static_cast<std::size_t>(map.landmarkNode(l, 9))];
+        EXPECT_EQ(loop.plan.landmarks[l].voxel, inspect::keyIndex(node.key)) << mls[l].id;
+        EXPECT_TRUE(node.expectedObject) << mls[l].id;
+    }
+    // Hand-worked: top (1, 2, 20) +z is voxel ((1 + 64) / 0.25, (2 + 64) / 0.25, (20 + 64) / 0.25 - 1);
+    // ny (-1, -10, 12) -y is voxel (252, 216, 304), y index (−10 + 64) / 0.25 on the face's high side.
+    EXPECT_EQ(loop.plan.landmarks[0].voxel, Eigen::Vector3i(260, 264, 335));
+    EXPECT_EQ(loop.plan.landmarks.back().voxel, Eigen::Vector3i(252, 216, 304));
+}
+
 // The whole defect list (hgtest::plateDefects: a feature shifted, material
 // missing at a corner, a burr, a hole too large, a face too low, each 0.65 mm)
 // through the planner's own views: plan once from the nominal CAD, render the
@@ -122,17 +141,8 @@ TEST(ClosedLoop, DefectListThroughThePlannedViews)
     problem.part = plate.name;
     problem.solid = plate.solid.get();
     problem.station = &station;
-    problem.grid.origin = plate.geometry.cubeOrigin;
-    problem.grid.depth = plate.geometry.depth;
-    problem.grid.voxelSize = plate.geometry.cubeSize / static_cast<double>(1 << plate.geometry.depth);
-    for (const auto& l : plate.landmarks) {
-        PlanLandmark pl;
-        pl.id = l.id;
-        pl.position = l.position;
-        pl.normal = l.normal;
-        pl.toleranceMm = l.toleranceMm;
-        problem.landmarks.push_back(pl);
-    }
+    problem.frame = plate.geometry.frame();
+    for (const auto& l : plate.landmarks) problem.landmarks.push_back({l, {}});
     PlanOptions options;
     options.rules.floorRadiusMm = 5.0;
     const ViewPlan plan = planViews(problem, options);

@@ -48,9 +48,7 @@ PlanProblem problemFor(const model::Solid& solid, const geometry::Station& stati
     p.part = "test";
     p.solid = &solid;
     p.station = &station;
-    p.grid.origin = Vec3(-64, -64, -64);
-    p.grid.voxelSize = 0.25;
-    p.grid.depth = 9;
+    p.frame = {Vec3(-64, -64, -64), 128.0, 9}; // ΔV = 0.25 mm
     p.landmarks = std::move(lms);
     return p;
 }
@@ -253,16 +251,14 @@ TEST(WeakConvexity, ToleranceBelowStationMedIsRefused)
     model::Solid cube(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)));
     auto station = makeStation({-180, 180}, {0, 60});
     auto problem = problemFor(cube, station, {landmark("px", {10, 0, 10}, {1, 0, 0}, 0.05)});
-    problem.grid.voxelSize = 0.03125;
-    problem.grid.depth = 12;
+    problem.frame.depth = 12; // ΔV = 0.03125 mm
     auto all = analyseLandmarks(problem);
     EXPECT_EQ(all[0].verdict, LandmarkVerdict::BelowStationMed) << all[0].reason;
     EXPECT_GT(all[0].bestMedMm, 0.106);
     EXPECT_NE(all[0].reason.find("tolerance 0.05 mm"), std::string::npos) << all[0].reason;
 
     // And a tolerance below ΔV (eq. 5.3.6-1).
-    problem.grid.voxelSize = 0.25;
-    problem.grid.depth = 9;
+    problem.frame.depth = 9;
     problem.landmarks[0].toleranceMm = 0.2;
     all = analyseLandmarks(problem);
     EXPECT_EQ(all[0].verdict, LandmarkVerdict::VoxelTooCoarse) << all[0].reason;

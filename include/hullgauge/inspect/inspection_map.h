@@ -1,9 +1,8 @@
 // The octree inspection map (dissertation 3.3.1, 3.3.2, 3.5.1).
 //
-// Frame: voxel (level L, i, j, k) is the axis-aligned box
-//   cubeOrigin + ΔV_L * [i, i+1] x [j, j+1] x [k, k+1],  ΔV_L = cubeSize / 2^L
-// in the part frame (mm); level 0 is the whole cube, level `depth` the
-// inspection voxels (ΔV, the MAD of eq. 4.5.1-1).
+// Frame: voxel_frame.h (world = cubeOrigin + ΔV_L · index); each landmark's
+// type-three node is VoxelFrame::landmarkKey, the voxel the planner reasons
+// about too.
 //
 // Node types (3.3.2): type one — absent (no entry); type two — a node on a path
 // to at least one landmark (downward links to its 8 children, -1 for type-one
@@ -38,27 +37,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "hullgauge/inspect/voxel_frame.h"
+
 namespace hg::inspect {
-
-/// (level, i, j, k) packed: level in bits 60..63, i, j, k in 20 bits each.
-using VoxelKey = std::uint64_t;
-
-constexpr int kMaxDepth = 15;
-
-inline VoxelKey makeKey(int level, int i, int j, int k)
-{
-    return (static_cast<VoxelKey>(level) << 60) | (static_cast<VoxelKey>(i) << 40) | (static_cast<VoxelKey>(j) << 20) |
-           static_cast<VoxelKey>(k);
-}
-inline int keyLevel(VoxelKey key)
-{
-    return static_cast<int>(key >> 60);
-}
-inline Eigen::Vector3i keyIndex(VoxelKey key)
-{
-    return {static_cast<int>((key >> 40) & 0xFFFFF), static_cast<int>((key >> 20) & 0xFFFFF),
-            static_cast<int>(key & 0xFFFFF)};
-}
 
 enum class NodeType : std::uint8_t { Path = 2, Landmark = 3, Adjacent = 4 };
 
@@ -83,18 +64,13 @@ struct MapNode {
     std::int32_t children = -1;
     /// Index of the first of 26 neighbour slots in InspectionMap::neighbours(), or -1.
     std::int32_t neighbours = -1;
+
+    bool operator==(const MapNode&) const = default;
 };
 
 /// The 26 neighbour offsets, in slot order (dz fastest, then dy, then dx; the
 /// centre skipped). Slot s and slot 25 - s are opposite.
 const std::array<Eigen::Vector3i, 26>& neighbourOffsets();
-
-struct MapLandmark {
-    std::string id;
-    Eigen::Vector3d position = Eigen::Vector3d::Zero(); ///< on the CAD surface, mm
-    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< outward unit normal
-    double toleranceMm = 0.0;
-};
 
 enum class ParameterKind : std::uint8_t { Distance, Perimeter, Area };
 
@@ -104,6 +80,8 @@ struct MapParameter {
     std::vector<std::string> landmarks;
     double nominal = 0.0;   ///< mm, or mm² for an area
     double tolerance = 0.0; ///< same unit as nominal
+
+    bool operator==(const MapParameter&) const = default;
 };
 
 const char* toString(ParameterKind kind);
@@ -116,6 +94,9 @@ struct MapGeometry {
     int depth = 8;          ///< finest level (ΔV = cubeSize / 2^depth)
     int adjacencyDepth = 3; ///< type-four layers
     int coarsestLevel = 8;  ///< coarsest level with networks (<= depth)
+
+    VoxelFrame frame() const { return {cubeOrigin, cubeSize, depth}; }
+    bool operator==(const MapGeometry&) const = default;
 };
 
 /// Expected label of a voxel: true = object (>= 50 % inside; Solid::isObjectVoxel).
@@ -159,10 +140,7 @@ class InspectionMap {
 
     const std::string& partName() const { return partName_; }
     const MapGeometry& geometry() const { return geometry_; }
-    double voxelSize(int level) const;
-    Eigen::AlignedBox3d voxelBox(VoxelKey key) const;
-    /// The voxel key holding `point` at `level` (clamped into the cube).
-    VoxelKey keyAt(const Eigen::Vector3d& point, int level) const;
+    const VoxelFrame& frame() const { return frame_; }
 
     const std::vector<MapNode>& nodes() const { return nodes_; }
     const std::vector<std::int32_t>& children() const { return children_; }
@@ -181,12 +159,36 @@ class InspectionMap {
         const std::int32_t base = nodes_[static_cast<std::size_t>(n)].neighbours;
         return base < 0 ? -1 : neighbours_[static_cast<std::size_t>(base) + slot];
     }
+    /// Walks the neighbour network breadth-first from `layer`, one 26-neighbour
+    /// layer at a time (Open3D's Octree::Traverse idea, on the same-size
+    /// networks of 3.3.2): `visit(v)` is called for every linked neighbour v
+    /// of a node being expanded, in slot order, and returns whether to expand
+    /// v in turn, so the goal-driven inspection prunes every branch it has
+    /// settled (3.3.8); `done()` is asked before each layer and ends the walk.
+    /// The visitor keeps its own record of the nodes it has seen.
+    template <typename Visit, typename Done>
+    void walkNetwork(std::vector<std::int32_t> layer, Visit&& visit, Done&& done) const
+    {
+        while (!layer.empty() && !done()) {
+            std::vector<std::int32_t> next;
+            for (const std::int32_t u : layer)
+                for (int s = 0; s < 26; ++s) {
+                    const std::int32_t v = neighbour(u, s);
+                    if (v >= 0 && visit(v)) next.push_back(v);
+                }
+            layer = std::move(next);
+        }
+    }
     /// Index of a landmark by id, or std::nullopt.
     std::optional<std::size_t> landmarkIndex(const std::string& id) const;
+
+    /// Every field, the derived frame and the landmark table included.
+    bool operator==(const InspectionMap&) const = default;
 
   private:
     std::string partName_;
     MapGeometry geometry_;
+    VoxelFrame frame_;
     std::vector<MapNode> nodes_;
     std::vector<std::int32_t> children_;
     std::vector<std::int32_t> neighbours_;

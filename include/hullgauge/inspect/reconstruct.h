@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "hullgauge/inspect/voxel_frame.h"
 #include "hullgauge/inspect/voxel_test.h"
 
 namespace hg::inspect {
@@ -20,9 +21,8 @@ struct HullNode {
 };
 
 struct HullReconstruction {
-    Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();
-    double cubeSize = 0.0;
-    int depth = 0;
+    /// The cube and the finest level (voxel_frame.h).
+    VoxelFrame frame;
     /// Object nodes (leaves of the octree at any level).
     std::vector<HullNode> objectNodes;
     /// Finest-level voxels inside object nodes (8^(depth - level) each).
@@ -31,12 +31,12 @@ struct HullReconstruction {
     std::uint64_t undecidedVoxels = 0;
     std::uint64_t footprintsMeasured = 0;
 
-    double voxelSize() const { return cubeSize / static_cast<double>(std::uint64_t{1} << depth); }
+    double voxelSize() const { return frame.voxelSize(); }
     double volumeMm3() const;
-    Box3 box(const HullNode& n) const;
+    Box3 box(const HullNode& n) const { return frame.box(n.level, n.index); }
 };
 
-HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const Eigen::Vector3d& cubeOrigin,
-                                   double cubeSize, int depth, VoxelTestMethod method = VoxelTestMethod::VolumeSource);
+HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const VoxelFrame& frame,
+                                   VoxelTestMethod method = VoxelTestMethod::VolumeSource);
 
 } // namespace hg::inspect

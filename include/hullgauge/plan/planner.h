@@ -34,25 +34,10 @@
 
 namespace hg::plan {
 
-/// The inspection depth's voxel grid (inspection_map.h frame): voxel (i, j, k)
-/// is origin + ΔV [i, i+1] x [j, j+1] x [k, k+1].
-struct VoxelGrid {
-    Vec3 origin = Vec3::Zero();
-    double voxelSize = 1.0; ///< ΔV, mm
-    int depth = 8;          ///< level of the inspection voxels (for VoxelKey)
-
-    Eigen::Vector3i indexOf(const Vec3& point) const;
-    Eigen::AlignedBox3d box(const Eigen::Vector3i& index) const;
-    inspect::VoxelKey key(const Eigen::Vector3i& index) const;
-};
-
-struct PlanLandmark {
-    std::string id;
-    Vec3 position = Vec3::Zero();
-    /// Outward unit normal; taken from the mesh when absent.
-    std::optional<Vec3> normal;
-    double toleranceMm = 0.0;
-    /// Designer best views: AND over the outer list, OR inside (eq. 5.3.2-1/2). Empty: derive them.
+/// A landmark as the planner sees it: the map's landmark (position, outward
+/// unit normal, tolerance) and the designer's best views: AND over the outer
+/// list, OR inside (eq. 5.3.2-1/2); empty: derive them.
+struct PlanLandmark : inspect::MapLandmark {
     std::vector<std::vector<FixturePose>> bestViews;
 };
 
@@ -60,7 +45,9 @@ struct PlanProblem {
     std::string part;
     const model::Solid* solid = nullptr;
     const geometry::Station* station = nullptr;
-    VoxelGrid grid;
+    /// The inspection map's frame; the planner works at its depth (ΔV), on
+    /// each landmark's voxel as the map has it (VoxelFrame::landmarkVoxel).
+    inspect::VoxelFrame frame;
     std::vector<PlanLandmark> landmarks;
 };
 

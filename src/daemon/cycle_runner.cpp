@@ -151,6 +151,17 @@ SequencerAction CycleRunner::feed(SequencerEvent event)
     return transition([&] { return sequencer_.onEvent(event); });
 }
 
+bool CycleRunner::abort()
+{
+    // Checked as PlcRegisters checks the PLC's abort: one sent while idle would abort the next part.
+    if (!registers_.running()) {
+        hg::log::category("seq")->info("abort dropped: no cycle or calibration runs");
+        return false;
+    }
+    abortRequested_ = true;
+    return true;
+}
+
 // The one place the PLC's commands are taken: an abort acts on the running
 // cycle; a fault reset waits for the station to be between cycles.
 void CycleRunner::takeCommands()

@@ -51,8 +51,9 @@ class CycleRunner {
 
     /// A new configuration for the next cycle (SIGHUP); the running cycle keeps its own.
     void setConfig(std::shared_ptr<const station::DaemonConfig> config);
-    /// Abort the running cycle or calibration (maintenance socket; the PLC uses COMMAND).
-    void abort() { abortRequested_ = true; }
+    /// Abort the running cycle or calibration (maintenance socket; the PLC uses
+    /// COMMAND); false, and nothing latched, when none runs (docs/plc.md).
+    bool abort();
 
     /// Queues a calibration; it runs between cycles, on the runner thread, when
     /// the station is ready (production is paused meanwhile: PLC STATUS 5,

@@ -16,6 +16,7 @@
 #include <signal.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
+#include <vector>
 
 namespace hg::daemon {
 namespace {
@@ -41,6 +42,24 @@ std::vector<std::string> needsRestart(const station::DaemonConfig& a, const stat
     if (a.results.database != b.results.database) keys.push_back("results.database");
     if (a.maintenance.socket != b.maintenance.socket) keys.push_back("maintenance.socket");
     return keys;
+}
+
+/// The daemon's configuration with every part program loaded in full, as its
+/// trigger would load it: a bad program is refused here, not at the trigger.
+ConfigPtr loadConfig(const std::filesystem::path& file, const ProgramCheck& checkProgram)
+{
+    auto config = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(file));
+    if (!checkProgram) return config;
+    for (const auto& [number, ref] : config->programs) {
+        try {
+            checkProgram(ref);
+        } catch (const InputError&) {
+            throw;
+        } catch (const std::exception& e) {
+            throw InputError(ref.partFile.string(), "part program " + std::to_string(number), e.what());
+        }
+    }
+    return config;
 }
 
 std::int64_t ageNs(std::int64_t thenNs)
@@ -85,10 +104,10 @@ int blockSignals()
 /// while healthy, STATUS lines, signals and the maintenance socket.
 class MainLoop {
   public:
-    MainLoop(ConfigPtr config, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner, Notifier& notifier,
-             int sigFd)
-        : config_(std::move(config)), registers_(registers), plc_(plc), runner_(runner), notifier_(notifier),
-          sigFd_(sigFd)
+    MainLoop(ConfigPtr config, ProgramCheck checkProgram, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner,
+             Notifier& notifier, int sigFd)
+        : config_(std::move(config)), checkProgram_(std::move(checkProgram)), registers_(registers), plc_(plc),
+          runner_(runner), notifier_(notifier), sigFd_(sigFd)
     {
     }
     const ConfigPtr& config() const { return config_; }
@@ -101,6 +120,7 @@ class MainLoop {
     void reload();
 
     ConfigPtr config_;
+    ProgramCheck checkProgram_;
     PlcRegisters& registers_;
     PlcServer& plc_;
     CycleRunner& runner_;
@@ -133,11 +153,14 @@ void MainLoop::serve(MaintenanceServer& maintenance)
 
         auto wake = std::min(nextBeat, notifier_.watchdogInterval() ? nextPing : nextBeat);
         auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
-        pollfd fds[2] = {{sigFd_, POLLIN, 0}, {maintenance.fd(), POLLIN, 0}};
-        int n = poll(fds, 2, static_cast<int>(std::clamp<long long>(timeoutMs, 1, 1000)));
-        if (n <= 0) continue;
-        if (fds[1].revents & POLLIN) maintenance.serveOne();
-        if ((fds[0].revents & POLLIN) && !takeSignals()) return;
+        // Waiting maintenance clients are polled too, and closed past their time even when silent.
+        auto clients = maintenance.pollFds();
+        std::vector<pollfd> fds{{sigFd_, POLLIN, 0}};
+        fds.insert(fds.end(), clients.begin(), clients.end());
+        int n = poll(fds.data(), fds.size(), static_cast<int>(std::clamp<long long>(timeoutMs, 1, 200)));
+        std::copy(fds.begin() + 1, fds.end(), clients.begin());
+        maintenance.serve(clients);
+        if (n > 0 && (fds[0].revents & POLLIN) && !takeSignals()) return;
     }
 }
 
@@ -178,7 +201,7 @@ void MainLoop::reload()
     auto log = hg::log::category("daemon");
     notifier_.reloading();
     try {
-        auto fresh = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(config_->file));
+        auto fresh = loadConfig(config_->file, checkProgram_);
         for (const auto& key : needsRestart(*config_, *fresh))
             log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
         registers_.setKnownPrograms(programNumbers(*fresh));
@@ -194,7 +217,7 @@ void MainLoop::reload()
 
 /// Opens the store, starts the PLC server, the runner and the maintenance socket, and serves until stopped.
 void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
-                Notifier& notifier, int sigFd)
+                const ProgramCheck& checkProgram, Notifier& notifier, int sigFd)
 {
     ResultStore store(config->results.database);
     PlcRegisters registers;
@@ -204,7 +227,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     PlcServer plc(registers, config->plc);
     plc.start();
     CycleRunner runner(registers, *hardware.devices, *inspector, store, config);
-    MainLoop loop(config, registers, plc, runner, notifier, sigFd);
+    MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd);
     MaintenanceServer maintenance(
         config->maintenance.socket, config->maintenance.group,
         maintenanceCommands({registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config()}));
@@ -219,7 +242,8 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
 
 } // namespace
 
-int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector)
+int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
+              const ProgramCheck& checkProgram)
 {
     Options options;
     if (auto exit = parseArguments(argc, argv, options)) return *exit;
@@ -229,7 +253,7 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
     ConfigPtr config;
     try {
         if (!options.logSpec.empty()) hg::log::configure(options.logSpec);
-        config = std::make_shared<const station::DaemonConfig>(station::loadDaemonConfig(options.configFile));
+        config = loadConfig(options.configFile, checkProgram);
     } catch (const InputError& e) {
         std::cerr << "hullgauged: " << e.what() << '\n';
         return static_cast<int>(ExitStatus::BadInput);
@@ -243,7 +267,7 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
     Notifier notifier;
     int status = 0;
     try {
-        runStation(config, makeDevices, makeInspector, notifier, sigFd);
+        runStation(config, makeDevices, makeInspector, checkProgram, notifier, sigFd);
     } catch (const FaultError& e) {
         log->critical("{}", e.what());
         notifier.stopping(std::string("failed: ") + e.what());

@@ -23,7 +23,13 @@ namespace hg::daemon {
 using DevicesFactory = std::function<StationHardware(const station::DaemonConfig&)>;
 using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station::DaemonConfig&)>;
 
+/// Loads a part program in full, as a trigger would, and throws InputError
+/// naming its file and field when it does not load (docs/daemon.md).
+using ProgramCheck = std::function<void(const station::PartProgramRef&)>;
+
 /// Runs the daemon until SIGTERM/SIGINT; returns the process exit status.
-int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector);
+/// `checkProgram` runs on every part program at start, `--check` and reload.
+int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
+              const ProgramCheck& checkProgram = {});
 
 } // namespace hg::daemon

@@ -53,6 +53,10 @@ class EngineInspector : public Inspector {
             } catch (const std::exception& e) {
                 error = e.what();
                 return false;
+            } catch (...) {
+                // Whatever the program's load throws is the program's fault (FAULT 30), never the daemon's end.
+                error = "the part program could not be loaded";
+                return false;
             }
         }
         current_ = &it->second;
@@ -105,6 +109,8 @@ class EngineInspector : public Inspector {
             out.evidence = evidence(result);
         } catch (const std::exception& e) {
             out.error = e.what();
+        } catch (...) {
+            out.error = "the inspection failed";
         }
         views_.clear();
         return out;
@@ -150,6 +156,11 @@ class EngineInspector : public Inspector {
 std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config)
 {
     return std::make_unique<EngineInspector>(config);
+}
+
+void checkEngineProgram(const station::PartProgramRef& ref)
+{
+    (void)inspect::inspectionOptions(model::loadPartProgram(ref.partFile).inspection);
 }
 
 } // namespace hg::daemon

@@ -17,5 +17,8 @@
 namespace hg::daemon {
 
 std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config);
+/// The part program and the inspection options begin() loads (mesh, landmarks,
+/// parameters); throws InputError naming the file and field.
+void checkEngineProgram(const station::PartProgramRef& ref);
 
 } // namespace hg::daemon

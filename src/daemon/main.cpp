@@ -6,5 +6,6 @@
 
 int main(int argc, char** argv)
 {
-    return hg::daemon::runDaemon(argc, argv, hg::daemon::makeDriverDevices, hg::daemon::makeEngineInspector);
+    return hg::daemon::runDaemon(argc, argv, hg::daemon::makeDriverDevices, hg::daemon::makeEngineInspector,
+                                 hg::daemon::checkEngineProgram);
 }

@@ -3,6 +3,7 @@
 #include "cycle_runner.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/station.h"
 #include "plc_server.h"
@@ -11,8 +12,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fcntl.h>
 #include <grp.h>
 #include <map>
+#include <spdlog/fmt/fmt.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -68,39 +71,81 @@ MaintenanceServer::~MaintenanceServer()
     }
 }
 
-void MaintenanceServer::serveOne()
+std::vector<pollfd> MaintenanceServer::pollFds() const
 {
-    int client = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC);
-    if (client < 0) return;
-    timeval tv{1, 0};
-    setsockopt(client, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-    setsockopt(client, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
-    std::string line;
-    char buf[512];
-    while (line.find('\n') == std::string::npos && line.size() < 64 * 1024) {
-        ssize_t n = read(client, buf, sizeof buf);
-        if (n <= 0) break;
-        line.append(buf, static_cast<std::size_t>(n));
+    std::vector<pollfd> fds{{fd_, POLLIN, 0}};
+    for (const auto& c : clients_) fds.push_back({c.fd, POLLIN, 0});
+    return fds;
+}
+
+void MaintenanceServer::serve(const std::vector<pollfd>& polled)
+{
+    // The clients polled are the first polled.size() - 1 of clients_, in order.
+    std::vector<bool> done(clients_.size(), false);
+    for (std::size_t i = 1; i < polled.size() && i - 1 < clients_.size(); ++i)
+        if (polled[i].revents & (POLLIN | POLLHUP | POLLERR)) done[i - 1] = readFrom(clients_[i - 1]);
+    const auto now = std::chrono::steady_clock::now();
+    for (std::size_t i = clients_.size(); i-- > 0;) {
+        if (!done[i] && now - clients_[i].since < kRequestTimeout) continue;
+        close(clients_[i].fd);
+        clients_.erase(clients_.begin() + static_cast<std::ptrdiff_t>(i));
     }
-    nlohmann::json answer;
-    auto request = nlohmann::json::parse(line.substr(0, line.find('\n')), nullptr, false);
-    if (request.is_discarded() || !request.is_object() || !request.contains("command")) {
-        answer = {{"ok", false}, {"error", "expected one JSON object with a \"command\" on one line"}};
-    } else {
-        try {
-            answer = handler_(request);
-        } catch (const std::exception& e) {
-            answer = {{"ok", false}, {"error", e.what()}};
+    if (!polled.empty() && (polled[0].revents & POLLIN)) acceptAll();
+}
+
+void MaintenanceServer::acceptAll()
+{
+    for (;;) {
+        int fd = accept4(fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+        if (fd < 0) return;
+        if (clients_.size() >= kMaxClients) {
+            // The longest-waiting client yields: the newest is the likeliest to send.
+            close(clients_.front().fd);
+            clients_.erase(clients_.begin());
         }
+        clients_.push_back({fd, std::chrono::steady_clock::now(), {}});
     }
+}
+
+bool MaintenanceServer::readFrom(Client& client)
+{
+    char buf[4096];
+    ssize_t n = read(client.fd, buf, sizeof buf);
+    if (n < 0 && (errno == EAGAIN || errno == EINTR)) return false;
+    if (n <= 0) return true; // gone before sending a whole line
+    client.request.append(buf, static_cast<std::size_t>(n));
+    const bool complete = client.request.find('\n') != std::string::npos;
+    if (!complete && client.request.size() < kMaxRequestBytes) return false;
+    answer(client);
+    return true;
+}
+
+void MaintenanceServer::answer(const Client& client)
+{
+    nlohmann::json answer;
+    const auto end = client.request.find('\n');
+    try {
+        if (end == std::string::npos) throw InputError("request", "line", "longer than 64 KiB without a newline");
+        auto request = parseJson(client.request.substr(0, end), "request");
+        if (!request.is_object() || !request.contains("command"))
+            throw InputError("request", "command", "expected one JSON object with a \"command\" on one line");
+        answer = handler_(request);
+    } catch (const std::exception& e) {
+        answer = {{"ok", false}, {"error", e.what()}};
+    }
+    // The answer is small (a status or a page of results); a client that does
+    // not read it gets one second before it is dropped.
+    timeval tv{1, 0};
+    setsockopt(client.fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+    int flags = fcntl(client.fd, F_GETFL);
+    fcntl(client.fd, F_SETFL, flags & ~O_NONBLOCK);
     auto text = answer.dump() + "\n";
     std::size_t sent = 0;
     while (sent < text.size()) {
-        ssize_t n = write(client, text.data() + sent, text.size() - sent);
+        ssize_t n = write(client.fd, text.data() + sent, text.size() - sent);
         if (n <= 0) break;
         sent += static_cast<std::size_t>(n);
     }
-    close(client);
 }
 
 } // namespace hg::daemon
@@ -151,8 +196,13 @@ json trigger(const MaintenanceContext& c, const json& request)
 {
     const auto program = request.value("program", 0);
     if (program < 1 || program > 65535) return {{"ok", false}, {"error", "program must be 1..65535"}};
-    const auto reason =
-        c.registers.triggerManually(static_cast<std::uint16_t>(program), request.value("serial", std::string()));
+    const auto serial = request.value("serial", std::string());
+    // The PLC's rule for its SERIAL registers; a NUL is padding there, never part of a serial.
+    for (std::size_t i = 0; i < serial.size(); ++i)
+        if (const auto byte = static_cast<unsigned char>(serial[i]); byte == 0 || !station::validSerialByte(byte))
+            return {{"ok", false},
+                    {"error", fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte)}};
+    const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program), serial);
     if (reason == station::RejectReason::None) return {{"ok", true}};
     static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
     return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
@@ -160,8 +210,8 @@ json trigger(const MaintenanceContext& c, const json& request)
 
 json abortCycle(const MaintenanceContext& c, const json&)
 {
-    c.runner.abort();
-    return {{"ok", true}};
+    // An abort applies to the running cycle only (docs/plc.md).
+    return {{"ok", true}, {"aborted", c.runner.abort()}};
 }
 
 // The live fixture calibration (docs/calibration.md), run by the cycle runner

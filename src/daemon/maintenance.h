@@ -2,16 +2,22 @@
 // `maintenance.group`) that `hullgauge ctl` talks to. One request per
 // connection: a JSON object on one line; the answer is a JSON object on one
 // line with "ok": true/false (and "error" when false). Served from the
-// daemon's main loop; a client gets at most one second to send its request.
+// daemon's main loop, every client on its own: each connection gathers its
+// request line (at most 64 KiB) as it arrives, one that has not sent it within
+// one second is closed, and when kMaxClients wait the longest-waiting one
+// goes, so idle clients never keep `ctl` out (docs/daemon.md).
 #pragma once
 
 #include "daemon_config.h"
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <poll.h>
 #include <string>
+#include <vector>
 
 namespace hg::daemon {
 
@@ -32,15 +38,32 @@ class MaintenanceServer {
     MaintenanceServer(const MaintenanceServer&) = delete;
     MaintenanceServer& operator=(const MaintenanceServer&) = delete;
 
-    /// The listening descriptor, for the main loop's poll().
-    int fd() const { return fd_; }
-    /// Accepts and answers one pending client (call when fd() is readable).
-    void serveOne();
+    static constexpr std::size_t kMaxClients = 32;
+    static constexpr std::size_t kMaxRequestBytes = 64 * 1024;
+    static constexpr std::chrono::milliseconds kRequestTimeout{1000};
+
+    /// The listening socket and every waiting client, for the main loop's poll().
+    std::vector<pollfd> pollFds() const;
+    /// Accepts new clients, reads what the ready ones sent, answers every
+    /// complete request and closes the clients past their time; `polled` is
+    /// pollFds() as poll() returned it.
+    void serve(const std::vector<pollfd>& polled);
 
   private:
+    struct Client {
+        int fd;
+        std::chrono::steady_clock::time_point since;
+        std::string request;
+    };
+    void acceptAll();
+    /// Reads once; true when the client is done with (answered or gone).
+    bool readFrom(Client& client);
+    void answer(const Client& client);
+
     std::filesystem::path path_;
     Handler handler_;
     int fd_ = -1;
+    std::vector<Client> clients_;
 };
 
 /// What the maintenance commands act on; all of it lives as long as the server.

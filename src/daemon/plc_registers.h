@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <utility>
 
 namespace hg::daemon {
 
@@ -25,7 +26,19 @@ class PlcRegisters {
     station::ModbusException write(std::uint16_t address, std::span<const std::uint16_t> values)
     {
         std::lock_guard lock(mutex_);
-        return notifying(map_.write(address, values));
+        const bool running = runningLocked();
+        auto written = map_.write(address, values);
+        // An abort applies to the running cycle only (docs/plc.md): one written
+        // while idle is dropped, so it cannot abort the next part.
+        if (!running) dropAbort();
+        return notifying(written);
+    }
+    /// True while a trigger is accepted or its cycle runs (STATUS busy) or a
+    /// calibration runs (STATUS maintenance): the only times an abort applies.
+    bool running() const
+    {
+        std::lock_guard lock(mutex_);
+        return runningLocked();
     }
     station::RejectReason triggerManually(std::uint16_t program, const std::string& serial)
     {
@@ -61,7 +74,9 @@ class PlcRegisters {
     station::PlcCommands takeCommands()
     {
         std::lock_guard lock(mutex_);
-        return map_.takeCommands();
+        auto commands = map_.takeCommands();
+        commands.resetFault = commands.resetFault || std::exchange(resetKept_, false);
+        return commands;
     }
     std::array<std::uint16_t, station::reg::Count> snapshot() const
     {
@@ -74,20 +89,29 @@ class PlcRegisters {
     std::optional<station::TriggerRequest> waitTrigger(std::chrono::milliseconds timeout)
     {
         std::unique_lock lock(mutex_);
-        work_.wait_for(lock, timeout, [&] { return map_.hasWork(); });
+        work_.wait_for(lock, timeout, [&] { return hasWorkLocked(); });
         return map_.takeTrigger();
     }
 
   private:
     template <class T> T notifying(T result)
     {
-        if (map_.hasWork()) work_.notify_all();
+        if (hasWorkLocked()) work_.notify_all();
         return result;
     }
+    bool hasWorkLocked() const { return map_.hasWork() || resetKept_; }
+    bool runningLocked() const
+    {
+        const auto status = map_.status();
+        return status == station::PlcStatus::Busy || status == station::PlcStatus::Maintenance;
+    }
+    /// Takes the latched commands and keeps only the fault reset.
+    void dropAbort() { resetKept_ = map_.takeCommands().resetFault || resetKept_; }
 
     mutable std::mutex mutex_;
     std::condition_variable work_;
     Map map_;
+    bool resetKept_ = false; ///< a fault reset taken with a dropped abort
 };
 
 } // namespace hg::daemon

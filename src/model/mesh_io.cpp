@@ -19,6 +19,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
+#include <cmath>
 #include <spdlog/fmt/fmt.h>
 
 #include "hullgauge/common/error.h"
@@ -246,6 +247,16 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     if (!CGAL::IO::read_polygon_soup(name, points, polygons, CGAL::parameters::verbose(false)))
         throw InputError(name, "mesh", "not a readable " + ext.substr(1) + " file");
     if (polygons.empty()) throw InputError(name, "mesh", "the file holds no facets");
+    // The soup repair below indexes the points without checking: an index past
+    // them (a PLY face naming vertex 1e6 of 8) or a non-finite coordinate is bad input.
+    for (std::size_t f = 0; f < polygons.size(); ++f)
+        for (auto v : polygons[f])
+            if (v >= points.size())
+                throw InputError(name, fmt::format("face {}", f + 1),
+                                 fmt::format("vertex index {} is past the file's {} vertices", v, points.size()));
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!std::isfinite(points[i].x()) || !std::isfinite(points[i].y()) || !std::isfinite(points[i].z()))
+            throw InputError(name, fmt::format("vertex {}", i + 1), "coordinate is not a finite number");
 
     // Merge duplicate points (STL repeats every vertex per facet), drop
     // repeated polygons and polygons that collapse to fewer than 3 points.

@@ -109,6 +109,9 @@ Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfac
     if (lm.id.empty()) idNode.fail("landmark id is empty");
     const ConfigNode posNode = node["position"];
     lm.position = posNode.asVector3();
+    // Far past any part: the closest-point query would overflow (a coordinate of 1e308).
+    if (lm.position.cwiseAbs().maxCoeff() > 1e5)
+        posNode.fail("values must lie within ±1e5 mm (a part is not that large)");
     lm.toleranceMm = node["tolerance_mm"].asPositive();
 
     // On the surface (within the documented tolerance).

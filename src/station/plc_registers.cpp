@@ -11,13 +11,12 @@ std::uint16_t u16(auto v)
     return static_cast<std::uint16_t>(v);
 }
 
-// SERIAL carries printable ASCII; NUL pads a short serial.
+} // namespace
+
 bool validSerialByte(unsigned byte)
 {
     return byte == 0 || (byte >= 0x20 && byte <= 0x7E);
 }
-
-} // namespace
 
 std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
 {

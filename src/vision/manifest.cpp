@@ -1,14 +1,18 @@
 #include "hullgauge/vision/manifest.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <set>
+#include <spdlog/fmt/fmt.h>
 #include <sstream>
 #include <stdexcept>
 
@@ -205,6 +209,18 @@ class ManifestReader {
             geometry::RigidTransform pose;
             pose.R = rotation(j["R"], at + ".R");
             pose.t = vector3(j["t"], at + ".t");
+            // Magnitudes as the station file bounds them (docs/capture-manifest.md): a 1e308 is a typo, not a camera.
+            if (pose.t.cwiseAbs().maxCoeff() > 1e5)
+                fail(at + ".t", "values must lie within ±1e5 mm (a station is not that large)");
+            if (in.imageSize.width > 0) {
+                try {
+                    in.validate();
+                } catch (const std::invalid_argument& e) {
+                    fail(at, e.what());
+                }
+            } else if (in.K.cwiseAbs().maxCoeff() > 1e7) {
+                fail(at + ".K", "values must lie within ±1e7 px");
+            }
             v.camera = geometry::CameraModel(in, pose);
         }
         if (j.contains("fixture_pose")) v.fixturePose = fixturePose(j["fixture_pose"], at + ".fixture_pose");
@@ -279,17 +295,8 @@ CaptureManifest readManifest(const fs::path& file)
     ss << in.rdbuf();
     const std::string text = ss.str();
 
-    json root;
-    try {
-        root = json::parse(text);
-    } catch (const json::parse_error& e) {
-        // Name the line of the syntax error, as for YAML files.
-        const std::size_t upto = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
-        const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(upto), '\n'));
-        std::string what = e.what();
-        const auto pos = what.find("syntax error");
-        throw InputError(name, "", "JSON " + (pos == std::string::npos ? what : what.substr(pos)), line);
-    }
+    // Duplicate keys, numbers past double range and syntax errors name the file, key and line.
+    const json root = parseJson(text, name);
 
     ManifestReader reader(name);
     if (!root.is_object()) reader.fail("(document)", "expected a JSON object with 'views'");
@@ -354,6 +361,30 @@ void writeManifest(const CaptureManifest& manifest, const fs::path& file)
     if (!out) throw FaultError("cannot write manifest " + file.string());
 }
 
+namespace {
+
+// 2^28 pixels: sixteen times a 16-megapixel camera's frame.
+constexpr std::uint64_t kMaxImagePixels = std::uint64_t{1} << 28;
+
+/// A PNG's width and height from its IHDR chunk (bytes 16..23), read before
+/// any decoder allocates the frame; nullopt for anything but a PNG.
+std::optional<std::pair<std::uint64_t, std::uint64_t>> pngSize(const fs::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    unsigned char head[24] = {};
+    if (!in.read(reinterpret_cast<char*>(head), sizeof head)) return std::nullopt;
+    static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    if (!std::equal(kSignature, kSignature + 8, head) || std::string(head + 12, head + 16) != "IHDR")
+        return std::nullopt;
+    auto be32 = [&](int at) {
+        return (std::uint64_t{head[at]} << 24) | (std::uint64_t{head[at + 1]} << 16) |
+               (std::uint64_t{head[at + 2]} << 8) | std::uint64_t{head[at + 3]};
+    };
+    return std::pair{be32(16), be32(20)};
+}
+
+} // namespace
+
 cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
 {
     if (index >= manifest.views.size()) throw std::out_of_range("readViewImage: no view " + std::to_string(index));
@@ -363,7 +394,16 @@ cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
     std::error_code ec;
     if (!fs::is_regular_file(v.image, ec))
         throw InputError(name, field, "no such image file '" + v.image.string() + "'");
-    cv::Mat frame = cv::imread(v.image.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    if (auto size = pngSize(v.image); size && size->first * size->second > kMaxImagePixels)
+        throw InputError(name, field,
+                         fmt::format("image '{}' claims {}x{} pixels, past the {} a frame may hold", v.image.string(),
+                                     size->first, size->second, kMaxImagePixels));
+    cv::Mat frame;
+    try {
+        frame = cv::imread(v.image.string(), cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    } catch (const cv::Exception& e) {
+        throw InputError(name, field, "cannot read image '" + v.image.string() + "': " + e.what());
+    }
     if (frame.empty()) throw InputError(name, field, "cannot read image '" + v.image.string() + "'");
     cv::Mat grey;
     try {

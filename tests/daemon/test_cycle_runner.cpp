@@ -270,6 +270,49 @@ TEST_F(CycleRunnerTest, AbortMidCycleEndsItAsAbortedByThePlc)
     EXPECT_TRUE(devices.recoverTimes().empty());
 }
 
+TEST_F(CycleRunnerTest, AbortSentWhileIdleDoesNotAbortTheNextPart)
+{
+    startReady();
+    command(1);                    // the PLC's abort, between cycles
+    EXPECT_FALSE(runner->abort()); // the maintenance socket's, too
+    trigger(4);
+    ASSERT_TRUE(eventually([&] { return done(4); }));
+    EXPECT_EQ(at(reg::Result), 1); // pass: all three views grabbed
+    EXPECT_EQ(at(reg::FaultCode), 0);
+    EXPECT_EQ(devices.grabCount(), 3);
+    EXPECT_EQ(lastRecord()["verdict"], "pass");
+}
+
+// The register map alone, no runner thread: whether an abort is kept depends
+// only on STATUS when it is written, never on when the runner looks.
+TEST(PlcRegistersAbort, KeptOnlyWhileACycleOrCalibrationRuns)
+{
+    PlcRegisters registers;
+    auto write = [&](std::uint16_t value) {
+        std::array<std::uint16_t, 1> v{value};
+        ASSERT_EQ(registers.write(reg::Command, v), station::ModbusException::None);
+    };
+    using station::PlcStatus;
+    for (auto idle : {PlcStatus::Ready, PlcStatus::Done, PlcStatus::Fault, PlcStatus::Starting}) {
+        registers.setStatus(idle);
+        write(1);
+        EXPECT_FALSE(registers.takeCommands().abort) << static_cast<int>(idle);
+    }
+    for (auto running : {PlcStatus::Busy, PlcStatus::Maintenance}) {
+        registers.setStatus(running);
+        write(1);
+        EXPECT_TRUE(registers.takeCommands().abort) << static_cast<int>(running);
+    }
+    // A fault reset written with a dropped abort is still taken.
+    registers.setStatus(PlcStatus::Fault);
+    write(2);
+    write(1);
+    auto commands = registers.takeCommands();
+    EXPECT_TRUE(commands.resetFault);
+    EXPECT_FALSE(commands.abort);
+    EXPECT_FALSE(registers.takeCommands().any());
+}
+
 TEST_F(CycleRunnerTest, FaultResetSentMidCycleIsAppliedAfterIt)
 {
     // COMMAND = 2 arrives during the first grab; the grabs of view 1 then time out twice.

@@ -16,6 +16,8 @@ nominal part and the `corner-missing` defect, and checks:
 - the SQLite store (read with python's sqlite3) holds one row per cycle;
 - SIGTERM stops the line with exit status 0 for both programs, and their logs
   hold no sanitizer report (LeakSanitizer runs at the daemon's exit).
+--rss-csv FILE appends `cycles,vmrss_kib` every --rss-every cycles (the memory
+curve of docs/daemon.md; a release build's --bin runs the same soak faster).
 Every wait is bounded.
 """
 import argparse
@@ -83,6 +85,8 @@ def main():
     ap.add_argument("--rss-from", type=int, default=500, help="cycle after which the RSS baseline is taken")
     ap.add_argument("--rss-growth-mib", type=float, default=16.0)
     ap.add_argument("--cycle-timeout", type=float, default=20.0)
+    ap.add_argument("--rss-csv", type=Path, help="write cycles,vmrss_kib to this CSV every --rss-every cycles")
+    ap.add_argument("--rss-every", type=int, default=100)
     args = ap.parse_args()
     if not 0 < args.rss_from < args.cycles:
         ap.error("--rss-from must lie between 0 and --cycles")
@@ -145,6 +149,9 @@ def main():
                     break
             if cycles_done in (args.rss_from, args.cycles):
                 rss[cycles_done] = vm_rss_kib(pid)
+            if args.rss_csv and cycles_done % args.rss_every == 0:
+                with open(args.rss_csv, "a") as csv:
+                    csv.write(f"{cycles_done},{vm_rss_kib(pid)}\n")
             if cycles_done % 250 == 0:
                 print(f"soak: {cycles_done} cycles, {time.monotonic() - started:.0f} s, VmRSS "
                       f"{vm_rss_kib(pid) / 1024:.1f} MiB", flush=True)

@@ -154,11 +154,11 @@ class Plc:
             raise RuntimeError(f"read {address}+{count}: {r}")
         return r.registers
 
-    def cycle(self, serial, timeout_s=30):
-        """One inspection the way a PLC runs it; (result, fault code, cycle s as the PLC saw it)."""
+    def cycle(self, serial, timeout_s=30, program=1):
+        """One inspection the way a PLC runs it; (seq, result, fault code, cycle s as the PLC saw it)."""
         seq = (self.read(TRIGGER_SEQ, 1)[0] + 1) % 65536 or 1
         t0 = time.monotonic()
-        w = self.client.write_registers(TRIGGER_SEQ, [seq, 1] + encode_serial(serial), slave=1)
+        w = self.client.write_registers(TRIGGER_SEQ, [seq, program] + encode_serial(serial), slave=1)
         if w.isError():
             raise RuntimeError(f"trigger write: {w}")
         deadline = t0 + timeout_s
@@ -303,11 +303,190 @@ def scenario_duplicate_keys(args):
     finally:
         subprocess.run(["rm", "-rf", str(work)])
 
+COMMAND, LAST_REJECT_REASON = 10, 111
+
+
+def ask(sock_path, request, timeout_s=5):
+    """One maintenance request (a JSON line) and its answer, parsed; the raw line when it is not JSON."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(timeout_s)
+        s.connect(sock_path)
+        s.sendall((request if isinstance(request, str) else json.dumps(request)).encode() + b"\n")
+        data = b""
+        while not data.endswith(b"\n"):
+            chunk = s.recv(65536)
+            if not chunk:
+                break
+            data += chunk
+    return json.loads(data)
+
+
+def cube_ply(bad_index=None):
+    """A closed 20 mm cube as ASCII PLY; `bad_index` replaces one face's vertex index."""
+    v = [(x, y, z) for z in (0, 20) for y in (-10, 10) for x in (-10, 10)]
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    tris = [t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))]
+    if bad_index is not None:
+        tris[3] = (tris[3][0], bad_index, tris[3][2])
+    head = ["ply", "format ascii 1.0", f"element vertex {len(v)}", "property float x", "property float y",
+            "property float z", f"element face {len(tris)}", "property list uchar int vertex_indices", "end_header"]
+    return "\n".join(head + [f"{x} {y} {z}" for x, y, z in v] + [f"3 {a} {b} {c}" for a, b, c in tris]) + "\n"
+
+
+def cube_program(mesh, position="[0, 0, 20]"):
+    return (f"part: cube\nmesh: {mesh}\noctree: {{depth: 5, adjacency_depth: 3}}\n"
+            f"landmarks:\n  - {{id: top, position: {position}, tolerance_mm: 0.4}}\n")
+
+
+def scenario_bad_program(args):
+    """Part programs that crashed the daemon at trigger time: refused at --check and reload, FAULT 30 after."""
+    line = Line(args)
+    cfg = line.workdir / "config"
+    daemon_yaml = cfg / "hullgauged.yaml"
+    original = daemon_yaml.read_text()
+    log = line.workdir / "hullgauged.log"
+    try:
+        (cfg / "cube.ply").write_text(cube_ply())
+        (cfg / "cube-bad-face.ply").write_text(cube_ply(bad_index=1000000))
+        (cfg / "cube-ok.yaml").write_text(cube_program("cube.ply"))
+        bad = {"a PLY face index past the vertices (1000000 of 8)": (cube_program("cube-bad-face.ply"), "face 4"),
+               "a landmark coordinate of 1e308": (cube_program("cube.ply", "[1e308, 0, 20]"), "position")}
+        with_program_2 = original.replace(
+            "programs:\n", "programs:\n  2: {part: cube-2.yaml, views: stepped-block-views.yaml}\n", 1)
+        check(with_program_2 != original, "bad program: no programs section to extend")
+        plc = Plc(line.plc_port)
+        for what, (text, field) in bad.items():
+            (cfg / "cube-2.yaml").write_text(text)
+            daemon_yaml.write_text(with_program_2)
+            t0 = time.monotonic()
+            r = subprocess.run([str(args.bin / "hullgauged"), "--config", str(daemon_yaml), "--check"],
+                               capture_output=True, text=True, timeout=60)
+            check_s = time.monotonic() - t0
+            check(r.returncode == 2 and field in r.stderr, f"bad program ({what}): --check {r.stderr.strip()!r}")
+            refusals = log.read_text().count("reload refused")
+            os.kill(line.daemon_pid, signal.SIGHUP)
+            deadline = time.monotonic() + 30
+            while log.read_text().count("reload refused") == refusals and time.monotonic() < deadline:
+                time.sleep(0.05)
+            refused = log.read_text().count("reload refused") > refusals
+            check(refused, f"bad program ({what}): the reload was not refused")
+            seq = (plc.read(TRIGGER_SEQ, 1)[0] + 1) % 65536 or 1
+            plc.client.write_registers(TRIGGER_SEQ, [seq, 2] + encode_serial("BAD"), slave=1)
+            reject = plc.read(LAST_REJECT_REASON, 1)[0]
+            check(reject == 2, f"bad program ({what}): trigger of program 2 reject reason {reject}, expected 2")
+            _, result, fault, _ = plc.cycle("AFTERBAD")
+            check(result == 1 and fault == 0, f"bad program ({what}): program 1 result {result} fault {fault}")
+            reason = r.stderr.strip().replace(str(cfg) + "/", "")
+            row(f"a part program with {what}",
+                f"`hullgauged --check` exit 2 in {check_s:.1f} s: `{reason}`; SIGHUP reload refused, program 2 "
+                "unknown (LAST_REJECT_REASON 2), program 1 passes", "—", "nothing (the running configuration kept)")
+        # A program valid at reload, broken on disk before its first trigger: FAULT 30 at the trigger.
+        (cfg / "cube-2.yaml").write_text(cube_program("cube.ply"))
+        daemon_yaml.write_text(with_program_2)
+        reloads = log.read_text().count("configuration reloaded")
+        os.kill(line.daemon_pid, signal.SIGHUP)
+        deadline = time.monotonic() + 30
+        while log.read_text().count("configuration reloaded") == reloads and time.monotonic() < deadline:
+            time.sleep(0.05)
+        check(log.read_text().count("configuration reloaded") > reloads, "bad program: the good reload was refused")
+        for what, (text, _) in bad.items():
+            (cfg / "cube-2.yaml").write_text(text)
+            _, result, fault, seconds = plc.cycle("FAULT30", program=2)
+            check(result == 3 and fault == 30, f"bad program at trigger ({what}): result {result} fault {fault}")
+            check(line.alive(), f"bad program at trigger ({what}): the daemon died")
+            t0 = time.monotonic()
+            _, result, fault, _ = plc.cycle("AFTER30")
+            check(result == 1 and fault == 0, f"bad program at trigger ({what}): next part {result}/{fault}")
+            row(f"a part program broken on disk after the reload ({what}), then triggered",
+                f"RESULT 3, FAULT 30 (program-load) after {seconds:.2f} s; the daemon serves on",
+                f"the next part of program 1 passes ({time.monotonic() - t0:.2f} s)", "nothing")
+            # The loader keeps nothing of a failed load: the next trigger loads again.
+            (cfg / "cube-2.yaml").write_text(cube_program("cube.ply"))
+        plc.close()
+        check(line.alive(), "bad program: the daemon died")
+    finally:
+        line.stop()
+
+
+def scenario_stale_abort(args):
+    """COMMAND = 1 written while idle, then a trigger 0-100 ms later: the part runs."""
+    line = Line(args)
+    try:
+        plc = Plc(line.plc_port)
+        results = []
+        for delay_ms in (0, 25, 50, 75, 100):
+            w = plc.client.write_registers(COMMAND, [1], slave=1)
+            check(not w.isError(), f"stale abort: COMMAND write {w}")
+            time.sleep(delay_ms / 1000)  # the stimulus: the gap between the abort and the trigger
+            _, result, fault, _ = plc.cycle(f"ABORT{delay_ms:03d}")
+            results.append((delay_ms, result, fault))
+            check(result == 1 and fault == 0, f"stale abort at {delay_ms} ms: result {result} fault {fault}")
+        answer = ask(line.socket, {"command": "abort"})
+        check(answer.get("ok") and answer.get("aborted") is False, f"stale abort: ctl abort while idle {answer}")
+        _, result, fault, _ = plc.cycle("CTLABORT")
+        check(result == 1 and fault == 0, f"stale abort after ctl abort: result {result} fault {fault}")
+        passed = sum(1 for _, r, f in results if r == 1 and f == 0)
+        row("COMMAND = 1 while idle, trigger 0/25/50/75/100 ms later; `ctl abort` while idle",
+            f"{passed} of 5 parts run to RESULT 1; the idle abort is dropped (`ctl abort` answers `aborted: false`)",
+            "—", "nothing")
+        plc.close()
+    finally:
+        line.stop()
+
+
+def scenario_maintenance_clients(args):
+    """20 idle maintenance clients while `ctl status` answers; /dev/zero as a poses file."""
+    line = Line(args)
+    try:
+        idle = []
+        for _ in range(20):
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            s.connect(line.socket)
+            idle.append(s)
+        times = []
+        for _ in range(5):
+            t0 = time.monotonic()
+            r = subprocess.run([str(args.bin / "hullgauge"), "ctl", "--socket", line.socket, "status"],
+                               capture_output=True, text=True, timeout=30)
+            times.append(time.monotonic() - t0)
+            check(r.returncode == 0, f"maintenance: ctl status exit {r.returncode}: {r.stderr.strip()}")
+        for s in idle:
+            s.close()
+        worst = max(times)
+        check(worst < 2.0, f"maintenance: ctl status took {worst:.2f} s with 20 idle clients")
+        row("20 idle clients on the maintenance socket",
+            f"— (`ctl status` answers in {statistics.median(times) * 1000:.0f} ms median, "
+            f"{worst * 1000:.0f} ms max of 5)", "idle clients closed after 1 s", "nothing")
+        duplicate = ask(line.socket, '{"command": "status", "command": "abort"}')
+        check(duplicate.get("ok") is False and "duplicate key 'command'" in duplicate.get("error", ""),
+              f"maintenance: duplicate key answer {duplicate}")
+        rss0 = line.rss_kib()
+        t0 = time.monotonic()
+        answer = ask(line.socket, {"command": "calibrate", "pattern": "chessboard:8x5:10", "poses": "/dev/zero"})
+        took = time.monotonic() - t0
+        rss1 = line.rss_kib()
+        check(answer.get("ok") is False, f"maintenance: /dev/zero poses accepted {answer}")
+        check(took < 5.0, f"maintenance: /dev/zero poses answered after {took:.2f} s")
+        check(abs(rss1 - rss0) < 8 * 1024, f"maintenance: RSS {rss0} -> {rss1} KiB")
+        serial = ask(line.socket, {"command": "trigger", "program": 1, "serial": "A\u001b[2J"})
+        check(serial.get("ok") is False and "serial" in serial.get("error", ""), f"maintenance: ESC serial {serial}")
+        row("`ctl calibrate --poses /dev/zero`",
+            f"— (refused in {took * 1000:.0f} ms: `{answer.get('error')}`; RSS {rss0 / 1024:.0f} → "
+            f"{rss1 / 1024:.0f} MiB)", "—", "nothing")
+        row("a maintenance request naming `command` twice; a manual serial with ESC",
+            f"— (`{duplicate.get('error')}`; `{serial.get('error')}`)", "—", "nothing")
+        check(line.alive(), "maintenance: the daemon died")
+    finally:
+        line.stop()
+
 
 SCENARIOS = {
     "slow_clients": scenario_slow_clients,
     "modbus_conformance": scenario_modbus_conformance,
     "duplicate_keys": scenario_duplicate_keys,
+    "bad_program": scenario_bad_program,
+    "stale_abort": scenario_stale_abort,
+    "maintenance_clients": scenario_maintenance_clients,
 }
 
 

@@ -233,7 +233,13 @@ INSTANTIATE_TEST_SUITE_P(
                 "segmentation.object_is_dark", "expected true or false"},
         BadCase{"ViewsNotArray", R"({"views": {"id": "a"}})", "views", "expected an array"},
         BadCase{"ViewsEmpty", R"({"views": []})", "views", "at least one view"},
-        BadCase{"ViewsMissing", R"({"segmentation": {"method": "otsu"}})", "views", "missing"}),
+        BadCase{"ViewsMissing", R"({"segmentation": {"method": "otsu"}})", "views", "missing"},
+        BadCase{"TAbsurd", views(R"({"id": "c", "image": "c.png", )" + kK + ", " + kR + R"(, "t": [1e308, 0, 300]})"),
+                "views[2].t", "within ±1e5 mm"},
+        BadCase{"CxAbsurd",
+                views(R"({"id": "c", "image": "c.png", "K": [[1000, 0, -9.2e18], [0, 1000, 240], [0, 0, 1]], )" + kR +
+                      ", " + kT + "}"),
+                "views[2].K", "within ±1e7 px"}),
     [](const ::testing::TestParamInfo<BadCase>& param) { return std::string(param.param.name); });
 
 TEST(Manifest, SyntaxErrorNamesTheLine)
@@ -289,6 +295,46 @@ TEST(Manifest, ReadsViewImagesAsGreyOfTheirDepth)
             FAIL() << "view " << bad << " accepted";
         } catch (const InputError& e) {
             EXPECT_EQ(e.field(), "views[" + std::to_string(bad) + "].image") << e.what();
+        }
+    }
+}
+
+// A header claiming 65535 x 65535 pixels (16 GiB of frame) is refused from
+// its IHDR chunk, before any decoder allocates or prints a line of its own.
+TEST(Manifest, ImageClaimingTooManyPixelsIsRefusedBeforeDecoding)
+{
+    hgtest::TempDir tmp;
+    const unsigned char header[] = {0x89, 'P', 'N', 'G',  '\r', '\n', 0x1A, '\n', 0,    0, 0, 13, 'I', 'H', 'D',
+                                    'R',  0,   0,   0xFF, 0xFF, 0,    0,    0xFF, 0xFF, 8, 0, 0,  0,   0};
+    hgtest::writeFile(tmp / "huge.png", std::string(reinterpret_cast<const char*>(header), sizeof header));
+    const auto file = hgtest::writeFile(tmp / "manifest.json", R"({"views": [{"id": "h", "image": "huge.png", )" + kK +
+                                                                   ", " + kR + ", " + kT + "}]}");
+    const CaptureManifest m = readManifest(file);
+    try {
+        readViewImage(m, 0);
+        FAIL() << "a 65535x65535 image was accepted";
+    } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), file.string());
+        EXPECT_EQ(e.field(), "views[0].image");
+        EXPECT_NE(e.problem().find("65535x65535"), std::string::npos) << e.what();
+    }
+}
+
+// The strict reader's refusals reach the manifest's reader: file, key and line named.
+TEST(Manifest, DuplicateKeyAndNumberPastDoubleAreBadInput)
+{
+    hgtest::TempDir tmp;
+    for (const std::string& text : {std::string(R"({"views": [)") + R"({"id": "a", "id": "b"}]})",
+                                    std::string(R"({"views": [{"id": "a", "t": [1e400, 0, 0]}]})")}) {
+        const auto file = hgtest::writeFile(tmp / "manifest.json", text);
+        try {
+            readManifest(file);
+            FAIL() << "accepted: " << text;
+        } catch (const InputError& e) {
+            EXPECT_EQ(e.file(), file.string());
+            EXPECT_NE(std::string(e.what()).find(text.find("1e400") == std::string::npos ? "id" : "t"),
+                      std::string::npos)
+                << e.what();
         }
     }
 }

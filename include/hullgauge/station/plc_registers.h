@@ -162,6 +162,9 @@ class RegisterMap {
 /// The serial number in SERIAL (2 ASCII characters per register, high byte
 /// first), without trailing NULs and spaces.
 std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words);
+/// SERIAL carries printable ASCII; NUL pads a short serial (the rule of every
+/// serial, the PLC's and the maintenance socket's manual trigger).
+bool validSerialByte(unsigned byte);
 /// The inverse of decodeSerial (pads with NULs; longer strings are cut at 16).
 std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& serial);
 

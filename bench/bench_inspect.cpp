@@ -1,6 +1,6 @@
 // Inspection benchmarks (Google Benchmark; tools/bench prints the table):
 //  - BM_InspectGoalDriven/<depth>: 64 landmarks x 8 views of 2448x2048
-//    frames, ROI segmentation included (issue target (b): <= 5 ms on one core
+//    frames, ROI segmentation included (target (b) of the README's benchmark table: <= 5 ms on one core
 //    at depth 9);
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
 //    EVERY voxel of the part cube at the same ΔV (dense carving, full-frame
@@ -13,7 +13,7 @@
 //  - BM_VoxelTestAccuracy/<method>: volume source against centre point on a
 //    face raised by a sweep of offsets: mean |error_mm − true offset|, how
 //    often the true offset falls outside the reported bracket, wrong verdicts
-//    (issue target (c)).
+//    (target (c) of the README's benchmark table).
 #include <benchmark/benchmark.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Whole-object reconstruction against Open3D (issue 3, benchmark (d)):
+// Whole-object reconstruction against Open3D (benchmark (d), docs/inspection.md):
 // `reconstruct` (octree, volume-source test, 50 % rule) and Open3D's
 // VoxelGrid::CarveSilhouette on a dense grid, at equal resolution and with the
 // same 16 views of the block (bench_scene.h). Both report wall time and the

@@ -1,5 +1,5 @@
 # Runs `systemd-analyze security --offline=true` on UNIT and fails when the
-# overall exposure exceeds THRESHOLD (issue 6: <= 2.0).
+# overall exposure exceeds THRESHOLD (docs/daemon.md, systemd: <= 2.0).
 execute_process(COMMAND systemd-analyze security --offline=true --no-pager ${UNIT}
                 OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
 string(REGEX MATCH "Overall exposure level for [^:]+: ([0-9]+\\.[0-9]+)" found "${out}")

@@ -1,5 +1,5 @@
 // The lamp driver's common part: configuration, lifecycle, the station
-// indications of CONTRACTS §6 and the blink timer thread. The GPIO backend
+// indications of docs/contracts.md §6 and the blink timer thread. The GPIO backend
 // and the simulated twin only drive three output levels.
 #include "hullgauge/drivers/lamps.h"
 
@@ -139,7 +139,7 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
 std::array<LampState, 3> lampStatesFor(StationIndication indication)
 {
     using S = LampState;
-    // CONTRACTS §6, indexed by StationIndication; each row green, amber, red.
+    // docs/contracts.md §6, indexed by StationIndication; each row green, amber, red.
     constexpr std::array<std::array<LampState, 3>, 5> table{{{S::Off, S::Off, S::Off},
                                                              {S::On, S::Off, S::Off},
                                                              {S::Off, S::Off, S::On},

@@ -1,4 +1,4 @@
-// hullgauge calibrate intrinsics | rail | fixture (CONTRACTS §5; docs/calibration.md).
+// hullgauge calibrate intrinsics | rail | fixture (docs/contracts.md §5; docs/calibration.md).
 #include "command.h"
 #include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/calib/fixture_sequence.h"
@@ -265,7 +265,7 @@ std::unique_ptr<drivers::Camera> makeRunCamera(const ConfigNode& root, drivers::
     return camera;
 }
 
-/// The live sequence (issue 5): home, then for every pose move, wait in
+/// The live sequence (docs/calibration.md, `calibrate run`): home, then for every pose move, wait in
 /// position, grab, detect; solve the axes; write the station with a backup.
 int runLive(const RunArgs& a)
 {

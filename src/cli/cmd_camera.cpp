@@ -2,7 +2,7 @@
 // by the station's camera.driver section, from the camera backend table
 // (GigE Vision through Aravis, V4L2, or the simulated twin; docs/camera.md). Results go to stdout as JSON; progress and
 // errors to stderr. Exit status: 0 done, 2 bad station file or arguments,
-// 3 camera fault (unreachable, refused value, no frame) (CONTRACTS §5).
+// 3 camera fault (unreachable, refused value, no frame) (docs/contracts.md §5).
 #include <chrono>
 #include <iostream>
 #include <memory>

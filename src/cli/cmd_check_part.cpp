@@ -1,5 +1,5 @@
 // hullgauge check-part --part P.yaml [--json]: validates a part program
-// (CONTRACTS §1) and prints what the inspection map will be built from.
+// (docs/contracts.md §1) and prints what the inspection map will be built from.
 #include <iostream>
 #include <memory>
 #include <string>
@@ -98,7 +98,7 @@ std::function<int()> factory(CLI::App& app)
     auto* sub = app.add_subcommand("check-part", "validate a part program and summarise its mesh, cube and landmarks");
     auto partFile = std::make_shared<std::string>();
     auto json = std::make_shared<bool>(false);
-    sub->add_option("--part", *partFile, "part program YAML (CONTRACTS §1)")->required();
+    sub->add_option("--part", *partFile, "part program YAML (docs/contracts.md §1)")->required();
     sub->add_flag("--json", *json, "print the summary as JSON");
     return [partFile, json] { return run(*partFile, *json); };
 }

@@ -1,5 +1,5 @@
 // `hullgauge ctl`: talks to the running daemon through its maintenance socket
-// (CONTRACTS §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
+// (docs/contracts.md §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
 // default. One JSON request per connection, one JSON answer (docs/daemon.md).
 #include "command.h"
 #include "hullgauge/common/error.h"

@@ -3,7 +3,7 @@
 // drive, the fixture simulator, or the in-process twin). The final drive
 // status goes to stdout as JSON; progress and errors go to stderr.
 // Exit status: 0 done, 2 bad station file or arguments, 3 drive or
-// communication fault, timeout (CONTRACTS §5).
+// communication fault, timeout (docs/contracts.md §5).
 #include "command.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/drivers/fixture.h"

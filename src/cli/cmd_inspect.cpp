@@ -1,5 +1,5 @@
 // hullgauge inspect --part P.yaml|--map M.hgmap --views M.json [--out R.json]
-// Goal-driven inspection of one captured part (CONTRACTS §4, §5;
+// Goal-driven inspection of one captured part (docs/contracts.md §4, §5;
 // docs/inspection.md). Exit 0 when the part passes, 1 when it fails, 2 for bad
 // input (a bad manifest, a missing image or one of the wrong size names the
 // view), 3 for a fault.
@@ -111,7 +111,7 @@ std::function<int()> factory(CLI::App& app)
     auto* map = cmd->add_option("--map", args->map, "inspection map built by 'hullgauge build-map'");
     part->excludes(map);
     map->excludes(part);
-    cmd->add_option("--views", args->views, "capture manifest (JSON, CONTRACTS §3)")->required();
+    cmd->add_option("--views", args->views, "capture manifest (JSON, docs/contracts.md §3)")->required();
     cmd->add_option("--out", args->out, "result JSON (default: stdout)");
     // Each option replaces the part program's `inspection` key of the same meaning.
     cmd->add_option("--level", args->level, "octree level to inspect at (default: inspection.level, else the depth)");

@@ -1,5 +1,5 @@
 // hullgauge plan --part P.yaml --station S.yaml [--out plan.json] [--report plan.md]
-// Weak-convexity check and view planning (CONTRACTS §5, docs/planning.md).
+// Weak-convexity check and view planning (docs/contracts.md §5, docs/planning.md).
 // plan.json goes to --out (or stdout); beside it a poses file for
 // `hullgauge simulate` and the capture sequence. A plan that cannot be made
 // (a landmark in a concavity, a fixture range that excludes every witness, a

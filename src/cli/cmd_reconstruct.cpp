@@ -1,6 +1,6 @@
 // hullgauge reconstruct --views M.json --cube X Y Z SIZE --depth D --out hull.ply [--stats S.json]
 // Whole-object octree reconstruction with the same volume-source voxel test as
-// the inspection (CONTRACTS §5). The PLY holds one vertex per object octree
+// the inspection (docs/contracts.md §5). The PLY holds one vertex per object octree
 // node: its centre and its edge length (`size`, mm) — nodes decided whole at a
 // coarse level are not split into finest voxels. S.json: object_voxels (finest
 // level), volume_mm3, undecided_voxels, voxel_size_mm, object_nodes,

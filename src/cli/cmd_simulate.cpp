@@ -3,7 +3,7 @@
 //                    [--noise SIGMA] [--blur SIGMA] [--seed N] [--bit-depth 8|16] [--subsamples N]
 // Renders backlit views of the part (the union of the --mesh solids, each
 // minus every --subtract solid) at the fixture poses and writes v0.png,
-// v1.png, ... and DIR/manifest.json (CONTRACTS §3, §5) with K, dist, R, t and
+// v1.png, ... and DIR/manifest.json (docs/contracts.md §3, §5) with K, dist, R, t and
 // the fixture pose of every view. One summary line per view on stdout; the
 // progress on stderr.
 #include "command.h"

@@ -11,7 +11,7 @@
 namespace hg::cli {
 
 /// Adds a subcommand to `app` and returns the function that runs it; that
-/// function returns the process exit status (CONTRACTS §5).
+/// function returns the process exit status (docs/contracts.md §5).
 using CommandFactory = std::function<std::function<int()>(CLI::App& app)>;
 
 struct CommandRegistration {

@@ -1,4 +1,4 @@
-// hullgauge — the maintenance and offline tool (CONTRACTS §5).
+// hullgauge — the maintenance and offline tool (docs/contracts.md §5).
 #include <algorithm>
 #include <iostream>
 #include <memory>

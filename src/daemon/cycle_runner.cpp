@@ -458,7 +458,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
 void CycleRunner::commitAndPublish(Cycle& cycle)
 {
     auto& record = cycle.record;
-    // The record is durable before the PLC can see DONE_SEQ (CONTRACTS §6).
+    // The record is durable before the PLC can see DONE_SEQ (docs/contracts.md §6).
     const auto commitStart = clock_.now();
     try {
         store_.commit(record, cycle.imagesDir);

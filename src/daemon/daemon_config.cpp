@@ -57,7 +57,7 @@ void parsePlc(const ConfigNode& node, PlcConfig& plc)
     if (auto n = node.optional("frame_timeout_s")) plc.frameTimeout = seconds(*n, 0.01, 10.0);
     if (auto n = node.optional("idle_timeout_s")) plc.idleTimeout = seconds(*n, 1.0, 86400.0);
     if (auto n = node.optional("yield_after_s")) plc.yieldAfter = seconds(*n, 0.1, 3600.0);
-    // CONTRACTS §6: HEARTBEAT increments at least once a second.
+    // docs/contracts.md §6: HEARTBEAT increments at least once a second.
     if (auto n = node.optional("heartbeat_period_s")) plc.heartbeatPeriod = seconds(*n, 0.05, 1.0);
 }
 
@@ -110,7 +110,7 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
         // The part program's own loader checks it in full when the program is loaded;
         // here it must at least be a YAML map that names its part and landmarks.
         auto part = ConfigNode::loadFile(ref.partFile);
-        if (!part.isMap()) part.fail("a part program is a YAML map (CONTRACTS §1)");
+        if (!part.isMap()) part.fail("a part program is a YAML map (docs/contracts.md §1)");
         (void)part["part"].asString();
         if (!part["landmarks"].isSequence() || part["landmarks"].size() == 0)
             part["landmarks"].fail("expected a non-empty list of landmarks");

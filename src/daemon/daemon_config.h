@@ -36,8 +36,8 @@ std::optional<Ipv4Network> parseIpv4Network(const std::string& text);
 
 struct PartProgramRef {
     std::uint16_t number = 0;
-    std::filesystem::path partFile;           ///< part program YAML (CONTRACTS §1), absolute
-    std::filesystem::path viewsFile;          ///< view plan: a poses file (CONTRACTS §5), absolute
+    std::filesystem::path partFile;           ///< part program YAML (docs/contracts.md §1), absolute
+    std::filesystem::path viewsFile;          ///< view plan: a poses file (docs/contracts.md §5), absolute
     std::vector<geometry::FixturePose> views; ///< loaded and range-checked
 };
 

@@ -21,7 +21,7 @@
 
 namespace hg::daemon {
 
-/// Operator lamp patterns (CONTRACTS §6), chosen by station::lampPattern.
+/// Operator lamp patterns (docs/contracts.md §6), chosen by station::lampPattern.
 using station::LampPattern;
 
 class StationDevices {

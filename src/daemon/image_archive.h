@@ -1,7 +1,7 @@
 // The parts' archive (docs/daemon.md, "Archived parts"): one folder per
 // archived inspection holding, per view, the frame as grabbed and a PNG with
 // the silhouette outline and the landmarks drawn in their status colours, and a
-// capture manifest (CONTRACTS §3) with the cameras and the segmentation the
+// capture manifest (docs/contracts.md §3) with the cameras and the segmentation the
 // daemon inspected with, so `hullgauge inspect --part P --views
 // <folder>/manifest.json` reproduces its landmark results. A folder is written
 // whole or not at all (a hidden partial folder renamed when complete), and the

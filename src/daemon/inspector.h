@@ -1,6 +1,6 @@
 // The inspection pipeline as the cycle runner sees it: a cycle begins with a
 // part program, each grabbed view is handed over as soon as it is in (so view
-// k is processed while the fixture moves to view k+1, issue 6 point 4), and
+// k is processed while the fixture moves to view k+1, docs/daemon.md, "The pipeline"), and
 // finish() waits for the verdict.
 #pragma once
 

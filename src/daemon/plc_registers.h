@@ -1,4 +1,4 @@
-// The register map (hullgauge/station/plc_registers.h, CONTRACTS §6) shared by
+// The register map (hullgauge/station/plc_registers.h, docs/contracts.md §6) shared by
 // the PLC server's thread, the cycle runner and the main loop: every access
 // takes one lock, so a read of any block sees one consistent state (a result
 // is published whole), and the runner can wait for a trigger or a command.

@@ -1,4 +1,4 @@
-// The Modbus TCP server the PLC talks to (CONTRACTS §6), over libmodbus.
+// The Modbus TCP server the PLC talks to (docs/contracts.md §6), over libmodbus.
 //
 // One thread serves every client with poll(): a listening socket, up to
 // `max_clients` non-blocking connections, and a wake-up pipe for stop(). Each

@@ -1,4 +1,4 @@
-// The inspection pipeline's worker (issue 6 point 4): view k's frame is
+// The inspection pipeline's worker (docs/daemon.md, "The pipeline"): view k's frame is
 // segmented into its silhouette index — the per-view half of the goal-driven
 // inspection, the regions of interest the volume-source voxel test of
 // dissertation 3.3.4 will read — on a thread of its own while the cycle runner

@@ -27,7 +27,7 @@ std::string toString(const FixturePose& pose, FixtureType type)
 
 RigidTransform FixtureKinematics::cameraFromPart(const FixturePose& pose) const
 {
-    // CONTRACTS §2: the turntable turns the part about the rotation axis, the
+    // docs/contracts.md §2: the turntable turns the part about the rotation axis, the
     // declination tilts the turntable (and the part on it) about its own axis.
     if (type == FixtureType::Rail)
         return cameraFromFixture * RigidTransform::translation(railAxis.normalized() * pose.railMm);

@@ -1,4 +1,4 @@
-// Part program loader (CONTRACTS §1); every field is validated through
+// Part program loader (docs/contracts.md §1); every field is validated through
 // ConfigNode so errors name file, line and key path.
 #include "hullgauge/model/part_program.h"
 

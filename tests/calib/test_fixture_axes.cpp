@@ -79,7 +79,7 @@ TEST(FixtureAxes, IntersectingPerpendicularAxesGiveTheContractModel)
     auto result = calibrateFixtureAxes(rig.views(5), rig.camera);
     expectRecovered(rig, result);
     EXPECT_LT(result.axesDistanceMm, 0.1);
-    // With intersecting axes the CONTRACTS §2 kinematics reproduce the rig.
+    // With intersecting axes the docs/contracts.md §2 kinematics reproduce the rig.
     auto k = result.kinematics();
     FixturePose pose{-20.0, 35.0, 0.0};
     RigidTransform truth =

@@ -1,4 +1,4 @@
-// `hullgauge ctl` against a running daemon (CONTRACTS §7): socket selection,
+// `hullgauge ctl` against a running daemon (docs/contracts.md §7): socket selection,
 // status, sim-part, trigger, results, and the exit status when no daemon runs.
 #include "daemon_harness.h"
 

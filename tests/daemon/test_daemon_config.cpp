@@ -111,8 +111,8 @@ TEST(DaemonConfig, DefaultsFollowTheContract)
                                                   "station: station.yaml\n"
                                                   "programs: {1: {part: block.yaml, views: views.yaml}}\n"
                                                   "results: {database: r.db, images: img}\n"));
-    EXPECT_EQ(cfg.plc.port, 502); // CONTRACTS §6
-    EXPECT_EQ(cfg.plc.unitId, 1); // CONTRACTS §6
+    EXPECT_EQ(cfg.plc.port, 502); // docs/contracts.md §6
+    EXPECT_EQ(cfg.plc.unitId, 1); // docs/contracts.md §6
     EXPECT_TRUE(cfg.plc.allowedClients.empty());
     EXPECT_LE(cfg.plc.heartbeatPeriod, std::chrono::milliseconds(1000));
     EXPECT_EQ(cfg.sequencer.retries, 1);

@@ -1,4 +1,4 @@
-// Fixture kinematics (CONTRACTS §2) against poses worked out by hand.
+// Fixture kinematics (docs/contracts.md §2) against poses worked out by hand.
 #include <gtest/gtest.h>
 
 #include "hullgauge/geometry/fixture.h"

@@ -1,9 +1,9 @@
-// The defect list of issue 3, made from the CAD with the simulator
+// The defect list (docs/inspection.md), made from the CAD with the simulator
 // (hgtest::plateDefects: a feature shifted, material missing at a corner, a
 // burr, a hole too large, a face too low) and inspected from grazing views
 // of every landmark with noisy frames. For every landmark the true offset e
 // (derived by hand from the defect geometry along the landmark normal)
-// satisfies CONTRACTS §4: error_min − ΔV <= |e| <= error_max + ΔV; landmarks
+// satisfies docs/contracts.md §4: error_min − ΔV <= |e| <= error_max + ΔV; landmarks
 // with |e| > tolerance + 2ΔV fail, those with |e| < tolerance − 2ΔV pass.
 #include "hgtest/parts.h"
 

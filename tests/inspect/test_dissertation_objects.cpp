@@ -4,7 +4,7 @@
 // channel (weakly convex, not convex), the handleless cup (not weakly convex
 // at its inner bottom), the post of fig. 3.5 and the circular hole of fig.
 // 3.6. Every verdict is checked against the offsets derived by hand from the
-// geometry (CONTRACTS §4); the fig. 3.7 face is in test_simulated_parts.cpp.
+// geometry (docs/contracts.md §4); the fig. 3.7 face is in test_simulated_parts.cpp.
 // Also the map's "don't care" band: a nominal face on a voxel mid-plane.
 #include "hgtest/parts.h"
 #include "hullgauge/common/error.h"
@@ -125,7 +125,7 @@ TEST(DissertationObjects, CupInnerBottomIsNotObservableAndNeverPasses)
     const LandmarkResult& bottom = landmarkResult(r, "inner-bottom");
     EXPECT_EQ(bottom.status, LandmarkStatus::NotObservable) << bottom.reason;
     EXPECT_NE(bottom.reason.find("enclosed"), std::string::npos) << bottom.reason;
-    EXPECT_FALSE(r.pass); // CONTRACTS §4: any landmark not ok fails the part
+    EXPECT_FALSE(r.pass); // docs/contracts.md §4: any landmark not ok fails the part
     EXPECT_EQ(toJson(r)["verdict"], "fail");
     hgtest::expectJudgedAgainstTruth(r, cup, hgtest::asDesigned(cup), {"inner-bottom"});
 }

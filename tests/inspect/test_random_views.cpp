@@ -1,4 +1,4 @@
-// Zero false rejects of nominal parts over random view sets (issue 3): 24
+// Zero false rejects of nominal parts over random view sets (docs/inspection.md): 24
 // seeded sets per part, each holding a grazing view of every landmark (camera
 // centre in the landmark's tangent plane, random azimuth within it among the
 // clear ones, random distance 260-380 mm, random roll) plus three random
@@ -47,7 +47,7 @@ Tally runRandomSets(const hgtest::TestPart& part, int sets, std::uint64_t seed)
                 ADD_FAILURE() << part.name << " set " << s << ": " << l.id << " " << toString(l.status) << " error "
                               << l.errorMm << " [" << l.offsetLowMm << ", " << l.offsetHighMm << "] " << l.reason;
             }
-            // The nominal surface (e = 0) is bracketed as CONTRACTS §4 promises
+            // The nominal surface (e = 0) is bracketed as docs/contracts.md §4 promises
             // (slack ΔV). Known weakness: at a corner landmark (normal along a
             // body diagonal) the segmentation's half-pixel erosion of the
             // silhouette's vertex adds up over three axes, and with views at

@@ -1,9 +1,9 @@
 // Inspection of parts rendered with the backlit simulator (dissertation
 // fig. 3.5-3.7 objects), seen from grazing views: the camera centre lies in
 // the landmark's tangent plane, computed analytically, so the line of sight
-// grazes the surface at the landmark (ARCHITECTURE.md, "perspective and
+// grazes the surface at the landmark (docs/architecture.md, "perspective and
 // grazing views"). Defects are made from the CAD: a face raised or lowered by
-// a known e; the CONTRACTS §4 promise is checked at every landmark:
+// a known e; the docs/contracts.md §4 promise is checked at every landmark:
 //   error_min − ΔV <= |e| <= error_max + ΔV.
 #include <gtest/gtest.h>
 

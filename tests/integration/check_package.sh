@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The Debian package (issue 6, systemd): `cpack -G DEB` on the build tree into
+# The Debian package (docs/daemon.md, systemd): `cpack -G DEB` on the build tree into
 # a scratch folder, then, with Debian's own tools only:
 #   - dpkg-deb -c: the daemon, the CLI, the unit, the sysusers file, the docs;
 #   - dpkg-deb -I: Depends lists the shared libraries the programs link

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The simulated line end to end (CONTRACTS §6, §7).
+"""The simulated line end to end (docs/contracts.md §6, §7).
 
 Starts tools/simline (fixture simulator on Modbus TCP, hullgauged with the
 simulated camera and config/sim, with --config laid over it: CTest uses

@@ -1,4 +1,4 @@
-// Part program loading (CONTRACTS §1): the fields, the derived cube and
+// Part program loading (docs/contracts.md §1): the fields, the derived cube and
 // normals, and a precise error (file, line, field) for each kind of mistake.
 #include <cmath>
 #include <string>

@@ -1,4 +1,4 @@
-// `hullgauge plan` end to end (CONTRACTS §5): files in, plan.json and poses
+// `hullgauge plan` end to end (docs/contracts.md §5): files in, plan.json and poses
 // out, exit 2 with a sentence the designer can act on when no plan exists.
 #include "hgtest/paths.h"
 #include "hullgauge/geometry/station.h"

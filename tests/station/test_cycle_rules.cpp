@@ -1,5 +1,5 @@
 // The rules beside the sequencer: device status -> event, verdict, lamps
-// (CONTRACTS §6) and STATUS (docs/plc.md), each case written out by hand.
+// (docs/contracts.md §6) and STATUS (docs/plc.md), each case written out by hand.
 #include "hullgauge/station/cycle_rules.h"
 
 #include <gtest/gtest.h>
@@ -51,7 +51,7 @@ TEST(CycleRules, LampsFollowTheStateAndInDoneTheVerdict)
 
 TEST(CycleRules, StatusRegisterForEachState)
 {
-    // STATUS values of CONTRACTS §6 (and 5, maintenance, docs/plc.md).
+    // STATUS values of docs/contracts.md §6 (and 5, maintenance, docs/plc.md).
     EXPECT_EQ(static_cast<int>(plcStatus(S::Ready)), 0);
     for (auto busy : {S::Moving, S::Settling, S::Grabbing, S::Processing})
         EXPECT_EQ(static_cast<int>(plcStatus(busy)), 1);

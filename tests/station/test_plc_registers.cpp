@@ -1,4 +1,4 @@
-// The PLC register map of CONTRACTS §6: access rules, exception codes, the
+// The PLC register map of docs/contracts.md §6: access rules, exception codes, the
 // trigger handshake and the publication of a result (the lock around it is the
 // daemon's, tests/daemon/test_plc_registers.cpp).
 #include "hullgauge/station/plc_registers.h"
@@ -32,7 +32,7 @@ TEST(PlcRegisterMap, StartsInStartingWithEverythingElseZero)
 {
     RegisterMap r;
     auto s = r.snapshot();
-    EXPECT_EQ(s[102], 4); // STATUS starting (CONTRACTS §6)
+    EXPECT_EQ(s[102], 4); // STATUS starting (docs/contracts.md §6)
     for (std::size_t a = 0; a < s.size(); ++a) {
         if (a != 102) {
             EXPECT_EQ(s[a], 0) << "address " << a;

@@ -1,4 +1,4 @@
-// Capture manifest (CONTRACTS §3): round trip, the P form against K [R | t]
+// Capture manifest (docs/contracts.md §3): round trip, the P form against K [R | t]
 // computed by hand, and one precise error per malformed field.
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
@@ -51,7 +51,7 @@ TEST(Manifest, RoundTripKeepsCamerasPosesAndSegmentation)
     std::filesystem::create_directories(file.parent_path());
     writeManifest(m, file);
 
-    // The file is plain CONTRACTS §3 JSON with paths relative to the manifest.
+    // The file is plain docs/contracts.md §3 JSON with paths relative to the manifest.
     std::ifstream in(file);
     const auto raw = nlohmann::json::parse(in);
     EXPECT_EQ(raw["views"][0]["image"], "v0.png");

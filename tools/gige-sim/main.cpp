@@ -4,7 +4,7 @@
 // exactly as to a line camera, so CI exercises the real driver code.
 //
 // It serves grey images from PNG/TIFF files (or the views of a capture
-// manifest, CONTRACTS §3) one after the other, cycling; each frame the fake
+// manifest, docs/contracts.md §3) one after the other, cycling; each frame the fake
 // camera sends is the next image, cropped to the requested ROI and converted
 // to the requested pixel format:
 //   Mono8  : 8-bit images as is; 16-bit images >> 8

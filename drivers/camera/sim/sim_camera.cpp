@@ -2,7 +2,7 @@
 // real camera, used by the simulated line and in tests. Each grab asks the pose
 // source where the fixture is, poses the camera through the station
 // calibration (camera_from_part = camera_from_fixture * fixture motion,
-// CONTRACTS §2) and renders the backlit silhouette of the part under test with
+// docs/contracts.md §2) and renders the backlit silhouette of the part under test with
 // the hg::sim renderer, into a pool slot cropped to the ROI.
 //
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held

@@ -1,7 +1,7 @@
 // Fixture-axis calibration: from views of a target (chessboard) carried by
 // the fixture at several rotation and declination angles, the two axes as
 // lines in space — in general skew and not at right angles — and
-// camera_from_fixture (CONTRACTS §2), with residuals in pixels and mm.
+// camera_from_fixture (docs/contracts.md §2), with residuals in pixels and mm.
 //
 // Model (camera frame; declination is the outer axis, it tilts the turntable):
 //   camera_from_target(θ, φ) = Rot(L_d, φ) · Rot(L_r, θ) · M
@@ -61,7 +61,7 @@ struct FixtureAxesResult {
     int views = 0;
     int corners = 0;
 
-    /// The CONTRACTS §2 kinematics with these axes (ranges left at `base`'s).
+    /// The docs/contracts.md §2 kinematics with these axes (ranges left at `base`'s).
     /// It keeps both axes through the origin: the declination axis offset
     /// (axesDistanceMm) is not part of the §2 model.
     geometry::FixtureKinematics kinematics(const geometry::FixtureKinematics& base = {}) const;

@@ -1,4 +1,4 @@
-// The live fixture-axis calibration sequence (issue 5, dissertation 4.3):
+// The live fixture-axis calibration sequence (docs/calibration.md, dissertation 4.3):
 // for every pose move, wait in position, grab, detect the target; then solve
 // the axes. The station's hardware is reached through callbacks, so the same
 // sequence runs from `hullgauge calibrate run` (its own drivers) and from the

@@ -3,7 +3,7 @@
 // error of every view and the standard deviation of every estimated parameter.
 // This is the modern replacement of the dissertation's 4.3 rail procedure for
 // K; the result feeds the camera model of eq. 4.2.1-1/2 generalised
-// (CONTRACTS: fx = f/Δp_h, fy = f/Δp_v, (cx, cy) = (m_c, n_c)).
+// (docs/contracts.md: fx = f/Δp_h, fy = f/Δp_v, (cx, cy) = (m_c, n_c)).
 #pragma once
 
 #include <string>

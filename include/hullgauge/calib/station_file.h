@@ -1,4 +1,4 @@
-// Writing calibration results into a station YAML file (CONTRACTS §2, §5):
+// Writing calibration results into a station YAML file (docs/contracts.md §2, §5):
 // only the keys a calibration owns change, every other key of an existing file
 // is kept (in its order), the old file is kept as a time-stamped backup, and
 // the new text goes to a temporary file in the same folder that is flushed and

@@ -1,5 +1,5 @@
 // A YAML node that knows the file it came from and its key path, so that every
-// configuration error names file, line and field (CONTRACTS §5, exit status 2):
+// configuration error names file, line and field (docs/contracts.md §5, exit status 2):
 //   station.yaml:12: fixture.rotation_range_deg: expected a sequence of 2 numbers
 // Used by the station, part program, poses and daemon configuration loaders.
 #pragma once

@@ -2,9 +2,9 @@
 //
 // Loading-time problems (a file, a configuration key, a command-line value) are
 // InputError: they name the file, the field and, where the format has lines, the
-// line, and map to exit status 2 (CONTRACTS §5). Hardware and runtime faults are
+// line, and map to exit status 2 (docs/contracts.md §5). Hardware and runtime faults are
 // FaultError (exit status 3). The capture loop never throws across a driver
-// boundary; it returns status values instead (STYLE.md point 4).
+// boundary; it returns status values instead (docs/style.md point 4).
 #pragma once
 
 #include <optional>
@@ -38,7 +38,7 @@ class FaultError : public std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-/// Exit statuses of every hullgauge program (CONTRACTS §5).
+/// Exit statuses of every hullgauge program (docs/contracts.md §5).
 enum class ExitStatus : int { Ok = 0, PartFails = 1, BadInput = 2, Fault = 3 };
 
 } // namespace hg

@@ -1,4 +1,4 @@
-// Category logging (STYLE.md point 5): one spdlog logger per category
+// Category logging (docs/style.md point 5): one spdlog logger per category
 // ("camera", "fixture", "plc", "seq", "inspect", "model", "sim", "calib", ...),
 // each with its own level, set at run time from HULLGAUGE_LOG
 // ("info" or "warn,camera=trace,plc=debug"). Per-frame messages use trace.

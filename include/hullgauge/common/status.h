@@ -1,6 +1,6 @@
 // The one status value of every call that must not throw: the drivers' cyclic
 // and lifecycle calls, the daemon's device port and the calibration sequence's
-// move/grab callbacks (STYLE.md point 4). A status is success, or a failure
+// move/grab callbacks (docs/style.md point 4). A status is success, or a failure
 // with a code that says what kind of failure it was (the sequencer maps the
 // code to its events and the PLC's fault codes, docs/plc.md) and a message for
 // people that names the device and what went wrong.

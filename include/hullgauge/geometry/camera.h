@@ -1,6 +1,6 @@
 // Pinhole camera with OpenCV lens distortion, posed relative to the part.
 //
-// Frames (CONTRACTS): the part frame is the CAD frame; the camera frame is
+// Frames (docs/contracts.md): the part frame is the CAD frame; the camera frame is
 // OpenCV's (x right, y down, z forward). `cameraFromPart` maps part to camera:
 // X_cam = R * X_part + t. Pixels: x = column, y = row, and the centre of pixel
 // (c, r) is at (c, r) — so pixel (c, r) covers [c-0.5, c+0.5] x [r-0.5, r+0.5]

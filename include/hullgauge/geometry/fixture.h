@@ -1,4 +1,4 @@
-// Fixture kinematics (CONTRACTS §2).
+// Fixture kinematics (docs/contracts.md §2).
 //
 // Rotation/declination fixture: the part is mounted with its frame on the
 // turntable frame; the turntable rotates about `rotationAxis`, and the whole

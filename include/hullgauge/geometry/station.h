@@ -1,4 +1,4 @@
-// The station description (CONTRACTS §2): camera intrinsics, fixture
+// The station description (docs/contracts.md §2): camera intrinsics, fixture
 // kinematics, environment. Driver and communication sections of the same file
 // are kept as raw configuration for the drivers to read (`sections`).
 #pragma once
@@ -36,7 +36,7 @@ Station loadStation(const std::filesystem::path& file);
 Station parseStation(const ConfigNode& root);
 
 /// Loads a poses file: a YAML list of `{rotation_deg, declination_deg}` or
-/// `{rail_mm}` maps (CONTRACTS §5). Each pose is checked against the fixture's
+/// `{rail_mm}` maps (docs/contracts.md §5). Each pose is checked against the fixture's
 /// type and ranges when `fixture` is given.
 std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const FixtureKinematics* fixture = nullptr);
 

@@ -1,6 +1,6 @@
 // Rigid transforms between frames.
 //
-// Convention (CONTRACTS): a transform named `a_from_b` maps coordinates of a
+// Convention (docs/contracts.md): a transform named `a_from_b` maps coordinates of a
 // point in frame b to frame a: X_a = R * X_b + t. Composition reads right to
 // left: a_from_c = a_from_b * b_from_c. Units: millimetres, angles in degrees
 // at the interfaces, radians inside Eigen.

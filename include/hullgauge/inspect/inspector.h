@@ -112,7 +112,7 @@ struct InspectionResult {
     double segmentationMs = 0.0, reconstructionMs = 0.0, totalMs = 0.0;
 };
 
-/// CONTRACTS §4 plus the documented extensions.
+/// docs/contracts.md §4 plus the documented extensions.
 nlohmann::json toJson(const InspectionResult& result);
 
 /// A reconstruction oracle: the label of a voxel box (Void, Object or Undecided).
@@ -136,7 +136,7 @@ class Inspector {
                              const vision::SegmentationSettings& segmentation) const;
     /// Segments one view's regions of interest into its silhouette index: the
     /// per-view half of `inspect`, so a caller can prepare view k while the
-    /// fixture moves to view k+1 (issue 6, pipeline). Const and free of shared
+    /// fixture moves to view k+1 (docs/daemon.md, "The pipeline"). Const and free of shared
     /// state: safe to call from several threads. Throws std::invalid_argument
     /// naming the view when the frame does not match its camera.
     SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;

@@ -1,4 +1,4 @@
-// The part program (CONTRACTS §1): which CAD model, the octree of the
+// The part program (docs/contracts.md §1): which CAD model, the octree of the
 // inspection map (dissertation 3.3.1, MAD eq. 4.5.1-1), the designer's
 // landmarks with tolerances and best views (5.3.1), and the geometric
 // parameters built from them (4.6.4). The reference is docs/part-program.md.

@@ -1,5 +1,5 @@
-// Writing a view plan: plan.json (CONTRACTS §5 `hullgauge plan`), a poses file
-// for `hullgauge simulate` and the capture sequence (CONTRACTS §5 poses
+// Writing a view plan: plan.json (docs/contracts.md §5 `hullgauge plan`), a poses file
+// for `hullgauge simulate` and the capture sequence (docs/contracts.md §5 poses
 // format), and a Markdown report for the designer. Format: docs/planning.md.
 #pragma once
 

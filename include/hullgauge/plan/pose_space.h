@@ -2,7 +2,7 @@
 // analytic grazing poses of a landmark (ARCHITECTURE "perspective and grazing
 // views").
 //
-// A pose is a fixture position (CONTRACTS §2). The camera centre in the part
+// A pose is a fixture position (docs/contracts.md §2). The camera centre in the part
 // frame, C(pose), is what decides what a view sees of the part. For a
 // rotation/declination fixture C(θ, δ) = Rot(rot_axis, θ)ᵀ Rot(decl_axis, δ)ᵀ c_f
 // with c_f the camera centre in the fixture frame, so at a fixed declination

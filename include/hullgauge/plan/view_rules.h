@@ -27,7 +27,7 @@
 //  Rule 4 (depth of field, eq. 5.3.6-5): the landmark's depth along the
 //    optical axis lies within the station's depth of field, when given.
 //
-// The floor (Assumption 2.10, CONTRACTS §2 environment.floor_z_mm): the camera
+// The floor (Assumption 2.10, docs/contracts.md §2 environment.floor_z_mm): the camera
 // centre must lie above the plane z = floor_z_mm, and a line of sight is
 // blocked where it crosses that plane within `floorRadiusMm` of the fixture
 // axis (the turntable under the part); beyond it the back light is seen.

@@ -1,6 +1,6 @@
 // The rules that turn what a cycle's steps reported into what the station
 // shows: the sequencer's events from the devices' status codes, the verdict of
-// a cycle, the operator lamps (CONTRACTS §6) and the PLC's STATUS for a
+// a cycle, the operator lamps (docs/contracts.md §6) and the PLC's STATUS for a
 // sequencer state (docs/plc.md). Pure functions beside the sequencer; the
 // daemon's cycle runner applies them.
 #pragma once
@@ -14,7 +14,7 @@
 
 namespace hg::station {
 
-/// Operator lamp patterns (CONTRACTS §6): green pass, red fail, amber busy,
+/// Operator lamp patterns (docs/contracts.md §6): green pass, red fail, amber busy,
 /// red and amber blinking on fault.
 enum class LampPattern { Off, Busy, Pass, Fail, Fault };
 std::string_view toString(LampPattern p);

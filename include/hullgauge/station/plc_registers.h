@@ -1,4 +1,4 @@
-// The PLC's view of the station: the holding-register map of CONTRACTS §6 and
+// The PLC's view of the station: the holding-register map of docs/contracts.md §6 and
 // its rules, independent of the Modbus transport and of threads. A pure value:
 // the daemon's PlcRegisters (src/daemon/plc_registers.h) holds one under a
 // lock, so a read of any block of registers sees one consistent state: RESULT,
@@ -6,7 +6,7 @@
 // cycle are written together by publishResult(), and a PLC that reads
 // DONE_SEQ == its TRIGGER_SEQ in the same block reads that cycle's result.
 //
-// Trigger rule (CONTRACTS §6): a write that changes TRIGGER_SEQ asks for an
+// Trigger rule (docs/contracts.md §6): a write that changes TRIGGER_SEQ asks for an
 // inspection with the PART_PROGRAM and SERIAL in the registers after that write
 // (an FC16 block writing program, serial and trigger together is applied as one).
 // It is accepted when STATUS is ready or done and the program is known: ACK_SEQ
@@ -27,7 +27,7 @@
 
 namespace hg::station {
 
-/// Holding-register addresses (0-based), CONTRACTS §6. Extensions beyond the
+/// Holding-register addresses (0-based), docs/contracts.md §6. Extensions beyond the
 /// contract are marked and documented in docs/plc.md.
 namespace reg {
 inline constexpr std::uint16_t TriggerSeq = 0;
@@ -55,11 +55,11 @@ inline constexpr std::uint16_t Count = 136;
 /// Largest number of landmarks LANDMARK_OK_BITS can report.
 inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
 
-/// STATUS register values (CONTRACTS §6).
+/// STATUS register values (docs/contracts.md §6).
 /// Maintenance (5) is an extension: a calibration runs from the maintenance
 /// socket; triggers are refused as not ready.
 enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4, Maintenance = 5 };
-/// RESULT register values (CONTRACTS §6).
+/// RESULT register values (docs/contracts.md §6).
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
 /// COMMAND register values (extension).
 enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2 };

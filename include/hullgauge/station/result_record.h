@@ -13,7 +13,7 @@
 
 namespace hg::station {
 
-/// A landmark's outcome, as in the inspection result JSON (CONTRACTS §4).
+/// A landmark's outcome, as in the inspection result JSON (docs/contracts.md §4).
 struct LandmarkOutcome {
     std::string id;
     std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable

@@ -1,4 +1,4 @@
-// The capture sequencer as an explicit state machine (STYLE.md point 6).
+// The capture sequencer as an explicit state machine (docs/style.md point 6).
 //
 // Pure logic: it consumes events (what the devices and the pipeline reported)
 // and answers the next action; the daemon's cycle runner performs the actions

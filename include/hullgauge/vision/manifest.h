@@ -1,4 +1,4 @@
-// Capture manifest (CONTRACTS §3): a set of views for offline work — one image
+// Capture manifest (docs/contracts.md §3): a set of views for offline work — one image
 // per view with the camera that took it — and how to segment the images.
 //
 //   {"views": [{"id": "v0", "image": "v0.png", "K": [[...]], "dist": [...],
@@ -6,7 +6,7 @@
 //              {"id": "v1", "image": "v1.png", "P": [[...4], [...4], [...4]]}],
 //    "segmentation": {"method": "otsu", "object_is_dark": true}}
 //
-// Cameras follow CONTRACTS: X_cam = R X_part + t, pixel = K X_cam, then
+// Cameras follow docs/contracts.md: X_cam = R X_part + t, pixel = K X_cam, then
 // OpenCV distortion. A view gives either K, R, t (+ optional dist) or a 3x4
 // P (part frame to pixels), decomposed into K, R, t.
 //

@@ -1,4 +1,4 @@
-// Segmentation of backlit grey frames into silhouettes (CONTRACTS §3,
+// Segmentation of backlit grey frames into silhouettes (docs/contracts.md §3,
 // dissertation 3.3.8 "the views ... are segmented and thresholded").
 //
 // Convention of every silhouette produced here: CV_8U, 255 = object (the part
@@ -49,7 +49,7 @@ std::string toString(SegmentationMethod method);
 /// Largest `threshold` accepted in a file: the top grey level of a 16-bit frame.
 constexpr double kMaxThreshold = 65535.0;
 
-/// A `segmentation` map with the keys of the capture manifest's (CONTRACTS §3):
+/// A `segmentation` map with the keys of the capture manifest's (docs/contracts.md §3):
 /// `method` (otsu | fixed | mask), `threshold` (required for fixed, grey
 /// levels 0..65535), `object_is_dark`. Absent keys keep the defaults; a bad
 /// value or an unknown key throws InputError naming file, line and key.

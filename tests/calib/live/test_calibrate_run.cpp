@@ -268,7 +268,7 @@ TEST_F(CalibrateRun, SimulatedCameraWithoutATargetIsBadInputNamingTheKey)
     EXPECT_TRUE(backupsOf(station).empty());
 }
 
-// The same calibration through the running daemon (issue 6, maintenance
+// The same calibration through the running daemon (docs/daemon.md, maintenance
 // socket): hullgauged with this station and a part program, the operator
 // puts the target on the fixture (`ctl sim-part target`) and runs `ctl
 // calibrate`; production is paused meanwhile (PLC STATUS 5 = maintenance,

@@ -3,7 +3,7 @@
 // defect list, as CAD meshes with the designer's landmarks; defective parts
 // made from the CAD with csg.h, each with the true offset of its surface at
 // every landmark computed from the defect geometry; and the analytic grazing
-// views of ARCHITECTURE.md ("perspective and grazing views").
+// views of docs/architecture.md ("perspective and grazing views").
 //
 // Every part fits the same octree: a 32 mm cube at depth 8 (ΔV = 0.125 mm),
 // 6 adjacency layers, its origin placed so that no nominal face lies on a
@@ -122,7 +122,7 @@ struct Clearance {
     double offsetMm;
 };
 
-/// A grazing view of `landmark` (ARCHITECTURE.md): the camera centre lies in
+/// A grazing view of `landmark` (docs/architecture.md): the camera centre lies in
 /// the landmark's tangent plane, at a random azimuth within it and a random
 /// distance, looking at the landmark. The azimuth is drawn uniformly among
 /// those whose lines of sight (camera centre through the points of
@@ -156,7 +156,7 @@ std::vector<hg::inspect::CapturedView> renderViews(const hg::model::TriangleMesh
 std::vector<hg::geometry::CameraModel> grazingViewSet(const TestPart& part, const PartAsMade* asMade, int extraViews,
                                                       std::mt19937_64& rng, const GrazingOptions& options = {});
 
-/// The judgement CONTRACTS §4 promises, checked (gtest) at every landmark of
+/// The judgement docs/contracts.md §4 promises, checked (gtest) at every landmark of
 /// `result` against the true offsets of `asMade`: the landmark is measured,
 /// e lies in [error_min − ΔV, error_max + ΔV] and, signed, in [offset_low −
 /// ΔV, offset_high + ΔV]; a landmark with |e| > tolerance + 2ΔV is not ok, one

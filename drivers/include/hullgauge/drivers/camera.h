@@ -1,4 +1,4 @@
-// The camera interface every backend implements (STYLE.md: one small interface
+// The camera interface every backend implements (docs/style.md: one small interface
 // per device kind, in domain types; no ArvCamera* or V4L2 handle crosses it).
 //
 // Lifecycle (lifecycle.h, docs/drivers.md): constructing a camera from

@@ -1,7 +1,7 @@
 // The fixture that carries the part through its inspection poses: a
 // rotation/declination fixture (turntable that tilts) or a rail stage
-// (CONTRACTS §2). One small interface in domain types (degrees, millimetres,
-// seconds); no protocol handle crosses it (STYLE.md point 1).
+// (docs/contracts.md §2). One small interface in domain types (degrees, millimetres,
+// seconds); no protocol handle crosses it (docs/style.md point 1).
 //
 // Lifecycle (lifecycle.h, docs/drivers.md): constructing a driver from its
 // configuration only parses and validates it (bad sections throw

@@ -1,7 +1,7 @@
 // The operator lamps: a green, an amber and a red lamp on GPIO lines
-// (CONTRACTS §6: green = pass, red = fail, amber = busy, fault = red and amber
+// (docs/contracts.md §6: green = pass, red = fail, amber = busy, fault = red and amber
 // blinking). One small interface in domain types; no GPIO handle crosses it
-// (STYLE.md point 1).
+// (docs/style.md point 1).
 //
 // Lifecycle (lifecycle.h, docs/drivers.md): constructing a driver from the
 // station's `lamps` section only parses and validates it (bad sections throw
@@ -41,7 +41,7 @@ inline constexpr std::array<Lamp, 3> kAllLamps{Lamp::Green, Lamp::Amber, Lamp::R
 
 enum class LampState { Off, On, Blinking };
 
-/// What the station shows the operator (CONTRACTS §6).
+/// What the station shows the operator (docs/contracts.md §6).
 enum class StationIndication {
     Dark,  ///< every lamp off
     Pass,  ///< green

@@ -136,6 +136,11 @@ struct FaultCase {
     int faultCode;
 };
 
+void PrintTo(const FaultCase& c, std::ostream* os)
+{
+    *os << c.variable << "=" << c.value << " (fault " << c.faultCode << ")";
+}
+
 class DaemonFaults : public ::testing::TestWithParam<FaultCase> {};
 
 TEST_P(DaemonFaults, DeviceFaultIsReportedWithItsCodeAndTheDaemonKeepsServing)
@@ -162,7 +167,13 @@ INSTANTIATE_TEST_SUITE_P(Codes, DaemonFaults,
                          ::testing::Values(FaultCase{"HG_FAKE_MOVE_FAIL", "timeout", 20},
                                            FaultCase{"HG_FAKE_MOVE_FAIL", "fault", 21},
                                            FaultCase{"HG_FAKE_GRAB_FAIL", "timeout", 10},
-                                           FaultCase{"HG_FAKE_GRAB_FAIL", "bad", 11}));
+                                           FaultCase{"HG_FAKE_GRAB_FAIL", "bad", 11}),
+                         // The test's name says the fault and its code, never the case's bytes.
+                         [](const ::testing::TestParamInfo<FaultCase>& param) {
+                             const std::string device =
+                                 std::string(param.param.variable).find("MOVE") != std::string::npos ? "move" : "grab";
+                             return device + "_" + param.param.value + "_" + std::to_string(param.param.faultCode);
+                         });
 
 TEST(DaemonProcess, AbortCommandFromThePlcEndsTheCycleAsAborted)
 {

@@ -6,6 +6,7 @@
 // communication fault, timeout (docs/contracts.md §5).
 #include "command.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/drivers/fixture.h"
 #include "hullgauge/geometry/station.h"
 
@@ -26,13 +27,6 @@ struct FixtureArgs {
     std::optional<double> timeoutS;
     bool noWait = false;
 };
-
-std::string fmt(double v)
-{
-    std::ostringstream s;
-    s << v;
-    return s.str();
-}
 
 /// Turns a failed call into the exception main() maps to exit status 3.
 void check(const Status& r, const std::string& what)
@@ -68,8 +62,8 @@ geometry::FixturePose requestedPose(const FixtureArgs& a, const geometry::Fixtur
     auto inRange = [](double v, const geometry::Range& r, const std::string& option, const std::string& unit) {
         if (!r.contains(v))
             throw InputError("", option,
-                             fmt(v) + " " + unit + " is outside the fixture range [" + fmt(r.min) + ", " + fmt(r.max) +
-                                 "] of the station");
+                             formatNumber(v) + " " + unit + " is outside the fixture range [" + formatNumber(r.min) +
+                                 ", " + formatNumber(r.max) + "] of the station");
     };
     if (k.type == geometry::FixtureType::Rail) {
         if (!a.rail) throw InputError("", "--rail", "a rail fixture moves to --rail MM");

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 
 namespace hg {
 namespace {
@@ -27,13 +28,6 @@ std::string describe(const YAML::Node& n)
     default:
         return "an undefined value";
     }
-}
-
-std::string fmtNumber(double v)
-{
-    std::ostringstream s;
-    s << v;
-    return s.str();
 }
 
 std::string keyText(const YAML::Node& key)
@@ -189,14 +183,15 @@ double ConfigNode::asDouble() const
 double ConfigNode::asDoubleIn(double lo, double hi) const
 {
     double v = asDouble();
-    if (v < lo || v > hi) fail("value " + fmtNumber(v) + " is outside [" + fmtNumber(lo) + ", " + fmtNumber(hi) + "]");
+    if (v < lo || v > hi)
+        fail("value " + formatNumber(v) + " is outside [" + formatNumber(lo) + ", " + formatNumber(hi) + "]");
     return v;
 }
 
 double ConfigNode::asPositive() const
 {
     double v = asDouble();
-    if (!(v > 0)) fail("expected a positive number, found " + fmtNumber(v));
+    if (!(v > 0)) fail("expected a positive number, found " + formatNumber(v));
     return v;
 }
 

@@ -1,4 +1,5 @@
 #include "hullgauge/plan/plan_report.h"
+#include "hullgauge/common/format.h"
 
 #include <algorithm>
 #include <cmath>
@@ -30,11 +31,7 @@ json mat(const geometry::Mat3& m)
 
 std::string num(double v, int precision = 4)
 {
-    if (!std::isfinite(v)) return "∞";
-    std::ostringstream s;
-    s.precision(precision);
-    s << v;
-    return s.str();
+    return std::isfinite(v) ? formatNumber(v, precision) : "∞";
 }
 
 std::string poseText(const FixturePose& p, FixtureType type)

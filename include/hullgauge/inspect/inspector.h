@@ -28,6 +28,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/geometry/camera.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/inspect/measures.h"
@@ -110,6 +111,11 @@ struct InspectionResult {
     Statistics statistics;
     std::vector<ParameterResult> parameters;
     double segmentationMs = 0.0, reconstructionMs = 0.0, totalMs = 0.0;
+    /// The measured seat, when the inspector aligns (docs/alignment.md).
+    std::optional<align::AlignmentResult> alignment;
+    /// The seat is beyond the program's limits: nothing was inspected (every
+    /// landmark not_inspected), the part is neither passed nor failed.
+    bool seatingFault = false;
 };
 
 /// docs/contracts.md §4 plus the documented extensions.
@@ -128,7 +134,11 @@ struct CapturedView {
 class Inspector {
   public:
     /// Validates `options` against the map; throws std::invalid_argument.
-    Inspector(const InspectionMap& map, InspectionOptions options = {});
+    /// With an aligner every inspection from frames first measures the seat
+    /// and inspects through the seated cameras (docs/alignment.md); the
+    /// regions of interest then carry the aligner's margin.
+    Inspector(const InspectionMap& map, InspectionOptions options = {},
+              std::shared_ptr<const align::Aligner> aligner = nullptr);
 
     /// Segments only the regions the map's voxels project to, then inspects.
     /// Frames must match their camera's image size (std::invalid_argument naming the view).
@@ -140,7 +150,9 @@ class Inspector {
     /// state: safe to call from several threads. Throws std::invalid_argument
     /// naming the view when the frame does not match its camera.
     SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;
-    /// Inspects prepared silhouettes (ids name the views in the result).
+    /// Inspects prepared silhouettes (ids name the views in the result): aligns
+    /// first when the inspector has an aligner (the views' cameras are the
+    /// nominal ones; the seated ones are used from then on).
     InspectionResult inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const;
     /// Inspects with any voxel oracle (no views: no MED check, views_used 0).
     InspectionResult inspectWith(const VoxelOracle& oracle) const;
@@ -161,6 +173,7 @@ class Inspector {
     int level_;
     int adjacency_;
     std::vector<std::uint8_t> active_;
+    std::shared_ptr<const align::Aligner> aligner_;
 };
 
 } // namespace hg::inspect

@@ -26,6 +26,10 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels =
 /// The options a part program's `inspection` section sets (docs/part-program.md).
 InspectionOptions inspectionOptions(const model::InspectionSettings& settings);
 
+/// The aligner of a part program's `alignment` section; null for `method: none`.
+/// Throws hg::InputError naming the program when a datum is not a landmark.
+std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& program);
+
 /// The map of inspections at `options.level` (-1: the depth): only the levels
 /// from there to the depth. The daemon and `hullgauge inspect --part` both
 /// build their map so, so both inspect the same map.

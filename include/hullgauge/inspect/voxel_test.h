@@ -85,6 +85,10 @@ class SilhouetteIndex {
 struct SilhouetteView {
     geometry::CameraModel camera;
     SilhouetteIndex index;
+    /// The grey frame and the threshold it was segmented with (shared pixels,
+    /// not a copy): what alignment measures edges on (docs/alignment.md).
+    cv::Mat grey;
+    double threshold = 0.0;
 };
 
 /// How one view sees one voxel.

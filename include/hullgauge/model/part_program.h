@@ -74,6 +74,21 @@ struct InspectionSettings {
     bool earlyExit = false;        ///< stop at the first landmark that is not ok (3.3.6)
 };
 
+/// How the part's seat is measured before it is inspected: the optional
+/// `alignment` section (docs/part-program.md, docs/alignment.md). A part seated
+/// beyond either limit is not inspected: it is a seating fault.
+enum class AlignmentMethod { Silhouette, Datums, None };
+std::string toString(AlignmentMethod method);
+
+struct AlignmentSettings {
+    AlignmentMethod method = AlignmentMethod::Silhouette;
+    /// `method: datums`: landmark ids whose CAD faces are the datums, in
+    /// priority order (A, B, C: 3-2-1).
+    std::vector<std::string> datums;
+    double maxShiftMm = 1.0;     ///< limit on the shift of the part's reference point
+    double maxRotationDeg = 1.0; ///< limit on the rotation angle
+};
+
 struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
@@ -83,6 +98,7 @@ struct PartProgram {
     std::vector<Landmark> landmarks;
     std::vector<GeometricParameter> parameters;
     InspectionSettings inspection;
+    AlignmentSettings alignment;
     /// Kind of fixture the best views are written for (rotation/declination or rail), when any are given.
     std::optional<geometry::FixtureType> bestViewFixture;
 

@@ -82,7 +82,8 @@ const char* toString(LandmarkStatus status)
     return "not_inspected";
 }
 
-Inspector::Inspector(const InspectionMap& map, InspectionOptions options) : map_(&map), options_(std::move(options))
+Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::shared_ptr<const align::Aligner> aligner)
+    : map_(&map), options_(std::move(options)), aligner_(std::move(aligner))
 {
     const MapGeometry& g = map.geometry();
     level_ = options_.level < 0 ? g.depth : options_.level;

@@ -143,6 +143,16 @@ InspectionOptions inspectionOptions(const model::InspectionSettings& settings)
     return options;
 }
 
+std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& program)
+{
+    if (program.alignment.method == model::AlignmentMethod::None) return nullptr;
+    try {
+        return std::make_shared<const align::Aligner>(program.solid, program.landmarks, program.alignment);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(program.file.string(), "alignment", e.what());
+    }
+}
+
 InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options)
 {
     const int depth = program.octree.depth;

@@ -201,6 +201,19 @@ double OctreeSpec::voxelSize() const
     return cubeSize / std::ldexp(1.0, depth);
 }
 
+std::string toString(AlignmentMethod method)
+{
+    switch (method) {
+    case AlignmentMethod::Silhouette:
+        return "silhouette";
+    case AlignmentMethod::Datums:
+        return "datums";
+    case AlignmentMethod::None:
+        return "none";
+    }
+    return "?";
+}
+
 std::string toString(ParameterKind kind)
 {
     switch (kind) {

@@ -89,6 +89,7 @@ struct SilhouetteView {
     /// not a copy): what alignment measures edges on (docs/alignment.md).
     cv::Mat grey;
     double threshold = 0.0;
+    bool objectIsDark = true;
 };
 
 /// How one view sees one voxel.

@@ -59,7 +59,8 @@ std::vector<int> growDatumFace(const model::TriangleMesh& mesh, std::size_t seed
         const auto f = static_cast<std::size_t>(queue.front());
         queue.pop_front();
         const auto& t = mesh.triangles[f];
-        const Vec3 &p0 = mesh.vertices[static_cast<std::size_t>(t[0])], &p1 = mesh.vertices[static_cast<std::size_t>(t[1])],
+        const Vec3 &p0 = mesh.vertices[static_cast<std::size_t>(t[0])],
+                   &p1 = mesh.vertices[static_cast<std::size_t>(t[1])],
                    &p2 = mesh.vertices[static_cast<std::size_t>(t[2])];
         const double a = 0.5 * (p1 - p0).cross(p2 - p0).norm();
         weighted += a * mesh.faceNormal(f);
@@ -180,7 +181,8 @@ Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<mo
                 throw std::invalid_argument("datum '" + settings.datums[k] + "' is not a landmark");
             DatumPlane plane;
             for (int f : growDatumFace(mesh, solid->closestPoint(it->position).triangle, plane))
-                if (faceDatum[static_cast<std::size_t>(f)] < 0) faceDatum[static_cast<std::size_t>(f)] = static_cast<int>(k);
+                if (faceDatum[static_cast<std::size_t>(f)] < 0)
+                    faceDatum[static_cast<std::size_t>(f)] = static_cast<int>(k);
             impl_->groups.push_back({datumProjection(plane, impl_->reference, impl_->lever)});
         }
     } else {
@@ -211,9 +213,9 @@ double Aligner::Impl::searchBandPx(const AlignmentView& view, const Vec3& point)
     return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
 }
 
-std::vector<Aligner::Impl::Correspondence> Aligner::Impl::measure(
-    const std::vector<AlignmentView>& views, const std::vector<std::vector<ContourSample>>& samples,
-    const geometry::RigidTransform& seat, bool first) const
+std::vector<Aligner::Impl::Correspondence>
+Aligner::Impl::measure(const std::vector<AlignmentView>& views, const std::vector<std::vector<ContourSample>>& samples,
+                       const geometry::RigidTransform& seat, bool first) const
 {
     std::vector<Correspondence> out;
     for (std::size_t v = 0; v < views.size(); ++v) {

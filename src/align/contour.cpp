@@ -91,8 +91,7 @@ bool projectSample(const EdgeGraph& graph, const ContourSample& sample, const ge
     return true;
 }
 
-bool imageOf(const EdgeGraph& graph, const ContourSample& sample, const geometry::CameraModel& camera,
-             SampleImage& out)
+bool imageOf(const EdgeGraph& graph, const ContourSample& sample, const geometry::CameraModel& camera, SampleImage& out)
 {
     const EdgeGraph::Edge& e = graph.edges()[static_cast<std::size_t>(sample.edge)];
     return graph.isContour(e, camera.centre()) && projectSample(graph, sample, camera, out);
@@ -146,8 +145,7 @@ bool onOutline(const model::Solid& solid, const geometry::CameraModel& camera, c
 } // namespace
 
 std::vector<ContourSample> sampleContour(const EdgeGraph& graph, const model::Solid& solid,
-                                         const geometry::CameraModel& camera, double nearGrazingDeg,
-                                         int maxSamples)
+                                         const geometry::CameraModel& camera, double nearGrazingDeg, int maxSamples)
 {
     // Samples keep clear of the edge's ends, where the outline turns a corner
     // and the normal is not the edge's.

@@ -65,8 +65,7 @@ struct SampleImage {
 /// of being seen edge-on are sampled too (whichever of such a face's two
 /// edges is outermost depends on the seat).
 std::vector<ContourSample> sampleContour(const EdgeGraph& graph, const model::Solid& solid,
-                                         const geometry::CameraModel& camera, double nearGrazingDeg,
-                                         int maxSamples);
+                                         const geometry::CameraModel& camera, double nearGrazingDeg, int maxSamples);
 
 /// The sample's pixel and outward normal (the side its faces fold away from)
 /// in `camera`; false when it is behind the camera.
@@ -78,8 +77,8 @@ bool imageOf(const EdgeGraph& graph, const ContourSample& sample, const geometry
 
 /// Grey frame access for the edge search.
 struct EdgeImage {
-    cv::Mat grey;            ///< CV_8UC1 or CV_16UC1
-    double threshold = 0.0;  ///< the silhouette's grey level
+    cv::Mat grey;           ///< CV_8UC1 or CV_16UC1
+    double threshold = 0.0; ///< the silhouette's grey level
     bool objectIsDark = true;
 };
 

@@ -37,19 +37,19 @@ struct ObservationGroup {
 /// limits allow must move the outline by `minMotionPx` (RMS over the
 /// samples), and the residuals must pin it to better than that range.
 struct SolverLimits {
-    double maxShiftMm = 1.0;  ///< the range of a shift
-    double maxTurnMm = 1.0;   ///< of θ: the range of a rotation (lever × max rotation)
+    double maxShiftMm = 1.0; ///< the range of a shift
+    double maxTurnMm = 1.0;  ///< of θ: the range of a rotation (lever × max rotation)
     double minRelative = 1e-2;
     double minMotionPx = 0.25;
-    double minScalePx = 0.1;  ///< the robust scale never drops below this: the edges' noise floor
+    double minScalePx = 0.1; ///< the robust scale never drops below this: the edges' noise floor
 };
 
 struct Step {
-    Vector6 delta = Vector6::Zero();             ///< θ to add
-    Matrix6 covariance = Matrix6::Zero();         ///< of θ, mm²
-    std::vector<Vector6> undetermined;            ///< unit θ directions left at nominal
-    std::vector<double> weights;                  ///< robust weight per observation
-    double scalePx = 0.0;                         ///< robust scale of the residuals
+    Vector6 delta = Vector6::Zero();      ///< θ to add
+    Matrix6 covariance = Matrix6::Zero(); ///< of θ, mm²
+    std::vector<Vector6> undetermined;    ///< unit θ directions left at nominal
+    std::vector<double> weights;          ///< robust weight per observation
+    double scalePx = 0.0;                 ///< robust scale of the residuals
 };
 
 /// How residuals are weighted: Huber's (convex: a start far from the seat

@@ -15,9 +15,9 @@
 
 namespace {
 
+using hg::align::Aligner;
 using hg::align::AlignmentResult;
 using hg::align::AlignmentView;
-using hg::align::Aligner;
 using hg::geometry::CameraModel;
 using hg::geometry::RigidTransform;
 using hg::geometry::Vec3;
@@ -54,8 +54,7 @@ std::vector<hg::inspect::CapturedView> seatedViews(const hg::model::TriangleMesh
 std::vector<AlignmentView> alignmentViews(const std::vector<hg::inspect::CapturedView>& views)
 {
     std::vector<AlignmentView> out;
-    for (const auto& v : views)
-        out.push_back({v.camera, v.frame, hg::vision::computeThreshold(v.frame, {}), true});
+    for (const auto& v : views) out.push_back({v.camera, v.frame, hg::vision::computeThreshold(v.frame, {}), true});
     return out;
 }
 
@@ -132,8 +131,8 @@ TEST(Alignment, NominalSeatIsMeasuredAsNominal)
 TEST(Alignment, SeatedDefectivePartsAreJudgedInThePartFrame)
 {
     const Plate plate;
-    auto aligner = std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{},
-                                                   AlignmentSettings{});
+    auto aligner =
+        std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{}, AlignmentSettings{});
     const hg::inspect::InspectionMap map = plate.part.map();
     const hg::inspect::Inspector inspector(map, {}, aligner);
     std::mt19937_64 rng(23);
@@ -160,8 +159,8 @@ TEST(Alignment, SeatedDefectivePartsAreJudgedInThePartFrame)
 TEST(Alignment, APartTwoMillimetresOffIsASeatingFault)
 {
     const Plate plate;
-    auto aligner = std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{},
-                                                   AlignmentSettings{});
+    auto aligner =
+        std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{}, AlignmentSettings{});
     const hg::inspect::InspectionMap map = plate.part.map();
     const hg::inspect::Inspector inspector(map, {}, aligner);
     const RigidTransform truth = RigidTransform::translation(Vec3(2.0, 0.0, 0.0));

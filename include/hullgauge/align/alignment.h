@@ -54,7 +54,7 @@ using geometry::Vec3;
 /// One view as the aligner sees it.
 struct AlignmentView {
     geometry::CameraModel camera; ///< camera_from_part of the nominal seat (the calibrated view)
-    cv::Mat grey;                 ///< CV_8UC1 or CV_16UC1, camera.imageSize()
+    cv::Mat grey{};               ///< CV_8UC1 or CV_16UC1, camera.imageSize()
     double threshold = 0.0;       ///< grey level of the silhouette edge (the segmentation threshold)
     bool objectIsDark = true;     ///< backlit: the part is darker than the background
 };

@@ -163,7 +163,7 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
                                     std::to_string(v.camera.imageSize().height));
     const cv::Mat grey = vision::toGrey(v.frame);
     const double threshold = vision::computeThreshold(grey, segmentation);
-    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size()), grey, threshold};
+    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size())};
     for (const cv::Rect& r : regionsOfInterest(v.camera))
         sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
     return sv;

@@ -87,7 +87,7 @@ struct SilhouetteView {
     SilhouetteIndex index;
     /// The grey frame and the threshold it was segmented with (shared pixels,
     /// not a copy): what alignment measures edges on (docs/alignment.md).
-    cv::Mat grey;
+    cv::Mat grey{};
     double threshold = 0.0;
 };
 

@@ -116,9 +116,7 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     for (const model::GeometricParameter& p : program.parameters) {
         MapParameter mp;
         mp.id = p.id;
-        mp.kind = p.kind == model::ParameterKind::Distance    ? ParameterKind::Distance
-                  : p.kind == model::ParameterKind::Perimeter ? ParameterKind::Perimeter
-                                                              : ParameterKind::Area;
+        mp.kind = p.kind;
         mp.landmarks = p.landmarkIds;
         mp.nominal = p.nominalMm;
         mp.tolerance = p.toleranceMm;

@@ -290,7 +290,7 @@ void Aligner::Impl::report(const std::vector<Correspondence>& cs, const std::vec
                            AlignmentResult& out) const
 {
     const std::vector<Observation> obs = observeAll(cs, views, out.seat);
-    const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey);
+    const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey, true);
     double sum = 0.0;
     for (std::size_t j = 0; j < obs.size(); ++j)
         if (step.weights[j] > 0.0) {

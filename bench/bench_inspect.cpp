@@ -2,6 +2,11 @@
 //  - BM_InspectGoalDriven/<depth>: 64 landmarks x 8 views of 2448x2048
 //    frames, ROI segmentation included (target (b) of the README's benchmark table: <= 5 ms on one core
 //    at depth 9);
+//  - BM_Align: the seat alone (docs/alignment.md) from the same 8 frames of the
+//    block seated 0.3 mm / 0.3° off (target: <= 10 ms on one core); counters:
+//    the seat's error against the true one;
+//  - BM_InspectAligned/9: BM_InspectGoalDriven/9 on the seated block with
+//    alignment on (the regions of interest carry the alignment margin);
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
 //    EVERY voxel of the part cube at the same ΔV (dense carving, full-frame
 //    segmentation included), actually run — depth 9 is 134 million voxel
@@ -20,7 +25,9 @@
 #include <map>
 
 #include "bench_scene.h"
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/inspect/reconstruct.h"
+#include "hullgauge/vision/segmentation.h"
 
 using namespace hg::inspect;
 using namespace hgbench;
@@ -47,6 +54,55 @@ void BM_InspectGoalDriven(benchmark::State& state)
     state.counters["pass"] = r.pass ? 1 : 0;
 }
 BENCHMARK(BM_InspectGoalDriven)->Arg(9)->Arg(10)->Unit(benchmark::kMillisecond);
+
+// The block seated 0.3 mm and 0.3° off (docs/alignment.md).
+hg::geometry::RigidTransform benchSeat()
+{
+    const auto turn = hg::geometry::RigidTransform::rotation(Eigen::Vector3d(1, 2, 3), 0.3);
+    const Eigen::Vector3d centre(20, 20, kTop / 2);
+    return {turn.R, centre - turn.R * centre + Eigen::Vector3d(0.2, -0.2, 0.1)};
+}
+
+void BM_Align(benchmark::State& state)
+{
+    const hg::geometry::RigidTransform truth = benchSeat();
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0, truth);
+    const hg::align::Aligner aligner(std::make_shared<const hg::model::Solid>(block()), {}, {});
+    std::vector<hg::align::AlignmentView> views;
+    for (const auto& f : scene.frames)
+        views.push_back({f.camera, f.frame, hg::vision::computeThreshold(f.frame, {}), true});
+    hg::align::AlignmentResult a;
+    for (auto _ : state) {
+        a = aligner.align(views);
+        benchmark::DoNotOptimize(a.shiftMm);
+    }
+    state.counters["samples"] = a.samples;
+    state.counters["inliers"] = a.inliers;
+    state.counters["residual_px"] = a.residualPx;
+    state.counters["seat_error_um"] = 1000.0 * (a.seat.apply(a.referencePoint) - truth.apply(a.referencePoint)).norm();
+    state.counters["seat_error_mdeg"] = 1000.0 * hg::geometry::rotationAngleDeg(a.seat.R, truth.R);
+}
+BENCHMARK(BM_Align)->Unit(benchmark::kMillisecond);
+
+void BM_InspectAligned(benchmark::State& state)
+{
+    const int depth = static_cast<int>(state.range(0));
+    const Scene scene(8, 8, {2448, 2048}, 0.0, depth, 400.0, benchSeat());
+    auto aligner =
+        std::make_shared<const hg::align::Aligner>(std::make_shared<const hg::model::Solid>(block()),
+                                                   std::vector<hg::model::Landmark>{}, hg::model::AlignmentSettings{});
+    const Inspector inspector(scene.map, {}, aligner);
+    const hg::vision::SegmentationSettings seg;
+    InspectionResult r;
+    for (auto _ : state) {
+        r = inspector.inspect(scene.frames, seg);
+        benchmark::DoNotOptimize(r.pass);
+    }
+    state.counters["landmarks"] = static_cast<double>(r.landmarks.size());
+    state.counters["pass"] = r.pass ? 1 : 0;
+    state.counters["align_ms"] = r.alignment ? r.alignment->ms : -1.0;
+}
+BENCHMARK(BM_InspectAligned)->Arg(9)->Unit(benchmark::kMillisecond);
 
 void BM_DenseCarving(benchmark::State& state)
 {

@@ -1,6 +1,7 @@
 // View planning: time for 16, 64 and 256 landmarks on a stamp-like part
 // (target < 1 s for 100), and the greedy view count against the integer
 // program's optimum on instances of 5 to 30 landmarks.
+#include "hgtest/station.h"
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
@@ -15,14 +16,7 @@ using Eigen::Vector3d;
 
 geometry::Station station()
 {
-    geometry::Station s;
-    s.camera.K << 4000, 0, 1224, 0, 4000, 1024, 0, 0, 1;
-    s.camera.imageSize = {2448, 2048};
-    s.fixture.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-    s.fixture.cameraFromFixture.t = Vector3d(0, 0, 300);
-    s.fixture.rotationRangeDeg = {-180, 180};
-    s.fixture.declinationRangeDeg = {0, 60};
-    return s;
+    return hgtest::station({.imageSize = {2448, 2048}, .focalPx = 4000});
 }
 
 // A stamp: handle 10 x 10 x 30 under a 24 x 24 x 8 head with a 6 mm boss on top.

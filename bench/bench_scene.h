@@ -61,7 +61,10 @@ struct Scene {
     hg::inspect::InspectionMap map;
     std::vector<hg::inspect::CapturedView> frames;
 
-    Scene(int n, int views, cv::Size size, double raise, int depth = 9, double distance = 400.0)
+    /// `seat` (nominal_from_part, docs/alignment.md): the block is rendered
+    /// seated so, the frames keep the nominal cameras.
+    Scene(int n, int views, cv::Size size, double raise, int depth = 9, double distance = 400.0,
+          const hg::geometry::RigidTransform& seat = {})
     {
         using namespace hg::inspect;
         auto solid = std::make_shared<const hg::model::Solid>(block());
@@ -84,7 +87,8 @@ struct Scene {
             const double a = 2 * M_PI * v / views;
             const Eigen::Vector3d dir(std::cos(a), std::sin(a), 0);
             const auto cam = lookAt(Eigen::Vector3d(20, 20, kTop) + distance * dir, -dir, size);
-            frames.push_back({"v" + std::to_string(v), cam, r.render(cam)});
+            const hg::geometry::CameraModel seated(cam.intrinsics(), cam.cameraFromPart() * seat);
+            frames.push_back({"v" + std::to_string(v), cam, r.render(seated)});
         }
     }
 };

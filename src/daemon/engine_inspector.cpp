@@ -98,7 +98,7 @@ class EngineInspector : public Inspector {
                 return out;
             }
             // Only the traversal is left once the last frame is in (dissertation 3.3.8).
-            auto result = current_->inspector->inspect(prepared.views, prepared.ids);
+            auto result = current_->inspector->inspect(std::move(prepared.views), prepared.ids);
             out.ok = true;
             out.part = result.part;
             out.pass = result.pass;

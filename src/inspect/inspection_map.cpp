@@ -135,27 +135,6 @@ const std::array<Eigen::Vector3i, 26>& neighbourOffsets()
     return offsets;
 }
 
-const char* toString(ParameterKind kind)
-{
-    switch (kind) {
-    case ParameterKind::Distance:
-        return "distance";
-    case ParameterKind::Perimeter:
-        return "perimeter";
-    case ParameterKind::Area:
-        return "area";
-    }
-    return "distance";
-}
-
-ParameterKind parseParameterKind(const std::string& name)
-{
-    if (name == "distance") return ParameterKind::Distance;
-    if (name == "perimeter") return ParameterKind::Perimeter;
-    if (name == "area") return ParameterKind::Area;
-    throw std::invalid_argument("unknown parameter kind '" + name + "' (expected distance, perimeter or area)");
-}
-
 std::int32_t InspectionMap::find(VoxelKey key) const
 {
     auto it =

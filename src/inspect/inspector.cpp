@@ -115,7 +115,10 @@ std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& 
         const Eigen::Vector3i c = keyIndex(map_->nodes()[static_cast<std::size_t>(n)].key);
         const Eigen::Vector3i lo = (c.array() - adjacency_).max(0).matrix();
         const Eigen::Vector3i hi = (c.array() + adjacency_).min(nmax).matrix() + Eigen::Vector3i::Ones();
-        const Box3 box(voxels.origin + s * lo.cast<double>(), voxels.origin + s * hi.cast<double>());
+        // The seat moves the part by up to the aligner's margin (docs/alignment.md).
+        const double margin = aligner_ ? aligner_->marginMm() : 0.0;
+        const Box3 box(voxels.origin + s * lo.cast<double>() - Vec3::Constant(margin),
+                       voxels.origin + s * hi.cast<double>() + Vec3::Constant(margin));
         double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
         bool ok = true;
         for (int i = 0; i < 8 && ok; ++i) {
@@ -163,7 +166,10 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
                                     std::to_string(v.camera.imageSize().height));
     const cv::Mat grey = vision::toGrey(v.frame);
     const double threshold = vision::computeThreshold(grey, segmentation);
-    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size())};
+    const bool mask = segmentation.method == vision::SegmentationMethod::Mask;
+    // A mask frame's edge lies half-way between its two values.
+    const double edgeLevel = mask ? (grey.depth() == CV_8U ? 127.5 : 32767.5) : threshold;
+    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size()), grey, edgeLevel, !mask && segmentation.objectIsDark};
     for (const cv::Rect& r : regionsOfInterest(v.camera))
         sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
     return sv;
@@ -181,20 +187,55 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
         ids.push_back(v.id);
     }
     const double segMs = msSince(t0);
-    InspectionResult r = inspect(silhouettes, ids);
+    InspectionResult r = inspect(std::move(silhouettes), ids);
     r.segmentationMs = segMs;
     r.totalMs = msSince(t0);
     return r;
 }
 
-InspectionResult Inspector::inspect(const std::vector<SilhouetteView>& views,
-                                    const std::vector<std::string>& viewIds) const
+InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const
 {
     const auto t0 = Clock::now();
+    InspectionResult seatFault;
+    if (aligner_ && !seat(views, seatFault)) {
+        seatFault.totalMs = msSince(t0);
+        return seatFault;
+    }
     VoxelTester tester(&views, options_.method);
     InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
+    r.alignment = std::move(seatFault.alignment);
     r.totalMs = msSince(t0);
     return r;
+}
+
+// Alignment before the traversal (docs/alignment.md): the views were
+// segmented through their nominal cameras with the aligner's margin, so only
+// the cameras move.
+bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& result) const
+{
+    std::vector<align::AlignmentView> frames;
+    frames.reserve(views.size());
+    for (const SilhouetteView& v : views) frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark});
+    result.alignment = aligner_->align(frames);
+    const align::AlignmentResult& a = *result.alignment;
+    if (a.measured && a.withinLimits) {
+        for (SilhouetteView& v : views) v.camera = align::seatedCamera(v.camera, a.seat);
+        return true;
+    }
+    result.part = map_->partName();
+    result.level = level_;
+    result.adjacency = adjacency_;
+    result.voxelSizeMm = map_->frame().voxelSize(level_);
+    result.viewsUsed = static_cast<int>(views.size());
+    result.seatingFault = true;
+    for (const auto& l : map_->landmarks()) {
+        LandmarkResult lr;
+        lr.id = l.id;
+        lr.toleranceMm = l.toleranceMm;
+        lr.reason = a.message;
+        result.landmarks.push_back(std::move(lr));
+    }
+    return false;
 }
 
 InspectionResult Inspector::inspectWith(const VoxelOracle& oracle) const
@@ -602,6 +643,10 @@ nlohmann::json toJson(const InspectionResult& r)
     }
     j["parameters"] = std::move(ps);
     j["timing_ms"] = {{"segmentation", r.segmentationMs}, {"reconstruction", r.reconstructionMs}, {"total", r.totalMs}};
+    if (r.alignment) {
+        j["alignment"] = align::toJson(*r.alignment);
+        j["seating_fault"] = r.seatingFault;
+    }
     return j;
 }
 

@@ -116,9 +116,7 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     for (const model::GeometricParameter& p : program.parameters) {
         MapParameter mp;
         mp.id = p.id;
-        mp.kind = p.kind == model::ParameterKind::Distance    ? ParameterKind::Distance
-                  : p.kind == model::ParameterKind::Perimeter ? ParameterKind::Perimeter
-                                                              : ParameterKind::Area;
+        mp.kind = p.kind;
         mp.landmarks = p.landmarkIds;
         mp.nominal = p.nominalMm;
         mp.tolerance = p.toleranceMm;
@@ -141,6 +139,16 @@ InspectionOptions inspectionOptions(const model::InspectionSettings& settings)
     options.method = settings.centrePointTest ? VoxelTestMethod::CentrePoint : VoxelTestMethod::VolumeSource;
     options.requireResolution = settings.requireResolution;
     return options;
+}
+
+std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& program)
+{
+    if (program.alignment.method == model::AlignmentMethod::None) return nullptr;
+    try {
+        return std::make_shared<const align::Aligner>(program.solid, program.landmarks, program.alignment);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(program.file.string(), "alignment", e.what());
+    }
 }
 
 InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options)

@@ -149,14 +149,9 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     if (p.id.empty()) idNode.fail("parameter id is empty");
     const ConfigNode kindNode = node["kind"];
     const std::string kind = kindNode.asString();
-    if (kind == "distance")
-        p.kind = ParameterKind::Distance;
-    else if (kind == "perimeter")
-        p.kind = ParameterKind::Perimeter;
-    else if (kind == "area")
-        p.kind = ParameterKind::Area;
-    else
-        kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
+    const std::optional<ParameterKind> parsedKind = parseParameterKind(kind);
+    if (!parsedKind) kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
+    p.kind = *parsedKind;
     const ConfigNode list = node["landmarks"];
     for (const ConfigNode& item : list.items()) {
         const std::string id = item.asString();
@@ -268,6 +263,13 @@ std::string toString(ParameterKind kind)
         return "area";
     }
     return "?";
+}
+
+std::optional<ParameterKind> parseParameterKind(const std::string& name)
+{
+    for (ParameterKind kind : {ParameterKind::Distance, ParameterKind::Perimeter, ParameterKind::Area})
+        if (toString(kind) == name) return kind;
+    return std::nullopt;
 }
 
 double PartProgram::surfaceToleranceMm() const

@@ -6,6 +6,7 @@
 
 #include "fixture_rig.h"
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/geometry/station.h"
 
@@ -35,15 +36,8 @@ std::string readText(const std::filesystem::path& p)
     return s.str();
 }
 
-const char* kStation = R"(camera:
-  image_size: [640, 480]
-  K: [[400, 0, 320], [0, 400, 240], [0, 0, 1]]
-  pixel_size_um: [6.0, 6.0]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 300]}
-environment: {floor_z_mm: 2.5}
-)";
+const std::string kStation =
+    hgtest::stationYaml({.focalPx = 400, .cameraKeys = "  pixel_size_um: [6.0, 6.0]\n", .floorZMm = 2.5});
 
 } // namespace
 

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
@@ -12,20 +13,16 @@ using namespace hg::calib;
 
 namespace {
 
-const char* kStation = R"(# station of line 3
-camera:
-  image_size: [640, 480]
-  K: [[500, 0, 320], [0, 500, 240], [0, 0, 1]]
-  pixel_size_um: [3.45, 3.45]
-  driver: {backend: sim}
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 400]}
-  rotation_range_deg: [-170, 170]
-environment:
-  floor_z_mm: -5.5
-lamps: {backend: sim, green: G, amber: A, red: R}
-)";
+// A station with a comment, camera and lamp sections and a limited turntable:
+// what a rewrite must keep.
+const std::string kStation =
+    "# station of line 3\n" + hgtest::stationYaml({.focalPx = 500,
+                                                   .cameraKeys = "  pixel_size_um: [3.45, 3.45]\n"
+                                                                 "  driver: {backend: sim}\n",
+                                                   .distanceMm = 400,
+                                                   .rotationRangeDeg = {-170, 170},
+                                                   .floorZMm = -5.5,
+                                                   .sections = "lamps: {backend: sim, green: G, amber: A, red: R}\n"});
 
 std::string readText(const std::filesystem::path& p)
 {

@@ -1,4 +1,5 @@
 #include "daemon_harness.h"
+#include "hgtest/station.h"
 
 #include <arpa/inet.h>
 #include <cstring>
@@ -30,15 +31,7 @@ int freePort()
 
 std::filesystem::path writeConfig(const hgtest::TempDir& dir, int port, const std::string& extra, int views)
 {
-    hgtest::writeFile(dir / "station.yaml", R"(camera:
-  image_size: [64, 48]
-  K: [[80, 0, 32], [0, 80, 24], [0, 0, 1]]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
-  rotation_range_deg: [-180, 180]
-  declination_range_deg: [0, 60]
-)");
+    hgtest::writeFile(dir / "station.yaml", hgtest::stationYaml({.imageSize = {64, 48}, .focalPx = 80}));
     hgtest::writeFile(dir / "part.yaml", "part: fake-block\nmesh: block.stl\nlandmarks:\n"
                                          "  - {id: L0, position: [0, 0, 10], tolerance_mm: 0.2}\n");
     std::string poses;

@@ -2,6 +2,7 @@
 // of bad value is refused naming file, line and key.
 #include "daemon_config.h"
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/common/error.h"
 
 #include <gtest/gtest.h>
@@ -9,18 +10,7 @@
 namespace hg::station {
 namespace {
 
-const char* kStation = R"(camera:
-  image_size: [640, 480]
-  K: [[800, 0, 320], [0, 800, 240], [0, 0, 1]]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
-  rotation_axis: [0, 0, 1]
-  declination_axis: [1, 0, 0]
-  rotation_range_deg: [-180, 180]
-  declination_range_deg: [0, 60]
-lamps: {backend: sim}
-)";
+const std::string kStation = hgtest::stationYaml({.sections = "lamps: {backend: sim}\n"});
 
 const char* kPart = R"(part: block
 mesh: block.stl
@@ -48,12 +38,7 @@ maintenance: {socket: run/hg.sock, group: hullgauge}
 watchdog: {max_cycle_s: 30}
 )";
 
-std::string replaced(std::string text, const std::string& from, const std::string& to)
-{
-    auto pos = text.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    return text.replace(pos, from.size(), to);
-}
+using hgtest::replaced;
 
 struct Fixture {
     hgtest::TempDir dir;
@@ -126,14 +111,16 @@ TEST(DaemonConfig, DefaultsFollowTheContract)
 TEST(DaemonConfig, StationSegmentationIsReadAtLoadAndNamedWhenBad)
 {
     Fixture f;
-    hgtest::writeFile(f.dir / "station.yaml", std::string(kStation) + "segmentation: {method: fixed, threshold: 40}\n");
+    hgtest::writeFile(f.dir / "station.yaml", kStation + "segmentation: {method: fixed, threshold: 40}\n");
     auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", kDaemon));
     EXPECT_EQ(cfg.segmentation.method, vision::SegmentationMethod::Fixed);
     EXPECT_EQ(cfg.segmentation.threshold, 40.0);
-    // kStation has 11 lines: the section is line 12 (`hullgauged --check` exits 2 with this).
-    hgtest::writeFile(f.dir / "station.yaml", std::string(kStation) + "segmentation: {method: fixed}\n");
+    // Named at the section's line (`hullgauged --check` exits 2 with this).
+    const std::string text = kStation + "segmentation: {method: fixed}\n";
+    hgtest::writeFile(f.dir / "station.yaml", text);
     auto message = f.error(kDaemon);
-    EXPECT_NE(message.find("station.yaml:12: segmentation: threshold: missing"), std::string::npos) << message;
+    const std::string where = "station.yaml:" + std::to_string(hgtest::lineOf(text, "segmentation:")) + ": ";
+    EXPECT_NE(message.find(where + "segmentation: threshold: missing"), std::string::npos) << message;
 }
 
 TEST(DaemonConfig, BadValuesNameFileLineAndKey)

@@ -3,36 +3,29 @@
 #include <gtest/gtest.h>
 
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
 
 namespace hg::geometry {
 namespace {
 
-const char* kStation = R"(camera:
-  image_size: [2448, 2048]
-  K: [[2400, 0, 1224], [0, 2400, 1024], [0, 0, 1]]
-  dist: [-0.1, 0.05, 0, 0, 0]
-  pixel_size_um: [3.45, 3.45]
-  depth_of_field_mm: [250, 350]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
-  rotation_axis: [0, 0, 1]
-  declination_axis: [1, 0, 0]
-  rotation_range_deg: [-180, 180]
-  declination_range_deg: [0, 60]
-environment:
-  floor_z_mm: -2.5
-plc: {port: 1502}
-)";
+// The contract example (docs/contracts.md §2): every optional key given.
+const std::string kStation = hgtest::stationYaml({.imageSize = {2448, 2048},
+                                                  .focalPx = 2400,
+                                                  .cameraKeys = "  dist: [-0.1, 0.05, 0, 0, 0]\n"
+                                                                "  pixel_size_um: [3.45, 3.45]\n"
+                                                                "  depth_of_field_mm: [250, 350]\n",
+                                                  .floorZMm = -2.5,
+                                                  .sections = "plc: {port: 1502}\n"});
 
-std::string replaced(std::string text, const std::string& from, const std::string& to)
+/// "station.yaml:<line of key>: " + rest.
+std::string at(const std::string& key, const std::string& rest)
 {
-    auto pos = text.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    return text.replace(pos, from.size(), to);
+    return "station.yaml:" + std::to_string(hgtest::lineOf(kStation, key)) + ": " + rest;
 }
+
+using hgtest::replaced;
 
 // Loads `text` and returns the InputError message (empty if it loaded).
 std::string loadError(const std::string& text)
@@ -70,51 +63,56 @@ TEST(Station, LoadsTheContractExample)
 TEST(Station, WrongTypeNamesLineAndKey)
 {
     EXPECT_EQ(loadError(replaced(kStation, "[2448, 2048]", "wide")),
-              "station.yaml:2: camera.image_size: expected a sequence, found 'wide'");
+              at("image_size:", "camera.image_size: expected a sequence, found 'wide'"));
     EXPECT_EQ(loadError(replaced(kStation, "floor_z_mm: -2.5", "floor_z_mm: low")),
-              "station.yaml:15: environment.floor_z_mm: expected a finite number, found 'low'");
+              at("floor_z_mm:", "environment.floor_z_mm: expected a finite number, found 'low'"));
 }
 
 TEST(Station, BadValuesAreRefused)
 {
     EXPECT_EQ(loadError(replaced(kStation, "dist: [-0.1, 0.05, 0, 0, 0]", "dist: [1, 2, 3]")),
-              "station.yaml:4: camera.dist: expected 4, 5, 8 or 12 OpenCV coefficients, found 3");
+              at("dist:", "camera.dist: expected 4, 5, 8 or 12 OpenCV coefficients, found 3"));
     EXPECT_EQ(loadError(replaced(kStation, "[[1, 0, 0], [0, 0, -1], [0, 1, 0]]", "[[1, 0, 0], [0, 0, 1], [0, 1, 0]]")),
-              "station.yaml:9: fixture.camera_from_fixture.R: not a rotation matrix (must be orthonormal with "
-              "determinant +1)");
+              at("camera_from_fixture:",
+                 "fixture.camera_from_fixture.R: not a rotation matrix (must be orthonormal with "
+                 "determinant +1)"));
     EXPECT_EQ(loadError(replaced(kStation, "type: rotation_declination", "type: turntable")),
-              "station.yaml:8: fixture.type: unknown fixture type 'turntable' (rotation_declination or rail)");
+              at("type:", "fixture.type: unknown fixture type 'turntable' (rotation_declination or rail)"));
     EXPECT_EQ(loadError(replaced(kStation, "[0, 60]", "[60, 0]")),
-              "station.yaml:13: fixture.declination_range_deg: range [min, max] must have min <= max");
+              at("declination_range_deg:", "fixture.declination_range_deg: range [min, max] must have min <= max"));
     EXPECT_EQ(loadError(replaced(kStation, "[2400, 0, 1224], [0, 2400, 1024]", "[-2400, 0, 1224], [0, 2400, 1024]")),
-              "station.yaml:3: camera.K: fx and fy must be positive");
+              at("K:", "camera.K: fx and fy must be positive"));
 }
 
 TEST(Station, AbsurdMagnitudesAreNamedWhereTheyAre)
 {
     // 9.2e18 mm: once accepted, `plan` blamed the part for what was a typo in the station.
     EXPECT_EQ(loadError(replaced(kStation, "t: [0, 0, 300]", "t: [0, 0, 9.2e18]")),
-              "station.yaml:9: fixture.camera_from_fixture.t: values must lie within ±1e5 mm (a station is not that "
-              "large)");
+              at("camera_from_fixture:",
+                 "fixture.camera_from_fixture.t: values must lie within ±1e5 mm (a station is not that "
+                 "large)"));
     EXPECT_EQ(loadError(replaced(kStation, "[0, 2400, 1024]", "[0, 2400, -9.2e18]")),
-              "station.yaml:3: camera.K: the principal point (cx, cy) lies more than ten image sizes from the image");
+              at("K:", "camera.K: the principal point (cx, cy) lies more than ten image sizes from the image"));
     EXPECT_EQ(loadError(replaced(kStation, "[[2400, 0, 1224]", "[[1e308, 0, 1224]")),
-              "station.yaml:3: camera.K: fx, fy and the skew must be below 1e7 px");
+              at("K:", "camera.K: fx, fy and the skew must be below 1e7 px"));
     EXPECT_EQ(loadError(replaced(kStation, "[-180, 180]", "[-1e308, 180]")),
-              "station.yaml:12: fixture.rotation_range_deg: values must lie within ±1e5 mm or degrees (a station is "
-              "not that large)");
+              at("rotation_range_deg:",
+                 "fixture.rotation_range_deg: values must lie within ±1e5 mm or degrees (a station is "
+                 "not that large)"));
     EXPECT_EQ(loadError(replaced(kStation, "floor_z_mm: -2.5", "floor_z_mm: 1e300")),
-              "station.yaml:15: environment.floor_z_mm: value 1e+300 is outside [-100000, 100000]");
+              at("floor_z_mm:", "environment.floor_z_mm: value 1e+300 is outside [-100000, 100000]"));
     // A principal point outside the image but within reach stays legal (decentred optics).
     EXPECT_EQ(loadError(replaced(kStation, "[0, 2400, 1024]", "[0, 2400, 3000]")), "");
 }
 
 TEST(Station, MissingAndUnknownKeys)
 {
-    EXPECT_EQ(loadError(replaced(kStation, "  type: rotation_declination\n", "")),
-              "station.yaml:8: fixture: missing required key 'type'");
+    // A block map is where its first key is: without `type`, camera_from_fixture.
+    const std::string untyped = replaced(kStation, "  type: rotation_declination\n", "");
+    EXPECT_EQ(loadError(untyped), "station.yaml:" + std::to_string(hgtest::lineOf(untyped, "camera_from_fixture:")) +
+                                      ": fixture: missing required key 'type'");
     auto msg = loadError(replaced(kStation, "  rotation_axis:", "  rotaton_axis:"));
-    EXPECT_EQ(msg.substr(0, msg.find(" (")), "station.yaml:10: fixture.rotaton_axis: unknown key 'rotaton_axis'");
+    EXPECT_EQ(msg.substr(0, msg.find(" (")), at("rotation_axis:", "fixture.rotaton_axis: unknown key 'rotaton_axis'"));
 }
 
 TEST(Station, SyntaxErrorNamesLine)

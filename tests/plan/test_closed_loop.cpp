@@ -3,6 +3,7 @@
 // must pass with every landmark observed and ok; a part with material missing
 // on one face must fail at that face's landmarks only.
 #include "hgtest/parts.h"
+#include "hgtest/station.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
@@ -17,14 +18,7 @@ using Eigen::Vector3d;
 
 geometry::Station makeStation()
 {
-    geometry::Station s;
-    s.camera.K << 4000, 0, 1224, 0, 4000, 1024, 0, 0, 1;
-    s.camera.imageSize = {2448, 2048};
-    s.fixture.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-    s.fixture.cameraFromFixture.t = Vec3(0, 0, 300);
-    s.fixture.rotationRangeDeg = {-180, 180};
-    s.fixture.declinationRangeDeg = {0, 60};
-    return s;
+    return hgtest::station({.imageSize = {2448, 2048}, .focalPx = 4000});
 }
 
 struct Loop {

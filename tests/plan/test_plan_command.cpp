@@ -1,6 +1,7 @@
 // `hullgauge plan` end to end (docs/contracts.md §5): files in, plan.json and poses
 // out, exit 2 with a sentence the designer can act on when no plan exists.
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/mesh_io.h"
@@ -15,22 +16,10 @@ namespace {
 
 using Eigen::Vector3d;
 
-std::string stationYaml(const std::string& rotation)
+std::string stationYaml(geometry::Range rotation)
 {
-    return R"(camera:
-  image_size: [2448, 2048]
-  K: [[4000, 0, 1224], [0, 4000, 1024], [0, 0, 1]]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
-  rotation_axis: [0, 0, 1]
-  declination_axis: [1, 0, 0]
-  rotation_range_deg: )" +
-           rotation + R"(
-  declination_range_deg: [0, 60]
-environment:
-  floor_z_mm: 0.0
-)";
+    return hgtest::stationYaml(
+        {.imageSize = {2448, 2048}, .focalPx = 4000, .rotationRangeDeg = rotation, .floorZMm = 0.0});
 }
 
 std::string partYaml(const std::string& landmarks)
@@ -52,7 +41,7 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
 {
     hgtest::TempDir dir;
     model::saveMesh(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)), dir / "part.stl");
-    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    hgtest::writeFile(dir / "station.yaml", stationYaml({-180, 180}));
     hgtest::writeFile(dir / "part.yaml",
                       partYaml(R"(  - {id: top, position: [1, 2, 20], normal: [0, 0, 1], tolerance_mm: 0.5}
   - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: 0.5}
@@ -99,7 +88,7 @@ TEST(PlanCommand, ConcavityExitsTwoWithTheReason)
     model::saveMesh(model::difference(model::makeCylinder(Vector3d(0, 0, 0), 15, 20, 48),
                                       model::makeCylinder(Vector3d(0, 0, 3), 12, 20, 48)),
                     dir / "part.stl");
-    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    hgtest::writeFile(dir / "station.yaml", stationYaml({-180, 180}));
     hgtest::writeFile(dir / "part.yaml",
                       partYaml("  - {id: inner-bottom, position: [0, 0, 3], normal: [0, 0, 1], tolerance_mm: 0.5}\n"));
     auto r = hgtest::run(plan(dir));
@@ -118,7 +107,7 @@ TEST(PlanCommand, FixtureRangeAndToleranceProblemsExitTwo)
     R << 0, 0, 1, 1, 0, 0, 0, 1, 0;
     channel.transform(R, Vector3d::Zero());
     model::saveMesh(channel, dir / "part.stl");
-    hgtest::writeFile(dir / "station.yaml", stationYaml("[-30, 30]"));
+    hgtest::writeFile(dir / "station.yaml", stationYaml({-30, 30}));
     hgtest::writeFile(dir / "part.yaml",
                       partYaml("  - {id: inner-wall, position: [0, -6, 8], normal: [0, 1, 0], tolerance_mm: 0.5}\n"
                                "  - {id: wall-top, position: [0, -8, 12], normal: [0, 0, 1], tolerance_mm: 0.3}\n"));
@@ -143,7 +132,7 @@ TEST(PlanCommand, FixtureRangeAndToleranceProblemsExitTwo)
 TEST(PlanCommand, MissingFileIsBadInput)
 {
     hgtest::TempDir dir;
-    hgtest::writeFile(dir / "station.yaml", stationYaml("[-180, 180]"));
+    hgtest::writeFile(dir / "station.yaml", stationYaml({-180, 180}));
     auto r = hgtest::run(plan(dir));
     EXPECT_EQ(r.status, 2);
 }

@@ -1,5 +1,6 @@
 // Pose space: grazing poses solve the tangent-plane condition exactly, grids
 // cover the ranges, travel ordering is optimal on small sets.
+#include "hgtest/station.h"
 #include "hullgauge/plan/pose_space.h"
 #include "hullgauge/plan/view_rules.h"
 
@@ -14,12 +15,7 @@ namespace {
 // (0, -300 cos δ, 300 sin δ) at rotation 0.
 FixtureKinematics turntable(geometry::Range rotation, geometry::Range declination)
 {
-    FixtureKinematics f;
-    f.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-    f.cameraFromFixture.t = Vec3(0, 0, 300);
-    f.rotationRangeDeg = rotation;
-    f.declinationRangeDeg = declination;
-    return f;
+    return hgtest::station({.rotationRangeDeg = rotation, .declinationRangeDeg = declination}).fixture;
 }
 
 PoseGrid steps(double rotationDeg, double declinationDeg, double railMm)
@@ -108,12 +104,7 @@ TEST(PoseSpace, RangesExcludeGrazingPoses)
 
 TEST(PoseSpace, RailSolvesTheSinglePosition)
 {
-    FixtureKinematics f;
-    f.type = FixtureType::Rail;
-    f.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-    f.cameraFromFixture.t = Vec3(0, 0, 300);
-    f.railAxis = Vec3::UnitX();
-    f.railRangeMm = {-100, 100};
+    const FixtureKinematics f = hgtest::station({.fixtureType = FixtureType::Rail}).fixture; // along x, ±100 mm
     // Camera centre in the part frame is (-s, -300, 0): plane x = 12 needs s = -12.
     auto poses = grazingPoses(f, Vec3(12, 0, 0), Vec3::UnitX(), {});
     ASSERT_EQ(poses.size(), 1u);

@@ -6,6 +6,7 @@
 // from the fixture origin on -y looking along +y; positive declination raises
 // it: camera centre (0, -300 cos δ, 300 sin δ) at rotation 0, and rotation θ
 // turns that point about z (rotation 90° puts the camera at -x).
+#include "hgtest/station.h"
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
@@ -20,15 +21,11 @@ using Eigen::Vector3d;
 
 geometry::Station makeStation(geometry::Range rotation, geometry::Range declination, double floorZ = 0.0)
 {
-    geometry::Station s;
-    s.camera.K << 4000, 0, 1224, 0, 4000, 1024, 0, 0, 1;
-    s.camera.imageSize = {2448, 2048};
-    s.fixture.cameraFromFixture.R << 1, 0, 0, 0, 0, -1, 0, 1, 0;
-    s.fixture.cameraFromFixture.t = Vec3(0, 0, 300);
-    s.fixture.rotationRangeDeg = rotation;
-    s.fixture.declinationRangeDeg = declination;
-    s.floorZMm = floorZ;
-    return s;
+    return hgtest::station({.imageSize = {2448, 2048},
+                            .focalPx = 4000,
+                            .rotationRangeDeg = rotation,
+                            .declinationRangeDeg = declination,
+                            .floorZMm = floorZ});
 }
 
 PlanLandmark landmark(std::string id, Vec3 p, Vec3 n, double tol = 0.5)

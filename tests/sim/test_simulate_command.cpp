@@ -3,6 +3,7 @@
 // station's own cameras, a CSG notch, and bad input (exit 2, one line naming
 // file and field).
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/vision/manifest.h"
 
@@ -19,17 +20,7 @@ namespace fs = std::filesystem;
 
 // Camera 300 mm from the turntable centre on the part's -y side, looking
 // along +y, image up = part +z: X_cam = (x, -z, y + 300).
-const char* kStation = R"(camera:
-  image_size: [640, 480]
-  K: [[800, 0, 319.5], [0, 800, 239.5], [0, 0, 1]]
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 300]}
-  rotation_axis: [0, 0, 1]
-  declination_axis: [1, 0, 0]
-  rotation_range_deg: [-180, 180]
-  declination_range_deg: [0, 60]
-)";
+const std::string kStation = hgtest::stationYaml();
 
 /// An ASCII STL of the box [lo, hi], written facet by facet (outward normals).
 std::string boxStl(double x0, double y0, double z0, double x1, double y1, double z1)

@@ -54,17 +54,18 @@ using geometry::Vec3;
 /// One view as the aligner sees it.
 struct AlignmentView {
     geometry::CameraModel camera; ///< camera_from_part of the nominal seat (the calibrated view)
-    cv::Mat grey;                 ///< CV_8UC1 or CV_16UC1, camera.imageSize()
+    cv::Mat grey{};               ///< CV_8UC1 or CV_16UC1, camera.imageSize()
     double threshold = 0.0;       ///< grey level of the silhouette edge (the segmentation threshold)
+    bool objectIsDark = true;     ///< backlit: the part is darker than the background
 };
 
 /// A direction of the seat the views do not determine: left at nominal.
 struct FixedDof {
     enum class Kind { Rotation, Translation };
     Kind kind = Kind::Rotation;
-    Vec3 axis = Vec3::UnitZ();  ///< unit, part frame
-    Vec3 point = Vec3::Zero();  ///< a point of the rotation axis, part frame (rotations)
-    std::string label;          ///< "rotation about z through (0, 0, 5)", "translation along x", ...
+    Vec3 axis = Vec3::UnitZ(); ///< unit, part frame
+    Vec3 point = Vec3::Zero(); ///< a point of the rotation axis, part frame (rotations)
+    std::string label;         ///< "rotation about z through (0, 0, 5)", "translation along x", ...
 };
 
 struct AlignmentResult {
@@ -72,19 +73,19 @@ struct AlignmentResult {
     /// A seat was estimated (false for method none and when too little of the
     /// outline was found: `message` says why; the seat is then nominal).
     bool measured = false;
-    geometry::RigidTransform seat;        ///< nominal_from_part
-    Vec3 referencePoint = Vec3::Zero();   ///< part frame: the centre of the mesh's bounding box
-    double shiftMm = 0.0;                 ///< |seat(reference) − reference|
-    double rotationDeg = 0.0;             ///< angle of seat.R
-    double residualPx = 0.0;              ///< RMS of the inliers' residuals at the solution
-    double shiftUncertaintyMm = 0.0;      ///< expanded (k = 2), the largest over directions
-    double rotationUncertaintyDeg = 0.0;  ///< expanded (k = 2), the largest over axes
+    geometry::RigidTransform seat;       ///< nominal_from_part
+    Vec3 referencePoint = Vec3::Zero();  ///< part frame: the centre of the mesh's bounding box
+    double shiftMm = 0.0;                ///< |seat(reference) − reference|
+    double rotationDeg = 0.0;            ///< angle of seat.R
+    double residualPx = 0.0;             ///< RMS of the inliers' residuals at the solution
+    double shiftUncertaintyMm = 0.0;     ///< expanded (k = 2), the largest over directions
+    double rotationUncertaintyDeg = 0.0; ///< expanded (k = 2), the largest over axes
     /// Covariance of (rotation vector [rad], shift of the reference point [mm]).
     Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
     std::vector<FixedDof> fixedDofs;
-    int samples = 0;    ///< contour samples with an edge found (last round)
-    int inliers = 0;    ///< of them, with a non-zero robust weight
-    int iterations = 0; ///< Gauss–Newton steps, all rounds
+    int samples = 0;          ///< contour samples with an edge found (last round)
+    int inliers = 0;          ///< of them, with a non-zero robust weight
+    int iterations = 0;       ///< Gauss–Newton steps, all rounds
     bool withinLimits = true; ///< shift and rotation within max_shift_mm / max_rotation_deg
     std::string message;      ///< why not measured, or the limit exceeded
     double ms = 0.0;

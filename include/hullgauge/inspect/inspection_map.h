@@ -38,6 +38,7 @@
 #include <Eigen/Geometry>
 
 #include "hullgauge/inspect/voxel_frame.h"
+#include "hullgauge/model/part_program.h"
 
 namespace hg::inspect {
 
@@ -72,7 +73,8 @@ struct MapNode {
 /// centre skipped). Slot s and slot 25 - s are opposite.
 const std::array<Eigen::Vector3i, 26>& neighbourOffsets();
 
-enum class ParameterKind : std::uint8_t { Distance, Perimeter, Area };
+/// The part program's parameter kinds (model::toString, model::parseParameterKind name them).
+using ParameterKind = model::ParameterKind;
 
 struct MapParameter {
     std::string id;
@@ -83,10 +85,6 @@ struct MapParameter {
 
     bool operator==(const MapParameter&) const = default;
 };
-
-const char* toString(ParameterKind kind);
-/// "distance", "perimeter", "area"; throws std::invalid_argument otherwise.
-ParameterKind parseParameterKind(const std::string& name);
 
 struct MapGeometry {
     Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero();

@@ -153,7 +153,7 @@ class Inspector {
     /// Inspects prepared silhouettes (ids name the views in the result): aligns
     /// first when the inspector has an aligner (the views' cameras are the
     /// nominal ones; the seated ones are used from then on).
-    InspectionResult inspect(const std::vector<SilhouetteView>& views, const std::vector<std::string>& viewIds) const;
+    InspectionResult inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const;
     /// Inspects with any voxel oracle (no views: no MED check, views_used 0).
     InspectionResult inspectWith(const VoxelOracle& oracle) const;
 
@@ -165,6 +165,9 @@ class Inspector {
     int adjacency() const { return adjacency_; }
 
   private:
+    /// Measures the seat and moves the views' cameras onto it; false (and
+    /// `result` the seating fault) when the part is not seated within the limits.
+    bool seat(std::vector<SilhouetteView>& views, InspectionResult& result) const;
     InspectionResult run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                          const std::vector<std::string>* viewIds) const;
 

@@ -87,8 +87,9 @@ struct SilhouetteView {
     SilhouetteIndex index;
     /// The grey frame and the threshold it was segmented with (shared pixels,
     /// not a copy): what alignment measures edges on (docs/alignment.md).
-    cv::Mat grey;
+    cv::Mat grey{};
     double threshold = 0.0;
+    bool objectIsDark = true;
 };
 
 /// How one view sees one voxel.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -46,8 +47,12 @@ struct Landmark {
     double distanceToSurfaceMm = 0.0;
 };
 
-enum class ParameterKind { Distance, Perimeter, Area };
+/// Inspection map files (.hgmap) store the kind as its value in one byte: keep the order.
+enum class ParameterKind : std::uint8_t { Distance, Perimeter, Area };
+/// "distance", "perimeter", "area".
 std::string toString(ParameterKind kind);
+/// The kind toString names; std::nullopt for any other name.
+std::optional<ParameterKind> parseParameterKind(const std::string& name);
 
 /// A geometric parameter (dissertation 4.6.4): a distance between two
 /// landmarks, or the perimeter or area of the closed polygon through 3 or more.

@@ -1,6 +1,7 @@
 // The simulated camera against analytic silhouettes: a cube seen face-on by a
 // pinhole camera projects to a square whose size follows from similar triangles.
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
@@ -21,17 +22,11 @@ using hg::drivers::FrameStatus;
 // of the camera; the turntable axis is the optical axis (fixture z).
 constexpr double kF = 1000.0;
 constexpr double kDistance = 300.0;
-const char* kStation = R"(camera:
-  image_size: [640, 480]
-  K: [[1000, 0, 319.5], [0, 1000, 239.5], [0, 0, 1]]
-  driver:
-    backend: sim
-fixture:
-  type: rotation_declination
-  camera_from_fixture: {R: [[1, 0, 0], [0, 1, 0], [0, 0, 1]], t: [0, 0, 300]}
-  rotation_axis: [0, 0, 1]
-  declination_axis: [1, 0, 0]
-)";
+const std::string kStation = hgtest::stationYaml({.focalPx = kF,
+                                                  .principalPointPx = cv::Point2d(319.5, 239.5),
+                                                  .cameraKeys = "  driver:\n    backend: sim\n",
+                                                  .mount = hgtest::CameraMount::Axis,
+                                                  .distanceMm = kDistance});
 
 struct Silhouette {
     double area = 0; // dark pixels
@@ -214,9 +209,7 @@ TEST_F(SimCameraTest, TruthStationGeometryIsWhatTheTwinRenders)
     hgtest::TempDir dir;
     // The rig as it is: the fixture origin 10 mm to the right of where the
     // station file (nominal) says, so the cube's near face moves 1000 * 10 / 280 px right.
-    std::string truth = kStation;
-    truth.replace(truth.find("t: [0, 0, 300]"), 14, "t: [10, 0, 300]");
-    hgtest::writeFile(dir / "truth.yaml", truth);
+    hgtest::writeFile(dir / "truth.yaml", hgtest::replaced(kStation, "t: [0, 0, 300]", "t: [10, 0, 300]"));
     std::string text = kStation;
     text.insert(text.find("fixture:"), "    truth_station: truth.yaml\n");
     auto file = hgtest::writeFile(dir / "station.yaml", text);

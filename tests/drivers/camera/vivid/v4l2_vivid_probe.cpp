@@ -188,7 +188,8 @@ StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<voi
         if (!first) {
             // vivid's capture thread runs on the kernel tick; when the guest is
             // starved it can emit two frames within one frame period, and both
-            // carry that period's sequence number. Never backwards, rarely equal.
+            // carry that period's sequence number. Never backwards; how often
+            // equal depends on the host's load, so it is counted, not bounded.
             EXPECT_GE(f.frameId, st.lastId) << "frame " << k;
             if (f.frameId == st.lastId) ++st.repeatedIds;
             EXPECT_GT(f.timestamp, st.lastTs) << "frame " << k;
@@ -201,7 +202,6 @@ StreamStats streamFrames(Camera& cam, int n, int cvType, const std::function<voi
         st.lastTs = f.timestamp;
         check(f);
     }
-    EXPECT_LE(st.repeatedIds, n / 10) << "sequence numbers repeated";
     // vivid paces frames by the kernel tick (jiffies): single gaps jitter by a
     // tick (4 ms at HZ=250), the mean period over a long run is the set rate.
     if (st.lastId >= st.firstId + 20) {

@@ -1,0 +1,454 @@
+// Silhouette and datum alignment of the seated part (docs/alignment.md;
+// dissertation 6.2, item 6).
+#include "hullgauge/align/alignment.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <map>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include "contour.h"
+#include "hullgauge/common/format.h"
+#include "seat_solver.h"
+
+namespace hg::align {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMaxSamplesPerView = 160;
+constexpr int kMinInliers = 12;
+constexpr int kMaxRounds = 4;
+constexpr int kMaxIterations = 20;
+// Edges are searched again this far (px) around the new estimate in later rounds.
+constexpr double kRefineBandPx = 3.0;
+// The first search reaches twice the limits, so a part seated beyond them is
+// measured (and refused as such), not lost.
+constexpr double kSearchReach = 2.0;
+
+struct DatumPlane {
+    Vec3 normal;
+    Vec3 centroid;
+};
+
+// The CAD face of a datum landmark: the triangles connected to the one
+// nearest the landmark that lie in its plane (within 1°).
+std::vector<int> growDatumFace(const model::TriangleMesh& mesh, std::size_t seed, DatumPlane& plane)
+{
+    const double cosLimit = std::cos(geometry::degToRad(1.0));
+    std::map<std::pair<int, int>, std::vector<int>> byEdge;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const int a = mesh.triangles[f][static_cast<std::size_t>(k)];
+            const int b = mesh.triangles[f][static_cast<std::size_t>((k + 1) % 3)];
+            byEdge[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(f));
+        }
+    const Vec3 n0 = mesh.faceNormal(seed);
+    std::vector<int> face{static_cast<int>(seed)};
+    std::vector<char> seen(mesh.triangles.size(), 0);
+    seen[seed] = 1;
+    std::deque<int> queue{static_cast<int>(seed)};
+    Vec3 weighted = Vec3::Zero(), centre = Vec3::Zero();
+    double area = 0.0;
+    while (!queue.empty()) {
+        const auto f = static_cast<std::size_t>(queue.front());
+        queue.pop_front();
+        const auto& t = mesh.triangles[f];
+        const Vec3 &p0 = mesh.vertices[static_cast<std::size_t>(t[0])],
+                   &p1 = mesh.vertices[static_cast<std::size_t>(t[1])],
+                   &p2 = mesh.vertices[static_cast<std::size_t>(t[2])];
+        const double a = 0.5 * (p1 - p0).cross(p2 - p0).norm();
+        weighted += a * mesh.faceNormal(f);
+        centre += a * (p0 + p1 + p2) / 3.0;
+        area += a;
+        for (int k = 0; k < 3; ++k) {
+            const int va = t[static_cast<std::size_t>(k)], vb = t[static_cast<std::size_t>((k + 1) % 3)];
+            for (int g : byEdge[{std::min(va, vb), std::max(va, vb)}]) {
+                const auto gi = static_cast<std::size_t>(g);
+                if (seen[gi] || mesh.faceNormal(gi).dot(n0) < cosLimit) continue;
+                seen[gi] = 1;
+                face.push_back(g);
+                queue.push_back(g);
+            }
+        }
+    }
+    plane.normal = weighted.normalized();
+    plane.centroid = centre / area;
+    return face;
+}
+
+// What a datum plane can fix: its normal shift and its two tilts, and nothing
+// of the motions that slide or turn it in itself (3-2-1). The oblique
+// projection onto those along the plane's own motions, in θ = (L·ω, v).
+Matrix6 datumProjection(const DatumPlane& plane, const Vec3& reference, double lever)
+{
+    const Vec3 m = plane.normal;
+    const Vec3 a1 = m.unitOrthogonal(), a2 = m.cross(a1);
+    const Vec3 arm = reference - plane.centroid;
+    auto rotation = [&](const Vec3& axis) {
+        Vector6 v;
+        v << lever * axis, axis.cross(arm);
+        return v;
+    };
+    auto shift = [](const Vec3& d) {
+        Vector6 v;
+        v << Vec3::Zero(), d;
+        return v;
+    };
+    Matrix6 sees, all;
+    sees << rotation(a1), rotation(a2), shift(m), Vector6::Zero(), Vector6::Zero(), Vector6::Zero();
+    all << rotation(a1), rotation(a2), shift(m), rotation(m), shift(a1), shift(a2);
+    return sees * all.inverse();
+}
+
+geometry::RigidTransform applyStep(const geometry::RigidTransform& seat, const Vector6& delta, const Vec3& reference,
+                                   double lever)
+{
+    const Vec3 omega = delta.head<3>() / lever;
+    const Vec3 v = delta.tail<3>();
+    const Vec3 centre = seat.apply(reference);
+    const double angle = omega.norm();
+    const geometry::Mat3 R =
+        angle > 0.0 ? Eigen::AngleAxisd(angle, omega / angle).toRotationMatrix() : geometry::Mat3::Identity();
+    return {R * seat.R, R * (seat.t - centre) + centre + v};
+}
+
+} // namespace
+
+struct Aligner::Impl {
+    std::shared_ptr<const model::Solid> solid;
+    model::AlignmentSettings settings;
+    std::unique_ptr<EdgeGraph> graph;
+    Vec3 reference = Vec3::Zero();
+    double lever = 1.0;
+    std::vector<ObservationGroup> groups;
+
+    // An edge point found beside a contour sample.
+    struct Correspondence {
+        std::size_t view;
+        const ContourSample* sample;
+        Vec2 edge;
+        Vec2 normal;
+    };
+
+    std::vector<Correspondence> measure(const std::vector<AlignmentView>& views,
+                                        const std::vector<std::vector<ContourSample>>& samples,
+                                        const geometry::RigidTransform& seat, bool first) const;
+    Observation observe(const Correspondence& c, const AlignmentView& view, const geometry::RigidTransform& seat) const;
+    std::vector<Observation> observeAll(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
+                                        const geometry::RigidTransform& seat) const;
+    int solve(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views, Loss loss,
+              geometry::RigidTransform& seat) const;
+    void report(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
+                AlignmentResult& out) const;
+    double searchBandPx(const AlignmentView& view, const Vec3& point) const;
+    double marginMm() const { return settings.maxShiftMm + geometry::degToRad(settings.maxRotationDeg) * lever; }
+    SolverLimits solverLimits() const
+    {
+        SolverLimits l;
+        l.maxShiftMm = settings.maxShiftMm;
+        l.maxTurnMm = geometry::degToRad(settings.maxRotationDeg) * lever;
+        return l;
+    }
+};
+
+Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<model::Landmark>& landmarks,
+                 model::AlignmentSettings settings)
+    : impl_(std::make_unique<Impl>())
+{
+    if (!solid) throw std::invalid_argument("alignment needs the CAD solid");
+    if (!(settings.maxShiftMm > 0.0) || !std::isfinite(settings.maxShiftMm))
+        throw std::invalid_argument("max_shift_mm must be a positive number");
+    if (!(settings.maxRotationDeg > 0.0) || !std::isfinite(settings.maxRotationDeg))
+        throw std::invalid_argument("max_rotation_deg must be a positive number");
+    const model::TriangleMesh& mesh = solid->mesh();
+    impl_->reference = mesh.bounds().center();
+    double lever = 0.0;
+    for (const Vec3& v : mesh.vertices) lever = std::max(lever, (v - impl_->reference).norm());
+    impl_->lever = std::max(lever, 1e-3);
+    std::vector<int> faceDatum(mesh.triangles.size(), -1);
+    if (settings.method == model::AlignmentMethod::Datums) {
+        if (settings.datums.empty()) throw std::invalid_argument("method datums needs at least one datum");
+        for (std::size_t k = 0; k < settings.datums.size(); ++k) {
+            const auto it = std::find_if(landmarks.begin(), landmarks.end(),
+                                         [&](const model::Landmark& l) { return l.id == settings.datums[k]; });
+            if (it == landmarks.end())
+                throw std::invalid_argument("datum '" + settings.datums[k] + "' is not a landmark");
+            DatumPlane plane;
+            for (int f : growDatumFace(mesh, solid->closestPoint(it->position).triangle, plane))
+                if (faceDatum[static_cast<std::size_t>(f)] < 0)
+                    faceDatum[static_cast<std::size_t>(f)] = static_cast<int>(k);
+            impl_->groups.push_back({datumProjection(plane, impl_->reference, impl_->lever)});
+        }
+    } else {
+        impl_->groups.push_back({});
+    }
+    impl_->graph = std::make_unique<EdgeGraph>(mesh, std::move(faceDatum));
+    impl_->solid = std::move(solid);
+    impl_->settings = std::move(settings);
+}
+
+Aligner::~Aligner() = default;
+
+const model::AlignmentSettings& Aligner::settings() const
+{
+    return impl_->settings;
+}
+
+double Aligner::marginMm() const
+{
+    return impl_->marginMm();
+}
+
+double Aligner::Impl::searchBandPx(const AlignmentView& view, const Vec3& point) const
+{
+    const double margin = marginMm();
+    const double depth = view.camera.cameraFromPart().apply(point).z();
+    const double mmPerPx = depth / view.camera.intrinsics().K(0, 0);
+    return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
+}
+
+std::vector<Aligner::Impl::Correspondence>
+Aligner::Impl::measure(const std::vector<AlignmentView>& views, const std::vector<std::vector<ContourSample>>& samples,
+                       const geometry::RigidTransform& seat, bool first) const
+{
+    std::vector<Correspondence> out;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        const geometry::CameraModel camera = seatedCamera(views[v].camera, seat);
+        const EdgeImage image{views[v].grey, views[v].threshold, views[v].objectIsDark};
+        for (const ContourSample& s : samples[v]) {
+            SampleImage at;
+            if (!imageOf(*graph, s, camera, at)) continue;
+            double offset = 0.0;
+            const double band = first ? searchBandPx(views[v], s.point) : kRefineBandPx;
+            if (!findEdge(image, at, band, offset)) continue;
+            out.push_back({v, &s, at.pixel + offset * at.normal, at.normal});
+        }
+    }
+    return out;
+}
+
+// Residual: the edge's distance from the projected sample along the normal;
+// its gradient through the pinhole (distortion changes it by far less than
+// the step matters: the residual itself is exact).
+Observation Aligner::Impl::observe(const Correspondence& c, const AlignmentView& view,
+                                   const geometry::RigidTransform& seat) const
+{
+    const geometry::RigidTransform& cam = view.camera.cameraFromPart();
+    const Vec3 Y = seat.apply(c.sample->point);
+    const Vec3 Z = cam.apply(Y);
+    Observation o;
+    o.group = std::max(0, c.sample->datum);
+    const auto u = view.camera.projectCameraPoint(Z);
+    if (!u || Z.z() <= 0.0) {
+        o.gradient.setZero();
+        o.residual = 0.0;
+        return o;
+    }
+    o.residual = c.normal.dot(*u - c.edge);
+    const geometry::Mat3& K = view.camera.intrinsics().K;
+    const double z = Z.z();
+    Eigen::Matrix<double, 2, 3> Jp;
+    Jp << K(0, 0) / z, K(0, 1) / z, -(K(0, 0) * Z.x() + K(0, 1) * Z.y()) / (z * z), 0.0, K(1, 1) / z,
+        -K(1, 1) * Z.y() / (z * z);
+    const Vec3 g = (c.normal.transpose() * Jp * cam.R).transpose();
+    const Vec3 arm = Y - seat.apply(reference);
+    o.gradient << arm.cross(g) / lever, g;
+    return o;
+}
+
+std::vector<Observation> Aligner::Impl::observeAll(const std::vector<Correspondence>& cs,
+                                                   const std::vector<AlignmentView>& views,
+                                                   const geometry::RigidTransform& seat) const
+{
+    std::vector<Observation> obs;
+    obs.reserve(cs.size());
+    for (const Correspondence& c : cs) obs.push_back(observe(c, views[c.view], seat));
+    return obs;
+}
+
+// Gauss–Newton on fixed correspondences until the step is below 0.01 µm.
+int Aligner::Impl::solve(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views, Loss loss,
+                         geometry::RigidTransform& seat) const
+{
+    const SolverLimits limits = solverLimits();
+    int it = 0;
+    for (; it < kMaxIterations; ++it) {
+        const Step step = robustStep(observeAll(cs, views, seat), groups, limits, loss);
+        seat = applyStep(seat, step.delta, reference, lever);
+        if (step.delta.norm() < 1e-5) return it + 1;
+    }
+    return it;
+}
+
+void Aligner::Impl::report(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
+                           AlignmentResult& out) const
+{
+    const std::vector<Observation> obs = observeAll(cs, views, out.seat);
+    const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey);
+    double sum = 0.0;
+    for (std::size_t j = 0; j < obs.size(); ++j)
+        if (step.weights[j] > 0.0) {
+            ++out.inliers;
+            sum += obs[j].residual * obs[j].residual;
+        }
+    out.samples = static_cast<int>(obs.size());
+    out.residualPx = out.inliers > 0 ? std::sqrt(sum / out.inliers) : 0.0;
+    // θ = (L·ω, v) to (ω, v).
+    Matrix6 S = Matrix6::Identity();
+    S.topLeftCorner<3, 3>() /= lever;
+    out.covariance = S * step.covariance * S.transpose();
+    Eigen::SelfAdjointEigenSolver<geometry::Mat3> rot(out.covariance.topLeftCorner<3, 3>());
+    Eigen::SelfAdjointEigenSolver<geometry::Mat3> shift(out.covariance.bottomRightCorner<3, 3>());
+    out.rotationUncertaintyDeg = 2.0 * geometry::radToDeg(std::sqrt(std::max(0.0, rot.eigenvalues().maxCoeff())));
+    out.shiftUncertaintyMm = 2.0 * std::sqrt(std::max(0.0, shift.eigenvalues().maxCoeff()));
+    // θ moves the seated part about its seated reference point, in the
+    // nominal frame; the report names the part's own axes and points.
+    const Vec3 centre = out.seat.apply(reference);
+    const geometry::RigidTransform partFromNominal = out.seat.inverse();
+    for (const Vector6& u : step.undetermined) {
+        const Vec3 omega = u.head<3>() / lever, v = u.tail<3>();
+        FixedDof d;
+        if (lever * omega.norm() >= v.norm()) {
+            d.kind = FixedDof::Kind::Rotation;
+            const Vec3 axis = omega.normalized();
+            const Vec3 across = v - v.dot(axis) * axis;
+            d.axis = partFromNominal.applyToDirection(axis);
+            d.point = partFromNominal.apply(centre + omega.cross(across) / omega.squaredNorm());
+        } else {
+            d.kind = FixedDof::Kind::Translation;
+            d.axis = partFromNominal.applyToDirection(v.normalized());
+        }
+        out.fixedDofs.push_back(d);
+    }
+}
+
+namespace {
+
+std::string axisName(const Vec3& axis)
+{
+    const char* names[] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i)
+        if (std::abs(axis(i)) > std::cos(geometry::degToRad(1.0))) return names[i];
+    return "(" + formatNumber(axis.x(), 3) + ", " + formatNumber(axis.y(), 3) + ", " + formatNumber(axis.z(), 3) + ")";
+}
+
+void label(FixedDof& d)
+{
+    if (d.kind == FixedDof::Kind::Rotation)
+        d.label = "rotation about " + axisName(d.axis) + " through (" + formatNumber(d.point.x(), 3) + ", " +
+                  formatNumber(d.point.y(), 3) + ", " + formatNumber(d.point.z(), 3) + ")";
+    else
+        d.label = "translation along " + axisName(d.axis);
+}
+
+void checkViews(const std::vector<AlignmentView>& views)
+{
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        const AlignmentView& view = views[v];
+        const std::string name = "alignment view " + std::to_string(v);
+        if (view.grey.empty()) throw std::invalid_argument(name + ": no frame");
+        if (view.grey.type() != CV_8UC1 && view.grey.type() != CV_16UC1)
+            throw std::invalid_argument(name + ": the frame must be 8- or 16-bit grey");
+        if (view.grey.size() != view.camera.imageSize())
+            throw std::invalid_argument(name + ": frame is " + std::to_string(view.grey.cols) + "x" +
+                                        std::to_string(view.grey.rows) + ", camera expects " +
+                                        std::to_string(view.camera.imageSize().width) + "x" +
+                                        std::to_string(view.camera.imageSize().height));
+    }
+}
+
+} // namespace
+
+AlignmentResult Aligner::align(const std::vector<AlignmentView>& views) const
+{
+    const auto t0 = Clock::now();
+    checkViews(views);
+    const Impl& m = *impl_;
+    AlignmentResult out;
+    out.method = m.settings.method;
+    out.referencePoint = m.reference;
+    std::vector<std::vector<ContourSample>> samples;
+    const double nearGrazingDeg = m.settings.maxRotationDeg * kSearchReach + 0.5;
+    for (const AlignmentView& v : views) {
+        auto s = sampleContour(*m.graph, *m.solid, v.camera, nearGrazingDeg, kMaxSamplesPerView);
+        if (m.settings.method == model::AlignmentMethod::Datums)
+            s.erase(std::remove_if(s.begin(), s.end(), [](const ContourSample& c) { return c.datum < 0; }), s.end());
+        samples.push_back(std::move(s));
+    }
+    std::vector<Impl::Correspondence> cs;
+    for (int round = 0; round < kMaxRounds; ++round) {
+        cs = m.measure(views, samples, out.seat, round == 0);
+        if (static_cast<int>(cs.size()) < kMinInliers) break;
+        const geometry::RigidTransform before = out.seat;
+        // The first round starts at nominal, possibly far from the seat: the
+        // convex loss; then the biweight from close by.
+        out.iterations += m.solve(cs, views, round == 0 ? Loss::Huber : Loss::Tukey, out.seat);
+        const double moved = (out.seat.apply(m.reference) - before.apply(m.reference)).norm() +
+                             geometry::degToRad(geometry::rotationAngleDeg(before.R, out.seat.R)) * m.lever;
+        if (round > 0 && moved < 1e-4) break;
+    }
+    if (static_cast<int>(cs.size()) >= kMinInliers) m.report(cs, views, out);
+    for (FixedDof& d : out.fixedDofs) label(d);
+    out.measured = out.inliers >= kMinInliers;
+    out.shiftMm = (out.seat.apply(m.reference) - m.reference).norm();
+    out.rotationDeg = geometry::rotationAngleDeg(geometry::Mat3::Identity(), out.seat.R);
+    if (!out.measured) {
+        out.message = "the seat could not be measured: " + std::to_string(out.inliers) +
+                      " edge points on the outline agree (at least " + std::to_string(kMinInliers) + " needed)";
+        out.seat = {};
+        out.shiftMm = out.rotationDeg = 0.0;
+        out.withinLimits = false;
+    } else if (out.shiftMm > m.settings.maxShiftMm || out.rotationDeg > m.settings.maxRotationDeg) {
+        out.withinLimits = false;
+        out.message = "part not seated: shift " + formatNumber(out.shiftMm, 3) + " mm (max_shift_mm " +
+                      formatNumber(m.settings.maxShiftMm) + "), rotation " + formatNumber(out.rotationDeg, 3) +
+                      "° (max_rotation_deg " + formatNumber(m.settings.maxRotationDeg) + ")";
+    }
+    out.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return out;
+}
+
+geometry::CameraModel seatedCamera(const geometry::CameraModel& nominal, const geometry::RigidTransform& seat)
+{
+    return geometry::CameraModel(nominal.intrinsics(), nominal.cameraFromPart() * seat);
+}
+
+nlohmann::json toJson(const AlignmentResult& r)
+{
+    auto vec = [](const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+    nlohmann::json R = nlohmann::json::array();
+    for (int i = 0; i < 3; ++i) R.push_back(nlohmann::json::array({r.seat.R(i, 0), r.seat.R(i, 1), r.seat.R(i, 2)}));
+    nlohmann::json fixed = nlohmann::json::array();
+    for (const FixedDof& d : r.fixedDofs) {
+        nlohmann::json j{{"kind", d.kind == FixedDof::Kind::Rotation ? "rotation" : "translation"},
+                         {"axis", vec(d.axis)},
+                         {"label", d.label}};
+        if (d.kind == FixedDof::Kind::Rotation) j["point"] = vec(d.point);
+        fixed.push_back(std::move(j));
+    }
+    return {{"method", model::toString(r.method)},
+            {"measured", r.measured},
+            {"R", R},
+            {"t", vec(r.seat.t)},
+            {"reference_point", vec(r.referencePoint)},
+            {"shift_mm", r.shiftMm},
+            {"rotation_deg", r.rotationDeg},
+            {"residual_px", r.residualPx},
+            {"shift_uncertainty_mm", r.shiftUncertaintyMm},
+            {"rotation_uncertainty_deg", r.rotationUncertaintyDeg},
+            {"fixed_dofs", fixed},
+            {"samples", r.samples},
+            {"inliers", r.inliers},
+            {"iterations", r.iterations},
+            {"within_limits", r.withinLimits},
+            {"message", r.message},
+            {"ms", r.ms}};
+}
+
+} // namespace hg::align

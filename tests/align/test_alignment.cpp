@@ -1,0 +1,301 @@
+// Alignment of seated parts (docs/alignment.md): parts rendered through
+// cameras composed with a known seat, aligned through the nominal cameras;
+// the measured seat against the true one, and the inspection through the
+// seated cameras against the parts' true surface offsets.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "hgtest/parts.h"
+#include "hullgauge/align/alignment.h"
+#include "hullgauge/geometry/transform.h"
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/vision/segmentation.h"
+
+namespace {
+
+using hg::align::Aligner;
+using hg::align::AlignmentResult;
+using hg::align::AlignmentView;
+using hg::geometry::CameraModel;
+using hg::geometry::RigidTransform;
+using hg::geometry::Vec3;
+using hg::model::AlignmentMethod;
+using hg::model::AlignmentSettings;
+
+constexpr double kSeatToleranceMm = 0.02;
+constexpr double kSeatToleranceDeg = 0.02;
+
+// A seat of `shiftMm` in a random direction and `turnDeg` about a random axis
+// through `pivot`: nominal_from_part.
+RigidTransform randomSeat(std::mt19937_64& rng, const Vec3& pivot, double shiftMm, double turnDeg)
+{
+    std::normal_distribution<double> g(0.0, 1.0);
+    const Vec3 dir = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const Vec3 axis = Vec3(g(rng), g(rng), g(rng)).normalized();
+    const RigidTransform turn = RigidTransform::rotation(axis, turnDeg);
+    // X -> R (X - pivot) + pivot + shift
+    return {turn.R, pivot - turn.R * pivot + shiftMm * dir};
+}
+
+// The frames of the part as made, seated by `seat`, and the nominal cameras.
+std::vector<hg::inspect::CapturedView> seatedViews(const hg::model::TriangleMesh& mesh,
+                                                   const std::vector<CameraModel>& nominal, const RigidTransform& seat,
+                                                   std::uint64_t seed)
+{
+    std::vector<CameraModel> seated;
+    for (const CameraModel& c : nominal) seated.push_back(hg::align::seatedCamera(c, seat));
+    auto views = hgtest::renderViews(mesh, seated, 1.0, seed);
+    for (std::size_t i = 0; i < views.size(); ++i) views[i].camera = nominal[i];
+    return views;
+}
+
+std::vector<AlignmentView> alignmentViews(const std::vector<hg::inspect::CapturedView>& views)
+{
+    std::vector<AlignmentView> out;
+    for (const auto& v : views) out.push_back({v.camera, v.frame, hg::vision::computeThreshold(v.frame, {}), true});
+    return out;
+}
+
+// The seat's error: the rotation between the two, and the distance between
+// where they put the reference point.
+void expectSeat(const AlignmentResult& got, const RigidTransform& truth, double tolMm = kSeatToleranceMm,
+                double tolDeg = kSeatToleranceDeg)
+{
+    ASSERT_TRUE(got.measured) << got.message;
+    EXPECT_LT(hg::geometry::rotationAngleDeg(got.seat.R, truth.R), tolDeg);
+    EXPECT_LT((got.seat.apply(got.referencePoint) - truth.apply(got.referencePoint)).norm(), tolMm);
+}
+
+struct Plate {
+    hgtest::TestPart part = hgtest::defectPlatePart();
+    std::vector<CameraModel> cameras;
+    Vec3 pivot = part.mesh.bounds().center();
+    Plate()
+    {
+        std::mt19937_64 rng(7);
+        cameras = hgtest::grazingViewSet(part, nullptr, 4, rng);
+    }
+};
+
+TEST(Alignment, SeatsWithinHalfAMillimetreAndHalfADegreeAreMeasuredWithinTwentyMicrometres)
+{
+    const Plate plate;
+    const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
+    std::mt19937_64 rng(11);
+    for (int k = 0; k < 6; ++k) {
+        SCOPED_TRACE("seat " + std::to_string(k));
+        const RigidTransform truth = randomSeat(rng, plate.pivot, 0.1 * (k % 6), 0.1 * ((k + 3) % 6));
+        const auto views = seatedViews(plate.part.mesh, plate.cameras, truth, 100 + k);
+        const AlignmentResult a = aligner.align(alignmentViews(views));
+        expectSeat(a, truth);
+        EXPECT_TRUE(a.withinLimits);
+        EXPECT_TRUE(a.fixedDofs.empty());
+        EXPECT_LT(a.residualPx, 0.5);
+        EXPECT_GT(a.inliers, 100);
+    }
+}
+
+TEST(Alignment, EachAxisTurnedHalfADegreeIsMeasured)
+{
+    const Plate plate;
+    const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
+    for (int axis = 0; axis < 3; ++axis) {
+        SCOPED_TRACE("axis " + std::to_string(axis));
+        const RigidTransform turn = RigidTransform::rotation(Vec3::Unit(axis), 0.5);
+        const RigidTransform truth{turn.R, plate.pivot - turn.R * plate.pivot + Vec3(0.3, -0.2, 0.1)};
+        const AlignmentResult a =
+            aligner.align(alignmentViews(seatedViews(plate.part.mesh, plate.cameras, truth, 200 + axis)));
+        expectSeat(a, truth);
+        EXPECT_NEAR(a.rotationDeg, 0.5, kSeatToleranceDeg);
+    }
+}
+
+TEST(Alignment, NominalSeatIsMeasuredAsNominal)
+{
+    const Plate plate;
+    const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
+    const AlignmentResult a = aligner.align(alignmentViews(seatedViews(plate.part.mesh, plate.cameras, {}, 300)));
+    expectSeat(a, RigidTransform{});
+    EXPECT_LT(a.shiftMm, 0.01);
+    EXPECT_LT(a.rotationDeg, 0.01);
+    // The expanded uncertainty covers what was measured of the exact seat.
+    EXPECT_GT(a.shiftUncertaintyMm, 0.0);
+    EXPECT_LT(a.shiftUncertaintyMm, 0.02);
+}
+
+// The defects the inspection is for do not pull the seat, and every one is
+// still found at its landmark through the seated cameras, the bracket of
+// docs/contracts.md §4 holding in the part's own frame.
+TEST(Alignment, SeatedDefectivePartsAreJudgedInThePartFrame)
+{
+    const Plate plate;
+    auto aligner =
+        std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{}, AlignmentSettings{});
+    const hg::inspect::InspectionMap map = plate.part.map();
+    const hg::inspect::Inspector inspector(map, {}, aligner);
+    std::mt19937_64 rng(23);
+    std::vector<hgtest::PartAsMade> parts = hgtest::plateDefects(plate.part);
+    parts.insert(parts.begin(), hgtest::asDesigned(plate.part));
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+        const hgtest::PartAsMade& made = parts[k];
+        SCOPED_TRACE(made.name);
+        std::mt19937_64 viewRng(31 + k);
+        const auto cameras = hgtest::grazingViewSet(plate.part, &made, 4, viewRng);
+        const RigidTransform truth = randomSeat(rng, plate.pivot, 0.4, 0.4);
+        const auto views = seatedViews(made.mesh, cameras, truth, 400 + 10 * k);
+        const hg::inspect::InspectionResult r = inspector.inspect(views, hg::vision::SegmentationSettings{});
+        ASSERT_TRUE(r.alignment);
+        expectSeat(*r.alignment, truth);
+        EXPECT_FALSE(r.seatingFault);
+        hgtest::expectJudgedAgainstTruth(r, plate.part, made);
+        if (made.name == "nominal") {
+            EXPECT_TRUE(r.pass);
+        }
+    }
+}
+
+TEST(Alignment, APartTwoMillimetresOffIsASeatingFault)
+{
+    const Plate plate;
+    auto aligner =
+        std::make_shared<const Aligner>(plate.part.solid, std::vector<hg::model::Landmark>{}, AlignmentSettings{});
+    const hg::inspect::InspectionMap map = plate.part.map();
+    const hg::inspect::Inspector inspector(map, {}, aligner);
+    const RigidTransform truth = RigidTransform::translation(Vec3(2.0, 0.0, 0.0));
+    const auto r = inspector.inspect(seatedViews(plate.part.mesh, plate.cameras, truth, 500), {});
+    ASSERT_TRUE(r.alignment);
+    EXPECT_TRUE(r.seatingFault);
+    EXPECT_FALSE(r.pass);
+    EXPECT_FALSE(r.alignment->withinLimits);
+    EXPECT_NEAR(r.alignment->shiftMm, 2.0, 0.05);
+    EXPECT_NE(r.alignment->message.find("part not seated: shift 2"), std::string::npos) << r.alignment->message;
+    EXPECT_NE(r.alignment->message.find("max_shift_mm 1"), std::string::npos) << r.alignment->message;
+    for (const auto& l : r.landmarks) EXPECT_EQ(l.status, hg::inspect::LandmarkStatus::NotInspected) << l.id;
+}
+
+// A cylinder turned about its own axis looks the same: that turn is left at
+// nominal and reported with its axis; everything else is measured.
+TEST(Alignment, ACylindersTurnAboutItsAxisIsReportedNotGuessed)
+{
+    const hgtest::TestPart cup = hgtest::cupPart();
+    std::mt19937_64 rng(5);
+    std::vector<CameraModel> cameras;
+    const Vec3 centre = cup.mesh.bounds().center();
+    for (int k = 0; k < 8; ++k) cameras.push_back(hgtest::randomView(centre, rng));
+    const Aligner aligner(cup.solid, {}, AlignmentSettings{});
+    const RigidTransform tilt = RigidTransform::rotation(Vec3::UnitX(), 0.3);
+    const RigidTransform truth{tilt.R, centre - tilt.R * centre + Vec3(0.25, -0.15, 0.1)};
+    const AlignmentResult a = aligner.align(alignmentViews(seatedViews(cup.mesh, cameras, truth, 600)));
+    expectSeat(a, truth);
+    ASSERT_EQ(a.fixedDofs.size(), 1u);
+    const hg::align::FixedDof& d = a.fixedDofs.front();
+    EXPECT_EQ(d.kind, hg::align::FixedDof::Kind::Rotation);
+    EXPECT_GT(std::abs(d.axis.z()), std::cos(hg::geometry::degToRad(1.0)));
+    // The axis of the cup runs through x = y = 0; the 64 facets, the only
+    // thing a turn changes, place the least-seen axis within 2.5 % of the radius.
+    EXPECT_NEAR(d.point.x(), 0.0, 0.25);
+    EXPECT_NEAR(d.point.y(), 0.0, 0.25);
+    EXPECT_NE(d.label.find("rotation about z"), std::string::npos) << d.label;
+}
+
+std::vector<hg::model::Landmark> plateDatums()
+{
+    // The plate's bottom (A), its −y face (B) and its −x face (C).
+    std::vector<hg::model::Landmark> l(3);
+    l[0].id = "A";
+    l[0].position = {14, 10, 0};
+    l[1].id = "B";
+    l[1].position = {8, 0, 4};
+    l[2].id = "C";
+    l[2].position = {0, 10, 4};
+    return l;
+}
+
+TEST(Alignment, DatumsAlignThreeTwoOneOnTheirFaces)
+{
+    const Plate plate;
+    AlignmentSettings s;
+    s.method = AlignmentMethod::Datums;
+    s.datums = {"A", "B", "C"};
+    const Aligner aligner(plate.part.solid, plateDatums(), s);
+    // The boss is shifted 0.65 mm: datums ignore it altogether.
+    const hgtest::PartAsMade shifted = hgtest::plateDefects(plate.part).front();
+    ASSERT_EQ(shifted.name, "feature_shifted");
+    std::mt19937_64 rng(41);
+    const RigidTransform truth = randomSeat(rng, plate.pivot, 0.3, 0.3);
+    const AlignmentResult a = aligner.align(alignmentViews(seatedViews(shifted.mesh, plate.cameras, truth, 700)));
+    EXPECT_EQ(a.method, AlignmentMethod::Datums);
+    expectSeat(a, truth);
+    EXPECT_TRUE(a.fixedDofs.empty());
+}
+
+TEST(Alignment, OnePrimaryDatumFixesThreeDirectionsAndLeavesThree)
+{
+    const Plate plate;
+    AlignmentSettings s;
+    s.method = AlignmentMethod::Datums;
+    s.datums = {"A"};
+    const Aligner aligner(plate.part.solid, plateDatums(), s);
+    const RigidTransform tilt = RigidTransform::rotation(Vec3::UnitX(), 0.3);
+    const RigidTransform truth{tilt.R, plate.pivot - tilt.R * plate.pivot + Vec3(0.0, 0.0, 0.2)};
+    const AlignmentResult a = aligner.align(alignmentViews(seatedViews(plate.part.mesh, plate.cameras, truth, 800)));
+    ASSERT_TRUE(a.measured) << a.message;
+    // The bottom plane as measured: its height and tilt are the true ones.
+    const Vec3 n = a.seat.R * Vec3::UnitZ(), nTrue = truth.R * Vec3::UnitZ();
+    EXPECT_LT(hg::geometry::radToDeg(std::acos(std::min(1.0, n.dot(nTrue)))), kSeatToleranceDeg);
+    EXPECT_NEAR(nTrue.dot(a.seat.apply(plate.pivot) - truth.apply(plate.pivot)), 0.0, kSeatToleranceMm);
+    // Sliding in the plane and turning about its normal are the plane's own.
+    ASSERT_EQ(a.fixedDofs.size(), 3u);
+    int rotations = 0;
+    for (const auto& d : a.fixedDofs) {
+        if (d.kind == hg::align::FixedDof::Kind::Rotation) {
+            ++rotations;
+            EXPECT_GT(std::abs(d.axis.z()), 0.999) << d.label;
+        } else {
+            EXPECT_LT(std::abs(d.axis.z()), 0.05) << d.label;
+        }
+    }
+    EXPECT_EQ(rotations, 1);
+}
+
+TEST(Alignment, UnknownDatumAndBadLimitsAreRefused)
+{
+    const Plate plate;
+    AlignmentSettings s;
+    s.method = AlignmentMethod::Datums;
+    s.datums = {"Z"};
+    EXPECT_THROW(Aligner(plate.part.solid, plateDatums(), s), std::invalid_argument);
+    AlignmentSettings bad;
+    bad.maxShiftMm = 0.0;
+    EXPECT_THROW(Aligner(plate.part.solid, {}, bad), std::invalid_argument);
+}
+
+TEST(Alignment, AFrameOfTheWrongSizeNamesTheView)
+{
+    const Plate plate;
+    const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
+    std::vector<AlignmentView> views{{plate.cameras.front(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(200)), 128.0, true}};
+    try {
+        aligner.align(views);
+        FAIL() << "accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_NE(std::string(e.what()).find("alignment view 0"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Alignment, AnEmptyBackgroundIsNotMeasuredAndSaysWhy)
+{
+    const Plate plate;
+    const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
+    std::vector<AlignmentView> views;
+    for (const auto& c : plate.cameras)
+        views.push_back({c, cv::Mat(c.imageSize(), CV_8UC1, cv::Scalar(217)), 120.0, true});
+    const AlignmentResult a = aligner.align(views);
+    EXPECT_FALSE(a.measured);
+    EXPECT_FALSE(a.withinLimits);
+    EXPECT_NE(a.message.find("could not be measured"), std::string::npos) << a.message;
+}
+
+} // namespace

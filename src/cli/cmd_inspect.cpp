@@ -69,6 +69,7 @@ std::string seatingFaultMessage(const std::optional<align::AlignmentResult>& mea
 {
     if (!measured) return "the part is not seated; nothing inspected, re-seat the part";
     const align::AlignmentResult& a = *measured;
+    if (!a.measured) return a.message + "; nothing inspected, re-seat the part";
     return "the part is not seated: shift " + formatNumber(a.shiftMm, 4) + " mm (limit " +
            formatNumber(limits.maxShiftMm) + " mm), rotation " + formatNumber(a.rotationDeg, 4) + "° (limit " +
            formatNumber(limits.maxRotationDeg) + "°); nothing inspected, re-seat the part";

@@ -4,7 +4,8 @@
 //    at depth 9);
 //  - BM_Align: the seat alone (docs/alignment.md) from the same 8 frames of the
 //    block seated 0.3 mm / 0.3° off (target: <= 10 ms on one core); counters:
-//    the seat's error against the true one;
+//    the seat's error against the true one; BM_AlignAfterLastFrame: what is
+//    left of it once every view was prepared as it came in (Aligner::prepare);
 //  - BM_InspectAligned/9: BM_InspectGoalDriven/9 on the seated block with
 //    alignment on (the regions of interest carry the alignment margin);
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
@@ -83,6 +84,23 @@ void BM_Align(benchmark::State& state)
     state.counters["seat_error_mdeg"] = 1000.0 * hg::geometry::rotationAngleDeg(a.seat.R, truth.R);
 }
 BENCHMARK(BM_Align)->Unit(benchmark::kMillisecond);
+
+void BM_AlignAfterLastFrame(benchmark::State& state)
+{
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0, benchSeat());
+    const hg::align::Aligner aligner(std::make_shared<const hg::model::Solid>(block()), {}, {});
+    std::vector<hg::align::AlignmentView> views;
+    std::vector<std::shared_ptr<const hg::align::ViewEdges>> prepared;
+    for (const auto& f : scene.frames) {
+        views.push_back({f.camera, f.frame, hg::vision::computeThreshold(f.frame, {}), true});
+        prepared.push_back(aligner.prepare(views.back()));
+    }
+    for (auto _ : state) {
+        const hg::align::AlignmentResult a = aligner.align(views, prepared);
+        benchmark::DoNotOptimize(a.shiftMm);
+    }
+}
+BENCHMARK(BM_AlignAfterLastFrame)->Unit(benchmark::kMillisecond);
 
 void BM_InspectAligned(benchmark::State& state)
 {

@@ -120,6 +120,15 @@ geometry::RigidTransform applyStep(const geometry::RigidTransform& seat, const V
 
 } // namespace
 
+struct ViewEdges {
+    struct Found {
+        std::size_t sample;
+        Vec2 edge, normal;
+    };
+    std::vector<ContourSample> samples; ///< at the nominal camera
+    std::vector<Found> first;           ///< edges found around the nominal outline
+};
+
 struct Aligner::Impl {
     std::shared_ptr<const model::Solid> solid;
     model::AlignmentSettings settings;
@@ -136,9 +145,12 @@ struct Aligner::Impl {
         Vec2 normal;
     };
 
+    // The first round's edges of one view, around its nominal outline.
+    ViewEdges firstEdges(const AlignmentView& view) const;
+    // Edges again, around the outline of the seat found so far.
     std::vector<Correspondence> measure(const std::vector<AlignmentView>& views,
-                                        const std::vector<std::vector<ContourSample>>& samples,
-                                        const geometry::RigidTransform& seat, bool first) const;
+                                        const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+                                        const geometry::RigidTransform& seat) const;
     Observation observe(const Correspondence& c, const AlignmentView& view, const geometry::RigidTransform& seat) const;
     std::vector<Observation> observeAll(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
                                         const geometry::RigidTransform& seat) const;
@@ -213,20 +225,40 @@ double Aligner::Impl::searchBandPx(const AlignmentView& view, const Vec3& point)
     return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
 }
 
+ViewEdges Aligner::Impl::firstEdges(const AlignmentView& view) const
+{
+    ViewEdges out;
+    out.samples =
+        sampleContour(*graph, *solid, view.camera, settings.maxRotationDeg * kSearchReach + 0.5, kMaxSamplesPerView);
+    if (settings.method == model::AlignmentMethod::Datums)
+        out.samples.erase(
+            std::remove_if(out.samples.begin(), out.samples.end(), [](const ContourSample& c) { return c.datum < 0; }),
+            out.samples.end());
+    const EdgeImage image{view.grey, view.threshold, view.objectIsDark};
+    for (std::size_t k = 0; k < out.samples.size(); ++k) {
+        SampleImage at;
+        if (!imageOf(*graph, out.samples[k], view.camera, at)) continue;
+        double offset = 0.0;
+        if (findEdge(image, at, searchBandPx(view, out.samples[k].point), offset))
+            out.first.push_back({k, at.pixel + offset * at.normal, at.normal});
+    }
+    return out;
+}
+
 std::vector<Aligner::Impl::Correspondence>
-Aligner::Impl::measure(const std::vector<AlignmentView>& views, const std::vector<std::vector<ContourSample>>& samples,
-                       const geometry::RigidTransform& seat, bool first) const
+Aligner::Impl::measure(const std::vector<AlignmentView>& views,
+                       const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+                       const geometry::RigidTransform& seat) const
 {
     std::vector<Correspondence> out;
     for (std::size_t v = 0; v < views.size(); ++v) {
         const geometry::CameraModel camera = seatedCamera(views[v].camera, seat);
         const EdgeImage image{views[v].grey, views[v].threshold, views[v].objectIsDark};
-        for (const ContourSample& s : samples[v]) {
+        for (const ContourSample& s : prepared[v]->samples) {
             SampleImage at;
             if (!imageOf(*graph, s, camera, at)) continue;
             double offset = 0.0;
-            const double band = first ? searchBandPx(views[v], s.point) : kRefineBandPx;
-            if (!findEdge(image, at, band, offset)) continue;
+            if (!findEdge(image, at, kRefineBandPx, offset)) continue;
             out.push_back({v, &s, at.pixel + offset * at.normal, at.normal});
         }
     }
@@ -290,7 +322,7 @@ void Aligner::Impl::report(const std::vector<Correspondence>& cs, const std::vec
                            AlignmentResult& out) const
 {
     const std::vector<Observation> obs = observeAll(cs, views, out.seat);
-    const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey);
+    const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey, true);
     double sum = 0.0;
     for (std::size_t j = 0; j < obs.size(); ++j)
         if (step.weights[j] > 0.0) {
@@ -365,25 +397,37 @@ void checkViews(const std::vector<AlignmentView>& views)
 
 } // namespace
 
+std::shared_ptr<const ViewEdges> Aligner::prepare(const AlignmentView& view) const
+{
+    checkViews({view});
+    return std::make_shared<const ViewEdges>(impl_->firstEdges(view));
+}
+
 AlignmentResult Aligner::align(const std::vector<AlignmentView>& views) const
+{
+    std::vector<std::shared_ptr<const ViewEdges>> prepared;
+    for (const AlignmentView& v : views) prepared.push_back(prepare(v));
+    return align(views, prepared);
+}
+
+AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
+                               const std::vector<std::shared_ptr<const ViewEdges>>& prepared) const
 {
     const auto t0 = Clock::now();
     checkViews(views);
+    if (prepared.size() != views.size() ||
+        std::any_of(prepared.begin(), prepared.end(), [](const auto& p) { return !p; }))
+        throw std::invalid_argument("alignment: every view must be prepared");
     const Impl& m = *impl_;
     AlignmentResult out;
     out.method = m.settings.method;
     out.referencePoint = m.reference;
-    std::vector<std::vector<ContourSample>> samples;
-    const double nearGrazingDeg = m.settings.maxRotationDeg * kSearchReach + 0.5;
-    for (const AlignmentView& v : views) {
-        auto s = sampleContour(*m.graph, *m.solid, v.camera, nearGrazingDeg, kMaxSamplesPerView);
-        if (m.settings.method == model::AlignmentMethod::Datums)
-            s.erase(std::remove_if(s.begin(), s.end(), [](const ContourSample& c) { return c.datum < 0; }), s.end());
-        samples.push_back(std::move(s));
-    }
     std::vector<Impl::Correspondence> cs;
+    for (std::size_t v = 0; v < views.size(); ++v)
+        for (const ViewEdges::Found& f : prepared[v]->first)
+            cs.push_back({v, &prepared[v]->samples[f.sample], f.edge, f.normal});
     for (int round = 0; round < kMaxRounds; ++round) {
-        cs = m.measure(views, samples, out.seat, round == 0);
+        if (round > 0) cs = m.measure(views, prepared, out.seat);
         if (static_cast<int>(cs.size()) < kMinInliers) break;
         const geometry::RigidTransform before = out.seat;
         // The first round starts at nominal, possibly far from the seat: the

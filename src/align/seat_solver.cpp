@@ -68,62 +68,107 @@ double residualSigma(const std::vector<Observation>& obs, const std::vector<doub
 
 } // namespace
 
+namespace {
+
+// One datum's (or the silhouette's) normal equations in the projected motion.
+struct Stage {
+    Matrix6 H = Matrix6::Zero();
+    Vector6 g = Vector6::Zero();
+    double weightSum = 0.0;
+};
+
+Stage stageOf(const std::vector<Observation>& obs, const std::vector<double>& w, int group, const Matrix6& P)
+{
+    Stage st;
+    for (std::size_t j = 0; j < obs.size(); ++j) {
+        if (obs[j].group != group || w[j] <= 0.0) continue;
+        const Vector6 J = P.transpose() * obs[j].gradient;
+        st.H += w[j] * J * J.transpose();
+        st.g += w[j] * J * obs[j].residual;
+        st.weightSum += w[j];
+    }
+    return st;
+}
+
+// The inverse of the stage's normal matrix over the free directions it
+// determines (SolverLimits); the directions it leaves go to `left`.
+Eigen::MatrixXd determinedInverse(const Stage& st, const Eigen::MatrixXd& free, const SolverLimits& limits,
+                                  double sigmaFloor, Eigen::MatrixXd& left)
+{
+    const Eigen::MatrixXd A = free.transpose() * st.H * free;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
+    const double lambdaMax = eig.eigenvalues().maxCoeff();
+    Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(A.rows(), A.cols());
+    std::vector<Eigen::Index> undetermined;
+    for (Eigen::Index i = 0; i < A.rows(); ++i) {
+        const double l = eig.eigenvalues()(i);
+        const Vector6 u = free * eig.eigenvectors().col(i);
+        const double range = limits.maxTurnMm * u.head<3>().norm() + limits.maxShiftMm * u.tail<3>().norm();
+        const bool determined = l > 0.0 && l >= limits.minRelative * lambdaMax &&
+                                std::sqrt(l / st.weightSum) * range >= limits.minMotionPx &&
+                                sigmaFloor / std::sqrt(l) <= range;
+        if (determined)
+            pinv += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose() / l;
+        else
+            undetermined.push_back(i);
+    }
+    left.resize(6, static_cast<Eigen::Index>(undetermined.size()));
+    for (std::size_t i = 0; i < undetermined.size(); ++i)
+        left.col(static_cast<Eigen::Index>(i)) = free * eig.eigenvectors().col(undetermined[i]);
+    return pinv;
+}
+
+// θ = B·r: the step is linear in the residuals, which carries their variance
+// to the seat's covariance through every stage of 3-2-1.
+Matrix6 covarianceOf(const std::vector<Observation>& obs, const std::vector<ObservationGroup>& groups,
+                     const std::vector<double>& w, const std::vector<Eigen::MatrixXd>& frees,
+                     const std::vector<Eigen::MatrixXd>& pinvs, double sigma)
+{
+    const auto n = static_cast<Eigen::Index>(obs.size());
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(6, n);
+    for (std::size_t g = 0; g < pinvs.size(); ++g) {
+        const Matrix6& P = groups[g].projection;
+        Matrix6 H = Matrix6::Zero();
+        Eigen::MatrixXd G = Eigen::MatrixXd::Zero(6, n);
+        for (Eigen::Index j = 0; j < n; ++j) {
+            const auto k = static_cast<std::size_t>(j);
+            if (obs[k].group != static_cast<int>(g) || w[k] <= 0.0) continue;
+            const Vector6 J = P.transpose() * obs[k].gradient;
+            H += w[k] * J * J.transpose();
+            G.col(j) = w[k] * J;
+        }
+        B += frees[g] * (-pinvs[g] * frees[g].transpose() * (H * B + G));
+    }
+    Matrix6 cov = Matrix6::Zero();
+    for (Eigen::Index j = 0; j < n; ++j) {
+        const double wj = w[static_cast<std::size_t>(j)];
+        if (wj > 0.0) cov += sigma * sigma / wj * B.col(j) * B.col(j).transpose();
+    }
+    return cov;
+}
+
+} // namespace
+
 Step robustStep(const std::vector<Observation>& obs, const std::vector<ObservationGroup>& groups,
-                const SolverLimits& limits, Loss loss)
+                const SolverLimits& limits, Loss loss, bool withCovariance)
 {
     Step step;
     step.weights = robustWeights(obs, groups.size(), limits.minScalePx, loss, step.scalePx);
     const double sigma = residualSigma(obs, step.weights);
     const double sigmaFloor = std::max(sigma, limits.minScalePx);
-    const Eigen::Index n = static_cast<Eigen::Index>(obs.size());
-    // θ = B·r: the step is linear in the residuals, which carries their
-    // variance to the seat's covariance through every stage of 3-2-1.
-    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(6, n);
     Eigen::MatrixXd free = Matrix6::Identity();
+    std::vector<Eigen::MatrixXd> frees, pinvs;
     for (std::size_t g = 0; g < groups.size() && free.cols() > 0; ++g) {
-        const Matrix6 P = groups[g].projection;
-        Matrix6 H = Matrix6::Zero();
-        double weightSum = 0.0;
-        Eigen::MatrixXd G = Eigen::MatrixXd::Zero(6, n);
-        for (Eigen::Index j = 0; j < n; ++j) {
-            const Observation& o = obs[static_cast<std::size_t>(j)];
-            const double w = step.weights[static_cast<std::size_t>(j)];
-            if (o.group != static_cast<int>(g) || w <= 0.0) continue;
-            const Vector6 J = P.transpose() * o.gradient;
-            H += w * J * J.transpose();
-            weightSum += w;
-            G.col(j) = w * J;
-        }
-        const Eigen::MatrixXd A = free.transpose() * H * free;
-        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
-        const double lambdaMax = eig.eigenvalues().maxCoeff();
-        Eigen::MatrixXd pinv = Eigen::MatrixXd::Zero(A.rows(), A.cols());
-        std::vector<Eigen::Index> left;
-        for (Eigen::Index i = 0; i < A.rows(); ++i) {
-            const double l = eig.eigenvalues()(i);
-            const Vector6 u = free * eig.eigenvectors().col(i);
-            const double range = limits.maxTurnMm * u.head<3>().norm() + limits.maxShiftMm * u.tail<3>().norm();
-            const bool determined = l > 0.0 && l >= limits.minRelative * lambdaMax &&
-                                    std::sqrt(l / weightSum) * range >= limits.minMotionPx &&
-                                    sigmaFloor / std::sqrt(l) <= range;
-            if (determined)
-                pinv += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose() / l;
-            else
-                left.push_back(i);
-        }
-        B += free * (-pinv * free.transpose() * (H * B + G));
-        Eigen::MatrixXd next(6, static_cast<Eigen::Index>(left.size()));
-        for (std::size_t i = 0; i < left.size(); ++i)
-            next.col(static_cast<Eigen::Index>(i)) = free * eig.eigenvectors().col(left[i]);
-        free = next;
+        const Stage st = stageOf(obs, step.weights, static_cast<int>(g), groups[g].projection);
+        Eigen::MatrixXd left;
+        const Eigen::MatrixXd pinv = determinedInverse(st, free, limits, sigmaFloor, left);
+        // Solve in the directions the earlier stages left free.
+        step.delta += free * (-pinv * free.transpose() * (st.H * step.delta + st.g));
+        frees.push_back(free);
+        pinvs.push_back(pinv);
+        free = left;
     }
-    Eigen::VectorXd r(n);
-    for (Eigen::Index j = 0; j < n; ++j) r(j) = obs[static_cast<std::size_t>(j)].residual;
-    step.delta = B * r;
-    for (Eigen::Index j = 0; j < n; ++j) {
-        const double w = step.weights[static_cast<std::size_t>(j)];
-        if (w > 0.0) step.covariance += sigma * sigma / w * B.col(j) * B.col(j).transpose();
-    }
+    if (withCovariance) step.covariance = covarianceOf(obs, groups, step.weights, frees, pinvs, sigma);
     for (Eigen::Index i = 0; i < free.cols(); ++i) step.undetermined.push_back(free.col(i).normalized());
     return step;
 }

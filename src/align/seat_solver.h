@@ -59,7 +59,8 @@ enum class Loss { Huber, Tukey };
 
 /// Robust (IRLS) Gauss–Newton step, groups solved in order, each in the
 /// directions the groups before it left free (3-2-1 for datums).
+/// The covariance (the last step's, for the report) only `withCovariance`.
 Step robustStep(const std::vector<Observation>& observations, const std::vector<ObservationGroup>& groups,
-                const SolverLimits& limits, Loss loss);
+                const SolverLimits& limits, Loss loss, bool withCovariance = false);
 
 } // namespace hg::align

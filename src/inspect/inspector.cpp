@@ -170,6 +170,8 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
     // A mask frame's edge lies half-way between its two values.
     const double edgeLevel = mask ? (grey.depth() == CV_8U ? 127.5 : 32767.5) : threshold;
     SilhouetteView sv{v.camera, SilhouetteIndex(grey.size()), grey, edgeLevel, !mask && segmentation.objectIsDark};
+    // The view's share of the alignment now, not after the last frame (docs/alignment.md).
+    if (aligner_) sv.alignment = aligner_->prepare({sv.camera, sv.grey, sv.threshold, sv.objectIsDark});
     for (const cv::Rect& r : regionsOfInterest(v.camera))
         sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
     return sv;
@@ -214,9 +216,13 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
 bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& result) const
 {
     std::vector<align::AlignmentView> frames;
+    std::vector<std::shared_ptr<const align::ViewEdges>> prepared;
     frames.reserve(views.size());
-    for (const SilhouetteView& v : views) frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark});
-    result.alignment = aligner_->align(frames);
+    for (const SilhouetteView& v : views) {
+        frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark});
+        prepared.push_back(v.alignment ? v.alignment : aligner_->prepare(frames.back()));
+    }
+    result.alignment = aligner_->align(frames, prepared);
     const align::AlignmentResult& a = *result.alignment;
     if (a.measured && a.withinLimits) {
         for (SilhouetteView& v : views) v.camera = align::seatedCamera(v.camera, a.seat);

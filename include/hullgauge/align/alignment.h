@@ -91,6 +91,11 @@ struct AlignmentResult {
     double ms = 0.0;
 };
 
+/// One view's share of the work, done as soon as its frame is in (while the
+/// fixture moves on): the contour samples at its nominal camera and the edges
+/// found around them. Opaque; made by Aligner::prepare.
+struct ViewEdges;
+
 class Aligner {
   public:
     /// `landmarks` name the datums of `method: datums`. Throws
@@ -104,6 +109,12 @@ class Aligner {
     /// Measures the seat from the views (each with its nominal camera).
     /// Throws std::invalid_argument when a frame does not match its camera.
     AlignmentResult align(const std::vector<AlignmentView>& views) const;
+    /// The per-view half of align (docs/daemon.md, "The pipeline"); const and
+    /// free of shared state: safe from several threads.
+    std::shared_ptr<const ViewEdges> prepare(const AlignmentView& view) const;
+    /// align with every view prepared (`prepared[i]` from views[i]).
+    AlignmentResult align(const std::vector<AlignmentView>& views,
+                          const std::vector<std::shared_ptr<const ViewEdges>>& prepared) const;
 
     /// How far (mm) any point of the part may lie from its nominal place
     /// within the limits: the margin the inspection's regions of interest need.

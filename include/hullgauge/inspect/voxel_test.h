@@ -28,6 +28,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -35,6 +36,10 @@
 #include <opencv2/core.hpp>
 
 #include "hullgauge/geometry/camera.h"
+
+namespace hg::align {
+struct ViewEdges;
+}
 
 namespace hg::inspect {
 
@@ -90,6 +95,8 @@ struct SilhouetteView {
     cv::Mat grey{};
     double threshold = 0.0;
     bool objectIsDark = true;
+    /// The view's share of the alignment, when the inspector aligns.
+    std::shared_ptr<const align::ViewEdges> alignment{};
 };
 
 /// How one view sees one voxel.

@@ -3,6 +3,7 @@
 // default. One JSON request per connection, one JSON answer (docs/daemon.md).
 #include "command.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 
 #include <cerrno>
 #include <chrono>
@@ -112,6 +113,16 @@ void printStatus(const nlohmann::json& s)
         std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"
                   << c["serial"].get<std::string>() << "', program " << c["program"] << ", " << c["cycle_ms"]
                   << " ms, landmarks failed " << c["landmarks_failed"] << "/" << c["landmarks_total"] << "\n";
+        // The measured seat (docs/alignment.md) and, on the simulated line, the true one.
+        const auto seat = [](const nlohmann::json& a) {
+            return formatNumber(a.value("shift_mm", 0.0), 3) + " mm, " + formatNumber(a.value("rotation_deg", 0.0), 3) +
+                   "°";
+        };
+        if (c.contains("alignment") && c["alignment"].is_object())
+            std::cout << "last seat:    " << seat(c["alignment"]) << " ("
+                      << c["alignment"].value("method", std::string("?")) << ")\n";
+        if (c.contains("simulation") && c["simulation"].contains("seat"))
+            std::cout << "true seat:    " << seat(c["simulation"]["seat"]) << " (simulated)\n";
     }
 }
 

@@ -1,8 +1,11 @@
 // hullgauge inspect --part P.yaml|--map M.hgmap --views M.json [--out R.json]
 // Goal-driven inspection of one captured part (docs/contracts.md §4, §5;
-// docs/inspection.md). Exit 0 when the part passes, 1 when it fails, 2 for bad
-// input (a bad manifest, a missing image or one of the wrong size names the
-// view), 3 for a fault.
+// docs/inspection.md). With --part the part's seat is measured first
+// (docs/alignment.md); a map carries no CAD mesh, so --map inspects the part
+// as drawn. Exit 0 when the part passes, 1 when it fails, 2 for bad input (a
+// bad manifest, a missing image or one of the wrong size names the view), 3
+// for a fault — a part seated beyond the program's alignment limits is one
+// (the result, with its `alignment` object, is still written).
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +15,7 @@
 
 #include "command.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/vision/manifest.h"
@@ -30,6 +34,7 @@ struct InspectArgs {
     bool earlyExit = false;
     std::string method;
     bool noResolutionCheck = false;
+    std::string alignment; ///< none | silhouette | datums; empty: the program's method
 };
 
 // The part program's `inspection` section (defaults with --map), each option
@@ -44,19 +49,49 @@ model::InspectionSettings withFlags(model::InspectionSettings s, const InspectAr
     return s;
 }
 
+// The part program's `alignment` section with --alignment replacing its method.
+// Datums come from the program only: --alignment datums needs them there.
+model::AlignmentSettings withFlag(model::AlignmentSettings s, const InspectArgs& args)
+{
+    if (args.alignment == "none") s.method = model::AlignmentMethod::None;
+    if (args.alignment == "silhouette") s.method = model::AlignmentMethod::Silhouette;
+    if (args.alignment == "datums") {
+        if (s.datums.empty())
+            throw InputError(args.part, "alignment.datums", "--alignment datums needs the program's datums");
+        s.method = model::AlignmentMethod::Datums;
+    }
+    return s;
+}
+
+// The seating fault's line on stderr: what was measured against which limit.
+std::string seatingFaultMessage(const std::optional<align::AlignmentResult>& measured,
+                                const model::AlignmentSettings& limits)
+{
+    if (!measured) return "the part is not seated; nothing inspected, re-seat the part";
+    const align::AlignmentResult& a = *measured;
+    if (!a.measured) return a.message + "; nothing inspected, re-seat the part";
+    return "the part is not seated: shift " + formatNumber(a.shiftMm, 4) + " mm (limit " +
+           formatNumber(limits.maxShiftMm) + " mm), rotation " + formatNumber(a.rotationDeg, 4) + "° (limit " +
+           formatNumber(limits.maxRotationDeg) + "°); nothing inspected, re-seat the part";
+}
+
 int run(const InspectArgs& args)
 {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     std::optional<inspect::InspectionMap> map;
     inspect::InspectionOptions options;
+    std::shared_ptr<const align::Aligner> aligner;
+    model::AlignmentSettings alignment;
     if (!args.map.empty()) {
         map = inspect::InspectionMap::load(args.map);
         options = inspect::inspectionOptions(withFlags({}, args));
     } else {
-        const model::PartProgram program = model::loadPartProgram(args.part);
+        model::PartProgram program = model::loadPartProgram(args.part);
+        program.alignment = alignment = withFlag(program.alignment, args);
         options = inspect::inspectionOptions(withFlags(program.inspection, args));
         map = inspect::buildInspectionMap(program, options);
+        aligner = inspect::makeAligner(program);
     }
     options.maskedLandmarks = args.mask;
 
@@ -74,7 +109,7 @@ int run(const InspectArgs& args)
     const std::string source = args.map.empty() ? args.part : args.map;
     std::optional<inspect::Inspector> inspector;
     try {
-        inspector.emplace(*map, options);
+        inspector.emplace(*map, options, aligner);
     } catch (const std::invalid_argument& e) {
         throw InputError(source, "inspection options", e.what());
     }
@@ -93,6 +128,11 @@ int run(const InspectArgs& args)
         std::ofstream f(args.out);
         f << text;
         if (!f) throw FaultError("cannot write " + args.out);
+    }
+    if (result.seatingFault) {
+        std::cerr << "hullgauge inspect: " << result.part
+                  << ": seating fault: " << seatingFaultMessage(result.alignment, alignment) << "\n";
+        return static_cast<int>(ExitStatus::Fault);
     }
     int failed = 0;
     for (const auto& l : result.landmarks)
@@ -123,9 +163,14 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::IsMember({"volume", "centre"}));
     cmd->add_flag("--no-resolution-check", args->noResolutionCheck,
                   "do not require a view that resolves ΔV (eq. 4.4.4-19) per landmark");
+    cmd->add_option("--alignment", args->alignment,
+                    "how the seat is measured: none, silhouette or datums; default: alignment.method (--part only)")
+        ->check(CLI::IsMember({"none", "silhouette", "datums"}));
     return [args] {
         if (args->part.empty() == args->map.empty())
             throw InputError("", "--part/--map", "give exactly one of --part and --map");
+        if (!args->alignment.empty() && args->part.empty())
+            throw InputError("", "--alignment", "--alignment needs --part: a map has no CAD mesh to align");
         return run(*args);
     };
 }

@@ -1,13 +1,24 @@
 // hullgauge simulate --mesh M.stl [--mesh D.stl ...] [--subtract C.stl ...]
 //                    --station S.yaml --poses poses.yaml --out DIR
 //                    [--noise SIGMA] [--blur SIGMA] [--seed N] [--bit-depth 8|16] [--subsamples N]
+//                    [--seat "dx,dy,dz,rx,ry,rz"]
 // Renders backlit views of the part (the union of the --mesh solids, each
 // minus every --subtract solid) at the fixture poses and writes v0.png,
 // v1.png, ... and DIR/manifest.json (docs/contracts.md §3, §5) with K, dist, R, t and
 // the fixture pose of every view. One summary line per view on stdout; the
 // progress on stderr.
+//
+// --seat renders the part seated off its nominal place while the manifest
+// keeps the nominal cameras, as a real nest does: the inspection has to find
+// the seat (docs/alignment.md). The seat is nominal_from_part, the definition
+// of the result's `alignment`: a part point X lies at R·X + t, with R the
+// rotation rz about z · ry about y · rx about x (degrees, the part's axes)
+// about the centre c of the rendered meshes' bounding box, then the shift d:
+// R·X + t = R (X − c) + c + d. The manifest records it under "simulation".
 #include "command.h"
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/csg.h"
@@ -15,8 +26,10 @@
 #include "hullgauge/sim/renderer.h"
 #include "hullgauge/vision/manifest.h"
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
@@ -40,7 +53,32 @@ struct SimulateArgs {
     std::uint64_t seed = 0;
     int bitDepth = 8;
     int subsamples = 16;
+    std::vector<double> seat; ///< dx, dy, dz (mm), rx, ry, rz (degrees); empty: as drawn
 };
+
+/// The --seat transform (nominal_from_part) about the bounding-box centre `c`.
+geometry::RigidTransform seatFromArgs(const std::vector<double>& v, const geometry::Vec3& c)
+{
+    using Eigen::AngleAxisd;
+    const geometry::Mat3 R = (AngleAxisd(geometry::degToRad(v[5]), geometry::Vec3::UnitZ()) *
+                              AngleAxisd(geometry::degToRad(v[4]), geometry::Vec3::UnitY()) *
+                              AngleAxisd(geometry::degToRad(v[3]), geometry::Vec3::UnitX()))
+                                 .toRotationMatrix();
+    const geometry::Vec3 d(v[0], v[1], v[2]);
+    return {R, c + d - R * c};
+}
+
+/// The manifest's "simulation" extension: the true seat the part was rendered with.
+nlohmann::json seatJson(const geometry::RigidTransform& seat, const geometry::Vec3& c)
+{
+    const auto& R = seat.R;
+    return {{"seat",
+             {{"R", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)}, {R(2, 0), R(2, 1), R(2, 2)}}},
+              {"t", {seat.t.x(), seat.t.y(), seat.t.z()}},
+              {"centre", {c.x(), c.y(), c.z()}},
+              {"shift_mm", (seat.apply(c) - c).norm()},
+              {"rotation_deg", geometry::rotationAngleDeg(geometry::Mat3::Identity(), R)}}}};
+}
 
 /// The part to render: every --mesh solid minus every --subtract solid.
 /// (A ∪ B) − C = (A − C) ∪ (B − C), and the renderer draws the union, so the
@@ -94,6 +132,10 @@ int run(const SimulateArgs& args)
     std::size_t triangles = 0;
     for (const auto& m : part) triangles += m.triangles.size();
     const sim::SilhouetteRenderer renderer(part);
+    Eigen::AlignedBox3d bounds;
+    for (const auto& m : part) bounds.extend(m.bounds());
+    const geometry::RigidTransform seat =
+        args.seat.empty() ? geometry::RigidTransform::identity() : seatFromArgs(args.seat, bounds.center());
 
     const fs::path outDir = args.out;
     std::error_code ec;
@@ -107,7 +149,8 @@ int run(const SimulateArgs& args)
     for (std::size_t i = 0; i < poses.size(); ++i) {
         const std::string id = "v" + std::to_string(i);
         const geometry::CameraModel camera = station.cameraAt(poses[i]);
-        const cv::Mat coverage = renderer.coverage(camera, options);
+        // The part is seen seated; the manifest gets the nominal camera.
+        const cv::Mat coverage = renderer.coverage(align::seatedCamera(camera, seat), options);
         // Each view gets its own noise stream, reproducible from --seed.
         sim::RenderOptions viewOptions = options;
         viewOptions.seed = args.seed + i;
@@ -126,7 +169,15 @@ int run(const SimulateArgs& args)
         manifest.views.push_back(std::move(view));
     }
     const fs::path manifestFile = outDir / "manifest.json";
-    vision::writeManifest(manifest, manifestFile);
+    if (args.seat.empty()) {
+        vision::writeManifest(manifest, manifestFile);
+    } else {
+        nlohmann::json j = parseJson(vision::manifestJson(manifest, outDir), manifestFile.string());
+        j["simulation"] = seatJson(seat, bounds.center());
+        std::ofstream f(manifestFile);
+        f << j.dump(2) << '\n';
+        if (!f) throw FaultError("cannot write " + manifestFile.string());
+    }
     std::cerr << "hullgauge simulate: wrote " << manifestFile.string() << '\n';
     return 0;
 }
@@ -156,6 +207,11 @@ std::function<int()> factory(CLI::App& app)
     cmd->add_option("--subsamples", args->subsamples, "sub-scanlines per pixel row (vertical anti-aliasing)")
         ->check(CLI::Range(4, 256))
         ->capture_default_str();
+    cmd->add_option("--seat", args->seat,
+                    "render the part seated off nominal: dx,dy,dz (mm), rx,ry,rz (degrees) about the bounding-box "
+                    "centre; the manifest keeps the nominal cameras")
+        ->delimiter(',')
+        ->expected(6);
     return [args] { return run(*args); };
 }
 

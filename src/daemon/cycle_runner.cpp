@@ -1,5 +1,6 @@
 #include "cycle_runner.h"
 
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/station/cycle_rules.h"
 #include "image_archive.h"
@@ -23,6 +24,20 @@ std::int64_t wallMs()
 std::int64_t ns(std::chrono::milliseconds d)
 {
     return std::chrono::nanoseconds(d).count();
+}
+
+/// The simulated part's true seat as the record keeps it, in the terms of the
+/// result's `alignment` object (docs/alignment.md): R, t, and the shift of the
+/// pivot and the rotation angle the demo compares with the measured ones.
+nlohmann::json seatJson(const SimulatedSeat& s)
+{
+    const auto& R = s.seat.R;
+    const auto& t = s.seat.t;
+    return {{"R", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)}, {R(2, 0), R(2, 1), R(2, 2)}}},
+            {"t", {t.x(), t.y(), t.z()}},
+            {"centre", {s.centre.x(), s.centre.y(), s.centre.z()}},
+            {"shift_mm", (s.seat.apply(s.centre) - s.centre).norm()},
+            {"rotation_deg", geometry::rotationAngleDeg(geometry::Mat3::Identity(), R)}};
 }
 
 } // namespace
@@ -316,6 +331,8 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     log->info("cycle {}{}: program {}, serial '{}'", r.manual ? "manual" : "seq ",
               r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial);
     devices_.showLamps(LampPattern::Busy);
+    // The simulated line puts a new part in the nest, seated within its play.
+    if (simulation_) simulation_->newPart();
     auto it = cycle.cfg->programs.find(r.program);
     cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
     auto action = transition([&] { return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1); });
@@ -407,8 +424,20 @@ SequencerAction CycleRunner::finishInspection(Cycle& cycle)
     const auto start = clock_.now();
     cycle.outcome = inspector_.finish();
     cycle.finishMs += clock_.msSince(start);
-    if (!cycle.outcome.ok) hg::log::category("seq")->error("inspection failed: {}", cycle.outcome.error);
-    return feed(cycle.outcome.ok ? SequencerEvent::Processed : SequencerEvent::ProcessingFailed);
+    const auto& outcome = cycle.outcome;
+    if (!outcome.ok) {
+        hg::log::category("seq")->error("inspection failed: {}", outcome.error);
+        return feed(SequencerEvent::ProcessingFailed);
+    }
+    if (outcome.seatingFault) {
+        // Not a station fault: the PLC re-seats the part and triggers again (FAULT_CODE 32, docs/plc.md).
+        const auto& a = outcome.alignment;
+        hg::log::category("seq")->warn("part not seated: shift {:.3f} mm, rotation {:.3f}°{}{}", a ? a->shiftMm : 0.0,
+                                       a ? a->rotationDeg : 0.0, a && !a->message.empty() ? ": " : "",
+                                       a ? a->message : std::string());
+        return feed(SequencerEvent::NotSeated);
+    }
+    return feed(SequencerEvent::Processed);
 }
 
 void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
@@ -435,6 +464,12 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     const auto& outcome = cycle.outcome;
     record.part = outcome.part;
     record.verdict = station::verdictOf(how, outcome.pass);
+    // The seat is kept whatever the verdict: a part not seated is recorded with the pose that says so.
+    if (outcome.ok && outcome.alignment) record.alignment = align::toJson(*outcome.alignment);
+    if (simulation_) {
+        record.simulation = {{"part", simulation_->part()}};
+        if (auto seat = simulation_->trueSeat()) record.simulation["seat"] = seatJson(*seat);
+    }
     if (how == station::CycleOutcome::Inspected) record.landmarks = outcome.landmarks;
     record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
     // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
@@ -506,7 +541,9 @@ void CycleRunner::report(Cycle& cycle)
                       {"landmarks_total", record.landmarks.size()},
                       {"manual", record.manual},
                       {"images_dir", cycle.imagesDir},
+                      {"alignment", record.alignment},
                       {"timing_ms", timing}};
+        if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
     }
     hg::log::category("seq")->info(
         "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "

@@ -41,6 +41,11 @@ class CycleRunner {
     CycleRunner(const CycleRunner&) = delete;
     CycleRunner& operator=(const CycleRunner&) = delete;
 
+    /// The simulated line's control (before start()): a new part is seated in
+    /// the nest at the start of every cycle, and the record keeps the part
+    /// shown and its true seat (docs/daemon.md, "Seating"). Null on real hardware.
+    void setSimulation(SimulationControl* simulation) { simulation_ = simulation; }
+
     /// Starts the thread: it starts the devices, then serves triggers.
     /// `onDevicesActive` is called once, from that thread, when the devices
     /// first became active (the daemon sends READY=1 there).
@@ -99,6 +104,7 @@ class CycleRunner {
 
     PlcRegisters& registers_;
     StationDevices& devices_;
+    SimulationControl* simulation_ = nullptr;
     Inspector& inspector_;
     ResultStore& store_;
     Clock& clock_;

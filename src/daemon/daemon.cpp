@@ -227,6 +227,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     PlcServer plc(registers, config->plc);
     plc.start();
     CycleRunner runner(registers, *hardware.devices, *inspector, store, config);
+    runner.setSimulation(hardware.simulation);
     MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd);
     MaintenanceServer maintenance(
         config->maintenance.socket, config->maintenance.group,

@@ -157,6 +157,23 @@ std::optional<Ipv4Network> parseIpv4Network(const std::string& text)
     return net;
 }
 
+namespace {
+
+// `simulation.seating`: the play of the simulated nest (docs/daemon.md, "Seating").
+DaemonConfig::Seating parseSeating(const ConfigNode& node)
+{
+    if (!node.isMap()) node.fail("expected {shift_mm: N, rotation_deg: N, seed: N}");
+    node.allowOnlyKeys({"shift_mm", "rotation_deg", "seed"});
+    DaemonConfig::Seating s;
+    // Beyond a few millimetres or degrees the part is not in the nest at all.
+    s.shiftMm = node["shift_mm"].asDoubleIn(0.0, 10.0);
+    s.rotationDeg = node["rotation_deg"].asDoubleIn(0.0, 10.0);
+    if (auto seed = node.optional("seed")) s.seed = static_cast<std::uint64_t>(seed->asIntIn(0, 1LL << 62));
+    return s;
+}
+
+} // namespace
+
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
 {
     auto root = ConfigNode::loadFile(file);
@@ -202,11 +219,12 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);
     }
     if (auto n = root.optional("simulation")) {
-        n->allowOnlyKeys({"parts"});
+        n->allowOnlyKeys({"parts", "seating"});
         auto parts = (*n)["parts"];
         if (!parts.isMap()) parts.fail("expected a map of part names to mesh files (nominal and defect variants)");
         for (const auto& name : parts.keys()) cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
         if (parts.keys().empty() || !parts.has("nominal")) parts.fail("the simulated parts must include 'nominal'");
+        if (auto s = n->optional("seating")) cfg.simulatedSeating = parseSeating(*s);
     }
     return cfg;
 }

@@ -112,6 +112,15 @@ struct DaemonConfig {
     /// simulated camera can render, by name ("nominal" first, then defect
     /// variants), as mesh files. Empty on real hardware.
     std::vector<std::pair<std::string, std::filesystem::path>> simulatedParts;
+    /// Simulated line only: `simulation.seating`, the play within which every
+    /// new part is seated at random (docs/daemon.md, "Seating"); absent: every
+    /// part is seated exactly as drawn.
+    struct Seating {
+        double shiftMm = 0.0;     ///< largest shift of the part's bounding-box centre
+        double rotationDeg = 0.0; ///< largest rotation angle about it
+        std::uint64_t seed = 1;   ///< the draws repeat from run to run
+    };
+    std::optional<Seating> simulatedSeating;
 };
 
 /// Loads and validates a daemon configuration. Relative paths are relative to

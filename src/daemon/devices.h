@@ -10,12 +10,14 @@
 
 #include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/transform.h"
 #include "hullgauge/station/cycle_rules.h"
 
 #include <chrono>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,8 +50,14 @@ class StationDevices {
     virtual nlohmann::json lampStatus() const { return nullptr; }
 };
 
+/// A simulated part's true seat (docs/daemon.md, "Seating").
+struct SimulatedSeat {
+    geometry::RigidTransform seat;                  ///< nominal_from_part, as align::AlignmentResult::seat
+    geometry::Vec3 centre = geometry::Vec3::Zero(); ///< the nominal mesh's bounding-box centre, the pivot
+};
+
 /// The simulated line's control (`hullgauge ctl sim-part`, docs/daemon.md):
-/// which part the simulated camera shows.
+/// which part the simulated camera shows, and how it is seated.
 class SimulationControl {
   public:
     virtual ~SimulationControl() = default;
@@ -58,6 +66,12 @@ class SimulationControl {
     virtual std::string part() const = 0;
     /// Switches the part under test; false for an unknown name.
     virtual bool selectPart(const std::string& name) = 0;
+    /// A new part is put in the nest: with `simulation.seating` it is seated
+    /// at random within the play, else exactly as drawn. The cycle runner calls
+    /// it at the start of every cycle.
+    virtual void newPart() {}
+    /// The seat of the part in the nest; nullopt without `simulation.seating`.
+    virtual std::optional<SimulatedSeat> trueSeat() const { return std::nullopt; }
 };
 
 /// What the daemon's device factory returns: the production port and, on the

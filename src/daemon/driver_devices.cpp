@@ -5,12 +5,40 @@
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/mesh_io.h"
 
+#include <Eigen/Geometry>
 #include <array>
+#include <cmath>
+#include <random>
 
 namespace hg::daemon {
 namespace {
 
 using drivers::LifecycleState;
+
+/// A unit vector of uniformly random direction (a normal sample, normalised).
+geometry::Vec3 randomDirection(std::mt19937_64& rng)
+{
+    std::normal_distribution<double> normal;
+    geometry::Vec3 v;
+    do v = geometry::Vec3(normal(rng), normal(rng), normal(rng));
+    while (v.norm() < 1e-9);
+    return v.normalized();
+}
+
+/// A seat drawn uniformly within the play (docs/daemon.md, "Seating"): the
+/// shift and the rotation vector each uniform in the ball of its play, the
+/// rotation about the nominal mesh's bounding-box centre c, then the shift:
+/// X ↦ R (X − c) + c + d.
+SimulatedSeat drawSeat(std::mt19937_64& rng, const station::DaemonConfig::Seating& play, const geometry::Vec3& c)
+{
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    // The cube root of a uniform variable: uniform in the volume of the ball.
+    const geometry::Vec3 d = randomDirection(rng) * (play.shiftMm * std::cbrt(unit(rng)));
+    const geometry::Vec3 axis = randomDirection(rng);
+    const double angle = geometry::degToRad(play.rotationDeg * std::cbrt(unit(rng)));
+    const geometry::Mat3 R = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
+    return {{R, c + d - R * c}, c};
+}
 
 drivers::StationIndication indication(LampPattern p)
 {
@@ -28,8 +56,14 @@ class DriverDevices : public StationDevices, public SimulationControl {
         lamps_ = drivers::makeLamps(doc[config.lampsSection], &sim_);
         // The simulated line: the camera renders the selected part at the fixture's actual pose.
         drivers::CameraEnvironment environment;
-        for (const auto& [name, file] : config.simulatedParts)
+        for (const auto& [name, file] : config.simulatedParts) {
             environment.parts.emplace_back(name, model::loadMesh(file));
+            if (name == "nominal") seatCentre_ = environment.parts.back().second.bounds().center();
+        }
+        if (config.simulatedSeating) {
+            seating_ = *config.simulatedSeating;
+            seatRng_.seed(seating_->seed);
+        }
         environment.poseSource = [this]() -> std::optional<geometry::FixturePose> {
             drivers::FixtureStatus status;
             if (!fixture_->status(status).ok() || status.busy || status.fault) return std::nullopt;
@@ -112,6 +146,19 @@ class DriverDevices : public StationDevices, public SimulationControl {
     std::string part() const override { return sim_.camera->part(); }
     bool selectPart(const std::string& name) override { return sim_.camera->setPart(name).ok(); }
 
+    void newPart() override
+    {
+        if (!seating_) return;
+        seat_ = drawSeat(seatRng_, *seating_, seatCentre_);
+        sim_.camera->setSeat(seat_.seat);
+    }
+
+    std::optional<SimulatedSeat> trueSeat() const override
+    {
+        if (!seating_) return std::nullopt;
+        return seat_;
+    }
+
     void showLamps(LampPattern pattern) override
     {
         if (auto r = lamps_->show(indication(pattern)); !r.ok()) hg::log::category("daemon")->warn("{}", r.message());
@@ -149,6 +196,11 @@ class DriverDevices : public StationDevices, public SimulationControl {
     }
 
     drivers::SimulationControls sim_; ///< the twins' controls, where a driver is simulated
+    // The simulated nest (runner thread only): its play, the draws, the part in it.
+    std::optional<station::DaemonConfig::Seating> seating_;
+    std::mt19937_64 seatRng_;
+    geometry::Vec3 seatCentre_ = geometry::Vec3::Zero();
+    SimulatedSeat seat_;
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;
     std::unique_ptr<drivers::Lamps> lamps_;

@@ -45,7 +45,8 @@ class EngineInspector : public Inspector {
                 // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
                 const auto options = inspect::inspectionOptions(p.program.inspection);
                 p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
-                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options);
+                // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
+                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program));
                 hg::log::category("inspect")->info(
                     "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
@@ -102,6 +103,8 @@ class EngineInspector : public Inspector {
             out.part = result.part;
             out.pass = result.pass;
             out.traversalMs = result.totalMs;
+            out.alignment = result.alignment;
+            out.seatingFault = result.seatingFault;
             out.processingMs = prepared.prepareMs + result.totalMs;
             for (const auto& l : result.landmarks)
                 out.landmarks.push_back(
@@ -132,10 +135,16 @@ class EngineInspector : public Inspector {
         std::map<std::string, std::string> status;
         for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
         std::vector<ViewEvidence> views = std::move(views_);
-        for (auto& e : views)
+        // The archive's manifest keeps the nominal cameras (`hullgauge inspect` aligns again from
+        // them); the landmarks are drawn where the seated part shows them.
+        const geometry::RigidTransform seat =
+            result.alignment ? result.alignment->seat : geometry::RigidTransform::identity();
+        for (auto& e : views) {
+            const geometry::CameraModel seated = align::seatedCamera(e.capture->camera, seat);
             for (const auto& l : current_->program.landmarks)
-                if (auto px = e.capture->camera.project(l.position))
+                if (auto px = seated.project(l.position))
                     e.landmarks.push_back({cv::Point2d((*px).x(), (*px).y()), l.id, status[l.id]});
+        }
         return [views = std::move(views)]() mutable {
             for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);
             return views;
@@ -160,7 +169,9 @@ std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& conf
 
 void checkEngineProgram(const station::PartProgramRef& ref)
 {
-    (void)inspect::inspectionOptions(model::loadPartProgram(ref.partFile).inspection);
+    const model::PartProgram program = model::loadPartProgram(ref.partFile);
+    (void)inspect::inspectionOptions(program.inspection);
+    (void)inspect::makeAligner(program);
 }
 
 } // namespace hg::daemon

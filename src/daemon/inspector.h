@@ -5,6 +5,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
 #include "hullgauge/vision/manifest.h"
@@ -49,6 +50,11 @@ struct InspectionOutcome {
     /// the result is shown — that work is not on the path from the last frame to the verdict.
     std::vector<ViewEvidence> views;
     std::function<std::vector<ViewEvidence>()> evidence;
+    /// The part's measured seat when the program aligns (docs/alignment.md).
+    std::optional<align::AlignmentResult> alignment;
+    /// The seat is beyond the program's limits: nothing was inspected, the
+    /// cycle ends with FAULT_CODE 32 (part-not-seated, docs/plc.md).
+    bool seatingFault = false;
     double processingMs = 0.0; ///< preparation of every view plus the traversal
     double prepareMs = 0.0;    ///< segmentation of the views (mostly while the fixture moved)
     double traversalMs = 0.0;  ///< the goal-driven traversal after the last frame

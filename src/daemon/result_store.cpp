@@ -10,7 +10,8 @@
 namespace hg::daemon {
 namespace {
 
-constexpr int kSchemaVersion = 1;
+// 2: alignment_json and simulation_json (the measured and the simulated seat).
+constexpr int kSchemaVersion = 2;
 
 constexpr const char* kSchema = R"(
 CREATE TABLE IF NOT EXISTS inspections (
@@ -29,7 +30,9 @@ CREATE TABLE IF NOT EXISTS inspections (
     landmarks_total  INTEGER NOT NULL,
     landmarks_json   TEXT    NOT NULL,
     timing_json      TEXT    NOT NULL,
-    images_dir       TEXT    NOT NULL DEFAULT ''
+    images_dir       TEXT    NOT NULL DEFAULT '',
+    alignment_json   TEXT    NOT NULL DEFAULT 'null',
+    simulation_json  TEXT    NOT NULL DEFAULT 'null'
 );
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
@@ -83,6 +86,11 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
         if (found > kSchemaVersion)
             throw FaultError("result store " + file.string() + ": schema version " + std::to_string(found) +
                              " is newer than this daemon's (" + std::to_string(kSchemaVersion) + ")");
+        // A version 1 database gains the seat's columns; its rows read null there.
+        if (found == 1) {
+            exec("ALTER TABLE inspections ADD COLUMN alignment_json TEXT NOT NULL DEFAULT 'null'");
+            exec("ALTER TABLE inspections ADD COLUMN simulation_json TEXT NOT NULL DEFAULT 'null'");
+        }
         exec(("PRAGMA user_version=" + std::to_string(kSchemaVersion)).c_str());
     } catch (...) {
         sqlite3_close(db_);
@@ -111,8 +119,8 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
 {
     Statement insert(db_, "INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
                           "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
-                          "landmarks_json, timing_json, images_dir) "
-                          "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                          "landmarks_json, timing_json, images_dir, alignment_json, simulation_json) "
+                          "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     auto text = [&](int i, const std::string& s) {
         sqlite3_bind_text(insert.stmt, i, s.c_str(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
     };
@@ -131,6 +139,8 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     text(13, r.landmarksJson().dump());
     text(14, r.timingMs.dump());
     text(15, imagesDir);
+    text(16, r.alignment.dump());
+    text(17, r.simulation.dump());
     // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
     if (sqlite3_step(insert.stmt) != SQLITE_DONE)
         throw FaultError("result store " + file_.string() + ": " + sqlite3_errmsg(db_));
@@ -140,7 +150,8 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
 nlohmann::json ResultStore::recent(int limit) const
 {
     Statement query(db_, "SELECT id, started_utc, trigger_seq, manual, serial, program, part, verdict, fault_code, "
-                         "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, images_dir "
+                         "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, images_dir, alignment_json, "
+                         "simulation_json "
                          "FROM inspections ORDER BY id DESC LIMIT ?");
     sqlite3_bind_int(query.stmt, 1, limit);
     auto rows = nlohmann::json::array();
@@ -162,7 +173,9 @@ nlohmann::json ResultStore::recent(int limit) const
                         {"landmarks_failed", sqlite3_column_int(query.stmt, 10)},
                         {"landmarks_total", sqlite3_column_int(query.stmt, 11)},
                         {"landmarks", nlohmann::json::parse(column(12), nullptr, false)},
-                        {"images", column(13)}});
+                        {"images", column(13)},
+                        {"alignment", nlohmann::json::parse(column(14), nullptr, false)},
+                        {"simulation", nlohmann::json::parse(column(15), nullptr, false)}});
     }
     return rows;
 }

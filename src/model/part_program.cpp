@@ -11,6 +11,7 @@
 
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/model/mesh_io.h"
 
@@ -189,6 +190,48 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
     return s;
 }
 
+// The `alignment` section (docs/part-program.md, docs/alignment.md): the
+// datums must name landmarks, so it is read after them.
+AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::string, std::size_t>& landmarkIndex)
+{
+    if (!node.isMap()) node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg");
+    node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg"});
+    AlignmentSettings s;
+    if (auto n = node.optional("method")) {
+        const std::string method = n->asString();
+        if (method == "silhouette")
+            s.method = AlignmentMethod::Silhouette;
+        else if (method == "datums")
+            s.method = AlignmentMethod::Datums;
+        else if (method == "none")
+            s.method = AlignmentMethod::None;
+        else
+            n->fail("unknown method '" + method + "' (expected silhouette, datums or none)");
+    }
+    const auto datums = node.optional("datums");
+    if (datums && s.method != AlignmentMethod::Datums)
+        datums->fail("datums are read by method datums only (method is " + toString(s.method) + ")");
+    if (s.method == AlignmentMethod::Datums) {
+        if (!datums) node.fail("method datums needs datums: [landmark id, ...] (in priority order)");
+        for (const ConfigNode& item : datums->items()) {
+            const std::string id = item.asString();
+            if (!landmarkIndex.count(id)) item.fail("unknown landmark '" + id + "'");
+            if (std::find(s.datums.begin(), s.datums.end(), id) != s.datums.end())
+                item.fail("datum '" + id + "' is listed twice");
+            s.datums.push_back(id);
+        }
+        if (s.datums.empty()) datums->fail("method datums needs at least one datum");
+    }
+    if (auto n = node.optional("max_shift_mm")) s.maxShiftMm = n->asPositive();
+    if (auto n = node.optional("max_rotation_deg")) {
+        // Beyond 10° the part is not seated at all: no fixture has that much play.
+        s.maxRotationDeg = n->asPositive();
+        if (s.maxRotationDeg > 10.0)
+            n->fail("value " + formatNumber(s.maxRotationDeg) + " is outside (0, 10] (degrees)");
+    }
+    return s;
+}
+
 } // namespace
 
 double OctreeSpec::voxelSize() const
@@ -259,7 +302,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters", "inspection"});
+    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters", "inspection", "alignment"});
 
     PartProgram program;
     program.file = file;
@@ -304,6 +347,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
         }
     }
     if (auto n = root.optional("inspection")) program.inspection = parseInspection(*n, program.octree);
+    if (auto n = root.optional("alignment")) program.alignment = parseAlignment(*n, index);
     return program;
 }
 

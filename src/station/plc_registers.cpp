@@ -163,6 +163,8 @@ void RegisterMap::publishResult(const PublishedResult& r)
     regs_[reg::LandmarksTotal] = r.landmarksTotal;
     regs_[reg::CycleMs] = u16(r.cycleMs >> 16);
     regs_[reg::CycleMs + 1] = u16(r.cycleMs & 0xFFFF);
+    regs_[reg::SeatShiftUm] = r.seatShiftUm;
+    regs_[reg::SeatRotationMdeg] = r.seatRotationMdeg;
     for (std::uint16_t k = 0; k < reg::LandmarkOkWords; ++k) {
         std::uint16_t word = 0;
         for (unsigned bit = 0; bit < 16; ++bit) {

@@ -1,6 +1,7 @@
 #include "hullgauge/station/result_record.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace hg::station {
@@ -38,6 +39,19 @@ nlohmann::json InspectionRecord::landmarksJson() const
     return list;
 }
 
+namespace {
+
+/// `value` × `scale` rounded into a register: 0 for no value, 65535 beyond.
+std::uint16_t saturating(const nlohmann::json& value, double scale)
+{
+    if (!value.is_number()) return 0;
+    const double v = std::round(value.get<double>() * scale);
+    if (!(v > 0.0)) return 0;
+    return v >= 65535.0 ? std::uint16_t{65535} : static_cast<std::uint16_t>(v);
+}
+
+} // namespace
+
 PublishedResult InspectionRecord::toPublished(PlcStatus statusAfter) const
 {
     constexpr auto kMax = std::numeric_limits<std::uint16_t>::max();
@@ -61,6 +75,10 @@ PublishedResult InspectionRecord::toPublished(PlcStatus statusAfter) const
     r.landmarksFailed = static_cast<std::uint16_t>(std::min<std::size_t>(landmarksFailed(), kMax));
     r.landmarksTotal = static_cast<std::uint16_t>(std::min<std::size_t>(landmarks.size(), kMax));
     r.cycleMs = cycleMs;
+    if (alignment.is_object()) {
+        r.seatShiftUm = saturating(alignment.value("shift_mm", nlohmann::json()), 1000.0);
+        r.seatRotationMdeg = saturating(alignment.value("rotation_deg", nlohmann::json()), 1000.0);
+    }
     r.landmarkOk.reserve(landmarks.size());
     for (const auto& l : landmarks) r.landmarkOk.push_back(l.ok());
     return r;

@@ -46,11 +46,12 @@ std::string_view toString(SequencerState s)
 
 std::string_view toString(SequencerEvent e)
 {
-    constexpr std::array<std::string_view, 23> names{
-        "devices-active",  "devices-failed",  "trigger",           "in-position",     "move-timeout",  "move-fault",
-        "move-comm-error", "move-refused",    "settled",           "frame-ok",        "frame-timeout", "frame-bad",
-        "frame-error",     "processed",       "processing-failed", "program-failed",  "abort",         "shutdown",
-        "recovered",       "recovery-failed", "calibration-start", "calibration-end", "fault-reset"};
+    constexpr std::array<std::string_view, 24> names{
+        "devices-active",  "devices-failed",    "trigger",         "in-position", "move-timeout",
+        "move-fault",      "move-comm-error",   "move-refused",    "settled",     "frame-ok",
+        "frame-timeout",   "frame-bad",         "frame-error",     "processed",   "processing-failed",
+        "not-seated",      "program-failed",    "abort",           "shutdown",    "recovered",
+        "recovery-failed", "calibration-start", "calibration-end", "fault-reset"};
     return names[static_cast<std::size_t>(e)];
 }
 
@@ -77,6 +78,8 @@ std::string_view toString(FaultCode c)
         return "program-load";
     case FaultCode::InspectionError:
         return "inspection-error";
+    case FaultCode::PartNotSeated:
+        return "part-not-seated";
     case FaultCode::AbortedByPlc:
         return "aborted-by-plc";
     case FaultCode::AbortedByShutdown:
@@ -114,6 +117,8 @@ std::string_view describe(FaultCode c)
         return "the part program or its view plan could not be loaded";
     case FaultCode::InspectionError:
         return "the inspection could not be computed";
+    case FaultCode::PartNotSeated:
+        return "the part is not seated within the part program's alignment limits: re-seat it and trigger again";
     case FaultCode::AbortedByPlc:
         return "the PLC aborted the cycle";
     case FaultCode::AbortedByShutdown:
@@ -293,6 +298,8 @@ SequencerAction CaptureSequencer::onStepEvent(SequencerEvent event)
         if (event == E::Processed) return endCycle(CycleOutcome::Inspected, FaultCode::None, false, false);
         if (event == E::ProcessingFailed)
             return endCycle(CycleOutcome::Faulted, FaultCode::InspectionError, false, false);
+        // Nothing is wrong with the station: the PLC re-seats the part and triggers again.
+        if (event == E::NotSeated) return endCycle(CycleOutcome::Faulted, FaultCode::PartNotSeated, false, false);
         return {};
     default:
         return {};

@@ -316,7 +316,8 @@ CaptureManifest readManifest(const fs::path& file)
     }
     if (root.contains("segmentation") && !root["segmentation"].is_null())
         manifest.segmentation = reader.segmentation(root["segmentation"]);
-    reader.warnUnknownKeys(root, {"views", "segmentation"}, "");
+    // "simulation": the true seat `hullgauge simulate --seat` rendered with, for the reader, not the model.
+    reader.warnUnknownKeys(root, {"views", "segmentation", "simulation"}, "");
     return manifest;
 }
 

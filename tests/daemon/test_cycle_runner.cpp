@@ -112,7 +112,8 @@ class ScriptedDevices : public StationDevices {
     std::atomic<bool> stopped_{false};
 };
 
-/// Passes every part with three landmarks.
+/// Passes every part with three landmarks; the test may give the seat it
+/// measured and call it a seating fault (set before the trigger).
 class PassingInspector : public Inspector {
   public:
     bool begin(const station::PartProgramRef&, std::string&) override { return true; }
@@ -122,12 +123,49 @@ class PassingInspector : public Inspector {
         InspectionOutcome out;
         out.ok = true;
         out.part = "block";
-        out.pass = true;
-        for (const char* id : {"A", "B", "C"}) out.landmarks.push_back({id, "ok", 0.0, 0.1, 0.05, 0.2});
+        out.alignment = alignment;
+        out.seatingFault = seatingFault;
+        out.pass = !seatingFault;
+        for (const char* id : {"A", "B", "C"})
+            out.landmarks.push_back({id, seatingFault ? "not_inspected" : "ok", 0.0, 0.1, 0.05, 0.2});
         return out;
     }
     void cancel() override {}
+
+    std::optional<align::AlignmentResult> alignment;
+    bool seatingFault = false;
 };
+
+/// The simulated line's nest: counts the parts put in, each seated by a known shift.
+class CountingSimulation : public SimulationControl {
+  public:
+    std::vector<std::string> parts() const override { return {"nominal"}; }
+    std::string part() const override { return "nominal"; }
+    bool selectPart(const std::string&) override { return true; }
+    void newPart() override { ++newParts; }
+    std::optional<SimulatedSeat> trueSeat() const override
+    {
+        // Part n is shifted 0.1·n mm along x and turned 0.2° about z through its centre (5, 5, 5).
+        const int n = newParts.load();
+        const geometry::Vec3 c(5, 5, 5);
+        const auto R = geometry::RigidTransform::rotation(geometry::Vec3::UnitZ(), 0.2).R;
+        return SimulatedSeat{{R, c + geometry::Vec3(0.1 * n, 0, 0) - R * c}, c};
+    }
+    std::atomic<int> newParts{0};
+};
+
+/// A seat as the aligner reports it: `shiftMm` along x, `rotationDeg` about z.
+align::AlignmentResult measuredSeat(double shiftMm, double rotationDeg, bool withinLimits)
+{
+    align::AlignmentResult a;
+    a.measured = true;
+    a.seat = geometry::RigidTransform::rotation(geometry::Vec3::UnitZ(), rotationDeg);
+    a.seat.t += geometry::Vec3(shiftMm, 0, 0);
+    a.shiftMm = shiftMm;
+    a.rotationDeg = rotationDeg;
+    a.withinLimits = withinLimits;
+    return a;
+}
 
 Status fails(StatusCode code)
 {
@@ -223,6 +261,69 @@ TEST_F(CycleRunnerTest, FailTheFirstMovePassTheRetry)
     // Three settle times of 50 ms passed on the runner's clock, nothing else did.
     EXPECT_EQ(record["cycle_ms"], 150);
     EXPECT_EQ(readyCalls.load(), 1);
+}
+
+TEST_F(CycleRunnerTest, APartNotSeatedIsResultThreeFault32AndTheNextTriggerIsTaken)
+{
+    inspector.alignment = measuredSeat(2.0004, 0.1234, false);
+    inspector.seatingFault = true;
+    startReady();
+    trigger(3);
+    ASSERT_TRUE(eventually([&] { return done(3); }));
+    EXPECT_EQ(at(reg::Result), 3);             // aborted / error
+    EXPECT_EQ(at(reg::FaultCode), 32);         // part-not-seated
+    EXPECT_EQ(at(reg::Status), 2);             // done: no station fault, no recovery
+    EXPECT_EQ(at(reg::SeatShiftUm), 2000);     // 2000.4 µm
+    EXPECT_EQ(at(reg::SeatRotationMdeg), 123); // 123.4 mdeg
+    EXPECT_EQ(at(reg::LandmarksTotal), 0);     // nothing was inspected
+    EXPECT_TRUE(devices.recoverTimes().empty());
+    EXPECT_EQ(runner->state(), SequencerState::Done);
+    auto record = lastRecord();
+    EXPECT_EQ(record["verdict"], "error");
+    EXPECT_EQ(record["fault_code"], 32);
+    ASSERT_TRUE(record["alignment"].is_object()); // the record keeps the pose
+    EXPECT_DOUBLE_EQ(record["alignment"]["shift_mm"].get<double>(), 2.0004);
+    EXPECT_DOUBLE_EQ(record["alignment"]["rotation_deg"].get<double>(), 0.1234);
+    EXPECT_TRUE(record["simulation"].is_null()); // real hardware: no simulated part
+
+    // Re-seated, the part is inspected; the registers show the new seat with its result.
+    inspector.alignment = measuredSeat(0.25, 0.0, true);
+    inspector.seatingFault = false;
+    trigger(4);
+    ASSERT_TRUE(eventually([&] { return done(4); }));
+    EXPECT_EQ(at(reg::Result), 1);
+    EXPECT_EQ(at(reg::FaultCode), 0);
+    EXPECT_EQ(at(reg::SeatShiftUm), 250);
+    EXPECT_EQ(at(reg::SeatRotationMdeg), 0);
+    EXPECT_EQ(runner->describe()["last_cycle"]["alignment"]["shift_mm"], 0.25); // ctl status shows the last seat
+}
+
+TEST_F(CycleRunnerTest, TheSimulatedLineSeatsANewPartEveryCycleAndRecordsItsTrueSeat)
+{
+    CountingSimulation simulation;
+    runner = std::make_unique<CycleRunner>(registers, devices, inspector, store, config, clock);
+    runner->setSimulation(&simulation);
+    runner->start([this] { ++readyCalls; });
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    EXPECT_EQ(simulation.newParts.load(), 0);
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    trigger(2);
+    ASSERT_TRUE(eventually([&] { return done(2); }));
+    EXPECT_EQ(simulation.newParts.load(), 2);
+    auto record = lastRecord();
+    EXPECT_EQ(record["simulation"]["part"], "nominal");
+    const auto& seat = record["simulation"]["seat"];
+    EXPECT_NEAR(seat["shift_mm"].get<double>(), 0.2, 1e-12); // part 2: 0.2 mm at the pivot
+    EXPECT_NEAR(seat["rotation_deg"].get<double>(), 0.2, 1e-9);
+    EXPECT_EQ(seat["centre"], nlohmann::json({5.0, 5.0, 5.0}));
+    // R·c + t = c + d: the pivot moves by the shift alone.
+    const double cx = 5.0;
+    const double x = seat["R"][0][0].get<double>() * cx + seat["R"][0][1].get<double>() * cx +
+                     seat["R"][0][2].get<double>() * cx + seat["t"][0].get<double>();
+    EXPECT_NEAR(x, 5.2, 1e-12);
+    EXPECT_EQ(runner->describe()["last_cycle"]["simulation"]["seat"]["centre"], seat["centre"]);
+    runner.reset(); // before the simulation it was given
 }
 
 TEST_F(CycleRunnerTest, GrabTimesOutTwiceFaultsWithItsCodeThenRecovers)

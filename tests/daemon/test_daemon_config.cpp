@@ -178,6 +178,36 @@ TEST(DaemonConfig, SimulatedPartsNeedNominalAndExistingMeshes)
     EXPECT_NE(missing.find("simulation.parts.nominal"), std::string::npos) << missing;
 }
 
+TEST(DaemonConfig, SimulatedSeatingIsOptionalAndBounded)
+{
+    Fixture f;
+    hgtest::writeFile(f.dir / "nominal.stl", "solid n\nendsolid n\n");
+    const std::string parts = "simulation:\n  parts: {nominal: nominal.stl}\n";
+    auto exact = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", std::string(kDaemon) + parts));
+    EXPECT_FALSE(exact.simulatedSeating); // absent: seated exactly as drawn
+    auto cfg = loadDaemonConfig(
+        hgtest::writeFile(f.dir / "hullgauged.yaml",
+                          std::string(kDaemon) + parts + "  seating: {shift_mm: 0.3, rotation_deg: 0.25, seed: 7}\n"));
+    ASSERT_TRUE(cfg.simulatedSeating);
+    EXPECT_DOUBLE_EQ(cfg.simulatedSeating->shiftMm, 0.3);
+    EXPECT_DOUBLE_EQ(cfg.simulatedSeating->rotationDeg, 0.25);
+    EXPECT_EQ(cfg.simulatedSeating->seed, 7u);
+    auto unseeded = loadDaemonConfig(hgtest::writeFile(
+        f.dir / "hullgauged.yaml", std::string(kDaemon) + parts + "  seating: {shift_mm: 0, rotation_deg: 1}\n"));
+    EXPECT_EQ(unseeded.simulatedSeating->seed, 1u);
+
+    for (const auto& [seating, expected] : std::vector<std::pair<std::string, std::string>>{
+             {"{shift_mm: -0.1, rotation_deg: 0.3}", "simulation.seating.shift_mm: value -0.1 is outside [0, 10]"},
+             {"{shift_mm: 0.3, rotation_deg: 11}", "simulation.seating.rotation_deg: value 11 is outside [0, 10]"},
+             {"{shift_mm: 0.3}", "missing required key 'rotation_deg'"},
+             {"{shift_mm: 0.3, rotation_deg: 0.3, play: 1}", "simulation.seating.play: unknown key"},
+             {"0.3", "simulation.seating: expected {shift_mm"},
+         }) {
+        auto message = f.error(std::string(kDaemon) + parts + "  seating: " + seating + "\n");
+        EXPECT_NE(message.find(expected), std::string::npos) << seating << ": " << message;
+    }
+}
+
 TEST(DaemonConfig, Ipv4Networks)
 {
     auto n = parseIpv4Network("192.168.10.0/24");

@@ -54,6 +54,57 @@ TEST(ResultStore, CommitsInWalModeAndSqliteReadsIt)
     EXPECT_EQ(again.count(), 2);
 }
 
+TEST(ResultStore, KeepsTheSeatAndTheSimulatedPartWithTheRecord)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        auto r = record(9, station::Verdict::Error);
+        r.faultCode = station::FaultCode::PartNotSeated;
+        r.alignment = {{"method", "silhouette"}, {"shift_mm", 2.0}, {"rotation_deg", 0.125}};
+        r.simulation = {{"part", "nominal"}, {"seat", {{"shift_mm", 2.0}}}};
+        store.commit(r);
+        store.commit(record(10, station::Verdict::Pass)); // no seat: null
+        auto recent = store.recent(2);
+        ASSERT_EQ(recent.size(), 2u);
+        EXPECT_TRUE(recent[0]["alignment"].is_null());
+        EXPECT_TRUE(recent[0]["simulation"].is_null());
+        EXPECT_EQ(recent[1]["fault_code"], 32);
+        EXPECT_EQ(recent[1]["alignment"]["shift_mm"], 2.0);
+        EXPECT_EQ(recent[1]["simulation"]["part"], "nominal");
+    }
+    auto rows = hgtest::run("sqlite3 " + file.string() +
+                            " \"SELECT json_extract(alignment_json, '$.rotation_deg'), "
+                            "json_extract(simulation_json, '$.seat.shift_mm') FROM inspections ORDER BY id\"");
+    EXPECT_EQ(rows.out, "0.125|2.0\n|\n");
+}
+
+TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v1.db";
+    // The schema of version 1, as the daemon before the seat wrote it.
+    hgtest::run("sqlite3 " + file.string() +
+                " \"CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_utc TEXT NOT NULL, "
+                "started_unix_ms INTEGER NOT NULL, trigger_seq INTEGER NOT NULL, manual INTEGER NOT NULL, serial TEXT "
+                "NOT NULL, program INTEGER NOT NULL, part TEXT NOT NULL, verdict TEXT NOT NULL, fault_code INTEGER NOT "
+                "NULL, cycle_ms INTEGER NOT NULL, landmarks_failed INTEGER NOT NULL, landmarks_total INTEGER NOT NULL, "
+                "landmarks_json TEXT NOT NULL, timing_json TEXT NOT NULL, images_dir TEXT NOT NULL DEFAULT ''); "
+                "INSERT INTO inspections VALUES (1, 't', 0, 3, 0, 'OLD', 1, 'block', 'pass', 0, 10, 0, 0, '[]', '{}', "
+                "''); PRAGMA user_version=1;\"");
+    ResultStore store(file);
+    auto r = record(4, station::Verdict::Pass);
+    r.alignment = {{"shift_mm", 0.25}};
+    store.commit(r);
+    auto recent = store.recent(2);
+    ASSERT_EQ(recent.size(), 2u);
+    EXPECT_EQ(recent[0]["alignment"]["shift_mm"], 0.25);
+    EXPECT_EQ(recent[1]["serial"], "OLD");
+    EXPECT_TRUE(recent[1]["alignment"].is_null());
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "2\n");
+}
+
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
 {
     hgtest::TempDir dir;

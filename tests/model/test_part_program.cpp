@@ -251,6 +251,67 @@ TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
     }
 }
 
+TEST_F(PartProgramTest, AlignmentSectionIsOptionalWithSilhouetteWithinOneMillimetreAndOneDegree)
+{
+    const AlignmentSettings defaults = loadPartProgram(write(kGood)).alignment;
+    EXPECT_EQ(defaults.method, AlignmentMethod::Silhouette);
+    EXPECT_TRUE(defaults.datums.empty());
+    EXPECT_DOUBLE_EQ(defaults.maxShiftMm, 1.0);
+    EXPECT_DOUBLE_EQ(defaults.maxRotationDeg, 1.0);
+
+    const AlignmentSettings d = loadPartProgram(write(kGood + "alignment:\n  method: datums\n"
+                                                              "  datums: [edge, face, corner]\n"
+                                                              "  max_shift_mm: 0.5\n  max_rotation_deg: 10\n"))
+                                    .alignment;
+    EXPECT_EQ(d.method, AlignmentMethod::Datums);
+    EXPECT_EQ(d.datums, (std::vector<std::string>{"edge", "face", "corner"})); // priority order kept
+    EXPECT_DOUBLE_EQ(d.maxShiftMm, 0.5);
+    EXPECT_DOUBLE_EQ(d.maxRotationDeg, 10.0);
+
+    EXPECT_EQ(loadPartProgram(write(kGood + "alignment:\n  method: none\n")).alignment.method, AlignmentMethod::None);
+    EXPECT_EQ(toString(AlignmentMethod::Silhouette), "silhouette");
+    EXPECT_EQ(toString(AlignmentMethod::Datums), "datums");
+    EXPECT_EQ(toString(AlignmentMethod::None), "none");
+}
+
+TEST_F(PartProgramTest, AlignmentSectionMistakesNameLineAndKey)
+{
+    // kGood has 32 lines: "alignment:" is line 33, the first key line 34.
+    const std::vector<Mistake> mistakes = {
+        {"method: icp", "",
+         "part.yaml:34: alignment.method: unknown method 'icp' (expected silhouette, datums or none)"},
+        {"method: datums", "", "part.yaml:34: alignment: method datums needs datums"},
+        {"method: datums", "  datums: []", "part.yaml:35: alignment.datums: method datums needs at least one datum"},
+        {"method: datums", "  datums: face", "part.yaml:35: alignment.datums: expected a sequence"},
+        {"method: datums", "  datums: [face, nose]", "part.yaml:35: alignment.datums[1]: unknown landmark 'nose'"},
+        {"method: datums", "  datums: [face, edge, face]",
+         "part.yaml:35: alignment.datums[2]: datum 'face' is listed twice"},
+        {"datums: [face]", "",
+         "part.yaml:34: alignment.datums: datums are read by method datums only (method is "
+         "silhouette)"},
+        {"method: none", "  datums: [face]",
+         "part.yaml:35: alignment.datums: datums are read by method datums only "
+         "(method is none)"},
+        {"max_shift_mm: 0", "", "part.yaml:34: alignment.max_shift_mm: expected a positive number, found 0"},
+        {"max_shift_mm: -1", "", "part.yaml:34: alignment.max_shift_mm: expected a positive number"},
+        {"max_shift_mm: .inf", "", "part.yaml:34: alignment.max_shift_mm: expected a finite number"},
+        {"max_shift_mm: .nan", "", "part.yaml:34: alignment.max_shift_mm: expected a finite number"},
+        {"max_rotation_deg: 0", "", "part.yaml:34: alignment.max_rotation_deg: expected a positive number"},
+        {"max_rotation_deg: 10.5", "", "part.yaml:34: alignment.max_rotation_deg: value 10.5 is outside (0, 10]"},
+        {"max_rotation_deg: .inf", "", "part.yaml:34: alignment.max_rotation_deg: expected a finite number"},
+        {"max_shift: 1", "", "part.yaml:34: alignment.max_shift: unknown key 'max_shift'"},
+    };
+    for (const auto& m : mistakes) {
+        const std::string section = "alignment:\n  " + m.from + "\n" + (m.to.empty() ? "" : m.to + "\n");
+        const InputError e = error(kGood + section);
+        EXPECT_NE(std::string(e.what()).find(m.expected), std::string::npos)
+            << "expected '" << m.expected << "' in: " << e.what();
+    }
+    EXPECT_NE(
+        std::string(error(kGood + "alignment: silhouette\n").what()).find("part.yaml:33: alignment: expected a map"),
+        std::string::npos);
+}
+
 TEST_F(PartProgramTest, BrokenMeshIsReportedAtTheMeshKey)
 {
     TriangleMesh open = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));

@@ -9,6 +9,7 @@
 
 #include <fstream>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
@@ -179,6 +180,70 @@ TEST_F(SimulateCommand, BadOptionsAndMeshesExitTwo)
                     (dir / "out").string());
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find(broken.string()), std::string::npos) << r.err;
+}
+
+// --seat renders the part seated off nominal: the same pixels as the moved
+// solid drawn at nominal, while the manifest keeps the nominal cameras and
+// records the seat (docs/inspection.md, "Seated parts").
+TEST_F(SimulateCommand, SeatRendersThePartMovedAndKeepsTheNominalCameras)
+{
+    hgtest::writeFile(dir / "poses.yaml", "- {rotation_deg: 0, declination_deg: 0}\n"
+                                          "- {rotation_deg: 30, declination_deg: 20}\n");
+    // The box [-20, 20] x [-10, 10] x [0, 30] about its centre c = (0, 0, 15):
+    // shifted by d = (2, 0, 3) it is the box [-18, 22] x [-10, 10] x [3, 33];
+    // turned 90° about z it is [-10, 10] x [-20, 20] x [0, 30].
+    struct Case {
+        std::string seat;
+        std::string movedStl;
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        double shiftMm, rotationDeg;
+    };
+    Eigen::Matrix3d rz90;
+    rz90 << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+    const std::vector<Case> cases = {
+        {"2,0,3,0,0,0", boxStl(-18, -10, 3, 22, 10, 33), Eigen::Matrix3d::Identity(), {2, 0, 3}, std::sqrt(13.0), 0.0},
+        {"0,0,0,0,0,90", boxStl(-10, -20, 0, 10, 20, 30), rz90, {0, 0, 0}, 0.0, 90.0},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.seat);
+        hgtest::writeFile(dir / "moved.stl", c.movedStl);
+        auto seated = simulate("--poses " + (dir / "poses.yaml").string() + " --out " + (dir / "seated").string() +
+                               " --seat " + c.seat);
+        ASSERT_EQ(seated.status, 0) << seated.err;
+        auto moved = hgtest::run(program() + " simulate --mesh " + (dir / "moved.stl").string() + " --station " +
+                                 (dir / "station.yaml").string() + " --poses " + (dir / "poses.yaml").string() +
+                                 " --out " + (dir / "moved").string());
+        ASSERT_EQ(moved.status, 0) << moved.err;
+        const auto station = geometry::loadStation(dir / "station.yaml");
+        const auto poses = geometry::loadPoses(dir / "poses.yaml", &station.fixture);
+        const auto m = vision::readManifest(dir / "seated/manifest.json");
+        const auto reference = vision::readManifest(dir / "moved/manifest.json");
+        ASSERT_EQ(m.views.size(), 2u);
+        for (std::size_t i = 0; i < 2; ++i) {
+            // The nominal camera, not the seated one.
+            const auto want = station.cameraAt(poses[i]);
+            EXPECT_LT((m.views[i].camera.cameraFromPart().R - want.cameraFromPart().R).cwiseAbs().maxCoeff(), 1e-12);
+            EXPECT_LT((m.views[i].camera.cameraFromPart().t - want.cameraFromPart().t).norm(), 1e-9);
+            // The same pixels as the moved box (rounding may flip a grey level on an edge).
+            const cv::Mat a = vision::readViewImage(m, i), b = vision::readViewImage(reference, i);
+            EXPECT_LE(cv::norm(a, b, cv::NORM_INF), 1.0);
+            EXPECT_LT(cv::norm(a, b, cv::NORM_L1) / static_cast<double>(a.total()), 0.01);
+        }
+        std::ifstream in(dir / "seated/manifest.json");
+        const auto seat = nlohmann::json::parse(in)["simulation"]["seat"];
+        for (int r = 0; r < 3; ++r) {
+            for (int k = 0; k < 3; ++k) EXPECT_NEAR(seat["R"][r][k].get<double>(), c.R(r, k), 1e-12);
+            EXPECT_NEAR(seat["t"][r].get<double>(), c.t(r), 1e-12);
+        }
+        EXPECT_EQ(seat["centre"], nlohmann::json({0.0, 0.0, 15.0}));
+        EXPECT_NEAR(seat["shift_mm"].get<double>(), c.shiftMm, 1e-12);
+        EXPECT_NEAR(seat["rotation_deg"].get<double>(), c.rotationDeg, 1e-9);
+    }
+    // Six numbers or nothing.
+    auto bad =
+        simulate("--poses " + (dir / "poses.yaml").string() + " --out " + (dir / "bad").string() + " --seat 1,2,3");
+    EXPECT_EQ(bad.status, 2) << bad.err;
 }
 
 } // namespace

@@ -2,6 +2,7 @@
 // trigger handshake and the publication of a result (the lock around it is the
 // daemon's, tests/daemon/test_plc_registers.cpp).
 #include "hullgauge/station/plc_registers.h"
+#include "hullgauge/station/result_record.h"
 
 #include <gtest/gtest.h>
 
@@ -183,6 +184,46 @@ TEST(PlcRegisterMap, PublishedResultAppearsWithDoneSeqAndBits)
     EXPECT_EQ(v[20], 0xFFF7); // word 0: landmarks 0..15, bit 3 clear
     EXPECT_EQ(v[21], 0x000D); // word 1: landmarks 16..19 = bits 0,2,3 set, bit 1 (landmark 17) clear
     EXPECT_EQ(v[22], 0);
+}
+
+TEST(PlcRegisterMap, TheSeatIsPublishedWithTheResultInTheFreeRegistersOfItsBlock)
+{
+    RegisterMap r;
+    makeReady(r);
+    PublishedResult p;
+    p.seq = 7;
+    p.result = PlcResult::Aborted;
+    p.faultCode = 32;
+    p.seatShiftUm = 2003;
+    p.seatRotationMdeg = 65535;
+    r.publishResult(p);
+    std::vector<std::uint16_t> v;
+    ASSERT_EQ(r.read(100, 36, v), ModbusException::None);
+    EXPECT_EQ(v[1], 7);      // DONE_SEQ in the same block
+    EXPECT_EQ(v[4], 32);     // FAULT_CODE part-not-seated
+    EXPECT_EQ(v[12], 2003);  // SEAT_SHIFT_UM (112)
+    EXPECT_EQ(v[13], 65535); // SEAT_ROTATION_MDEG (113)
+    EXPECT_EQ(v[11], 0);     // LAST_REJECT_REASON untouched
+    EXPECT_EQ(v[14], 0);     // 114..119 stay free
+    // The PLC cannot write them.
+    EXPECT_EQ(writeOne(r, 112, 1), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(writeOne(r, 113, 1), ModbusException::IllegalDataAddress);
+}
+
+TEST(InspectionRecordToPublished, TheSeatInMicrometresAndMillidegreesSaturating)
+{
+    InspectionRecord record;
+    EXPECT_EQ(record.toPublished(PlcStatus::Done).seatShiftUm, 0); // no alignment: 0
+    record.alignment = {{"method", "silhouette"}, {"shift_mm", 0.3124}, {"rotation_deg", 0.2506}};
+    auto p = record.toPublished(PlcStatus::Done);
+    EXPECT_EQ(p.seatShiftUm, 312);      // 312.4 µm rounded
+    EXPECT_EQ(p.seatRotationMdeg, 251); // 250.6 mdeg rounded
+    record.alignment = {{"shift_mm", 70.0}, {"rotation_deg", 66.0}};
+    p = record.toPublished(PlcStatus::Done);
+    EXPECT_EQ(p.seatShiftUm, 65535); // 70 000 µm saturates
+    EXPECT_EQ(p.seatRotationMdeg, 65535);
+    record.alignment = {{"shift_mm", nullptr}};
+    EXPECT_EQ(record.toPublished(PlcStatus::Done).seatShiftUm, 0);
 }
 
 TEST(PlcRegisterMap, ManualTriggerLeavesThePlcHandshakeAlone)

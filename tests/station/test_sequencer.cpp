@@ -167,6 +167,28 @@ TEST(Sequencer, InspectionErrorEndsTheCycleWithoutStationFault)
     EXPECT_EQ(s.outcome(), CycleOutcome::Faulted);
 }
 
+TEST(Sequencer, PartNotSeatedEndsTheCycleReadyForTheNextTrigger)
+{
+    auto s = readySequencer();
+    (void)s.trigger(1);
+    (void)completeView(s);
+    const auto a = s.onEvent(E::NotSeated);
+    EXPECT_EQ(a.kind, A::Publish);
+    EXPECT_FALSE(a.stopMotion);
+    EXPECT_EQ(s.state(), S::Done); // STATUS 2: the PLC re-seats and triggers again, no recovery
+    EXPECT_EQ(s.faultCode(), FaultCode::PartNotSeated);
+    EXPECT_EQ(static_cast<int>(FaultCode::PartNotSeated), 32);
+    EXPECT_EQ(toString(FaultCode::PartNotSeated), "part-not-seated");
+    EXPECT_EQ(s.outcome(), CycleOutcome::Faulted);
+    EXPECT_EQ(s.afterPublish().kind, A::None);
+    EXPECT_EQ(s.trigger(1).kind, A::MoveTo);
+
+    auto moving = readySequencer();
+    (void)moving.trigger(2);
+    EXPECT_EQ(moving.onEvent(E::NotSeated).kind, A::None); // only the verdict can say so
+    EXPECT_EQ(moving.state(), S::Moving);
+}
+
 TEST(Sequencer, DevicesFailingAtStartGoToFaultAndRecover)
 {
     CaptureSequencer s;

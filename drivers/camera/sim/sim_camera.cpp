@@ -2,8 +2,9 @@
 // real camera, used by the simulated line and in tests. Each grab asks the pose
 // source where the fixture is, poses the camera through the station
 // calibration (camera_from_part = camera_from_fixture * fixture motion,
-// docs/contracts.md §2) and renders the backlit silhouette of the part under test with
-// the hg::sim renderer, into a pool slot cropped to the ROI.
+// docs/contracts.md §2) and renders the backlit silhouette of the part under test, as
+// it is seated in the nest (setSeat, docs/daemon.md "Seating": camera_from_part
+// · seat), with the hg::sim renderer, into a pool slot cropped to the ROI.
 //
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
 // and read back but do not change the image; Part switches the part under
@@ -17,6 +18,7 @@
 // "target", and `truth_station` names a station file whose camera and fixture
 // geometry the twin renders with instead of the station's own (nominal) one,
 // so `hullgauge calibrate run` has something true to recover.
+#include "hullgauge/align/alignment.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
@@ -192,6 +194,12 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         return out;
     }
 
+    void setSeat(const geometry::RigidTransform& seat) override
+    {
+        std::lock_guard lock(mutex_);
+        seat_ = seat;
+    }
+
     void injectFault(SimulatedCameraFault fault) override
     {
         std::lock_guard lock(mutex_);
@@ -241,9 +249,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         std::shared_ptr<const sim::SilhouetteRenderer> renderer;
         PoseSource source;
         SimulatedCameraFault fault;
+        geometry::RigidTransform seat;
         {
             std::lock_guard lock(mutex_);
             renderer = current_;
+            seat = seat_;
             source = poseSource_;
             fault = fault_;
             if (fault_ == SimulatedCameraFault::Dropped) fault_ = SimulatedCameraFault::None;
@@ -264,7 +274,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
             return Frame::failed(FrameStatus::Timeout, "sim camera: all " + std::to_string(config_.bufferCount) +
                                                            " buffers are held by the caller");
         cv::Mat& out = pool_->slots[*slot];
-        render(renderer.get(), *pose, out);
+        render(renderer.get(), *pose, seat, out);
         const auto id = ++frameCount_;
         const bool incomplete = fault == SimulatedCameraFault::Incomplete;
         if (incomplete) dropPackets(out);
@@ -276,14 +286,16 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
             incomplete ? "sim camera: packets missing (fault switch incomplete)" : "");
     }
 
-    /// The part at `pose` (or the bare back light without a part) into `out`, cropped to the ROI.
-    void render(const sim::SilhouetteRenderer* renderer, const geometry::FixturePose& pose, cv::Mat& out) const
+    /// The part at `pose`, seated so (or the bare back light without a part) into `out`, cropped to the ROI.
+    void render(const sim::SilhouetteRenderer* renderer, const geometry::FixturePose& pose,
+                const geometry::RigidTransform& seat, cv::Mat& out) const
     {
         const PixelFormat format = settings().pixelFormat;
         sim::RenderOptions options = config_.render;
         options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
         options.seed = config_.render.seed + frameCount_; // fresh, reproducible noise per frame
-        const cv::Mat image = (renderer ? *renderer : backlight_).render(station_.cameraAt(pose), options);
+        const geometry::CameraModel camera = align::seatedCamera(station_.cameraAt(pose), seat);
+        const cv::Mat image = (renderer ? *renderer : backlight_).render(camera, options);
         if (format == PixelFormat::Mono12)
             image(roi_).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
         else
@@ -382,11 +394,12 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     geometry::Station station_;
     const sim::SilhouetteRenderer backlight_{}; ///< nothing in front of the back light
     std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
-    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_
+    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
     PoseSource poseSource_;
     SimulatedCameraFault fault_;
+    geometry::RigidTransform seat_; ///< nominal_from_part of the part in the nest
     cv::Rect roi_;
     double exposureUs_ = 10000.0;
     double gainDb_ = 0.0;

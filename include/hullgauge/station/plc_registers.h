@@ -46,6 +46,9 @@ inline constexpr std::uint16_t CycleMs = 107; ///< 107..108, u32 high word first
 inline constexpr std::uint16_t Heartbeat = 109;
 inline constexpr std::uint16_t RejectedTriggers = 110;
 inline constexpr std::uint16_t LastRejectReason = 111; ///< extension, RejectReason
+/// Extension: the measured seat of the part (docs/alignment.md), with the result.
+inline constexpr std::uint16_t SeatShiftUm = 112;      ///< shift of the reference point, µm, saturating at 65535
+inline constexpr std::uint16_t SeatRotationMdeg = 113; ///< rotation angle, millidegrees, saturating at 65535
 inline constexpr std::uint16_t LandmarkOkBits = 120;   ///< 120..135
 inline constexpr std::uint16_t LandmarkOkWords = 16;
 /// One past the last mapped address; reads of [0, Count) are allowed (gaps read 0).
@@ -101,6 +104,10 @@ struct PublishedResult {
     std::uint32_t cycleMs = 0;
     /// ok[i]: landmark i passed; entries beyond kMaxReportedLandmarks are not reported.
     std::vector<bool> landmarkOk;
+    /// The measured seat (extension, SEAT_SHIFT_UM, SEAT_ROTATION_MDEG); 0 when
+    /// the cycle measured none (alignment off, aborted or faulted before).
+    std::uint16_t seatShiftUm = 0;
+    std::uint16_t seatRotationMdeg = 0;
     /// STATUS after publishing: Done normally, Fault when the station needs recovery.
     PlcStatus statusAfter = PlcStatus::Done;
     /// A manual cycle's result only changes STATUS (see TriggerRequest::manual).
@@ -127,8 +134,8 @@ class RegisterMap {
     /// the trigger acceptance (a trigger accepted first wins); false otherwise.
     bool enterMaintenance();
     PlcStatus status() const;
-    /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, LANDMARK_OK_BITS, DONE_SEQ
-    /// and STATUS together.
+    /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, the seat, LANDMARK_OK_BITS,
+    /// DONE_SEQ and STATUS together.
     void publishResult(const PublishedResult& r);
     /// HEARTBEAT += 1 (wraps at 65536).
     void beat();

@@ -40,11 +40,18 @@ struct InspectionRecord {
     std::vector<LandmarkOutcome> landmarks;
     /// Cycle-time breakdown in ms (move, settle, grab, processing, ...).
     nlohmann::json timingMs = nlohmann::json::object();
+    /// The measured seat: the result's `alignment` object (docs/alignment.md,
+    /// docs/contracts.md §4); null when the cycle measured none.
+    nlohmann::json alignment = nullptr;
+    /// The simulated line only (docs/daemon.md, "Seating"): the part shown and
+    /// its true seat, {"part": name, "seat": {...}}; null on real hardware.
+    nlohmann::json simulation = nullptr;
 
     std::size_t landmarksFailed() const;
     /// The landmark errors as stored in the result database.
     nlohmann::json landmarksJson() const;
-    /// RESULT, FAULT_CODE, counts, CYCLE_MS and LANDMARK_OK_BITS for the PLC.
+    /// RESULT, FAULT_CODE, counts, CYCLE_MS, the seat (from `alignment`:
+    /// shift_mm, rotation_deg) and LANDMARK_OK_BITS for the PLC.
     PublishedResult toPublished(PlcStatus statusAfter) const;
 };
 

@@ -10,6 +10,7 @@
 //   Moving(k) --in position--> Settling(k) --settled--> Grabbing(k)
 //   Grabbing(k) --frame ok--> Moving(k+1), or Processing after the last view
 //   Processing --processed--> Done --trigger--> Moving(0)
+//   Processing --not seated--> Done (result error, part-not-seated: re-seat, trigger again)
 //   Moving/Grabbing --device failure--> same state once more (retry), then Fault
 //   busy --program or inspection error--> Done (result error; devices are fine)
 //   Moving/Settling/Grabbing --abort--> Done (result aborted)
@@ -57,6 +58,7 @@ enum class SequencerEvent {
     FrameError,       ///< the camera could not grab (wrong state, device lost)
     Processed,        ///< the pipeline delivered the verdict
     ProcessingFailed, ///< the pipeline could not decide (error in the inspection)
+    NotSeated,        ///< the part is seated beyond the part program's alignment limits (docs/alignment.md)
     ProgramFailed,    ///< the part program or its view plan could not be loaded
     Abort,            ///< COMMAND = abort from the PLC (or the maintenance socket)
     Shutdown,         ///< SIGTERM: abort unless only processing remains
@@ -80,6 +82,7 @@ enum class FaultCode : std::uint16_t {
     FixtureRefused = 23,       ///< pose out of range or fixture not homed, after re-homing
     ProgramLoad = 30,          ///< part program or view plan failed to load
     InspectionError = 31,      ///< the inspection could not be computed
+    PartNotSeated = 32,        ///< extension: the seat is beyond the alignment limits; re-seat and trigger again
     AbortedByPlc = 40,         ///< COMMAND = 1 during a cycle
     AbortedByShutdown = 41,    ///< the daemon was stopped during a cycle
     ResultStore = 42,          ///< the result could not be committed to the database

@@ -12,7 +12,9 @@
 //
 // Extensions (optional, written by `hullgauge simulate`, ignored by readers
 // that do not know them): per view `image_size: [width, height]` in pixels and
-// `fixture_pose: {rotation_deg, declination_deg}` or `{rail_mm}`. Any other
+// `fixture_pose: {rotation_deg, declination_deg}` or `{rail_mm}`; at the top
+// level `simulation: {seat: {R, t, centre, shift_mm, rotation_deg}}`, the true
+// seat `hullgauge simulate --seat` rendered the part with. Any other
 // key is kept out of the model and logged at warning level (category
 // "vision"), so third-party additions do not stop a run but typos show.
 //

@@ -13,6 +13,7 @@
 #include "hullgauge/drivers/camera.h"
 #include "hullgauge/drivers/fixture.h"
 #include "hullgauge/drivers/lamps.h"
+#include "hullgauge/geometry/transform.h"
 
 namespace hg::drivers {
 
@@ -34,6 +35,11 @@ class SimCameraControl {
     virtual Status setPart(const std::string& name) = 0;
     virtual std::string part() const = 0;
     virtual std::vector<std::string> partNames() const = 0;
+    /// Seats the part under test (and every part shown next): the camera
+    /// renders it through camera_from_part = camera_from_fixture · fixture
+    /// motion · `seat`, with `seat` = nominal_from_part (docs/alignment.md).
+    /// Identity (the default) shows the part as drawn. Thread-safe.
+    virtual void setSeat(const geometry::RigidTransform& seat) = 0;
     /// Switches a fault on, or off with SimulatedCameraFault::None (thread-safe).
     virtual void injectFault(SimulatedCameraFault fault) = 0;
 };

@@ -158,6 +158,17 @@ struct Aligner::Impl {
               geometry::RigidTransform& seat) const;
     void report(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
                 AlignmentResult& out) const;
+    struct Fit {
+        geometry::RigidTransform seat;
+        std::vector<Correspondence> edges; ///< found around the fitted outline
+        int iterations = 0;
+    };
+    // Rounds of solve and edge search from nominal, the first with `firstLoss`.
+    Fit refine(const std::vector<AlignmentView>& views, const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+               const std::vector<Correspondence>& first, Loss firstLoss) const;
+    // How much of the outline disagrees with a fit: every sample without an
+    // edge near it counts 1, every edge its biweight loss at a fixed scale.
+    double disagreement(const Fit& fit, const std::vector<AlignmentView>& views, std::size_t samples) const;
     double searchBandPx(const AlignmentView& view, const Vec3& point) const;
     double marginMm() const { return settings.maxShiftMm + geometry::degToRad(settings.maxRotationDeg) * lever; }
     SolverLimits solverLimits() const
@@ -318,6 +329,35 @@ int Aligner::Impl::solve(const std::vector<Correspondence>& cs, const std::vecto
     return it;
 }
 
+Aligner::Impl::Fit Aligner::Impl::refine(const std::vector<AlignmentView>& views,
+                                         const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+                                         const std::vector<Correspondence>& first, Loss firstLoss) const
+{
+    Fit fit;
+    fit.edges = first;
+    for (int round = 0; round < kMaxRounds; ++round) {
+        if (round > 0) fit.edges = measure(views, prepared, fit.seat);
+        if (static_cast<int>(fit.edges.size()) < kMinInliers) break;
+        const geometry::RigidTransform before = fit.seat;
+        fit.iterations += solve(fit.edges, views, round == 0 ? firstLoss : Loss::Tukey, fit.seat);
+        const double moved = (fit.seat.apply(reference) - before.apply(reference)).norm() +
+                             geometry::degToRad(geometry::rotationAngleDeg(before.R, fit.seat.R)) * lever;
+        if (round > 0 && moved < 1e-4) break;
+    }
+    return fit;
+}
+
+double Aligner::Impl::disagreement(const Fit& fit, const std::vector<AlignmentView>& views, std::size_t samples) const
+{
+    constexpr double kCutPx = 2.0; // biweight cut-off: four edge noise floors
+    double cost = static_cast<double>(samples) - static_cast<double>(fit.edges.size());
+    for (const Observation& o : observeAll(fit.edges, views, fit.seat)) {
+        const double u = std::min(1.0, std::abs(o.residual) / kCutPx);
+        cost += 1.0 - std::pow(1.0 - u * u, 3);
+    }
+    return cost;
+}
+
 void Aligner::Impl::report(const std::vector<Correspondence>& cs, const std::vector<AlignmentView>& views,
                            AlignmentResult& out) const
 {
@@ -422,21 +462,24 @@ AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
     AlignmentResult out;
     out.method = m.settings.method;
     out.referencePoint = m.reference;
-    std::vector<Impl::Correspondence> cs;
-    for (std::size_t v = 0; v < views.size(); ++v)
+    std::vector<Impl::Correspondence> first;
+    std::size_t total = 0;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+        total += prepared[v]->samples.size();
         for (const ViewEdges::Found& f : prepared[v]->first)
-            cs.push_back({v, &prepared[v]->samples[f.sample], f.edge, f.normal});
-    for (int round = 0; round < kMaxRounds; ++round) {
-        if (round > 0) cs = m.measure(views, prepared, out.seat);
-        if (static_cast<int>(cs.size()) < kMinInliers) break;
-        const geometry::RigidTransform before = out.seat;
-        // The first round starts at nominal, possibly far from the seat: the
-        // convex loss; then the biweight from close by.
-        out.iterations += m.solve(cs, views, round == 0 ? Loss::Huber : Loss::Tukey, out.seat);
-        const double moved = (out.seat.apply(m.reference) - before.apply(m.reference)).norm() +
-                             geometry::degToRad(geometry::rotationAngleDeg(before.R, out.seat.R)) * m.lever;
-        if (round > 0 && moved < 1e-4) break;
+            first.push_back({v, &prepared[v]->samples[f.sample], f.edge, f.normal});
     }
+    // Two starts: the convex loss first (it reaches a seat far from nominal),
+    // and the biweight straight from nominal (when half the outline disagrees
+    // with the other half — a face raised along its whole length — the convex
+    // loss settles between them, the biweight on the side that agrees with
+    // the nest). The one whose outline agrees with more of the edges wins.
+    Impl::Fit fit = m.refine(views, prepared, first, Loss::Huber);
+    const Impl::Fit fromNominal = m.refine(views, prepared, first, Loss::Tukey);
+    if (m.disagreement(fromNominal, views, total) < m.disagreement(fit, views, total)) fit = fromNominal;
+    out.seat = fit.seat;
+    out.iterations = fit.iterations;
+    const std::vector<Impl::Correspondence>& cs = fit.edges;
     if (static_cast<int>(cs.size()) >= kMinInliers) m.report(cs, views, out);
     for (FixedDof& d : out.fixedDofs) label(d);
     out.measured = out.inliers >= kMinInliers;

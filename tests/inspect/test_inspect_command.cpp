@@ -138,7 +138,17 @@ TEST_F(InspectCommand, NominalPassesRaisedFailsAndMapFileGivesTheSameResult)
         hgtest::run(exe + " inspect --map " + (dir / "block.hgmap").string() + " --views " + raised.string());
     EXPECT_EQ(viaMap.status, 1) << viaMap.err;
     const json rm = json::parse(viaMap.out);
-    EXPECT_EQ(rm["landmarks"], rf["landmarks"]);
+    // A map carries no CAD mesh, so no alignment (docs/alignment.md): the
+    // same as the part program inspected without it.
+    EXPECT_FALSE(rm.contains("alignment"));
+    const auto unaligned = hgtest::run(exe + " inspect --part " + (dir / "block.yaml").string() +
+                                       " --alignment none --views " + raised.string());
+    EXPECT_EQ(unaligned.status, 1) << unaligned.err;
+    EXPECT_EQ(rm["landmarks"], json::parse(unaligned.out)["landmarks"]);
+    // The raised top is half the outline that fixes the height: the seat is
+    // the bottom's, nominal, not a compromise that would hide half the defect.
+    ASSERT_TRUE(rf.contains("alignment"));
+    EXPECT_LT(rf["alignment"]["shift_mm"].get<double>(), 0.02);
 }
 
 TEST_F(InspectCommand, PartProgramInspectionSectionAppliesAndEachOptionReplacesItsKey)

@@ -36,18 +36,27 @@ struct DatumPlane {
     Vec3 centroid;
 };
 
-// The CAD face of a datum landmark: the triangles connected to the one
-// nearest the landmark that lie in its plane (within 1°).
-std::vector<int> growDatumFace(const model::TriangleMesh& mesh, std::size_t seed, DatumPlane& plane)
+using FacesByEdge = std::map<std::pair<int, int>, std::vector<int>>;
+
+// Every edge's faces, built once for all datums.
+FacesByEdge facesByEdge(const model::TriangleMesh& mesh)
 {
-    const double cosLimit = std::cos(geometry::degToRad(1.0));
-    std::map<std::pair<int, int>, std::vector<int>> byEdge;
+    FacesByEdge byEdge;
     for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k) {
             const int a = mesh.triangles[f][static_cast<std::size_t>(k)];
             const int b = mesh.triangles[f][static_cast<std::size_t>((k + 1) % 3)];
             byEdge[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(f));
         }
+    return byEdge;
+}
+
+// The CAD face of a datum landmark: the triangles connected to the one
+// nearest the landmark that lie in its plane (within 1°).
+std::vector<int> growDatumFace(const model::TriangleMesh& mesh, const FacesByEdge& byEdge, std::size_t seed,
+                               DatumPlane& plane)
+{
+    const double cosLimit = std::cos(geometry::degToRad(1.0));
     const Vec3 n0 = mesh.faceNormal(seed);
     std::vector<int> face{static_cast<int>(seed)};
     std::vector<char> seen(mesh.triangles.size(), 0);
@@ -68,7 +77,7 @@ std::vector<int> growDatumFace(const model::TriangleMesh& mesh, std::size_t seed
         area += a;
         for (int k = 0; k < 3; ++k) {
             const int va = t[static_cast<std::size_t>(k)], vb = t[static_cast<std::size_t>((k + 1) % 3)];
-            for (int g : byEdge[{std::min(va, vb), std::max(va, vb)}]) {
+            for (int g : byEdge.at({std::min(va, vb), std::max(va, vb)})) {
                 const auto gi = static_cast<std::size_t>(g);
                 if (seen[gi] || mesh.faceNormal(gi).dot(n0) < cosLimit) continue;
                 seen[gi] = 1;
@@ -197,13 +206,14 @@ Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<mo
     std::vector<int> faceDatum(mesh.triangles.size(), -1);
     if (settings.method == model::AlignmentMethod::Datums) {
         if (settings.datums.empty()) throw std::invalid_argument("method datums needs at least one datum");
+        const FacesByEdge byEdge = facesByEdge(mesh);
         for (std::size_t k = 0; k < settings.datums.size(); ++k) {
             const auto it = std::find_if(landmarks.begin(), landmarks.end(),
                                          [&](const model::Landmark& l) { return l.id == settings.datums[k]; });
             if (it == landmarks.end())
                 throw std::invalid_argument("datum '" + settings.datums[k] + "' is not a landmark");
             DatumPlane plane;
-            for (int f : growDatumFace(mesh, solid->closestPoint(it->position).triangle, plane))
+            for (int f : growDatumFace(mesh, byEdge, solid->closestPoint(it->position).triangle, plane))
                 if (faceDatum[static_cast<std::size_t>(f)] < 0)
                     faceDatum[static_cast<std::size_t>(f)] = static_cast<int>(k);
             impl_->groups.push_back({datumProjection(plane, impl_->reference, impl_->lever)});

@@ -86,7 +86,7 @@ std::string_view toString(LampState state)
 
 std::string_view toString(StationIndication indication)
 {
-    constexpr std::array<std::string_view, 5> names{"dark", "pass", "fail", "busy", "fault"};
+    constexpr std::array<std::string_view, 6> names{"dark", "pass", "fail", "busy", "fault", "reseat"};
     return names[static_cast<std::size_t>(indication)];
 }
 
@@ -139,12 +139,13 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
 std::array<LampState, 3> lampStatesFor(StationIndication indication)
 {
     using S = LampState;
-    // docs/contracts.md §6, indexed by StationIndication; each row green, amber, red.
-    constexpr std::array<std::array<LampState, 3>, 5> table{{{S::Off, S::Off, S::Off},
+    // docs/contracts.md §6 and its re-seat extension, indexed by StationIndication; each row green, amber, red.
+    constexpr std::array<std::array<LampState, 3>, 6> table{{{S::Off, S::Off, S::Off},
                                                              {S::On, S::Off, S::Off},
                                                              {S::Off, S::Off, S::On},
                                                              {S::Off, S::On, S::Off},
-                                                             {S::Off, S::Blinking, S::Blinking}}};
+                                                             {S::Off, S::Blinking, S::Blinking},
+                                                             {S::Off, S::Blinking, S::Off}}};
     return table[static_cast<std::size_t>(indication)];
 }
 

@@ -14,6 +14,7 @@
 
 #include "contour.h"
 #include "hullgauge/common/format.h"
+#include "hullgauge/geometry/json.h"
 #include "seat_solver.h"
 
 namespace hg::align {
@@ -516,24 +517,31 @@ geometry::CameraModel seatedCamera(const geometry::CameraModel& nominal, const g
     return geometry::CameraModel(nominal.intrinsics(), nominal.cameraFromPart() * seat);
 }
 
+nlohmann::json seatJson(const geometry::RigidTransform& seat, const Vec3& pivot)
+{
+    return {{"R", geometry::toJson(seat.R)},
+            {"t", geometry::toJson(seat.t)},
+            {"centre", geometry::toJson(pivot)},
+            {"shift_mm", (seat.apply(pivot) - pivot).norm()},
+            {"rotation_deg", geometry::rotationAngleDeg(geometry::Mat3::Identity(), seat.R)}};
+}
+
 nlohmann::json toJson(const AlignmentResult& r)
 {
-    auto vec = [](const Vec3& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
-    nlohmann::json R = nlohmann::json::array();
-    for (int i = 0; i < 3; ++i) R.push_back(nlohmann::json::array({r.seat.R(i, 0), r.seat.R(i, 1), r.seat.R(i, 2)}));
+    using geometry::toJson;
     nlohmann::json fixed = nlohmann::json::array();
     for (const FixedDof& d : r.fixedDofs) {
         nlohmann::json j{{"kind", d.kind == FixedDof::Kind::Rotation ? "rotation" : "translation"},
-                         {"axis", vec(d.axis)},
+                         {"axis", toJson(d.axis)},
                          {"label", d.label}};
-        if (d.kind == FixedDof::Kind::Rotation) j["point"] = vec(d.point);
+        if (d.kind == FixedDof::Kind::Rotation) j["point"] = toJson(d.point);
         fixed.push_back(std::move(j));
     }
     return {{"method", model::toString(r.method)},
             {"measured", r.measured},
-            {"R", R},
-            {"t", vec(r.seat.t)},
-            {"reference_point", vec(r.referencePoint)},
+            {"R", toJson(r.seat.R)},
+            {"t", toJson(r.seat.t)},
+            {"reference_point", toJson(r.referencePoint)},
             {"shift_mm", r.shiftMm},
             {"rotation_deg", r.rotationDeg},
             {"residual_px", r.residualPx},

@@ -8,16 +8,14 @@
 #include <spdlog/fmt/fmt.h>
 
 #include "command.h"
+#include "hullgauge/geometry/json.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
 
 namespace hg::cli {
 namespace {
 
-nlohmann::json toJson(const Eigen::Vector3d& v)
-{
-    return nlohmann::json::array({v.x(), v.y(), v.z()});
-}
+using geometry::toJson;
 
 int run(const std::string& partFile, bool json)
 {

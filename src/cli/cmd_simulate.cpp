@@ -68,18 +68,6 @@ geometry::RigidTransform seatFromArgs(const std::vector<double>& v, const geomet
     return {R, c + d - R * c};
 }
 
-/// The manifest's "simulation" extension: the true seat the part was rendered with.
-nlohmann::json seatJson(const geometry::RigidTransform& seat, const geometry::Vec3& c)
-{
-    const auto& R = seat.R;
-    return {{"seat",
-             {{"R", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)}, {R(2, 0), R(2, 1), R(2, 2)}}},
-              {"t", {seat.t.x(), seat.t.y(), seat.t.z()}},
-              {"centre", {c.x(), c.y(), c.z()}},
-              {"shift_mm", (seat.apply(c) - c).norm()},
-              {"rotation_deg", geometry::rotationAngleDeg(geometry::Mat3::Identity(), R)}}}};
-}
-
 /// The part to render: every --mesh solid minus every --subtract solid.
 /// (A ∪ B) − C = (A − C) ∪ (B − C), and the renderer draws the union, so the
 /// differences are taken mesh by mesh.
@@ -173,7 +161,8 @@ int run(const SimulateArgs& args)
         vision::writeManifest(manifest, manifestFile);
     } else {
         nlohmann::json j = parseJson(vision::manifestJson(manifest, outDir), manifestFile.string());
-        j["simulation"] = seatJson(seat, bounds.center());
+        // The manifest's "simulation" extension: the true seat the part was rendered with.
+        j["simulation"] = {{"seat", align::seatJson(seat, bounds.center())}};
         std::ofstream f(manifestFile);
         f << j.dump(2) << '\n';
         if (!f) throw FaultError("cannot write " + manifestFile.string());

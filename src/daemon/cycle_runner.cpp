@@ -1,7 +1,9 @@
 #include "cycle_runner.h"
 
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/align/pose_correction.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/geometry/json.h"
 #include "hullgauge/station/cycle_rules.h"
 #include "image_archive.h"
 
@@ -26,26 +28,17 @@ std::int64_t ns(std::chrono::milliseconds d)
     return std::chrono::nanoseconds(d).count();
 }
 
-/// The simulated part's true seat as the record keeps it, in the terms of the
-/// result's `alignment` object (docs/alignment.md): R, t, and the shift of the
-/// pivot and the rotation angle the demo compares with the measured ones.
-nlohmann::json seatJson(const SimulatedSeat& s)
-{
-    const auto& R = s.seat.R;
-    const auto& t = s.seat.t;
-    return {{"R", {{R(0, 0), R(0, 1), R(0, 2)}, {R(1, 0), R(1, 1), R(1, 2)}, {R(2, 0), R(2, 1), R(2, 2)}}},
-            {"t", {t.x(), t.y(), t.z()}},
-            {"centre", {s.centre.x(), s.centre.y(), s.centre.z()}},
-            {"shift_mm", (s.seat.apply(s.centre) - s.centre).norm()},
-            {"rotation_deg", geometry::rotationAngleDeg(geometry::Mat3::Identity(), R)}};
-}
-
 } // namespace
 
 /// One cycle's working state, from the trigger to the published record.
 struct CycleRunner::Cycle {
     std::shared_ptr<const station::DaemonConfig> cfg; ///< the configuration the cycle keeps to its end
     const station::PartProgramRef* program = nullptr;
+    /// The poses commanded: the plan's, those after the first seatViews() corrected for the seat they measured.
+    std::vector<geometry::FixturePose> poses;
+    bool posesChecked = false;      ///< the correction was decided (done, or why not)
+    nlohmann::json poseCorrection;  ///< what it did, for the record (null: not tried)
+    std::vector<bool> rangeLimited; ///< per view: a range of the fixture stopped its correction short
     station::InspectionRecord record;
     Clock::time_point started;
     std::optional<Clock::time_point> lastFrameAt; ///< when the last good frame was in (the latency)
@@ -335,6 +328,7 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     if (simulation_) simulation_->newPart();
     auto it = cycle.cfg->programs.find(r.program);
     cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
+    if (cycle.program) cycle.poses = cycle.program->views;
     auto action = transition([&] { return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1); });
     std::string error;
     if (!cycle.program)
@@ -386,11 +380,52 @@ SequencerAction CycleRunner::perform(Cycle& cycle, const SequencerAction& action
 
 SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
 {
+    // The first views have measured the seat: the rest are taken where they see the seated part as planned.
+    if (!cycle.posesChecked && action.view > 0 && action.view == inspector_.seatViews()) correctPoses(cycle);
     const auto start = clock_.now();
-    auto r = devices_.moveTo(cycle.program->views[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
+    auto r = devices_.moveTo(cycle.poses[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
     cycle.moveMs += clock_.msSince(start);
     if (!r.ok()) hg::log::category("seq")->warn("view {}: move failed: {}", action.view, r.message());
     return feed(station::moveEvent(r.code()));
+}
+
+// Between the grab of view k-1 and the move to view k = seatViews(): the seat
+// of the first k views (their preparation ran while the fixture moved) turns
+// the remaining planned poses so the camera sees the seated part from the
+// planned directions (docs/alignment.md, "Poses corrected for the seat").
+void CycleRunner::correctPoses(Cycle& cycle)
+{
+    cycle.posesChecked = true;
+    const auto started = std::chrono::steady_clock::now();
+    const std::size_t first = inspector_.seatViews();
+    const auto seat = inspector_.provisionalSeat();
+    auto& j = cycle.poseCorrection;
+    j = {{"after_views", first}};
+    auto log = hg::log::category("seq");
+    if (!seat || !seat->measured || !seat->withinLimits) {
+        j["applied"] = false;
+        j["reason"] = !seat ? "the first views could not be prepared"
+                            : (seat->message.empty() ? "the seat is beyond the limits" : seat->message);
+        log->info("poses as planned: the seat of the first {} views: {}", first, j["reason"].get<std::string>());
+    } else {
+        j["applied"] = true;
+        j["seat"] = {{"shift_mm", seat->shiftMm},
+                     {"rotation_deg", seat->rotationDeg},
+                     {"residual_px", seat->residualPx},
+                     {"inliers", seat->inliers},
+                     {"samples", seat->samples}};
+        j["seat_transform"] = align::seatJson(seat->seat, seat->referencePoint);
+        const auto& fixture = cycle.cfg->station.fixture;
+        cycle.rangeLimited.assign(cycle.poses.size(), false);
+        for (std::size_t k = first; k < cycle.poses.size(); ++k) {
+            const auto c = align::correctPose(fixture, cycle.poses[k], seat->seat, seat->referencePoint);
+            cycle.poses[k] = c.pose;
+            cycle.rangeLimited[k] = c.limited;
+        }
+        log->debug("poses {}..{} corrected for the seat of the first {} views (shift {:.3f} mm, rotation {:.3f}°)",
+                   first, cycle.poses.size() - 1, first, seat->shiftMm, seat->rotationDeg);
+    }
+    j["ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
 }
 
 SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
@@ -412,7 +447,7 @@ SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
     cycle.grabMs += clock_.msSince(start);
     if (r.ok()) {
         cycle.lastFrameAt = clock_.now();
-        inspector_.addView(action.view, cycle.program->views[action.view], image);
+        inspector_.addView(action.view, cycle.poses[action.view], image);
     } else {
         hg::log::category("seq")->warn("view {}: grab failed: {}", action.view, r.message());
     }
@@ -465,10 +500,13 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     record.part = outcome.part;
     record.verdict = station::verdictOf(how, outcome.pass);
     // The seat is kept whatever the verdict: a part not seated is recorded with the pose that says so.
-    if (outcome.ok && outcome.alignment) record.alignment = align::toJson(*outcome.alignment);
+    if (outcome.ok && outcome.alignment) {
+        record.alignment = align::toJson(*outcome.alignment);
+        if (!cycle.poseCorrection.is_null()) record.alignment["pose_correction"] = poseCorrectionJson(cycle);
+    }
     if (simulation_) {
         record.simulation = {{"part", simulation_->part()}};
-        if (auto seat = simulation_->trueSeat()) record.simulation["seat"] = seatJson(*seat);
+        if (auto seat = simulation_->trueSeat()) record.simulation["seat"] = align::seatJson(seat->seat, seat->centre);
     }
     if (how == station::CycleOutcome::Inspected) record.landmarks = outcome.landmarks;
     record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
@@ -481,6 +519,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
                        {"traversal", outcome.traversalMs},
                        {"processing", outcome.processingMs},
                        {"wait_for_verdict", cycle.finishMs}};
+    if (!cycle.poseCorrection.is_null()) record.timingMs["correct_poses"] = cycle.poseCorrection["ms"];
     // A failed part's images are written after the result is shown: the record names their
     // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
     cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) && (!outcome.views.empty() || outcome.evidence);
@@ -488,6 +527,28 @@ void CycleRunner::recordOutcome(Cycle& cycle)
         cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
                               .folderFor(record.startedUnixMs, record.serial)
                               .string();
+}
+
+// Per view the planned and the commanded pose and how far off the planned
+// direction the camera saw the part as finally measured (docs/alignment.md).
+nlohmann::json CycleRunner::poseCorrectionJson(const Cycle& cycle) const
+{
+    nlohmann::json j = cycle.poseCorrection;
+    const auto& fixture = cycle.cfg->station.fixture;
+    const auto& a = *cycle.outcome.alignment;
+    j["views"] = nlohmann::json::array();
+    for (std::size_t k = 0; k < cycle.poses.size(); ++k) {
+        const auto& planned = cycle.program->views[k];
+        const auto& commanded = cycle.poses[k];
+        j["views"].push_back(
+            {{"view", k},
+             {"planned", geometry::toJson(planned, fixture.type)},
+             {"commanded", geometry::toJson(commanded, fixture.type)},
+             {"corrected", !(planned == commanded)},
+             {"limited", k < cycle.rangeLimited.size() && cycle.rangeLimited[k]},
+             {"sight_error_deg", align::sightErrorDeg(fixture, planned, commanded, a.seat, a.referencePoint)}});
+    }
+    return j;
 }
 
 void CycleRunner::commitAndPublish(Cycle& cycle)
@@ -505,7 +566,7 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     cycle.commitMs = clock_.msSince(commitStart);
     // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
     const auto after = state();
-    devices_.showLamps(station::lampPattern(after, record.verdict));
+    devices_.showLamps(station::lampPattern(after, record.verdict, record.faultCode));
     const auto publishStart = clock_.now();
     registers_.publishResult(record.toPublished(station::plcStatus(after)));
     const auto published = clock_.now();

@@ -93,11 +93,13 @@ class CycleRunner {
     std::optional<station::SequencerAction> interruption(Cycle& cycle);
     station::SequencerAction perform(Cycle& cycle, const station::SequencerAction& action);
     station::SequencerAction move(Cycle& cycle, const station::SequencerAction& action);
+    void correctPoses(Cycle& cycle);
     station::SequencerAction settle(Cycle& cycle, const station::SequencerAction& action);
     station::SequencerAction grab(Cycle& cycle, const station::SequencerAction& action);
     station::SequencerAction finishInspection(Cycle& cycle);
     void endCycle(Cycle& cycle, bool stopMotion);
     void recordOutcome(Cycle& cycle);
+    nlohmann::json poseCorrectionJson(const Cycle& cycle) const;
     void commitAndPublish(Cycle& cycle);
     void report(Cycle& cycle);
     void archivePart(Cycle& cycle);

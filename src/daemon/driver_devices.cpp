@@ -43,7 +43,7 @@ SimulatedSeat drawSeat(std::mt19937_64& rng, const station::DaemonConfig::Seatin
 drivers::StationIndication indication(LampPattern p)
 {
     using I = drivers::StationIndication;
-    constexpr std::array<I, 5> byPattern{I::Dark, I::Busy, I::Pass, I::Fail, I::Fault}; // LampPattern order
+    constexpr std::array<I, 6> byPattern{I::Dark, I::Busy, I::Pass, I::Fail, I::Fault, I::Reseat}; // LampPattern order
     return byPattern[static_cast<std::size_t>(p)];
 }
 

@@ -82,6 +82,29 @@ class EngineInspector : public Inspector {
         pipeline_.submit(std::move(view));
     }
 
+    std::size_t seatViews() const override
+    {
+        if (!current_ || current_->program.alignment.method == model::AlignmentMethod::None) return 0;
+        return static_cast<std::size_t>(current_->program.alignment.correctPosesAfter);
+    }
+
+    // On the runner's thread, between a grab and the next move: waits for the
+    // first views' preparation (started as each frame came in) and solves.
+    std::optional<align::AlignmentResult> provisionalSeat() override
+    {
+        const std::size_t count = seatViews();
+        if (count == 0) return std::nullopt;
+        auto views = pipeline_.firstPrepared(count);
+        if (!views) return std::nullopt;
+        try {
+            return current_->inspector->measureSeat(*views);
+        } catch (const std::exception& e) {
+            hg::log::category("inspect")->warn("the seat of the first {} views could not be measured: {}", count,
+                                               e.what());
+            return std::nullopt;
+        }
+    }
+
     InspectionOutcome finish() override
     {
         InspectionOutcome out;

@@ -68,6 +68,14 @@ class Inspector {
     virtual bool begin(const station::PartProgramRef& program, std::string& error) = 0;
     /// Hands over view `index` taken at `pose`; returns at once.
     virtual void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) = 0;
+    /// How many first views measure the seat that corrects the planned poses
+    /// of the views after them (the program's `alignment.correct_poses_after`;
+    /// 0: none). Valid after begin().
+    virtual std::size_t seatViews() const { return 0; }
+    /// The seat measured on the first seatViews() views, waiting for their
+    /// preparation; nullopt when the program does not align or a view could
+    /// not be prepared (docs/alignment.md, "Poses corrected for the seat").
+    virtual std::optional<align::AlignmentResult> provisionalSeat() { return std::nullopt; }
     /// Waits for every view to be processed and returns the verdict.
     virtual InspectionOutcome finish() = 0;
     /// Drops the cycle (abort).

@@ -1,5 +1,6 @@
 #include "view_pipeline.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -74,6 +75,25 @@ ViewPipeline::Prepared ViewPipeline::wait()
     }
     slots_.clear();
     ++cycle_;
+    return out;
+}
+
+std::optional<std::vector<inspect::SilhouetteView>> ViewPipeline::firstPrepared(std::size_t count)
+{
+    std::unique_lock lock(mutex_);
+    if (slots_.size() < count) return std::nullopt;
+    const std::uint64_t cycle = cycle_;
+    changed_.wait(lock, [&] {
+        return cycle_ != cycle || std::all_of(slots_.begin(), slots_.begin() + static_cast<std::ptrdiff_t>(count),
+                                              [](const Slot& s) { return s.done; });
+    });
+    if (cycle_ != cycle) return std::nullopt;
+    std::vector<inspect::SilhouetteView> out;
+    for (std::size_t k = 0; k < count; ++k) {
+        const Slot& s = slots_[k];
+        if (!s.error.empty() || !s.view) return std::nullopt;
+        out.push_back({s.view->camera, {}, s.view->grey, s.view->threshold, s.view->objectIsDark, s.view->alignment});
+    }
     return out;
 }
 

@@ -71,6 +71,13 @@ class ViewPipeline {
     void submit(inspect::CapturedView view);
     /// Waits until every submitted view is prepared and ends the cycle.
     Prepared wait();
+    /// Waits until the first `count` views of the cycle are prepared and
+    /// returns them without their silhouette indexes (the cameras, the frames
+    /// and the alignment's share, shared, not copied) — what measuring the seat
+    /// needs while the cycle goes on (docs/daemon.md, "The pipeline").
+    /// nullopt when fewer were submitted or one of them failed; the cycle's
+    /// views stay for wait().
+    std::optional<std::vector<inspect::SilhouetteView>> firstPrepared(std::size_t count);
     /// Drops the queued views and waits for the one in preparation to end (its
     /// result is discarded), so the preparation function is no longer in use.
     void cancel();

@@ -213,8 +213,9 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
 // Alignment before the traversal (docs/alignment.md): the views were
 // segmented through their nominal cameras with the aligner's margin, so only
 // the cameras move.
-bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& result) const
+std::optional<align::AlignmentResult> Inspector::measureSeat(const std::vector<SilhouetteView>& views) const
 {
+    if (!aligner_) return std::nullopt;
     std::vector<align::AlignmentView> frames;
     std::vector<std::shared_ptr<const align::ViewEdges>> prepared;
     frames.reserve(views.size());
@@ -222,7 +223,12 @@ bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& resul
         frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark});
         prepared.push_back(v.alignment ? v.alignment : aligner_->prepare(frames.back()));
     }
-    result.alignment = aligner_->align(frames, prepared);
+    return aligner_->align(frames, prepared);
+}
+
+bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& result) const
+{
+    result.alignment = measureSeat(views);
     const align::AlignmentResult& a = *result.alignment;
     if (a.measured && a.withinLimits) {
         for (SilhouetteView& v : views) v.camera = align::seatedCamera(v.camera, a.seat);

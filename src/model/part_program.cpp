@@ -194,8 +194,9 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
 // datums must name landmarks, so it is read after them.
 AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::string, std::size_t>& landmarkIndex)
 {
-    if (!node.isMap()) node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg");
-    node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg"});
+    if (!node.isMap())
+        node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg, correct_poses_after");
+    node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg", "correct_poses_after"});
     AlignmentSettings s;
     if (auto n = node.optional("method")) {
         const std::string method = n->asString();
@@ -229,6 +230,8 @@ AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::str
         if (s.maxRotationDeg > 10.0)
             n->fail("value " + formatNumber(s.maxRotationDeg) + " is outside (0, 10] (degrees)");
     }
+    // A view count: 0 never corrects; a plan has at most a few dozen views.
+    if (auto n = node.optional("correct_poses_after")) s.correctPosesAfter = static_cast<int>(n->asIntIn(0, 64));
     return s;
 }
 

@@ -1,5 +1,6 @@
 #include "hullgauge/plan/plan_report.h"
 #include "hullgauge/common/format.h"
+#include "hullgauge/geometry/json.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,24 +11,6 @@ namespace hg::plan {
 namespace {
 
 using nlohmann::json;
-
-json poseJson(const FixturePose& p, FixtureType type)
-{
-    if (type == FixtureType::Rail) return {{"rail_mm", p.railMm}};
-    return {{"rotation_deg", p.rotationDeg}, {"declination_deg", p.declinationDeg}};
-}
-
-json vec(const Vec3& v)
-{
-    return json::array({v.x(), v.y(), v.z()});
-}
-
-json mat(const geometry::Mat3& m)
-{
-    json rows = json::array();
-    for (int r = 0; r < 3; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2)});
-    return rows;
-}
 
 std::string num(double v, int precision = 4)
 {
@@ -72,11 +55,11 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         const auto& cam = v.camera;
         json j;
         j["id"] = v.id;
-        j["pose"] = poseJson(v.pose, type);
-        j["K"] = mat(cam.intrinsics().K);
+        j["pose"] = geometry::toJson(v.pose, type);
+        j["K"] = geometry::toJson(cam.intrinsics().K);
         j["dist"] = cam.intrinsics().dist.empty() ? std::vector<double>(5, 0.0) : cam.intrinsics().dist;
-        j["R"] = mat(cam.cameraFromPart().R);
-        j["t"] = vec(cam.cameraFromPart().t);
+        j["R"] = geometry::toJson(cam.cameraFromPart().R);
+        j["t"] = geometry::toJson(cam.cameraFromPart().t);
         j["image_size"] = {cam.imageSize().width, cam.imageSize().height};
         json ids = json::array();
         json med = json::object();
@@ -100,27 +83,27 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         j["status"] = toString(a.verdict);
         j["inspectable"] = a.inspectable();
         j["tolerance_mm"] = a.toleranceMm;
-        j["normal"] = vec(a.normal);
+        j["normal"] = geometry::toJson(a.normal);
         j["best_views"] = a.designerBestViews ? "designer" : "derived";
         j["observed_by"] = ids;
         if (std::isfinite(med)) j["predicted_med_mm"] = med;
         if (std::isfinite(a.bestMedMm) && !a.witnessPoses.empty()) j["best_med_mm"] = a.bestMedMm;
         json witnesses = json::array();
         for (std::size_t k = 0; k < a.witnessPoses.size(); ++k) {
-            auto w = poseJson(a.witnessPoses[k], type);
-            w["direction"] = vec(a.witnessDirections[k]);
+            auto w = geometry::toJson(a.witnessPoses[k], type);
+            w["direction"] = geometry::toJson(a.witnessDirections[k]);
             witnesses.push_back(w);
         }
         j["witnesses"] = witnesses;
         if (!a.reason.empty()) j["reason"] = a.reason;
         if (!a.unreachableWitnesses.empty()) {
             json u = json::array();
-            for (const auto& p : a.unreachableWitnesses) u.push_back(poseJson(p, type));
+            for (const auto& p : a.unreachableWitnesses) u.push_back(geometry::toJson(p, type));
             j["unreachable_witnesses"] = u;
         }
         if (a.blockingTriangle) j["blocking_triangle"] = *a.blockingTriangle;
-        if (a.blockingPoint) j["blocking_point"] = vec(*a.blockingPoint);
-        if (a.nearestInspectablePoint) j["nearest_inspectable_point"] = vec(*a.nearestInspectablePoint);
+        if (a.blockingPoint) j["blocking_point"] = geometry::toJson(*a.blockingPoint);
+        if (a.nearestInspectablePoint) j["nearest_inspectable_point"] = geometry::toJson(*a.nearestInspectablePoint);
         json voids = json::array();
         for (auto key : a.unseenVoids) {
             const auto idx = inspect::keyIndex(key);

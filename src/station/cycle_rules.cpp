@@ -15,6 +15,8 @@ std::string_view toString(LampPattern p)
         return "fail";
     case LampPattern::Fault:
         return "fault";
+    case LampPattern::Reseat:
+        return "reseat";
     }
     return "off";
 }
@@ -62,13 +64,14 @@ Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed)
     return Verdict::Error;
 }
 
-LampPattern lampPattern(SequencerState state, Verdict lastVerdict)
+LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault)
 {
     if (state == SequencerState::Fault) return LampPattern::Fault;
     if (isBusy(state) || state == SequencerState::Calibrating) return LampPattern::Busy;
     if (state != SequencerState::Done) return LampPattern::Off;
     if (lastVerdict == Verdict::Pass) return LampPattern::Pass;
     if (lastVerdict == Verdict::Fail) return LampPattern::Fail;
+    if (lastFault == FaultCode::PartNotSeated) return LampPattern::Reseat;
     return LampPattern::Off;
 }
 

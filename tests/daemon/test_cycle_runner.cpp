@@ -6,6 +6,7 @@
 // when the test moves it (settle times pass at once).
 #include "cycle_runner.h"
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 
 #include <deque>
 #include <gtest/gtest.h>
@@ -47,10 +48,11 @@ class ScriptedDevices : public StationDevices {
 
     Status start() override { return startStatus; }
     void shutdown() override {}
-    Status moveTo(const geometry::FixturePose&, std::chrono::milliseconds, bool retry) override
+    Status moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds, bool retry) override
     {
         std::lock_guard lock(mutex_);
         moveRetries_.push_back(retry);
+        poses_.push_back(pose);
         return next(moves);
     }
     void stopMotion() override { stopped_ = true; }
@@ -77,6 +79,11 @@ class ScriptedDevices : public StationDevices {
     {
         std::lock_guard lock(mutex_);
         return lamps_;
+    }
+    std::vector<geometry::FixturePose> poses() const
+    {
+        std::lock_guard lock(mutex_);
+        return poses_;
     }
     std::vector<bool> moveRetries() const
     {
@@ -107,6 +114,7 @@ class ScriptedDevices : public StationDevices {
     mutable std::mutex mutex_;
     std::vector<LampPattern> lamps_;
     std::vector<bool> moveRetries_;
+    std::vector<geometry::FixturePose> poses_;
     std::vector<Clock::time_point> recoverTimes_;
     int grabCount_ = 0;
     std::atomic<bool> stopped_{false};
@@ -131,9 +139,19 @@ class PassingInspector : public Inspector {
         return out;
     }
     void cancel() override {}
+    std::size_t seatViews() const override { return seatAfter; }
+    std::optional<align::AlignmentResult> provisionalSeat() override
+    {
+        ++provisionalCalls;
+        return provisional;
+    }
 
     std::optional<align::AlignmentResult> alignment;
     bool seatingFault = false;
+    /// The seat of the first `seatAfter` views (0: the program does not correct poses).
+    std::size_t seatAfter = 0;
+    std::optional<align::AlignmentResult> provisional;
+    std::atomic<int> provisionalCalls{0};
 };
 
 /// The simulated line's nest: counts the parts put in, each seated by a known shift.
@@ -278,6 +296,7 @@ TEST_F(CycleRunnerTest, APartNotSeatedIsResultThreeFault32AndTheNextTriggerIsTak
     EXPECT_EQ(at(reg::LandmarksTotal), 0);     // nothing was inspected
     EXPECT_TRUE(devices.recoverTimes().empty());
     EXPECT_EQ(runner->state(), SequencerState::Done);
+    EXPECT_EQ(devices.lamps().back(), LampPattern::Reseat); // amber blinking: re-seat the part
     auto record = lastRecord();
     EXPECT_EQ(record["verdict"], "error");
     EXPECT_EQ(record["fault_code"], 32);
@@ -295,6 +314,7 @@ TEST_F(CycleRunnerTest, APartNotSeatedIsResultThreeFault32AndTheNextTriggerIsTak
     EXPECT_EQ(at(reg::FaultCode), 0);
     EXPECT_EQ(at(reg::SeatShiftUm), 250);
     EXPECT_EQ(at(reg::SeatRotationMdeg), 0);
+    EXPECT_EQ(devices.lamps().back(), LampPattern::Pass);
     EXPECT_EQ(runner->describe()["last_cycle"]["alignment"]["shift_mm"], 0.25); // ctl status shows the last seat
 }
 
@@ -324,6 +344,75 @@ TEST_F(CycleRunnerTest, TheSimulatedLineSeatsANewPartEveryCycleAndRecordsItsTrue
     EXPECT_NEAR(x, 5.2, 1e-12);
     EXPECT_EQ(runner->describe()["last_cycle"]["simulation"]["seat"]["centre"], seat["centre"]);
     runner.reset(); // before the simulation it was given
+}
+
+// The planned poses after the first views are corrected for the seat those
+// views measured (docs/alignment.md, "Poses corrected for the seat"). The
+// station is the tests' (camera 300 mm off on the part's -y side, turntable
+// about z, tilt about x); the seat a turn of 0.3° about the turntable's axis,
+// which the turntable takes off exactly: views 1 and 2 at rotation −0.3°.
+TEST_F(CycleRunnerTest, PosesAfterTheFirstViewsAreCorrectedForTheirSeat)
+{
+    auto cfg = std::make_shared<station::DaemonConfig>(*config);
+    cfg->station = hgtest::station();
+    config = cfg;
+    inspector.seatAfter = 1;
+    inspector.provisional = measuredSeat(0.0, 0.3, true); // about z through the origin, the reference point
+    inspector.alignment = inspector.provisional;
+    startReady();
+    trigger(7);
+    ASSERT_TRUE(eventually([&] { return done(7); }));
+    EXPECT_EQ(inspector.provisionalCalls.load(), 1);
+    const auto poses = devices.poses();
+    ASSERT_EQ(poses.size(), 3u);
+    EXPECT_EQ(poses[0], (geometry::FixturePose{0, 20, 0})); // measured the seat: as planned
+    EXPECT_NEAR(poses[1].rotationDeg, 20 - 0.3, 1e-9);
+    EXPECT_NEAR(poses[1].declinationDeg, 20, 1e-9);
+    EXPECT_NEAR(poses[2].rotationDeg, 40 - 0.3, 1e-9);
+    EXPECT_NEAR(poses[2].declinationDeg, 20, 1e-9);
+    EXPECT_EQ(at(reg::Result), 1);
+
+    const auto pc = lastRecord()["alignment"]["pose_correction"];
+    ASSERT_TRUE(pc.is_object());
+    EXPECT_EQ(pc["after_views"], 1);
+    EXPECT_EQ(pc["applied"], true);
+    ASSERT_EQ(pc["views"].size(), 3u);
+    EXPECT_EQ(pc["views"][0]["corrected"], false);
+    EXPECT_EQ(pc["views"][1]["corrected"], true);
+    EXPECT_NEAR(pc["views"][2]["commanded"]["rotation_deg"].get<double>(), 39.7, 1e-9);
+    EXPECT_EQ(pc["views"][2]["planned"]["rotation_deg"], 40.0);
+    // View 0 saw the part turned: its line of sight, at elevation 20° from the
+    // reference point, is off by the chord angle 2·asin(cos 20° · sin 0.15°).
+    const double expected =
+        geometry::radToDeg(2 * std::asin(std::cos(geometry::degToRad(20)) * std::sin(geometry::degToRad(0.15))));
+    EXPECT_NEAR(pc["views"][0]["sight_error_deg"].get<double>(), expected, 1e-9);
+    EXPECT_LT(pc["views"][1]["sight_error_deg"].get<double>(), 1e-7);
+    EXPECT_LT(pc["views"][2]["sight_error_deg"].get<double>(), 1e-7);
+}
+
+TEST_F(CycleRunnerTest, ASeatTheFirstViewsCannotMeasureLeavesThePosesAsPlanned)
+{
+    auto cfg = std::make_shared<station::DaemonConfig>(*config);
+    cfg->station = hgtest::station();
+    config = cfg;
+    inspector.seatAfter = 2;
+    inspector.provisional = measuredSeat(2.5, 0.3, false); // beyond the limits
+    inspector.alignment = measuredSeat(0.0, 0.3, true);
+    startReady();
+    trigger(8);
+    ASSERT_TRUE(eventually([&] { return done(8); }));
+    EXPECT_EQ(devices.poses(), config->programs.at(1).views);
+    const auto pc = lastRecord()["alignment"]["pose_correction"];
+    EXPECT_EQ(pc["applied"], false);
+    EXPECT_EQ(pc["after_views"], 2);
+
+    // A program that does not correct poses is not asked for a seat at all.
+    inspector.seatAfter = 0;
+    inspector.provisionalCalls = 0;
+    trigger(9);
+    ASSERT_TRUE(eventually([&] { return done(9); }));
+    EXPECT_EQ(inspector.provisionalCalls.load(), 0);
+    EXPECT_FALSE(lastRecord()["alignment"].contains("pose_correction"));
 }
 
 TEST_F(CycleRunnerTest, GrabTimesOutTwiceFaultsWithItsCodeThenRecovers)

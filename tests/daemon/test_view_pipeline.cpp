@@ -122,6 +122,48 @@ TEST(ViewPipeline, NamesTheViewThatCouldNotBePrepared)
     EXPECT_EQ(prepared.ids, std::vector<std::string>{"v7"});
 }
 
+TEST(ViewPipeline, TheFirstViewsAreHandedOutWhenPreparedAndStayForTheVerdict)
+{
+    // The cycle runner asks for the first two views (to measure the seat) while
+    // the third is still in preparation: it gets them as soon as they are done,
+    // and wait() still returns all three.
+    SteppedPreparation preparation(3);
+    std::vector<std::future<void>> started;
+    for (auto& p : preparation.started) started.push_back(p.get_future());
+    ViewPipeline pipeline(4);
+    pipeline.begin(preparation.fn());
+    EXPECT_FALSE(pipeline.firstPrepared(1)) << "nothing submitted yet";
+    for (int k = 0; k < 3; ++k) pipeline.submit(view(k));
+    auto first = std::async(std::launch::async, [&] { return pipeline.firstPrepared(2); });
+    preparation.finish[0].set_value();
+    ASSERT_EQ(started[1].wait_for(10s), std::future_status::ready);
+    EXPECT_EQ(first.wait_for(0s), std::future_status::timeout) << "view 1 is still in preparation";
+    preparation.finish[1].set_value();
+    ASSERT_EQ(first.wait_for(10s), std::future_status::ready);
+    const auto views = first.get();
+    ASSERT_TRUE(views);
+    ASSERT_EQ(views->size(), 2u);
+    EXPECT_EQ((*views)[0].index.frameSize(), cv::Size()) << "handed out without the silhouette index";
+    EXPECT_EQ((*views)[1].camera.intrinsics().imageSize, cv::Size(64, 48));
+    preparation.finish[2].set_value();
+    const auto prepared = pipeline.wait();
+    ASSERT_TRUE(prepared.error.empty()) << prepared.error;
+    EXPECT_EQ(prepared.ids, (std::vector<std::string>{"v0", "v1", "v2"}));
+    EXPECT_EQ(prepared.views[0].index.frameSize(), cv::Size(64, 48)) << "the index stays with the cycle";
+}
+
+TEST(ViewPipeline, AFirstViewThatFailedHandsOutNothing)
+{
+    ViewPipeline pipeline;
+    pipeline.begin([](const CapturedView& v) -> SilhouetteView {
+        if (v.id == "v0") throw std::runtime_error("lost 3 lines");
+        return {v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+    });
+    for (int k = 0; k < 2; ++k) pipeline.submit(view(k));
+    EXPECT_FALSE(pipeline.firstPrepared(2));
+    EXPECT_EQ(pipeline.wait().error, "view 'v0': lost 3 lines");
+}
+
 TEST(ViewPipeline, CancelDropsQueuedViewsAndTheNextCycleSeesOnlyItsOwn)
 {
     std::promise<void> release;

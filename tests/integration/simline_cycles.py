@@ -21,12 +21,22 @@ defective variant (half the run `face-low`, half `corner-missing`), and checks:
   red alone after a fail, amber never lit once the result is shown;
 - the SQLite store holds exactly one row per cycle with the PLC's trigger
   sequence, serial, verdict and failing landmarks;
+- every part is seated at random (config/sim `simulation.seating`), and the
+  views after the first two are taken at poses corrected for the seat the
+  first two measured (docs/alignment.md, "Poses corrected for the seat").
+  Worked out here from the station file's kinematics (docs/contracts.md §2)
+  and the part's *true* seat: no corrected view sees the part farther off
+  its planned direction of sight than it would have from the planned pose;
+  on a nominal part every view the fixture's ranges let be corrected fully
+  sees it within 0.05° of the planned direction; over the run those views
+  are on average at least ten times closer than they would have been;
 - SIGTERM stops the line cleanly (exit 0, no process left behind).
 Every wait is bounded.
 """
 import argparse
 import ctypes
 import json
+import math
 import os
 import signal
 import socket
@@ -36,6 +46,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import yaml
 
 LANDMARKS = ["tall-top", "tall-corner", "tall-side", "tall-foot", "riser", "step-top", "step-side", "end-front",
              "end-back", "step-top-back"]
@@ -67,6 +79,55 @@ def free_port():
 def ok_bits(failing):
     """LANDMARK_OK_BITS word 0 for the given failing landmarks (bit i: landmark i in program order)."""
     return sum(1 << i for i, name in enumerate(LANDMARKS) if name not in failing)
+
+
+def rotation(axis, deg):
+    """Right-handed rotation matrix (rows) by deg about the unit axis."""
+    n = math.sqrt(sum(a * a for a in axis))
+    x, y, z = (a / n for a in axis)
+    c, s, C = math.cos(math.radians(deg)), math.sin(math.radians(deg)), 1 - math.cos(math.radians(deg))
+    return [[c + x * x * C, x * y * C - z * s, x * z * C + y * s],
+            [y * x * C + z * s, c + y * y * C, y * z * C - x * s],
+            [z * x * C - y * s, z * y * C + x * s, c + z * z * C]]
+
+
+def mul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def tmul(a, v):
+    """a transposed times v."""
+    return [sum(a[k][i] * v[k] for k in range(3)) for i in range(3)]
+
+
+def sight(station, pose, seat):
+    """Unit direction from the part's reference point to the camera centre, in the part's frame:
+    camera_from_part = camera_from_fixture · Rot(declination) · Rot(rotation) · seat (axes through the origin)."""
+    fixture = station["fixture"]
+    pose_r = mul(mul(fixture["camera_from_fixture"]["R"], rotation(fixture["declination_axis"], pose["declination_deg"])),
+                 rotation(fixture["rotation_axis"], pose["rotation_deg"]))
+    centre = tmul(pose_r, [-v for v in fixture["camera_from_fixture"]["t"]])  # the nominal frame
+    in_part = tmul(seat["R"], [c - t for c, t in zip(centre, seat["t"])])
+    d = [p - q for p, q in zip(in_part, seat["centre"])]
+    n = math.sqrt(sum(v * v for v in d))
+    return [v / n for v in d]
+
+
+def angle_deg(a, b):
+    return math.degrees(math.acos(max(-1.0, min(1.0, sum(x * y for x, y in zip(a, b))))))
+
+
+def true_sight_errors(station, alignment, simulation):
+    """Per view, with the part's true seat: the record's view and how many degrees off the planned direction of
+    sight the part was seen from the commanded pose and would have been from the planned one."""
+    seat = simulation["seat"]
+    drawn = {"R": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "t": [0, 0, 0], "centre": seat["centre"]}
+    out = []
+    for v in alignment["pose_correction"]["views"]:
+        wanted = sight(station, v["planned"], drawn)
+        out.append((v, angle_deg(wanted, sight(station, v["commanded"], seat)),
+                    angle_deg(wanted, sight(station, v["planned"], seat))))
+    return out
 
 
 def main():
@@ -167,15 +228,41 @@ def main():
 
         # The result store: one row per cycle, the PLC's sequence, serial, verdict and failing landmarks.
         db = sqlite3.connect(f"file:{workdir / 'results.db'}?mode=ro", uri=True)
-        rows = db.execute("SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_json FROM inspections "
-                          "WHERE manual = 0 ORDER BY id").fetchall()
+        rows = db.execute("SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_json, alignment_json, "
+                          "simulation_json FROM inspections WHERE manual = 0 ORDER BY id").fetchall()
         check(len(rows) == len(plan), f"{len(rows)} rows in the result store for {len(plan)} cycles")
-        for (seq, serial, part, expected), (db_seq, db_serial, verdict, failed, landmarks) in zip(plan, rows):
+        station = yaml.safe_load((args.source / "config" / "sim" / "station.yaml").read_text())
+        after_all, before_all = [], []
+        for (seq, serial, part, expected), (db_seq, db_serial, verdict, failed, landmarks, alignment,
+                                            simulation) in zip(plan, rows):
             check((db_seq, db_serial, verdict) == (seq, serial, expected),
                   f"stored ({db_seq}, {db_serial}, {verdict}), PLC saw ({seq}, {serial}, {expected})")
             bad = {l["id"] for l in json.loads(landmarks) if l["status"] != "ok"}
             check(bad == FAILING[part] and failed == len(bad), f"cycle {seq} ({part}): stored failing landmarks {bad}")
+            alignment, simulation = json.loads(alignment or "null"), json.loads(simulation or "null")
+            if not check(alignment and simulation and alignment.get("pose_correction", {}).get("applied"),
+                         f"cycle {seq}: no seat-corrected poses in the record"):
+                continue
+            for k, (view, after, before) in enumerate(true_sight_errors(station, alignment, simulation)):
+                check(view["view"] == k and (k >= 2 or not view["corrected"]),
+                      f"cycle {seq}: view {k} of the first two corrected")
+                if k < 2:
+                    continue
+                check(after <= before + 0.01, f"cycle {seq}: view {k} corrected from {before:.4f}° to {after:.4f}° off")
+                if view["limited"]:
+                    continue
+                after_all.append(after)
+                before_all.append(before)
+                check(part != "nominal" or after < 0.05,
+                      f"cycle {seq}: view {k} sees the nominal part {after:.4f}° off the planned direction")
         db.close()
+        if check(after_all, "no corrected views to judge"):
+            mean_after, mean_before = sum(after_all) / len(after_all), sum(before_all) / len(before_all)
+            print(f"true direction of sight off the plan, {len(after_all)} corrected views: mean {mean_after:.4f}° "
+                  f"(max {max(after_all):.4f}°), from the planned poses it would have been {mean_before:.4f}°",
+                  flush=True)
+            check(mean_after < 0.1 * mean_before,
+                  f"corrected views {mean_after:.4f}° off on average, {mean_before:.4f}° without the correction")
     finally:
         if line.poll() is None:
             os.killpg(line.pid, signal.SIGKILL)

@@ -258,15 +258,18 @@ TEST_F(PartProgramTest, AlignmentSectionIsOptionalWithSilhouetteWithinOneMillime
     EXPECT_TRUE(defaults.datums.empty());
     EXPECT_DOUBLE_EQ(defaults.maxShiftMm, 1.0);
     EXPECT_DOUBLE_EQ(defaults.maxRotationDeg, 1.0);
+    EXPECT_EQ(defaults.correctPosesAfter, 2); // the daemon corrects poses after the first two views
 
     const AlignmentSettings d = loadPartProgram(write(kGood + "alignment:\n  method: datums\n"
                                                               "  datums: [edge, face, corner]\n"
-                                                              "  max_shift_mm: 0.5\n  max_rotation_deg: 10\n"))
+                                                              "  max_shift_mm: 0.5\n  max_rotation_deg: 10\n"
+                                                              "  correct_poses_after: 0\n"))
                                     .alignment;
     EXPECT_EQ(d.method, AlignmentMethod::Datums);
     EXPECT_EQ(d.datums, (std::vector<std::string>{"edge", "face", "corner"})); // priority order kept
     EXPECT_DOUBLE_EQ(d.maxShiftMm, 0.5);
     EXPECT_DOUBLE_EQ(d.maxRotationDeg, 10.0);
+    EXPECT_EQ(d.correctPosesAfter, 0);
 
     EXPECT_EQ(loadPartProgram(write(kGood + "alignment:\n  method: none\n")).alignment.method, AlignmentMethod::None);
     EXPECT_EQ(toString(AlignmentMethod::Silhouette), "silhouette");
@@ -300,6 +303,8 @@ TEST_F(PartProgramTest, AlignmentSectionMistakesNameLineAndKey)
         {"max_rotation_deg: 10.5", "", "part.yaml:34: alignment.max_rotation_deg: value 10.5 is outside (0, 10]"},
         {"max_rotation_deg: .inf", "", "part.yaml:34: alignment.max_rotation_deg: expected a finite number"},
         {"max_shift: 1", "", "part.yaml:34: alignment.max_shift: unknown key 'max_shift'"},
+        {"correct_poses_after: -1", "", "part.yaml:34: alignment.correct_poses_after: value -1 is outside [0, 64]"},
+        {"correct_poses_after: 2.5", "", "part.yaml:34: alignment.correct_poses_after: expected an integer"},
     };
     for (const auto& m : mistakes) {
         const std::string section = "alignment:\n  " + m.from + "\n" + (m.to.empty() ? "" : m.to + "\n");

@@ -46,6 +46,11 @@ TEST(CycleRules, LampsFollowTheStateAndInDoneTheVerdict)
     EXPECT_EQ(lampPattern(S::Done, Verdict::Fail), LampPattern::Fail);
     EXPECT_EQ(lampPattern(S::Done, Verdict::Aborted), LampPattern::Off);
     EXPECT_EQ(lampPattern(S::Done, Verdict::Error), LampPattern::Off);
+    // A part not seated: amber blinks alone until the next cycle (re-seat it).
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Error, FaultCode::PartNotSeated), LampPattern::Reseat);
+    EXPECT_EQ(lampPattern(S::Done, Verdict::Error, FaultCode::InspectionError), LampPattern::Off);
+    EXPECT_EQ(lampPattern(S::Moving, Verdict::Error, FaultCode::PartNotSeated), LampPattern::Busy);
+    EXPECT_EQ(lampPattern(S::Fault, Verdict::Error, FaultCode::PartNotSeated), LampPattern::Fault);
     EXPECT_EQ(toString(LampPattern::Fault), "fault");
 }
 

@@ -131,5 +131,10 @@ geometry::CameraModel seatedCamera(const geometry::CameraModel& nominal, const g
 
 /// The result's `alignment` object (docs/contracts.md §4, docs/alignment.md).
 nlohmann::json toJson(const AlignmentResult& result);
+/// A seat (nominal_from_part) given, not measured — the simulated part's true
+/// one — in the same terms: R, t, the pivot (`centre`) and the shift of the
+/// pivot and the rotation angle to set beside the measured `shift_mm` and
+/// `rotation_deg` (docs/alignment.md).
+nlohmann::json seatJson(const geometry::RigidTransform& seat, const Vec3& pivot);
 
 } // namespace hg::align

@@ -154,6 +154,11 @@ class Inspector {
     /// first when the inspector has an aligner (the views' cameras are the
     /// nominal ones; the seated ones are used from then on).
     InspectionResult inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const;
+    /// The seat measured on prepared views (their nominal cameras), e.g. on
+    /// the first views of a cycle while the fixture moves on, to correct the
+    /// remaining poses (docs/alignment.md, "Poses corrected for the seat").
+    /// nullopt when the inspector does not align.
+    std::optional<align::AlignmentResult> measureSeat(const std::vector<SilhouetteView>& views) const;
     /// Inspects with any voxel oracle (no views: no MED check, views_used 0).
     InspectionResult inspectWith(const VoxelOracle& oracle) const;
 

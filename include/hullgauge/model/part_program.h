@@ -92,6 +92,10 @@ struct AlignmentSettings {
     std::vector<std::string> datums;
     double maxShiftMm = 1.0;     ///< limit on the shift of the part's reference point
     double maxRotationDeg = 1.0; ///< limit on the rotation angle
+    /// The seat measured on this many first views corrects the planned poses
+    /// of the views after them (docs/alignment.md, "Poses corrected for the
+    /// seat"); 0: every view is taken at its planned pose.
+    int correctPosesAfter = 2;
 };
 
 struct PartProgram {

@@ -15,8 +15,9 @@
 namespace hg::station {
 
 /// Operator lamp patterns (docs/contracts.md §6): green pass, red fail, amber busy,
-/// red and amber blinking on fault.
-enum class LampPattern { Off, Busy, Pass, Fail, Fault };
+/// red and amber blinking on fault; extension: amber blinking alone after a
+/// part not seated (FAULT_CODE 32: re-seat it, docs/plc.md).
+enum class LampPattern { Off, Busy, Pass, Fail, Fault, Reseat };
 std::string_view toString(LampPattern p);
 
 /// The event a move's status feeds to the sequencer.
@@ -28,8 +29,8 @@ SequencerEvent grabEvent(StatusCode code);
 Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed);
 
 /// The lamps for the sequencer's state; in Done they show the last verdict
-/// (an aborted or failed cycle leaves them off).
-LampPattern lampPattern(SequencerState state, Verdict lastVerdict);
+/// (an aborted or failed cycle leaves them off, a part not seated blinks amber).
+LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault = FaultCode::None);
 
 /// STATUS for the sequencer's state: busy while a cycle runs, maintenance while calibrating.
 PlcStatus plcStatus(SequencerState state);

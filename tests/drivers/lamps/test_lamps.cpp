@@ -144,6 +144,12 @@ TEST(Lamps, StationIndicationsFollowContracts)
     EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Blinking);
     EXPECT_EQ(l.lamps->commanded(Lamp::Amber), LampState::Blinking);
     EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
+    // Re-seat the part: amber blinks alone.
+    ASSERT_TRUE(l.lamps->show(StationIndication::Reseat).ok());
+    EXPECT_EQ(l.lamps->commanded(Lamp::Amber), LampState::Blinking);
+    EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Off);
+    EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
+    EXPECT_EQ(toString(StationIndication::Reseat), "reseat");
 }
 
 TEST(Lamps, ActiveLowLinesAreInverted)

@@ -43,11 +43,12 @@ enum class LampState { Off, On, Blinking };
 
 /// What the station shows the operator (docs/contracts.md §6).
 enum class StationIndication {
-    Dark,  ///< every lamp off
-    Pass,  ///< green
-    Fail,  ///< red
-    Busy,  ///< amber
-    Fault, ///< red and amber blinking
+    Dark,   ///< every lamp off
+    Pass,   ///< green
+    Fail,   ///< red
+    Busy,   ///< amber
+    Fault,  ///< red and amber blinking
+    Reseat, ///< amber blinking alone: the part is not seated, re-seat it (extension)
 };
 
 std::string_view toString(Lamp lamp);

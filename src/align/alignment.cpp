@@ -37,21 +37,6 @@ struct DatumPlane {
     Vec3 centroid;
 };
 
-using FacesByEdge = std::map<std::pair<int, int>, std::vector<int>>;
-
-// Every edge's faces, built once for all datums.
-FacesByEdge facesByEdge(const model::TriangleMesh& mesh)
-{
-    FacesByEdge byEdge;
-    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k) {
-            const int a = mesh.triangles[f][static_cast<std::size_t>(k)];
-            const int b = mesh.triangles[f][static_cast<std::size_t>((k + 1) % 3)];
-            byEdge[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(f));
-        }
-    return byEdge;
-}
-
 // The CAD face of a datum landmark: the triangles connected to the one
 // nearest the landmark that lie in its plane (within 1°).
 std::vector<int> growDatumFace(const model::TriangleMesh& mesh, const FacesByEdge& byEdge, std::size_t seed,
@@ -207,6 +192,7 @@ Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<mo
     std::vector<int> faceDatum(mesh.triangles.size(), -1);
     if (settings.method == model::AlignmentMethod::Datums) {
         if (settings.datums.empty()) throw std::invalid_argument("method datums needs at least one datum");
+        // Every edge's faces, built once for all datums.
         const FacesByEdge byEdge = facesByEdge(mesh);
         for (std::size_t k = 0; k < settings.datums.size(); ++k) {
             const auto it = std::find_if(landmarks.begin(), landmarks.end(),

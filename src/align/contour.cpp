@@ -21,6 +21,18 @@ double facing(const Vec3& normal, const Vec3& onFace, const Vec3& eye)
 
 } // namespace
 
+FacesByEdge facesByEdge(const model::TriangleMesh& mesh)
+{
+    FacesByEdge byEdge;
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const int a = mesh.triangles[f][static_cast<std::size_t>(k)];
+            const int b = mesh.triangles[f][static_cast<std::size_t>((k + 1) % 3)];
+            byEdge[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(f));
+        }
+    return byEdge;
+}
+
 EdgeGraph::EdgeGraph(const model::TriangleMesh& mesh, std::vector<int> faceDatum)
     : mesh_(&mesh), faceDatum_(std::move(faceDatum))
 {
@@ -28,17 +40,12 @@ EdgeGraph::EdgeGraph(const model::TriangleMesh& mesh, std::vector<int> faceDatum
     if (faceDatum_.size() != nf) faceDatum_.assign(nf, -1);
     normals_.reserve(nf);
     centroids_.reserve(nf);
-    std::map<std::pair<int, int>, std::vector<int>> faces;
     for (std::size_t f = 0; f < nf; ++f) {
         const auto& t = mesh.triangles[f];
         normals_.push_back(mesh.faceNormal(f));
         centroids_.push_back((vertex(t[0]) + vertex(t[1]) + vertex(t[2])) / 3.0);
-        for (int k = 0; k < 3; ++k) {
-            const int a = t[static_cast<std::size_t>(k)], b = t[static_cast<std::size_t>((k + 1) % 3)];
-            faces[{std::min(a, b), std::max(a, b)}].push_back(static_cast<int>(f));
-        }
     }
-    for (const auto& [key, fs] : faces) {
+    for (const auto& [key, fs] : facesByEdge(mesh)) {
         // A closed 2-manifold (model::Solid checks it) has two faces per edge.
         if (fs.size() != 2) continue;
         if (normal(fs[0]).dot(normal(fs[1])) > kFlatCos) continue;

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,6 +18,10 @@ namespace hg::align {
 
 using geometry::Vec2;
 using geometry::Vec3;
+
+/// Every edge of the mesh (vertex pair, smaller first) with the faces it bounds.
+using FacesByEdge = std::map<std::pair<int, int>, std::vector<int>>;
+FacesByEdge facesByEdge(const model::TriangleMesh& mesh);
 
 /// The mesh's sharp edges with their two faces: the only places an occluding
 /// contour of a polyhedron can run.

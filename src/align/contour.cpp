@@ -179,94 +179,12 @@ std::vector<ContourSample> sampleContour(const EdgeGraph& graph, const model::So
     return samples;
 }
 
-namespace {
-
-double grey(const cv::Mat& image, int row, int col)
-{
-    return image.depth() == CV_8U ? image.at<std::uint8_t>(row, col) : image.at<std::uint16_t>(row, col);
-}
-
-// Bilinear grey level at (x, y); false outside the frame.
-bool sample(const cv::Mat& image, const Vec2& at, double& value)
-{
-    const double x = at.x(), y = at.y();
-    if (!(x >= 0.0 && y >= 0.0 && x <= image.cols - 1.0 && y <= image.rows - 1.0)) return false;
-    const int c = std::min(static_cast<int>(x), image.cols - 2), r = std::min(static_cast<int>(y), image.rows - 2);
-    const double fx = x - c, fy = y - r;
-    value = (1 - fy) * ((1 - fx) * grey(image, r, c) + fx * grey(image, r, c + 1)) +
-            fy * ((1 - fx) * grey(image, r + 1, c) + fx * grey(image, r + 1, c + 1));
-    return true;
-}
-
-// Signed "background-ness" of a grey level: > 0 on the background side.
-double side(const EdgeImage& image, double value)
-{
-    return image.objectIsDark ? value - image.threshold : image.threshold - value;
-}
-
-// The threshold crossing (object -> background going outward) nearest s = 0,
-// from a profile sampled every pixel.
-bool nearestCrossing(const EdgeImage& image, const SampleImage& at, double band, double& crossing)
-{
-    const int n = static_cast<int>(std::ceil(band));
-    double best = 1e300;
-    double prev = 0.0;
-    bool havePrev = false;
-    for (int k = -n; k <= n; ++k) {
-        double v = 0.0;
-        if (!sample(image.grey, at.pixel + k * at.normal, v)) {
-            havePrev = false;
-            continue;
-        }
-        const double sv = side(image, v);
-        if (havePrev && prev <= 0.0 && sv > 0.0) {
-            const double s = (k - 1) + (-prev) / (sv - prev);
-            if (std::abs(s) < std::abs(best)) best = s;
-        }
-        prev = sv;
-        havePrev = true;
-    }
-    if (std::abs(best) > band) return false;
-    crossing = best;
-    return true;
-}
-
-} // namespace
-
 bool findEdge(const EdgeImage& image, const SampleImage& at, double bandPx, double& offset)
 {
-    double crossing = 0.0;
-    if (!nearestCrossing(image, at, bandPx, crossing)) return false;
-    // Levels of object and background on either side of the edge, then the
-    // integral of the normalised profile over a window across it: the
-    // window's start plus the covered length is the edge.
-    constexpr double kHalfWindow = 3.0, kLevelSpan = 1.5, kStep = 0.5;
-    double object = 0.0, background = 0.0;
-    int no = 0, nb = 0;
-    for (double s = 0.0; s <= kLevelSpan + 1e-9; s += kStep) {
-        double v = 0.0;
-        if (sample(image.grey, at.pixel + (crossing - kHalfWindow - s) * at.normal, v)) object += v, ++no;
-        if (sample(image.grey, at.pixel + (crossing + kHalfWindow + s) * at.normal, v)) background += v, ++nb;
-    }
-    if (no == 0 || nb == 0) return false;
-    object /= no;
-    background /= nb;
-    const double contrast = background - object;
-    const double full = image.grey.depth() == CV_8U ? 255.0 : 65535.0;
-    // Both levels clearly on their side of the threshold, and a real step.
-    if (std::abs(contrast) < 0.03 * full) return false;
-    if (side(image, object) > -0.25 * std::abs(contrast) || side(image, background) < 0.25 * std::abs(contrast))
-        return false;
-    double covered = 0.0;
-    const int steps = static_cast<int>(std::lround(2.0 * kHalfWindow / kStep));
-    for (int k = 0; k <= steps; ++k) {
-        double v = 0.0;
-        if (!sample(image.grey, at.pixel + (crossing - kHalfWindow + k * kStep) * at.normal, v)) return false;
-        const double objectness = (background - v) / contrast;
-        covered += (k == 0 || k == steps ? 0.5 : 1.0) * objectness * kStep;
-    }
-    offset = crossing - kHalfWindow + covered;
-    return std::abs(offset - crossing) <= 1.0;
+    const auto edge = vision::findEdge(image, at.pixel, at.normal, bandPx);
+    if (!edge) return false;
+    offset = edge->offset;
+    return true;
 }
 
 } // namespace hg::align

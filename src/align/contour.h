@@ -13,6 +13,7 @@
 
 #include "hullgauge/geometry/camera.h"
 #include "hullgauge/model/solid.h"
+#include "hullgauge/vision/edge.h"
 
 namespace hg::align {
 
@@ -82,17 +83,11 @@ bool imageOf(const EdgeGraph& graph, const ContourSample& sample, const geometry
              SampleImage& out);
 
 /// Grey frame access for the edge search.
-struct EdgeImage {
-    cv::Mat grey;           ///< CV_8UC1 or CV_16UC1
-    double threshold = 0.0; ///< the silhouette's grey level
-    bool objectIsDark = true;
-};
+using vision::EdgeImage;
 
-/// The silhouette edge along pixel + s·normal, s in [-band, band]: the
-/// threshold crossing nearest s = 0 from object to background, located to a
-/// fraction of a pixel by the integral of the normalised grey profile across
-/// it (exact for a straight edge under any symmetric blur). False when there
-/// is no clean crossing. `offset` receives s of the edge.
+/// The silhouette edge along the sample's normal within `bandPx`
+/// (vision::findEdge); false when there is no clean crossing. `offset`
+/// receives its distance along the normal, pixels.
 bool findEdge(const EdgeImage& image, const SampleImage& at, double bandPx, double& offset);
 
 } // namespace hg::align

@@ -83,6 +83,7 @@ int run(const InspectArgs& args)
     inspect::InspectionOptions options;
     std::shared_ptr<const align::Aligner> aligner;
     model::AlignmentSettings alignment;
+    std::shared_ptr<const inspect::DeviationGauge> gauge;
     if (!args.map.empty()) {
         map = inspect::InspectionMap::load(args.map);
         options = inspect::inspectionOptions(withFlags({}, args));
@@ -92,6 +93,7 @@ int run(const InspectArgs& args)
         options = inspect::inspectionOptions(withFlags(program.inspection, args));
         map = inspect::buildInspectionMap(program, options);
         aligner = inspect::makeAligner(program);
+        gauge = inspect::makeDeviationGauge(program);
     }
     options.maskedLandmarks = args.mask;
 
@@ -109,7 +111,7 @@ int run(const InspectArgs& args)
     const std::string source = args.map.empty() ? args.part : args.map;
     std::optional<inspect::Inspector> inspector;
     try {
-        inspector.emplace(*map, options, aligner);
+        inspector.emplace(*map, options, aligner, gauge);
     } catch (const std::invalid_argument& e) {
         throw InputError(source, "inspection options", e.what());
     }

@@ -46,7 +46,8 @@ class EngineInspector : public Inspector {
                 const auto options = inspect::inspectionOptions(p.program.inspection);
                 p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
                 // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
-                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program));
+                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program),
+                                                                   inspect::makeDeviationGauge(p.program));
                 hg::log::category("inspect")->info(
                     "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());

@@ -82,8 +82,9 @@ const char* toString(LandmarkStatus status)
     return "not_inspected";
 }
 
-Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::shared_ptr<const align::Aligner> aligner)
-    : map_(&map), options_(std::move(options)), aligner_(std::move(aligner))
+Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::shared_ptr<const align::Aligner> aligner,
+                     std::shared_ptr<const DeviationGauge> gauge)
+    : map_(&map), options_(std::move(options)), aligner_(std::move(aligner)), gauge_(std::move(gauge))
 {
     const MapGeometry& g = map.geometry();
     level_ = options_.level < 0 ? g.depth : options_.level;
@@ -206,6 +207,12 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     VoxelTester tester(&views, options_.method);
     InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
     r.alignment = std::move(seatFault.alignment);
+    // The sub-voxel step: each landmark's edge in the views that see it on their outline.
+    if (gauge_)
+        for (LandmarkResult& lr : r.landmarks)
+            for (const MapLandmark& lm : map_->landmarks())
+                if (lm.id == lr.id)
+                    lr.deviation = gauge_->measure(lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
     r.totalMs = msSince(t0);
     return r;
 }
@@ -614,6 +621,12 @@ nlohmann::json toJson(const InspectionResult& r)
         if (!lr.reason.empty()) l["reason"] = lr.reason;
         l["voxels_reconstructed"] = lr.voxelsReconstructed;
         if (lr.medMm) l["med_mm"] = *lr.medMm;
+        if (lr.deviation) {
+            // docs/inspection.md, "Sub-voxel deviation": signed, outward positive; U with k = 2.
+            l["deviation_mm"] = lr.deviation->measured ? json(lr.deviation->deviationMm) : json(nullptr);
+            l["uncertainty_mm"] = lr.deviation->measured ? json(lr.deviation->uncertaintyMm) : json(nullptr);
+            l["deviation"] = toJson(*lr.deviation);
+        }
         if (!lr.views.empty()) {
             json vs = json::array();
             for (const ViewReport& v : lr.views) {

@@ -151,6 +151,11 @@ std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& prog
     }
 }
 
+std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program)
+{
+    return program.inspection.deviation ? std::make_shared<const DeviationGauge>(program.solid) : nullptr;
+}
+
 InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options)
 {
     const int depth = program.octree.depth;

@@ -221,16 +221,18 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_FALSE(defaults.centrePointTest);
     EXPECT_TRUE(defaults.requireResolution);
     EXPECT_FALSE(defaults.earlyExit);
+    EXPECT_FALSE(defaults.deviation);
 
     const InspectionSettings s = loadPartProgram(write(kGood + "inspection:\n  level: 5\n  adjacency: 2\n"
                                                                "  method: centre\n  resolution_check: false\n"
-                                                               "  early_exit: true\n"))
+                                                               "  early_exit: true\n  deviation: true\n"))
                                      .inspection;
     EXPECT_EQ(s.level, 5);
     EXPECT_EQ(s.adjacency, 2);
     EXPECT_TRUE(s.centrePointTest);
     EXPECT_FALSE(s.requireResolution);
     EXPECT_TRUE(s.earlyExit);
+    EXPECT_TRUE(s.deviation);
 }
 
 TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
@@ -243,6 +245,7 @@ TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
         {"resolution_check: maybe", "", "part.yaml:34: inspection.resolution_check"},
         {"masked_landmarks: [face]", "", "part.yaml:34: inspection.masked_landmarks: unknown key"},
         {"early_exit: 1.5", "", "part.yaml:34: inspection.early_exit"},
+        {"deviation: maybe", "", "part.yaml:34: inspection.deviation: expected true or false"},
     };
     for (const auto& m : mistakes) {
         const InputError e = error(kGood + "inspection:\n  " + m.from + "\n");

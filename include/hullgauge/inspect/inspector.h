@@ -30,6 +30,7 @@
 
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/geometry/camera.h"
+#include "hullgauge/inspect/deviation.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/inspect/measures.h"
 #include "hullgauge/inspect/voxel_test.h"
@@ -79,6 +80,9 @@ struct LandmarkResult {
     int voxelsReconstructed = 0; ///< voxels this landmark caused to be reconstructed
     std::optional<double> medMm; ///< best (smallest) eq. 4.4.4-19 MED over observing views
     std::vector<ViewReport> views;
+    /// The signed sub-voxel deviation and its uncertainty, when the inspector
+    /// measures them (docs/inspection.md, "Sub-voxel deviation").
+    std::optional<Deviation> deviation;
 };
 
 struct ParameterResult {
@@ -137,8 +141,11 @@ class Inspector {
     /// With an aligner every inspection from frames first measures the seat
     /// and inspects through the seated cameras (docs/alignment.md); the
     /// regions of interest then carry the aligner's margin.
+    /// With a gauge every inspection from frames also measures each
+    /// landmark's signed sub-voxel deviation (docs/inspection.md).
     Inspector(const InspectionMap& map, InspectionOptions options = {},
-              std::shared_ptr<const align::Aligner> aligner = nullptr);
+              std::shared_ptr<const align::Aligner> aligner = nullptr,
+              std::shared_ptr<const DeviationGauge> gauge = nullptr);
 
     /// Segments only the regions the map's voxels project to, then inspects.
     /// Frames must match their camera's image size (std::invalid_argument naming the view).
@@ -182,6 +189,7 @@ class Inspector {
     int adjacency_;
     std::vector<std::uint8_t> active_;
     std::shared_ptr<const align::Aligner> aligner_;
+    std::shared_ptr<const DeviationGauge> gauge_;
 };
 
 } // namespace hg::inspect

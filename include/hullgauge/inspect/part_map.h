@@ -29,6 +29,8 @@ InspectionOptions inspectionOptions(const model::InspectionSettings& settings);
 /// The aligner of a part program's `alignment` section; null for `method: none`.
 /// Throws hg::InputError naming the program when a datum is not a landmark.
 std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& program);
+/// The deviation gauge of a program with `inspection.deviation`; null without.
+std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program);
 
 /// The map of inspections at `options.level` (-1: the depth): only the levels
 /// from there to the depth. The daemon and `hullgauge inspect --part` both

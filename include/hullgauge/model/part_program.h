@@ -77,6 +77,9 @@ struct InspectionSettings {
     bool centrePointTest = false;  ///< `method: centre`: the centre-point voxel test, not the volume source
     bool requireResolution = true; ///< `resolution_check`: eq. 4.4.4-19 required per landmark
     bool earlyExit = false;        ///< stop at the first landmark that is not ok (3.3.6)
+    /// `deviation`: also the signed sub-voxel deviation and its uncertainty
+    /// per landmark (docs/inspection.md, "Sub-voxel deviation").
+    bool deviation = false;
 };
 
 /// How the part's seat is measured before it is inspected: the optional

@@ -1,0 +1,49 @@
+// Sub-pixel silhouette edges in grey frames (docs/alignment.md, "Method";
+// docs/inspection.md, "Sub-voxel deviation"). The 50 % rule of the
+// dissertation's segmentation (4.4.2) keeps only which side of the threshold
+// a pixel lies on; the grey levels across an edge say where, within the
+// pixel, the edge lies. Along a line through the frame the edge is located by
+// the integral of the normalised grey profile across a 6-pixel window: the
+// window's start plus the covered length — exact for a straight edge under any
+// symmetric optical blur and for the pixel-area coverage a sensor integrates.
+//
+// Pure computation on values: no I/O, no state.
+#pragma once
+
+#include <optional>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace hg::vision {
+
+/// A grey frame as the edge search reads it.
+struct EdgeImage {
+    cv::Mat grey;           ///< CV_8UC1 or CV_16UC1
+    double threshold = 0.0; ///< the silhouette's grey level
+    bool objectIsDark = true;
+};
+
+/// A silhouette edge found along pixel + s·normal.
+struct EdgeFound {
+    double offset = 0.0;    ///< s of the edge, pixels
+    double contrast = 0.0;  ///< background level − object level (grey levels, signed)
+    /// Standard deviation of the grey level on the flat background beyond the
+    /// edge (from whole pixels 4–20 px out, robustly, at least the
+    /// quantisation's 1/√12): the frame's own noise there; 0 when those pixels
+    /// leave the frame.
+    double noise = 0.0;
+    /// Standard uncertainty of `offset` (pixels) from that noise: the profile
+    /// integral over the window and the two levels it is normalised by.
+    double sigmaPx = 0.0;
+};
+
+/// The silhouette edge along pixel + s·normal (normal: unit, pointing from the
+/// object to the background), s in [-band, band]: the threshold crossing
+/// nearest s = 0, refined by the integral of the normalised profile. nullopt
+/// without a clean crossing (contrast under 3 % of full scale, a level within
+/// a quarter of the contrast of the threshold, or the window leaving the frame).
+std::optional<EdgeFound> findEdge(const EdgeImage& image, const Eigen::Vector2d& pixel, const Eigen::Vector2d& normal,
+                                  double bandPx);
+
+} // namespace hg::vision

@@ -1,0 +1,142 @@
+// Sub-pixel silhouette edges (docs/inspection.md, "Sub-voxel deviation";
+// dissertation 4.4.2 on what thresholding discards).
+#include "hullgauge/vision/edge.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+namespace hg::vision {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+
+// The integral window and where the two levels are taken (pixels).
+constexpr double kHalfWindow = 3.0, kLevelSpan = 1.5, kStep = 0.5;
+
+double grey(const cv::Mat& image, int row, int col)
+{
+    return image.depth() == CV_8U ? image.at<std::uint8_t>(row, col) : image.at<std::uint16_t>(row, col);
+}
+
+// Bilinear grey level at (x, y); false outside the frame.
+bool sample(const cv::Mat& image, const Vec2& at, double& value)
+{
+    const double x = at.x(), y = at.y();
+    if (!(x >= 0.0 && y >= 0.0 && x <= image.cols - 1.0 && y <= image.rows - 1.0)) return false;
+    const int c = std::min(static_cast<int>(x), image.cols - 2), r = std::min(static_cast<int>(y), image.rows - 2);
+    const double fx = x - c, fy = y - r;
+    value = (1 - fy) * ((1 - fx) * grey(image, r, c) + fx * grey(image, r, c + 1)) +
+            fy * ((1 - fx) * grey(image, r + 1, c) + fx * grey(image, r + 1, c + 1));
+    return true;
+}
+
+// Signed "background-ness" of a grey level: > 0 on the background side.
+double side(const EdgeImage& image, double value)
+{
+    return image.objectIsDark ? value - image.threshold : image.threshold - value;
+}
+
+// The threshold crossing (object -> background going outward) nearest s = 0,
+// from a profile sampled every pixel.
+bool nearestCrossing(const EdgeImage& image, const Vec2& pixel, const Vec2& normal, double band, double& crossing)
+{
+    const int n = static_cast<int>(std::ceil(band));
+    double best = 1e300;
+    double prev = 0.0;
+    bool havePrev = false;
+    for (int k = -n; k <= n; ++k) {
+        double v = 0.0;
+        if (!sample(image.grey, pixel + k * normal, v)) {
+            havePrev = false;
+            continue;
+        }
+        const double sv = side(image, v);
+        if (havePrev && prev <= 0.0 && sv > 0.0) {
+            const double s = (k - 1) + (-prev) / (sv - prev);
+            if (std::abs(s) < std::abs(best)) best = s;
+        }
+        prev = sv;
+        havePrev = true;
+    }
+    if (std::abs(best) > band) return false;
+    crossing = best;
+    return true;
+}
+
+// The frame's noise on the background beyond the edge: whole pixels 4-20 px
+// out, from their mean absolute deviation about the median (× √(π/2) for a
+// Gaussian; robust to a stray feature, and not zero where most pixels share
+// one grey level as the median absolute deviation is), never below the
+// quantisation's 1/√12 level.
+double backgroundNoise(const cv::Mat& image, const Vec2& edge, const Vec2& normal)
+{
+    std::vector<double> values;
+    for (int k = 4; k <= 20; ++k) {
+        const Vec2 p = edge + k * normal;
+        const int c = static_cast<int>(std::lround(p.x())), r = static_cast<int>(std::lround(p.y()));
+        if (c < 0 || r < 0 || c >= image.cols || r >= image.rows) return 0.0;
+        values.push_back(grey(image, r, c));
+    }
+    auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    const double m = median(values);
+    double sum = 0.0;
+    for (double v : values) sum += std::abs(v - m);
+    return std::max(1.2533 * sum / static_cast<double>(values.size()), 1.0 / std::sqrt(12.0));
+}
+
+} // namespace
+
+std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, const Vec2& normal, double bandPx)
+{
+    double crossing = 0.0;
+    if (!nearestCrossing(image, pixel, normal, bandPx, crossing)) return std::nullopt;
+    // Levels of object and background on either side of the edge, then the
+    // integral of the normalised profile over a window across it: the
+    // window's start plus the covered length is the edge.
+    double object = 0.0, background = 0.0;
+    int no = 0, nb = 0;
+    for (double s = 0.0; s <= kLevelSpan + 1e-9; s += kStep) {
+        double v = 0.0;
+        if (sample(image.grey, pixel + (crossing - kHalfWindow - s) * normal, v)) object += v, ++no;
+        if (sample(image.grey, pixel + (crossing + kHalfWindow + s) * normal, v)) background += v, ++nb;
+    }
+    if (no == 0 || nb == 0) return std::nullopt;
+    object /= no;
+    background /= nb;
+    const double contrast = background - object;
+    const double full = image.grey.depth() == CV_8U ? 255.0 : 65535.0;
+    // Both levels clearly on their side of the threshold, and a real step.
+    if (std::abs(contrast) < 0.03 * full) return std::nullopt;
+    if (side(image, object) > -0.25 * std::abs(contrast) || side(image, background) < 0.25 * std::abs(contrast))
+        return std::nullopt;
+    double covered = 0.0;
+    const int steps = static_cast<int>(std::lround(2.0 * kHalfWindow / kStep));
+    for (int k = 0; k <= steps; ++k) {
+        double v = 0.0;
+        if (!sample(image.grey, pixel + (crossing - kHalfWindow + k * kStep) * normal, v)) return std::nullopt;
+        const double objectness = (background - v) / contrast;
+        covered += (k == 0 || k == steps ? 0.5 : 1.0) * objectness * kStep;
+    }
+    EdgeFound out;
+    out.offset = crossing - kHalfWindow + covered;
+    if (std::abs(out.offset - crossing) > 1.0) return std::nullopt;
+    out.contrast = contrast;
+    out.noise = backgroundNoise(image.grey, pixel + crossing * normal, normal);
+    // covered = ∫ (B − v)/C over the window W: the noise of the W pixels it
+    // integrates, and of the levels B and O (each a mean over the level span,
+    // about kLevelSpan + 0.5 pixels' worth), weighted by ∂covered/∂B =
+    // (W − covered)/C and ∂covered/∂O = covered/C.
+    const double W = 2.0 * kHalfWindow, levelPixels = kLevelSpan + 0.5;
+    const double inside = covered;
+    const double variance =
+        W + (W - inside) * (W - inside) / levelPixels + inside * inside / levelPixels;
+    out.sigmaPx = out.noise / std::abs(contrast) * std::sqrt(variance);
+    return out;
+}
+
+} // namespace hg::vision

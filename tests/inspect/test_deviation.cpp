@@ -1,0 +1,157 @@
+// Signed sub-voxel deviation (docs/inspection.md, "Sub-voxel deviation"):
+// parts whose surfaces are moved by known amounts, rendered with blur and
+// sensor noise at about 0.05 mm per pixel, inspected with the deviation
+// gauge; the measured deviation and its uncertainty against the offsets the
+// parts were made with (tests/support/parts.cpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <random>
+
+#include "hgtest/parts.h"
+#include "hullgauge/inspect/deviation.h"
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/sim/renderer.h"
+
+namespace {
+
+using hg::inspect::DeviationGauge;
+using hg::inspect::InspectionResult;
+using hg::inspect::Inspector;
+
+// f = 6000 px at 260-380 mm: 0.043-0.063 mm per pixel at the landmark.
+hgtest::GrazingOptions station()
+{
+    hgtest::GrazingOptions o;
+    o.camera.focalPx = 6000.0;
+    return o;
+}
+
+std::vector<hg::inspect::CapturedView> render(const hg::model::TriangleMesh& mesh,
+                                              const std::vector<hg::geometry::CameraModel>& cameras,
+                                              std::uint64_t seed)
+{
+    const hg::sim::SilhouetteRenderer renderer({mesh});
+    hg::sim::RenderOptions o;
+    o.noiseSigma = 1.5;
+    o.blurSigmaPx = 0.6;
+    std::vector<hg::inspect::CapturedView> views;
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
+        o.seed = seed + i;
+        views.push_back({"v" + std::to_string(i), cameras[i], renderer.render(cameras[i], o)});
+    }
+    return views;
+}
+
+InspectionResult inspect(const hgtest::TestPart& part, const hgtest::PartAsMade& made, std::uint64_t seed)
+{
+    std::mt19937_64 rng(seed);
+    const auto cameras = hgtest::grazingViewSet(part, &made, 2, rng, station());
+    const auto map = part.map();
+    const Inspector inspector(map, {}, nullptr, std::make_shared<DeviationGauge>(part.solid));
+    return inspector.inspect(render(made.mesh, cameras, seed), {});
+}
+
+struct Tally {
+    int measured = 0, withinU = 0, within2U = 0;
+    double worst = 0.0, largestU = 0.0;
+    void add(double measuredMm, double trueMm, double U)
+    {
+        ++measured;
+        const double e = std::abs(measuredMm - trueMm);
+        withinU += e <= U;
+        within2U += e <= 2 * U;
+        worst = std::max(worst, e);
+        largestU = std::max(largestU, U);
+    }
+};
+
+void check(const InspectionResult& r, const hgtest::PartAsMade& made, const hgtest::TestPart& part, Tally& tally)
+{
+    for (std::size_t i = 0; i < r.landmarks.size(); ++i) {
+        const auto& lr = r.landmarks[i];
+        ASSERT_TRUE(lr.deviation) << lr.id;
+        const double truth = made.offsetMm[part.landmark(lr.id)];
+        if (!lr.deviation->measured) {
+            ADD_FAILURE() << made.name << " " << lr.id << ": " << lr.deviation->reason;
+            continue;
+        }
+        const double d = lr.deviation->deviationMm, U = lr.deviation->uncertaintyMm;
+        EXPECT_LE(std::abs(d - truth), 0.01) << made.name << " " << lr.id << ": " << d << " mm, true " << truth;
+        EXPECT_LE(std::abs(d - truth), 2 * U) << made.name << " " << lr.id << ": U " << U;
+        tally.add(d, truth, U);
+    }
+}
+
+TEST(Deviation, ThePostWidenedOrNarrowedIsMeasuredToAHundredthWithItsUncertainty)
+{
+    // Every side of the post moved by b: the four vertical edges by b·√2 along their bisectors.
+    const hgtest::TestPart post = hgtest::postPart();
+    Tally tally;
+    std::uint64_t seed = 100;
+    for (double b : {0.0, 0.03, -0.03, 0.08, -0.08, 0.15, -0.15}) {
+        const auto made = hgtest::postWidened(post, b / std::sqrt(2.0));
+        SCOPED_TRACE("offset " + std::to_string(b));
+        check(inspect(post, made, seed++), made, post, tally);
+    }
+    std::cout << tally.measured << " landmarks: worst |deviation - truth| " << tally.worst << " mm, largest U "
+              << tally.largestU << " mm, within U " << tally.withinU << ", within 2U " << tally.within2U << "\n";
+    EXPECT_EQ(tally.measured, 28);
+    // The result JSON carries them (docs/inspection.md, "Sub-voxel deviation").
+    const auto j = hg::inspect::toJson(inspect(post, hgtest::postWidened(post, 0.05), 7));
+    for (const auto& l : j["landmarks"]) {
+        ASSERT_TRUE(l["deviation_mm"].is_number()) << l.dump();
+        EXPECT_NEAR(l["deviation_mm"].get<double>(), 0.05 * std::sqrt(2.0), 0.01);
+        EXPECT_GT(l["uncertainty_mm"].get<double>(), 0.0);
+        EXPECT_FALSE(l["deviation"]["views"].empty());
+    }
+    EXPECT_GE(tally.withinU, static_cast<int>(std::ceil(0.95 * tally.measured)));
+    EXPECT_EQ(tally.within2U, tally.measured);
+    EXPECT_LE(tally.largestU, 0.015);
+}
+
+} // namespace
+
+namespace {
+
+TEST(Deviation, TheDefectListIsMeasuredAtEveryLandmarkAViewSeesOnItsOutline)
+{
+    // The defect list at 0.03, 0.08 and 0.15 mm. Left out: the corner of
+    // `corner_missing`, a notch: its true offset lies at the notch's concave
+    // inner edge, which no silhouette shows (the outline there is the two new
+    // convex edges, half as deep: chapter 2's weak convexity); the bracket
+    // test covers it.
+    const hgtest::TestPart plate = hgtest::defectPlatePart();
+    Tally tally;
+    int notSeen = 0;
+    std::uint64_t seed = 200;
+    for (double size : {0.03, 0.08, 0.15}) {
+        for (const auto& made : hgtest::plateDefects(plate, size)) {
+            SCOPED_TRACE(made.name + " " + std::to_string(size));
+            const InspectionResult r = inspect(plate, made, seed++);
+            for (const auto& lr : r.landmarks) {
+                ASSERT_TRUE(lr.deviation);
+                if (made.name == "corner_missing" && lr.id == "corner") continue;
+                if (!lr.deviation->measured) {
+                    ++notSeen;
+                    continue;
+                }
+                const double truth = made.offsetMm[plate.landmark(lr.id)];
+                const double d = lr.deviation->deviationMm, U = lr.deviation->uncertaintyMm;
+                EXPECT_LE(std::abs(d - truth), 0.01) << lr.id << ": " << d << " mm, true " << truth;
+                EXPECT_LE(std::abs(d - truth), 2 * U) << lr.id << ": " << d << " mm, true " << truth << ", U " << U;
+                tally.add(d, truth, U);
+            }
+        }
+    }
+    std::cout << tally.measured << " landmarks measured, " << notSeen << " seen by no view on its outline: worst "
+              << "|deviation - truth| " << tally.worst << " mm, largest U " << tally.largestU << " mm, within U "
+              << tally.withinU << ", within 2U " << tally.within2U << "\n";
+    EXPECT_LE(notSeen, 5);
+    EXPECT_GE(tally.withinU, static_cast<int>(std::ceil(0.95 * tally.measured)));
+    EXPECT_EQ(tally.within2U, tally.measured);
+    EXPECT_LE(tally.largestU, 0.015);
+}
+
+} // namespace

@@ -81,7 +81,9 @@ double alignmentSigma(const align::AlignmentResult& a, const Vec3& point, const 
 
 } // namespace
 
-DeviationGauge::DeviationGauge(std::shared_ptr<const model::Solid> solid) : solid_(std::move(solid)) {}
+DeviationGauge::DeviationGauge(std::shared_ptr<const model::Solid> solid) : solid_(std::move(solid))
+{
+}
 
 std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm, const SilhouetteView& view) const
 {
@@ -116,7 +118,8 @@ std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm
 }
 
 Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<SilhouetteView>& views,
-                                  const std::vector<std::string>& viewIds, const align::AlignmentResult* alignment) const
+                                  const std::vector<std::string>& viewIds,
+                                  const align::AlignmentResult* alignment) const
 {
     Deviation out;
     double sumW = 0.0, sumWx = 0.0, methodW = 0.0;
@@ -157,8 +160,8 @@ Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<Silho
     }
     if (alignment) out.budget.alignment = alignmentSigma(*alignment, lm.position, lm.normal);
     const auto& u = out.budget;
-    out.uncertaintyMm =
-        2.0 * std::sqrt(u.edgeNoise * u.edgeNoise + u.method * u.method + u.views * u.views + u.alignment * u.alignment);
+    out.uncertaintyMm = 2.0 * std::sqrt(u.edgeNoise * u.edgeNoise + u.method * u.method + u.views * u.views +
+                                        u.alignment * u.alignment);
     return out;
 }
 

@@ -133,8 +133,7 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     // (W − covered)/C and ∂covered/∂O = covered/C.
     const double W = 2.0 * kHalfWindow, levelPixels = kLevelSpan + 0.5;
     const double inside = covered;
-    const double variance =
-        W + (W - inside) * (W - inside) / levelPixels + inside * inside / levelPixels;
+    const double variance = W + (W - inside) * (W - inside) / levelPixels + inside * inside / levelPixels;
     out.sigmaPx = out.noise / std::abs(contrast) * std::sqrt(variance);
     return out;
 }

@@ -29,8 +29,7 @@ hgtest::GrazingOptions station()
 }
 
 std::vector<hg::inspect::CapturedView> render(const hg::model::TriangleMesh& mesh,
-                                              const std::vector<hg::geometry::CameraModel>& cameras,
-                                              std::uint64_t seed)
+                                              const std::vector<hg::geometry::CameraModel>& cameras, std::uint64_t seed)
 {
     const hg::sim::SilhouetteRenderer renderer({mesh});
     hg::sim::RenderOptions o;

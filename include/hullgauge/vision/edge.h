@@ -26,8 +26,8 @@ struct EdgeImage {
 
 /// A silhouette edge found along pixel + s·normal.
 struct EdgeFound {
-    double offset = 0.0;    ///< s of the edge, pixels
-    double contrast = 0.0;  ///< background level − object level (grey levels, signed)
+    double offset = 0.0;   ///< s of the edge, pixels
+    double contrast = 0.0; ///< background level − object level (grey levels, signed)
     /// Standard deviation of the grey level on the flat background beyond the
     /// edge (from whole pixels 4–20 px out, robustly, at least the
     /// quantisation's 1/√12): the frame's own noise there; 0 when those pixels

@@ -8,6 +8,8 @@
 //    left of it once every view was prepared as it came in (Aligner::prepare);
 //  - BM_InspectAligned/9: BM_InspectGoalDriven/9 on the seated block with
 //    alignment on (the regions of interest carry the alignment margin);
+//  - BM_InspectWithDeviation: BM_InspectGoalDriven/9 with the sub-voxel
+//    deviation of every landmark (docs/inspection.md; target: <= 1 ms more);
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
 //    EVERY voxel of the part cube at the same ΔV (dense carving, full-frame
 //    segmentation included), actually run — depth 9 is 134 million voxel
@@ -121,6 +123,37 @@ void BM_InspectAligned(benchmark::State& state)
     state.counters["align_ms"] = r.alignment ? r.alignment->ms : -1.0;
 }
 BENCHMARK(BM_InspectAligned)->Arg(9)->Unit(benchmark::kMillisecond);
+
+// BM_InspectGoalDriven/9 with the sub-voxel deviation of every landmark
+// (docs/inspection.md, "Sub-voxel deviation"); the counters: landmarks
+// measured and the views that saw them on their outline. The added cost per
+// cycle is this minus BM_InspectGoalDriven/9 of the same run.
+void BM_InspectWithDeviation(benchmark::State& state)
+{
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0);
+    const Inspector inspector(
+        scene.map, {}, nullptr,
+        std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block())));
+    const hg::vision::SegmentationSettings seg;
+    InspectionResult r;
+    for (auto _ : state) {
+        r = inspector.inspect(scene.frames, seg);
+        benchmark::DoNotOptimize(r.pass);
+    }
+    int measured = 0, views = 0;
+    double worst = 0.0;
+    for (const auto& l : r.landmarks)
+        if (l.deviation && l.deviation->measured) {
+            ++measured;
+            views += static_cast<int>(l.deviation->views.size());
+            worst = std::max(worst, std::abs(l.deviation->deviationMm));
+        }
+    state.counters["landmarks"] = static_cast<double>(r.landmarks.size());
+    state.counters["measured"] = measured;
+    state.counters["view_measurements"] = views;
+    state.counters["worst_abs_deviation_um"] = 1000.0 * worst; // a nominal part: 0 is the truth
+}
+BENCHMARK(BM_InspectWithDeviation)->Unit(benchmark::kMillisecond);
 
 void BM_DenseCarving(benchmark::State& state)
 {

@@ -82,6 +82,35 @@ double alignmentSigma(const align::AlignmentResult& a, const Vec3& point, const 
 
 } // namespace
 
+const char* toString(DecisionRule rule)
+{
+    return rule == DecisionRule::Guarded ? "guarded" : "simple";
+}
+
+const char* toString(Decision decision)
+{
+    switch (decision) {
+    case Decision::Conforms:
+        return "conforms";
+    case Decision::Nonconforms:
+        return "nonconforms";
+    case Decision::Uncertain:
+        return "uncertain";
+    }
+    return "uncertain";
+}
+
+// ISO 14253-1: the acceptance zone is the tolerance zone shrunk by U on both
+// sides, the rejection zone the outside widened by U; between them nothing is
+// proven. The simple rule (ILAC G8's "simple acceptance") takes the value as it is.
+Decision decide(double d, double U, double lower, double upper, DecisionRule rule)
+{
+    if (rule == DecisionRule::Simple) return d >= lower && d <= upper ? Decision::Conforms : Decision::Nonconforms;
+    if (d >= lower + U && d <= upper - U) return Decision::Conforms;
+    if (d < lower - U || d > upper + U) return Decision::Nonconforms;
+    return Decision::Uncertain;
+}
+
 DeviationGauge::DeviationGauge(std::shared_ptr<const model::Solid> solid) : solid_(std::move(solid))
 {
 }

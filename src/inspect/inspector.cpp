@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 
 namespace hg::inspect {
@@ -78,6 +79,8 @@ const char* toString(LandmarkStatus status)
         return "not_observable";
     case LandmarkStatus::NotInspected:
         return "not_inspected";
+    case LandmarkStatus::Uncertain:
+        return "uncertain";
     }
     return "not_inspected";
 }
@@ -207,14 +210,46 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     VoxelTester tester(&views, options_.method);
     InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
     r.alignment = std::move(seatFault.alignment);
-    // The sub-voxel step: each landmark's edge in the views that see it on their outline.
-    if (gauge_)
-        for (LandmarkResult& lr : r.landmarks)
-            for (const MapLandmark& lm : map_->landmarks())
-                if (lm.id == lr.id)
-                    lr.deviation = gauge_->measure(lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
+    if (gauge_) measureDeviations(r, views, viewIds);
     r.totalMs = msSince(t0);
     return r;
+}
+
+// The sub-voxel step (docs/inspection.md, "Sub-voxel deviation",
+// "Decisions"): each landmark's edge in the views that see it on their
+// outline; where the bracket found the surface (ok or out of tolerance) the
+// decision on the deviation, its uncertainty and ±tolerance sets the status.
+void Inspector::measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
+                                  const std::vector<std::string>& viewIds) const
+{
+    for (LandmarkResult& lr : r.landmarks) {
+        const auto lm = std::find_if(map_->landmarks().begin(), map_->landmarks().end(),
+                                     [&](const MapLandmark& m) { return m.id == lr.id; });
+        if (lm == map_->landmarks().end()) continue;
+        lr.deviation = gauge_->measure(*lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
+        if (!lr.deviation->measured) continue;
+        if (lr.status != LandmarkStatus::Ok && lr.status != LandmarkStatus::OutOfTolerance) continue;
+        const Deviation& d = *lr.deviation;
+        lr.decision = decide(d.deviationMm, d.uncertaintyMm, -lr.toleranceMm, lr.toleranceMm, options_.decisionRule);
+        const LandmarkStatus before = lr.status;
+        lr.status = *lr.decision == Decision::Conforms      ? LandmarkStatus::Ok
+                    : *lr.decision == Decision::Nonconforms ? LandmarkStatus::OutOfTolerance
+                                                            : LandmarkStatus::Uncertain;
+        const std::string measured = "deviation " + formatNumber(d.deviationMm, 4) + " mm ± " +
+                                     formatNumber(d.uncertaintyMm, 4) + " mm (k = 2) against ±" +
+                                     formatNumber(lr.toleranceMm) + " mm";
+        if (lr.status == LandmarkStatus::Uncertain)
+            lr.reason = measured + ": conformance not proven";
+        else if (lr.status == LandmarkStatus::OutOfTolerance && before != lr.status)
+            lr.reason = measured + ": out of tolerance";
+        else if (lr.status == LandmarkStatus::Ok)
+            lr.reason.clear();
+    }
+    r.pass = true;
+    for (const LandmarkResult& lr : r.landmarks)
+        if (lr.status != LandmarkStatus::Ok) r.pass = false;
+    for (const ParameterResult& pr : r.parameters)
+        if (pr.status != "ok") r.pass = false;
 }
 
 // Alignment before the traversal (docs/alignment.md): the views were
@@ -626,6 +661,7 @@ nlohmann::json toJson(const InspectionResult& r)
             l["deviation_mm"] = lr.deviation->measured ? json(lr.deviation->deviationMm) : json(nullptr);
             l["uncertainty_mm"] = lr.deviation->measured ? json(lr.deviation->uncertaintyMm) : json(nullptr);
             l["deviation"] = toJson(*lr.deviation);
+            if (lr.decision) l["decision"] = toString(*lr.decision);
         }
         if (!lr.views.empty()) {
             json vs = json::array();

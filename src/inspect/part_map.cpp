@@ -138,6 +138,7 @@ InspectionOptions inspectionOptions(const model::InspectionSettings& settings)
     options.earlyExit = settings.earlyExit;
     options.method = settings.centrePointTest ? VoxelTestMethod::CentrePoint : VoxelTestMethod::VolumeSource;
     options.requireResolution = settings.requireResolution;
+    options.decisionRule = settings.simpleDecision ? DecisionRule::Simple : DecisionRule::Guarded;
     return options;
 }
 

@@ -175,7 +175,8 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
 // The `inspection` section, checked against the octree.
 InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& octree)
 {
-    node.allowOnlyKeys({"level", "adjacency", "method", "resolution_check", "early_exit", "deviation"});
+    node.allowOnlyKeys(
+        {"level", "adjacency", "method", "resolution_check", "early_exit", "deviation", "decision_rule"});
     InspectionSettings s;
     if (auto n = node.optional("level")) s.level = static_cast<int>(n->asIntIn(1, octree.depth));
     if (auto n = node.optional("adjacency")) s.adjacency = static_cast<int>(n->asIntIn(1, octree.adjacencyDepth));
@@ -188,6 +189,12 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
     if (auto n = node.optional("resolution_check")) s.requireResolution = n->asBool();
     if (auto n = node.optional("early_exit")) s.earlyExit = n->asBool();
     if (auto n = node.optional("deviation")) s.deviation = n->asBool();
+    if (auto n = node.optional("decision_rule")) {
+        const std::string rule = n->asString();
+        if (rule != "guarded" && rule != "simple")
+            n->fail("unknown decision rule '" + rule + "' (expected guarded or simple)");
+        s.simpleDecision = rule == "simple";
+    }
     return s;
 }
 

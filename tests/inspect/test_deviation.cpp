@@ -154,3 +154,75 @@ TEST(Deviation, TheDefectListIsMeasuredAtEveryLandmarkAViewSeesOnItsOutline)
 }
 
 } // namespace
+
+namespace {
+
+using hg::inspect::decide;
+using hg::inspect::Decision;
+using hg::inspect::DecisionRule;
+using hg::inspect::LandmarkStatus;
+
+TEST(Decision, GuardedProvesConformanceAndNonconformanceBeyondU)
+{
+    // Tolerance ±0.05 mm, U = 0.01 mm: acceptance zone [−0.04, 0.04], rejection beyond ±0.06.
+    EXPECT_EQ(decide(0.03, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Conforms);
+    EXPECT_EQ(decide(-0.04, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Conforms);
+    EXPECT_EQ(decide(0.045, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Uncertain);
+    EXPECT_EQ(decide(-0.055, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Uncertain);
+    EXPECT_EQ(decide(0.061, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Nonconforms);
+    EXPECT_EQ(decide(-0.061, 0.01, -0.05, 0.05, DecisionRule::Guarded), Decision::Nonconforms);
+    // A zone narrower than 2U proves no conformance at all.
+    EXPECT_EQ(decide(0.0, 0.01, -0.005, 0.005, DecisionRule::Guarded), Decision::Uncertain);
+    // Simple acceptance: the value against the limits as it is.
+    EXPECT_EQ(decide(0.045, 0.01, -0.05, 0.05, DecisionRule::Simple), Decision::Conforms);
+    EXPECT_EQ(decide(0.055, 0.01, -0.05, 0.05, DecisionRule::Simple), Decision::Nonconforms);
+    EXPECT_STREQ(toString(Decision::Uncertain), "uncertain");
+    EXPECT_STREQ(toString(DecisionRule::Guarded), "guarded");
+}
+
+// The post's four edges with a tolerance of `tolMm`, made with every edge `offsetMm` out.
+InspectionResult postWith(double tolMm, double offsetMm, std::uint64_t seed, DecisionRule rule = DecisionRule::Guarded)
+{
+    hgtest::TestPart post = hgtest::postPart();
+    for (auto& l : post.landmarks) l.toleranceMm = tolMm;
+    const auto made = hgtest::postWidened(post, offsetMm / std::sqrt(2.0));
+    std::mt19937_64 rng(seed);
+    const auto cameras = hgtest::grazingViewSet(post, &made, 2, rng, station());
+    const auto map = post.map();
+    hg::inspect::InspectionOptions options;
+    options.decisionRule = rule;
+    const Inspector inspector(map, options, nullptr, std::make_shared<DeviationGauge>(post.solid));
+    return inspector.inspect(render(made.mesh, cameras, seed), {});
+}
+
+TEST(Decision, TheDeviationDecidesWhereTheBracketCannot)
+{
+    // 0.08 mm out against ±0.05: a voxel of 0.125 mm cannot tell; the deviation can.
+    InspectionResult r = postWith(0.05, 0.08, 11);
+    EXPECT_FALSE(r.pass);
+    for (const auto& l : r.landmarks) {
+        ASSERT_TRUE(l.decision) << l.id << " " << toString(l.status) << " " << l.reason;
+        EXPECT_EQ(*l.decision, Decision::Nonconforms) << l.id;
+        EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
+    }
+    // 0.03 mm out against ±0.05 mm: proven to conform.
+    r = postWith(0.05, 0.03, 12);
+    EXPECT_TRUE(r.pass);
+    for (const auto& l : r.landmarks) EXPECT_EQ(l.decision, Decision::Conforms) << l.id << " " << l.reason;
+    // Right at the limit: neither proven; the guarded rule fails the part, naming why.
+    r = postWith(0.05, 0.05, 13);
+    EXPECT_FALSE(r.pass);
+    for (const auto& l : r.landmarks) {
+        EXPECT_EQ(l.status, LandmarkStatus::Uncertain) << l.id;
+        EXPECT_NE(l.reason.find("conformance not proven"), std::string::npos) << l.reason;
+    }
+    // A tolerance the station cannot resolve (±0.002 mm, narrower than U): never ok.
+    r = postWith(0.002, 0.0, 14);
+    for (const auto& l : r.landmarks) EXPECT_NE(l.status, LandmarkStatus::Ok) << l.id;
+    EXPECT_FALSE(r.pass);
+    const auto j = hg::inspect::toJson(r);
+    EXPECT_EQ(j["landmarks"][0]["decision"], "uncertain");
+    EXPECT_EQ(j["landmarks"][0]["status"], "uncertain");
+}
+
+} // namespace

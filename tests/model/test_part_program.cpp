@@ -222,10 +222,12 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_TRUE(defaults.requireResolution);
     EXPECT_FALSE(defaults.earlyExit);
     EXPECT_FALSE(defaults.deviation);
+    EXPECT_FALSE(defaults.simpleDecision); // guarded
 
     const InspectionSettings s = loadPartProgram(write(kGood + "inspection:\n  level: 5\n  adjacency: 2\n"
                                                                "  method: centre\n  resolution_check: false\n"
-                                                               "  early_exit: true\n  deviation: true\n"))
+                                                               "  early_exit: true\n  deviation: true\n"
+                                                               "  decision_rule: simple\n"))
                                      .inspection;
     EXPECT_EQ(s.level, 5);
     EXPECT_EQ(s.adjacency, 2);
@@ -233,6 +235,7 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_FALSE(s.requireResolution);
     EXPECT_TRUE(s.earlyExit);
     EXPECT_TRUE(s.deviation);
+    EXPECT_TRUE(s.simpleDecision);
 }
 
 TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
@@ -246,6 +249,8 @@ TEST_F(PartProgramTest, InspectionSectionMistakesNameLineAndKey)
         {"masked_landmarks: [face]", "", "part.yaml:34: inspection.masked_landmarks: unknown key"},
         {"early_exit: 1.5", "", "part.yaml:34: inspection.early_exit"},
         {"deviation: maybe", "", "part.yaml:34: inspection.deviation: expected true or false"},
+        {"decision_rule: lenient", "",
+         "part.yaml:34: inspection.decision_rule: unknown decision rule 'lenient' (expected guarded or simple)"},
     };
     for (const auto& m : mistakes) {
         const InputError e = error(kGood + "inspection:\n  " + m.from + "\n");

@@ -54,6 +54,18 @@ struct Deviation {
     std::string reason; ///< why not measured
 };
 
+/// ISO 14253-1 decision rules (docs/inspection.md, "Decisions"): `guarded`
+/// — conformance must be proven: the deviation lies inside the limits by at
+/// least U, nonconformance when it lies outside by at least U, else
+/// uncertain; `simple` — the deviation against the limits, U ignored.
+enum class DecisionRule { Guarded, Simple };
+enum class Decision { Conforms, Nonconforms, Uncertain };
+const char* toString(DecisionRule rule);
+const char* toString(Decision decision);
+/// The decision for a deviation with expanded uncertainty U against the
+/// limits [lower, upper] (lower < upper; mm, outward positive).
+Decision decide(double deviationMm, double uncertaintyMm, double lowerMm, double upperMm, DecisionRule rule);
+
 class DeviationGauge {
   public:
     explicit DeviationGauge(std::shared_ptr<const model::Solid> solid);

@@ -38,7 +38,9 @@
 
 namespace hg::inspect {
 
-enum class LandmarkStatus { Ok, OutOfTolerance, Overflow, NotFound, NotObservable, NotInspected };
+/// Uncertain (extension): the deviation lies within its uncertainty of a
+/// limit, so the guarded decision rule cannot prove conformance (docs/inspection.md, "Decisions").
+enum class LandmarkStatus { Ok, OutOfTolerance, Overflow, NotFound, NotObservable, NotInspected, Uncertain };
 const char* toString(LandmarkStatus status);
 
 /// Run-time adaptation of the map (3.4) and the mode of the traversal.
@@ -56,6 +58,8 @@ struct InspectionOptions {
     /// Require eq. 4.4.4-19 (MED <= ΔV) from at least one observing view per
     /// landmark; a landmark without one is not_observable.
     bool requireResolution = true;
+    /// How a measured sub-voxel deviation decides a landmark (with a gauge).
+    DecisionRule decisionRule = DecisionRule::Guarded;
 };
 
 struct ViewReport {
@@ -83,6 +87,8 @@ struct LandmarkResult {
     /// The signed sub-voxel deviation and its uncertainty, when the inspector
     /// measures them (docs/inspection.md, "Sub-voxel deviation").
     std::optional<Deviation> deviation;
+    /// The decision on the deviation against ±tolerance, when it was measured.
+    std::optional<Decision> decision;
 };
 
 struct ParameterResult {
@@ -180,6 +186,9 @@ class Inspector {
     /// Measures the seat and moves the views' cameras onto it; false (and
     /// `result` the seating fault) when the part is not seated within the limits.
     bool seat(std::vector<SilhouetteView>& views, InspectionResult& result) const;
+    /// The sub-voxel step after the traversal: deviations and the decisions on them.
+    void measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
+                           const std::vector<std::string>& viewIds) const;
     InspectionResult run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                          const std::vector<std::string>* viewIds) const;
 

@@ -80,6 +80,9 @@ struct InspectionSettings {
     /// `deviation`: also the signed sub-voxel deviation and its uncertainty
     /// per landmark (docs/inspection.md, "Sub-voxel deviation").
     bool deviation = false;
+    /// `decision_rule`: guarded (conformance proven beyond U, the default) or
+    /// simple (the deviation against the tolerance as it is).
+    bool simpleDecision = false;
 };
 
 /// How the part's seat is measured before it is inspected: the optional

@@ -130,9 +130,16 @@ class EngineInspector : public Inspector {
             out.alignment = result.alignment;
             out.seatingFault = result.seatingFault;
             out.processingMs = prepared.prepareMs + result.totalMs;
-            for (const auto& l : result.landmarks)
-                out.landmarks.push_back(
-                    {l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm});
+            for (const auto& l : result.landmarks) {
+                station::LandmarkOutcome o{
+                    l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
+                if (l.deviation && l.deviation->measured) {
+                    o.deviationMm = l.deviation->deviationMm;
+                    o.uncertaintyMm = l.deviation->uncertaintyMm;
+                }
+                if (l.decision) o.decision = inspect::toString(*l.decision);
+                out.landmarks.push_back(std::move(o));
+            }
             out.evidence = evidence(result);
         } catch (const std::exception& e) {
             out.error = e.what();

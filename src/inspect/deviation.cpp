@@ -142,9 +142,20 @@ std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm
     const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark};
     const auto edge = vision::findEdge(image, *pixel + *outline * u, u, kEdgeBandPx);
     if (!edge) return std::nullopt;
+    // A surface moved inward is seen from its outer side: its outline runs
+    // along the boundary farthest along the line of sight — where the line
+    // just inside the nominal outline leaves the solid — deeper than where it
+    // enters, and a millimetre makes fewer pixels there (docs/inspection.md).
+    double pxPerMm = *scale;
+    if (edge->offset < 0.0) {
+        const auto exit = solid_->firstHit(touch->point + 1e-6 * ray.direction, ray.direction);
+        if (exit && std::abs(lm.normal.dot(exit->point - lm.position)) <= 1.0 / g.norm())
+            if (const auto far = pixelsPerMm(camera, exit->point, lm.normal, u); far && *far >= 0.5 * g.norm())
+                pxPerMm = *far;
+    }
     const double sinTilt = std::abs(lm.normal.dot((lm.position - camera.centre()).normalized()));
     const double tilt = kFeatureHalfLengthMm * sinTilt / std::sqrt(std::max(1e-12, 1.0 - sinTilt * sinTilt));
-    return ViewDeviation{{}, edge->offset / *scale, edge->sigmaPx / *scale, *scale, tilt};
+    return ViewDeviation{{}, edge->offset / pxPerMm, edge->sigmaPx / pxPerMm, pxPerMm, tilt};
 }
 
 Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<SilhouetteView>& views,

@@ -29,13 +29,18 @@ std::size_t InspectionRecord::landmarksFailed() const
 nlohmann::json InspectionRecord::landmarksJson() const
 {
     auto list = nlohmann::json::array();
-    for (const auto& l : landmarks)
-        list.push_back({{"id", l.id},
-                        {"status", l.status},
-                        {"error_min_mm", l.errorMinMm},
-                        {"error_max_mm", l.errorMaxMm},
-                        {"error_mm", l.errorMm},
-                        {"tolerance_mm", l.toleranceMm}});
+    for (const auto& l : landmarks) {
+        nlohmann::json j{{"id", l.id},
+                         {"status", l.status},
+                         {"error_min_mm", l.errorMinMm},
+                         {"error_max_mm", l.errorMaxMm},
+                         {"error_mm", l.errorMm},
+                         {"tolerance_mm", l.toleranceMm}};
+        if (l.deviationMm) j["deviation_mm"] = *l.deviationMm;
+        if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
+        if (!l.decision.empty()) j["decision"] = l.decision;
+        list.push_back(std::move(j));
+    }
     return list;
 }
 

@@ -124,6 +124,13 @@ std::size_t expectSameLandmarks(const InspectionOutcome& daemon, const nlohmann:
         EXPECT_EQ(figure(o["error_max_mm"]), d.errorMaxMm) << d.id;
         EXPECT_EQ(figure(o["error_mm"]), d.errorMm) << d.id;
         EXPECT_EQ(o["tolerance_mm"].get<double>(), d.toleranceMm) << d.id;
+        // The sub-voxel deviation, when the program measures it (docs/inspection.md).
+        EXPECT_EQ(o.contains("deviation_mm") && o["deviation_mm"].is_number(), d.deviationMm.has_value()) << d.id;
+        if (d.deviationMm) {
+            EXPECT_EQ(o["deviation_mm"].get<double>(), *d.deviationMm) << d.id;
+            EXPECT_EQ(o["uncertainty_mm"].get<double>(), *d.uncertaintyMm) << d.id;
+        }
+        EXPECT_EQ(o.value("decision", ""), d.decision) << d.id;
         ++compared;
     }
     return compared;
@@ -250,6 +257,36 @@ TEST_F(EngineParity, PartProgramInspectionSectionIsWhatTheDaemonInspectsWith)
     const fs::path folder = archive(config, outcome, dir / "images", "face-low");
     ASSERT_FALSE(folder.empty());
     EXPECT_EQ(expectSameLandmarks(outcome, inspectOffline(config.programs.at(1).partFile, folder)), 10u);
+}
+
+TEST_F(EngineParity, TheSubVoxelDeviationIsTheOfflineToolsToo)
+{
+    // inspection.deviation in the part program: the daemon measures every landmark's signed
+    // deviation; face-low's step top is 0.7 mm low (config/sim/README.md), the rest as drawn.
+    hgtest::TempDir dir;
+    auto config = hg::station::loadDaemonConfig(lineWithSegmentation(dir, "{method: otsu}"));
+    std::ofstream(dir.path() / "sim" / "stepped-block.yaml", std::ios::app) << "inspection: {deviation: true}\n";
+    auto inspector = hg::daemon::makeEngineInspector(config);
+    for (const std::string part : {"nominal", "face-low"}) {
+        SCOPED_TRACE(part);
+        auto outcome = inspect(*inspector, config, frames(config, part));
+        ASSERT_TRUE(outcome.ok) << outcome.error;
+        int measured = 0;
+        for (const auto& l : outcome.landmarks) {
+            if (!l.deviationMm) continue;
+            ++measured;
+            const bool lowered = part == "face-low" && (l.id == "step-top" || l.id == "step-top-back");
+            EXPECT_NEAR(*l.deviationMm, lowered ? -0.7 : 0.0, std::max(*l.uncertaintyMm, 0.02)) << l.id;
+            if (std::getenv("HG_DEBUG_DEV"))
+                std::cerr << "DEV " << part << " " << l.id << " " << *l.deviationMm << " U " << *l.uncertaintyMm
+                          << "\n";
+            EXPECT_EQ(l.decision, lowered ? "nonconforms" : "conforms") << l.id;
+        }
+        EXPECT_GE(measured, 6) << "most landmarks lie on some view's outline";
+        const fs::path folder = archive(config, outcome, dir / "images", part);
+        ASSERT_FALSE(folder.empty());
+        EXPECT_EQ(expectSameLandmarks(outcome, inspectOffline(config.programs.at(1).partFile, folder)), 10u);
+    }
 }
 
 // A seat of `shiftMm` along `direction` and `rotationDeg` about `axis`, both through the centre of the

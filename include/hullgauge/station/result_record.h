@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,11 +17,16 @@ namespace hg::station {
 /// A landmark's outcome, as in the inspection result JSON (docs/contracts.md §4).
 struct LandmarkOutcome {
     std::string id;
-    std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable
+    std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable | uncertain
     double errorMinMm = 0.0;
     double errorMaxMm = 0.0;
     double errorMm = 0.0;
     double toleranceMm = 0.0;
+    /// With the part program's inspection.deviation (docs/inspection.md): the
+    /// signed sub-voxel deviation, its expanded uncertainty and the decision.
+    std::optional<double> deviationMm{};
+    std::optional<double> uncertaintyMm{};
+    std::string decision{};
     bool ok() const { return status == "ok"; }
 };
 

@@ -23,8 +23,11 @@ class GigeSim {
     GigeSim& operator=(const GigeSim&) = delete;
 
     /// Starts the simulator with `args` and waits (at most `timeoutMs`) for its
-    /// "ready" line; throws std::runtime_error with its stderr otherwise.
-    void start(const std::vector<std::string>& args, int timeoutMs = 5000);
+    /// "ready" line; throws std::runtime_error with its stderr otherwise. The
+    /// deadline only bounds a simulator that hangs: it starts in well under a
+    /// second, but a machine loaded by other builds (and a driver hammering it
+    /// with reconnects) has been seen to take more than 5 s.
+    void start(const std::vector<std::string>& args, int timeoutMs = 60000);
     /// SIGKILL, as a camera losing power: no goodbye on the wire.
     void kill();
     /// SIGTERM and wait (bounded); SIGKILL if it hangs.

@@ -226,3 +226,35 @@ TEST(Decision, TheDeviationDecidesWhereTheBracketCannot)
 }
 
 } // namespace
+
+namespace {
+
+TEST(Deviation, ThirtyNoiseRealisationsOfOnePartRepeatWithinThreeMicrometres)
+{
+    // The same post, the same views, 30 frames' noise: the deviation's
+    // repeatability per landmark (the gauge's own scatter, type A).
+    const hgtest::TestPart post = hgtest::postPart();
+    const auto made = hgtest::asDesigned(post);
+    std::mt19937_64 rng(5);
+    const auto cameras = hgtest::grazingViewSet(post, &made, 2, rng, station());
+    const auto map = post.map();
+    const Inspector inspector(map, {}, nullptr, std::make_shared<DeviationGauge>(post.solid));
+    std::vector<std::vector<double>> values(post.landmarks.size());
+    for (std::uint64_t seed = 0; seed < 30; ++seed) {
+        const InspectionResult r = inspector.inspect(render(made.mesh, cameras, 1000 + 10 * seed), {});
+        for (std::size_t i = 0; i < r.landmarks.size(); ++i) {
+            ASSERT_TRUE(r.landmarks[i].deviation && r.landmarks[i].deviation->measured) << r.landmarks[i].id;
+            values[i].push_back(r.landmarks[i].deviation->deviationMm);
+        }
+    }
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        double mean = 0.0, var = 0.0;
+        for (double v : values[i]) mean += v / 30.0;
+        for (double v : values[i]) var += (v - mean) * (v - mean) / 29.0;
+        std::cout << post.landmarks[i].id << ": mean " << mean << " mm, sigma " << std::sqrt(var) << " mm\n";
+        EXPECT_LE(std::sqrt(var), 0.003) << post.landmarks[i].id;
+        EXPECT_LE(std::abs(mean), 0.01) << post.landmarks[i].id;
+    }
+}
+
+} // namespace

@@ -3,9 +3,9 @@
 #include "hullgauge/vision/edge.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
-#include <vector>
 
 namespace hg::vision {
 namespace {
@@ -72,21 +72,21 @@ bool nearestCrossing(const EdgeImage& image, const Vec2& pixel, const Vec2& norm
 // quantisation's 1/√12 level.
 double backgroundNoise(const cv::Mat& image, const Vec2& edge, const Vec2& normal)
 {
-    std::vector<double> values;
-    for (int k = 4; k <= 20; ++k) {
+    // On the stack: this runs for every edge the aligner and the gauge look at.
+    constexpr int kFirst = 4, kLast = 20, kCount = kLast - kFirst + 1;
+    std::array<double, kCount> values{};
+    for (int k = kFirst; k <= kLast; ++k) {
         const Vec2 p = edge + k * normal;
         const int c = static_cast<int>(std::lround(p.x())), r = static_cast<int>(std::lround(p.y()));
         if (c < 0 || r < 0 || c >= image.cols || r >= image.rows) return 0.0;
-        values.push_back(grey(image, r, c));
+        values[static_cast<std::size_t>(k - kFirst)] = grey(image, r, c);
     }
-    auto median = [](std::vector<double> v) {
-        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-        return v[v.size() / 2];
-    };
-    const double m = median(values);
+    std::array<double, kCount> sorted = values;
+    std::nth_element(sorted.begin(), sorted.begin() + kCount / 2, sorted.end());
+    const double m = sorted[kCount / 2];
     double sum = 0.0;
     for (double v : values) sum += std::abs(v - m);
-    return std::max(1.2533 * sum / static_cast<double>(values.size()), 1.0 / std::sqrt(12.0));
+    return std::max(1.2533 * sum / kCount, 1.0 / std::sqrt(12.0));
 }
 
 } // namespace

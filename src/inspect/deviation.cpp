@@ -80,6 +80,18 @@ double alignmentSigma(const align::AlignmentResult& a, const Vec3& point, const 
     return std::sqrt(std::max(0.0, (J * a.covariance * J.transpose())(0, 0)));
 }
 
+/// A view's type B term — the method's limit and its tilt — in mm (standard).
+double methodSigma(const ViewDeviation& v)
+{
+    return std::hypot(kMethodPx / v.pxPerMm, v.tiltMm);
+}
+
+/// A view's variance: its noise with its type B term beside it.
+double viewVariance(const ViewDeviation& v)
+{
+    return v.sigmaMm * v.sigmaMm + methodSigma(v) * methodSigma(v);
+}
+
 } // namespace
 
 const char* toString(DecisionRule rule)
@@ -169,11 +181,10 @@ Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<Silho
         if (!v) continue;
         v->viewId = k < viewIds.size() ? viewIds[k] : "v" + std::to_string(k);
         // Each view weighs by its noise with the method's limit and its tilt beside it.
-        const double method = std::hypot(kMethodPx / v->pxPerMm, v->tiltMm);
-        const double w = 1.0 / (v->sigmaMm * v->sigmaMm + method * method);
+        const double w = 1.0 / viewVariance(*v);
         sumW += w;
         sumWx += w * v->deviationMm;
-        methodW += w * method;
+        methodW += w * methodSigma(*v);
         out.views.push_back(*v);
     }
     if (out.views.empty()) {
@@ -184,11 +195,10 @@ Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<Silho
     out.deviationMm = sumWx / sumW;
     double noiseVar = 0.0, chi2 = 0.0;
     for (const ViewDeviation& v : out.views) {
-        const double method = std::hypot(kMethodPx / v.pxPerMm, v.tiltMm);
-        const double w = 1.0 / (v.sigmaMm * v.sigmaMm + method * method) / sumW;
+        const double w = 1.0 / viewVariance(v) / sumW;
         noiseVar += w * w * v.sigmaMm * v.sigmaMm;
         const double d = v.deviationMm - out.deviationMm;
-        chi2 += d * d / (v.sigmaMm * v.sigmaMm + method * method);
+        chi2 += d * d / viewVariance(v);
     }
     out.budget.edgeNoise = std::sqrt(noiseVar);
     // The method's limit is systematic per view geometry: not reduced by averaging views.

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,8 @@ struct LandmarkOutcome {
     std::optional<double> deviationMm{};
     std::optional<double> uncertaintyMm{};
     std::string decision{};
+    /// The part program's asymmetric limits [lower, upper], when it gives them.
+    std::optional<std::pair<double, double>> limitsMm{};
     bool ok() const { return status == "ok"; }
 };
 

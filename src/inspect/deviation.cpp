@@ -4,6 +4,7 @@
 #include "hullgauge/inspect/deviation.h"
 
 #include <cmath>
+#include <utility>
 
 #include "hullgauge/vision/edge.h"
 
@@ -28,6 +29,10 @@ constexpr double kOutlineReachPx = 1.0;
 // landmark's tangent plane by `tilt`: a type B term per view with this ℓ
 // (mm), so the most nearly grazing views weigh most (docs/inspection.md).
 constexpr double kFeatureHalfLengthMm = 0.5;
+// The stored outline is taken where lines of sight this far (px) either side
+// of it hit and miss the solid: 0.001 mm at 0.05 mm per pixel, a fiftieth of
+// the method's limit.
+constexpr double kVerifyPx = 0.02;
 // Step (mm) of the numeric derivative of the projection along the normal.
 constexpr double kNormalStepMm = 0.01;
 // The edge location's own limit (px, standard, a type B estimate): the
@@ -86,6 +91,24 @@ std::optional<CadOutline> cadOutline(const model::Solid& solid, const geometry::
     const auto hit = solid.firstHit(ray.origin, ray.direction);
     if (!hit) return std::nullopt;
     return CadOutline{0.5 * (in + out), hit->point};
+}
+
+/// Where the outline runs in `camera`, from the stored points: the
+/// outermost (along u) of the grazing chord's ends first, then the other,
+/// each taken only where two lines of sight kVerifyPx either side of it hit
+/// and miss the solid — the outline then lies within kVerifyPx of it.
+/// nullopt when neither lies on this camera's outline.
+std::optional<Vec2> verifiedStart(const model::Solid& solid, const geometry::CameraModel& camera,
+                                  const OutlinePoint& outline, const Vec2& u)
+{
+    std::optional<Vec2> candidates[2] = {camera.project(outline.graze), std::nullopt};
+    if (outline.grazeExit) candidates[1] = camera.project(*outline.grazeExit);
+    if (candidates[0] && candidates[1] && (*candidates[1] - *candidates[0]).dot(u) > 0.0)
+        std::swap(candidates[0], candidates[1]);
+    for (const auto& c : candidates)
+        if (c && hitsSolid(solid, camera, *c - kVerifyPx * u) && !hitsSolid(solid, camera, *c + kVerifyPx * u))
+            return c;
+    return std::nullopt;
 }
 
 /// A local feature of half-length ℓ seen ℓ·tan(tilt) short (mm, standard).
@@ -238,7 +261,11 @@ std::optional<OutlinePoint> DeviationGauge::outlineAt(const MapLandmark& lm, con
     if (!touch || std::abs(lm.normal.dot(touch->point - lm.position)) > reach) return std::nullopt;
     const auto scale = pixelsPerMm(camera, touch->point, lm.normal, u);
     if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
-    OutlinePoint point{outline->graze, touch->point, std::nullopt};
+    OutlinePoint point{outline->graze, std::nullopt, touch->point, std::nullopt};
+    const Vec3 along = (outline->graze - camera.centre()).normalized();
+    const auto grazeExit = solid_->firstHit(outline->graze + 1e-6 * along, along);
+    if (grazeExit && std::abs(lm.normal.dot(grazeExit->point - lm.position)) <= reach)
+        point.grazeExit = grazeExit->point;
     // Where that line of sight leaves the solid: the boundary a surface moved
     // inward is seen by (measureInView).
     const auto exit = solid_->firstHit(touch->point + 1e-6 * ray.direction, ray.direction);
@@ -258,14 +285,26 @@ ViewOutlines DeviationGauge::outlines(const std::vector<MapLandmark>& landmarks,
 // The per-cycle half of the step: the stored outline points projected
 // through the view's camera as inspected, the image's edge beside them.
 std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm, const SilhouetteView& view,
-                                                           const OutlinePoint& outline) const
+                                                           const OutlinePoint& stored) const
 {
     const geometry::CameraModel& camera = view.camera;
     if (view.grey.empty()) return std::nullopt;
     const auto g = normalImage(camera, lm);
-    const auto start = camera.project(outline.graze);
-    if (!g || !start) return std::nullopt;
+    if (!g) return std::nullopt;
     const Vec2 u = g->normalized();
+    // The stored points, verified on this camera's own outline; where the
+    // seat moved an outline they do not follow (a face or a ruled wall seen
+    // edge-on), the outline is found again (docs/inspection.md).
+    // The stored surface points still give the scale where it is formed.
+    auto start = verifiedStart(*solid_, camera, stored, u);
+    if (!start) {
+        const auto pixel = camera.project(lm.position);
+        const auto found = pixel ? cadOutline(*solid_, camera, *pixel, u) : std::nullopt;
+        if (!found) return std::nullopt;
+        start = camera.project(found->graze);
+        if (!start) return std::nullopt;
+    }
+    const OutlinePoint& outline = stored;
     const auto scale = pixelsPerMm(camera, outline.touch, lm.normal, u);
     if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
     const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark};

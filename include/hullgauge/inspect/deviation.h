@@ -29,11 +29,17 @@ namespace hg::inspect {
 
 /// Where the CAD model forms the outline beside one landmark in one camera:
 /// the points the ray casts found, which an inspection then only projects
-/// through its own (seated) camera — the outline of a surface is stationary
-/// under the small motions of a seat, so its image moves with these points
-/// to second order (docs/inspection.md, "Sub-voxel deviation").
+/// through its own (seated) camera (docs/inspection.md, "Sub-voxel
+/// deviation"). The outline of a curved surface or an edge is stationary
+/// under the small motions of a seat, so its image moves with `graze` to
+/// second order; a flat face seen edge-on is not — tilted by the seat, its
+/// outline is its near or far boundary along the line of sight, the ends of
+/// the grazing line's chord through it, whichever lies outermost.
 struct OutlinePoint {
-    geometry::Vec3 graze; ///< on the outline: where the last line of sight that still meets the solid touches it
+    geometry::Vec3 graze; ///< on the outline: where the last line of sight that still meets the solid enters it
+    /// Where that line of sight leaves the solid again, when it leaves on the
+    /// landmark's surface: the chord's far end on a face seen edge-on.
+    std::optional<geometry::Vec3> grazeExit;
     geometry::Vec3 touch; ///< where the line of sight just inside it first meets the solid (the landmark's surface)
     /// Where that line of sight leaves the solid again, when it leaves on the
     /// landmark's surface (the far boundary a surface moved inward is seen by).

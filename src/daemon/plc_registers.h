@@ -66,6 +66,16 @@ class PlcRegisters {
         std::lock_guard lock(mutex_);
         map_.publishResult(r);
     }
+    void setPurpose(station::CyclePurpose purpose)
+    {
+        std::lock_guard lock(mutex_);
+        map_.setPurpose(purpose);
+    }
+    station::CyclePurpose purpose() const
+    {
+        std::lock_guard lock(mutex_);
+        return map_.purpose();
+    }
     void beat()
     {
         std::lock_guard lock(mutex_);

@@ -207,8 +207,9 @@ std::string countsOf(const PartTrials& byPart)
 void checkLayout(const PartTrials& byPart)
 {
     if (byPart.size() < 2)
-        throw InputError("", "type3", std::to_string(byPart.size()) + " part(s) (" + countsOf(byPart) +
-                                          "): a gauge R&R needs at least 2 parts (10 recommended)");
+        throw InputError("", "type3",
+                         std::to_string(byPart.size()) + " part(s) (" + countsOf(byPart) +
+                             "): a gauge R&R needs at least 2 parts (10 recommended)");
     const auto r = byPart.front().second.size();
     for (const auto& [serial, values] : byPart)
         if (values.size() != r)
@@ -291,12 +292,8 @@ void checkType3Layout(const std::vector<StudyRecord>& records)
 
 nlohmann::json toJson(const Type1Result& r)
 {
-    nlohmann::json j{{"n", r.n},
-                     {"evaluated", r.evaluated},
-                     {"tolerance_mm", r.tolerance},
-                     {"mean_mm", r.mean},
-                     {"stddev_mm", r.stddev},
-                     {"reference_mm", r.reference},
+    nlohmann::json j{{"n", r.n},          {"evaluated", r.evaluated}, {"tolerance_mm", r.tolerance},
+                     {"mean_mm", r.mean}, {"stddev_mm", r.stddev},    {"reference_mm", r.reference},
                      {"bias_mm", r.bias}};
     if (!r.evaluated) {
         j["not_evaluated"] = r.notEvaluated;

@@ -77,8 +77,7 @@ std::int64_t parseUtc(const std::string& text, const std::string& option)
     const bool valid = rest.empty() && tm.tm_year + 1900 == asWritten.tm_year && tm.tm_mon + 1 == asWritten.tm_mon &&
                        tm.tm_mday == asWritten.tm_mday && tm.tm_hour == asWritten.tm_hour &&
                        tm.tm_min == asWritten.tm_min && tm.tm_sec == asWritten.tm_sec;
-    if (!valid)
-        throw InputError("", option, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
+    if (!valid) throw InputError("", option, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
     return static_cast<std::int64_t>(t) * 1000;
 }
 
@@ -197,8 +196,7 @@ std::vector<study::StudyRecord> selectCycles(const StudyOptions& o, Selection& s
 }
 
 /// The reference file of a type-1 study: landmark id → x_ref in mm (docs/study.md).
-std::map<std::string, double> loadReference(const std::string& file,
-                                            const std::vector<study::LandmarkSeries>& series)
+std::map<std::string, double> loadReference(const std::string& file, const std::vector<study::LandmarkSeries>& series)
 {
     std::map<std::string, double> out;
     if (file.empty()) return out;
@@ -267,7 +265,8 @@ void printNotes(std::ostream& os, const json& landmarks)
         if (l.contains("not_evaluated"))
             os << "  " << l["id"].get<std::string>() << ": not evaluated — " << l["not_evaluated"].get<std::string>()
                << "\n";
-        if (l.contains("note")) os << "  " << l["id"].get<std::string>() << ": " << l["note"].get<std::string>() << "\n";
+        if (l.contains("note"))
+            os << "  " << l["id"].get<std::string>() << ": " << l["note"].get<std::string>() << "\n";
     }
 }
 
@@ -305,8 +304,13 @@ std::string textReport(Kind kind, const json& report)
 
 int run(Kind kind, const StudyOptions& o)
 {
-    Selection sel{o.purpose.empty() ? (kind == Kind::Type1 ? "master" : "study") : o.purpose, {}, o.serial,
-                  o.since, o.until, {}, {}};
+    Selection sel{o.purpose.empty() ? (kind == Kind::Type1 ? "master" : "study") : o.purpose,
+                  {},
+                  o.serial,
+                  o.since,
+                  o.until,
+                  {},
+                  {}};
     if (o.program) sel.program = o.program;
     if (!o.since.empty()) sel.sinceMs = parseUtc(o.since, "--since");
     if (!o.until.empty()) sel.untilMs = parseUtc(o.until, "--until");
@@ -327,8 +331,8 @@ int run(Kind kind, const StudyOptions& o)
                   {"last_id", records.back().id}}},
                 {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records)}};
     const auto text = o.json ? report.dump(2) + "\n" : textReport(kind, report);
-    hg::log::category("study")->info("{}: {} cycles of program {}", report["study"].get<std::string>(),
-                                     records.size(), *sel.program);
+    hg::log::category("study")->info("{}: {} cycles of program {}", report["study"].get<std::string>(), records.size(),
+                                     *sel.program);
     if (o.out.empty())
         std::cout << text;
     else
@@ -358,9 +362,9 @@ std::function<int()> factory(CLI::App& app)
     auto* studyCmd = app.add_subcommand("study", "gauge studies on the result store: type-1 (Cg, Cgk) and type-3 "
                                                  "(gauge R&R) per landmark (docs/study.md)");
     studyCmd->require_subcommand(1);
-    auto* type1 = addStudy(*studyCmd, "type1",
-                           "type-1 study (VDA 5): one master part measured again and again; default purpose master",
-                           *o);
+    auto* type1 =
+        addStudy(*studyCmd, "type1",
+                 "type-1 study (VDA 5): one master part measured again and again; default purpose master", *o);
     type1->add_option("--reference", o->reference, "YAML: landmark id → the master's reference value in mm");
     type1->add_option("--min-cycles", o->minCycles, "fewest cycles the study takes (default 25)")
         ->check(CLI::Range(2, 1000000));

@@ -332,7 +332,7 @@ int run(Kind kind, const StudyOptions& o)
                 {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records)}};
     const auto text = o.json ? report.dump(2) + "\n" : textReport(kind, report);
     hg::log::category("study")->debug("{}: {} cycles of program {}", report["study"].get<std::string>(), records.size(),
-                                     *sel.program);
+                                      *sel.program);
     if (o.out.empty())
         std::cout << text;
     else

@@ -19,15 +19,16 @@ std::string hullgauge()
 }
 
 /// The columns `study` reads, as the daemon's schema 3 has them (docs/daemon.md, "Results").
-constexpr const char* kTable = "CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_unix_ms INTEGER "
-                               "NOT NULL, serial TEXT NOT NULL, program INTEGER NOT NULL, verdict TEXT NOT NULL, "
-                               "landmarks_json TEXT NOT NULL, purpose TEXT NOT NULL DEFAULT 'production');\n";
+constexpr const char* kTable =
+    "CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_unix_ms INTEGER "
+    "NOT NULL, serial TEXT NOT NULL, program INTEGER NOT NULL, verdict TEXT NOT NULL, "
+    "landmarks_json TEXT NOT NULL, purpose TEXT NOT NULL DEFAULT 'production');\n";
 
 struct Row {
     std::string serial;
     std::string purpose = "master";
-    double a = 0.0;         ///< landmark a's deviation_mm
-    double b = 0.0625;      ///< landmark b's error_mm (no deviation)
+    double a = 0.0;    ///< landmark a's deviation_mm
+    double b = 0.0625; ///< landmark b's error_mm (no deviation)
     std::string verdict = "pass";
     int program = 1;
     std::int64_t ms = 1'780'000'000'000; // 2026-05-28T20:26:40Z
@@ -40,8 +41,8 @@ std::string insert(const Row& r)
          {{"id", "b"}, {"status", "ok"}, {"error_mm", r.b}, {"tolerance_mm", 0.4}}});
     std::ostringstream sql;
     sql << "INSERT INTO inspections (started_unix_ms, serial, program, verdict, landmarks_json, purpose) VALUES ("
-        << r.ms << ", '" << r.serial << "', " << r.program << ", '" << r.verdict << "', '" << landmarks.dump()
-        << "', '" << r.purpose << "');\n";
+        << r.ms << ", '" << r.serial << "', " << r.program << ", '" << r.verdict << "', '" << landmarks.dump() << "', '"
+        << r.purpose << "');\n";
     return sql.str();
 }
 
@@ -197,7 +198,8 @@ TEST(StudyCli, AStoreBeforeCyclePurposesHoldsProductionCyclesOnly)
         sql += line;
     }
     const auto db = dir / "v2.db";
-    ASSERT_EQ(hgtest::run("sqlite3 " + db.string() + " < " + hgtest::writeFile(dir / "v2.sql", sql).string()).status, 0);
+    ASSERT_EQ(hgtest::run("sqlite3 " + db.string() + " < " + hgtest::writeFile(dir / "v2.sql", sql).string()).status,
+              0);
     auto r = hgtest::run(hullgauge() + " study type1 --store " + db.string());
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("holds no pass/fail cycles with purpose master"), std::string::npos) << r.err;

@@ -277,6 +277,8 @@ std::string textReport(Kind kind, const json& report)
     os << (kind == Kind::Type1 ? "type-1 study" : "type-3 study (gauge R&R, ANOVA without operators)") << ": "
        << sel["cycles"] << " cycles of program " << sel["program"] << ", purpose " << sel["purpose"].get<std::string>()
        << ", from " << report["store"].get<std::string>() << "\n";
+    if (kind == Kind::Type1 && sel["serials"].get<int>() > 1)
+        os << "  (" << sel["serials"] << " serials: a type-1 study measures one master part; --serial chooses it)\n";
     if (kind == Kind::Type1) {
         os << fmt::format("{:<16} {:>4} {:>7} {:>10} {:>10} {:>9} {:>10} {:>7} {:>7}  {}\n", "landmark", "n", "T mm",
                           "mean mm", "s mm", "ref mm", "bias mm", "Cg", "Cgk", "capable");
@@ -300,6 +302,13 @@ std::string textReport(Kind kind, const json& report)
     }
     printNotes(os, report["landmarks"]);
     return os.str();
+}
+
+std::size_t serialCount(const std::vector<study::StudyRecord>& records)
+{
+    std::set<std::string> serials;
+    for (const auto& r : records) serials.insert(r.serial);
+    return serials.size();
 }
 
 int run(Kind kind, const StudyOptions& o)
@@ -327,6 +336,7 @@ int run(Kind kind, const StudyOptions& o)
                   {"program", *sel.program},
                   {"serial", sel.serial},
                   {"cycles", records.size()},
+                  {"serials", serialCount(records)},
                   {"first_id", records.front().id},
                   {"last_id", records.back().id}}},
                 {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records)}};

@@ -1,7 +1,11 @@
-// hullgauge check-part --part P.yaml [--json]: validates a part program
-// (docs/contracts.md §1) and prints what the inspection map will be built from.
+// hullgauge check-part --part P.yaml [--station S.yaml --views V.yaml] [--json]:
+// validates a part program (docs/contracts.md §1) and prints what the
+// inspection map will be built from; with a station and the poses of its
+// views, the uncertainty each landmark is expected to be measured with there
+// (the capability check, docs/inspection.md, "Capability").
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -9,6 +13,9 @@
 
 #include "command.h"
 #include "hullgauge/geometry/json.h"
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/capability.h"
+#include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
 
@@ -17,9 +24,40 @@ namespace {
 
 using geometry::toJson;
 
-int run(const std::string& partFile, bool json)
+struct CheckArgs {
+    std::string part;
+    std::string station;
+    std::string views;
+    bool json = false;
+};
+
+/// The expected U per landmark at the station's views; nullopt without --station.
+std::optional<std::vector<inspect::LandmarkCapability>> capabilityAt(const model::PartProgram& program,
+                                                                     const CheckArgs& args)
 {
+    if (args.station.empty()) return std::nullopt;
+    const geometry::Station station = geometry::loadStation(args.station);
+    std::vector<geometry::CameraModel> cameras;
+    for (const geometry::FixturePose& pose : geometry::loadPoses(args.views, &station.fixture))
+        cameras.push_back(station.cameraAt(pose));
+    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
+    return inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge.get(),
+                                     cameras, station.imageQuality);
+}
+
+/// "tolerance ±0.05 mm" or "limits [-0.02, 0.08] mm".
+std::string zoneText(const model::Landmark& lm)
+{
+    if (lm.limitsMm) return fmt::format("limits [{:.4g}, {:.4g}] mm", lm.limitsMm->first, lm.limitsMm->second);
+    return fmt::format("tolerance {:.4g} mm", lm.toleranceMm);
+}
+
+int run(const CheckArgs& args)
+{
+    const std::string& partFile = args.part;
+    const bool json = args.json;
     const model::PartProgram program = model::loadPartProgram(partFile);
+    const auto capability = capabilityAt(program, args);
     const model::TriangleMesh& mesh = program.solid->mesh();
     const model::MeshCheck check = model::checkMesh(mesh);
     const auto& oct = program.octree;
@@ -46,13 +84,20 @@ int run(const std::string& partFile, bool json)
         out["surface_tolerance_mm"] = program.surfaceToleranceMm();
         out["landmarks"] = nlohmann::json::array();
         for (const auto& lm : program.landmarks) {
-            out["landmarks"].push_back({{"id", lm.id},
-                                        {"position", toJson(lm.position)},
-                                        {"normal", toJson(lm.normal)},
-                                        {"normal_from_mesh", lm.normalFromMesh},
-                                        {"distance_to_surface_mm", lm.distanceToSurfaceMm},
-                                        {"tolerance_mm", lm.toleranceMm},
-                                        {"best_view_groups", lm.bestViews.size()}});
+            out["landmarks"].push_back(
+                {{"id", lm.id},
+                 {"position", toJson(lm.position)},
+                 {"normal", toJson(lm.normal)},
+                 {"normal_from_mesh", lm.normalFromMesh},
+                 {"distance_to_surface_mm", lm.distanceToSurfaceMm},
+                 {"tolerance_mm", lm.toleranceMm},
+                 {"limits_mm",
+                  lm.limitsMm ? nlohmann::json{lm.limitsMm->first, lm.limitsMm->second} : nlohmann::json(nullptr)},
+                 {"best_view_groups", lm.bestViews.size()}});
+        }
+        if (capability) {
+            out["capability"] = nlohmann::json::array();
+            for (const auto& c : *capability) out["capability"].push_back(inspect::toJson(c));
         }
         out["parameters"] = nlohmann::json::array();
         for (const auto& p : program.parameters)
@@ -80,25 +125,34 @@ int run(const std::string& partFile, bool json)
                              program.surfaceToleranceMm());
     for (const auto& lm : program.landmarks)
         std::cout << fmt::format("  {:<16} at ({:.4f}, {:.4f}, {:.4f}) off {:.2e} mm, normal ({:.4f}, {:.4f}, {:.4f})"
-                                 "{}, tolerance {:.4g} mm, {} best-view group{}\n",
+                                 "{}, {}, {} best-view group{}\n",
                                  lm.id, lm.position.x(), lm.position.y(), lm.position.z(), lm.distanceToSurfaceMm,
                                  lm.normal.x(), lm.normal.y(), lm.normal.z(), lm.normalFromMesh ? " (mesh)" : "",
-                                 lm.toleranceMm, lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
+                                 zoneText(lm), lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
     std::cout << fmt::format("parameters  {}\n", program.parameters.size());
     for (const auto& p : program.parameters)
         std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id,
                                  model::toString(p.kind), p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
+    if (capability) {
+        std::cout << fmt::format("capability  expected uncertainty (k = 2) at the {} views of {}:\n",
+                                 geometry::loadPoses(args.views).size(), args.views);
+        for (const auto& c : *capability) std::cout << "  " << inspect::describe(c) << '\n';
+    }
     return 0;
 }
 
 std::function<int()> factory(CLI::App& app)
 {
     auto* sub = app.add_subcommand("check-part", "validate a part program and summarise its mesh, cube and landmarks");
-    auto partFile = std::make_shared<std::string>();
-    auto json = std::make_shared<bool>(false);
-    sub->add_option("--part", *partFile, "part program YAML (docs/contracts.md §1)")->required();
-    sub->add_flag("--json", *json, "print the summary as JSON");
-    return [partFile, json] { return run(*partFile, *json); };
+    auto args = std::make_shared<CheckArgs>();
+    sub->add_option("--part", args->part, "part program YAML (docs/contracts.md §1)")->required();
+    auto* station = sub->add_option("--station", args->station,
+                                    "station file: also the expected uncertainty per landmark at --views");
+    auto* views = sub->add_option("--views", args->views, "the view plan's poses file (with --station)");
+    station->needs(views);
+    views->needs(station);
+    sub->add_flag("--json", args->json, "print the summary as JSON");
+    return [args] { return run(*args); };
 }
 
 } // namespace

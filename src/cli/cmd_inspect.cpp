@@ -6,6 +6,7 @@
 // bad manifest, a missing image or one of the wrong size names the view), 3
 // for a fault — a part seated beyond the program's alignment limits is one
 // (the result, with its `alignment` object, is still written).
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "command.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
+#include "hullgauge/inspect/capability.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/vision/manifest.h"
@@ -35,6 +37,7 @@ struct InspectArgs {
     std::string method;
     bool noResolutionCheck = false;
     std::string alignment; ///< none | silhouette | datums; empty: the program's method
+    bool force = false;    ///< inspect landmarks the capability check refuses (never ok then)
 };
 
 // The part program's `inspection` section (defaults with --map), each option
@@ -75,6 +78,35 @@ std::string seatingFaultMessage(const std::optional<align::AlignmentResult>& mea
            formatNumber(limits.maxRotationDeg) + "°); nothing inspected, re-seat the part";
 }
 
+// The capability check at the manifest's cameras (docs/inspection.md,
+// "Capability"): a landmark whose tolerance zone is narrower than 4 U is
+// refused (exit 2) unless --force, which inspects it as never ok.
+std::vector<std::string> unprovenLandmarks(const inspect::InspectionMap& map, const inspect::InspectionOptions& options,
+                                           const inspect::DeviationGauge* gauge,
+                                           const vision::CaptureManifest& manifest, const InspectArgs& args)
+{
+    const int level = options.level < 0 ? map.geometry().depth : options.level;
+    std::vector<geometry::CameraModel> cameras;
+    for (const vision::ManifestView& v : manifest.views) cameras.push_back(v.camera);
+    const auto assessment = inspect::assessCapability(map.landmarks(), map.frame().voxelSize(level), gauge, cameras,
+                                                      manifest.imageQuality.value_or(geometry::ImageQuality{}));
+    std::vector<std::string> unproven;
+    std::string refused;
+    for (const inspect::LandmarkCapability& c : assessment) {
+        if (c.capable || std::find(args.mask.begin(), args.mask.end(), c.id) != args.mask.end()) continue;
+        unproven.push_back(c.id);
+        refused += "  " + inspect::describe(c) + "\n";
+    }
+    if (unproven.empty()) return unproven;
+    if (!args.force)
+        throw InputError(args.part.empty() ? args.map : args.part, "landmarks",
+                         "the station cannot decide these tolerances (give --force to inspect them anyway; they "
+                         "can then only be uncertain or out of tolerance):\n" +
+                             refused);
+    std::cerr << "hullgauge inspect: --force: inspecting landmarks this station cannot prove (never ok):\n" << refused;
+    return unproven;
+}
+
 int run(const InspectArgs& args)
 {
     using Clock = std::chrono::steady_clock;
@@ -84,6 +116,7 @@ int run(const InspectArgs& args)
     std::shared_ptr<const align::Aligner> aligner;
     model::AlignmentSettings alignment;
     std::shared_ptr<const inspect::DeviationGauge> gauge;
+    const vision::CaptureManifest manifest = vision::readManifest(args.views);
     if (!args.map.empty()) {
         map = inspect::InspectionMap::load(args.map);
         options = inspect::inspectionOptions(withFlags({}, args));
@@ -93,11 +126,10 @@ int run(const InspectArgs& args)
         options = inspect::inspectionOptions(withFlags(program.inspection, args));
         map = inspect::buildInspectionMap(program, options);
         aligner = inspect::makeAligner(program);
-        gauge = inspect::makeDeviationGauge(program);
+        // The budget's calibration term is the station's, which the manifest carries (docs/inspection.md).
+        gauge = inspect::makeDeviationGauge(program, manifest.calibration);
     }
     options.maskedLandmarks = args.mask;
-
-    const vision::CaptureManifest manifest = vision::readManifest(args.views);
     std::vector<inspect::CapturedView> views;
     for (std::size_t i = 0; i < manifest.views.size(); ++i) {
         const vision::ManifestView& mv = manifest.views[i];
@@ -111,6 +143,7 @@ int run(const InspectArgs& args)
     const std::string source = args.map.empty() ? args.part : args.map;
     std::optional<inspect::Inspector> inspector;
     try {
+        options.unprovenLandmarks = unprovenLandmarks(*map, options, gauge.get(), manifest, args);
         inspector.emplace(*map, options, aligner, gauge);
     } catch (const std::invalid_argument& e) {
         throw InputError(source, "inspection options", e.what());
@@ -165,6 +198,9 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::IsMember({"volume", "centre"}));
     cmd->add_flag("--no-resolution-check", args->noResolutionCheck,
                   "do not require a view that resolves ΔV (eq. 4.4.4-19) per landmark");
+    cmd->add_flag(
+        "--force", args->force,
+        "inspect landmarks whose tolerance zone is narrower than 4 U at these views (they are then never ok)");
     cmd->add_option("--alignment", args->alignment,
                     "how the seat is measured: none, silhouette or datums; default: alignment.method (--part only)")
         ->check(CLI::IsMember({"none", "silhouette", "datums"}));

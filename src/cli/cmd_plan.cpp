@@ -4,16 +4,22 @@
 // `hullgauge simulate` and the capture sequence. A plan that cannot be made
 // (a landmark in a concavity, a fixture range that excludes every witness, a
 // tolerance below the station's MED, too few views allowed) exits 2 with one
-// sentence per problem on stderr.
+// sentence per problem on stderr; so does a plan whose views cannot decide a
+// landmark's tolerance (the capability check: tolerance zone < 4 U,
+// docs/inspection.md, "Capability") unless --force.
 #include "command.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/capability.h"
+#include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/plan/plan_report.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 
 namespace hg::cli {
@@ -35,6 +41,7 @@ struct PlanArgs {
     double band = 2.0;
     double floorRadius = 0.0;
     int samples = 7;
+    bool force = false;
 };
 
 void writeText(const fs::path& file, const std::string& text)
@@ -42,6 +49,38 @@ void writeText(const fs::path& file, const std::string& text)
     std::ofstream f(file);
     f << text;
     if (!f) throw FaultError("cannot write " + file.string());
+}
+
+// The capability check at the planned views (docs/inspection.md, "Capability").
+std::optional<std::vector<inspect::LandmarkCapability>>
+assessPlan(const model::PartProgram& program, const geometry::Station& station, const plan::ViewPlan& result)
+{
+    if (!result.feasible) return std::nullopt;
+    std::vector<geometry::CameraModel> cameras;
+    for (const plan::PlannedView& v : result.views) cameras.push_back(v.camera);
+    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
+    return inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge.get(),
+                                     cameras, station.imageQuality);
+}
+
+/// Prints the expected U of every landmark; false when one is refused and not forced.
+bool reportCapability(const std::vector<inspect::LandmarkCapability>& capability, const PlanArgs& args)
+{
+    std::cerr << "hullgauge plan: expected uncertainty (k = 2) at the planned views:\n";
+    bool refused = false;
+    for (const auto& c : capability) {
+        std::cerr << "  " << inspect::describe(c) << '\n';
+        refused = refused || !c.capable;
+    }
+    if (!refused) return true;
+    if (args.force) {
+        std::cerr << "hullgauge plan: --force: the landmarks this station cannot prove are inspected as never ok\n";
+        return true;
+    }
+    std::cerr << "hullgauge plan: " << args.part
+              << ": the station cannot decide every tolerance (test uncertainty ratio 4:1); loosen the tolerance, "
+                 "bring the camera closer, or give --force\n";
+    return false;
 }
 
 int run(const PlanArgs& args)
@@ -57,8 +96,14 @@ int run(const PlanArgs& args)
     problem.solid = program.solid.get();
     problem.station = &station;
     problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
-    for (const auto& lm : program.landmarks)
-        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, lm.toleranceMm}, lm.bestViews});
+    // With the sub-voxel deviation the tolerance is decided to U, not to a
+    // voxel: the planner's tolerance rules (eq. 5.3.6-1, Rule 3) then ask the
+    // views to resolve ΔV, and the capability check judges the tolerance.
+    const double dv = program.octree.voxelSize();
+    for (const auto& lm : program.landmarks) {
+        const double tolerance = program.inspection.deviation ? std::max(lm.toleranceMm, dv) : lm.toleranceMm;
+        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, tolerance}, lm.bestViews});
+    }
 
     plan::PlanOptions options;
     options.grid.rotationStepDeg = args.rotationStep;
@@ -73,7 +118,12 @@ int run(const PlanArgs& args)
 
     std::cerr << "hullgauge plan: " << problem.landmarks.size() << " landmarks of " << program.part << "...\n";
     const auto result = plan::planViews(problem, options);
-    const auto json = plan::planToJson(result, problem);
+    auto json = plan::planToJson(result, problem);
+    const auto capability = assessPlan(program, station, result);
+    if (capability) {
+        json["capability"] = nlohmann::json::array();
+        for (const auto& c : *capability) json["capability"].push_back(inspect::toJson(c));
+    }
 
     if (args.out.empty()) {
         std::cout << json.dump(2) << '\n';
@@ -98,6 +148,7 @@ int run(const PlanArgs& args)
         for (const auto& p : result.problems) std::cerr << "  " << p << '\n';
         return static_cast<int>(ExitStatus::BadInput);
     }
+    if (capability && !reportCapability(*capability, args)) return static_cast<int>(ExitStatus::BadInput);
     std::cerr << "hullgauge plan: " << result.views.size() << " views";
     if (!posesFile.empty()) std::cerr << "; poses in " << posesFile.string();
     std::cerr << '\n';
@@ -114,6 +165,8 @@ std::function<int()> factory(CLI::App& app)
     cmd->add_option("--report", args->report, "Markdown report for the designer (default: stderr)");
     cmd->add_option("--poses", args->poses, "poses YAML of the planned views (default: <out>.poses.yaml)");
     cmd->add_option("--max-views", args->maxViews, "requested view count; fail when the accuracy needs more (0: any)");
+    cmd->add_flag("--force", args->force,
+                  "plan although a landmark's tolerance zone is narrower than 4 U at the planned views");
     cmd->add_flag("--exact", args->exact, "also solve the view cover exactly (GLPK) and report the optimum");
     cmd->add_option("--rotation-step", args->rotationStep, "pose grid: rotation step, degrees")
         ->check(CLI::PositiveNumber)

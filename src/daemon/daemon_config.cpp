@@ -104,7 +104,7 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     // 0 is PART_PROGRAM's "none"; the register holds 16 bits.
     if (number < 1 || number > 65535) node.fail("part program numbers are integers 1..65535, not '" + key + "'");
     ref.number = static_cast<std::uint16_t>(number);
-    node.allowOnlyKeys({"part", "views"});
+    node.allowOnlyKeys({"part", "views", "force"});
     ref.partFile = existingFile(node["part"], base);
     {
         // The part program's own loader checks it in full when the program is loaded;
@@ -118,6 +118,7 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     ref.viewsFile = existingFile(node["views"], base);
     ref.views = geometry::loadPoses(ref.viewsFile, &station.fixture);
     if (ref.views.empty()) throw InputError(ref.viewsFile.string(), "views", "a view plan needs at least one pose");
+    if (auto f = node.optional("force")) ref.force = f->asBool();
     return ref;
 }
 

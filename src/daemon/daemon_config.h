@@ -39,6 +39,9 @@ struct PartProgramRef {
     std::filesystem::path partFile;           ///< part program YAML (docs/contracts.md §1), absolute
     std::filesystem::path viewsFile;          ///< view plan: a poses file (docs/contracts.md §5), absolute
     std::vector<geometry::FixturePose> views; ///< loaded and range-checked
+    /// Run the program although the capability check finds a tolerance this
+    /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
+    bool force = false;
 };
 
 struct PlcConfig {

@@ -2,6 +2,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/inspect/capability.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/part_program.h"
@@ -43,11 +44,15 @@ class EngineInspector : public Inspector {
                 p.file = ref.partFile;
                 p.program = model::loadPartProgram(ref.partFile);
                 // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
-                const auto options = inspect::inspectionOptions(p.program.inspection);
+                auto options = inspect::inspectionOptions(p.program.inspection);
                 p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
                 // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
-                p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program),
-                                                                   inspect::makeDeviationGauge(p.program));
+                const auto gauge = inspect::makeDeviationGauge(p.program, station_.calibration);
+                options.unprovenLandmarks = capabilityCheck(ref, p, gauge.get());
+                p.inspector =
+                    std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
+                // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
+                p.inspector->prepareOutlines(plannedCameras(ref));
                 hg::log::category("inspect")->info(
                     "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
@@ -79,8 +84,40 @@ class EngineInspector : public Inspector {
         kept.capture = vision::ManifestView{
             view.id, {}, view.camera, false, vision::ManifestFixturePose{station_.fixture.type, pose}};
         kept.segmentation = segmentation_;
+        kept.calibration = station_.calibration;
+        kept.imageQuality = station_.imageQuality;
         views_.push_back(std::move(kept));
         pipeline_.submit(std::move(view));
+    }
+
+    std::vector<geometry::CameraModel> plannedCameras(const station::PartProgramRef& ref) const
+    {
+        std::vector<geometry::CameraModel> cameras;
+        for (const geometry::FixturePose& pose : ref.views) cameras.push_back(station_.cameraAt(pose));
+        return cameras;
+    }
+
+    // The capability check when a program is loaded (docs/inspection.md,
+    // "Capability"): a tolerance this station cannot prove at the planned
+    // views refuses the program (FAULT 30) unless its entry says `force`.
+    std::vector<std::string> capabilityCheck(const station::PartProgramRef& ref, const LoadedProgram& p,
+                                             const inspect::DeviationGauge* gauge) const
+    {
+        const auto assessment = inspect::assessCapability(p.map->landmarks(), inspect::inspectionVoxelMm(p.program),
+                                                          gauge, plannedCameras(ref), station_.imageQuality);
+        std::vector<std::string> unproven;
+        std::string refused;
+        for (const inspect::LandmarkCapability& c : assessment)
+            if (!c.capable) {
+                unproven.push_back(c.id);
+                refused += (refused.empty() ? "" : "; ") + inspect::describe(c);
+            }
+        if (unproven.empty()) return unproven;
+        if (!ref.force)
+            throw InputError(ref.partFile.string(), "landmarks",
+                             refused + " (programs." + std::to_string(ref.number) + ".force: true runs it anyway)");
+        hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, refused);
+        return unproven;
     }
 
     std::size_t seatViews() const override

@@ -35,6 +35,8 @@ void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
     const bool capture = std::all_of(views.begin(), views.end(), [](const ViewEvidence& v) { return v.capture; });
     vision::CaptureManifest manifest;
     manifest.segmentation = views.front().segmentation;
+    manifest.calibration = views.front().calibration;
+    if (views.front().imageQuality.given) manifest.imageQuality = views.front().imageQuality;
     for (std::size_t k = 0; k < views.size(); ++k) {
         writePng(dir / ("view_" + std::to_string(k) + ".png"), annotate(views[k]));
         if (!capture) continue;

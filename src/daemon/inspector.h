@@ -37,6 +37,10 @@ struct ViewEvidence {
     std::optional<vision::ManifestView> capture{};
     /// How the inspection segmented the frame (the silhouette is drawn so too).
     vision::SegmentationSettings segmentation{};
+    /// The station's calibration uncertainty and image quality, which the
+    /// archive's manifest carries for the deviation's budget (docs/inspection.md).
+    geometry::CalibrationUncertainty calibration{};
+    geometry::ImageQuality imageQuality{};
 };
 
 struct InspectionOutcome {

@@ -127,6 +127,35 @@ std::optional<Vec2> CameraModel::projectCameraPoint(const Vec3& pc) const
     return Vec2(K(0, 0) * xy.x() + K(0, 1) * xy.y() + K(0, 2), K(1, 1) * xy.y() + K(1, 2));
 }
 
+// Differentiating pixel = K·distort(x/z, y/z) by its parameters: fx, fy,
+// cx, cy act on the distorted coordinates, k1, k2, k3 (r², r⁴, r⁶) and the
+// tangential p1, p2 on the undistorted ones through cv::projectPoints' model.
+std::optional<Eigen::Matrix<double, 2, 9>> CameraModel::intrinsicsJacobian(const Vec3& partPoint) const
+{
+    const Vec3 pc = cameraFromPart_.apply(partPoint);
+    if (!(pc.z() > 0)) return std::nullopt;
+    const double x = pc.x() / pc.z(), y = pc.y() / pc.z();
+    const Vec2 d = distorted_ ? distortNormalised({x, y}) : Vec2(x, y);
+    const double fx = intrinsics_.K(0, 0), fy = intrinsics_.K(1, 1);
+    const double r2 = x * x + y * y;
+    Eigen::Matrix<double, 2, 9> J = Eigen::Matrix<double, 2, 9>::Zero();
+    J(0, 0) = d.x();
+    J(1, 1) = d.y();
+    J(0, 2) = 1.0;
+    J(1, 3) = 1.0;
+    const double radial[3] = {r2, r2 * r2, r2 * r2 * r2};
+    const int radialColumn[3] = {4, 5, 8};
+    for (int i = 0; i < 3; ++i) {
+        J(0, radialColumn[i]) = fx * x * radial[i];
+        J(1, radialColumn[i]) = fy * y * radial[i];
+    }
+    J(0, 6) = fx * 2.0 * x * y;
+    J(1, 6) = fy * (r2 + 2.0 * y * y);
+    J(0, 7) = fx * (r2 + 2.0 * x * x);
+    J(1, 7) = fy * 2.0 * x * y;
+    return J;
+}
+
 std::optional<Vec2> CameraModel::project(const Vec3& partPoint) const
 {
     return projectCameraPoint(cameraFromPart_.apply(partPoint));

@@ -42,7 +42,8 @@ Vec3 parseAxis(const ConfigNode& node)
 
 Intrinsics parseCamera(const ConfigNode& cam)
 {
-    cam.allowOnlyKeys({"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration"});
+    cam.allowOnlyKeys(
+        {"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration", "image_quality"});
     Intrinsics in;
     auto sizeNode = cam["image_size"];
     auto size = sizeNode.items();
@@ -101,7 +102,42 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
     return k;
 }
 
+/// The calibration records' uncertainty (docs/calibration.md): written by
+/// `hullgauge calibrate`; only the figures the budget uses are read.
+CalibrationUncertainty parseCalibrationUncertainty(const ConfigNode& cam, const ConfigNode& fix)
+{
+    CalibrationUncertainty u;
+    if (auto cal = cam.optional("calibration"))
+        if (auto sd = cal->optional("std_dev")) {
+            static const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
+            for (std::size_t i = 0; i < u.intrinsicsStdDev.size(); ++i)
+                if (auto n = sd->optional(names[i])) u.intrinsicsStdDev[i] = n->asDoubleIn(0.0, kMaxMagnitude);
+        }
+    if (auto cal = fix.optional("calibration"))
+        if (auto n = cal->optional("rms_mm")) u.fixtureRmsMm = n->asDoubleIn(0.0, kMaxMagnitude);
+    return u;
+}
+
+ImageQuality parseImageQuality(const ConfigNode& node)
+{
+    node.allowOnlyKeys({"noise_grey", "contrast_grey"});
+    ImageQuality q;
+    q.noiseGrey = node["noise_grey"].asDoubleIn(0.0, 65535.0);
+    q.contrastGrey = node["contrast_grey"].asDoubleIn(0.0, 65535.0);
+    if (!(q.contrastGrey > 0.0)) node["contrast_grey"].fail("the backlight's contrast must be positive");
+    q.given = true;
+    return q;
+}
+
 } // namespace
+
+bool CalibrationUncertainty::recorded() const
+{
+    if (fixtureRmsMm > 0.0) return true;
+    for (double s : intrinsicsStdDev)
+        if (s > 0.0) return true;
+    return false;
+}
 
 CameraModel Station::cameraAt(const FixturePose& pose) const
 {
@@ -124,6 +160,8 @@ Station parseStation(const ConfigNode& root)
         s.depthOfFieldMm = r;
     }
     s.fixture = parseFixture(root["fixture"]);
+    s.calibration = parseCalibrationUncertainty(cam, root["fixture"]);
+    if (auto n = cam.optional("image_quality")) s.imageQuality = parseImageQuality(*n);
     if (auto env = root.optional("environment")) {
         env->allowOnlyKeys({"floor_z_mm"});
         if (auto f = env->optional("floor_z_mm")) s.floorZMm = f->asDoubleIn(-kMaxMagnitude, kMaxMagnitude);

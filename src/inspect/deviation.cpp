@@ -51,12 +51,30 @@ std::optional<double> pixelsPerMm(const geometry::CameraModel& camera, const Vec
     return (*a - *b).dot(u) / (2.0 * kNormalStepMm);
 }
 
+/// The image of the landmark's normal (px per mm): nullopt when the surface
+/// cannot move the outline — the normal more than 60° out of the image plane.
+std::optional<Vec2> normalImage(const geometry::CameraModel& camera, const MapLandmark& lm)
+{
+    const auto a = camera.project(lm.position + kNormalStepMm * lm.normal);
+    const auto b = camera.project(lm.position - kNormalStepMm * lm.normal);
+    if (!a || !b) return std::nullopt;
+    const Vec2 g = (*a - *b) / (2.0 * kNormalStepMm);
+    const double depth = (camera.cameraFromPart().apply(lm.position)).z();
+    if (!(depth > 0.0) || g.norm() < 0.5 / camera.millimetresPerPixelAt(depth).x()) return std::nullopt;
+    return g;
+}
+
+struct CadOutline {
+    double at = 0.0; ///< along u from the landmark's pixel, px
+    Vec3 graze;      ///< where the last line of sight inside it touches the solid
+};
+
 /// The CAD outline along pixel + t·u within |t| ≤ kOutlineReachPx: the line
 /// of sight hits the solid just inside and misses it just outside (two ray
 /// casts decide most views at once), then bisection. One crossing is taken;
 /// two within a reach of 1 px would be features narrower than the blur.
-std::optional<double> cadOutline(const model::Solid& solid, const geometry::CameraModel& camera, const Vec2& pixel,
-                                 const Vec2& u)
+std::optional<CadOutline> cadOutline(const model::Solid& solid, const geometry::CameraModel& camera, const Vec2& pixel,
+                                     const Vec2& u)
 {
     double in = -kOutlineReachPx, out = kOutlineReachPx;
     if (!hitsSolid(solid, camera, pixel + in * u) || hitsSolid(solid, camera, pixel + out * u)) return std::nullopt;
@@ -64,7 +82,17 @@ std::optional<double> cadOutline(const model::Solid& solid, const geometry::Came
         const double mid = 0.5 * (in + out);
         (hitsSolid(solid, camera, pixel + mid * u) ? in : out) = mid;
     }
-    return 0.5 * (in + out);
+    const geometry::Ray ray = camera.backProject(pixel + in * u);
+    const auto hit = solid.firstHit(ray.origin, ray.direction);
+    if (!hit) return std::nullopt;
+    return CadOutline{0.5 * (in + out), hit->point};
+}
+
+/// A local feature of half-length ℓ seen ℓ·tan(tilt) short (mm, standard).
+double tiltMm(const geometry::CameraModel& camera, const MapLandmark& lm)
+{
+    const double sinTilt = std::abs(lm.normal.dot((lm.position - camera.centre()).normalized()));
+    return kFeatureHalfLengthMm * sinTilt / std::sqrt(std::max(1e-12, 1.0 - sinTilt * sinTilt));
 }
 
 /// The seat's uncertainty at `point` along `normal` (mm, standard): the
@@ -80,16 +108,18 @@ double alignmentSigma(const align::AlignmentResult& a, const Vec3& point, const 
     return std::sqrt(std::max(0.0, (J * a.covariance * J.transpose())(0, 0)));
 }
 
-/// A view's type B term — the method's limit and its tilt — in mm (standard).
-double methodSigma(const ViewDeviation& v)
+/// A view's type B terms — the method's limit, its tilt and the calibration
+/// — in mm (standard). They are systematic for a view's geometry.
+double systematicSigma(const ViewDeviation& v)
 {
-    return std::hypot(kMethodPx / v.pxPerMm, v.tiltMm);
+    return std::sqrt(kMethodPx * kMethodPx / (v.pxPerMm * v.pxPerMm) + v.tiltMm * v.tiltMm +
+                     v.calibrationMm * v.calibrationMm);
 }
 
-/// A view's variance: its noise with its type B term beside it.
+/// A view's variance: its noise with its type B terms beside it.
 double viewVariance(const ViewDeviation& v)
 {
-    return v.sigmaMm * v.sigmaMm + methodSigma(v) * methodSigma(v);
+    return v.sigmaMm * v.sigmaMm + systematicSigma(v) * systematicSigma(v);
 }
 
 } // namespace
@@ -123,73 +153,26 @@ Decision decide(double d, double U, double lower, double upper, DecisionRule rul
     return Decision::Uncertain;
 }
 
-DeviationGauge::DeviationGauge(std::shared_ptr<const model::Solid> solid) : solid_(std::move(solid))
-{
-}
-
-std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm, const SilhouetteView& view) const
-{
-    const geometry::CameraModel& camera = view.camera;
-    if (view.grey.empty()) return std::nullopt;
-    const auto pixel = camera.project(lm.position);
-    if (!pixel) return std::nullopt;
-    const auto a = camera.project(lm.position + kNormalStepMm * lm.normal);
-    const auto b = camera.project(lm.position - kNormalStepMm * lm.normal);
-    if (!a || !b) return std::nullopt;
-    const Vec2 g = (*a - *b) / (2.0 * kNormalStepMm);
-    // The surface must move the outline: the normal at most 60° out of the image plane.
-    const double depth = (camera.cameraFromPart().apply(lm.position)).z();
-    if (!(depth > 0.0) || g.norm() < 0.5 / camera.millimetresPerPixelAt(depth).x()) return std::nullopt;
-    const Vec2 u = g.normalized();
-    const auto outline = cadOutline(*solid_, camera, *pixel, u);
-    if (!outline) return std::nullopt;
-    // The surface point that forms the outline there: just inside it, the
-    // line of sight's first contact. It must lie on the landmark's surface
-    // (within a pixel's worth of its plane), else another feature forms it.
-    const geometry::Ray ray = camera.backProject(*pixel + (*outline - 0.05) * u);
-    const auto touch = solid_->firstHit(ray.origin, ray.direction);
-    if (!touch || std::abs(lm.normal.dot(touch->point - lm.position)) > 1.0 / g.norm()) return std::nullopt;
-    const auto scale = pixelsPerMm(camera, touch->point, lm.normal, u);
-    if (!scale || *scale < 0.5 * g.norm()) return std::nullopt;
-    const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark};
-    const auto edge = vision::findEdge(image, *pixel + *outline * u, u, kEdgeBandPx);
-    if (!edge) return std::nullopt;
-    // A surface moved inward is seen from its outer side: its outline runs
-    // along the boundary farthest along the line of sight — where the line
-    // just inside the nominal outline leaves the solid — deeper than where it
-    // enters, and a millimetre makes fewer pixels there (docs/inspection.md).
-    double pxPerMm = *scale;
-    if (edge->offset < 0.0) {
-        const auto exit = solid_->firstHit(touch->point + 1e-6 * ray.direction, ray.direction);
-        if (exit && std::abs(lm.normal.dot(exit->point - lm.position)) <= 1.0 / g.norm())
-            if (const auto far = pixelsPerMm(camera, exit->point, lm.normal, u); far && *far >= 0.5 * g.norm())
-                pxPerMm = *far;
-    }
-    const double sinTilt = std::abs(lm.normal.dot((lm.position - camera.centre()).normalized()));
-    const double tilt = kFeatureHalfLengthMm * sinTilt / std::sqrt(std::max(1e-12, 1.0 - sinTilt * sinTilt));
-    return ViewDeviation{{}, edge->offset / pxPerMm, edge->sigmaPx / pxPerMm, pxPerMm, tilt};
-}
-
-Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<SilhouetteView>& views,
-                                  const std::vector<std::string>& viewIds,
-                                  const align::AlignmentResult* alignment) const
+// The views combined (docs/inspection.md, "Uncertainty budget"): a weighted
+// mean by each view's noise and type B terms; the type B terms are
+// systematic per view geometry, so their weighted mean — not a reduced one —
+// enters the budget; views that disagree beyond their variances (Birge ratio
+// over 1) widen it.
+Deviation combine(std::vector<ViewDeviation> views, double alignmentSigmaMm)
 {
     Deviation out;
-    double sumW = 0.0, sumWx = 0.0, methodW = 0.0;
-    for (std::size_t k = 0; k < views.size(); ++k) {
-        auto v = measureInView(lm, views[k]);
-        if (!v) continue;
-        v->viewId = k < viewIds.size() ? viewIds[k] : "v" + std::to_string(k);
-        // Each view weighs by its noise with the method's limit and its tilt beside it.
-        const double w = 1.0 / viewVariance(*v);
-        sumW += w;
-        sumWx += w * v->deviationMm;
-        methodW += w * methodSigma(*v);
-        out.views.push_back(*v);
-    }
+    out.views = std::move(views);
     if (out.views.empty()) {
         out.reason = "no view sees the landmark on its outline with a clean edge";
         return out;
+    }
+    double sumW = 0.0, sumWx = 0.0, methodW = 0.0, calibrationW = 0.0;
+    for (const ViewDeviation& v : out.views) {
+        const double w = 1.0 / viewVariance(v);
+        sumW += w;
+        sumWx += w * v.deviationMm;
+        methodW += w * std::hypot(kMethodPx / v.pxPerMm, v.tiltMm);
+        calibrationW += w * v.calibrationMm;
     }
     out.measured = true;
     out.deviationMm = sumWx / sumW;
@@ -200,20 +183,160 @@ Deviation DeviationGauge::measure(const MapLandmark& lm, const std::vector<Silho
         const double d = v.deviationMm - out.deviationMm;
         chi2 += d * d / viewVariance(v);
     }
-    out.budget.edgeNoise = std::sqrt(noiseVar);
-    // The method's limit is systematic per view geometry: not reduced by averaging views.
-    out.budget.method = methodW / sumW;
-    // Views that disagree beyond their noise (Birge ratio > 1) widen the combined value's uncertainty.
-    const std::size_t n = out.views.size();
-    if (n > 1) {
+    DeviationBudget& u = out.budget;
+    u.edgeNoise = std::sqrt(noiseVar);
+    u.method = methodW / sumW;
+    u.calibration = calibrationW / sumW;
+    if (const std::size_t n = out.views.size(); n > 1) {
         const double birge2 = chi2 / static_cast<double>(n - 1);
-        if (birge2 > 1.0) out.budget.views = std::sqrt((birge2 - 1.0) / sumW);
+        if (birge2 > 1.0) u.views = std::sqrt((birge2 - 1.0) / sumW);
     }
-    if (alignment) out.budget.alignment = alignmentSigma(*alignment, lm.position, lm.normal);
-    const auto& u = out.budget;
+    u.alignment = alignmentSigmaMm;
     out.uncertaintyMm = 2.0 * std::sqrt(u.edgeNoise * u.edgeNoise + u.method * u.method + u.views * u.views +
-                                        u.alignment * u.alignment);
+                                        u.alignment * u.alignment + u.calibration * u.calibration);
     return out;
+}
+
+DeviationGauge::DeviationGauge(std::shared_ptr<const model::Solid> solid, geometry::CalibrationUncertainty calibration)
+    : solid_(std::move(solid)), calibration_(calibration)
+{
+}
+
+// The calibration's own uncertainty where the outline is predicted: the
+// intrinsics' standard deviations carried through the projection to the
+// outline's image along u (independent parameters: the calibration reports
+// no correlations), and the fixture model's residual, one image direction's
+// share of it (docs/inspection.md, "Uncertainty budget").
+double DeviationGauge::calibrationSigma(const geometry::CameraModel& camera, const Vec3& point, const Vec2& u,
+                                        double pxPerMm) const
+{
+    if (!calibration_.recorded()) return 0.0;
+    const auto J = camera.intrinsicsJacobian(point);
+    double varPx = 0.0;
+    for (int i = 0; J && i < 9; ++i) {
+        const double along = u.dot(J->col(i)) * calibration_.intrinsicsStdDev[static_cast<std::size_t>(i)];
+        varPx += along * along;
+    }
+    const double fixture = calibration_.fixtureRmsMm / std::sqrt(2.0);
+    return std::sqrt(varPx / (pxPerMm * pxPerMm) + fixture * fixture);
+}
+
+std::optional<OutlinePoint> DeviationGauge::outlineAt(const MapLandmark& lm, const geometry::CameraModel& camera) const
+{
+    const auto pixel = camera.project(lm.position);
+    const auto g = normalImage(camera, lm);
+    if (!pixel || !g) return std::nullopt;
+    const Vec2 u = g->normalized();
+    const auto outline = cadOutline(*solid_, camera, *pixel, u);
+    if (!outline) return std::nullopt;
+    // The surface point that forms the outline there: just inside it, the
+    // line of sight's first contact. It must lie on the landmark's surface
+    // (within a pixel's worth of its plane), else another feature forms it.
+    const double reach = 1.0 / g->norm();
+    const geometry::Ray ray = camera.backProject(*pixel + (outline->at - 0.05) * u);
+    const auto touch = solid_->firstHit(ray.origin, ray.direction);
+    if (!touch || std::abs(lm.normal.dot(touch->point - lm.position)) > reach) return std::nullopt;
+    const auto scale = pixelsPerMm(camera, touch->point, lm.normal, u);
+    if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
+    OutlinePoint point{outline->graze, touch->point, std::nullopt};
+    // Where that line of sight leaves the solid: the boundary a surface moved
+    // inward is seen by (measureInView).
+    const auto exit = solid_->firstHit(touch->point + 1e-6 * ray.direction, ray.direction);
+    if (exit && std::abs(lm.normal.dot(exit->point - lm.position)) <= reach) point.exit = exit->point;
+    return point;
+}
+
+ViewOutlines DeviationGauge::outlines(const std::vector<MapLandmark>& landmarks,
+                                      const geometry::CameraModel& camera) const
+{
+    ViewOutlines out;
+    out.landmarks.reserve(landmarks.size());
+    for (const MapLandmark& lm : landmarks) out.landmarks.push_back(outlineAt(lm, camera));
+    return out;
+}
+
+// The per-cycle half of the step: the stored outline points projected
+// through the view's camera as inspected, the image's edge beside them.
+std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm, const SilhouetteView& view,
+                                                           const OutlinePoint& outline) const
+{
+    const geometry::CameraModel& camera = view.camera;
+    if (view.grey.empty()) return std::nullopt;
+    const auto g = normalImage(camera, lm);
+    const auto start = camera.project(outline.graze);
+    if (!g || !start) return std::nullopt;
+    const Vec2 u = g->normalized();
+    const auto scale = pixelsPerMm(camera, outline.touch, lm.normal, u);
+    if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
+    const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark};
+    const auto edge = vision::findEdge(image, *start, u, kEdgeBandPx);
+    if (!edge) return std::nullopt;
+    // A surface moved inward is seen from its outer side: its outline runs
+    // along the boundary farthest along the line of sight — where the line
+    // just inside the nominal outline leaves the solid — deeper than where it
+    // enters, and a millimetre makes fewer pixels there (docs/inspection.md).
+    double pxPerMm = *scale;
+    if (edge->offset < 0.0 && outline.exit)
+        if (const auto far = pixelsPerMm(camera, *outline.exit, lm.normal, u); far && *far >= 0.5 * g->norm())
+            pxPerMm = *far;
+    ViewDeviation v{{}, edge->offset / pxPerMm, edge->sigmaPx / pxPerMm, pxPerMm, tiltMm(camera, lm), 0.0};
+    v.calibrationMm = calibrationSigma(camera, outline.graze, u, pxPerMm);
+    return v;
+}
+
+Deviation DeviationGauge::measure(std::size_t index, const MapLandmark& lm, const std::vector<SilhouetteView>& views,
+                                  const std::vector<std::string>& viewIds,
+                                  const align::AlignmentResult* alignment) const
+{
+    std::vector<ViewDeviation> measured;
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        const SilhouetteView& view = views[k];
+        // A view prepared without outline points (a caller's own) has them found now.
+        std::optional<OutlinePoint> own;
+        const std::optional<OutlinePoint>* outline = nullptr;
+        if (view.outlines && index < view.outlines->landmarks.size()) {
+            outline = &view.outlines->landmarks[index];
+        } else {
+            own = outlineAt(lm, view.camera);
+            outline = &own;
+        }
+        if (!*outline) continue;
+        auto v = measureInView(lm, view, **outline);
+        if (!v) continue;
+        v->viewId = k < viewIds.size() ? viewIds[k] : "v" + std::to_string(k);
+        measured.push_back(*v);
+    }
+    const double seat = alignment ? alignmentSigma(*alignment, lm.position, lm.normal) : 0.0;
+    return combine(std::move(measured), seat);
+}
+
+// The capability check's prediction (docs/inspection.md, "Capability"): each
+// camera's share as measureInView would have it on a nominal part — the
+// scale where the outline is formed (the smaller of entry and exit, for a
+// surface that may have moved either way), the edge noise the image quality
+// predicts for an edge centred in its window, the method, tilt and
+// calibration terms.
+Deviation DeviationGauge::expected(const MapLandmark& lm, const std::vector<geometry::CameraModel>& cameras,
+                                   const geometry::ImageQuality& quality) const
+{
+    std::vector<ViewDeviation> views;
+    const double edgePx = vision::edgeSigmaPx(quality.noiseGrey, quality.contrastGrey);
+    for (std::size_t k = 0; k < cameras.size(); ++k) {
+        const geometry::CameraModel& camera = cameras[k];
+        const auto outline = outlineAt(lm, camera);
+        const auto g = normalImage(camera, lm);
+        if (!outline || !g) continue;
+        const Vec2 u = g->normalized();
+        double pxPerMm = pixelsPerMm(camera, outline->touch, lm.normal, u).value_or(0.0);
+        if (outline->exit)
+            if (const auto far = pixelsPerMm(camera, *outline->exit, lm.normal, u); far && *far >= 0.5 * g->norm())
+                pxPerMm = std::min(pxPerMm, *far);
+        if (!(pxPerMm > 0.0)) continue;
+        ViewDeviation v{"v" + std::to_string(k), 0.0, edgePx / pxPerMm, pxPerMm, tiltMm(camera, lm), 0.0};
+        v.calibrationMm = calibrationSigma(camera, outline->graze, u, pxPerMm);
+        views.push_back(v);
+    }
+    return combine(std::move(views), 0.0);
 }
 
 nlohmann::json toJson(const Deviation& d)
@@ -224,7 +347,8 @@ nlohmann::json toJson(const Deviation& d)
                          {"deviation_mm", v.deviationMm},
                          {"sigma_mm", v.sigmaMm},
                          {"px_per_mm", v.pxPerMm},
-                         {"tilt_mm", v.tiltMm}});
+                         {"tilt_mm", v.tiltMm},
+                         {"calibration_mm", v.calibrationMm}});
     return {{"measured", d.measured},
             {"deviation_mm", d.measured ? nlohmann::json(d.deviationMm) : nlohmann::json(nullptr)},
             {"uncertainty_mm", d.measured ? nlohmann::json(d.uncertaintyMm) : nlohmann::json(nullptr)},
@@ -232,7 +356,8 @@ nlohmann::json toJson(const Deviation& d)
              {{"edge_noise", d.budget.edgeNoise},
               {"method", d.budget.method},
               {"views", d.budget.views},
-              {"alignment", d.budget.alignment}}},
+              {"alignment", d.budget.alignment},
+              {"calibration", d.budget.calibration}}},
             {"views", views},
             {"reason", d.reason}};
 }

@@ -14,8 +14,11 @@ namespace {
 
 constexpr char kMagic[8] = {'H', 'G', 'M', 'A', 'P', '\r', '\n', '\x1a'};
 // Version 2 stores the don't-care and hidden flags in the node's former
-// reserved byte; version 1 had zero there, which reads as neither.
-constexpr std::uint32_t kFormatVersion = 2;
+// reserved byte; version 1 had zero there, which reads as neither. Version 3
+// adds each landmark's asymmetric limits (a flag byte, then lower and upper);
+// a map without limits is written as version 2, which older readers read.
+constexpr std::uint32_t kFormatVersion = 3;
+constexpr std::uint32_t kVersionWithoutLimits = 2;
 constexpr std::uint32_t kOldestReadableVersion = 1;
 constexpr std::uint8_t kFlagDontCare = 1;
 constexpr std::uint8_t kFlagHidden = 2;
@@ -274,6 +277,9 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
 
 std::vector<std::uint8_t> InspectionMap::serialise() const
 {
+    const bool limits = std::any_of(landmarks_.begin(), landmarks_.end(),
+                                    [](const MapLandmark& lm) { return lm.limitsMm.has_value(); });
+    const std::uint32_t version = limits ? kFormatVersion : kVersionWithoutLimits;
     Writer w;
     w.putString(partName_);
     w.putVec(geometry_.cubeOrigin);
@@ -299,6 +305,11 @@ std::vector<std::uint8_t> InspectionMap::serialise() const
         w.putVec(lm.position);
         w.putVec(lm.normal);
         w.put(lm.toleranceMm);
+        if (version >= 3) w.put(static_cast<std::uint8_t>(lm.limitsMm ? 1 : 0));
+        if (lm.limitsMm) {
+            w.put(lm.limitsMm->first);
+            w.put(lm.limitsMm->second);
+        }
     }
     w.put(static_cast<std::uint32_t>(parameters_.size()));
     for (const MapParameter& p : parameters_) {
@@ -314,7 +325,7 @@ std::vector<std::uint8_t> InspectionMap::serialise() const
 
     std::vector<std::uint8_t> out(kMagic, kMagic + 8);
     Writer h;
-    h.put(kFormatVersion);
+    h.put(version);
     h.put(std::uint32_t{0});
     h.put(static_cast<std::uint64_t>(w.bytes.size()));
     h.put(checksum(w.bytes.data(), w.bytes.size()));
@@ -402,6 +413,15 @@ InspectionMap InspectionMap::deserialise(const std::vector<std::uint8_t>& bytes,
         lm.position = r.getVec();
         lm.normal = r.getVec();
         lm.toleranceMm = r.get<double>();
+        if (version >= 3) {
+            const auto hasLimits = r.get<std::uint8_t>();
+            if (hasLimits > 1) r.fail("bad landmark limits flag");
+            if (hasLimits) {
+                const double lower = r.get<double>(), upper = r.get<double>();
+                if (!(lower < upper)) r.fail("landmark limits out of order");
+                lm.limitsMm = std::make_pair(lower, upper);
+            }
+        }
         map.landmarks_.push_back(std::move(lm));
     }
     const auto nParams = r.get<std::uint32_t>();

@@ -15,6 +15,21 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+/// "±0.05 mm", or "[-0.02, 0.08] mm" for asymmetric limits.
+std::string limitsText(const MapLandmark& lm)
+{
+    if (!lm.limitsMm) return "±" + formatNumber(lm.toleranceMm) + " mm";
+    return "[" + formatNumber(lm.lowerMm()) + ", " + formatNumber(lm.upperMm()) + "] mm";
+}
+
+/// The same camera to the last bit: the outline points found for one serve the other.
+bool sameCamera(const geometry::CameraModel& a, const geometry::CameraModel& b)
+{
+    const auto &ia = a.intrinsics(), &ib = b.intrinsics();
+    return ia.K == ib.K && ia.dist == ib.dist && ia.imageSize == ib.imageSize &&
+           a.cameraFromPart().R == b.cameraFromPart().R && a.cameraFromPart().t == b.cameraFromPart().t;
+}
+
 double msSince(Clock::time_point t0)
 {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -176,6 +191,8 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
     SilhouetteView sv{v.camera, SilhouetteIndex(grey.size()), grey, edgeLevel, !mask && segmentation.objectIsDark};
     // The view's share of the alignment now, not after the last frame (docs/alignment.md).
     if (aligner_) sv.alignment = aligner_->prepare({sv.camera, sv.grey, sv.threshold, sv.objectIsDark});
+    // The ray casts of the sub-voxel step: found when the program was loaded, else now (docs/inspection.md).
+    if (gauge_) sv.outlines = outlinesFor(v.camera);
     for (const cv::Rect& r : regionsOfInterest(v.camera))
         sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
     return sv;
@@ -211,6 +228,7 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
     r.alignment = std::move(seatFault.alignment);
     if (gauge_) measureDeviations(r, views, viewIds);
+    markUnproven(r);
     r.totalMs = msSince(t0);
     return r;
 }
@@ -218,26 +236,25 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
 // The sub-voxel step (docs/inspection.md, "Sub-voxel deviation",
 // "Decisions"): each landmark's edge in the views that see it on their
 // outline; where the bracket found the surface (ok or out of tolerance) the
-// decision on the deviation, its uncertainty and ±tolerance sets the status.
+// decision on the deviation, its uncertainty and the limits sets the status.
 void Inspector::measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
                                   const std::vector<std::string>& viewIds) const
 {
     for (LandmarkResult& lr : r.landmarks) {
-        const auto lm = std::find_if(map_->landmarks().begin(), map_->landmarks().end(),
-                                     [&](const MapLandmark& m) { return m.id == lr.id; });
-        if (lm == map_->landmarks().end()) continue;
-        lr.deviation = gauge_->measure(*lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
+        const auto index = map_->landmarkIndex(lr.id);
+        if (!index) continue;
+        const MapLandmark& lm = map_->landmarks()[*index];
+        lr.deviation = gauge_->measure(*index, lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
         if (!lr.deviation->measured) continue;
         if (lr.status != LandmarkStatus::Ok && lr.status != LandmarkStatus::OutOfTolerance) continue;
         const Deviation& d = *lr.deviation;
-        lr.decision = decide(d.deviationMm, d.uncertaintyMm, -lr.toleranceMm, lr.toleranceMm, options_.decisionRule);
+        lr.decision = decide(d.deviationMm, d.uncertaintyMm, lm.lowerMm(), lm.upperMm(), options_.decisionRule);
         const LandmarkStatus before = lr.status;
         lr.status = *lr.decision == Decision::Conforms      ? LandmarkStatus::Ok
                     : *lr.decision == Decision::Nonconforms ? LandmarkStatus::OutOfTolerance
                                                             : LandmarkStatus::Uncertain;
         const std::string measured = "deviation " + formatNumber(d.deviationMm, 4) + " mm ± " +
-                                     formatNumber(d.uncertaintyMm, 4) + " mm (k = 2) against ±" +
-                                     formatNumber(lr.toleranceMm) + " mm";
+                                     formatNumber(d.uncertaintyMm, 4) + " mm (k = 2) against " + limitsText(lm);
         if (lr.status == LandmarkStatus::Uncertain)
             lr.reason = measured + ": conformance not proven";
         else if (lr.status == LandmarkStatus::OutOfTolerance && before != lr.status)
@@ -250,6 +267,43 @@ void Inspector::measureDeviations(InspectionResult& r, const std::vector<Silhoue
         if (lr.status != LandmarkStatus::Ok) r.pass = false;
     for (const ParameterResult& pr : r.parameters)
         if (pr.status != "ok") r.pass = false;
+}
+
+// A landmark the capability check refused and the user forced (docs/inspection.md,
+// "Capability"): the station cannot prove its tolerance, so it is never ok.
+void Inspector::markUnproven(InspectionResult& r) const
+{
+    for (LandmarkResult& lr : r.landmarks) {
+        const bool unproven = std::find(options_.unprovenLandmarks.begin(), options_.unprovenLandmarks.end(), lr.id) !=
+                              options_.unprovenLandmarks.end();
+        if (!unproven || lr.status != LandmarkStatus::Ok) continue;
+        lr.status = LandmarkStatus::Uncertain;
+        if (lr.decision) lr.decision = Decision::Uncertain;
+        lr.reason = "the tolerance zone is narrower than 4 U at this station (inspected with --force): "
+                    "conformance cannot be proven";
+        r.pass = false;
+    }
+}
+
+void Inspector::prepareOutlines(const std::vector<geometry::CameraModel>& cameras)
+{
+    if (!gauge_) return;
+    for (const geometry::CameraModel& c : cameras)
+        if (!cachedOutlines(c))
+            outlineCache_.emplace_back(c, std::make_shared<const ViewOutlines>(gauge_->outlines(map_->landmarks(), c)));
+}
+
+std::shared_ptr<const ViewOutlines> Inspector::cachedOutlines(const geometry::CameraModel& camera) const
+{
+    for (const auto& [c, outlines] : outlineCache_)
+        if (sameCamera(c, camera)) return outlines;
+    return nullptr;
+}
+
+std::shared_ptr<const ViewOutlines> Inspector::outlinesFor(const geometry::CameraModel& camera) const
+{
+    if (auto cached = cachedOutlines(camera)) return cached;
+    return std::make_shared<const ViewOutlines>(gauge_->outlines(map_->landmarks(), camera));
 }
 
 // Alignment before the traversal (docs/alignment.md): the views were
@@ -286,6 +340,7 @@ bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& resul
         LandmarkResult lr;
         lr.id = l.id;
         lr.toleranceMm = l.toleranceMm;
+        lr.limitsMm = l.limitsMm;
         lr.reason = a.message;
         result.landmarks.push_back(std::move(lr));
     }
@@ -427,6 +482,12 @@ NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& searc
 
 /// The bracket [sLow, sHigh] of the surface along the normal and the error
 /// measures over it (3.3.6, 4.6.2), then the status they give.
+/// Asymmetric limits decide on the bracket's signed middle (docs/inspection.md).
+bool withinLimits(double offsetMm, const MapLandmark& lm)
+{
+    return offsetMm >= lm.lowerMm() && offsetMm <= lm.upperMm();
+}
+
 void measureAlongNormal(LandmarkResult& lr, const MapLandmark& lm, const NormalLine& line, bool objectFound, double dv)
 {
     const auto& labels = line.labels;
@@ -460,7 +521,7 @@ void measureAlongNormal(LandmarkResult& lr, const MapLandmark& lm, const NormalL
     } else if (lr.overflowLow || lr.overflowHigh) {
         lr.status = LandmarkStatus::Overflow;
         lr.reason = "the boundary lies beyond the adjacency layers";
-    } else if (lr.errorMm > lm.toleranceMm) {
+    } else if (lm.limitsMm ? !withinLimits(0.5 * (lo + hi), lm) : lr.errorMm > lm.toleranceMm) {
         lr.status = LandmarkStatus::OutOfTolerance;
     } else {
         lr.status = LandmarkStatus::Ok;
@@ -565,6 +626,7 @@ LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, 
     LandmarkResult lr;
     lr.id = lm.id;
     lr.toleranceMm = lm.toleranceMm;
+    lr.limitsMm = lm.limitsMm;
     if (views) discriminate(lr, lm, *views, *viewIds);
     const TraversalOutcome t = traverseLandmark(map, search);
     lr.errorNumber = static_cast<int>(search.wrong.size());
@@ -601,6 +663,7 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             LandmarkResult lr;
             lr.id = map.landmarks()[l].id;
             lr.toleranceMm = map.landmarks()[l].toleranceMm;
+            lr.limitsMm = map.landmarks()[l].limitsMm;
             lr.reason = "inspection stopped at an earlier failing landmark";
             result.landmarks.push_back(std::move(lr));
             continue;
@@ -653,6 +716,7 @@ nlohmann::json toJson(const InspectionResult& r)
             l["offset_high_mm"] = lr.offsetHighMm;
         }
         l["tolerance_mm"] = lr.toleranceMm;
+        if (lr.limitsMm) l["limits_mm"] = {lr.limitsMm->first, lr.limitsMm->second};
         if (!lr.reason.empty()) l["reason"] = lr.reason;
         l["voxels_reconstructed"] = lr.voxelsReconstructed;
         if (lr.medMm) l["med_mm"] = *lr.medMm;

@@ -109,9 +109,7 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     g.adjacencyDepth = o.adjacencyDepth;
     g.coarsestLevel = std::max(0, o.depth - std::max(1, levels) + 1);
 
-    std::vector<MapLandmark> landmarks;
-    for (const model::Landmark& l : program.landmarks)
-        landmarks.push_back({l.id, l.position, l.normal.normalized(), l.toleranceMm});
+    std::vector<MapLandmark> landmarks = mapLandmarks(program);
     std::vector<MapParameter> parameters;
     for (const model::GeometricParameter& p : program.parameters) {
         MapParameter mp;
@@ -152,9 +150,24 @@ std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& prog
     }
 }
 
-std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program)
+std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program,
+                                                         const geometry::CalibrationUncertainty& calibration)
 {
-    return program.inspection.deviation ? std::make_shared<const DeviationGauge>(program.solid) : nullptr;
+    return program.inspection.deviation ? std::make_shared<const DeviationGauge>(program.solid, calibration) : nullptr;
+}
+
+std::vector<MapLandmark> mapLandmarks(const model::PartProgram& program)
+{
+    std::vector<MapLandmark> landmarks;
+    for (const model::Landmark& l : program.landmarks)
+        landmarks.push_back({l.id, l.position, l.normal.normalized(), l.toleranceMm, l.limitsMm});
+    return landmarks;
+}
+
+double inspectionVoxelMm(const model::PartProgram& program)
+{
+    const int level = program.inspection.level < 0 ? program.octree.depth : program.inspection.level;
+    return program.octree.cubeSize / static_cast<double>(std::uint64_t{1} << level);
 }
 
 InspectionMap buildInspectionMap(const model::PartProgram& program, const InspectionOptions& options)

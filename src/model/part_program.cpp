@@ -100,10 +100,27 @@ std::vector<BestViewGroup> parseBestViews(const ConfigNode& node, std::optional<
     return groups;
 }
 
+/// `tolerance_mm` (the zone ±t) or `limits_mm: [lower, upper]` (docs/part-program.md), one of them.
+void parseTolerance(const ConfigNode& node, Landmark& lm)
+{
+    const auto limits = node.optional("limits_mm");
+    if (limits && node.has("tolerance_mm"))
+        limits->fail("give either tolerance_mm or limits_mm, not both (limits_mm replaces the symmetric zone)");
+    if (!limits) {
+        lm.toleranceMm = node["tolerance_mm"].asPositive();
+        return;
+    }
+    const auto v = limits->asDoubles(2);
+    if (std::abs(v[0]) > 1e3 || std::abs(v[1]) > 1e3) limits->fail("limits must lie within ±1000 mm");
+    if (!(v[0] < v[1])) limits->fail("expected [lower, upper] with lower < upper (mm, outward positive)");
+    lm.limitsMm = std::make_pair(v[0], v[1]);
+    lm.toleranceMm = 0.5 * (v[1] - v[0]);
+}
+
 Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfaceTolerance,
                        std::optional<geometry::FixtureType>& kind)
 {
-    node.allowOnlyKeys({"id", "position", "normal", "tolerance_mm", "best_views"});
+    node.allowOnlyKeys({"id", "position", "normal", "tolerance_mm", "limits_mm", "best_views"});
     Landmark lm;
     const ConfigNode idNode = node["id"];
     lm.id = idNode.asString();
@@ -113,7 +130,7 @@ Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfac
     // Far past any part: the closest-point query would overflow (a coordinate of 1e308).
     if (lm.position.cwiseAbs().maxCoeff() > 1e5)
         posNode.fail("values must lie within ±1e5 mm (a part is not that large)");
-    lm.toleranceMm = node["tolerance_mm"].asPositive();
+    parseTolerance(node, lm);
 
     // On the surface (within the documented tolerance).
     const SurfacePoint nearest = solid.closestPoint(lm.position);
@@ -172,6 +189,15 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     return p;
 }
 
+/// `decision_rule`: true for simple, false for guarded.
+bool parseDecisionRule(const ConfigNode& n)
+{
+    const std::string rule = n.asString();
+    if (rule != "guarded" && rule != "simple")
+        n.fail("unknown decision rule '" + rule + "' (expected guarded or simple)");
+    return rule == "simple";
+}
+
 // The `inspection` section, checked against the octree.
 InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& octree)
 {
@@ -189,12 +215,7 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
     if (auto n = node.optional("resolution_check")) s.requireResolution = n->asBool();
     if (auto n = node.optional("early_exit")) s.earlyExit = n->asBool();
     if (auto n = node.optional("deviation")) s.deviation = n->asBool();
-    if (auto n = node.optional("decision_rule")) {
-        const std::string rule = n->asString();
-        if (rule != "guarded" && rule != "simple")
-            n->fail("unknown decision rule '" + rule + "' (expected guarded or simple)");
-        s.simpleDecision = rule == "simple";
-    }
+    if (auto n = node.optional("decision_rule")) s.simpleDecision = parseDecisionRule(*n);
     return s;
 }
 
@@ -313,7 +334,8 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys({"part", "mesh", "octree", "landmarks", "parameters", "inspection", "alignment"});
+    root.allowOnlyKeys(
+        {"part", "mesh", "octree", "landmarks", "parameters", "inspection", "alignment", "decision_rule"});
 
     PartProgram program;
     program.file = file;
@@ -358,6 +380,14 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
         }
     }
     if (auto n = root.optional("inspection")) program.inspection = parseInspection(*n, program.octree);
+    // docs/contracts.md §8 writes the rule at the top level; inspection.decision_rule says the same.
+    if (auto n = root.optional("decision_rule")) {
+        const bool simple = parseDecisionRule(*n);
+        const auto inner = root.optional("inspection") ? root["inspection"].optional("decision_rule") : std::nullopt;
+        if (inner && parseDecisionRule(*inner) != simple)
+            n->fail("decision_rule disagrees with inspection.decision_rule (give it once)");
+        program.inspection.simpleDecision = simple;
+    }
     if (auto n = root.optional("alignment")) program.alignment = parseAlignment(*n, index);
     return program;
 }

@@ -127,15 +127,19 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     if (std::abs(out.offset - crossing) > 1.0) return std::nullopt;
     out.contrast = contrast;
     out.noise = backgroundNoise(image.grey, pixel + crossing * normal, normal);
-    // covered = ∫ (B − v)/C over the window W: the noise of the W pixels it
-    // integrates, and of the levels B and O (each a mean over the level span,
-    // about kLevelSpan + 0.5 pixels' worth), weighted by ∂covered/∂B =
-    // (W − covered)/C and ∂covered/∂O = covered/C.
-    const double W = 2.0 * kHalfWindow, levelPixels = kLevelSpan + 0.5;
-    const double inside = covered;
-    const double variance = W + (W - inside) * (W - inside) / levelPixels + inside * inside / levelPixels;
-    out.sigmaPx = out.noise / std::abs(contrast) * std::sqrt(variance);
+    out.sigmaPx = edgeSigmaPx(out.noise, contrast, covered);
     return out;
+}
+
+// covered = ∫ (B − v)/C over the window W: the noise of the W pixels it
+// integrates, and of the levels B and O (each a mean over the level span,
+// about kLevelSpan + 0.5 pixels' worth), weighted by ∂covered/∂B =
+// (W − covered)/C and ∂covered/∂O = covered/C.
+double edgeSigmaPx(double noise, double contrast, double covered)
+{
+    const double W = 2.0 * kHalfWindow, levelPixels = kLevelSpan + 0.5;
+    const double variance = W + (W - covered) * (W - covered) / levelPixels + covered * covered / levelPixels;
+    return noise / std::abs(contrast) * std::sqrt(variance);
 }
 
 } // namespace hg::vision

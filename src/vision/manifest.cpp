@@ -5,6 +5,7 @@
 #include "hullgauge/common/log.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
@@ -21,6 +22,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+/// The calibration's parameter names, in geometry::CalibrationUncertainty's order.
+const std::array<std::string, 9> kIntrinsicNames = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
 
 /// |RᵀR − I| and |det R − 1| of a product of rotations computed in doubles.
 constexpr double kOrthonormalToRounding = 1e-12;
@@ -253,7 +257,48 @@ class ManifestReader {
         return s;
     }
 
+    geometry::CalibrationUncertainty calibration(const json& j) const
+    {
+        const std::string at = "calibration_uncertainty";
+        if (!j.is_object()) fail(at, "expected an object, found " + typeName(j));
+        geometry::CalibrationUncertainty u;
+        if (j.contains("intrinsics_std_dev")) {
+            const json& sd = j["intrinsics_std_dev"];
+            const std::string sdAt = at + ".intrinsics_std_dev";
+            if (!sd.is_object()) fail(sdAt, "expected an object {fx, fy, cx, cy, k1, k2, p1, p2, k3}");
+            for (std::size_t i = 0; i < kIntrinsicNames.size(); ++i)
+                if (sd.contains(kIntrinsicNames[i]))
+                    u.intrinsicsStdDev[i] = nonNegative(sd[kIntrinsicNames[i]], sdAt + "." + kIntrinsicNames[i]);
+            warnUnknownKeys(sd, {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}, sdAt);
+        }
+        if (j.contains("fixture_rms_mm")) u.fixtureRmsMm = nonNegative(j["fixture_rms_mm"], at + ".fixture_rms_mm");
+        warnUnknownKeys(j, {"intrinsics_std_dev", "fixture_rms_mm"}, at);
+        return u;
+    }
+
+    geometry::ImageQuality imageQuality(const json& j) const
+    {
+        const std::string at = "image_quality";
+        if (!j.is_object()) fail(at, "expected an object {noise_grey, contrast_grey}");
+        geometry::ImageQuality q;
+        if (!j.contains("noise_grey")) fail(at + ".noise_grey", "missing");
+        if (!j.contains("contrast_grey")) fail(at + ".contrast_grey", "missing");
+        q.noiseGrey = nonNegative(j["noise_grey"], at + ".noise_grey");
+        q.contrastGrey = nonNegative(j["contrast_grey"], at + ".contrast_grey");
+        if (!(q.contrastGrey > 0.0)) fail(at + ".contrast_grey", "the backlight's contrast must be positive");
+        q.given = true;
+        warnUnknownKeys(j, {"noise_grey", "contrast_grey"}, at);
+        return q;
+    }
+
   private:
+    double nonNegative(const json& j, const std::string& field) const
+    {
+        const double v = number(j, field);
+        if (!(v >= 0.0) || v > 1e6) fail(field, "expected a number within [0, 1e6]");
+        return v;
+    }
+
     std::string file_;
 };
 
@@ -316,8 +361,13 @@ CaptureManifest readManifest(const fs::path& file)
     }
     if (root.contains("segmentation") && !root["segmentation"].is_null())
         manifest.segmentation = reader.segmentation(root["segmentation"]);
+    if (root.contains("calibration_uncertainty") && !root["calibration_uncertainty"].is_null())
+        manifest.calibration = reader.calibration(root["calibration_uncertainty"]);
+    if (root.contains("image_quality") && !root["image_quality"].is_null())
+        manifest.imageQuality = reader.imageQuality(root["image_quality"]);
     // "simulation": the true seat `hullgauge simulate --seat` rendered with, for the reader, not the model.
-    reader.warnUnknownKeys(root, {"views", "segmentation", "simulation"}, "");
+    reader.warnUnknownKeys(root, {"views", "segmentation", "simulation", "calibration_uncertainty", "image_quality"},
+                           "");
     return manifest;
 }
 
@@ -349,7 +399,17 @@ std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder
     seg["method"] = toString(manifest.segmentation.method);
     if (manifest.segmentation.method == SegmentationMethod::Fixed) seg["threshold"] = manifest.segmentation.threshold;
     seg["object_is_dark"] = manifest.segmentation.objectIsDark;
-    const json root = {{"views", views}, {"segmentation", seg}};
+    json root = {{"views", views}, {"segmentation", seg}};
+    if (manifest.calibration.recorded()) {
+        json sd;
+        for (std::size_t i = 0; i < kIntrinsicNames.size(); ++i)
+            sd[kIntrinsicNames[i]] = manifest.calibration.intrinsicsStdDev[i];
+        root["calibration_uncertainty"] = {{"intrinsics_std_dev", sd},
+                                           {"fixture_rms_mm", manifest.calibration.fixtureRmsMm}};
+    }
+    if (manifest.imageQuality)
+        root["image_quality"] = {{"noise_grey", manifest.imageQuality->noiseGrey},
+                                 {"contrast_grey", manifest.imageQuality->contrastGrey}};
     return root.dump(2) + '\n';
 }
 

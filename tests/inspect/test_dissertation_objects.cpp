@@ -282,7 +282,7 @@ TEST(DontCareBand, MapFileKeepsTheFlagsAndReadsVersionOne)
     for (const MapNode& n : map.nodes()) hidden += n.hidden ? 1 : 0;
     EXPECT_GT(hidden, 0u); // the cup's cavity
     const auto bytes = map.serialise();
-    ASSERT_EQ(bytes[8], 2); // format version 2
+    ASSERT_EQ(bytes[8], 2); // format version 2: no landmark has asymmetric limits
     const InspectionMap back = InspectionMap::deserialise(bytes, "cup.hgmap");
     ASSERT_EQ(back.nodes().size(), map.nodes().size());
     for (std::size_t i = 0; i < map.nodes().size(); ++i) {
@@ -301,14 +301,36 @@ TEST(DontCareBand, MapFileKeepsTheFlagsAndReadsVersionOne)
     ASSERT_EQ(old.nodes().size(), v1Map.nodes().size());
     for (const MapNode& n : old.nodes()) EXPECT_FALSE(n.dontCare || n.hidden);
 
-    auto v3 = bytes;
-    v3[8] = 3;
+    auto v4 = bytes;
+    v4[8] = 4;
     try {
-        InspectionMap::deserialise(v3, "new.hgmap");
-        FAIL() << "a version-3 map was read";
+        InspectionMap::deserialise(v4, "new.hgmap");
+        FAIL() << "a version-4 map was read";
     } catch (const hg::InputError& e) {
         EXPECT_NE(std::string(e.what()).find("new.hgmap"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("version 3"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("version 4"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("rebuild"), std::string::npos) << e.what();
     }
+}
+
+// Asymmetric limits (docs/part-program.md `limits_mm`) make the map version 3;
+// they come back exactly, and a landmark without them keeps ±tolerance.
+TEST(MapFile, AsymmetricLimitsAreKeptInVersionThree)
+{
+    const TestPart plate = hgtest::holePlatePart();
+    auto landmarks = plate.landmarks;
+    ASSERT_GE(landmarks.size(), 2u);
+    landmarks[0].limitsMm = std::make_pair(-0.02, 0.08);
+    const InspectionMap map = InspectionMap::build("p", plate.geometry, landmarks, {},
+                                                   [&](const Box3& b) { return plate.solid->isObjectVoxel(b); });
+    const auto bytes = map.serialise();
+    ASSERT_EQ(bytes[8], 3);
+    const InspectionMap back = InspectionMap::deserialise(bytes, "limits.hgmap");
+    ASSERT_TRUE(back.landmarks()[0].limitsMm.has_value());
+    EXPECT_EQ(back.landmarks()[0].lowerMm(), -0.02);
+    EXPECT_EQ(back.landmarks()[0].upperMm(), 0.08);
+    EXPECT_FALSE(back.landmarks()[1].limitsMm.has_value());
+    EXPECT_EQ(back.landmarks()[1].lowerMm(), -landmarks[1].toleranceMm);
+    EXPECT_EQ(back.landmarks()[1].upperMm(), landmarks[1].toleranceMm);
+    EXPECT_EQ(back.landmarks(), map.landmarks());
 }

@@ -70,6 +70,11 @@ class CameraModel {
     /// As project(), for a point already in the camera frame.
     std::optional<Vec2> projectCameraPoint(const Vec3& cameraPoint) const;
 
+    /// How the pixel of a part-frame point moves with each intrinsic
+    /// parameter, in the order fx, fy, cx, cy, k1, k2, p1, p2, k3 (OpenCV's,
+    /// and the calibration's standard deviations'); nullopt behind the camera.
+    std::optional<Eigen::Matrix<double, 2, 9>> intrinsicsJacobian(const Vec3& partPoint) const;
+
     /// Normalised, undistorted image coordinates (x/z, y/z) of a pixel.
     Vec2 undistortPixel(const Vec2& pixel) const;
     /// The line of sight through a pixel, in the part frame.

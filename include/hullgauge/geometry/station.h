@@ -3,6 +3,7 @@
 // are kept as raw configuration for the drivers to read (`sections`).
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <vector>
@@ -13,6 +14,28 @@
 
 namespace hg::geometry {
 
+/// What the station's calibration records say of their own uncertainty
+/// (docs/calibration.md; docs/inspection.md, "Uncertainty budget"): the
+/// `std_dev` of `camera.calibration` and the `rms_mm` of `fixture.calibration`.
+struct CalibrationUncertainty {
+    /// One standard deviation of fx, fy, cx, cy (px), k1, k2, p1, p2, k3; 0 where not recorded.
+    std::array<double, 9> intrinsicsStdDev{};
+    /// The fixture model's object-space RMS residual (mm); 0 when not recorded.
+    double fixtureRmsMm = 0.0;
+    bool recorded() const;
+};
+
+/// How clearly the station's frames show the part's outline: the grey
+/// levels' noise and the backlight's contrast (`camera.image_quality`,
+/// docs/config-reference.md), from which the capability check predicts the
+/// edge noise before any frame is taken. The defaults are a dim, noisy
+/// 8-bit image: a station that knows better says so.
+struct ImageQuality {
+    double noiseGrey = 2.0;      ///< standard deviation of a background pixel, grey levels
+    double contrastGrey = 100.0; ///< background level − object level, grey levels
+    bool given = false;          ///< false: the defaults above
+};
+
 struct Station {
     Intrinsics camera;
     /// Physical pixel pitch (µm) for MED reports (eq. 4.5.2-2/3), when known.
@@ -22,6 +45,8 @@ struct Station {
     FixtureKinematics fixture;
     /// Floor plane z in the part frame; no line of sight passes below it (Assumption 2.10).
     double floorZMm = 0.0;
+    CalibrationUncertainty calibration;
+    ImageQuality imageQuality;
     /// The whole document, for driver sections (camera.driver, fixture.driver, lamps, ...).
     std::optional<ConfigNode> document;
 

@@ -20,11 +20,31 @@
 #include <vector>
 
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/geometry/station.h"
 #include "hullgauge/inspect/voxel_frame.h"
 #include "hullgauge/inspect/voxel_test.h"
 #include "hullgauge/model/solid.h"
 
 namespace hg::inspect {
+
+/// Where the CAD model forms the outline beside one landmark in one camera:
+/// the points the ray casts found, which an inspection then only projects
+/// through its own (seated) camera — the outline of a surface is stationary
+/// under the small motions of a seat, so its image moves with these points
+/// to second order (docs/inspection.md, "Sub-voxel deviation").
+struct OutlinePoint {
+    geometry::Vec3 graze; ///< on the outline: where the last line of sight that still meets the solid touches it
+    geometry::Vec3 touch; ///< where the line of sight just inside it first meets the solid (the landmark's surface)
+    /// Where that line of sight leaves the solid again, when it leaves on the
+    /// landmark's surface (the far boundary a surface moved inward is seen by).
+    std::optional<geometry::Vec3> exit;
+};
+
+/// One camera's outline points, by the map's landmark index; nullopt where
+/// the landmark's surface does not form that camera's outline.
+struct ViewOutlines {
+    std::vector<std::optional<OutlinePoint>> landmarks;
+};
 
 /// One view's measurement of a landmark.
 struct ViewDeviation {
@@ -35,6 +55,8 @@ struct ViewDeviation {
     /// How much shorter a local feature is seen because the line of sight
     /// leaves the tangent plane (mm, standard; docs/inspection.md).
     double tiltMm = 0.0;
+    /// The calibration's own uncertainty where the outline is predicted (mm, standard).
+    double calibrationMm = 0.0;
 };
 
 /// The standard uncertainties (mm, k = 1) the expanded one combines (GUM).
@@ -43,6 +65,9 @@ struct DeviationBudget {
     double method = 0.0;    ///< the edge location's own limit and the views' tilt (docs/inspection.md)
     double views = 0.0;     ///< the views' disagreement beyond their noise
     double alignment = 0.0; ///< the seat's covariance at the landmark, along its normal
+    /// The intrinsics' standard deviations and the fixture model's residual
+    /// where the outline is predicted (0 without calibration records).
+    double calibration = 0.0;
 };
 
 struct Deviation {
@@ -66,22 +91,54 @@ const char* toString(Decision decision);
 /// limits [lower, upper] (lower < upper; mm, outward positive).
 Decision decide(double deviationMm, double uncertaintyMm, double lowerMm, double upperMm, DecisionRule rule);
 
+/// The views' measurements combined: their weighted mean and its budget
+/// (docs/inspection.md, "Uncertainty budget"); not measured without views.
+Deviation combine(std::vector<ViewDeviation> views, double alignmentSigmaMm);
+
 class DeviationGauge {
   public:
-    explicit DeviationGauge(std::shared_ptr<const model::Solid> solid);
+    /// `calibration`: the station's calibration records (from the station
+    /// file, or the capture manifest that carries them), for the budget.
+    explicit DeviationGauge(std::shared_ptr<const model::Solid> solid,
+                            geometry::CalibrationUncertainty calibration = {});
 
-    /// The landmark's deviation from the views (cameras as inspected: seated
-    /// when the part was aligned; frames with their grey levels). `alignment`,
-    /// when given, adds the seat's uncertainty.
-    Deviation measure(const MapLandmark& landmark, const std::vector<SilhouetteView>& views,
+    /// The uncertainty expected for a landmark before any frame is taken
+    /// (the capability check, docs/inspection.md): the views' geometry as
+    /// measure() would find it, the edge noise predicted from the image
+    /// quality, the method, tilt and calibration terms; deviation 0, no
+    /// disagreement between views and no seat term (both are measured per part).
+    Deviation expected(const MapLandmark& landmark, const std::vector<geometry::CameraModel>& cameras,
+                       const geometry::ImageQuality& quality) const;
+
+    /// The ray casts of the step: where the CAD outline runs beside every
+    /// landmark in `camera` (the view's nominal camera). Done once per planned
+    /// view when a program is loaded, or as a view is prepared.
+    ViewOutlines outlines(const std::vector<MapLandmark>& landmarks, const geometry::CameraModel& camera) const;
+    /// One landmark's share of outlines().
+    std::optional<OutlinePoint> outlineAt(const MapLandmark& landmark, const geometry::CameraModel& camera) const;
+
+    /// The landmark (the map's landmark `index`) deviation from the views
+    /// (cameras as inspected: seated when the part was aligned; frames with
+    /// their grey levels; each view's outline points when it has them, else
+    /// they are found here). `alignment`, when given, adds the seat's
+    /// uncertainty.
+    Deviation measure(std::size_t index, const MapLandmark& landmark, const std::vector<SilhouetteView>& views,
                       const std::vector<std::string>& viewIds, const align::AlignmentResult* alignment) const;
 
-    /// One view's share; nullopt when the view does not see the landmark on
-    /// its outline or finds no clean edge there.
-    std::optional<ViewDeviation> measureInView(const MapLandmark& landmark, const SilhouetteView& view) const;
+    /// One view's share, from the outline point beside the landmark; nullopt
+    /// when the view does not see the landmark on its outline or finds no
+    /// clean edge there.
+    std::optional<ViewDeviation> measureInView(const MapLandmark& landmark, const SilhouetteView& view,
+                                               const OutlinePoint& outline) const;
+
+    const geometry::CalibrationUncertainty& calibration() const { return calibration_; }
 
   private:
+    double calibrationSigma(const geometry::CameraModel& camera, const geometry::Vec3& point, const geometry::Vec2& u,
+                            double pxPerMm) const;
+
     std::shared_ptr<const model::Solid> solid_;
+    geometry::CalibrationUncertainty calibration_;
 };
 
 nlohmann::json toJson(const Deviation& deviation);

@@ -60,6 +60,10 @@ struct InspectionOptions {
     bool requireResolution = true;
     /// How a measured sub-voxel deviation decides a landmark (with a gauge).
     DecisionRule decisionRule = DecisionRule::Guarded;
+    /// Landmarks whose tolerance zone the capability check found narrower
+    /// than 4 U and the user inspects anyway (`inspect --force`): never ok,
+    /// at best uncertain (docs/inspection.md, "Capability").
+    std::vector<std::string> unprovenLandmarks;
 };
 
 struct ViewReport {
@@ -87,8 +91,10 @@ struct LandmarkResult {
     /// The signed sub-voxel deviation and its uncertainty, when the inspector
     /// measures them (docs/inspection.md, "Sub-voxel deviation").
     std::optional<Deviation> deviation;
-    /// The decision on the deviation against ±tolerance, when it was measured.
+    /// The decision on the deviation against the limits, when it was measured.
     std::optional<Decision> decision;
+    /// The part program's asymmetric limits, when it gives them.
+    std::optional<std::pair<double, double>> limitsMm;
 };
 
 struct ParameterResult {
@@ -175,6 +181,12 @@ class Inspector {
     /// Inspects with any voxel oracle (no views: no MED check, views_used 0).
     InspectionResult inspectWith(const VoxelOracle& oracle) const;
 
+    /// Finds the CAD outline beside every landmark in these cameras now — the
+    /// ray casts of the sub-voxel step — so that a view later prepared with
+    /// the same camera (to the last bit: a planned view) only projects them
+    /// (docs/inspection.md, "Sub-voxel deviation", cost). Without a gauge, nothing.
+    void prepareOutlines(const std::vector<geometry::CameraModel>& cameras);
+
     /// Frame rectangles (merged, non-overlapping) holding every footprint the
     /// inspection can ask for in this camera.
     std::vector<cv::Rect> regionsOfInterest(const geometry::CameraModel& camera) const;
@@ -189,6 +201,9 @@ class Inspector {
     /// The sub-voxel step after the traversal: deviations and the decisions on them.
     void measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
                            const std::vector<std::string>& viewIds) const;
+    void markUnproven(InspectionResult& r) const;
+    std::shared_ptr<const ViewOutlines> cachedOutlines(const geometry::CameraModel& camera) const;
+    std::shared_ptr<const ViewOutlines> outlinesFor(const geometry::CameraModel& camera) const;
     InspectionResult run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                          const std::vector<std::string>* viewIds) const;
 
@@ -199,6 +214,8 @@ class Inspector {
     std::vector<std::uint8_t> active_;
     std::shared_ptr<const align::Aligner> aligner_;
     std::shared_ptr<const DeviationGauge> gauge_;
+    /// Outline points of the planned views, found when the program was loaded.
+    std::vector<std::pair<geometry::CameraModel, std::shared_ptr<const ViewOutlines>>> outlineCache_;
 };
 
 } // namespace hg::inspect

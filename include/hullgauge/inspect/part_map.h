@@ -29,8 +29,16 @@ InspectionOptions inspectionOptions(const model::InspectionSettings& settings);
 /// The aligner of a part program's `alignment` section; null for `method: none`.
 /// Throws hg::InputError naming the program when a datum is not a landmark.
 std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& program);
-/// The deviation gauge of a program with `inspection.deviation`; null without.
-std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program);
+/// The deviation gauge of a program with `inspection.deviation`; null
+/// without. `calibration`: the station's calibration records (the station
+/// file's, or those a capture manifest carries).
+std::shared_ptr<const DeviationGauge> makeDeviationGauge(const model::PartProgram& program,
+                                                         const geometry::CalibrationUncertainty& calibration = {});
+
+/// The program's landmarks as the map holds them.
+std::vector<MapLandmark> mapLandmarks(const model::PartProgram& program);
+/// ΔV at the program's inspection level (`inspection.level`, else the depth).
+double inspectionVoxelMm(const model::PartProgram& program);
 
 /// The map of inspections at `options.level` (-1: the depth): only the levels
 /// from there to the depth. The daemon and `hullgauge inspect --part` both

@@ -11,7 +11,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -49,8 +51,14 @@ struct MapLandmark {
     std::string id;
     Eigen::Vector3d position = Eigen::Vector3d::Zero(); ///< on the CAD surface, mm
     Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< outward unit normal
+    /// Half the tolerance zone: the bracket's error_mm fails beyond it (docs/contracts.md §4).
     double toleranceMm = 0.0;
+    /// Asymmetric limits [lower, upper] of the signed offset instead of
+    /// ±tolerance (the part program's `limits_mm`, docs/part-program.md).
+    std::optional<std::pair<double, double>> limitsMm{};
 
+    double lowerMm() const { return limitsMm ? limitsMm->first : -toleranceMm; }
+    double upperMm() const { return limitsMm ? limitsMm->second : toleranceMm; }
     bool operator==(const MapLandmark&) const = default;
 };
 

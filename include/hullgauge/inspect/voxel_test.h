@@ -43,6 +43,8 @@ struct ViewEdges;
 
 namespace hg::inspect {
 
+struct ViewOutlines;
+
 using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using Box3 = Eigen::AlignedBox3d;
@@ -97,6 +99,9 @@ struct SilhouetteView {
     bool objectIsDark = true;
     /// The view's share of the alignment, when the inspector aligns.
     std::shared_ptr<const align::ViewEdges> alignment{};
+    /// Where the CAD outline runs beside each landmark, when the inspector
+    /// measures deviations (docs/inspection.md, "Sub-voxel deviation").
+    std::shared_ptr<const ViewOutlines> outlines{};
 };
 
 /// How one view sees one voxel.

@@ -41,7 +41,9 @@ struct Landmark {
     Eigen::Vector3d position; // part frame, mm, on the CAD surface
     Eigen::Vector3d normal;   // unit, outward
     bool normalFromMesh = false;
-    double toleranceMm = 0.0;
+    double toleranceMm = 0.0; ///< half the tolerance zone (with `limits_mm`: (upper − lower) / 2)
+    /// `limits_mm: [lower, upper]`: asymmetric limits of the signed offset instead of ±tolerance_mm.
+    std::optional<std::pair<double, double>> limitsMm;
     std::vector<BestViewGroup> bestViews;
     /// Distance from `position` to the mesh surface, mm (within surfaceToleranceMm()).
     double distanceToSurfaceMm = 0.0;

@@ -38,6 +38,13 @@ struct EdgeFound {
     double sigmaPx = 0.0;
 };
 
+/// The standard uncertainty (px) of an edge located by the profile integral
+/// under background noise `noise` and contrast `contrast` (grey levels),
+/// `covered` the object's length of the 6-pixel window (px; half of it for
+/// an edge centred in it): the noise of the window's pixels the integral sums
+/// and of the two levels it is normalised by.
+double edgeSigmaPx(double noise, double contrast, double covered = 3.0);
+
 /// The silhouette edge along pixel + s·normal (normal: unit, pointing from the
 /// object to the background), s in [-band, band]: the threshold crossing
 /// nearest s = 0, refined by the integral of the normalised profile. nullopt

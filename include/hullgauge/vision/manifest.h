@@ -14,7 +14,11 @@
 // that do not know them): per view `image_size: [width, height]` in pixels and
 // `fixture_pose: {rotation_deg, declination_deg}` or `{rail_mm}`; at the top
 // level `simulation: {seat: {R, t, centre, shift_mm, rotation_deg}}`, the true
-// seat `hullgauge simulate --seat` rendered the part with. Any other
+// seat `hullgauge simulate --seat` rendered the part with;
+// `calibration_uncertainty: {intrinsics_std_dev: {fx, fy, cx, cy, k1, k2, p1,
+// p2, k3}, fixture_rms_mm}` and `image_quality: {noise_grey, contrast_grey}`,
+// the station's, which the sub-voxel deviation's budget and the capability
+// check use. Any other
 // key is kept out of the model and logged at warning level (category
 // "vision"), so third-party additions do not stop a run but typos show.
 //
@@ -25,6 +29,7 @@
 
 #include "hullgauge/geometry/camera.h"
 #include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/station.h"
 #include "hullgauge/vision/segmentation.h"
 
 #include <filesystem>
@@ -57,6 +62,12 @@ struct ManifestView {
 struct CaptureManifest {
     std::vector<ManifestView> views;
     SegmentationSettings segmentation;
+    /// The station's calibration records' uncertainty and image quality
+    /// (extension `calibration_uncertainty`, `image_quality`: the daemon's
+    /// archive carries its station's, so `inspect` budgets as it did;
+    /// docs/inspection.md, "Uncertainty budget").
+    geometry::CalibrationUncertainty calibration;
+    std::optional<geometry::ImageQuality> imageQuality;
     /// The file it was read from (empty for a manifest built in memory).
     std::filesystem::path file;
 

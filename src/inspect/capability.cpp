@@ -1,0 +1,63 @@
+// The capability check (docs/inspection.md, "Capability").
+#include "hullgauge/inspect/capability.h"
+
+#include <cmath>
+
+#include "hullgauge/common/format.h"
+
+namespace hg::inspect {
+
+std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>& landmarks, double voxelMm,
+                                                 const DeviationGauge* gauge,
+                                                 const std::vector<geometry::CameraModel>& cameras,
+                                                 const geometry::ImageQuality& quality)
+{
+    std::vector<LandmarkCapability> out;
+    out.reserve(landmarks.size());
+    for (const MapLandmark& lm : landmarks) {
+        LandmarkCapability c;
+        c.id = lm.id;
+        c.zoneMm = lm.upperMm() - lm.lowerMm();
+        if (gauge) c.prediction = gauge->expected(lm, cameras, quality);
+        c.bracket = !c.prediction.measured;
+        c.views = static_cast<int>(c.prediction.views.size());
+        // The bracket: one voxel wide, its half-width holds the offset.
+        c.expectedMm = c.bracket ? 0.5 * voxelMm : c.prediction.uncertaintyMm;
+        c.capable = c.zoneMm >= kTestUncertaintyRatio * c.expectedMm;
+        out.push_back(std::move(c));
+    }
+    return out;
+}
+
+std::vector<std::string> incapableLandmarks(const std::vector<LandmarkCapability>& assessment)
+{
+    std::vector<std::string> ids;
+    for (const LandmarkCapability& c : assessment)
+        if (!c.capable) ids.push_back(c.id);
+    return ids;
+}
+
+std::string describe(const LandmarkCapability& c)
+{
+    const std::string basis = c.bracket ? "the voxel bracket" : "sub-voxel deviation, " + std::to_string(c.views) +
+                                                                   (c.views == 1 ? " view" : " views");
+    const std::string figures = "4 U = 4 × " + formatNumber(c.expectedMm, 3) + " mm (" + basis + ")";
+    if (c.capable)
+        return "landmark " + c.id + ": tolerance zone " + formatNumber(c.zoneMm, 4) + " mm ≥ " + figures;
+    return "landmark " + c.id + ": tolerance zone " + formatNumber(c.zoneMm, 4) + " mm is narrower than " + figures +
+           ": this station cannot prove it (test uncertainty ratio 4:1)";
+}
+
+nlohmann::json toJson(const LandmarkCapability& c)
+{
+    return {{"id", c.id},
+            {"zone_mm", c.zoneMm},
+            {"expected_uncertainty_mm", c.expectedMm},
+            {"basis", c.bracket ? "bracket" : "deviation"},
+            {"views", c.views},
+            {"ratio", c.expectedMm > 0.0 ? nlohmann::json(c.zoneMm / c.expectedMm) : nlohmann::json(nullptr)},
+            {"capable", c.capable},
+            {"budget_mm", c.bracket ? nlohmann::json(nullptr) : toJson(c.prediction)["budget_mm"]}};
+}
+
+} // namespace hg::inspect

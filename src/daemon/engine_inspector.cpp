@@ -175,6 +175,7 @@ class EngineInspector : public Inspector {
                     o.uncertaintyMm = l.deviation->uncertaintyMm;
                 }
                 if (l.decision) o.decision = inspect::toString(*l.decision);
+                o.limitsMm = l.limitsMm;
                 out.landmarks.push_back(std::move(o));
             }
             out.evidence = evidence(result);

@@ -39,11 +39,11 @@ std::vector<std::string> incapableLandmarks(const std::vector<LandmarkCapability
 
 std::string describe(const LandmarkCapability& c)
 {
-    const std::string basis = c.bracket ? "the voxel bracket" : "sub-voxel deviation, " + std::to_string(c.views) +
-                                                                   (c.views == 1 ? " view" : " views");
+    const std::string basis =
+        c.bracket ? "the voxel bracket"
+                  : "sub-voxel deviation, " + std::to_string(c.views) + (c.views == 1 ? " view" : " views");
     const std::string figures = "4 U = 4 × " + formatNumber(c.expectedMm, 3) + " mm (" + basis + ")";
-    if (c.capable)
-        return "landmark " + c.id + ": tolerance zone " + formatNumber(c.zoneMm, 4) + " mm ≥ " + figures;
+    if (c.capable) return "landmark " + c.id + ": tolerance zone " + formatNumber(c.zoneMm, 4) + " mm ≥ " + figures;
     return "landmark " + c.id + ": tolerance zone " + formatNumber(c.zoneMm, 4) + " mm is narrower than " + figures +
            ": this station cannot prove it (test uncertainty ratio 4:1)";
 }

@@ -39,6 +39,7 @@ nlohmann::json InspectionRecord::landmarksJson() const
         if (l.deviationMm) j["deviation_mm"] = *l.deviationMm;
         if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
         if (!l.decision.empty()) j["decision"] = l.decision;
+        if (l.limitsMm) j["limits_mm"] = {l.limitsMm->first, l.limitsMm->second};
         list.push_back(std::move(j));
     }
     return list;

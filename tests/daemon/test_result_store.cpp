@@ -141,6 +141,23 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
     EXPECT_EQ(again.count(), 2);
 }
 
+TEST(ResultStore, KeepsALandmarksAsymmetricLimitsForTheStudies)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        auto r = record(3, station::Verdict::Pass);
+        r.landmarks[0].limitsMm = std::pair{-0.05, 0.15};
+        store.commit(r);
+    }
+    // Read by the gauge studies (docs/study.md): T = upper − lower; no limits → ±tolerance_mm.
+    auto rows = hgtest::run("sqlite3 " + file.string() +
+                            " \"SELECT json_extract(landmarks_json, '$[0].limits_mm'), "
+                            "json_type(landmarks_json, '$[1].limits_mm') IS NULL FROM inspections\"");
+    EXPECT_EQ(rows.out, "[-0.05,0.15]|1\n");
+}
+
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
 {
     hgtest::TempDir dir;

@@ -85,6 +85,18 @@ def start_line(args, workdir, plc_port):
     return line, out
 
 
+def ratio(a, b):
+    """a / b, with s = 0 (every value equal) unbounded by the sign of a (docs/study.md)."""
+    if b > 0:
+        return a / b
+    return math.inf if a > 0 else (-math.inf if a < 0 else 0.0)
+
+
+def number(v):
+    """The tool's JSON number, or its "inf" / "-inf"."""
+    return float(v) if isinstance(v, str) else v
+
+
 def expected_study(db_file):
     """Per landmark id: (n, source, mean, s, T, Cg, Cgk) from the master cycles as stored."""
     db = sqlite3.connect(f"file:{db_file}?mode=ro", uri=True)
@@ -104,11 +116,13 @@ def expected_study(db_file):
         mean = sum(x) / n
         s = math.sqrt(sum((v - mean) ** 2 for v in x) / (n - 1))
         missing = sum(1 for e in entries if not isinstance(e.get("deviation_mm"), (int, float)))
-        out[landmark["id"]] = (n, key, mean, s, T, 0.2 * T / (6 * s), (0.1 * T - abs(mean)) / (3 * s), missing)
+        out[landmark["id"]] = (n, key, mean, s, T, ratio(0.2 * T, 6 * s), ratio(0.1 * T - abs(mean), 3 * s), missing)
     return out
 
 
 def close(a, b):
+    if math.isinf(a) or math.isinf(b):
+        return a == b
     return abs(a - b) <= 1e-9 * max(1.0, abs(b))
 
 
@@ -119,14 +133,14 @@ def compare(study, expected, cycles):
     on_deviation = 0
     for l in study["landmarks"]:
         n, key, mean, s, T, cg, cgk, missing = expected[l["id"]]
-        print(f"{l['id']:<14} {l['n']:>3} {l['mean_mm']:>10.5f} {l['stddev_mm']:>9.5f} {l['cg']:>8.3f} "
-              f"{l['cgk']:>8.3f}  ({cg:.3f}, {cgk:.3f})", flush=True)
+        print(f"{l['id']:<14} {l['n']:>3} {l['mean_mm']:>10.5f} {l['stddev_mm']:>9.5f} {number(l['cg']):>8.3f} "
+              f"{number(l['cgk']):>8.3f}  ({cg:.3f}, {cgk:.3f})", flush=True)
         on_deviation += key == "deviation_mm"
         if missing:
             print(f"  {l['id']}: no deviation in {missing} of {n} cycles: studied on the bracket middle", flush=True)
         check(l["values"] == key and l["n"] == n and l["evaluated"], f"{l['id']}: {l}")
         for field, value in (("mean_mm", mean), ("stddev_mm", s), ("tolerance_mm", T), ("cg", cg), ("cgk", cgk)):
-            check(close(l[field], value), f"{l['id']}: {field} {l[field]}, recomputed {value}")
+            check(close(number(l[field]), value), f"{l['id']}: {field} {l[field]}, recomputed {value}")
         check(l["capable"] == (cg >= 1.33 and cgk >= 1.33), f"{l['id']}: capable {l['capable']}")
     check(on_deviation >= 8, f"only {on_deviation} of {len(study['landmarks'])} landmarks studied on deviation_mm")
 

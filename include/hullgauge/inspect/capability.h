@@ -31,12 +31,12 @@ inline constexpr double kTestUncertaintyRatio = 4.0;
 
 struct LandmarkCapability {
     std::string id;
-    double zoneMm = 0.0;      ///< upper − lower limit
-    double expectedMm = 0.0;  ///< expected U (k = 2)
-    bool bracket = false;     ///< decided on the voxel bracket (no gauge, or no view sees the outline)
-    int views = 0;            ///< planned views that see the landmark on its outline (the gauge)
-    bool capable = false;     ///< zone ≥ kTestUncertaintyRatio · U
-    Deviation prediction;     ///< the gauge's budget (not measured when `bracket`)
+    double zoneMm = 0.0;     ///< upper − lower limit
+    double expectedMm = 0.0; ///< expected U (k = 2)
+    bool bracket = false;    ///< decided on the voxel bracket (no gauge, or no view sees the outline)
+    int views = 0;           ///< planned views that see the landmark on its outline (the gauge)
+    bool capable = false;    ///< zone ≥ kTestUncertaintyRatio · U
+    Deviation prediction;    ///< the gauge's budget (not measured when `bracket`)
 };
 
 /// Every landmark's expected U at these cameras (the planned views); `gauge`

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hg::station {
@@ -27,6 +28,9 @@ struct LandmarkOutcome {
     std::optional<double> deviationMm{};
     std::optional<double> uncertaintyMm{};
     std::string decision{};
+    /// The landmark's asymmetric limits [lower, upper] in mm when the part
+    /// program gives `limits_mm` (docs/part-program.md); else ±toleranceMm.
+    std::optional<std::pair<double, double>> limitsMm{};
     bool ok() const { return status == "ok"; }
 };
 

@@ -230,7 +230,11 @@ json runType1(const std::vector<study::StudyRecord>& records, const StudyOptions
             j.update({{"n", s.values.size()}, {"evaluated", false}, {"not_evaluated", s.problem}});
         } else {
             const auto it = reference.find(s.id);
-            j.update(toJson(study::type1(s.values, s.zone.width(), it == reference.end() ? 0.0 : it->second, limits)));
+            const auto r = study::type1(s.values, s.zone.width(), it == reference.end() ? 0.0 : it->second, limits);
+            j.update(toJson(r));
+            if (r.evaluated && r.stddev == 0.0 && s.source == study::ValueSource::BracketMiddle)
+                j["note"] = j["note"].get<std::string>() +
+                            "; s = 0: every value in the same bracket, the spread is below the resolution";
         }
         landmarks.push_back(std::move(j));
     }

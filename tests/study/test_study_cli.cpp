@@ -89,7 +89,8 @@ TEST(StudyCli, Type1TakesTheMasterCyclesAndComputesCgCgk)
     EXPECT_EQ(a["capable"], true);
     const auto& b = j["landmarks"][1];
     EXPECT_EQ(b["values"], "error_mm");
-    EXPECT_EQ(b["note"], "bracket middle: resolution one voxel");
+    EXPECT_EQ(b["note"], "bracket middle: resolution one voxel; s = 0: every value in the same bracket, the spread "
+                         "is below the resolution");
     EXPECT_EQ(b["stddev_mm"], 0.0);
     EXPECT_EQ(b["cg"], "inf"); // s = 0
     EXPECT_EQ(b["cgk"], "inf");

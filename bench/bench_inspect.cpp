@@ -9,7 +9,11 @@
 //  - BM_InspectAligned/9: BM_InspectGoalDriven/9 on the seated block with
 //    alignment on (the regions of interest carry the alignment margin);
 //  - BM_InspectWithDeviation: BM_InspectGoalDriven/9 with the sub-voxel
-//    deviation of every landmark (docs/inspection.md; target: <= 1 ms more);
+//    deviation of every landmark, the outline points of the planned views
+//    found when the program was loaded, as the daemon does (docs/inspection.md;
+//    target: <= 1 ms more); BM_InspectWithDeviationUnprepared: the same with
+//    the outline found per part (views whose camera was not planned, and
+//    `hullgauge inspect`); BM_PrepareOutlines: that load-time step;
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
 //    EVERY voxel of the part cube at the same ΔV (dense carving, full-frame
 //    segmentation included), actually run — depth 9 is 134 million voxel
@@ -128,12 +132,20 @@ BENCHMARK(BM_InspectAligned)->Arg(9)->Unit(benchmark::kMillisecond);
 // (docs/inspection.md, "Sub-voxel deviation"); the counters: landmarks
 // measured and the views that saw them on their outline. The added cost per
 // cycle is this minus BM_InspectGoalDriven/9 of the same run.
+std::vector<hg::geometry::CameraModel> sceneCameras(const Scene& scene)
+{
+    std::vector<hg::geometry::CameraModel> cameras;
+    for (const auto& f : scene.frames) cameras.push_back(f.camera);
+    return cameras;
+}
+
 void BM_InspectWithDeviation(benchmark::State& state)
 {
+    const bool prepared = state.range(0) != 0;
     const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0);
-    const Inspector inspector(
-        scene.map, {}, nullptr,
-        std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block())));
+    Inspector inspector(scene.map, {}, nullptr,
+                        std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block())));
+    if (prepared) inspector.prepareOutlines(sceneCameras(scene));
     const hg::vision::SegmentationSettings seg;
     InspectionResult r;
     for (auto _ : state) {
@@ -153,7 +165,50 @@ void BM_InspectWithDeviation(benchmark::State& state)
     state.counters["view_measurements"] = views;
     state.counters["worst_abs_deviation_um"] = 1000.0 * worst; // a nominal part: 0 is the truth
 }
-BENCHMARK(BM_InspectWithDeviation)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_InspectWithDeviation)->ArgName("outlines_at_load")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+// The per-part half of the sub-voxel step alone, on views prepared as the
+// daemon's pipeline prepares them (outline points from the program's load):
+// what the step adds to a cycle, without the traversal's noise around it.
+void BM_DeviationStep(benchmark::State& state)
+{
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0);
+    const auto gauge = std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block()));
+    Inspector inspector(scene.map, {}, nullptr, gauge);
+    inspector.prepareOutlines(sceneCameras(scene));
+    std::vector<SilhouetteView> views;
+    std::vector<std::string> ids;
+    for (const auto& f : scene.frames) {
+        views.push_back(inspector.prepareView(f, {}));
+        ids.push_back(f.id);
+    }
+    const auto& landmarks = scene.map.landmarks();
+    std::size_t measured = 0;
+    for (auto _ : state) {
+        measured = 0;
+        for (std::size_t i = 0; i < landmarks.size(); ++i)
+            measured += gauge->measure(i, landmarks[i], views, ids, nullptr).measured ? 1 : 0;
+        benchmark::DoNotOptimize(measured);
+    }
+    state.counters["landmarks"] = static_cast<double>(landmarks.size());
+    state.counters["measured"] = static_cast<double>(measured);
+}
+BENCHMARK(BM_DeviationStep)->Unit(benchmark::kMillisecond);
+
+// The load-time half of the sub-voxel step: the CAD outline beside 64
+// landmarks in 8 planned views (ray casts), once per part program.
+void BM_PrepareOutlines(benchmark::State& state)
+{
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0);
+    const auto gauge = std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block()));
+    const auto cameras = sceneCameras(scene);
+    for (auto _ : state) {
+        Inspector inspector(scene.map, {}, nullptr, gauge);
+        inspector.prepareOutlines(cameras);
+        benchmark::ClobberMemory();
+    }
+}
+BENCHMARK(BM_PrepareOutlines)->Unit(benchmark::kMillisecond);
 
 void BM_DenseCarving(benchmark::State& state)
 {

@@ -27,6 +27,8 @@
 #include "hullgauge/vision/manifest.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -134,6 +136,14 @@ int run(const SimulateArgs& args)
               << " triangles, " << station.camera.imageSize.width << "x" << station.camera.imageSize.height << " px\n";
 
     vision::CaptureManifest manifest;
+    // What the frames are made with: the capability check and the budget
+    // read the station's records and image quality from the manifest
+    // (docs/inspection.md); the noise no lower than 8-bit quantisation's.
+    manifest.calibration = station.calibration;
+    const double full = args.bitDepth == 16 ? 65535.0 : 255.0;
+    manifest.imageQuality =
+        geometry::ImageQuality{std::max(options.noiseSigma, 1.0 / std::sqrt(12.0)),
+                               (options.backgroundLevel - options.objectLevel) * full, true};
     for (std::size_t i = 0; i < poses.size(); ++i) {
         const std::string id = "v" + std::to_string(i);
         const geometry::CameraModel camera = station.cameraAt(poses[i]);

@@ -258,3 +258,97 @@ TEST(Deviation, ThirtyNoiseRealisationsOfOnePartRepeatWithinThreeMicrometres)
 }
 
 } // namespace
+
+namespace {
+
+// Asymmetric limits (docs/part-program.md `limits_mm`): the same part, the
+// same offsets, decided against [−0.02, +0.10] mm instead of ±0.05 mm.
+InspectionResult postWithLimits(double offsetMm, std::uint64_t seed)
+{
+    hgtest::TestPart post = hgtest::postPart();
+    for (auto& l : post.landmarks) {
+        l.limitsMm = std::make_pair(-0.02, 0.10);
+        l.toleranceMm = 0.06;
+    }
+    const auto made = hgtest::postWidened(post, offsetMm / std::sqrt(2.0));
+    std::mt19937_64 rng(seed);
+    const auto cameras = hgtest::grazingViewSet(post, &made, 2, rng, station());
+    const auto map = post.map();
+    const Inspector inspector(map, {}, nullptr, std::make_shared<DeviationGauge>(post.solid));
+    return inspector.inspect(render(made.mesh, cameras, seed), {});
+}
+
+TEST(Decision, AsymmetricLimitsDecideEachSideByItsOwnLimit)
+{
+    // +0.08 mm lies inside [−0.02, 0.10] by 0.02 mm, more than U (≤ 0.015 mm): conforms,
+    // where ±0.05 would have rejected it.
+    InspectionResult r = postWithLimits(0.08, 21);
+    EXPECT_TRUE(r.pass);
+    for (const auto& l : r.landmarks) {
+        EXPECT_EQ(l.decision, Decision::Conforms) << l.id << " " << l.reason;
+        ASSERT_TRUE(l.limitsMm) << l.id;
+    }
+    const auto j = hg::inspect::toJson(r);
+    EXPECT_EQ(j["landmarks"][0]["limits_mm"], nlohmann::json::array({-0.02, 0.10}));
+    // −0.08 mm lies below −0.02 by 0.06 mm: nonconforms.
+    r = postWithLimits(-0.08, 22);
+    EXPECT_FALSE(r.pass);
+    for (const auto& l : r.landmarks) {
+        EXPECT_EQ(l.decision, Decision::Nonconforms) << l.id;
+        EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
+    }
+    // +0.10 mm, at the upper limit: not proven, and the reason names the limits.
+    r = postWithLimits(0.10, 23);
+    EXPECT_FALSE(r.pass);
+    for (const auto& l : r.landmarks) {
+        EXPECT_EQ(l.status, LandmarkStatus::Uncertain) << l.id;
+        EXPECT_NE(l.reason.find("against [-0.02, 0.1] mm"), std::string::npos) << l.reason;
+    }
+}
+
+// The calibration's own uncertainty (docs/inspection.md, "Uncertainty
+// budget"), one view at a time so that no weighting enters: a fixture
+// residual of r mm adds r/√2 (one image direction's share) in quadrature to
+// the view's standard uncertainty; the principal point's σ in both
+// directions moves the outline by σ px along any image direction u, so adds
+// σ / px-per-mm.
+TEST(Deviation, TheCalibrationsOwnUncertaintyEntersTheBudget)
+{
+    const hgtest::TestPart post = hgtest::postPart();
+    const auto made = hgtest::asDesigned(post);
+    std::mt19937_64 rng(31);
+    const auto cameras = hgtest::grazingViewSet(post, &made, 2, rng, station());
+    const auto frames = render(made.mesh, cameras, 31);
+    const auto map = post.map();
+    const auto plain = std::make_shared<DeviationGauge>(post.solid);
+    hg::geometry::CalibrationUncertainty fixture;
+    fixture.fixtureRmsMm = 0.004;
+    const DeviationGauge withFixture(post.solid, fixture);
+    hg::geometry::CalibrationUncertainty principal;
+    principal.intrinsicsStdDev[2] = principal.intrinsicsStdDev[3] = 0.2; // cx, cy
+    const DeviationGauge withPrincipal(post.solid, principal);
+    const Inspector inspector(map, {}, nullptr, plain);
+    int checked = 0;
+    for (const auto& frame : frames) {
+        const std::vector<hg::inspect::SilhouetteView> one{inspector.prepareView(frame, {})};
+        for (std::size_t i = 0; i < map.landmarks().size(); ++i) {
+            const auto& lm = map.landmarks()[i];
+            const auto d0 = plain->measure(i, lm, one, {frame.id}, nullptr);
+            if (!d0.measured) continue;
+            const auto d1 = withFixture.measure(i, lm, one, {frame.id}, nullptr);
+            const auto d2 = withPrincipal.measure(i, lm, one, {frame.id}, nullptr);
+            ASSERT_TRUE(d1.measured && d2.measured) << lm.id;
+            const double u0 = d0.uncertaintyMm / 2.0, c = 0.004 / std::sqrt(2.0);
+            EXPECT_EQ(d0.budget.calibration, 0.0);
+            EXPECT_NEAR(d1.budget.calibration, c, 1e-12) << lm.id;
+            EXPECT_NEAR(d1.uncertaintyMm, 2.0 * std::sqrt(u0 * u0 + c * c), 1e-12) << lm.id;
+            const double p = 0.2 / d2.views.at(0).pxPerMm;
+            EXPECT_NEAR(d2.views[0].calibrationMm, p, 1e-9) << lm.id;
+            EXPECT_NEAR(d2.uncertaintyMm, 2.0 * std::sqrt(u0 * u0 + p * p), 1e-9) << lm.id;
+            ++checked;
+        }
+    }
+    EXPECT_GE(checked, 4); // every edge landmark has its grazing view
+}
+
+} // namespace

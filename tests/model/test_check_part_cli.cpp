@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/primitives.h"
 
@@ -82,6 +83,54 @@ TEST(CheckPartCli, BadInspectionKeyExitsTwoNamingFileLineAndKey)
     const auto r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("part.yaml:13: inspection.level: value 8 is outside [1, 7]"), std::string::npos) << r.err;
+}
+
+} // namespace
+
+namespace {
+
+// `check-part --station S --views V`: the uncertainty each landmark is
+// expected to be measured with at those views (docs/inspection.md,
+// "Capability"). Decided on the bracket (no view sees the top on its
+// outline) the top's U is ΔV/2 = 0.0625 mm exactly; by the sub-voxel
+// deviation it is smaller. Either way ±0.2 mm is provable and ±0.002 mm is not.
+TEST(CheckPartCli, WithAStationTheExpectedUncertaintyOfEveryLandmarkIsPrinted)
+{
+    hgtest::TempDir dir;
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    hgtest::writeFile(dir / "part.yaml", kPart);
+    hgtest::writeFile(dir / "station.yaml", hgtest::stationYaml({.focalPx = 4000}));
+    hgtest::writeFile(dir / "views.yaml", "- {rotation_deg: 0, declination_deg: 0}\n"
+                                          "- {rotation_deg: 90, declination_deg: 30}\n");
+    const std::string args = " check-part --part " + (dir / "part.yaml").string() + " --station " +
+                             (dir / "station.yaml").string() + " --views " + (dir / "views.yaml").string();
+    auto r = hgtest::run(hullgauge() + args + " --json");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_EQ(j["capability"].size(), 1u);
+    const auto& c = j["capability"][0];
+    EXPECT_EQ(c["id"], "top");
+    EXPECT_DOUBLE_EQ(c["zone_mm"].get<double>(), 0.4);
+    if (c["basis"] == "bracket")
+        EXPECT_DOUBLE_EQ(c["expected_uncertainty_mm"].get<double>(), 0.0625);
+    else
+        EXPECT_LT(c["expected_uncertainty_mm"].get<double>(), 0.0625);
+    EXPECT_TRUE(c["capable"].get<bool>());
+    const auto text = hgtest::run(hullgauge() + args);
+    EXPECT_EQ(text.status, 0);
+    EXPECT_NE(text.out.find("landmark top: tolerance zone 0.4 mm ≥ 4 U"), std::string::npos) << text.out;
+
+    std::string tight = kPart;
+    tight.replace(tight.find("0.2"), 3, "0.002");
+    hgtest::writeFile(dir / "part.yaml", tight);
+    const auto refused = hgtest::run(hullgauge() + args);
+    EXPECT_EQ(refused.status, 0);
+    EXPECT_NE(refused.out.find("landmark top: tolerance zone 0.004 mm is narrower than 4 U"), std::string::npos)
+        << refused.out;
+    // --station needs the views it would be used at.
+    const auto noViews = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string() +
+                                     " --station " + (dir / "station.yaml").string());
+    EXPECT_EQ(noViews.status, 2) << noViews.err;
 }
 
 } // namespace

@@ -171,6 +171,23 @@ struct Mistake {
     std::string from, to, expected;
 };
 
+// Asymmetric limits instead of a tolerance, and the decision rule at the top
+// level (docs/part-program.md; docs/contracts.md §8).
+TEST_F(PartProgramTest, LimitsReplaceTheToleranceAndTheDecisionRuleMayStandAtTheTop)
+{
+    std::string yaml = kGood;
+    yaml.replace(yaml.find("tolerance_mm: 0.3"), 17, "limits_mm: [-0.05, 0.15]");
+    yaml.replace(yaml.find("part: block-1\n"), 14, "part: block-1\ndecision_rule: simple\n");
+    const PartProgram p = loadPartProgram(write(yaml));
+    const Landmark& corner = *p.findLandmark("corner");
+    ASSERT_TRUE(corner.limitsMm);
+    EXPECT_EQ(corner.limitsMm->first, -0.05);
+    EXPECT_EQ(corner.limitsMm->second, 0.15);
+    EXPECT_DOUBLE_EQ(corner.toleranceMm, 0.1); // half the zone
+    EXPECT_FALSE(p.findLandmark("face")->limitsMm);
+    EXPECT_TRUE(p.inspection.simpleDecision);
+}
+
 TEST_F(PartProgramTest, EachMistakeIsNamed)
 {
     const std::vector<Mistake> mistakes = {
@@ -199,6 +216,13 @@ TEST_F(PartProgramTest, EachMistakeIsNamed)
         {"  depth: 6\n", "  cube_origin: [0, 0, 0]\n  depth: 6\n", "octree.cube_origin: cube_origin needs cube_size"},
         {"  depth: 6\n", "  cube_origin: [2, 0, 0]\n  cube_size: 16\n  depth: 6\n",
          "octree.cube_origin: the part (bounding box"},
+        {"tolerance_mm: 0.3", "tolerance_mm: 0.3\n    limits_mm: [-0.1, 0.2]",
+         "landmarks[1].limits_mm: give either tolerance_mm or limits_mm, not both"},
+        {"tolerance_mm: 0.3", "limits_mm: [0.2, -0.1]", "landmarks[1].limits_mm: expected [lower, upper] with lower < upper"},
+        {"tolerance_mm: 0.3", "limits_mm: [0.1]", "landmarks[1].limits_mm: "},
+        {"part: block-1\n", "part: block-1\ndecision_rule: careful\n", "decision_rule: unknown decision rule 'careful'"},
+        {"part: block-1\n", "part: block-1\ndecision_rule: simple\ninspection: {decision_rule: guarded}\n",
+         "decision_rule: decision_rule disagrees with inspection.decision_rule"},
     };
     for (const auto& m : mistakes) {
         std::string yaml = kGood;
@@ -221,12 +245,12 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_FALSE(defaults.centrePointTest);
     EXPECT_TRUE(defaults.requireResolution);
     EXPECT_FALSE(defaults.earlyExit);
-    EXPECT_FALSE(defaults.deviation);
+    EXPECT_TRUE(defaults.deviation); // docs/part-program.md: decided on the sub-voxel deviation
     EXPECT_FALSE(defaults.simpleDecision); // guarded
 
     const InspectionSettings s = loadPartProgram(write(kGood + "inspection:\n  level: 5\n  adjacency: 2\n"
                                                                "  method: centre\n  resolution_check: false\n"
-                                                               "  early_exit: true\n  deviation: true\n"
+                                                               "  early_exit: true\n  deviation: false\n"
                                                                "  decision_rule: simple\n"))
                                      .inspection;
     EXPECT_EQ(s.level, 5);
@@ -234,7 +258,7 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_TRUE(s.centrePointTest);
     EXPECT_FALSE(s.requireResolution);
     EXPECT_TRUE(s.earlyExit);
-    EXPECT_TRUE(s.deviation);
+    EXPECT_FALSE(s.deviation);
     EXPECT_TRUE(s.simpleDecision);
 }
 

@@ -139,3 +139,47 @@ TEST(PlanCommand, MissingFileIsBadInput)
 
 } // namespace
 } // namespace hg::plan
+
+namespace hg::plan {
+namespace {
+
+// The capability check at the planned views (docs/inspection.md,
+// "Capability"): with the sub-voxel deviation a tolerance below ΔV is
+// planned — the views must resolve ΔV — and judged to 4 U instead.
+TEST(PlanCommand, ATolerancePlannedViewsCannotProveIsRefusedUnlessForced)
+{
+    hgtest::TempDir dir;
+    model::saveMesh(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)), dir / "part.stl");
+    hgtest::writeFile(dir / "station.yaml", stationYaml({-180, 180}));
+    const std::string landmarks = R"(  - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: TOL}
+  - {id: ny, position: [-1, -10, 12], normal: [0, -1, 0], tolerance_mm: 0.2}
+inspection: {deviation: true}
+)";
+    const auto withTolerance = [&](const std::string& tol) {
+        std::string l = landmarks;
+        l.replace(l.find("TOL"), 3, tol);
+        hgtest::writeFile(dir / "part.yaml", partYaml(l));
+    };
+    withTolerance("0.005");
+    auto r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("landmark px: tolerance zone 0.01 mm is narrower than 4 U"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("landmark ny: tolerance zone 0.4 mm ≥ 4 U"), std::string::npos) << r.err;
+    std::ifstream in(dir / "plan.json");
+    const auto j = nlohmann::json::parse(in);
+    ASSERT_EQ(j["capability"].size(), 2u);
+    EXPECT_FALSE(j["capability"][0]["capable"].get<bool>());
+    EXPECT_EQ(j["capability"][0]["basis"], "deviation");
+    const double U = j["capability"][0]["expected_uncertainty_mm"].get<double>();
+    EXPECT_GT(4.0 * U, 0.01);
+    EXPECT_TRUE(j["capability"][1]["capable"].get<bool>());
+    r = hgtest::run(plan(dir, " --force"));
+    EXPECT_EQ(r.status, 0) << r.err;
+    // A tolerance of 0.06 mm (below ΔV = 0.25 mm) is planned and proven: zone 0.12 mm ≥ 4 U.
+    withTolerance("0.06");
+    r = hgtest::run(plan(dir));
+    EXPECT_EQ(r.status, 0) << r.err;
+}
+
+} // namespace
+} // namespace hg::plan

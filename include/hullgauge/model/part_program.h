@@ -81,7 +81,7 @@ struct InspectionSettings {
     bool earlyExit = false;        ///< stop at the first landmark that is not ok (3.3.6)
     /// `deviation`: also the signed sub-voxel deviation and its uncertainty
     /// per landmark (docs/inspection.md, "Sub-voxel deviation").
-    bool deviation = false;
+    bool deviation = true;
     /// `decision_rule`: guarded (conformance proven beyond U, the default) or
     /// simple (the deviation against the tolerance as it is).
     bool simpleDecision = false;

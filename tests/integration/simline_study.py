@@ -3,7 +3,8 @@
 
 Starts tools/simline (config/sim with config/sim-fast and, laid over both, a
 copy of the stepped block's part program with `inspection.deviation: true`
-written into this test's work folder), tags the next cycles master through
+written out — the study is about the sub-voxel deviation whatever the
+default — into this test's work folder), tags the next cycles master through
 the PLC's CYCLE_PURPOSE register (11 = 1, with tools/plc-client; the
 maintenance socket must then report it), runs --cycles inspections of the
 nominal part — every part seated at random by the simulated line — and two

@@ -141,9 +141,8 @@ int run(const SimulateArgs& args)
     // (docs/inspection.md); the noise no lower than 8-bit quantisation's.
     manifest.calibration = station.calibration;
     const double full = args.bitDepth == 16 ? 65535.0 : 255.0;
-    manifest.imageQuality =
-        geometry::ImageQuality{std::max(options.noiseSigma, 1.0 / std::sqrt(12.0)),
-                               (options.backgroundLevel - options.objectLevel) * full, true};
+    manifest.imageQuality = geometry::ImageQuality{std::max(options.noiseSigma, 1.0 / std::sqrt(12.0)),
+                                                   (options.backgroundLevel - options.objectLevel) * full, true};
     for (std::size_t i = 0; i < poses.size(); ++i) {
         const std::string id = "v" + std::to_string(i);
         const geometry::CameraModel camera = station.cameraAt(poses[i]);

@@ -218,9 +218,11 @@ TEST_F(PartProgramTest, EachMistakeIsNamed)
          "octree.cube_origin: the part (bounding box"},
         {"tolerance_mm: 0.3", "tolerance_mm: 0.3\n    limits_mm: [-0.1, 0.2]",
          "landmarks[1].limits_mm: give either tolerance_mm or limits_mm, not both"},
-        {"tolerance_mm: 0.3", "limits_mm: [0.2, -0.1]", "landmarks[1].limits_mm: expected [lower, upper] with lower < upper"},
+        {"tolerance_mm: 0.3", "limits_mm: [0.2, -0.1]",
+         "landmarks[1].limits_mm: expected [lower, upper] with lower < upper"},
         {"tolerance_mm: 0.3", "limits_mm: [0.1]", "landmarks[1].limits_mm: "},
-        {"part: block-1\n", "part: block-1\ndecision_rule: careful\n", "decision_rule: unknown decision rule 'careful'"},
+        {"part: block-1\n", "part: block-1\ndecision_rule: careful\n",
+         "decision_rule: unknown decision rule 'careful'"},
         {"part: block-1\n", "part: block-1\ndecision_rule: simple\ninspection: {decision_rule: guarded}\n",
          "decision_rule: decision_rule disagrees with inspection.decision_rule"},
     };
@@ -245,7 +247,7 @@ TEST_F(PartProgramTest, InspectionSectionIsOptionalWithTheToolsDefaults)
     EXPECT_FALSE(defaults.centrePointTest);
     EXPECT_TRUE(defaults.requireResolution);
     EXPECT_FALSE(defaults.earlyExit);
-    EXPECT_TRUE(defaults.deviation); // docs/part-program.md: decided on the sub-voxel deviation
+    EXPECT_TRUE(defaults.deviation);       // docs/part-program.md: decided on the sub-voxel deviation
     EXPECT_FALSE(defaults.simpleDecision); // guarded
 
     const InspectionSettings s = loadPartProgram(write(kGood + "inspection:\n  level: 5\n  adjacency: 2\n"

@@ -52,7 +52,7 @@ ConfigPtr loadConfig(const std::filesystem::path& file, const ProgramCheck& chec
     if (!checkProgram) return config;
     for (const auto& [number, ref] : config->programs) {
         try {
-            checkProgram(ref);
+            checkProgram(ref, config->station);
         } catch (const InputError&) {
             throw;
         } catch (const std::exception& e) {

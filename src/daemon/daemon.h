@@ -24,8 +24,9 @@ using DevicesFactory = std::function<StationHardware(const station::DaemonConfig
 using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station::DaemonConfig&)>;
 
 /// Loads a part program in full, as a trigger would, and throws InputError
-/// naming its file and field when it does not load (docs/daemon.md).
-using ProgramCheck = std::function<void(const station::PartProgramRef&)>;
+/// naming its file and field when it does not load or the station cannot
+/// decide its tolerances (docs/daemon.md, docs/inspection.md "Capability").
+using ProgramCheck = std::function<void(const station::PartProgramRef&, const geometry::Station&)>;
 
 /// Runs the daemon until SIGTERM/SIGINT; returns the process exit status.
 /// `checkProgram` runs on every part program at start, `--check` and reload.

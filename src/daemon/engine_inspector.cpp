@@ -15,6 +15,38 @@
 namespace hg::daemon {
 namespace {
 
+std::vector<geometry::CameraModel> plannedCameras(const station::PartProgramRef& ref, const geometry::Station& station)
+{
+    std::vector<geometry::CameraModel> cameras;
+    for (const geometry::FixturePose& pose : ref.views) cameras.push_back(station.cameraAt(pose));
+    return cameras;
+}
+
+// The capability check when a program is loaded (docs/inspection.md,
+// "Capability"): a tolerance this station cannot prove at the planned views
+// refuses the program (FAULT 30 at a trigger; at start, --check and reload the
+// configuration) unless its entry says `force`; returns the forced landmarks.
+std::vector<std::string> capabilityCheck(const station::PartProgramRef& ref, const model::PartProgram& program,
+                                         const geometry::Station& station, const inspect::DeviationGauge* gauge)
+{
+    const auto assessment =
+        inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge,
+                                  plannedCameras(ref, station), station.imageQuality);
+    std::vector<std::string> unproven;
+    std::string refused;
+    for (const inspect::LandmarkCapability& c : assessment)
+        if (!c.capable) {
+            unproven.push_back(c.id);
+            refused += (refused.empty() ? "" : "; ") + inspect::describe(c);
+        }
+    if (unproven.empty()) return unproven;
+    if (!ref.force)
+        throw InputError(ref.partFile.string(), "landmarks",
+                         refused + " (programs." + std::to_string(ref.number) + ".force: true runs it anyway)");
+    hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, refused);
+    return unproven;
+}
+
 struct LoadedProgram {
     std::filesystem::path file;
     model::PartProgram program;
@@ -48,11 +80,11 @@ class EngineInspector : public Inspector {
                 p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
                 // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
                 const auto gauge = inspect::makeDeviationGauge(p.program, station_.calibration);
-                options.unprovenLandmarks = capabilityCheck(ref, p, gauge.get());
+                options.unprovenLandmarks = capabilityCheck(ref, p.program, station_, gauge.get());
                 p.inspector =
                     std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
                 // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
-                p.inspector->prepareOutlines(plannedCameras(ref));
+                p.inspector->prepareOutlines(plannedCameras(ref, station_));
                 hg::log::category("inspect")->info(
                     "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
@@ -88,36 +120,6 @@ class EngineInspector : public Inspector {
         kept.imageQuality = station_.imageQuality;
         views_.push_back(std::move(kept));
         pipeline_.submit(std::move(view));
-    }
-
-    std::vector<geometry::CameraModel> plannedCameras(const station::PartProgramRef& ref) const
-    {
-        std::vector<geometry::CameraModel> cameras;
-        for (const geometry::FixturePose& pose : ref.views) cameras.push_back(station_.cameraAt(pose));
-        return cameras;
-    }
-
-    // The capability check when a program is loaded (docs/inspection.md,
-    // "Capability"): a tolerance this station cannot prove at the planned
-    // views refuses the program (FAULT 30) unless its entry says `force`.
-    std::vector<std::string> capabilityCheck(const station::PartProgramRef& ref, const LoadedProgram& p,
-                                             const inspect::DeviationGauge* gauge) const
-    {
-        const auto assessment = inspect::assessCapability(p.map->landmarks(), inspect::inspectionVoxelMm(p.program),
-                                                          gauge, plannedCameras(ref), station_.imageQuality);
-        std::vector<std::string> unproven;
-        std::string refused;
-        for (const inspect::LandmarkCapability& c : assessment)
-            if (!c.capable) {
-                unproven.push_back(c.id);
-                refused += (refused.empty() ? "" : "; ") + inspect::describe(c);
-            }
-        if (unproven.empty()) return unproven;
-        if (!ref.force)
-            throw InputError(ref.partFile.string(), "landmarks",
-                             refused + " (programs." + std::to_string(ref.number) + ".force: true runs it anyway)");
-        hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, refused);
-        return unproven;
     }
 
     std::size_t seatViews() const override
@@ -236,11 +238,13 @@ std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& conf
     return std::make_unique<EngineInspector>(config);
 }
 
-void checkEngineProgram(const station::PartProgramRef& ref)
+void checkEngineProgram(const station::PartProgramRef& ref, const geometry::Station& station)
 {
     const model::PartProgram program = model::loadPartProgram(ref.partFile);
     (void)inspect::inspectionOptions(program.inspection);
     (void)inspect::makeAligner(program);
+    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
+    (void)capabilityCheck(ref, program, station, gauge.get());
 }
 
 } // namespace hg::daemon

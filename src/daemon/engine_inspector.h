@@ -18,7 +18,8 @@ namespace hg::daemon {
 
 std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config);
 /// The part program and the inspection options begin() loads (mesh, landmarks,
-/// parameters); throws InputError naming the file and field.
-void checkEngineProgram(const station::PartProgramRef& ref);
+/// parameters) and its capability at the station; throws InputError naming
+/// the file and field, or the landmarks the station cannot prove.
+void checkEngineProgram(const station::PartProgramRef& ref, const geometry::Station& station);
 
 } // namespace hg::daemon

@@ -289,6 +289,75 @@ TEST_F(EngineParity, TheSubVoxelDeviationIsTheOfflineToolsToo)
     }
 }
 
+// The capability check when the daemon loads a program (docs/inspection.md,
+// "Capability"): ±0.005 mm at 0.16 mm per pixel is a zone no view of the
+// plan can prove; the program is refused naming the landmark, unless its
+// entry says `force`, and then that landmark is never ok. The station's
+// calibration records enter the budget, and the archive carries them: the
+// offline tool gives the same deviations and uncertainties to the last bit.
+TEST_F(EngineParity, AToleranceTheStationCannotProveIsRefusedAtLoadUnlessForced)
+{
+    hgtest::TempDir dir;
+    const fs::path line = lineWithSegmentation(dir, "{method: otsu}");
+    const fs::path program = dir.path() / "sim" / "stepped-block.yaml";
+    std::ifstream in(program);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string tallTop = "{id: tall-top, position: [-15, 0, 30], tolerance_mm: 0.4}";
+    ASSERT_NE(text.find(tallTop), std::string::npos);
+    text.replace(text.find(tallTop), tallTop.size(), "{id: tall-top, position: [-15, 0, 30], tolerance_mm: 0.005}");
+    hgtest::writeFile(program, text);
+    const fs::path station = dir.path() / "sim" / "station.yaml";
+    std::ifstream sin(station);
+    std::string stationText((std::istreambuf_iterator<char>(sin)), std::istreambuf_iterator<char>());
+    stationText.replace(stationText.find("  driver:\n    backend: sim"), 0,
+                        "  calibration: {std_dev: {fx: 2.0, fy: 2.0, cx: 0.3, cy: 0.3}}\n");
+    hgtest::writeFile(station, stationText);
+
+    auto config = hg::station::loadDaemonConfig(line);
+    EXPECT_EQ(config.station.calibration.intrinsicsStdDev[2], 0.3);
+    std::string error;
+    EXPECT_FALSE(hg::daemon::makeEngineInspector(config)->begin(config.programs.at(1), error));
+    EXPECT_NE(error.find("landmark tall-top: tolerance zone 0.01 mm is narrower than 4 U"), std::string::npos) << error;
+    EXPECT_NE(error.find("programs.1.force: true"), std::string::npos) << error;
+
+    // `hullgauged --check` (and so the start and every reload) refuses the configuration likewise.
+    const std::string check =
+        (hgtest::binaryDir() / "bin" / "hullgauged").string() + " --config " + line.string() + " --check";
+    const auto checked = hgtest::run(check);
+    EXPECT_EQ(checked.status, 2) << checked.err;
+    EXPECT_NE(checked.err.find("landmark tall-top: tolerance zone 0.01 mm"), std::string::npos) << checked.err;
+    std::ifstream lin(line);
+    std::string lineText((std::istreambuf_iterator<char>(lin)), std::istreambuf_iterator<char>());
+    const std::string entry = "views: stepped-block-views.yaml}";
+    ASSERT_NE(lineText.find(entry), std::string::npos);
+    lineText.replace(lineText.find(entry), entry.size(), "views: stepped-block-views.yaml, force: true}");
+    hgtest::writeFile(line, lineText);
+    const auto forcedCheck = hgtest::run(check);
+    EXPECT_EQ(forcedCheck.status, 0) << forcedCheck.err;
+
+    config = hg::station::loadDaemonConfig(line);
+    EXPECT_TRUE(config.programs.at(1).force);
+    auto inspector = hg::daemon::makeEngineInspector(config);
+    auto outcome = inspect(*inspector, config, frames(config, "nominal"));
+    ASSERT_TRUE(outcome.ok) << outcome.error;
+    EXPECT_EQ(notOk(outcome), (std::map<std::string, std::string>{{"tall-top", "uncertain"}}));
+    const fs::path folder = archive(config, outcome, dir / "images", "nominal");
+    ASSERT_FALSE(folder.empty());
+    const auto manifest = hg::vision::readManifest(folder / "manifest.json");
+    EXPECT_EQ(manifest.calibration.intrinsicsStdDev[0], 2.0);
+    // Offline the landmark is refused too, and forced it is the daemon's to the last bit.
+    const auto refused = hgtest::run((hgtest::binaryDir() / "bin" / "hullgauge").string() + " inspect --part " +
+                                     program.string() + " --views " + (folder / "manifest.json").string());
+    EXPECT_EQ(refused.status, 2) << refused.err;
+    const fs::path out = dir.path() / "forced.json";
+    const auto forced =
+        hgtest::run((hgtest::binaryDir() / "bin" / "hullgauge").string() + " inspect --force --part " +
+                    program.string() + " --views " + (folder / "manifest.json").string() + " --out " + out.string());
+    EXPECT_EQ(forced.status, 1) << forced.err;
+    std::ifstream result(out);
+    EXPECT_EQ(expectSameLandmarks(outcome, nlohmann::json::parse(result)), 10u);
+}
+
 // A seat of `shiftMm` along `direction` and `rotationDeg` about `axis`, both through the centre of the
 // nominal mesh's bounding box (the aligner's reference point, docs/alignment.md).
 hg::geometry::RigidTransform seatAboutCentre(const DaemonConfig& config, const hg::geometry::Vec3& direction,

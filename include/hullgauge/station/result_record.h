@@ -28,8 +28,7 @@ struct LandmarkOutcome {
     std::optional<double> deviationMm{};
     std::optional<double> uncertaintyMm{};
     std::string decision{};
-    /// The landmark's asymmetric limits [lower, upper] in mm when the part
-    /// program gives `limits_mm` (docs/part-program.md); else ±toleranceMm.
+    /// The part program's asymmetric limits [lower, upper], when it gives them.
     std::optional<std::pair<double, double>> limitsMm{};
     bool ok() const { return status == "ok"; }
 };

@@ -34,6 +34,7 @@ struct CtlOptions {
     std::string pattern;
     std::string poses;
     std::string out;
+    std::string purpose;
     bool noWait = false;
     double waitS = 900.0;
 };
@@ -91,6 +92,7 @@ void printStatus(const nlohmann::json& s)
               << "cycles:       " << seq["cycles"] << " (" << seq["faults"] << " with errors)\n"
               << "results:      " << s["results"]["records"] << " in " << s["results"]["database"].get<std::string>()
               << "\n";
+    if (s.contains("purpose")) std::cout << "purpose:      " << s["purpose"].get<std::string>() << "\n";
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
     if (s.contains("lamps") && s["lamps"].is_object()) {
@@ -162,7 +164,8 @@ std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
     auto* ctl =
-        app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, calibrate)");
+        app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, purpose, "
+                                  "calibrate)");
     ctl->add_option("--socket", opts->socket,
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
@@ -177,6 +180,10 @@ std::function<int()> factory(CLI::App& app)
     auto* simPart = ctl->add_subcommand("sim-part", "switch the simulated part under test");
     simPart->add_flag("--list", opts->list, "list the parts the simulated line offers");
     simPart->add_option("name", opts->part, "nominal or a variant name");
+    auto* purpose = ctl->add_subcommand(
+        "purpose", "print or set the purpose of the next cycles: production, master or study (docs/study.md)");
+    purpose->add_option("purpose", opts->purpose, "production | master | study (none: print the current one)")
+        ->check(CLI::IsMember({"production", "master", "study"}));
     auto* calibrate = ctl->add_subcommand(
         "calibrate", "run the live fixture calibration through the daemon's devices while production is paused; "
                      "writes the station file (with a backup), used after a reload");
@@ -209,7 +216,7 @@ std::function<int()> factory(CLI::App& app)
                               << r["verdict"].get<std::string>() << "  serial '" << r["serial"].get<std::string>()
                               << "'  program " << r["program"] << "  " << r["cycle_ms"] << " ms  failed "
                               << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault " << r["fault_code"]
-                              << "\n";
+                              << "  " << r.value("purpose", std::string("production")) << "\n";
             }
         } else if (trigger->parsed()) {
             request(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});
@@ -217,6 +224,11 @@ std::function<int()> factory(CLI::App& app)
         } else if (abort->parsed()) {
             request(path, {{"command", "abort"}});
             std::cout << "abort requested\n";
+        } else if (purpose->parsed()) {
+            nlohmann::json req{{"command", "purpose"}};
+            if (!opts->purpose.empty()) req["purpose"] = opts->purpose;
+            answer = request(path, req);
+            std::cout << "purpose: " << answer["purpose"].get<std::string>() << "\n";
         } else if (calibrate->parsed()) {
             return runCalibrate(path, *opts);
         } else if (simPart->parsed()) {

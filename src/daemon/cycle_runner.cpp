@@ -309,6 +309,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     cycle.record.manual = trigger.manual;
     cycle.record.serial = trigger.serial;
     cycle.record.program = trigger.program;
+    cycle.record.purpose = trigger.purpose;
     auto action = beginCycle(cycle);
     while (action.kind != Kind::Publish) {
         auto next = interruption(cycle);
@@ -321,8 +322,10 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
 {
     auto log = hg::log::category("seq");
     const auto& r = cycle.record;
-    log->info("cycle {}{}: program {}, serial '{}'", r.manual ? "manual" : "seq ",
-              r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial);
+    log->info("cycle {}{}: program {}, serial '{}'{}", r.manual ? "manual" : "seq ",
+              r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial,
+              r.purpose == station::CyclePurpose::Production ? std::string()
+                                                             : ", " + std::string(station::toString(r.purpose)));
     devices_.showLamps(LampPattern::Busy);
     // The simulated line puts a new part in the nest, seated within its play.
     if (simulation_) simulation_->newPart();
@@ -601,6 +604,7 @@ void CycleRunner::report(Cycle& cycle)
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
                       {"manual", record.manual},
+                      {"purpose", std::string(station::toString(record.purpose))},
                       {"images_dir", cycle.imagesDir},
                       {"alignment", record.alignment},
                       {"timing_ms", timing}};

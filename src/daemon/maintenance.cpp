@@ -183,6 +183,7 @@ json status(const MaintenanceContext& c, const json&)
             {"results", {{"database", c.store.file().string()}, {"records", c.store.count()}}},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
+            {"purpose", std::string(station::toString(c.registers.purpose()))},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
 }
 
@@ -206,6 +207,23 @@ json trigger(const MaintenanceContext& c, const json& request)
     if (reason == station::RejectReason::None) return {{"ok", true}};
     static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
     return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
+}
+
+// The purpose of the cycles triggered from now on (docs/study.md); the PLC's
+// CYCLE_PURPOSE register is the same value, so the last writer wins. Without
+// "purpose" the current one is answered.
+json purpose(const MaintenanceContext& c, const json& request)
+{
+    if (request.contains("purpose")) {
+        const auto& wanted = request["purpose"];
+        const auto parsed = wanted.is_string() ? station::parsePurpose(wanted.get<std::string>()) : std::nullopt;
+        if (!parsed)
+            return {{"ok", false},
+                    {"error", "purpose: " + wanted.dump() + " is not \"production\", \"master\" or \"study\""}};
+        c.registers.setPurpose(*parsed);
+        hg::log::category("daemon")->info("cycle purpose {} (maintenance socket)", station::toString(*parsed));
+    }
+    return {{"ok", true}, {"purpose", std::string(station::toString(c.registers.purpose()))}};
 }
 
 json abortCycle(const MaintenanceContext& c, const json&)
@@ -255,7 +273,7 @@ json simPart(const MaintenanceContext& c, const json& request)
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
     {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
-    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart},
+    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
 };
 
 } // namespace

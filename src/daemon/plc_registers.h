@@ -4,6 +4,7 @@
 // is published whole), and the runner can wait for a trigger or a command.
 #pragma once
 
+#include "hullgauge/common/log.h"
 #include "hullgauge/station/plc_registers.h"
 
 #include <chrono>
@@ -27,7 +28,10 @@ class PlcRegisters {
     {
         std::lock_guard lock(mutex_);
         const bool running = runningLocked();
+        const auto purpose = map_.purpose();
         auto written = map_.write(address, values);
+        if (map_.purpose() != purpose)
+            hg::log::category("plc")->info("cycle purpose {} (PLC)", station::toString(map_.purpose()));
         // An abort applies to the running cycle only (docs/plc.md): one written
         // while idle is dropped, so it cannot abort the next part.
         if (!running) dropAbort();
@@ -65,6 +69,16 @@ class PlcRegisters {
     {
         std::lock_guard lock(mutex_);
         map_.publishResult(r);
+    }
+    void setPurpose(station::CyclePurpose purpose)
+    {
+        std::lock_guard lock(mutex_);
+        map_.setPurpose(purpose);
+    }
+    station::CyclePurpose purpose() const
+    {
+        std::lock_guard lock(mutex_);
+        return map_.purpose();
     }
     void beat()
     {

@@ -11,7 +11,8 @@ namespace hg::daemon {
 namespace {
 
 // 2: alignment_json and simulation_json (the measured and the simulated seat).
-constexpr int kSchemaVersion = 2;
+// 3: purpose (production, master, study: docs/study.md).
+constexpr int kSchemaVersion = 3;
 
 constexpr const char* kSchema = R"(
 CREATE TABLE IF NOT EXISTS inspections (
@@ -32,7 +33,8 @@ CREATE TABLE IF NOT EXISTS inspections (
     timing_json      TEXT    NOT NULL,
     images_dir       TEXT    NOT NULL DEFAULT '',
     alignment_json   TEXT    NOT NULL DEFAULT 'null',
-    simulation_json  TEXT    NOT NULL DEFAULT 'null'
+    simulation_json  TEXT    NOT NULL DEFAULT 'null',
+    purpose          TEXT    NOT NULL DEFAULT 'production' CHECK (purpose IN ('production', 'master', 'study'))
 );
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
@@ -91,6 +93,10 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
             exec("ALTER TABLE inspections ADD COLUMN alignment_json TEXT NOT NULL DEFAULT 'null'");
             exec("ALTER TABLE inspections ADD COLUMN simulation_json TEXT NOT NULL DEFAULT 'null'");
         }
+        // A version 1 or 2 database gains the cycles' purpose; its rows were production.
+        if (found == 1 || found == 2)
+            exec("ALTER TABLE inspections ADD COLUMN purpose TEXT NOT NULL DEFAULT 'production' "
+                 "CHECK (purpose IN ('production', 'master', 'study'))");
         exec(("PRAGMA user_version=" + std::to_string(kSchemaVersion)).c_str());
     } catch (...) {
         sqlite3_close(db_);
@@ -119,8 +125,8 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
 {
     Statement insert(db_, "INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
                           "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
-                          "landmarks_json, timing_json, images_dir, alignment_json, simulation_json) "
-                          "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                          "landmarks_json, timing_json, images_dir, alignment_json, simulation_json, purpose) "
+                          "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     auto text = [&](int i, const std::string& s) {
         sqlite3_bind_text(insert.stmt, i, s.c_str(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
     };
@@ -141,6 +147,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     text(15, imagesDir);
     text(16, r.alignment.dump());
     text(17, r.simulation.dump());
+    text(18, std::string(station::toString(r.purpose)));
     // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
     if (sqlite3_step(insert.stmt) != SQLITE_DONE)
         throw FaultError("result store " + file_.string() + ": " + sqlite3_errmsg(db_));
@@ -151,7 +158,7 @@ nlohmann::json ResultStore::recent(int limit) const
 {
     Statement query(db_, "SELECT id, started_utc, trigger_seq, manual, serial, program, part, verdict, fault_code, "
                          "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, images_dir, alignment_json, "
-                         "simulation_json "
+                         "simulation_json, purpose "
                          "FROM inspections ORDER BY id DESC LIMIT ?");
     sqlite3_bind_int(query.stmt, 1, limit);
     auto rows = nlohmann::json::array();
@@ -175,7 +182,8 @@ nlohmann::json ResultStore::recent(int limit) const
                         {"landmarks", nlohmann::json::parse(column(12), nullptr, false)},
                         {"images", column(13)},
                         {"alignment", nlohmann::json::parse(column(14), nullptr, false)},
-                        {"simulation", nlohmann::json::parse(column(15), nullptr, false)}});
+                        {"simulation", nlohmann::json::parse(column(15), nullptr, false)},
+                        {"purpose", column(16)}});
     }
     return rows;
 }

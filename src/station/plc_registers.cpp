@@ -13,6 +13,26 @@ std::uint16_t u16(auto v)
 
 } // namespace
 
+std::string_view toString(CyclePurpose p)
+{
+    switch (p) {
+    case CyclePurpose::Production:
+        return "production";
+    case CyclePurpose::Master:
+        return "master";
+    case CyclePurpose::Study:
+        return "study";
+    }
+    return "production";
+}
+
+std::optional<CyclePurpose> parsePurpose(std::string_view name)
+{
+    for (auto p : {CyclePurpose::Production, CyclePurpose::Master, CyclePurpose::Study})
+        if (toString(p) == name) return p;
+    return std::nullopt;
+}
+
 bool validSerialByte(unsigned byte)
 {
     return byte == 0 || (byte >= 0x20 && byte <= 0x7E);
@@ -49,7 +69,8 @@ RegisterMap::RegisterMap()
 bool RegisterMap::writable(std::uint16_t address)
 {
     return address == reg::TriggerSeq || address == reg::PartProgram ||
-           (address >= reg::Serial && address < reg::Serial + reg::SerialWords) || address == reg::Command;
+           (address >= reg::Serial && address < reg::Serial + reg::SerialWords) || address == reg::Command ||
+           address == reg::CyclePurpose;
 }
 
 ModbusException RegisterMap::read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const
@@ -74,6 +95,8 @@ ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::u
             if (!validSerialByte(v >> 8) || !validSerialByte(v & 0xFF)) return ModbusException::IllegalDataValue;
         } else if (a == reg::Command) {
             if (v > u16(PlcCommand::ResetFault)) return ModbusException::IllegalDataValue;
+        } else if (a == reg::CyclePurpose) {
+            if (v > u16(CyclePurpose::Study)) return ModbusException::IllegalDataValue;
         }
     }
 
@@ -96,7 +119,7 @@ ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::u
         TriggerRequest request{*newTrigger, regs_[reg::PartProgram],
                                decodeSerial(std::span<const std::uint16_t, reg::SerialWords>(regs_.data() + reg::Serial,
                                                                                              reg::SerialWords)),
-                               false};
+                               false, purpose()};
         accept(std::move(request));
     }
     return ModbusException::None;
@@ -127,7 +150,7 @@ RejectReason RegisterMap::accept(TriggerRequest request)
 
 RejectReason RegisterMap::triggerManually(std::uint16_t program, const std::string& serial)
 {
-    return accept(TriggerRequest{0, program, serial, true});
+    return accept(TriggerRequest{0, program, serial, true, purpose()});
 }
 
 void RegisterMap::setKnownPrograms(std::set<std::uint16_t> programs)
@@ -174,6 +197,16 @@ void RegisterMap::publishResult(const PublishedResult& r)
         regs_[reg::LandmarkOkBits + k] = word;
     }
     regs_[reg::DoneSeq] = r.seq;
+}
+
+void RegisterMap::setPurpose(CyclePurpose purpose)
+{
+    regs_[reg::CyclePurpose] = u16(purpose);
+}
+
+CyclePurpose RegisterMap::purpose() const
+{
+    return static_cast<CyclePurpose>(regs_[reg::CyclePurpose]);
 }
 
 void RegisterMap::beat()

@@ -46,6 +46,18 @@ TEST(Ctl, DrivesTheDaemonThroughItsMaintenanceSocket)
     EXPECT_EQ(rows[0]["serial"], "BENCH-7");
     EXPECT_EQ(rows[0]["verdict"], "fail"); // the dented part
     EXPECT_EQ(rows[0]["landmarks_failed"], 2);
+    // The purpose of the next cycles: printed, set, shown by status and stored with the results.
+    EXPECT_EQ(hgtest::run(ctl("--socket " + sock + " purpose")).out, "purpose: production\n");
+    auto master = hgtest::run(ctl("--socket " + sock + " purpose master"));
+    ASSERT_EQ(master.status, 0) << master.err;
+    EXPECT_EQ(master.out, "purpose: master\n");
+    EXPECT_NE(hgtest::run(ctl("--socket " + sock + " status")).out.find("purpose:      master"), std::string::npos);
+    EXPECT_EQ(hgtest::run(ctl("--socket " + sock + " purpose golden")).status, 2);
+    ASSERT_EQ(hgtest::run(ctl("--socket " + sock + " trigger --program 1 --serial MASTER-1")).status, 0);
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "done", 10s));
+    auto tagged = hgtest::run(ctl("--socket " + sock + " results -n 1"));
+    EXPECT_NE(tagged.out.find("'MASTER-1'"), std::string::npos) << tagged.out;
+    EXPECT_NE(tagged.out.find("  master\n"), std::string::npos) << tagged.out;
     // A trigger for an unknown program is refused with the reason.
     auto refused = hgtest::run(ctl("--socket " + sock + " trigger --program 5"));
     EXPECT_EQ(refused.status, 3);

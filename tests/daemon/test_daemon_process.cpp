@@ -130,6 +130,47 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
               "M1|1|pass\nSN000000|0|pass\n");
 }
 
+TEST(DaemonProcess, CyclePurposeFromThePlcOrTheSocketIsLatchedAtTheTriggerAndStored)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    const auto sock = dir / "hg.sock";
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "status"}})["purpose"], "production");
+
+    // The PLC tags the next cycles master (CYCLE_PURPOSE = 1); a value past 2 answers exception 03.
+    EXPECT_EQ(nlohmann::json::parse(hgdaemon::plcClient(port, "write 11 1").out)["exception"], 0);
+    EXPECT_EQ(nlohmann::json::parse(hgdaemon::plcClient(port, "write 11 3").out)["exception"], 3);
+    EXPECT_EQ(nlohmann::json::parse(hgdaemon::plcClient(port, "read 11 1").out)[0], 1);
+    EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "purpose"}})["purpose"], "master");
+    ASSERT_EQ(hgdaemon::plcClient(port, "cycles 1 --bad-every 0").status, 0);
+
+    // The socket writes the same register: the last writer wins, for the PLC's triggers too.
+    auto set = hgdaemon::maintenance(sock, {{"command", "purpose"}, {"purpose", "study"}});
+    ASSERT_TRUE(set["ok"].get<bool>()) << set.dump();
+    EXPECT_EQ(nlohmann::json::parse(hgdaemon::plcClient(port, "read 11 1").out)[0], 2);
+    ASSERT_EQ(hgdaemon::plcClient(port, "cycles 1 --bad-every 0").status, 0);
+    auto bad = hgdaemon::maintenance(sock, {{"command", "purpose"}, {"purpose", "golden"}});
+    EXPECT_FALSE(bad["ok"].get<bool>());
+    EXPECT_NE(bad["error"].get<std::string>().find("\"golden\" is not"), std::string::npos) << bad.dump();
+    EXPECT_FALSE(hgdaemon::maintenance(sock, {{"command", "purpose"}, {"purpose", 1}})["ok"].get<bool>());
+    EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "status"}})["purpose"], "study");
+    // A manual trigger carries it as well; back to production for the last one.
+    ASSERT_TRUE(hgdaemon::maintenance(sock, {{"command", "trigger"}, {"program", 1}, {"serial", "M1"}})["ok"]);
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "done", 10s));
+    ASSERT_TRUE(hgdaemon::maintenance(sock, {{"command", "purpose"}, {"purpose", "production"}})["ok"]);
+    ASSERT_EQ(hgdaemon::plcClient(port, "cycles 1 --bad-every 0").status, 0);
+
+    EXPECT_EQ(sql(dir / "results.db", "SELECT manual, purpose FROM inspections ORDER BY id"),
+              "0|master\n0|study\n1|study\n0|production\n");
+    const auto recent = hgdaemon::maintenance(sock, {{"command", "results"}, {"limit", 4}})["results"];
+    ASSERT_EQ(recent.size(), 4u);
+    EXPECT_EQ(recent[0]["purpose"], "production");
+    EXPECT_EQ(recent[3]["purpose"], "master");
+    EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "status"}})["sequencer"]["last_cycle"]["purpose"], "production");
+}
+
 struct FaultCase {
     const char* variable;
     const char* value;

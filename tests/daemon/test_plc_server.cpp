@@ -93,6 +93,8 @@ TEST(PlcServer, AccessRulesAnswerTheDocumentedExceptions)
     EXPECT_EQ(j["write_block_into_read_only"], 2);
     EXPECT_EQ(j["bad_serial_value"], 3);
     EXPECT_EQ(j["bad_command_value"], 3);
+    EXPECT_EQ(j["bad_purpose_value"], 3); // CYCLE_PURPOSE takes 0, 1, 2 only
+    EXPECT_EQ(s.registers.snapshot()[11], 0);
     EXPECT_EQ(j["read_past_map"], 2);
     EXPECT_EQ(j["write_program"], 0);
     EXPECT_EQ(j["read_map"], 0);

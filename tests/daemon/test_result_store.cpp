@@ -102,7 +102,60 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[0]["alignment"]["shift_mm"], 0.25);
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "2\n");
+    EXPECT_EQ(recent[1]["purpose"], "production");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "3\n");
+}
+
+TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v2.db";
+    // The schema of version 2, as the daemon before cycle purposes wrote it.
+    hgtest::run("sqlite3 " + file.string() +
+                " \"CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_utc TEXT NOT NULL, "
+                "started_unix_ms INTEGER NOT NULL, trigger_seq INTEGER NOT NULL, manual INTEGER NOT NULL, serial TEXT "
+                "NOT NULL, program INTEGER NOT NULL, part TEXT NOT NULL, verdict TEXT NOT NULL, fault_code INTEGER NOT "
+                "NULL, cycle_ms INTEGER NOT NULL, landmarks_failed INTEGER NOT NULL, landmarks_total INTEGER NOT NULL, "
+                "landmarks_json TEXT NOT NULL, timing_json TEXT NOT NULL, images_dir TEXT NOT NULL DEFAULT '', "
+                "alignment_json TEXT NOT NULL DEFAULT 'null', simulation_json TEXT NOT NULL DEFAULT 'null'); "
+                "INSERT INTO inspections VALUES (1, 't', 0, 3, 0, 'OLD', 1, 'block', 'pass', 0, 10, 0, 0, '[]', '{}', "
+                "'', 'null', 'null'); PRAGMA user_version=2;\"");
+    {
+        ResultStore store(file);
+        auto r = record(4, station::Verdict::Pass);
+        r.purpose = station::CyclePurpose::Master;
+        store.commit(r);
+        auto recent = store.recent(2);
+        ASSERT_EQ(recent.size(), 2u);
+        EXPECT_EQ(recent[0]["purpose"], "master");
+        EXPECT_EQ(recent[1]["purpose"], "production");
+        EXPECT_EQ(recent[1]["serial"], "OLD");
+    }
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "3\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
+              "OLD|production\nSN-4|master\n");
+    // Only the three purposes are stored, also in a migrated table.
+    auto bad = hgtest::run("sqlite3 " + file.string() + " \"UPDATE inspections SET purpose = 'golden' WHERE id = 1\"");
+    EXPECT_NE(bad.status, 0);
+    ResultStore again(file); // reopening a version 3 database changes nothing
+    EXPECT_EQ(again.count(), 2);
+}
+
+TEST(ResultStore, KeepsALandmarksAsymmetricLimitsForTheStudies)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        auto r = record(3, station::Verdict::Pass);
+        r.landmarks[0].limitsMm = std::pair{-0.05, 0.15};
+        store.commit(r);
+    }
+    // Read by the gauge studies (docs/study.md): T = upper − lower; no limits → ±tolerance_mm.
+    auto rows = hgtest::run("sqlite3 " + file.string() +
+                            " \"SELECT json_extract(landmarks_json, '$[0].limits_mm'), "
+                            "json_type(landmarks_json, '$[1].limits_mm') IS NULL FROM inspections\"");
+    EXPECT_EQ(rows.out, "[-0.05,0.15]|1\n");
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)

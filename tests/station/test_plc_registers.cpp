@@ -47,10 +47,10 @@ TEST(PlcRegisterMap, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
     makeReady(r);
     for (std::uint16_t a : {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 120, 135})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "read-only " << a;
-    for (std::uint16_t a : {11, 50, 99, 112, 119, 136, 1000, 65535})
+    for (std::uint16_t a : {12, 50, 99, 112, 119, 136, 1000, 65535})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "unmapped " << a;
     // A block that starts writable and runs into a read-only register changes nothing.
-    std::array<std::uint16_t, 12> block{};
+    std::array<std::uint16_t, 13> block{};
     block.fill(0x4141);
     EXPECT_EQ(r.write(0, block), ModbusException::IllegalDataAddress);
     EXPECT_EQ(readOne(r, 0), 0);
@@ -289,6 +289,60 @@ TEST(PlcRegisterMap, MaintenanceRefusesTriggersAndIsEnteredOnlyWhenIdle)
     EXPECT_EQ(r.triggerManually(1, "S2"), RejectReason::None); // accepted: STATUS busy, one pending
     EXPECT_FALSE(r.enterMaintenance());
     EXPECT_EQ(readOne(r, reg::Status), 1);
+}
+
+TEST(PlcRegisterMap, CyclePurposeTakesProductionMasterStudyAndRefusesAnythingElse)
+{
+    RegisterMap r;
+    makeReady(r);
+    for (std::uint16_t v : {1, 2, 0}) {
+        EXPECT_EQ(writeOne(r, 11, v), ModbusException::None) << v;
+        EXPECT_EQ(readOne(r, 11), v); // CYCLE_PURPOSE reads back what applies
+    }
+    ASSERT_EQ(writeOne(r, 11, 2), ModbusException::None);
+    for (std::uint16_t v : {3, 4, 255, 65535}) {
+        EXPECT_EQ(writeOne(r, 11, v), ModbusException::IllegalDataValue) << v;
+        EXPECT_EQ(readOne(r, 11), 2) << "changed by the refused value " << v;
+        EXPECT_EQ(r.purpose(), CyclePurpose::Study);
+    }
+    // All or nothing: a trigger in the same block as a bad purpose is not taken.
+    std::array<std::uint16_t, 12> block{};
+    block[0] = 9;  // TRIGGER_SEQ
+    block[1] = 1;  // PART_PROGRAM
+    block[11] = 7; // CYCLE_PURPOSE: no such purpose
+    EXPECT_EQ(r.write(0, block), ModbusException::IllegalDataValue);
+    EXPECT_FALSE(r.takeTrigger());
+    EXPECT_EQ(readOne(r, 0), 0);
+    EXPECT_EQ(toString(CyclePurpose::Master), "master");
+    EXPECT_EQ(parsePurpose("study"), CyclePurpose::Study);
+    EXPECT_FALSE(parsePurpose("golden"));
+}
+
+TEST(PlcRegisterMap, ThePurposeIsLatchedWithTheTriggerAndTheLastWriterWins)
+{
+    RegisterMap r;
+    makeReady(r);
+    // One FC16 block: program, purpose master and the trigger together.
+    std::array<std::uint16_t, 12> block{};
+    block[0] = 1;
+    block[1] = 1;
+    block[11] = 1;
+    ASSERT_EQ(r.write(0, block), ModbusException::None);
+    auto first = r.takeTrigger();
+    ASSERT_TRUE(first);
+    EXPECT_EQ(first->purpose, CyclePurpose::Master);
+    // The maintenance socket writes the same register: it wins over the PLC's earlier write ...
+    r.setPurpose(CyclePurpose::Study);
+    EXPECT_EQ(readOne(r, 11), 2);
+    EXPECT_EQ(first->purpose, CyclePurpose::Master); // the latched request keeps its purpose
+    r.setStatus(PlcStatus::Ready);
+    EXPECT_EQ(r.triggerManually(1, "M"), RejectReason::None);
+    EXPECT_EQ(r.takeTrigger()->purpose, CyclePurpose::Study);
+    // ... and a later PLC write wins over it.
+    r.setStatus(PlcStatus::Ready);
+    ASSERT_EQ(writeOne(r, 11, 0), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);
+    EXPECT_EQ(r.takeTrigger()->purpose, CyclePurpose::Production);
 }
 
 } // namespace

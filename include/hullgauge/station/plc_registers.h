@@ -23,6 +23,7 @@
 #include <set>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace hg::station {
@@ -35,6 +36,8 @@ inline constexpr std::uint16_t PartProgram = 1;
 inline constexpr std::uint16_t Serial = 2; ///< 2..9, 16 ASCII characters, high byte first
 inline constexpr std::uint16_t SerialWords = 8;
 inline constexpr std::uint16_t Command = 10; ///< extension: 1 = abort the cycle, 2 = reset fault
+/// Extension: the purpose of the next cycles (CyclePurpose), latched with each trigger (docs/plc.md).
+inline constexpr std::uint16_t CyclePurpose = 11;
 inline constexpr std::uint16_t AckSeq = 100;
 inline constexpr std::uint16_t DoneSeq = 101;
 inline constexpr std::uint16_t Status = 102;
@@ -66,6 +69,12 @@ enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3,
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
 /// COMMAND register values (extension).
 enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2 };
+/// CYCLE_PURPOSE register values (extension, docs/study.md): what the cycles
+/// are for. Master and study cycles stay out of production statistics.
+enum class CyclePurpose : std::uint16_t { Production = 0, Master = 1, Study = 2 };
+std::string_view toString(CyclePurpose p);
+/// "production", "master" or "study"; nothing for any other name.
+std::optional<CyclePurpose> parsePurpose(std::string_view name);
 /// The commands written to COMMAND and not taken yet: each is latched until
 /// taken, so an abort and a fault reset written back to back are both seen.
 struct PlcCommands {
@@ -92,6 +101,8 @@ struct TriggerRequest {
     /// From the maintenance socket, not the PLC: its result never touches
     /// ACK_SEQ, DONE_SEQ or the result registers the PLC owns a handshake on.
     bool manual = false;
+    /// CYCLE_PURPOSE at acceptance.
+    CyclePurpose purpose = CyclePurpose::Production;
 };
 
 /// What the PLC sees of a finished (or aborted) cycle.
@@ -139,6 +150,10 @@ class RegisterMap {
     void publishResult(const PublishedResult& r);
     /// HEARTBEAT += 1 (wraps at 65536).
     void beat();
+    /// CYCLE_PURPOSE as the maintenance socket sets it: the same register the
+    /// PLC writes, so whichever was written last applies to the next trigger.
+    void setPurpose(CyclePurpose purpose);
+    CyclePurpose purpose() const;
 
     /// Takes the oldest accepted trigger, if any.
     std::optional<TriggerRequest> takeTrigger();

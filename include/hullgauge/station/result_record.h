@@ -43,6 +43,8 @@ struct InspectionRecord {
     std::string serial;
     std::uint16_t program = 0;
     std::string part; ///< the part program's `part` name
+    /// What the cycle was for (CYCLE_PURPOSE at the trigger, docs/study.md).
+    CyclePurpose purpose = CyclePurpose::Production;
     Verdict verdict = Verdict::Error;
     FaultCode faultCode = FaultCode::None;
     std::uint32_t cycleMs = 0; ///< trigger accepted -> verdict

@@ -1,0 +1,393 @@
+// hullgauge study type1|type3 --store DB [...]: the gauge studies of
+// docs/study.md on the cycles of the result store (docs/daemon.md,
+// "Results"), read read-only. The store is read here; the studies themselves
+// are pure (hullgauge/study/gauge_study.h).
+#include "command.h"
+#include "hullgauge/common/config_node.h"
+#include "hullgauge/common/durable_file.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/study/gauge_study.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <spdlog/fmt/fmt.h>
+#include <sqlite3.h>
+#include <sstream>
+
+namespace hg::cli {
+namespace {
+
+using nlohmann::json;
+
+enum class Kind { Type1, Type3 };
+
+struct StudyOptions {
+    std::string store;
+    int program = 0;
+    std::string serial;
+    std::string since, until;
+    std::string purpose;
+    std::string reference;
+    std::size_t minCycles = 25;
+    bool json = false;
+    std::string out;
+};
+
+/// Which cycles the study takes: pass/fail cycles (never aborted or error)
+/// of one purpose (or any), optionally one program, one serial, a time window.
+struct Selection {
+    std::string purpose;
+    std::optional<int> program;
+    std::string serial;
+    std::string since, until; ///< as given
+    std::optional<std::int64_t> sinceMs, untilMs;
+};
+
+/// "2026-12-02", "2026-12-02T10:30", "2026-12-02T10:30:05" (optionally with
+/// a space for the T and a trailing Z), UTC, to ms since 1970.
+std::int64_t parseUtc(const std::string& text, const std::string& option)
+{
+    std::tm tm{};
+    int consumed = 0;
+    const int fields = std::sscanf(text.c_str(), "%4d-%2d-%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &consumed);
+    std::string rest = fields == 3 ? text.substr(static_cast<std::size_t>(consumed)) : std::string("?");
+    if (!rest.empty() && (rest[0] == 'T' || rest[0] == ' ')) {
+        int more = 0;
+        if (std::sscanf(rest.c_str() + 1, "%2d:%2d%n:%2d%n", &tm.tm_hour, &tm.tm_min, &more, &tm.tm_sec, &more) < 2)
+            rest = "?";
+        else
+            rest = rest.substr(static_cast<std::size_t>(more) + 1);
+    }
+    if (rest == "Z") rest.clear();
+    const std::tm asWritten = tm;
+    tm.tm_year -= 1900;
+    tm.tm_mon -= 1;
+    const std::time_t t = timegm(&tm);
+    // timegm normalises 2026-02-30 to March: a date that does not round-trip is no date.
+    const bool valid = rest.empty() && tm.tm_year + 1900 == asWritten.tm_year && tm.tm_mon + 1 == asWritten.tm_mon &&
+                       tm.tm_mday == asWritten.tm_mday && tm.tm_hour == asWritten.tm_hour &&
+                       tm.tm_min == asWritten.tm_min && tm.tm_sec == asWritten.tm_sec;
+    if (!valid) throw InputError("", option, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
+    return static_cast<std::int64_t>(t) * 1000;
+}
+
+/// The result store opened read-only; closed when it goes out of scope.
+class StoreReader {
+  public:
+    explicit StoreReader(const std::string& file) : file_(file)
+    {
+        if (!std::filesystem::is_regular_file(file)) throw InputError("", "--store", "no database at " + file);
+        const auto uri = "file:" + std::filesystem::absolute(file).string() + "?mode=ro";
+        if (sqlite3_open_v2(uri.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
+            const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+            sqlite3_close(db_);
+            db_ = nullptr;
+            throw InputError("", "--store", file + ": " + why);
+        }
+        sqlite3_busy_timeout(db_, 2000);
+    }
+    ~StoreReader() { sqlite3_close(db_); }
+    StoreReader(const StoreReader&) = delete;
+    StoreReader& operator=(const StoreReader&) = delete;
+
+    /// True when the table has the column (a database before schema version 3 has no `purpose`).
+    bool hasColumn(const std::string& column)
+    {
+        bool found = false, table = false;
+        query("PRAGMA table_info(inspections)", {}, [&](sqlite3_stmt* s) {
+            table = true;
+            found = found || column == reinterpret_cast<const char*>(sqlite3_column_text(s, 1));
+        });
+        if (!table) throw InputError("", "--store", file_ + " holds no inspections table: not a result store");
+        return found;
+    }
+
+    /// Runs `sql` with text parameters bound in order, calling `row` for every row.
+    template <class Row> void query(const std::string& sql, const std::vector<std::string>& params, Row&& row)
+    {
+        sqlite3_stmt* stmt = nullptr;
+        if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK)
+            throw InputError("", "--store", file_ + ": " + sqlite3_errmsg(db_));
+        for (std::size_t i = 0; i < params.size(); ++i)
+            sqlite3_bind_text(stmt, static_cast<int>(i + 1), params[i].c_str(), -1, SQLITE_TRANSIENT);
+        int rc;
+        while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) row(stmt);
+        sqlite3_finalize(stmt);
+        if (rc != SQLITE_DONE) throw FaultError("result store " + file_ + ": " + sqlite3_errmsg(db_));
+    }
+
+  private:
+    std::string file_;
+    sqlite3* db_ = nullptr;
+};
+
+std::string columnText(sqlite3_stmt* s, int i)
+{
+    const auto* p = sqlite3_column_text(s, i);
+    return p ? reinterpret_cast<const char*>(p) : "";
+}
+
+/// The selected cycles in the order they were stored; the programs they span.
+std::vector<study::StudyRecord> readRecords(StoreReader& store, const Selection& sel, std::set<int>& programs)
+{
+    std::string sql = "SELECT id, serial, program, landmarks_json FROM inspections WHERE verdict IN ('pass', 'fail')";
+    std::vector<std::string> params;
+    auto where = [&](const char* clause, std::string value) {
+        sql += clause;
+        params.push_back(std::move(value));
+    };
+    if (sel.purpose != "any") {
+        // A store before schema version 3 knows production cycles only.
+        if (store.hasColumn("purpose"))
+            where(" AND purpose = ?", sel.purpose);
+        else if (sel.purpose != "production")
+            sql += " AND 0";
+    }
+    if (sel.program) where(" AND program = CAST(? AS INTEGER)", std::to_string(*sel.program));
+    if (!sel.serial.empty()) where(" AND serial = ?", sel.serial);
+    if (sel.sinceMs) where(" AND started_unix_ms >= CAST(? AS INTEGER)", std::to_string(*sel.sinceMs));
+    if (sel.untilMs) where(" AND started_unix_ms < CAST(? AS INTEGER)", std::to_string(*sel.untilMs));
+    std::vector<study::StudyRecord> records;
+    store.query(sql + " ORDER BY id", params, [&](sqlite3_stmt* s) {
+        const auto id = sqlite3_column_int64(s, 0);
+        auto landmarks = json::parse(columnText(s, 3), nullptr, false);
+        if (landmarks.is_discarded())
+            throw InputError("", "cycle " + std::to_string(id) + ".landmarks_json", "not valid JSON");
+        programs.insert(sqlite3_column_int(s, 2));
+        records.push_back({id, columnText(s, 1), std::move(landmarks)});
+    });
+    return records;
+}
+
+std::string describe(const Selection& sel)
+{
+    std::string s = "pass/fail cycles with purpose " + sel.purpose;
+    if (sel.program) s += ", program " + std::to_string(*sel.program);
+    if (!sel.serial.empty()) s += ", serial '" + sel.serial + "'";
+    if (sel.sinceMs) s += ", started at or after " + sel.since;
+    if (sel.untilMs) s += ", started before " + sel.until;
+    return s;
+}
+
+/// The selection's cycles: one program, at least one cycle.
+std::vector<study::StudyRecord> selectCycles(const StudyOptions& o, Selection& sel)
+{
+    StoreReader store(o.store);
+    std::set<int> programs;
+    auto records = readRecords(store, sel, programs);
+    if (records.empty()) throw InputError("", "--store", o.store + " holds no " + describe(sel));
+    if (programs.size() > 1) {
+        std::string list;
+        for (int p : programs) list += (list.empty() ? "" : ", ") + std::to_string(p);
+        throw InputError("", "--program", "the selected cycles span programs " + list + ": choose one");
+    }
+    sel.program = *programs.begin();
+    return records;
+}
+
+/// The reference file of a type-1 study: landmark id → x_ref in mm (docs/study.md).
+std::map<std::string, double> loadReference(const std::string& file, const std::vector<study::LandmarkSeries>& series)
+{
+    std::map<std::string, double> out;
+    if (file.empty()) return out;
+    const auto root = ConfigNode::loadFile(file);
+    if (!root.isMap()) throw InputError(file, "", "expected a mapping of landmark id to reference value in mm");
+    for (const auto& id : root.keys()) {
+        const bool known = std::any_of(series.begin(), series.end(), [&](auto& s) { return s.id == id; });
+        if (!known) throw InputError(file, id, "no such landmark in the selected cycles", root[id].line());
+        out[id] = root[id].asDouble();
+    }
+    return out;
+}
+
+json sourceJson(const study::LandmarkSeries& s)
+{
+    json j{{"id", s.id}, {"values", std::string(study::toString(s.source))}, {"zone_mm", {s.zone.lower, s.zone.upper}}};
+    if (s.source == study::ValueSource::BracketMiddle) j["note"] = "bracket middle: resolution one voxel";
+    return j;
+}
+
+json runType1(const std::vector<study::StudyRecord>& records, const StudyOptions& o)
+{
+    const auto series = study::collectSeries(records);
+    const auto reference = loadReference(o.reference, series);
+    study::Limits limits;
+    limits.minType1Values = o.minCycles;
+    auto landmarks = json::array();
+    for (const auto& s : series) {
+        auto j = sourceJson(s);
+        if (!s.problem.empty()) {
+            j.update({{"n", s.values.size()}, {"evaluated", false}, {"not_evaluated", s.problem}});
+        } else {
+            const auto it = reference.find(s.id);
+            const auto r = study::type1(s.values, s.zone.width(), it == reference.end() ? 0.0 : it->second, limits);
+            j.update(toJson(r));
+            if (r.evaluated && r.stddev == 0.0 && s.source == study::ValueSource::BracketMiddle)
+                j["note"] = j["note"].get<std::string>() +
+                            "; s = 0: every value in the same bracket, the spread is below the resolution";
+        }
+        landmarks.push_back(std::move(j));
+    }
+    return landmarks;
+}
+
+json runType3(const std::vector<study::StudyRecord>& records)
+{
+    study::checkType3Layout(records);
+    auto landmarks = json::array();
+    for (const auto& s : study::collectSeries(records)) {
+        auto j = sourceJson(s);
+        if (!s.problem.empty())
+            j.update({{"evaluated", false}, {"not_evaluated", s.problem}});
+        else
+            j.update(toJson(study::type3(study::groupByPart(s), s.zone.width())));
+        landmarks.push_back(std::move(j));
+    }
+    return landmarks;
+}
+
+std::string cell(const json& v, int precision = 4)
+{
+    if (v.is_number()) return formatNumber(v.get<double>(), precision);
+    if (v.is_string()) return v.get<std::string>() == "inf" ? "∞" : (v.get<std::string>() == "-inf" ? "−∞" : "?");
+    return "—";
+}
+
+void printNotes(std::ostream& os, const json& landmarks)
+{
+    for (const auto& l : landmarks) {
+        if (l.contains("not_evaluated"))
+            os << "  " << l["id"].get<std::string>() << ": not evaluated — " << l["not_evaluated"].get<std::string>()
+               << "\n";
+        if (l.contains("note"))
+            os << "  " << l["id"].get<std::string>() << ": " << l["note"].get<std::string>() << "\n";
+    }
+}
+
+std::string textReport(Kind kind, const json& report)
+{
+    std::ostringstream os;
+    const auto& sel = report["selection"];
+    os << (kind == Kind::Type1 ? "type-1 study" : "type-3 study (gauge R&R, ANOVA without operators)") << ": "
+       << sel["cycles"] << " cycles of program " << sel["program"] << ", purpose " << sel["purpose"].get<std::string>()
+       << ", from " << report["store"].get<std::string>() << "\n";
+    if (kind == Kind::Type1 && sel["serials"].get<int>() > 1)
+        os << "  (" << sel["serials"] << " serials: a type-1 study measures one master part; --serial chooses it)\n";
+    if (kind == Kind::Type1) {
+        os << fmt::format("{:<16} {:>4} {:>7} {:>10} {:>10} {:>9} {:>10} {:>7} {:>7}  {}\n", "landmark", "n", "T mm",
+                          "mean mm", "s mm", "ref mm", "bias mm", "Cg", "Cgk", "capable");
+        for (const auto& l : report["landmarks"])
+            os << fmt::format("{:<16} {:>4} {:>7} {:>10} {:>10} {:>9} {:>10} {:>7} {:>7}  {}\n",
+                              l["id"].get<std::string>(), l.value("n", 0), cell(l.value("tolerance_mm", json()), 3),
+                              cell(l.value("mean_mm", json())), cell(l.value("stddev_mm", json())),
+                              cell(l.value("reference_mm", json())), cell(l.value("bias_mm", json())),
+                              cell(l.value("cg", json()), 3), cell(l.value("cgk", json()), 3),
+                              l.value("evaluated", false) ? (l["capable"].get<bool>() ? "yes" : "no") : "—");
+    } else {
+        os << fmt::format("{:<16} {:>5} {:>6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>4}  {}\n", "landmark", "parts",
+                          "trials", "EV mm", "PV mm", "TV mm", "%GRR", "%tol", "ndc", "acceptance");
+        for (const auto& l : report["landmarks"])
+            os << fmt::format("{:<16} {:>5} {:>6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>4}  {}\n",
+                              l["id"].get<std::string>(), l.value("parts", 0), l.value("trials", 0),
+                              cell(l.value("ev_mm", json())), cell(l.value("pv_mm", json())),
+                              cell(l.value("tv_mm", json())), cell(l.value("percent_grr", json()), 3),
+                              cell(l.value("percent_tolerance", json()), 3), cell(l.value("ndc", json())),
+                              l.value("acceptance", std::string("—")));
+    }
+    printNotes(os, report["landmarks"]);
+    return os.str();
+}
+
+std::size_t serialCount(const std::vector<study::StudyRecord>& records)
+{
+    std::set<std::string> serials;
+    for (const auto& r : records) serials.insert(r.serial);
+    return serials.size();
+}
+
+int run(Kind kind, const StudyOptions& o)
+{
+    Selection sel{o.purpose.empty() ? (kind == Kind::Type1 ? "master" : "study") : o.purpose,
+                  {},
+                  o.serial,
+                  o.since,
+                  o.until,
+                  {},
+                  {}};
+    if (o.program) sel.program = o.program;
+    if (!o.since.empty()) sel.sinceMs = parseUtc(o.since, "--since");
+    if (!o.until.empty()) sel.untilMs = parseUtc(o.until, "--until");
+    const auto records = selectCycles(o, sel);
+    if (kind == Kind::Type1 && records.size() < o.minCycles)
+        throw InputError("", "--min-cycles",
+                         std::to_string(records.size()) + " " + describe(sel) + " in " + o.store +
+                             ", a type-1 study needs " + std::to_string(o.minCycles) +
+                             " (VDA 5: at least 25; --min-cycles lowers it)");
+    json report{{"study", kind == Kind::Type1 ? "type1" : "type3"},
+                {"store", o.store},
+                {"selection",
+                 {{"purpose", sel.purpose},
+                  {"program", *sel.program},
+                  {"serial", sel.serial},
+                  {"cycles", records.size()},
+                  {"serials", serialCount(records)},
+                  {"first_id", records.front().id},
+                  {"last_id", records.back().id}}},
+                {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records)}};
+    const auto text = o.json ? report.dump(2) + "\n" : textReport(kind, report);
+    hg::log::category("study")->debug("{}: {} cycles of program {}", report["study"].get<std::string>(), records.size(),
+                                      *sel.program);
+    if (o.out.empty())
+        std::cout << text;
+    else
+        writeFileDurably(o.out, text);
+    return 0;
+}
+
+CLI::App* addStudy(CLI::App& parent, const char* name, const char* what, StudyOptions& o)
+{
+    auto* sub = parent.add_subcommand(name, what);
+    sub->add_option("--store", o.store, "the result store (SQLite, read read-only)")->required();
+    sub->add_option("--program", o.program, "part program number (default: the one the cycles have)")
+        ->check(CLI::Range(1, 65535));
+    sub->add_option("--serial", o.serial, "only the cycles of this serial");
+    sub->add_option("--since", o.since, "only cycles started at or after this UTC time (YYYY-MM-DD[THH:MM[:SS]])");
+    sub->add_option("--until", o.until, "only cycles started before this UTC time");
+    sub->add_option("--purpose", o.purpose, "cycles tagged master, study or production, or any")
+        ->check(CLI::IsMember({"production", "master", "study", "any"}));
+    sub->add_flag("--json", o.json, "print JSON (docs/study.md)");
+    sub->add_option("--out", o.out, "write the report to this file instead of standard output");
+    return sub;
+}
+
+std::function<int()> factory(CLI::App& app)
+{
+    auto o = std::make_shared<StudyOptions>();
+    auto* studyCmd = app.add_subcommand("study", "gauge studies on the result store: type-1 (Cg, Cgk) and type-3 "
+                                                 "(gauge R&R) per landmark (docs/study.md)");
+    studyCmd->require_subcommand(1);
+    auto* type1 =
+        addStudy(*studyCmd, "type1",
+                 "type-1 study (VDA 5): one master part measured again and again; default purpose master", *o);
+    type1->add_option("--reference", o->reference, "YAML: landmark id → the master's reference value in mm");
+    type1->add_option("--min-cycles", o->minCycles, "fewest cycles the study takes (default 25)")
+        ->check(CLI::Range(2, 1000000));
+    addStudy(*studyCmd, "type3", "type-3 study (AIAG MSA, ANOVA): parts × 2–3 trials; default purpose study", *o);
+    return [=]() { return run(type1->parsed() ? Kind::Type1 : Kind::Type3, *o); };
+}
+
+} // namespace
+
+HG_REGISTER_COMMAND("study", factory);
+
+} // namespace hg::cli

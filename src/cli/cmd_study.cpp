@@ -39,9 +39,24 @@ struct StudyOptions {
     std::string purpose;
     std::string reference;
     std::size_t minCycles = 25;
+    std::vector<std::string> landmarks; ///< only these (docs/contracts.md §8 `--landmark ID`); empty: all
     bool json = false;
     std::string out;
 };
+
+/// The series of the landmarks --landmark names (all without it); an id no
+/// selected cycle has is bad input naming it.
+std::vector<study::LandmarkSeries> chosenSeries(std::vector<study::LandmarkSeries> series, const StudyOptions& o)
+{
+    if (o.landmarks.empty()) return series;
+    for (const auto& id : o.landmarks)
+        if (std::none_of(series.begin(), series.end(), [&](const auto& s) { return s.id == id; }))
+            throw InputError("", "--landmark", "no landmark '" + id + "' in the selected cycles");
+    std::erase_if(series, [&](const auto& s) {
+        return std::find(o.landmarks.begin(), o.landmarks.end(), s.id) == o.landmarks.end();
+    });
+    return series;
+}
 
 /// Which cycles the study takes: pass/fail cycles (never aborted or error)
 /// of one purpose (or any), optionally one program, one serial, a time window.
@@ -219,7 +234,7 @@ json sourceJson(const study::LandmarkSeries& s)
 
 json runType1(const std::vector<study::StudyRecord>& records, const StudyOptions& o)
 {
-    const auto series = study::collectSeries(records);
+    const auto series = chosenSeries(study::collectSeries(records), o);
     const auto reference = loadReference(o.reference, series);
     study::Limits limits;
     limits.minType1Values = o.minCycles;
@@ -235,17 +250,23 @@ json runType1(const std::vector<study::StudyRecord>& records, const StudyOptions
             if (r.evaluated && r.stddev == 0.0 && s.source == study::ValueSource::BracketMiddle)
                 j["note"] = j["note"].get<std::string>() +
                             "; s = 0: every value in the same bracket, the spread is below the resolution";
+            // A value known to one voxel cannot show the gauge capable, whatever its spread
+            // (VDA 5 asks a resolution of 5 % of T; docs/study.md).
+            if (r.evaluated && s.source == study::ValueSource::BracketMiddle) {
+                j["capable"] = false;
+                j["note"] = j["note"].get<std::string>() + "; not capable on the bracket middle";
+            }
         }
         landmarks.push_back(std::move(j));
     }
     return landmarks;
 }
 
-json runType3(const std::vector<study::StudyRecord>& records)
+json runType3(const std::vector<study::StudyRecord>& records, const StudyOptions& o)
 {
     study::checkType3Layout(records);
     auto landmarks = json::array();
-    for (const auto& s : study::collectSeries(records)) {
+    for (const auto& s : chosenSeries(study::collectSeries(records), o)) {
         auto j = sourceJson(s);
         if (!s.problem.empty())
             j.update({{"evaluated", false}, {"not_evaluated", s.problem}});
@@ -343,7 +364,7 @@ int run(Kind kind, const StudyOptions& o)
                   {"serials", serialCount(records)},
                   {"first_id", records.front().id},
                   {"last_id", records.back().id}}},
-                {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records)}};
+                {"landmarks", kind == Kind::Type1 ? runType1(records, o) : runType3(records, o)}};
     const auto text = o.json ? report.dump(2) + "\n" : textReport(kind, report);
     hg::log::category("study")->debug("{}: {} cycles of program {}", report["study"].get<std::string>(), records.size(),
                                       *sel.program);
@@ -365,6 +386,7 @@ CLI::App* addStudy(CLI::App& parent, const char* name, const char* what, StudyOp
     sub->add_option("--until", o.until, "only cycles started before this UTC time");
     sub->add_option("--purpose", o.purpose, "cycles tagged master, study or production, or any")
         ->check(CLI::IsMember({"production", "master", "study", "any"}));
+    sub->add_option("--landmark", o.landmarks, "only this landmark (repeatable; default: every landmark)");
     sub->add_flag("--json", o.json, "print JSON (docs/study.md)");
     sub->add_option("--out", o.out, "write the report to this file instead of standard output");
     return sub;

@@ -142,7 +142,9 @@ def compare(study, expected, cycles):
         check(l["values"] == key and l["n"] == n and l["evaluated"], f"{l['id']}: {l}")
         for field, value in (("mean_mm", mean), ("stddev_mm", s), ("tolerance_mm", T), ("cg", cg), ("cgk", cgk)):
             check(close(number(l[field]), value), f"{l['id']}: {field} {l[field]}, recomputed {value}")
-        check(l["capable"] == (cg >= 1.33 and cgk >= 1.33), f"{l['id']}: capable {l['capable']}")
+        # Known to a voxel (the bracket middle) a landmark is never capable (docs/study.md).
+        capable = key == "deviation_mm" and cg >= 1.33 and cgk >= 1.33
+        check(l["capable"] == capable, f"{l['id']}: capable {l['capable']}")
     check(on_deviation >= 8, f"only {on_deviation} of {len(study['landmarks'])} landmarks studied on deviation_mm")
 
 

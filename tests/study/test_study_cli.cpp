@@ -90,7 +90,17 @@ TEST(StudyCli, Type1TakesTheMasterCyclesAndComputesCgCgk)
     const auto& b = j["landmarks"][1];
     EXPECT_EQ(b["values"], "error_mm");
     EXPECT_EQ(b["note"], "bracket middle: resolution one voxel; s = 0: every value in the same bracket, the spread "
-                         "is below the resolution");
+                         "is below the resolution; not capable on the bracket middle");
+    EXPECT_EQ(b["capable"], false); // known to a voxel: never capable, whatever its spread
+    // --landmark chooses (docs/contracts.md §8); an id the cycles lack is bad input naming it.
+    const auto onlyA = hgtest::run(hullgauge() + " study type1 --store " + db.string() + " --json --landmark a");
+    ASSERT_EQ(onlyA.status, 0) << onlyA.err;
+    const auto ja = nlohmann::json::parse(onlyA.out)["landmarks"];
+    ASSERT_EQ(ja.size(), 1u);
+    EXPECT_EQ(ja[0]["id"], "a");
+    const auto unknown = hgtest::run(hullgauge() + " study type1 --store " + db.string() + " --landmark nose");
+    EXPECT_EQ(unknown.status, 2);
+    EXPECT_NE(unknown.err.find("no landmark 'nose'"), std::string::npos) << unknown.err;
     EXPECT_EQ(b["stddev_mm"], 0.0);
     EXPECT_EQ(b["cg"], "inf"); // s = 0
     EXPECT_EQ(b["cgk"], "inf");

@@ -29,14 +29,6 @@ std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>&
     return out;
 }
 
-std::vector<std::string> incapableLandmarks(const std::vector<LandmarkCapability>& assessment)
-{
-    std::vector<std::string> ids;
-    for (const LandmarkCapability& c : assessment)
-        if (!c.capable) ids.push_back(c.id);
-    return ids;
-}
-
 std::string describe(const LandmarkCapability& c)
 {
     const std::string basis =

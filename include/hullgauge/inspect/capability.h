@@ -47,9 +47,6 @@ std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>&
                                                  const std::vector<geometry::CameraModel>& cameras,
                                                  const geometry::ImageQuality& quality);
 
-/// The landmarks that are not capable.
-std::vector<std::string> incapableLandmarks(const std::vector<LandmarkCapability>& assessment);
-
 /// One sentence naming the landmark and the numbers, e.g. "landmark post-nx:
 /// tolerance zone 0.01 mm is narrower than 4 U = 4 × 0.0071 mm (sub-voxel
 /// deviation, 3 views): this station cannot prove it".

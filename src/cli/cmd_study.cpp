@@ -8,6 +8,7 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/store/result_reader.h"
 #include "hullgauge/study/gauge_study.h"
 
 #include <algorithm>
@@ -21,7 +22,6 @@
 #include <optional>
 #include <set>
 #include <spdlog/fmt/fmt.h>
-#include <sqlite3.h>
 #include <sstream>
 
 namespace hg::cli {
@@ -68,119 +68,24 @@ struct Selection {
     std::optional<std::int64_t> sinceMs, untilMs;
 };
 
-/// "2026-12-02", "2026-12-02T10:30", "2026-12-02T10:30:05" (optionally with
-/// a space for the T and a trailing Z), UTC, to ms since 1970.
-std::int64_t parseUtc(const std::string& text, const std::string& option)
-{
-    std::tm tm{};
-    int consumed = 0;
-    const int fields = std::sscanf(text.c_str(), "%4d-%2d-%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &consumed);
-    std::string rest = fields == 3 ? text.substr(static_cast<std::size_t>(consumed)) : std::string("?");
-    if (!rest.empty() && (rest[0] == 'T' || rest[0] == ' ')) {
-        int more = 0;
-        if (std::sscanf(rest.c_str() + 1, "%2d:%2d%n:%2d%n", &tm.tm_hour, &tm.tm_min, &more, &tm.tm_sec, &more) < 2)
-            rest = "?";
-        else
-            rest = rest.substr(static_cast<std::size_t>(more) + 1);
-    }
-    if (rest == "Z") rest.clear();
-    const std::tm asWritten = tm;
-    tm.tm_year -= 1900;
-    tm.tm_mon -= 1;
-    const std::time_t t = timegm(&tm);
-    // timegm normalises 2026-02-30 to March: a date that does not round-trip is no date.
-    const bool valid = rest.empty() && tm.tm_year + 1900 == asWritten.tm_year && tm.tm_mon + 1 == asWritten.tm_mon &&
-                       tm.tm_mday == asWritten.tm_mday && tm.tm_hour == asWritten.tm_hour &&
-                       tm.tm_min == asWritten.tm_min && tm.tm_sec == asWritten.tm_sec;
-    if (!valid) throw InputError("", option, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
-    return static_cast<std::int64_t>(t) * 1000;
-}
-
-/// The result store opened read-only; closed when it goes out of scope.
-class StoreReader {
-  public:
-    explicit StoreReader(const std::string& file) : file_(file)
-    {
-        if (!std::filesystem::is_regular_file(file)) throw InputError("", "--store", "no database at " + file);
-        const auto uri = "file:" + std::filesystem::absolute(file).string() + "?mode=ro";
-        if (sqlite3_open_v2(uri.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
-            const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
-            sqlite3_close(db_);
-            db_ = nullptr;
-            throw InputError("", "--store", file + ": " + why);
-        }
-        sqlite3_busy_timeout(db_, 2000);
-    }
-    ~StoreReader() { sqlite3_close(db_); }
-    StoreReader(const StoreReader&) = delete;
-    StoreReader& operator=(const StoreReader&) = delete;
-
-    /// True when the table has the column (a database before schema version 3 has no `purpose`).
-    bool hasColumn(const std::string& column)
-    {
-        bool found = false, table = false;
-        query("PRAGMA table_info(inspections)", {}, [&](sqlite3_stmt* s) {
-            table = true;
-            found = found || column == reinterpret_cast<const char*>(sqlite3_column_text(s, 1));
-        });
-        if (!table) throw InputError("", "--store", file_ + " holds no inspections table: not a result store");
-        return found;
-    }
-
-    /// Runs `sql` with text parameters bound in order, calling `row` for every row.
-    template <class Row> void query(const std::string& sql, const std::vector<std::string>& params, Row&& row)
-    {
-        sqlite3_stmt* stmt = nullptr;
-        if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK)
-            throw InputError("", "--store", file_ + ": " + sqlite3_errmsg(db_));
-        for (std::size_t i = 0; i < params.size(); ++i)
-            sqlite3_bind_text(stmt, static_cast<int>(i + 1), params[i].c_str(), -1, SQLITE_TRANSIENT);
-        int rc;
-        while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) row(stmt);
-        sqlite3_finalize(stmt);
-        if (rc != SQLITE_DONE) throw FaultError("result store " + file_ + ": " + sqlite3_errmsg(db_));
-    }
-
-  private:
-    std::string file_;
-    sqlite3* db_ = nullptr;
-};
-
-std::string columnText(sqlite3_stmt* s, int i)
-{
-    const auto* p = sqlite3_column_text(s, i);
-    return p ? reinterpret_cast<const char*>(p) : "";
-}
-
 /// The selected cycles in the order they were stored; the programs they span.
-std::vector<study::StudyRecord> readRecords(StoreReader& store, const Selection& sel, std::set<int>& programs)
+std::vector<study::StudyRecord> readRecords(const store::ResultReader& store, const Selection& sel,
+                                            std::set<int>& programs)
 {
-    std::string sql = "SELECT id, serial, program, landmarks_json FROM inspections WHERE verdict IN ('pass', 'fail')";
-    std::vector<std::string> params;
-    auto where = [&](const char* clause, std::string value) {
-        sql += clause;
-        params.push_back(std::move(value));
-    };
-    if (sel.purpose != "any") {
-        // A store before schema version 3 knows production cycles only.
-        if (store.hasColumn("purpose"))
-            where(" AND purpose = ?", sel.purpose);
-        else if (sel.purpose != "production")
-            sql += " AND 0";
-    }
-    if (sel.program) where(" AND program = CAST(? AS INTEGER)", std::to_string(*sel.program));
-    if (!sel.serial.empty()) where(" AND serial = ?", sel.serial);
-    if (sel.sinceMs) where(" AND started_unix_ms >= CAST(? AS INTEGER)", std::to_string(*sel.sinceMs));
-    if (sel.untilMs) where(" AND started_unix_ms < CAST(? AS INTEGER)", std::to_string(*sel.untilMs));
+    store::ResultQuery q;
+    q.verdicts = {"pass", "fail"};
+    if (sel.purpose != "any") q.purpose = sel.purpose;
+    q.program = sel.program;
+    q.serial = sel.serial;
+    q.sinceMs = sel.sinceMs;
+    q.untilMs = sel.untilMs;
+    q.newestFirst = false;
     std::vector<study::StudyRecord> records;
-    store.query(sql + " ORDER BY id", params, [&](sqlite3_stmt* s) {
-        const auto id = sqlite3_column_int64(s, 0);
-        auto landmarks = json::parse(columnText(s, 3), nullptr, false);
-        if (landmarks.is_discarded())
-            throw InputError("", "cycle " + std::to_string(id) + ".landmarks_json", "not valid JSON");
-        programs.insert(sqlite3_column_int(s, 2));
-        records.push_back({id, columnText(s, 1), std::move(landmarks)});
-    });
+    for (auto& row : store.select(q)) {
+        programs.insert(row["program"].get<int>());
+        records.push_back({row["id"].get<std::int64_t>(), row["serial"].get<std::string>(),
+                           std::move(row["landmarks"])});
+    }
     return records;
 }
 
@@ -197,7 +102,7 @@ std::string describe(const Selection& sel)
 /// The selection's cycles: one program, at least one cycle.
 std::vector<study::StudyRecord> selectCycles(const StudyOptions& o, Selection& sel)
 {
-    StoreReader store(o.store);
+    const store::ResultReader store(o.store);
     std::set<int> programs;
     auto records = readRecords(store, sel, programs);
     if (records.empty()) throw InputError("", "--store", o.store + " holds no " + describe(sel));
@@ -346,8 +251,8 @@ int run(Kind kind, const StudyOptions& o)
                   {},
                   {}};
     if (o.program) sel.program = o.program;
-    if (!o.since.empty()) sel.sinceMs = parseUtc(o.since, "--since");
-    if (!o.until.empty()) sel.untilMs = parseUtc(o.until, "--until");
+    if (!o.since.empty()) sel.sinceMs = store::parseUtc(o.since, "--since");
+    if (!o.until.empty()) sel.untilMs = store::parseUtc(o.until, "--until");
     const auto records = selectCycles(o, sel);
     if (kind == Kind::Type1 && records.size() < o.minCycles)
         throw InputError("", "--min-cycles",

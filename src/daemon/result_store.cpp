@@ -2,6 +2,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/store/result_reader.h"
 
 #include <chrono>
 #include <ctime>
@@ -156,36 +157,9 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
 
 nlohmann::json ResultStore::recent(int limit) const
 {
-    Statement query(db_, "SELECT id, started_utc, trigger_seq, manual, serial, program, part, verdict, fault_code, "
-                         "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, images_dir, alignment_json, "
-                         "simulation_json, purpose "
-                         "FROM inspections ORDER BY id DESC LIMIT ?");
-    sqlite3_bind_int(query.stmt, 1, limit);
-    auto rows = nlohmann::json::array();
-    auto column = [&](int i) {
-        auto p = sqlite3_column_text(query.stmt, i);
-        return std::string(p ? reinterpret_cast<const char*>(p) : "");
-    };
-    while (sqlite3_step(query.stmt) == SQLITE_ROW) {
-        rows.push_back({{"id", sqlite3_column_int64(query.stmt, 0)},
-                        {"time", column(1)},
-                        {"trigger_seq", sqlite3_column_int(query.stmt, 2)},
-                        {"manual", sqlite3_column_int(query.stmt, 3) != 0},
-                        {"serial", column(4)},
-                        {"program", sqlite3_column_int(query.stmt, 5)},
-                        {"part", column(6)},
-                        {"verdict", column(7)},
-                        {"fault_code", sqlite3_column_int(query.stmt, 8)},
-                        {"cycle_ms", sqlite3_column_int64(query.stmt, 9)},
-                        {"landmarks_failed", sqlite3_column_int(query.stmt, 10)},
-                        {"landmarks_total", sqlite3_column_int(query.stmt, 11)},
-                        {"landmarks", nlohmann::json::parse(column(12), nullptr, false)},
-                        {"images", column(13)},
-                        {"alignment", nlohmann::json::parse(column(14), nullptr, false)},
-                        {"simulation", nlohmann::json::parse(column(15), nullptr, false)},
-                        {"purpose", column(16)}});
-    }
-    return rows;
+    store::ResultQuery query;
+    query.limit = limit;
+    return store::selectResults(db_, file_.string(), query);
 }
 
 std::int64_t ResultStore::count() const

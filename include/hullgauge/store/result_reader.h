@@ -1,0 +1,74 @@
+// Reading the station's result store (SQLite; the daemon writes it, see
+// docs/daemon.md "Result store"): one query type and one row shape for every
+// reader — `hullgauge ctl results`, the gauge studies, the exports and the web
+// HMI's JSON API (docs/hmi.md). A row is the JSON object of docs/daemon.md
+// ("results"): id, time, started_unix_ms, trigger_seq, manual, serial, program,
+// part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total,
+// landmarks, timing, images, alignment, simulation, purpose.
+//
+// Stores of every schema version are read: a column an older version lacks
+// reads as its default (alignment and simulation null, purpose production).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace hg::store {
+
+/// Which rows: every set field narrows the selection (AND).
+struct ResultQuery {
+    std::optional<int> program;
+    std::string serial;                ///< exactly this serial
+    std::string serialContains;        ///< a substring of the serial (the HMI's search)
+    std::vector<std::string> verdicts; ///< any of these (pass, fail, aborted, error); empty = any
+    std::string purpose;               ///< production, master or study; empty = any
+    std::optional<bool> manual;        ///< maintenance-triggered cycles (ctl trigger) or PLC cycles
+    std::optional<std::int64_t> sinceMs; ///< started at or after (Unix ms, UTC)
+    std::optional<std::int64_t> untilMs; ///< started before
+    std::optional<std::int64_t> beforeId; ///< paging: rows with a smaller id
+    std::optional<std::int64_t> afterId;  ///< paging: rows with a larger id
+    int limit = 0;                        ///< at most this many rows; 0 = all
+    bool newestFirst = true;              ///< order by id descending (else ascending)
+};
+
+/// "2026-12-02", "2026-12-02T10:30", "2026-12-02T10:30:05" (optionally with
+/// a space for the T and a trailing Z), UTC, to ms since 1970 — the form of
+/// every --since/--until and of the JSON API's since/until. Throws
+/// hg::InputError naming `field` otherwise (a date that does not exist too).
+std::int64_t parseUtc(const std::string& text, const std::string& field);
+
+/// The rows of `query` from an open database (the daemon's own connection or
+/// a reader's); `file` names the database in errors. Throws hg::FaultError
+/// when SQLite fails and hg::InputError when the file is not a result store.
+std::vector<nlohmann::json> selectResults(sqlite3* db, const std::string& file, const ResultQuery& query);
+std::int64_t countResults(sqlite3* db, const std::string& file, const ResultQuery& query);
+
+/// A result store opened read-only (SQLite's WAL lets it read while the
+/// daemon commits). Not thread-safe: one reader per thread.
+class ResultReader {
+  public:
+    /// Throws hg::InputError naming the file when there is no database there
+    /// or it cannot be opened read-only.
+    explicit ResultReader(const std::filesystem::path& file);
+    ~ResultReader();
+    ResultReader(const ResultReader&) = delete;
+    ResultReader& operator=(const ResultReader&) = delete;
+
+    std::vector<nlohmann::json> select(const ResultQuery& query) const;
+    std::int64_t count(const ResultQuery& query) const;
+    /// The row with this id, if any.
+    std::optional<nlohmann::json> byId(std::int64_t id) const;
+    const std::filesystem::path& file() const { return file_; }
+
+  private:
+    std::filesystem::path file_;
+    sqlite3* db_ = nullptr;
+};
+
+} // namespace hg::store

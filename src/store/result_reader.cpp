@@ -1,0 +1,222 @@
+#include "hullgauge/store/result_reader.h"
+
+#include "hullgauge/common/error.h"
+
+#include <cstdio>
+#include <ctime>
+#include <set>
+#include <sqlite3.h>
+
+namespace hg::store {
+namespace {
+
+using nlohmann::json;
+
+/// A prepared statement, finalized when it goes out of scope.
+struct Statement {
+    sqlite3_stmt* stmt = nullptr;
+    Statement(sqlite3* db, const std::string& file, const std::string& sql)
+    {
+        if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK)
+            throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
+    }
+    ~Statement() { sqlite3_finalize(stmt); }
+    Statement(const Statement&) = delete;
+    Statement& operator=(const Statement&) = delete;
+};
+
+std::set<std::string> columnsOf(sqlite3* db, const std::string& file)
+{
+    Statement info(db, file, "PRAGMA table_info(inspections)");
+    std::set<std::string> columns;
+    while (sqlite3_step(info.stmt) == SQLITE_ROW)
+        columns.insert(reinterpret_cast<const char*>(sqlite3_column_text(info.stmt, 1)));
+    if (columns.empty()) throw InputError(file, "", "holds no inspections table: not a result store");
+    return columns;
+}
+
+/// The SELECT list of one row; columns of later schema versions read as
+/// their defaults in older stores (docs/daemon.md, "Result store").
+std::string selectList(const std::set<std::string>& columns)
+{
+    auto orDefault = [&](const char* column, const char* fallback) {
+        return columns.count(column) ? std::string(column) : std::string(fallback);
+    };
+    return "id, started_utc, started_unix_ms, trigger_seq, manual, serial, program, part, verdict, fault_code, "
+           "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, timing_json, images_dir, " +
+           orDefault("alignment_json", "'null'") + ", " + orDefault("simulation_json", "'null'") + ", " +
+           orDefault("purpose", "'production'");
+}
+
+/// The WHERE clause of `q` and its parameters, bound as text in order.
+std::string whereClause(const ResultQuery& q, const std::set<std::string>& columns, std::vector<std::string>& params)
+{
+    std::string sql = " WHERE 1";
+    auto add = [&](const char* clause, std::string value) {
+        sql += clause;
+        params.push_back(std::move(value));
+    };
+    if (q.program) add(" AND program = CAST(? AS INTEGER)", std::to_string(*q.program));
+    if (!q.serial.empty()) add(" AND serial = ?", q.serial);
+    // instr() rather than LIKE: a serial's own % or _ is no wildcard.
+    if (!q.serialContains.empty()) add(" AND instr(serial, ?) > 0", q.serialContains);
+    if (!q.verdicts.empty()) {
+        sql += " AND verdict IN (";
+        for (std::size_t i = 0; i < q.verdicts.size(); ++i) {
+            sql += i ? ", ?" : "?";
+            params.push_back(q.verdicts[i]);
+        }
+        sql += ")";
+    }
+    // A store before schema version 3 knows production cycles only.
+    if (!q.purpose.empty() && columns.count("purpose"))
+        add(" AND purpose = ?", q.purpose);
+    else if (!q.purpose.empty() && q.purpose != "production")
+        sql += " AND 0";
+    if (q.manual) add(" AND manual = CAST(? AS INTEGER)", *q.manual ? "1" : "0");
+    if (q.sinceMs) add(" AND started_unix_ms >= CAST(? AS INTEGER)", std::to_string(*q.sinceMs));
+    if (q.untilMs) add(" AND started_unix_ms < CAST(? AS INTEGER)", std::to_string(*q.untilMs));
+    if (q.beforeId) add(" AND id < CAST(? AS INTEGER)", std::to_string(*q.beforeId));
+    if (q.afterId) add(" AND id > CAST(? AS INTEGER)", std::to_string(*q.afterId));
+    return sql;
+}
+
+void bindText(Statement& s, const std::vector<std::string>& params)
+{
+    for (std::size_t i = 0; i < params.size(); ++i)
+        sqlite3_bind_text(s.stmt, static_cast<int>(i + 1), params[i].c_str(), -1, SQLITE_TRANSIENT);
+}
+
+std::string text(sqlite3_stmt* s, int i)
+{
+    const auto* p = sqlite3_column_text(s, i);
+    return p ? reinterpret_cast<const char*>(p) : "";
+}
+
+/// A stored JSON column; a value that does not parse is a damaged row, named.
+json parsed(sqlite3_stmt* s, int i, const std::string& file, const char* column)
+{
+    auto value = json::parse(text(s, i), nullptr, false);
+    if (value.is_discarded())
+        throw InputError(file, "inspection " + std::to_string(sqlite3_column_int64(s, 0)) + "." + column,
+                         "not valid JSON");
+    return value;
+}
+
+json rowJson(sqlite3_stmt* s, const std::string& file)
+{
+    return {{"id", sqlite3_column_int64(s, 0)},
+            {"time", text(s, 1)},
+            {"started_unix_ms", sqlite3_column_int64(s, 2)},
+            {"trigger_seq", sqlite3_column_int(s, 3)},
+            {"manual", sqlite3_column_int(s, 4) != 0},
+            {"serial", text(s, 5)},
+            {"program", sqlite3_column_int(s, 6)},
+            {"part", text(s, 7)},
+            {"verdict", text(s, 8)},
+            {"fault_code", sqlite3_column_int(s, 9)},
+            {"cycle_ms", sqlite3_column_int64(s, 10)},
+            {"landmarks_failed", sqlite3_column_int(s, 11)},
+            {"landmarks_total", sqlite3_column_int(s, 12)},
+            {"landmarks", parsed(s, 13, file, "landmarks_json")},
+            {"timing", parsed(s, 14, file, "timing_json")},
+            {"images", text(s, 15)},
+            {"alignment", parsed(s, 16, file, "alignment_json")},
+            {"simulation", parsed(s, 17, file, "simulation_json")},
+            {"purpose", text(s, 18)}};
+}
+
+} // namespace
+
+std::int64_t parseUtc(const std::string& text, const std::string& field)
+{
+    std::tm tm{};
+    int consumed = 0;
+    const int fields = std::sscanf(text.c_str(), "%4d-%2d-%2d%n", &tm.tm_year, &tm.tm_mon, &tm.tm_mday, &consumed);
+    std::string rest = fields == 3 ? text.substr(static_cast<std::size_t>(consumed)) : std::string("?");
+    if (!rest.empty() && (rest[0] == 'T' || rest[0] == ' ')) {
+        int more = 0;
+        if (std::sscanf(rest.c_str() + 1, "%2d:%2d%n:%2d%n", &tm.tm_hour, &tm.tm_min, &more, &tm.tm_sec, &more) < 2)
+            rest = "?";
+        else
+            rest = rest.substr(static_cast<std::size_t>(more) + 1);
+    }
+    if (rest == "Z") rest.clear();
+    const std::tm asWritten = tm;
+    tm.tm_year -= 1900;
+    tm.tm_mon -= 1;
+    const std::time_t t = timegm(&tm);
+    // timegm normalises 2026-02-30 to March: a date that does not round-trip is no date.
+    const bool valid = rest.empty() && tm.tm_year + 1900 == asWritten.tm_year && tm.tm_mon + 1 == asWritten.tm_mon &&
+                       tm.tm_mday == asWritten.tm_mday && tm.tm_hour == asWritten.tm_hour &&
+                       tm.tm_min == asWritten.tm_min && tm.tm_sec == asWritten.tm_sec;
+    if (!valid) throw InputError("", field, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
+    return static_cast<std::int64_t>(t) * 1000;
+}
+
+std::vector<json> selectResults(sqlite3* db, const std::string& file, const ResultQuery& query)
+{
+    const auto columns = columnsOf(db, file);
+    std::vector<std::string> params;
+    std::string sql = "SELECT " + selectList(columns) + " FROM inspections" + whereClause(query, columns, params) +
+                      (query.newestFirst ? " ORDER BY id DESC" : " ORDER BY id ASC");
+    if (query.limit > 0) sql += " LIMIT " + std::to_string(query.limit);
+    Statement select(db, file, sql);
+    bindText(select, params);
+    std::vector<json> rows;
+    int rc;
+    while ((rc = sqlite3_step(select.stmt)) == SQLITE_ROW) rows.push_back(rowJson(select.stmt, file));
+    if (rc != SQLITE_DONE) throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
+    return rows;
+}
+
+std::int64_t countResults(sqlite3* db, const std::string& file, const ResultQuery& query)
+{
+    const auto columns = columnsOf(db, file);
+    std::vector<std::string> params;
+    Statement count(db, file, "SELECT COUNT(*) FROM inspections" + whereClause(query, columns, params));
+    bindText(count, params);
+    if (sqlite3_step(count.stmt) != SQLITE_ROW) throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
+    return sqlite3_column_int64(count.stmt, 0);
+}
+
+ResultReader::ResultReader(const std::filesystem::path& file) : file_(file)
+{
+    if (!std::filesystem::is_regular_file(file)) throw InputError(file.string(), "", "no database at " + file.string());
+    const auto uri = "file:" + std::filesystem::absolute(file).string() + "?mode=ro";
+    if (sqlite3_open_v2(uri.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
+        const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
+        sqlite3_close(db_);
+        db_ = nullptr;
+        throw InputError(file.string(), "", why);
+    }
+    // The daemon holds the write lock for one INSERT at a time: wait for it.
+    sqlite3_busy_timeout(db_, 2000);
+}
+
+ResultReader::~ResultReader()
+{
+    if (db_) sqlite3_close(db_);
+}
+
+std::vector<json> ResultReader::select(const ResultQuery& query) const
+{
+    return selectResults(db_, file_.string(), query);
+}
+
+std::int64_t ResultReader::count(const ResultQuery& query) const
+{
+    return countResults(db_, file_.string(), query);
+}
+
+std::optional<json> ResultReader::byId(std::int64_t id) const
+{
+    ResultQuery q;
+    q.afterId = id - 1;
+    q.beforeId = id + 1;
+    auto rows = select(q);
+    if (rows.empty()) return std::nullopt;
+    return std::move(rows.front());
+}
+
+} // namespace hg::store

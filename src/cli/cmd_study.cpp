@@ -83,8 +83,8 @@ std::vector<study::StudyRecord> readRecords(const store::ResultReader& store, co
     std::vector<study::StudyRecord> records;
     for (auto& row : store.select(q)) {
         programs.insert(row["program"].get<int>());
-        records.push_back({row["id"].get<std::int64_t>(), row["serial"].get<std::string>(),
-                           std::move(row["landmarks"])});
+        records.push_back(
+            {row["id"].get<std::int64_t>(), row["serial"].get<std::string>(), std::move(row["landmarks"])});
     }
     return records;
 }

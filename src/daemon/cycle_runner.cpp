@@ -627,11 +627,12 @@ void CycleRunner::archivePart(Cycle& cycle)
     auto evidence =
         outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
     images_.post([archive, evidence = std::move(evidence), startedUnixMs = cycle.record.startedUnixMs,
-                  serial = cycle.record.serial, dir = cycle.imagesDir, done = lastImagesMs_]() mutable {
+                  serial = cycle.record.serial, dir = cycle.imagesDir, done = lastImagesMs_,
+                  failed = cycle.record.verdict == station::Verdict::Fail]() mutable {
         auto log = hg::log::category("store");
         const auto start = std::chrono::steady_clock::now();
         try {
-            if (archive.save(startedUnixMs, serial, evidence()).empty())
+            if (archive.save(startedUnixMs, serial, evidence(), failed).empty())
                 log->error("the archive of part '{}' could not be written to {}", serial, dir);
             archive.enforceRetention();
         } catch (const std::exception& e) {

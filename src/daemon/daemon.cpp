@@ -1,6 +1,8 @@
 #include "daemon.h"
 
+#include "command_mailbox.h"
 #include "cycle_runner.h"
+#include "hmi_server.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
@@ -111,7 +113,11 @@ class MainLoop {
     {
     }
     const ConfigPtr& config() const { return config_; }
-    void serve(MaintenanceServer& maintenance);
+    /// Serves until SIGTERM/SIGINT: the maintenance socket's clients and the
+    /// web HMI's requests (the mailbox) with one command table.
+    void serve(MaintenanceServer& maintenance, CommandMailbox& mailbox, const MaintenanceServer::Handler& commands);
+    /// Told of every reloaded configuration.
+    void setHmi(HmiServer* hmi) { hmi_ = hmi; }
 
   private:
     bool healthy();
@@ -126,10 +132,12 @@ class MainLoop {
     CycleRunner& runner_;
     Notifier& notifier_;
     int sigFd_;
+    HmiServer* hmi_ = nullptr;
     bool wasHealthy_ = true;
 };
 
-void MainLoop::serve(MaintenanceServer& maintenance)
+void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
+                     const MaintenanceServer::Handler& commands)
 {
     const auto heartbeat = config_->plc.heartbeatPeriod;
     auto watchdogPeriod = std::chrono::milliseconds(1000);
@@ -155,11 +163,12 @@ void MainLoop::serve(MaintenanceServer& maintenance)
         auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
         // Waiting maintenance clients are polled too, and closed past their time even when silent.
         auto clients = maintenance.pollFds();
-        std::vector<pollfd> fds{{sigFd_, POLLIN, 0}};
+        std::vector<pollfd> fds{{sigFd_, POLLIN, 0}, {mailbox.fd(), POLLIN, 0}};
         fds.insert(fds.end(), clients.begin(), clients.end());
         int n = poll(fds.data(), fds.size(), static_cast<int>(std::clamp<long long>(timeoutMs, 1, 200)));
-        std::copy(fds.begin() + 1, fds.end(), clients.begin());
+        std::copy(fds.begin() + 2, fds.end(), clients.begin());
         maintenance.serve(clients);
+        if (n > 0 && (fds[1].revents & POLLIN)) mailbox.serve(commands);
         if (n > 0 && (fds[0].revents & POLLIN) && !takeSignals()) return;
     }
 }
@@ -206,6 +215,7 @@ void MainLoop::reload()
             log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
         registers_.setKnownPrograms(programNumbers(*fresh));
         runner_.setConfig(fresh);
+        if (hmi_) hmi_->setConfig(fresh);
         config_ = fresh;
         log->info("configuration reloaded from {} ({} part programs)", config_->file.string(),
                   config_->programs.size());
@@ -229,13 +239,20 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     CycleRunner runner(registers, *hardware.devices, *inspector, store, config);
     runner.setSimulation(hardware.simulation);
     MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd);
-    MaintenanceServer maintenance(
-        config->maintenance.socket, config->maintenance.group,
-        maintenanceCommands({registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config()}));
+    CommandMailbox mailbox;
+    std::unique_ptr<HmiServer> hmi;
+    if (config->http.enabled) hmi = std::make_unique<HmiServer>(config, mailbox);
+    loop.setHmi(hmi.get());
+    const auto commands = maintenanceCommands(
+        {registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0});
+    MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands);
     notifier.status("starting devices");
     runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
-    loop.serve(maintenance);
+    loop.serve(maintenance, mailbox, commands);
     notifier.stopping("stopping: finishing or aborting the cycle");
+    // The HMI's requests waiting for the loop are answered as refused; then it stops.
+    mailbox.close();
+    if (hmi) hmi->stop();
     runner.stop();
     plc.stop();
     hg::log::category("daemon")->info("stopped");

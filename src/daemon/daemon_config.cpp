@@ -1,10 +1,13 @@
 #include "daemon_config.h"
 
+#include "hmi_auth.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
 
 #include <arpa/inet.h>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
 
 namespace hg::station {
@@ -69,7 +72,9 @@ void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& r
     if (auto n = node.optional("save_failed_images")) results.saveFailedImages = n->asBool();
     if (auto n = node.optional("archive_all")) results.archiveAll = n->asBool();
     if (auto r = node.optional("retention")) {
-        r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes"});
+        r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes", "keep_failed"});
+        if (auto n = r->optional("keep_failed"))
+            results.retention.keepFailed = static_cast<std::size_t>(n->asIntIn(0, 100'000));
         if (auto n = r->optional("max_count"))
             results.retention.maxCount = static_cast<std::size_t>(n->asIntIn(0, 100'000'000));
         if (auto n = r->optional("max_age_days"))
@@ -77,6 +82,49 @@ void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& r
         if (auto n = r->optional("max_bytes"))
             results.retention.maxBytes = static_cast<std::uint64_t>(n->asDoubleIn(0.0, 1e15));
     }
+}
+
+/// A maintenance password hash from $CREDENTIALS_DIRECTORY/<name> (systemd's
+/// LoadCredential=, docs/hmi.md "Security"): only the daemon reads it there.
+std::string credentialHash(const ConfigNode& node)
+{
+    const char* dir = std::getenv("CREDENTIALS_DIRECTORY");
+    if (!dir) node.fail("$CREDENTIALS_DIRECTORY is not set (the unit's LoadCredential= provides it)");
+    const auto file = fs::path(dir) / node.asString();
+    std::ifstream in(file);
+    std::string hash;
+    if (!in || !std::getline(in, hash)) node.fail("cannot read the credential " + file.string());
+    return hash;
+}
+
+void parseHmi(const ConfigNode& node, const fs::path& base, HmiConfig& http)
+{
+    node.allowOnlyKeys({"bind", "port", "assets", "javascript", "password_hash", "password_hash_credential",
+                        "max_request_bytes", "requests_per_s", "burst", "threads", "session_idle_s"});
+    http.enabled = true;
+    if (auto n = node.optional("bind")) {
+        http.bindAddress = n->asString();
+        in_addr tmp{};
+        if (inet_pton(AF_INET, http.bindAddress.c_str(), &tmp) != 1)
+            n->fail("expected an IPv4 address such as 127.0.0.1 (read-only pages for everyone who reaches it)");
+    }
+    if (auto n = node.optional("port")) http.port = static_cast<int>(n->asIntIn(0, 65535));
+    if (auto n = node.optional("assets")) http.assets = resolve(*n, base);
+    if (auto n = node.optional("javascript")) http.javascript = resolve(*n, base);
+    if (node.has("password_hash") && node.has("password_hash_credential"))
+        node["password_hash_credential"].fail("give password_hash or password_hash_credential, not both");
+    if (auto n = node.optional("password_hash")) http.passwordHash = n->asString();
+    if (auto n = node.optional("password_hash_credential")) http.passwordHash = credentialHash(*n);
+    if (!http.passwordHash.empty() && !hg::daemon::validPasswordHash(http.passwordHash))
+        node.fail("the maintenance password hash is not a crypt(3) hash ($y$..., $6$..., $5$...): make one with "
+                  "`mkpasswd -m yescrypt` or `openssl passwd -6`");
+    if (auto n = node.optional("max_request_bytes"))
+        http.maxRequestBytes = static_cast<std::size_t>(n->asIntIn(1024, 16 << 20));
+    if (auto n = node.optional("requests_per_s")) http.requestsPerSecond = n->asDoubleIn(1.0, 100000.0);
+    if (auto n = node.optional("burst")) http.burst = static_cast<int>(n->asIntIn(1, 100000));
+    if (auto n = node.optional("threads")) http.threads = static_cast<int>(n->asIntIn(1, 64));
+    if (auto n = node.optional("session_idle_s"))
+        http.sessionIdle = std::chrono::seconds(n->asIntIn(60, 7 * 24 * 3600));
 }
 
 void parseSequencer(const ConfigNode& node, SequencerConfig& seq)
@@ -179,7 +227,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
 {
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
-    root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance",
+    root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
                         "watchdog", "simulation"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
@@ -215,6 +263,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         }
         if (auto g = n->optional("group")) cfg.maintenance.group = g->asString();
     }
+    if (auto n = root.optional("http")) parseHmi(*n, base, cfg.http);
     if (auto n = root.optional("watchdog")) {
         n->allowOnlyKeys({"max_cycle_s"});
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);

@@ -62,7 +62,10 @@ struct PlcConfig {
 };
 
 struct RetentionConfig {
-    std::size_t maxCount = 2000;         ///< archived part folders kept
+    std::size_t maxCount = 2000; ///< archived part folders kept
+    /// The folders of the newest this many failed parts are never removed by
+    /// count, age or bytes (the evidence of a reject outlives the audit trail).
+    std::size_t keepFailed = 50;
     std::chrono::hours maxAge{24 * 30};  ///< older image sets are removed
     std::uint64_t maxBytes = 2ull << 30; ///< total size of the archive folder
 };
@@ -91,6 +94,25 @@ struct MaintenanceConfig {
     std::string group;
 };
 
+/// The web HMI (docs/hmi.md): read-only pages and the JSON API for everyone
+/// who can reach the address; maintenance actions for a signed-in engineer.
+struct HmiConfig {
+    bool enabled = false; ///< the `http` section is present
+    std::string bindAddress = "127.0.0.1";
+    int port = 8080; ///< 0: a free port the kernel chooses (announced in the log and `ctl status`)
+    std::filesystem::path assets = "/usr/share/hullgauge/hmi";
+    /// Debian's JavaScript libraries (libjs-chart.js installs chart.js/ there).
+    std::filesystem::path javascript = "/usr/share/javascript";
+    /// crypt(3) hash of the maintenance password (yescrypt `$y$`, SHA-512 `$6$`);
+    /// empty: no maintenance actions over HTTP.
+    std::string passwordHash;
+    std::size_t maxRequestBytes = 64 * 1024;
+    double requestsPerSecond = 50.0; ///< per client address, sustained
+    int burst = 200;                 ///< per client address, at once
+    int threads = 4;
+    std::chrono::seconds sessionIdle{1800};
+};
+
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer
     /// than this (the sequencer is stuck) or the PLC server loop stalls.
@@ -110,6 +132,7 @@ struct DaemonConfig {
     ResultsConfig results;
     SequencerConfig sequencer;
     MaintenanceConfig maintenance;
+    HmiConfig http;
     WatchdogConfig watchdog;
     /// Simulated line only (`camera.driver.backend: sim`): the parts the
     /// simulated camera can render, by name ("nominal" first, then defect

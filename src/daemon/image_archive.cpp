@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -112,7 +113,7 @@ fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& 
 }
 
 fs::path ImageArchive::save(std::int64_t startedUnixMs, const std::string& serial,
-                            const std::vector<ViewEvidence>& views)
+                            const std::vector<ViewEvidence>& views, bool failed)
 {
     if (views.empty()) return {};
     const fs::path dir = folderFor(startedUnixMs, serial);
@@ -123,6 +124,7 @@ fs::path ImageArchive::save(std::int64_t startedUnixMs, const std::string& seria
         fs::remove_all(partial);
         fs::create_directories(partial);
         writeArchive(partial, views);
+        if (failed) std::ofstream(partial / kFailedMarker).put('\n');
         fs::rename(partial, dir);
         syncFolder(root_);
     } catch (const std::exception& e) {
@@ -139,6 +141,7 @@ std::size_t ImageArchive::enforceRetention()
         fs::path dir;
         fs::file_time_type time;
         std::uintmax_t bytes = 0;
+        bool failed = false;
     };
     std::vector<Entry> entries;
     std::vector<fs::path> stale;
@@ -150,7 +153,7 @@ std::size_t ImageArchive::enforceRetention()
             stale.push_back(d.path());
             continue;
         }
-        Entry e{d.path(), d.last_write_time(ec), 0};
+        Entry e{d.path(), d.last_write_time(ec), 0, fs::exists(d.path() / kFailedMarker, ec)};
         for (const auto& f : fs::recursive_directory_iterator(d.path(), ec))
             if (f.is_regular_file()) e.bytes += f.file_size(ec);
         entries.push_back(std::move(e));
@@ -160,9 +163,11 @@ std::size_t ImageArchive::enforceRetention()
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.time > b.time; });
     const auto cutoff = fs::file_time_type::clock::now() - retention_.maxAge;
     std::uintmax_t total = 0;
-    std::size_t removed = 0;
+    std::size_t removed = 0, failedSeen = 0;
     for (std::size_t i = 0; i < entries.size(); ++i) {
         total += entries[i].bytes;
+        // The newest keep_failed rejects stay whatever the other limits say.
+        if (entries[i].failed && ++failedSeen <= retention_.keepFailed) continue;
         bool keep = i < retention_.maxCount && entries[i].time >= cutoff && total <= retention_.maxBytes;
         if (keep) continue;
         fs::remove_all(entries[i].dir, ec);

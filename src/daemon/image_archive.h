@@ -33,6 +33,9 @@ bool archivesPart(const station::ResultsConfig& results, station::Verdict verdic
 
 class ImageArchive {
   public:
+    /// The file that marks a failed part's folder (its verdict, for the retention).
+    static constexpr const char* kFailedMarker = "FAILED";
+
     ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
 
     /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
@@ -40,13 +43,15 @@ class ImageArchive {
     std::filesystem::path folderFor(std::int64_t startedUnixMs, const std::string& serial) const;
     /// Writes `views` into folderFor(startedUnixMs, serial): view_<k>.png (annotated),
     /// and when every view carries its capture, <id>.png (the frame, lossless) and
-    /// manifest.json. Returns the folder, or an empty path when there was nothing
-    /// to write or the folder could not be written whole (logged; nothing is left).
-    /// Never throws.
+    /// manifest.json; a failed part's folder also holds the marker file FAILED. Returns the folder, or an empty path
+    /// when there was nothing to write or the folder could not be written whole (logged; nothing is left). Never
+    /// throws.
     std::filesystem::path save(std::int64_t startedUnixMs, const std::string& serial,
-                               const std::vector<ViewEvidence>& views);
+                               const std::vector<ViewEvidence>& views, bool failed = false);
     /// Removes the oldest folders beyond max_count, older than max_age_days,
-    /// or beyond max_bytes in total, and any partial folder a crash left.
+    /// or beyond max_bytes in total (raw frames, pictures and manifests all
+    /// count), and any partial folder a crash left — but never the folders of
+    /// the newest keep_failed failed parts.
     /// Returns how many archived folders were removed.
     std::size_t enforceRetention();
 

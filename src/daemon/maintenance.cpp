@@ -181,6 +181,7 @@ json status(const MaintenanceContext& c, const json&)
               {"idle_closed", counters.idleClosed},
               {"yielded", counters.yielded}}},
             {"results", {{"database", c.store.file().string()}, {"records", c.store.count()}}},
+            {"http", c.hmiPort ? json{{"address", c.config->http.bindAddress}, {"port", c.hmiPort}} : json()},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
             {"purpose", std::string(station::toString(c.registers.purpose()))},

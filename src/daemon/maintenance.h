@@ -77,6 +77,8 @@ struct MaintenanceContext {
     SimulationControl* simulation;
     /// The running configuration (replaced by a reload).
     const std::shared_ptr<const station::DaemonConfig>& config;
+    /// The web HMI's port; 0 when it is off.
+    int hmiPort = 0;
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,

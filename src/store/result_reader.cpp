@@ -2,6 +2,7 @@
 
 #include "hullgauge/common/error.h"
 
+#include <array>
 #include <cstdio>
 #include <ctime>
 #include <set>
@@ -39,13 +40,32 @@ std::set<std::string> columnsOf(sqlite3* db, const std::string& file)
 /// their defaults in older stores (docs/daemon.md, "Result store").
 std::string selectList(const std::set<std::string>& columns)
 {
-    auto orDefault = [&](const char* column, const char* fallback) {
-        return columns.count(column) ? std::string(column) : std::string(fallback);
-    };
-    return "id, started_utc, started_unix_ms, trigger_seq, manual, serial, program, part, verdict, fault_code, "
-           "cycle_ms, landmarks_failed, landmarks_total, landmarks_json, timing_json, images_dir, " +
-           orDefault("alignment_json", "'null'") + ", " + orDefault("simulation_json", "'null'") + ", " +
-           orDefault("purpose", "'production'");
+    // In rowJson's order, each with what a store without the column reads.
+    static constexpr std::array<std::pair<const char*, const char*>, 19> kColumns{{
+        {"id", "0"},
+        {"started_utc", "''"},
+        {"started_unix_ms", "0"},
+        {"trigger_seq", "0"},
+        {"manual", "0"},
+        {"serial", "''"},
+        {"program", "0"},
+        {"part", "''"},
+        {"verdict", "'error'"},
+        {"fault_code", "0"},
+        {"cycle_ms", "0"},
+        {"landmarks_failed", "0"},
+        {"landmarks_total", "0"},
+        {"landmarks_json", "'[]'"},
+        {"timing_json", "'{}'"},
+        {"images_dir", "''"},
+        {"alignment_json", "'null'"},
+        {"simulation_json", "'null'"},
+        {"purpose", "'production'"},
+    }};
+    std::string list;
+    for (const auto& [column, fallback] : kColumns)
+        list += (list.empty() ? "" : ", ") + std::string(columns.count(column) ? column : fallback);
+    return list;
 }
 
 /// The WHERE clause of `q` and its parameters, bound as text in order.

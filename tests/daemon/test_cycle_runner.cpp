@@ -7,6 +7,7 @@
 #include "cycle_runner.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
+#include "manual_clock.h"
 
 #include <deque>
 #include <gtest/gtest.h>
@@ -19,23 +20,6 @@ using namespace std::chrono_literals;
 using station::LampPattern;
 using station::SequencerState;
 namespace reg = station::reg;
-
-/// A clock only the test moves; sleeps end at once, at their deadline.
-class ManualClock : public Clock {
-  public:
-    time_point now() const override { return time_point(std::chrono::nanoseconds(ns_.load())); }
-    void sleepUntil(time_point until, const std::function<bool()>& stop) override
-    {
-        if (stop()) return;
-        auto target = std::chrono::duration_cast<std::chrono::nanoseconds>(until.time_since_epoch()).count();
-        auto current = ns_.load();
-        while (current < target && !ns_.compare_exchange_weak(current, target)) {}
-    }
-    void advance(std::chrono::milliseconds d) { ns_ += std::chrono::nanoseconds(d).count(); }
-
-  private:
-    std::atomic<std::int64_t> ns_{std::chrono::nanoseconds(1h).count()}; // 0 means "idle" to the runner
-};
 
 /// Devices whose answers the test scripts call by call; every call is recorded.
 class ScriptedDevices : public StationDevices {

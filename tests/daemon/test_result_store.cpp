@@ -234,6 +234,40 @@ TEST(ImageArchive, RetentionKeepsTheNewestWithinCountAndBytes)
     EXPECT_EQ(ImageArchive(dir / "images", tiny).enforceRetention(), 2u);
 }
 
+TEST(ImageArchive, RetentionNeverRemovesTheNewestFailedParts)
+{
+    hgtest::TempDir dir;
+    ImageArchive writer(dir / "images", {});
+    ViewEvidence v{cv::Mat(10, 10, CV_8UC1, cv::Scalar(9)), {}, {}};
+    // Oldest first: fail, pass, fail, pass, fail, pass (part 5 the newest).
+    std::vector<std::filesystem::path> folders;
+    for (int i = 0; i < 6; ++i) {
+        folders.push_back(writer.save(1000 + i, "S", {v}, i % 2 == 0));
+        std::filesystem::last_write_time(folders.back(),
+                                         std::filesystem::file_time_type::clock::now() - std::chrono::minutes(10 - i));
+    }
+    EXPECT_TRUE(std::filesystem::exists(folders[0] / ImageArchive::kFailedMarker));
+    EXPECT_FALSE(std::filesystem::exists(folders[1] / ImageArchive::kFailedMarker));
+
+    // Count 1 and bytes 1 would leave nothing; the two newest rejects (parts 4 and 2) stay.
+    station::RetentionConfig strict;
+    strict.maxCount = 1;
+    strict.maxBytes = 1;
+    strict.keepFailed = 2;
+    EXPECT_EQ(ImageArchive(dir / "images", strict).enforceRetention(), 4u);
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(std::filesystem::exists(folders[i]), i == 2 || i == 4) << "part " << i;
+
+    // Age too: a reject older than max_age_days stays while it is among the newest keep_failed.
+    station::RetentionConfig young;
+    young.maxAge = std::chrono::hours(1);
+    young.keepFailed = 1;
+    std::filesystem::last_write_time(folders[4], std::filesystem::file_time_type::clock::now() - std::chrono::hours(3));
+    std::filesystem::last_write_time(folders[2], std::filesystem::file_time_type::clock::now() - std::chrono::hours(4));
+    EXPECT_EQ(ImageArchive(dir / "images", young).enforceRetention(), 1u);
+    EXPECT_TRUE(std::filesystem::exists(folders[4]));
+    EXPECT_FALSE(std::filesystem::exists(folders[2]));
+}
+
 // A view as the engine inspector hands it over: a 16-bit frame and the camera it was inspected with.
 ViewEvidence capturedView(const std::string& id, double rotationDeg)
 {

@@ -40,10 +40,9 @@ void makeStore(const std::filesystem::path& file, const std::string& schema, con
 
 std::string v3Schema()
 {
-    return std::string(kSchemaV1) +
-           "ALTER TABLE inspections ADD COLUMN alignment_json TEXT NOT NULL DEFAULT 'null';"
-           "ALTER TABLE inspections ADD COLUMN simulation_json TEXT NOT NULL DEFAULT 'null';"
-           "ALTER TABLE inspections ADD COLUMN purpose TEXT NOT NULL DEFAULT 'production';";
+    return std::string(kSchemaV1) + "ALTER TABLE inspections ADD COLUMN alignment_json TEXT NOT NULL DEFAULT 'null';"
+                                    "ALTER TABLE inspections ADD COLUMN simulation_json TEXT NOT NULL DEFAULT 'null';"
+                                    "ALTER TABLE inspections ADD COLUMN purpose TEXT NOT NULL DEFAULT 'production';";
 }
 
 /// Row `i` (1-based): serial SN-<i>, every third fails, program 1 or 2 by parity, started at i seconds.
@@ -56,9 +55,8 @@ std::string rows(int n, bool withPurpose)
                "verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, landmarks_json, timing_json" +
                std::string(withPurpose ? ", purpose" : "") + ") VALUES ('t', " + std::to_string(i * 1000) + ", " +
                std::to_string(i) + ", 0, 'SN-" + std::to_string(i) + "', " + std::to_string(1 + i % 2) +
-               ", 'block', '" + verdict + "', 0, 100, 0, 1, '[{\"id\":\"a\",\"error_mm\":0.0" +
-               std::to_string(i) + "}]', '{}'" + (withPurpose ? (i == 4 ? ", 'master'" : ", 'production'") : "") +
-               ");";
+               ", 'block', '" + verdict + "', 0, 100, 0, 1, '[{\"id\":\"a\",\"error_mm\":0.0" + std::to_string(i) +
+               "}]', '{}'" + (withPurpose ? (i == 4 ? ", 'master'" : ", 'production'") : "") + ");";
     }
     return sql;
 }

@@ -24,13 +24,13 @@ namespace hg::store {
 /// Which rows: every set field narrows the selection (AND).
 struct ResultQuery {
     std::optional<int> program;
-    std::string serial;                ///< exactly this serial
-    std::string serialContains;        ///< a substring of the serial (the HMI's search)
-    std::vector<std::string> verdicts; ///< any of these (pass, fail, aborted, error); empty = any
-    std::string purpose;               ///< production, master or study; empty = any
-    std::optional<bool> manual;        ///< maintenance-triggered cycles (ctl trigger) or PLC cycles
-    std::optional<std::int64_t> sinceMs; ///< started at or after (Unix ms, UTC)
-    std::optional<std::int64_t> untilMs; ///< started before
+    std::string serial;                   ///< exactly this serial
+    std::string serialContains;           ///< a substring of the serial (the HMI's search)
+    std::vector<std::string> verdicts;    ///< any of these (pass, fail, aborted, error); empty = any
+    std::string purpose;                  ///< production, master or study; empty = any
+    std::optional<bool> manual;           ///< maintenance-triggered cycles (ctl trigger) or PLC cycles
+    std::optional<std::int64_t> sinceMs;  ///< started at or after (Unix ms, UTC)
+    std::optional<std::int64_t> untilMs;  ///< started before
     std::optional<std::int64_t> beforeId; ///< paging: rows with a smaller id
     std::optional<std::int64_t> afterId;  ///< paging: rows with a larger id
     int limit = 0;                        ///< at most this many rows; 0 = all

@@ -1,0 +1,27 @@
+// One result (docs/hmi.md, "Results"): every landmark with its status,
+// deviation, uncertainty, bracket and zone, and the annotated views.
+"use strict";
+hg.nav("/results");
+
+async function show() {
+  const id = new URLSearchParams(location.search).get("id");
+  try {
+    if (!/^[0-9]+$/.test(id || "")) throw new Error("no result id given");
+    const r = await hg.get(`/api/results/${id}`);
+    document.getElementById("title").textContent = `Result ${r.id}`;
+    const v = document.getElementById("verdict");
+    v.textContent = r.verdict.toUpperCase();
+    v.className = "verdict " + r.verdict;
+    const facts = document.getElementById("facts");
+    const rows = [["Serial", r.serial || "(none)"], ["Time (UTC)", r.time], ["Program", r.program], ["Part", r.part],
+      ["Purpose", r.purpose], ["Cycle", r.cycle_ms + " ms"], ["Fault code", r.fault_code],
+      ["Trigger", (r.manual ? "maintenance" : "PLC") + ", seq " + r.trigger_seq],
+      ["Landmarks failed", `${r.landmarks_failed} of ${r.landmarks_total}`]];
+    for (const [k, val] of rows) facts.append(hg.el("dt", { text: k }), hg.el("dd", { text: String(val) }));
+    document.getElementById("landmarks").replaceChildren(hg.landmarkTable(r.landmarks));
+    document.getElementById("images").replaceChildren(hg.images(r));
+  } catch (e) {
+    document.getElementById("error").textContent = e.message;
+  }
+}
+show();

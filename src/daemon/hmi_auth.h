@@ -1,0 +1,82 @@
+// The web HMI's guards (docs/hmi.md, "Security"): the maintenance password
+// checked against its crypt(3) hash (libxcrypt: yescrypt, SHA-crypt), the
+// signed-in engineers' sessions with their CSRF tokens, and a token-bucket
+// rate limit per client address. No HTTP here: the server asks these and
+// answers 401/403/429 itself; the clock is injected so the tests move it.
+#pragma once
+
+#include "clock.h"
+
+#include <cstddef>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+
+namespace hg::daemon {
+
+/// True when `hash` is a crypt(3) setting this libcrypt can verify (the
+/// prefixes `$y$`, `$gy$`, `$7$`, `$6$`, `$5$`, `$2b$`): never a plain password.
+bool validPasswordHash(const std::string& hash);
+/// Whether `password` hashes to `hash` (crypt_r; compared in constant time).
+bool verifyPassword(const std::string& password, const std::string& hash);
+
+/// Signed-in maintenance sessions: an unguessable id (the HttpOnly cookie)
+/// and its CSRF token (sent back in the X-CSRF-Token header of every
+/// state-changing request). A session idle longer than `idle` is gone.
+class Sessions {
+  public:
+    Sessions(Clock::duration idle, Clock& clock = Clock::steady());
+
+    struct Session {
+        std::string id;
+        std::string csrf;
+    };
+    Session open();
+    /// The session's CSRF token when `id` is live (its idle time restarts), else nothing.
+    std::optional<std::string> touch(const std::string& id);
+    void close(const std::string& id);
+    std::size_t live();
+
+    static constexpr std::size_t kMaxSessions = 64;
+
+  private:
+    void expire();
+
+    struct Entry {
+        std::string csrf;
+        Clock::time_point last;
+    };
+    Clock::duration idle_;
+    Clock& clock_;
+    std::mutex mutex_;
+    std::map<std::string, Entry> sessions_;
+};
+
+/// A token bucket per client address: `burst` requests at once, refilled at
+/// `perSecond`. Addresses idle long enough to be full again are forgotten, so
+/// the table stays bounded.
+class RateLimiter {
+  public:
+    RateLimiter(double perSecond, double burst, Clock& clock = Clock::steady());
+    /// Takes `cost` tokens for `address`; false (and nothing taken) when it has not enough.
+    bool allow(const std::string& address, double cost = 1.0);
+
+    static constexpr std::size_t kMaxAddresses = 4096;
+
+  private:
+    struct Bucket {
+        double tokens;
+        Clock::time_point last;
+    };
+    double perSecond_;
+    double burst_;
+    Clock& clock_;
+    std::mutex mutex_;
+    std::map<std::string, Bucket> buckets_;
+};
+
+/// `bytes` random bytes from the kernel (getrandom), hex-encoded.
+std::string randomToken(std::size_t bytes = 32);
+
+} // namespace hg::daemon

@@ -1,0 +1,268 @@
+#!/usr/bin/python3
+"""The web HMI in a real browser (docs/hmi.md): Debian's chromium, headless,
+driven by chromium-driver through selenium, against the simulated line
+(tools/simline --http-port). This script is the PLC (pymodbus): it triggers
+cycles, nominal and defective parts in turn, and checks what the pages show
+against the result store read here with sqlite3:
+
+- the line view shows each cycle's verdict and result id within two of its
+  own status polls (250 ms apart) after DONE_SEQ — counted by the page's polls,
+  not by the wall clock, so a loaded machine cannot fail it; the wall-clock
+  latency is printed;
+- the failed part's annotated views load (naturalWidth > 0) and its failed
+  landmarks are the stored ones;
+- the results search finds a serial; a result page lists every landmark;
+- the SPC chart's plotted points are the stored values of the PLC's
+  production cycles (a master cycle and a maintenance-triggered one are
+  left out);
+- maintenance: refused without a session, the purpose set from the page
+  after signing in reaches the daemon; bad requests get 4xx.
+
+  hmi_browser.py --source DIR --bin DIR [--cycles N] [--screenshots DIR]
+"""
+import argparse
+import http.client
+import json
+import sqlite3
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+
+from pymodbus.client import ModbusTcpClient  # noqa: E402
+from selenium import webdriver  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+
+DONE_SEQ = 101
+PASSWORD = "hmi-test-password"
+
+
+def encode_serial(text):
+    raw = text.encode("ascii")[:16].ljust(16, b"\0")
+    return [(raw[i] << 8) | raw[i + 1] for i in range(0, 16, 2)]
+
+
+def browser():
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--window-size=1400,1100", "--disable-extensions", "--no-first-run"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_page_load_timeout(60)
+    driver.set_script_timeout(60)
+    return driver
+
+
+def plc_cycle(client, seq, serial, timeout_s=60):
+    """One PLC handshake: program 1, the serial and a new TRIGGER_SEQ in one block; wait for DONE_SEQ."""
+    w = client.write_registers(0, [seq, 1] + encode_serial(serial), slave=1)
+    if w.isError():
+        raise RuntimeError(f"trigger write failed: {w}")
+    deadline = time.monotonic() + timeout_s
+    while True:
+        r = client.read_holding_registers(DONE_SEQ, 1, slave=1)
+        if not r.isError() and r.registers[0] == seq:
+            return time.monotonic()
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"no DONE_SEQ {seq} within {timeout_s} s")
+        time.sleep(0.005)
+
+
+def stored(db, serial):
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    con.row_factory = sqlite3.Row
+    row = con.execute("SELECT * FROM inspections WHERE serial = ? ORDER BY id DESC LIMIT 1", (serial,)).fetchone()
+    con.close()
+    return row
+
+
+def line_view_cycles(driver, url, client, sock, db, cycles, screenshots):
+    """Cycles with the line view open; returns the wall-clock latencies (s) from DONE_SEQ to the page."""
+    driver.get(url + "/")
+    WebDriverWait(driver, 30).until(lambda d: d.execute_script("return window.hgLine && window.hgLine.polls > 0"))
+    latencies = []
+    seq = client.read_holding_registers(0, 1, slave=1).registers[0]
+    for i in range(cycles):
+        bad = i % 2 == 1
+        serial = f"{'BAD' if bad else 'SN'}-HMI-{i:03d}"
+        maintenance(sock, {"command": "sim-part", "name": "face-low" if bad else "nominal"})
+        seq = (seq + 1) % 65536 or 1
+        done = plc_cycle(client, seq, serial)
+        polls_at_done = driver.execute_script("return window.hgLine.polls")
+        row = stored(db, serial)
+        if not check(row is not None, f"cycle {serial}: no stored row"):
+            continue
+        WebDriverWait(driver, 30, poll_frequency=0.02).until(
+            lambda d: d.execute_script("return window.hgLine.shownResult") == row["id"])
+        shown_at = time.monotonic()
+        polls = driver.execute_script("return window.hgLine.polls") - polls_at_done
+        latencies.append(shown_at - done)
+        # One poll may have been under way at DONE_SEQ; the next two see the stored result.
+        check(polls <= 3, f"cycle {serial}: the line view took {polls} polls after DONE_SEQ to show it")
+        verdict = driver.find_element(By.ID, "verdict").text.lower()
+        check(verdict == row["verdict"], f"cycle {serial}: the page shows {verdict!r}, the store {row['verdict']!r}")
+        check(driver.find_element(By.ID, "serial").text == serial, f"cycle {serial}: serial shown wrong")
+        check(row["verdict"] == ("fail" if bad else "pass"), f"cycle {serial}: verdict {row['verdict']}")
+        if bad:
+            failed_part(driver, row, serial)
+        if screenshots and i == cycles - 1:
+            driver.save_screenshot(str(screenshots / "hmi-line.png"))
+    return latencies, seq
+
+
+def failed_part(driver, row, serial):
+    WebDriverWait(driver, 30).until(lambda d: d.execute_script("return window.hgLine.shownFailed") == row["id"])
+    images = driver.find_elements(By.CSS_SELECTOR, "#failed-images img")
+    check(len(images) > 0, f"{serial}: the failed part's views are not on the line view")
+    loaded = WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+        "const imgs = [...document.querySelectorAll('#failed-images img')];"
+        "return imgs.every(i => i.complete) ? imgs.map(i => i.naturalWidth) : false"))
+    check(all(w > 0 for w in loaded), f"{serial}: a failed part's view did not load ({loaded})")
+    expected = sorted(l["id"] for l in json.loads(row["landmarks_json"]) if l["status"] != "ok")
+    listed = sorted(e.get_attribute("data-landmark")
+                    for e in driver.find_elements(By.CSS_SELECTOR, "#failed-landmarks tr[data-landmark]"))
+    check(listed == expected, f"{serial}: failed landmarks listed {listed}, stored {expected}")
+
+
+def search_and_result(driver, url, db, serial, screenshots):
+    driver.get(url + "/results")
+    box = driver.find_element(By.ID, "f-serial")
+    box.send_keys(serial)
+    driver.find_element(By.ID, "search").click()
+    WebDriverWait(driver, 30).until(
+        lambda d: [e.text for e in d.find_elements(By.CSS_SELECTOR, "#results td.serial")] == [serial])
+    if screenshots:
+        driver.find_element(By.ID, "f-serial").clear()
+        driver.find_element(By.ID, "search").click()
+        WebDriverWait(driver, 30).until(lambda d: len(d.find_elements(By.CSS_SELECTOR, "#results tbody tr")) > 3)
+        driver.save_screenshot(str(screenshots / "hmi-results.png"))
+    row = stored(db, serial)
+    driver.get(f"{url}/result?id={row['id']}")
+    landmarks = json.loads(row["landmarks_json"])
+    WebDriverWait(driver, 30).until(
+        lambda d: len(d.find_elements(By.CSS_SELECTOR, "#landmarks tr[data-landmark]")) == len(landmarks))
+    statuses = {e.get_attribute("data-landmark"): e.find_elements(By.TAG_NAME, "td")[1].text
+                for e in driver.find_elements(By.CSS_SELECTOR, "#landmarks tr[data-landmark]")}
+    check(statuses == {l["id"]: l["status"] for l in landmarks}, f"result {row['id']}: statuses shown {statuses}")
+    if screenshots:
+        WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+            "return [...document.querySelectorAll('#images img')].every(i => i.complete)"))
+        driver.save_screenshot(str(screenshots / "hmi-result.png"))
+
+
+def spc_expected(db, landmark):
+    """The values the SPC chart must plot: PLC production pass/fail cycles of program 1, oldest first;
+    the deviation when every such cycle has one for the landmark, else the bracket middle (docs/spc.md)."""
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    rows = con.execute("SELECT landmarks_json FROM inspections WHERE program = 1 AND purpose = 'production' "
+                       "AND manual = 0 AND verdict IN ('pass', 'fail') ORDER BY id").fetchall()
+    con.close()
+    entries = [next(l for l in json.loads(r[0]) if l["id"] == landmark) for r in rows]
+    key = "deviation_mm" if all("deviation_mm" in e for e in entries) else "error_mm"
+    return [e[key] for e in entries]
+
+
+def spc_page(driver, url, db, screenshots):
+    driver.get(url + "/spc")
+    WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+        "const c = Chart.getChart(document.getElementById('chart-i')); return !!c && c.data.datasets[0].data.length > 0"))
+    landmark = Select(driver.find_element(By.ID, "f-landmark")).first_selected_option.get_attribute("value")
+    plotted = driver.execute_script(
+        "return Chart.getChart(document.getElementById('chart-i')).data.datasets[0].data.map(p => p.y)")
+    expected = spc_expected(db, landmark)
+    check(len(plotted) == len(expected) and all(abs(a - b) <= 1e-9 for a, b in zip(plotted, expected)),
+          f"SPC {landmark}: plotted {plotted}, stored {expected}")
+    if screenshots:
+        driver.save_screenshot(str(screenshots / "hmi-spc.png"))
+
+
+def request(port, method, path, body=None, headers=None):
+    con = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+    con.request(method, path, body=body, headers=headers or {})
+    res = con.getresponse()
+    data = res.read()
+    con.close()
+    return res.status, data
+
+
+def maintenance_page(driver, url, port, sock, screenshots):
+    status, _ = request(port, "POST", "/api/maintenance", json.dumps({"command": "purpose", "purpose": "study"}),
+                        {"Content-Type": "application/json"})
+    check(status == 401, f"maintenance without a session answered {status}")
+    check(request(port, "GET", "/api/results?since=yesterday")[0] == 400, "a malformed since was not a 400")
+    check(request(port, "POST", "/api/login", "x" * 70000, {"Content-Type": "application/json"})[0] == 413,
+          "an oversized request was not a 413")
+    driver.get(url + "/maintenance")
+    WebDriverWait(driver, 30).until(lambda d: d.find_element(By.ID, "login").is_displayed())
+    driver.find_element(By.ID, "password").send_keys(PASSWORD)
+    driver.find_element(By.CSS_SELECTOR, "#login button").click()
+    WebDriverWait(driver, 30).until(lambda d: d.find_element(By.ID, "actions").is_displayed())
+    Select(driver.find_element(By.ID, "purpose")).select_by_visible_text("master")
+    driver.find_element(By.ID, "set-purpose").click()
+    deadline = time.monotonic() + 30
+    while maintenance(sock, {"command": "purpose"})["purpose"] != "master" and time.monotonic() < deadline:
+        time.sleep(0.05)
+    check(maintenance(sock, {"command": "purpose"})["purpose"] == "master", "the purpose set on the page did not arrive")
+    if screenshots:
+        driver.save_screenshot(str(screenshots / "hmi-maintenance.png"))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--source", required=True, type=Path)
+    ap.add_argument("--bin", required=True, type=Path)
+    ap.add_argument("--cycles", type=int, default=6)
+    ap.add_argument("--screenshots", type=Path)
+    args = ap.parse_args()
+    if args.screenshots:
+        args.screenshots.mkdir(parents=True, exist_ok=True)
+    workdir = Path(tempfile.mkdtemp(prefix="hg-hmi-"))
+    plc_port, http_port = free_port(), free_port()
+    password_hash = subprocess.run(["openssl", "passwd", "-6", PASSWORD], capture_output=True, text=True,
+                                   check=True).stdout.strip()
+    line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
+                              ["--http-port", str(http_port), "--hmi-password-hash", password_hash,
+                               "--config", str(args.source / "config" / "sim-fast")])
+    url = f"http://127.0.0.1:{http_port}"
+    sock = str(workdir / "hullgauged.sock")
+    db = workdir / "results.db"
+    driver = browser()
+    client = ModbusTcpClient("127.0.0.1", port=plc_port, timeout=10)
+    try:
+        check(client.connect(), "the PLC client could not connect")
+        latencies, seq = line_view_cycles(driver, url, client, sock, db, args.cycles, args.screenshots)
+        # A master cycle and a maintenance-triggered one: neither may reach the SPC chart.
+        maintenance(sock, {"command": "purpose", "purpose": "master"})
+        plc_cycle(client, (seq + 1) % 65536 or 1, "MASTER-1")
+        maintenance(sock, {"command": "purpose", "purpose": "production"})
+        maintenance(sock, {"command": "trigger", "program": 1, "serial": "MANUAL-1"})
+        deadline = time.monotonic() + 60
+        while stored(db, "MANUAL-1") is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        search_and_result(driver, url, db, "BAD-HMI-001", args.screenshots)
+        spc_page(driver, url, db, args.screenshots)
+        maintenance_page(driver, url, http_port, sock, args.screenshots)
+        if latencies:
+            print(f"line view: DONE_SEQ -> page, {len(latencies)} cycles: median "
+                  f"{1000 * statistics.median(latencies):.0f} ms, max {1000 * max(latencies):.0f} ms", flush=True)
+    finally:
+        client.close()
+        driver.quit()
+        stop_line(line, out)
+    if failures:
+        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
+        return 1
+    print("web HMI: every check passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

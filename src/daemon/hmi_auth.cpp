@@ -14,9 +14,8 @@ namespace hg::daemon {
 bool validPasswordHash(const std::string& hash)
 {
     static constexpr std::array<const char*, 6> kPrefixes{"$y$", "$gy$", "$7$", "$6$", "$5$", "$2b$"};
-    const bool known = std::any_of(kPrefixes.begin(), kPrefixes.end(), [&](const char* p) {
-        return hash.rfind(p, 0) == 0;
-    });
+    const bool known =
+        std::any_of(kPrefixes.begin(), kPrefixes.end(), [&](const char* p) { return hash.rfind(p, 0) == 0; });
     // A whole hash: method, salt and the hashed password ("$6$salt$hash"), not a setting alone;
     // crypt_checksalt says whether this libcrypt supports the method and the setting is well formed.
     const auto fields = std::count(hash.begin(), hash.end(), '$');
@@ -60,7 +59,9 @@ std::string randomToken(std::size_t bytes)
     return hex;
 }
 
-Sessions::Sessions(Clock::duration idle, Clock& clock) : idle_(idle), clock_(clock) {}
+Sessions::Sessions(Clock::duration idle, Clock& clock) : idle_(idle), clock_(clock)
+{
+}
 
 void Sessions::expire()
 {

@@ -177,8 +177,7 @@ std::string sessionCookie(const httplib::Request& req)
 } // namespace
 
 HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock)
-    : config_(std::move(config)), mailbox_(mailbox), clock_(clock),
-      sessions_(config_->http.sessionIdle, clock),
+    : config_(std::move(config)), mailbox_(mailbox), clock_(clock), sessions_(config_->http.sessionIdle, clock),
       limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
       // Guessing the password: five tries at once, then one every 12 s per address.
       signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<httplib::Server>())
@@ -215,15 +214,17 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     routeMaintenance();
     port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
                            : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
-    if (port_ < 0)
-        throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
+    if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
     // cpp-httplib listens with a backlog of 5; a page load of many clients at once needs more.
     if (listenFd_ >= 0) ::listen(listenFd_, 128);
     thread_ = std::thread([this] { server_->listen_after_bind(); });
     hg::log::category("hmi")->info("web HMI on http://{}:{}/", http.bindAddress, port_);
 }
 
-HmiServer::~HmiServer() { stop(); }
+HmiServer::~HmiServer()
+{
+    stop();
+}
 
 void HmiServer::stop()
 {
@@ -299,9 +300,8 @@ void HmiServer::routePages()
 
 void HmiServer::routeApi()
 {
-    server_->Get("/api/status", api([this](const httplib::Request&, httplib::Response& res) {
-                     sendJson(res, status());
-                 }));
+    server_->Get("/api/status",
+                 api([this](const httplib::Request&, httplib::Response& res) { sendJson(res, status()); }));
     server_->Get("/api/results", api([this](const httplib::Request& req, httplib::Response& res) {
                      const auto q = resultQuery(req);
                      const store::ResultReader reader(config()->results.database);
@@ -339,7 +339,8 @@ void HmiServer::routeApi()
                      const auto cfg = config();
                      for (const auto& [number, ref] : cfg->programs) {
                          json views = json::array();
-                         for (const auto& v : ref.views) views.push_back(geometry::toJson(v, cfg->station.fixture.type));
+                         for (const auto& v : ref.views)
+                             views.push_back(geometry::toJson(v, cfg->station.fixture.type));
                          programs.push_back({{"number", number},
                                              {"part", ref.partFile.string()},
                                              {"views_file", ref.viewsFile.string()},
@@ -369,8 +370,7 @@ void HmiServer::routeMaintenance()
                       if (!verifyPassword(body["password"].get<std::string>(), hash))
                           throw HttpError(401, "wrong password");
                       const auto session = sessions_.open();
-                      res.set_header("Set-Cookie",
-                                     "hg_session=" + session.id + "; Path=/; HttpOnly; SameSite=Strict");
+                      res.set_header("Set-Cookie", "hg_session=" + session.id + "; Path=/; HttpOnly; SameSite=Strict");
                       hg::log::category("hmi")->info("maintenance sign-in from {}", req.remote_addr);
                       sendJson(res, {{"csrf", session.csrf}});
                   }));

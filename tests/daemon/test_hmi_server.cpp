@@ -45,9 +45,9 @@ station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict, co
     r.verdict = verdict;
     r.cycleMs = 900 + seq;
     const bool bad = verdict == station::Verdict::Fail;
-    r.landmarks = {{"c1", "ok", 0.0, 0.125, 0.0625, 0.2},
-                   {"c2", bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0, bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625,
-                    0.2}};
+    r.landmarks = {
+        {"c1", "ok", 0.0, 0.125, 0.0625, 0.2},
+        {"c2", bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0, bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2}};
     return r;
 }
 
@@ -242,9 +242,10 @@ TEST_F(HmiServerTest, MalformedAndOversizedRequestsAreRefusedAndTheServerServesO
 {
     start([](station::DaemonConfig& c) { c.http.maxRequestBytes = 4096; });
     EXPECT_EQ(rawRequest(server->port(), "GARBAGE\r\n\r\n").substr(0, 12), "HTTP/1.1 400");
-    EXPECT_EQ(rawRequest(server->port(), "GET /api/status HTTP/1.1\r\nHost: x\r\n" + std::string(9000, 'h') + "\r\n\r\n")
-                  .substr(0, 9),
-              "HTTP/1.1 ");
+    EXPECT_EQ(
+        rawRequest(server->port(), "GET /api/status HTTP/1.1\r\nHost: x\r\n" + std::string(9000, 'h') + "\r\n\r\n")
+            .substr(0, 9),
+        "HTTP/1.1 ");
     auto big = client->Post("/api/login", std::string(8192, '{'), "application/json");
     ASSERT_TRUE(big);
     EXPECT_EQ(big->status, 413);
@@ -270,8 +271,8 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
     ASSERT_TRUE(form);
     EXPECT_EQ(form->status, 415);
     auto crossSite = client->Post("/api/maintenance",
-                                  {{"Cookie", cookie}, {"X-CSRF-Token", csrf}, {"Origin", "http://evil.example"}},
-                                  body, "application/json");
+                                  {{"Cookie", cookie}, {"X-CSRF-Token", csrf}, {"Origin", "http://evil.example"}}, body,
+                                  "application/json");
     ASSERT_TRUE(crossSite);
     EXPECT_EQ(crossSite->status, 403);
     auto notOffered = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}},
@@ -289,8 +290,8 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
 
     // The session ends when it has been idle too long.
     clock.advance(std::chrono::duration_cast<std::chrono::milliseconds>(config->http.sessionIdle) + 1s);
-    auto stale = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body,
-                              "application/json");
+    auto stale =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
     ASSERT_TRUE(stale);
     EXPECT_EQ(stale->status, 401);
 }

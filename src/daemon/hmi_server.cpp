@@ -137,6 +137,15 @@ std::vector<std::string> imagesOf(const json& row, const fs::path& imageRoot, fs
     return names;
 }
 
+/// The stored row with the id of a request path (digits, matched by the route); 404 when there is none.
+std::optional<json> storedResult(const station::DaemonConfig& cfg, const std::string& id)
+{
+    const store::ResultReader reader(cfg.results.database);
+    auto row = reader.byId(std::stoll(id));
+    if (!row) throw HttpError(404, "no result " + id);
+    return row;
+}
+
 std::optional<std::string> readFile(const fs::path& file)
 {
     std::ifstream in(file, std::ios::binary);
@@ -313,9 +322,7 @@ void HmiServer::routeApi()
                  }));
     server_->Get(R"(/api/results/([0-9]{1,18}))", api([this](const httplib::Request& req, httplib::Response& res) {
                      const auto cfg = config();
-                     const store::ResultReader reader(cfg->results.database);
-                     auto row = reader.byId(std::stoll(req.matches[1].str()));
-                     if (!row) throw HttpError(404, "no result " + req.matches[1].str());
+                     auto row = storedResult(*cfg, req.matches[1].str());
                      fs::path folder;
                      (*row)["image_files"] = imagesOf(*row, cfg->results.imageDir, folder);
                      row->erase("images");
@@ -324,9 +331,7 @@ void HmiServer::routeApi()
     server_->Get(R"(/api/results/([0-9]{1,18})/images/(view_[0-9]{1,3}\.png))",
                  api([this](const httplib::Request& req, httplib::Response& res) {
                      const auto cfg = config();
-                     const store::ResultReader reader(cfg->results.database);
-                     auto row = reader.byId(std::stoll(req.matches[1].str()));
-                     if (!row) throw HttpError(404, "no result " + req.matches[1].str());
+                     const auto row = storedResult(*cfg, req.matches[1].str());
                      fs::path folder;
                      const auto names = imagesOf(*row, cfg->results.imageDir, folder);
                      const auto name = req.matches[2].str();

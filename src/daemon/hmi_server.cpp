@@ -197,7 +197,11 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     server_->set_payload_max_length(http.maxRequestBytes);
     server_->set_read_timeout(5, 0);
     server_->set_write_timeout(5, 0);
-    server_->set_keep_alive_timeout(2);
+    // cpp-httplib gives a connection its thread for as long as the connection
+    // lives; a line view polling four times a second would keep one forever and
+    // `threads` screens would starve every other. So every answer closes its
+    // connection: a thread is taken only while a request is read and answered.
+    server_->set_keep_alive_max_count(1);
     server_->set_socket_options([this](int fd) {
         int one = 1;
         setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
@@ -224,8 +228,8 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
                            : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
-    // cpp-httplib listens with a backlog of 5; a page load of many clients at once needs more.
-    if (listenFd_ >= 0) ::listen(listenFd_, 128);
+    // cpp-httplib listens with a backlog of 5; many screens connecting at once need more.
+    if (listenFd_ >= 0) ::listen(listenFd_, 1024);
     thread_ = std::thread([this] { server_->listen_after_bind(); });
     hg::log::category("hmi")->info("web HMI on http://{}:{}/", http.bindAddress, port_);
 }

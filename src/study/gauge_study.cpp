@@ -3,6 +3,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
+#include "sample_statistics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -111,24 +112,6 @@ LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& r
     const char* key = series.source == ValueSource::Deviation ? "deviation_mm" : "error_mm";
     for (const auto* entry : entries) series.values.push_back((*entry)[key].get<double>());
     return series;
-}
-
-/// The mean, summed relative to the first value: n equal values give that value
-/// exactly (and a spread of exactly 0 below).
-double mean(const std::vector<double>& v)
-{
-    double sum = 0.0;
-    for (double x : v) sum += x - v.front();
-    return v.front() + sum / static_cast<double>(v.size());
-}
-
-/// Sample standard deviation (n − 1), two passes relative to the first value.
-double sampleStddev(const std::vector<double>& v, double m)
-{
-    const double offset = m - v.front();
-    double ss = 0.0;
-    for (double x : v) ss += (x - v.front() - offset) * (x - v.front() - offset);
-    return std::sqrt(ss / static_cast<double>(v.size() - 1));
 }
 
 /// a / b for b ≥ 0 where b = 0 gives ±∞ by the sign of a (0 for a = 0).

@@ -32,7 +32,7 @@ function individuals(s) {
   }
   datasets.push(line("USL", s.zone_mm[1], n, GREY, [2, 2]), line("LSL", s.zone_mm[0], n, GREY, [2, 2]));
   draw("chart-i", { type: "line", data: { datasets }, options: { animation: false, parsing: false,
-    scales: { x: linear("cycle"), y: linear(s.values === "deviation" ? "deviation mm" : "bracket middle mm") },
+    scales: { x: linear("cycle"), y: linear(s.values === "deviation_mm" ? "deviation mm" : "bracket middle mm") },
     plugins: { tooltip: { callbacks: { label: (c) => c.raw.serial !== undefined
       ? `${c.raw.serial}: ${c.raw.y.toFixed(4)} mm ${c.raw.rules.join(" ")}` : `${c.dataset.label} ${c.raw.y.toFixed(4)}` } } } } });
 }

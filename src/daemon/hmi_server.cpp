@@ -4,6 +4,7 @@
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/store/result_reader.h"
+#include "hullgauge/study/spc.h"
 
 #include <algorithm>
 #include <charconv>
@@ -101,6 +102,41 @@ store::ResultQuery resultQuery(const httplib::Request& req)
     return q;
 }
 
+/// The SPC page's data (docs/hmi.md, "JSON API"; docs/spc.md): the program's
+/// PLC-triggered production cycles that ended pass or fail — master, study,
+/// maintenance-triggered, aborted and error cycles never count — the newest
+/// `limit` of them, oldest first; one landmark's charts, or every landmark's.
+json spcSeries(const fs::path& database, const httplib::Request& req)
+{
+    if (!req.has_param("program")) throw HttpError(400, "program: missing (the part program's number)");
+    store::ResultQuery q;
+    q.program = static_cast<int>(*intParam(req, "program", 1, 65535));
+    q.purpose = "production";
+    q.manual = false;
+    q.verdicts = {"pass", "fail"};
+    q.limit = static_cast<int>(intParam(req, "limit", 2, 5000).value_or(500));
+    study::SpcOptions options;
+    options.baseline = static_cast<std::size_t>(intParam(req, "baseline", 2, 5000).value_or(25));
+    options.rules = study::parseRuleSet(oneOf(req, "rules", {"nelson", "western_electric"}, "nelson"));
+    const auto landmark = req.has_param("landmark") ? req.get_param_value("landmark") : std::string();
+
+    auto rows = store::ResultReader(database).select(q);
+    std::reverse(rows.begin(), rows.end());
+    std::vector<study::StudyRecord> records;
+    for (auto& row : rows)
+        records.push_back({row.at("id").get<std::int64_t>(), row.value("serial", ""), std::move(row["landmarks"])});
+    json ids = json::array();
+    json charts = json::array();
+    for (const auto& series : study::collectSeries(records)) {
+        ids.push_back(series.id);
+        if (landmark.empty() || series.id == landmark) charts.push_back(study::toJson(study::spcOf(series, options)));
+    }
+    if (!landmark.empty() && charts.empty())
+        throw HttpError(404, "program " + std::to_string(*q.program) + " has no landmark '" + landmark +
+                                 "' in its production cycles");
+    return {{"program", *q.program}, {"cycles", records.size()}, {"landmark_ids", ids}, {"landmarks", charts}};
+}
+
 /// A row of the results list: the stored row without its bulky parts, with the failed landmarks named.
 json summary(const json& row)
 {
@@ -193,7 +229,7 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
 {
     const auto& http = config_->http;
     const int threads = http.threads;
-    server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<size_t>(threads)); };
+    server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
     server_->set_payload_max_length(http.maxRequestBytes);
     server_->set_read_timeout(5, 0);
     server_->set_write_timeout(5, 0);
@@ -342,6 +378,9 @@ void HmiServer::routeApi()
                      if (std::find(names.begin(), names.end(), name) == names.end())
                          throw HttpError(404, "result " + req.matches[1].str() + " has no image " + name);
                      sendFile(res, folder / name);
+                 }));
+    server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendJson(res, spcSeries(config()->results.database, req));
                  }));
     server_->Get("/api/programs", api([this](const httplib::Request&, httplib::Response& res) {
                      json programs = json::array();

@@ -191,6 +191,45 @@ TEST_F(HmiServerTest, TheApiAnswersFromTheStoreAndTheMainLoop)
     EXPECT_EQ(png->body.substr(1, 3), "PNG");
 }
 
+TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)
+{
+    {
+        // Cycles the SPC must leave out: a master part, a maintenance-triggered one, an aborted one.
+        ResultStore store(config->results.database);
+        auto master = record(5, station::Verdict::Fail, "M-5");
+        master.purpose = station::CyclePurpose::Master;
+        auto manual = record(6, station::Verdict::Fail, "H-6");
+        manual.manual = true;
+        store.commit(master);
+        store.commit(manual);
+        store.commit(record(7, station::Verdict::Aborted, "Z-7"));
+    }
+    start();
+    const auto body = getJson("/api/spc?program=1&landmark=c2");
+    EXPECT_EQ(body["cycles"], 4);
+    EXPECT_EQ(body["landmark_ids"], json::array({"c1", "c2"}));
+    ASSERT_EQ(body["landmarks"].size(), 1u);
+    const auto& c2 = body["landmarks"][0];
+    // The bracket middles of c2 in rows 1..4 (fail, pass, pass, fail), oldest first.
+    const std::vector<double> expected{0.5625, 0.0625, 0.0625, 0.5625};
+    ASSERT_EQ(c2["points"].size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_DOUBLE_EQ(c2["points"][i]["value_mm"], expected[i]);
+    // Baseline = all 4 values: CL 0.3125, MR̄ = (0.5 + 0 + 0.5) / 3, σ = MR̄ / 1.128.
+    const double sigma = (1.0 / 3.0) / 1.128;
+    EXPECT_NEAR(c2["i_chart"]["centre_mm"].get<double>(), 0.3125, 1e-12);
+    EXPECT_NEAR(c2["i_chart"]["ucl_mm"].get<double>(), 0.3125 + 3 * sigma, 1e-9);
+    EXPECT_EQ(c2["baseline"]["used"], 4);
+    EXPECT_TRUE(c2["baseline"]["short"].get<bool>());
+    EXPECT_EQ(c2["yield"]["within"], 2); // 0.5625 is beyond the ±0.2 zone
+
+    EXPECT_EQ(getJson("/api/spc?program=1")["landmarks"].size(), 2u);
+    EXPECT_EQ(getJson("/api/spc?program=2")["landmark_ids"], json::array());
+    EXPECT_NE(getJson("/api/spc", 400)["error"].get<std::string>().find("program"), std::string::npos);
+    EXPECT_NE(getJson("/api/spc?program=1&landmark=c9", 404)["error"].get<std::string>().find("c9"), std::string::npos);
+    EXPECT_NE(getJson("/api/spc?program=1&rules=shewhart", 400)["error"].get<std::string>().find("shewhart"),
+              std::string::npos);
+}
+
 TEST_F(HmiServerTest, BadRequestsAreAnsweredWith4xxNamingTheProblem)
 {
     start();

@@ -1,7 +1,5 @@
 #include "hullgauge/calib/station_file.h"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <cstring>
 #include <ctime>
@@ -164,19 +162,7 @@ std::optional<std::filesystem::path> StationFileUpdate::commit()
         if (ec) throw FaultError(file_.string() + ": cannot write backup " + b.string() + ": " + ec.message());
         backup = b;
     }
-    std::filesystem::path tmp = file_;
-    tmp += ".tmp-" + std::to_string(::getpid());
-    try {
-        writeFileDurably(tmp, text);
-    } catch (...) {
-        std::filesystem::remove(tmp, ec);
-        throw;
-    }
-    std::filesystem::rename(tmp, file_, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        throw FaultError(file_.string() + ": cannot replace the station file: " + ec.message());
-    }
+    replaceFileDurably(file_, text);
     hg::log::category("calib")->info("wrote {}{}", file_.string(), backup ? " (backup " + backup->string() + ")" : "");
     return backup;
 }

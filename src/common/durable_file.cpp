@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <string>
 
 #include "hullgauge/common/error.h"
 
@@ -47,6 +48,29 @@ void syncFolder(const std::filesystem::path& folder)
     const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0) fail(folder, "cannot open", errno);
     syncAndClose(fd, folder);
+}
+
+void replaceFileDurably(const std::filesystem::path& file, std::string_view bytes)
+{
+    // Hidden and named by the process, so two writers never share one and a
+    // listing of the folder does not show it as a result.
+    auto folder = file.parent_path();
+    if (folder.empty()) folder = ".";
+    const auto tmp = folder / ("." + file.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    std::error_code ec;
+    try {
+        writeFileDurably(tmp, bytes);
+    } catch (...) {
+        std::filesystem::remove(tmp, ec);
+        throw;
+    }
+    std::filesystem::rename(tmp, file, ec);
+    if (ec) {
+        const auto why = ec.message();
+        std::filesystem::remove(tmp, ec);
+        throw FaultError(file.string() + ": cannot replace it: " + why);
+    }
+    syncFolder(folder);
 }
 
 } // namespace hg

@@ -4,8 +4,6 @@
 #include "hullgauge/common/log.h"
 #include "hullgauge/store/result_reader.h"
 
-#include <chrono>
-#include <ctime>
 #include <sqlite3.h>
 
 namespace hg::daemon {
@@ -40,18 +38,6 @@ CREATE TABLE IF NOT EXISTS inspections (
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
 )";
-
-std::string isoUtc(std::int64_t unixMs)
-{
-    std::time_t seconds = static_cast<std::time_t>(unixMs / 1000);
-    std::tm tm{};
-    gmtime_r(&seconds, &tm);
-    char buf[32];
-    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
-    char out[40];
-    std::snprintf(out, sizeof out, "%s.%03dZ", buf, static_cast<int>(unixMs % 1000));
-    return out;
-}
 
 struct Statement {
     sqlite3_stmt* stmt = nullptr;
@@ -131,7 +117,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     auto text = [&](int i, const std::string& s) {
         sqlite3_bind_text(insert.stmt, i, s.c_str(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
     };
-    text(1, isoUtc(r.startedUnixMs));
+    text(1, store::formatUtc(r.startedUnixMs));
     sqlite3_bind_int64(insert.stmt, 2, r.startedUnixMs);
     sqlite3_bind_int(insert.stmt, 3, r.triggerSeq);
     sqlite3_bind_int(insert.stmt, 4, r.manual ? 1 : 0);

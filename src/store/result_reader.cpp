@@ -174,6 +174,20 @@ std::int64_t parseUtc(const std::string& text, const std::string& field)
     return static_cast<std::int64_t>(t) * 1000;
 }
 
+std::string formatUtc(std::int64_t unixMs)
+{
+    // Floor division: a time before 1970 keeps its milliseconds in 0..999.
+    const std::int64_t ms = ((unixMs % 1000) + 1000) % 1000;
+    const auto seconds = static_cast<std::time_t>((unixMs - ms) / 1000);
+    std::tm tm{};
+    gmtime_r(&seconds, &tm);
+    char date[32];
+    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%S", &tm);
+    char out[48];
+    std::snprintf(out, sizeof out, "%s.%03dZ", date, static_cast<int>(ms));
+    return out;
+}
+
 std::vector<json> selectResults(sqlite3* db, const std::string& file, const ResultQuery& query)
 {
     const auto columns = columnsOf(db, file);

@@ -65,10 +65,11 @@ bool isNumber(const nlohmann::json& entry, const char* key)
     return entry.contains(key) && entry[key].is_number();
 }
 
-/// limits_mm when the landmark has it, else ±tolerance_mm (docs/study.md).
-Zone zoneOf(const nlohmann::json& entry, const StudyRecord& record, const std::string& id)
+} // namespace
+
+// limits_mm when the landmark has it, else ±tolerance_mm (docs/study.md).
+Zone zoneOf(const nlohmann::json& entry, const std::string& field)
 {
-    const auto field = cycleName(record) + ".landmarks." + id;
     if (entry.contains("limits_mm") && !entry["limits_mm"].is_null()) {
         const auto& limits = entry["limits_mm"];
         if (!limits.is_array() || limits.size() != 2 || !limits[0].is_number() || !limits[1].is_number())
@@ -79,6 +80,8 @@ Zone zoneOf(const nlohmann::json& entry, const StudyRecord& record, const std::s
     const double t = entry["tolerance_mm"].get<double>();
     return {-t, t};
 }
+
+namespace {
 
 /// A landmark's series over all records, or its problem.
 LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& records)
@@ -96,7 +99,7 @@ LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& r
             series.problem = cycleName(record) + " reports it " + status;
             return series;
         }
-        const Zone zone = zoneOf(*entry, record, id);
+        const Zone zone = zoneOf(*entry, cycleName(record) + ".landmarks." + id);
         if (entries.empty()) series.zone = zone;
         if (zone != series.zone) {
             series.problem = "its tolerance zone changed within the selection (" + cycleName(record) + ": [" +

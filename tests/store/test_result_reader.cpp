@@ -162,4 +162,13 @@ TEST(ResultReader, NamesWhatIsWrongWithTheFile)
     }
 }
 
+TEST(ResultReader, FormatsTimesAsTheStoreWritesThem)
+{
+    EXPECT_EQ(hg::store::formatUtc(0), "1970-01-01T00:00:00.000Z");
+    EXPECT_EQ(hg::store::formatUtc(1'780'000'000'123), "2026-05-28T20:26:40.123Z");
+    EXPECT_EQ(hg::store::formatUtc(-1), "1969-12-31T23:59:59.999Z");
+    // parseUtc reads what formatUtc writes, to the second.
+    EXPECT_EQ(hg::store::parseUtc("2026-05-28T20:26:40Z", "t"), 1'780'000'000'000);
+}
+
 } // namespace

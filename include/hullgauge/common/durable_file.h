@@ -17,4 +17,11 @@ void writeFileDurably(const std::filesystem::path& file, std::string_view bytes)
 /// Throws FaultError naming the folder.
 void syncFolder(const std::filesystem::path& folder);
 
+/// Replaces `file` with `bytes` atomically: written and flushed into a hidden
+/// temporary file in the same folder, renamed over `file`, the folder flushed.
+/// A reader sees the old file or the new one, never a part; on any error the
+/// temporary file is removed and `file` is as it was. Throws FaultError naming
+/// the file.
+void replaceFileDurably(const std::filesystem::path& file, std::string_view bytes);
+
 } // namespace hg

@@ -43,6 +43,10 @@ struct ResultQuery {
 /// hg::InputError naming `field` otherwise (a date that does not exist too).
 std::int64_t parseUtc(const std::string& text, const std::string& field);
 
+/// ms since 1970 as the store writes `started_utc`: "2026-12-02T10:30:05.250Z"
+/// (ISO 8601, UTC, milliseconds).
+std::string formatUtc(std::int64_t unixMs);
+
 /// The rows of `query` from an open database (the daemon's own connection or
 /// a reader's); `file` names the database in errors. Throws hg::FaultError
 /// when SQLite fails and hg::InputError when the file is not a result store.

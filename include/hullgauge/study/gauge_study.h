@@ -28,6 +28,13 @@ struct Zone {
     bool operator==(const Zone&) const = default;
 };
 
+/// The tolerance zone of one landmark entry of a stored result (the landmarks
+/// JSON of src/station/result_record.cpp): its `limits_mm` when it has them,
+/// else ±`tolerance_mm`. `field` names the entry in errors ("cycle 12.landmarks.a");
+/// throws hg::InputError naming it when neither is there or limits_mm is not
+/// [lower, upper]. The studies and the exports (docs/export.md) take it from here.
+Zone zoneOf(const nlohmann::json& entry, const std::string& field);
+
 /// Which number of a landmark's result the study measured.
 enum class ValueSource {
     Deviation,     ///< `deviation_mm`, the signed sub-voxel deviation (every record had it)

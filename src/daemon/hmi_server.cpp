@@ -3,6 +3,7 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
+#include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
 #include "hullgauge/study/spc.h"
 
@@ -135,6 +136,31 @@ json spcSeries(const fs::path& database, const httplib::Request& req)
         throw HttpError(404, "program " + std::to_string(*q.program) + " has no landmark '" + landmark +
                                  "' in its production cycles");
     return {{"program", *q.program}, {"cycles", records.size()}, {"landmark_ids", ids}, {"landmarks", charts}};
+}
+
+/// A download holds at most this many cycles; `hullgauge export` has no limit.
+constexpr std::int64_t kMaxExportCycles = 20000;
+
+/// The results page's downloads (docs/export.md): the selection of /api/results
+/// without its paging, oldest first, in one of the export formats.
+void sendExport(const fs::path& database, const httplib::Request& req, httplib::Response& res)
+{
+    const auto format = store::parseExportFormat(oneOf(req, "format", {"csv", "aqdef", "json"}, "csv"));
+    auto q = resultQuery(req);
+    q.limit = 0;
+    q.newestFirst = false;
+    const store::ResultReader reader(database);
+    const auto cycles = reader.count(q);
+    if (cycles > kMaxExportCycles)
+        throw HttpError(400, "the selection holds " + std::to_string(cycles) + " cycles, a download at most " +
+                                 std::to_string(kMaxExportCycles) +
+                                 ": narrow it (since/until, program) or use hullgauge export");
+    std::ostringstream out;
+    store::writeExport(out, format, reader.select(q));
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("Content-Disposition",
+                   "attachment; filename=\"hullgauge-results." + std::string(store::fileExtension(format)) + "\"");
+    res.set_content(out.str(), std::string(store::contentType(format)));
 }
 
 /// A row of the results list: the stored row without its bulky parts, with the failed landmarks named.
@@ -381,6 +407,9 @@ void HmiServer::routeApi()
                  }));
     server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendJson(res, spcSeries(config()->results.database, req));
+                 }));
+    server_->Get("/api/export", api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendExport(config()->results.database, req, res);
                  }));
     server_->Get("/api/programs", api([this](const httplib::Request&, httplib::Response& res) {
                      json programs = json::array();

@@ -230,6 +230,33 @@ TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)
               std::string::npos);
 }
 
+TEST_F(HmiServerTest, TheResultsPageDownloadsItsSelection)
+{
+    start();
+    auto csv = client->Get("/api/export?format=csv&verdict=pass");
+    ASSERT_TRUE(csv);
+    EXPECT_EQ(csv->status, 200) << csv->body;
+    EXPECT_EQ(csv->get_header_value("Content-Type").rfind("text/csv", 0), 0u);
+    EXPECT_EQ(csv->get_header_value("Content-Disposition"), "attachment; filename=\"hullgauge-results.csv\"");
+    // RFC 4180: a header and one CRLF-ended row per landmark of the two passed cycles; the serial
+    // with a comma and quotes quoted, its quotes doubled.
+    std::size_t lines = 0;
+    for (std::size_t at = csv->body.find("\r\n"); at != std::string::npos; at = csv->body.find("\r\n", at + 2)) ++lines;
+    EXPECT_EQ(lines, 1u + 2u * 2u) << csv->body;
+    EXPECT_NE(csv->body.find("\"B,\"\"2\"\"\""), std::string::npos) << csv->body;
+    EXPECT_EQ(csv->body.find("A-1"), std::string::npos) << "a failed cycle in a selection of passes";
+
+    auto dfq = client->Get("/api/export?format=aqdef&program=1");
+    ASSERT_TRUE(dfq);
+    EXPECT_EQ(dfq->status, 200) << dfq->body;
+    EXPECT_EQ(dfq->get_header_value("Content-Disposition"), "attachment; filename=\"hullgauge-results.dfq\"");
+    EXPECT_EQ(dfq->body.rfind("K0100 2", 0), 0u) << dfq->body.substr(0, 80);
+
+    EXPECT_NE(getJson("/api/export?format=xml", 400)["error"].get<std::string>().find("xml"), std::string::npos);
+    EXPECT_NE(getJson("/api/export?format=csv&since=yesterday", 400)["error"].get<std::string>().find("since"),
+              std::string::npos);
+}
+
 TEST_F(HmiServerTest, BadRequestsAreAnsweredWith4xxNamingTheProblem)
 {
     start();

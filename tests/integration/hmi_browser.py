@@ -12,6 +12,8 @@ against the result store read here with sqlite3:
 - the failed part's annotated views load (naturalWidth > 0) and its failed
   landmarks are the stored ones;
 - the results search finds a serial; a result page lists every landmark;
+  the page's CSV download holds one row per stored landmark measurement
+  (read with Python's csv module);
 - the SPC chart's plotted points are the stored values of the PLC's
   production cycles (a master cycle and a maintenance-triggered one are
   left out);
@@ -21,7 +23,9 @@ against the result store read here with sqlite3:
   hmi_browser.py --source DIR --bin DIR [--cycles N] [--screenshots DIR]
 """
 import argparse
+import csv
 import http.client
+import io
 import json
 import sqlite3
 import statistics
@@ -144,6 +148,7 @@ def search_and_result(driver, url, db, serial, screenshots):
         driver.find_element(By.ID, "search").click()
         WebDriverWait(driver, 30).until(lambda d: len(d.find_elements(By.CSS_SELECTOR, "#results tbody tr")) > 3)
         driver.save_screenshot(str(screenshots / "hmi-results.png"))
+    csv_download(driver, db)
     row = stored(db, serial)
     driver.get(f"{url}/result?id={row['id']}")
     landmarks = json.loads(row["landmarks_json"])
@@ -156,6 +161,23 @@ def search_and_result(driver, url, db, serial, screenshots):
         WebDriverWait(driver, 30).until(lambda d: d.execute_script(
             "return [...document.querySelectorAll('#images img')].every(i => i.complete)"))
         driver.save_screenshot(str(screenshots / "hmi-result.png"))
+
+
+def csv_download(driver, db):
+    """The results page's CSV link: every landmark of every stored cycle (no filter set), RFC 4180."""
+    href = driver.find_element(By.ID, "dl-csv").get_attribute("href")
+    status, body = request(int(href.split(":")[2].split("/")[0]), "GET", href[href.index("/api/"):])
+    if not check(status == 200, f"CSV download {href}: HTTP {status}"):
+        return
+    rows = list(csv.DictReader(io.StringIO(body.decode("utf-8"), newline="")))
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    expected = sorted((rid, l["id"]) for rid, lj in con.execute("SELECT id, landmarks_json FROM inspections")
+                      for l in json.loads(lj))
+    con.close()
+    got = sorted((int(r["result_id"]), r["landmark"]) for r in rows)
+    check(got == expected, f"CSV download: {len(got)} landmark rows, the store holds {len(expected)}")
+    check(body.count(b"\r\n") == len(rows) + 1 + sum(r["serial"].count("\r\n") for r in rows),
+          "CSV download: lines not ended with CRLF")
 
 
 def spc_expected(db, landmark):

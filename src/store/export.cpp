@@ -185,8 +185,9 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows)
                                              row.value("purpose", std::string("production")),
                                              row.value("verdict", std::string())};
         const std::vector<std::string> tail{reason.empty() ? "false" : "true", reason};
-        auto measurements = measurementsOf(row);
-        // A cycle without landmarks (an aborted one, mostly) still has its row.
+        const auto measurements = measurementsOf(row);
+        // A cycle without landmarks (an aborted one, mostly) still has its row,
+        // the ten landmark cells (landmark ... decision) empty.
         if (measurements.empty()) {
             auto cells = cycle;
             cells.resize(cycle.size() + 10);

@@ -238,7 +238,7 @@ constexpr int kAttributePlaceholder = 255;
 constexpr int kReasonProduction = 0;
 constexpr int kReasonSpecial = 10;
 
-/// UTF-8 text as ISO 8859-1, the transfer format's 8-bit text, at most `maxChars`
+/// UTF-8 text as ISO 8859-1, the 8-bit text of the transfer format, at most `maxChars`
 /// characters: a control character becomes a space (a line break would end the
 /// K-field line), a character outside Latin-1 or a byte that is not UTF-8 '?'.
 std::string dfqText(const std::string& text, std::size_t maxChars)

@@ -185,8 +185,9 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows)
                                              row.value("purpose", std::string("production")),
                                              row.value("verdict", std::string())};
         const std::vector<std::string> tail{reason.empty() ? "false" : "true", reason};
-        auto measurements = measurementsOf(row);
-        // A cycle without landmarks (an aborted one, mostly) still has its row.
+        const auto measurements = measurementsOf(row);
+        // A cycle without landmarks (an aborted one, mostly) still has its row,
+        // the ten landmark cells (landmark ... decision) empty.
         if (measurements.empty()) {
             auto cells = cycle;
             cells.resize(cycle.size() + 10);
@@ -237,7 +238,7 @@ constexpr int kAttributePlaceholder = 255;
 constexpr int kReasonProduction = 0;
 constexpr int kReasonSpecial = 10;
 
-/// UTF-8 text as ISO 8859-1, the transfer format's 8-bit text, at most `maxChars`
+/// UTF-8 text as ISO 8859-1, the 8-bit text of the transfer format, at most `maxChars`
 /// characters: a control character becomes a space (a line break would end the
 /// K-field line), a character outside Latin-1 or a byte that is not UTF-8 '?'.
 std::string dfqText(const std::string& text, std::size_t maxChars)

@@ -28,7 +28,7 @@ enum class ExportFormat { Aqdef, Csv, Json };
 ExportFormat parseExportFormat(std::string_view text);
 std::string_view toString(ExportFormat format);
 /// The HTTP Content-Type of a download: text/plain; charset=ISO-8859-1 for
-/// AQDEF (the transfer format's 8-bit text), text/csv; charset=utf-8, application/json.
+/// AQDEF (8-bit text, docs/export.md), text/csv; charset=utf-8, application/json.
 std::string_view contentType(ExportFormat format);
 /// "dfq", "csv", "json".
 std::string_view fileExtension(ExportFormat format);

@@ -5,6 +5,9 @@
 hg.nav("/results");
 
 let nextBefore = null;
+// Loads answered out of order (the page's first load and a search sent right
+// after it) must not overwrite a newer selection's rows: only the latest counts.
+let latestLoad = 0;
 
 function selection() {
   const params = new URLSearchParams();
@@ -26,10 +29,12 @@ function row(r) {
 }
 
 async function load(append) {
+  const mine = ++latestLoad;
   const params = selection();
   if (append && nextBefore) params.set("before", nextBefore);
   try {
     const body = await hg.get("/api/results?" + params.toString());
+    if (mine !== latestLoad) return;
     const tbody = document.querySelector("#results tbody");
     if (!append) tbody.replaceChildren();
     for (const r of body.results) tbody.append(row(r));
@@ -43,7 +48,7 @@ async function load(append) {
       document.getElementById("dl-" + f).href = "/api/export?" + exportParams.toString();
     }
   } catch (e) {
-    document.getElementById("error").textContent = e.message;
+    if (mine === latestLoad) document.getElementById("error").textContent = e.message;
   }
 }
 

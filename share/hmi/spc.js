@@ -91,7 +91,10 @@ function show(s) {
   if (s.rules.not_tested) list.append(hg.el("li", { class: "muted", text: s.rules.not_tested }));
 }
 
+// Only the latest load draws: an earlier selection's answer arriving late must not replace it.
+let latestLoad = 0;
 async function load() {
+  const mine = ++latestLoad;
   const program = document.getElementById("f-program").value;
   if (!program) return;
   const params = new URLSearchParams({ program, baseline: document.getElementById("f-baseline").value,
@@ -100,6 +103,7 @@ async function load() {
   if (landmark) params.set("landmark", landmark);
   try {
     const body = await hg.get("/api/spc?" + params.toString());
+    if (mine !== latestLoad) return;
     const select = document.getElementById("f-landmark");
     if (!select.options.length) {
       for (const id of body.landmark_ids) select.append(hg.el("option", { value: id, text: id }));
@@ -109,7 +113,7 @@ async function load() {
     document.getElementById("error").textContent = "";
     show(body.landmarks[0]);
   } catch (e) {
-    document.getElementById("error").textContent = e.message;
+    if (mine === latestLoad) document.getElementById("error").textContent = e.message;
   }
 }
 

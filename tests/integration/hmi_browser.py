@@ -65,6 +65,15 @@ def browser():
     return driver
 
 
+def texts(driver, css, attribute=None):
+    """The text (or an attribute) of every element matching css, read in one script: the pages
+    re-render their tables when an answer arrives, and an element found in one WebDriver call
+    may be gone by the next (a stale element)."""
+    return driver.execute_script(
+        "return [...document.querySelectorAll(arguments[0])]"
+        ".map(e => arguments[1] ? e.getAttribute(arguments[1]) : e.innerText.trim())", css, attribute)
+
+
 def plc_cycle(client, seq, serial, timeout_s=60):
     """One PLC handshake: program 1, the serial and a new TRIGGER_SEQ in one block; wait for DONE_SEQ."""
     w = client.write_registers(0, [seq, 1] + encode_serial(serial), slave=1)
@@ -131,8 +140,7 @@ def failed_part(driver, row, serial):
         "return imgs.every(i => i.complete) ? imgs.map(i => i.naturalWidth) : false"))
     check(all(w > 0 for w in loaded), f"{serial}: a failed part's view did not load ({loaded})")
     expected = sorted(l["id"] for l in json.loads(row["landmarks_json"]) if l["status"] != "ok")
-    listed = sorted(e.get_attribute("data-landmark")
-                    for e in driver.find_elements(By.CSS_SELECTOR, "#failed-landmarks tr[data-landmark]"))
+    listed = sorted(texts(driver, "#failed-landmarks tr[data-landmark]", "data-landmark"))
     check(listed == expected, f"{serial}: failed landmarks listed {listed}, stored {expected}")
 
 
@@ -142,20 +150,20 @@ def search_and_result(driver, url, db, serial, screenshots):
     box.send_keys(serial)
     driver.find_element(By.ID, "search").click()
     WebDriverWait(driver, 30).until(
-        lambda d: [e.text for e in d.find_elements(By.CSS_SELECTOR, "#results td.serial")] == [serial])
+        lambda d: texts(d, "#results td.serial") == [serial])
     if screenshots:
         driver.find_element(By.ID, "f-serial").clear()
         driver.find_element(By.ID, "search").click()
-        WebDriverWait(driver, 30).until(lambda d: len(d.find_elements(By.CSS_SELECTOR, "#results tbody tr")) > 3)
+        WebDriverWait(driver, 30).until(lambda d: len(texts(d, "#results tbody tr")) > 3)
         driver.save_screenshot(str(screenshots / "hmi-results.png"))
     csv_download(driver, db)
     row = stored(db, serial)
     driver.get(f"{url}/result?id={row['id']}")
     landmarks = json.loads(row["landmarks_json"])
     WebDriverWait(driver, 30).until(
-        lambda d: len(d.find_elements(By.CSS_SELECTOR, "#landmarks tr[data-landmark]")) == len(landmarks))
-    statuses = {e.get_attribute("data-landmark"): e.find_elements(By.TAG_NAME, "td")[1].text
-                for e in driver.find_elements(By.CSS_SELECTOR, "#landmarks tr[data-landmark]")}
+        lambda d: len(texts(d, "#landmarks tr[data-landmark]")) == len(landmarks))
+    statuses = dict(zip(texts(driver, "#landmarks tr[data-landmark]", "data-landmark"),
+                        texts(driver, "#landmarks tr[data-landmark] td:nth-child(2)")))
     check(statuses == {l["id"]: l["status"] for l in landmarks}, f"result {row['id']}: statuses shown {statuses}")
     if screenshots:
         WebDriverWait(driver, 30).until(lambda d: d.execute_script(

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # The Debian package (docs/daemon.md, systemd): `cpack -G DEB` on the build tree into
 # a scratch folder, then, with Debian's own tools only:
-#   - dpkg-deb -c: the daemon, the CLI, the unit, the sysusers file, the docs;
+#   - dpkg-deb -c: the daemon, the CLI, the unit, the sysusers file, the man
+#     pages, the configuration under /etc/hullgauge, the hardware template,
+#     the HMI's pages and every page of docs/ with its pictures;
 #   - dpkg-deb -I: Depends lists the shared libraries the programs link
-#     (dpkg-shlibdeps, CPACK_DEBIAN_PACKAGE_SHLIBDEPS) and systemd; the
-#     maintainer scripts are there and parse;
+#     (dpkg-shlibdeps, CPACK_DEBIAN_PACKAGE_SHLIBDEPS), systemd and Chart.js;
+#     every file under /etc is a conffile; the maintainer scripts are there
+#     and parse;
 #   - dpkg -x into a throwaway root: systemd-analyze verify --root on the
 #     installed unit (ExecStart resolves inside the root), and the sysusers
 #     file applied to that root creates the user and group hullgauge.
@@ -36,7 +39,17 @@ echo "package: $(basename "$deb"), $(du -k "$deb" | cut -f1) KiB"
 
 dpkg-deb -c "$deb" | awk '{print $NF}' >"$scratch/files"
 for f in ./usr/sbin/hullgauged ./usr/bin/hullgauge ./usr/lib/systemd/system/hullgauged.service \
-  ./usr/lib/sysusers.d/hullgauge.conf ./usr/share/doc/hullgauge/daemon.md ./usr/share/doc/hullgauge/plc.md; do
+  ./usr/lib/sysusers.d/hullgauge.conf ./usr/share/man/man8/hullgauged.8.gz ./usr/share/man/man1/hullgauge.1.gz \
+  ./etc/hullgauge/hullgauged.yaml ./etc/hullgauge/station.yaml ./etc/hullgauge/programs/stepped-block.yaml \
+  ./etc/hullgauge/programs/stepped-block-views.yaml ./etc/hullgauge/programs/stepped-block.stl \
+  ./usr/share/doc/hullgauge/examples/hardware/hullgauged.yaml ./usr/share/doc/hullgauge/examples/hardware/station.yaml \
+  ./usr/share/hullgauge/hmi/line.html; do
+  check "$f is not in the package" grep -qxF "$f" "$scratch/files"
+done
+# Every page of docs/ (the source tree's, beside this script) and its pictures.
+source_dir=$(cd "$(dirname "$0")/../.." && pwd)
+for page in "$source_dir"/docs/*.md "$source_dir"/docs/images/*.png; do
+  f=./usr/share/doc/hullgauge/${page#"$source_dir"/docs/}
   check "$f is not in the package" grep -qxF "$f" "$scratch/files"
 done
 
@@ -44,13 +57,17 @@ dpkg-deb -I "$deb" >"$scratch/info"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
 # The libraries the daemon links, as dpkg-shlibdeps names their packages.
-for lib in libmodbus5 libsqlite3-0 libsystemd0 libyaml-cpp0.7 libstdc++6 libc6 systemd; do
+for lib in libmodbus5 libsqlite3-0 libsystemd0 libyaml-cpp0.7 libstdc++6 libc6 systemd libjs-chart.js; do
   check "Depends lacks $lib" grep -qE "(^|, )${lib//+/\\+}( |,|$)" <<<"$depends"
+done
+# Every file under /etc is a conffile: dpkg keeps the engineer's edits.
+dpkg-deb -e "$deb" "$scratch/control"
+for f in $(grep '^\./etc/.*[^/]$' "$scratch/files" | sed 's/^\.//'); do
+  check "$f is not listed in conffiles" grep -qxF "$f" "$scratch/control/conffiles"
 done
 for script in postinst prerm; do
   check "maintainer script $script missing" grep -qE "^ +[0-9]+ bytes, +[0-9]+ lines +\* +$script " "$scratch/info"
 done
-dpkg-deb -e "$deb" "$scratch/control"
 for script in postinst prerm; do
   check "$script does not parse" sh -n "$scratch/control/$script"
   check "$script is not executable" test -x "$scratch/control/$script"

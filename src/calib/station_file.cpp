@@ -1,6 +1,8 @@
 #include "hullgauge/calib/station_file.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -165,6 +167,71 @@ std::optional<std::filesystem::path> StationFileUpdate::commit()
     replaceFileDurably(file_, text);
     hg::log::category("calib")->info("wrote {}{}", file_.string(), backup ? " (backup " + backup->string() + ")" : "");
     return backup;
+}
+
+namespace {
+
+// A calibration record as JSON: numbers stay numbers, maps and lists nest.
+nlohmann::json recordJson(const YAML::Node& node)
+{
+    if (!node || node.IsNull()) return nullptr;
+    if (node.IsMap()) {
+        auto out = nlohmann::json::object();
+        for (const auto& kv : node) out[kv.first.as<std::string>()] = recordJson(kv.second);
+        return out;
+    }
+    if (node.IsSequence()) {
+        auto out = nlohmann::json::array();
+        for (const auto& item : node) out.push_back(recordJson(item));
+        return out;
+    }
+    double number = 0;
+    if (YAML::convert<double>::decode(node, number)) return number;
+    return node.as<std::string>();
+}
+
+StationCalibration readCalibration(const std::filesystem::path& file)
+{
+    StationCalibration c;
+    c.file = file;
+    try {
+        const auto root = YAML::LoadFile(file.string());
+        if (root["camera"]) c.camera = recordJson(root["camera"]["calibration"]);
+        if (root["fixture"]) c.fixture = recordJson(root["fixture"]["calibration"]);
+    } catch (const std::exception& e) {
+        c.error = e.what();
+    }
+    return c;
+}
+
+} // namespace
+
+std::vector<StationCalibration> calibrationHistory(const std::filesystem::path& stationFile, std::size_t max)
+{
+    std::vector<StationCalibration> history;
+    if (max == 0) return history;
+    history.push_back(readCalibration(stationFile));
+    // Backups are named by their UTC time (%Y%m%dT%H%M%SZ) and, after the
+    // first of one second, a number (-1, -2, ...): newest first is the time's
+    // descending order, then the number's.
+    std::vector<std::pair<std::pair<std::string, long>, std::filesystem::path>> backups;
+    const auto prefix = stationFile.filename().string() + ".bak-";
+    std::error_code ec;
+    const auto folder = stationFile.has_parent_path() ? stationFile.parent_path() : std::filesystem::path(".");
+    for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+        const auto name = it->path().filename().string();
+        if (name.rfind(prefix, 0) != 0 || !it->is_regular_file(ec)) continue;
+        const auto stamp = name.substr(prefix.size());
+        const auto dash = stamp.find('-');
+        const long number = dash == std::string::npos ? 0 : std::strtol(stamp.c_str() + dash + 1, nullptr, 10);
+        backups.push_back({{stamp.substr(0, dash), number}, it->path()});
+    }
+    std::sort(backups.begin(), backups.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (const auto& b : backups) {
+        if (history.size() >= max) break;
+        history.push_back(readCalibration(b.second));
+    }
+    return history;
 }
 
 } // namespace hg::calib

@@ -235,14 +235,19 @@ void CycleRunner::serveBetweenCycles()
         schedule(feed(SequencerEvent::FaultReset));
         recoverIfDue();
     }
-    const bool calibrationQueued = calibration_.queued();
-    auto wait = std::chrono::milliseconds(calibrationQueued ? 0 : 200);
+    const bool maintenanceQueued = calibration_.queued() || snapshot_.queued();
+    auto wait = std::chrono::milliseconds(maintenanceQueued ? 0 : 200);
     if (recoverAt_)
         wait = std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(*recoverAt_ - clock_.now()),
                           std::chrono::milliseconds(0), wait);
-    // Triggers first: a queued calibration starts only when none is pending.
+    // Triggers first: a queued calibration or snapshot starts only when none is pending.
     if (auto trigger = registers_.waitTrigger(wait)) return runCycle(*trigger);
-    if (!calibrationQueued) return;
+    if (!maintenanceQueued) return;
+    if (auto shot = snapshot_.take()) {
+        if (state() == SequencerState::Fault)
+            return snapshot_.refuse("the station went into fault before the snapshot was grabbed");
+        return runSnapshot(std::move(*shot));
+    }
     auto job = calibration_.take();
     if (!job) return;
     if (state() == SequencerState::Fault)
@@ -265,12 +270,13 @@ void CycleRunner::recover()
     if (auto ready = std::exchange(onDevicesActive_, nullptr)) ready();
 }
 
-// The live fixture calibration between cycles: STATUS 5 refuses triggers, the
-// amber lamp shows the station busy, the sequencer sits in `calibrating`.
-void CycleRunner::runCalibration(CalibrationJob job)
+// Work on the devices between cycles (a calibration, a snapshot): STATUS 5
+// refuses triggers, the amber lamp shows the station busy, the sequencer sits
+// in its maintenance state `calibrating`. False when a trigger was accepted in
+// the meantime (its cycle runs first; the caller queues the work again).
+bool CycleRunner::runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work)
 {
-    // A trigger accepted in the meantime runs its cycle first.
-    if (!registers_.enterMaintenance()) return calibration_.requeue(std::move(job));
+    if (!registers_.enterMaintenance()) return false;
     feed(SequencerEvent::CalibrationStart);
     devices_.showLamps(LampPattern::Busy);
     abortRequested_ = false;
@@ -279,18 +285,36 @@ void CycleRunner::runCalibration(CalibrationJob job)
         std::lock_guard lock(mutex_);
         cfg = config_;
     }
-    const bool written = calibration_.run(job, devices_, *cfg, clock_,
-                                          [this] { return abortRequested_.load() || stopRequested_.load(); });
+    const bool done = work(*cfg);
     abortRequested_ = false;
     feed(SequencerEvent::CalibrationEnd);
     showState();
-    if (written) return;
+    if (done) return true;
     // A failed step may have left the drive faulted or the camera stopped: bring
     // the station back the way a cycle fault does before production resumes.
     if (auto r = devices_.recover(); !r.ok()) {
         schedule(feed(SequencerEvent::DevicesFailed));
         showState();
     }
+    return true;
+}
+
+// The live fixture calibration (docs/calibration.md).
+void CycleRunner::runCalibration(CalibrationJob job)
+{
+    const bool ran = runMaintenance([&](const station::DaemonConfig& cfg) {
+        return calibration_.run(job, devices_, cfg, clock_,
+                                [this] { return abortRequested_.load() || stopRequested_.load(); });
+    });
+    if (!ran) calibration_.requeue(std::move(job));
+}
+
+// A camera frame on demand with its silhouette (docs/hmi.md, "Maintenance").
+void CycleRunner::runSnapshot(SnapshotJob job)
+{
+    const bool ran =
+        runMaintenance([&](const station::DaemonConfig& cfg) { return snapshot_.run(job, devices_, cfg, clock_); });
+    if (!ran) snapshot_.requeue(std::move(job));
 }
 
 // ---- a cycle ----------------------------------------------------------------

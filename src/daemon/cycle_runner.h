@@ -12,6 +12,7 @@
 // runner's clock (injected; the tests move it by hand).
 #pragma once
 
+#include "camera_snapshot.h"
 #include "clock.h"
 #include "daemon_config.h"
 #include "devices.h"
@@ -67,6 +68,11 @@ class CycleRunner {
     bool requestCalibration(CalibrationJob job, std::string& why);
     /// The last calibration (FixtureCalibration::status).
     nlohmann::json calibration() const { return calibration_.status(); }
+    /// Queues a camera snapshot (docs/hmi.md, "Maintenance"): like a
+    /// calibration, between cycles with production paused for the grab.
+    bool requestSnapshot(SnapshotJob job, std::string& why) { return snapshot_.request(std::move(job), state(), why); }
+    /// The last snapshot: its status and its overlay (CameraSnapshot).
+    const CameraSnapshot& snapshot() const { return snapshot_; }
 
     station::SequencerState state() const;
     /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
@@ -87,6 +93,8 @@ class CycleRunner {
     void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
     void runCalibration(CalibrationJob job);
+    void runSnapshot(SnapshotJob job);
+    bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);
 
     void runCycle(const station::TriggerRequest& trigger);
     station::SequencerAction beginCycle(Cycle& cycle);
@@ -111,6 +119,7 @@ class CycleRunner {
     ResultStore& store_;
     Clock& clock_;
     FixtureCalibration calibration_;
+    CameraSnapshot snapshot_;
 
     mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_
     std::shared_ptr<const station::DaemonConfig> config_;

@@ -241,7 +241,9 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd);
     CommandMailbox mailbox;
     std::unique_ptr<HmiServer> hmi;
-    if (config->http.enabled) hmi = std::make_unique<HmiServer>(config, mailbox);
+    if (config->http.enabled)
+        hmi = std::make_unique<HmiServer>(config, mailbox, daemon::Clock::steady(),
+                                          [&runner] { return runner.snapshot().png(); });
     loop.setHmi(hmi.get());
     const auto commands = maintenanceCommands(
         {registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0});

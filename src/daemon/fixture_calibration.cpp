@@ -7,62 +7,9 @@ namespace hg::daemon {
 
 bool FixtureCalibration::request(CalibrationJob job, station::SequencerState state, std::string& why)
 {
-    using S = station::SequencerState;
-    std::lock_guard lock(mutex_);
-    if (job_ || running_ || state == S::Calibrating) {
-        why = "a calibration is already queued or running";
-        return false;
-    }
-    if (state == S::Fault || state == S::Starting) {
-        why = std::string("the station is not ready (") + std::string(station::toString(state)) + ")";
-        return false;
-    }
-    status_ = {{"state", "queued"},
-               {"poses", job.poses.size()},
-               {"out", job.out.string()},
-               {"progress", nlohmann::json::array()}};
-    job_ = std::move(job);
-    return true;
-}
-
-bool FixtureCalibration::queued() const
-{
-    std::lock_guard lock(mutex_);
-    return job_.has_value();
-}
-
-std::optional<CalibrationJob> FixtureCalibration::take()
-{
-    std::lock_guard lock(mutex_);
-    std::optional<CalibrationJob> job;
-    job.swap(job_);
-    running_ = job.has_value();
-    return job;
-}
-
-void FixtureCalibration::requeue(CalibrationJob job)
-{
-    std::lock_guard lock(mutex_);
-    job_ = std::move(job);
-    running_ = false;
-}
-
-void FixtureCalibration::refuse(const std::string& why)
-{
-    update({{"state", "failed"}, {"error", why}});
-}
-
-void FixtureCalibration::update(const nlohmann::json& fields)
-{
-    std::lock_guard lock(mutex_);
-    status_.update(fields);
-    if (fields.value("state", "") == "done" || fields.value("state", "") == "failed") running_ = false;
-}
-
-nlohmann::json FixtureCalibration::status() const
-{
-    std::lock_guard lock(mutex_);
-    return status_;
+    nlohmann::json status{
+        {"poses", job.poses.size()}, {"out", job.out.string()}, {"progress", nlohmann::json::array()}};
+    return queue_.request(std::move(job), state, std::move(status), why);
 }
 
 // The station file is written with a backup only when the axes were solved;
@@ -71,7 +18,7 @@ bool FixtureCalibration::run(const CalibrationJob& job, StationDevices& devices,
                              Clock& clock, const std::function<bool()>& cancelled)
 {
     auto log = hg::log::category("calib");
-    update({{"state", "running"}});
+    queue_.update({{"state", "running"}});
     log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target.toString(),
               job.out.string());
     calib::FixtureSequenceIo io;
@@ -88,8 +35,7 @@ bool FixtureCalibration::run(const CalibrationJob& job, StationDevices& devices,
     };
     io.progress = [&](std::size_t, std::size_t, const std::string& line) {
         log->info("calibration {}", line);
-        std::lock_guard lock(mutex_);
-        status_["progress"].push_back(line);
+        queue_.append("progress", line);
     };
     io.cancelled = cancelled;
     bool written = false;
@@ -99,15 +45,15 @@ bool FixtureCalibration::run(const CalibrationJob& job, StationDevices& devices,
         calib::StationFileUpdate file(job.out);
         file.setFixtureAxes(result.axes);
         const auto backup = file.commit();
-        update({{"state", "done"},
-                {"report", calib::formatFixtureReport(result.axes)},
-                {"views_used", result.views.size()},
-                {"backup", backup ? backup->string() : std::string()}});
+        queue_.update({{"state", "done"},
+                       {"report", calib::formatFixtureReport(result.axes)},
+                       {"views_used", result.views.size()},
+                       {"backup", backup ? backup->string() : std::string()}});
         log->info("calibration written to {}", job.out.string());
         written = true;
     } catch (const std::exception& e) {
         log->error("calibration failed: {}", e.what());
-        update({{"state", "failed"}, {"error", e.what()}});
+        queue_.update({{"state", "failed"}, {"error", e.what()}});
     }
     stepNs_ = 0;
     return written;

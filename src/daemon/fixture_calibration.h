@@ -11,11 +11,11 @@
 #include "devices.h"
 #include "hullgauge/calib/fixture_sequence.h"
 #include "hullgauge/station/sequencer.h"
+#include "maintenance_job.h"
 
 #include <atomic>
 #include <filesystem>
 #include <functional>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -34,15 +34,15 @@ struct CalibrationJob {
 class FixtureCalibration {
   public:
     /// Queues `job`. False with `why` when one is queued or running, or the
-    /// station (in `state`) is faulted or starting.
+    /// station (in `state`) is faulted, starting or in maintenance.
     bool request(CalibrationJob job, station::SequencerState state, std::string& why);
-    bool queued() const;
+    bool queued() const { return queue_.queued(); }
     /// Takes the queued job (none when none is queued).
-    std::optional<CalibrationJob> take();
+    std::optional<CalibrationJob> take() { return queue_.take(); }
     /// Puts a taken job back (a trigger was accepted first: its cycle runs first).
-    void requeue(CalibrationJob job);
+    void requeue(CalibrationJob job) { queue_.requeue(std::move(job)); }
     /// Ends a taken job as failed before it started.
-    void refuse(const std::string& why);
+    void refuse(const std::string& why) { queue_.refuse(why); }
 
     /// Runs `job` with `cfg`'s timeouts and settle time: move, settle, grab
     /// per pose, then solve and write the station file. True when it was written.
@@ -51,17 +51,12 @@ class FixtureCalibration {
 
     /// State (queued, running, done, failed), progress lines, the report or
     /// the error, the file written and its backup.
-    nlohmann::json status() const;
+    nlohmann::json status() const { return queue_.status(); }
     /// When the running step (move, settle, grab) began on the runner's clock, 0 when none runs.
     std::int64_t stepStartNs() const { return stepNs_.load(); }
 
   private:
-    void update(const nlohmann::json& fields);
-
-    mutable std::mutex mutex_;
-    std::optional<CalibrationJob> job_;
-    bool running_ = false;
-    nlohmann::json status_ = nullptr;
+    MaintenanceJob<CalibrationJob> queue_{"a calibration"};
     std::atomic<std::int64_t> stepNs_{0};
 };
 

@@ -1,5 +1,6 @@
 #include "hmi_server.h"
 
+#include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
@@ -236,6 +237,19 @@ void sendFile(httplib::Response& res, const fs::path& file)
     res.set_content(std::move(*body), contentType(file));
 }
 
+/// The station's calibrations, newest first (calib::calibrationHistory): the
+/// station file's records and each backup's, with the file's name.
+json calibrationHistory(const fs::path& stationFile)
+{
+    json history = json::array();
+    for (const auto& c : calib::calibrationHistory(stationFile, 50)) {
+        json entry{{"file", c.file.filename().string()}, {"camera", c.camera}, {"fixture", c.fixture}};
+        if (!c.error.empty()) entry["error"] = c.error;
+        history.push_back(std::move(entry));
+    }
+    return history;
+}
+
 /// The client's own session: the cookie `hg_session`.
 std::string sessionCookie(const httplib::Request& req)
 {
@@ -247,8 +261,10 @@ std::string sessionCookie(const httplib::Request& req)
 
 } // namespace
 
-HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock)
-    : config_(std::move(config)), mailbox_(mailbox), clock_(clock), sessions_(config_->http.sessionIdle, clock),
+HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock,
+                     SnapshotSource snapshots)
+    : config_(std::move(config)), mailbox_(mailbox), clock_(clock), snapshots_(std::move(snapshots)),
+      sessions_(config_->http.sessionIdle, clock),
       limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
       // Guessing the password: five tries at once, then one every 12 s per address.
       signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<httplib::Server>())
@@ -429,7 +445,20 @@ void HmiServer::routeApi()
     server_->Get("/api/calibration", api([this](const httplib::Request&, httplib::Response& res) {
                      auto answer = mailbox_.call({{"command", "calibration"}}, std::chrono::milliseconds(2000));
                      if (!answer) throw HttpError(503, "the daemon did not answer in time");
+                     // The history is read here, on the web thread, not by the main loop.
+                     (*answer)["history"] = calibrationHistory(config()->stationFile);
                      sendJson(res, *answer);
+                 }));
+    server_->Get("/api/snapshot", api([this](const httplib::Request&, httplib::Response& res) {
+                     auto answer = mailbox_.call({{"command", "snapshot"}}, std::chrono::milliseconds(2000));
+                     if (!answer) throw HttpError(503, "the daemon did not answer in time");
+                     sendJson(res, *answer);
+                 }));
+    server_->Get("/api/snapshot.png", api([this](const httplib::Request&, httplib::Response& res) {
+                     const auto png = snapshots_ ? snapshots_() : nullptr;
+                     if (!png) throw HttpError(404, "no camera snapshot yet");
+                     res.set_header("Cache-Control", "no-store");
+                     res.set_content(reinterpret_cast<const char*>(png->data()), png->size(), "image/png");
                  }));
 }
 
@@ -462,21 +491,22 @@ void HmiServer::routeMaintenance()
                      if (csrf) body["csrf"] = *csrf;
                      sendJson(res, body);
                  }));
-    server_->Post("/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
-                      const auto csrf = sessions_.touch(sessionCookie(req));
-                      if (!csrf) throw HttpError(401, "sign in first");
-                      if (req.get_header_value("X-CSRF-Token") != *csrf) throw HttpError(403, "CSRF token missing");
-                      auto body = json::parse(req.body, nullptr, false);
-                      if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
-                          throw HttpError(400, "expected {\"command\": \"...\", ...}");
-                      static const std::set<std::string> kAllowed{"trigger", "abort", "purpose", "sim-part"};
-                      const auto command = body["command"].get<std::string>();
-                      if (!kAllowed.count(command)) throw HttpError(400, "command '" + command + "' is not offered");
-                      hg::log::category("hmi")->info("maintenance '{}' from {}", command, req.remote_addr);
-                      auto answer = mailbox_.call(std::move(body), std::chrono::milliseconds(2000));
-                      if (!answer) throw HttpError(503, "the daemon did not answer in time");
-                      sendJson(res, *answer, answer->value("ok", false) ? 200 : 409);
-                  }));
+    server_->Post(
+        "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
+            const auto csrf = sessions_.touch(sessionCookie(req));
+            if (!csrf) throw HttpError(401, "sign in first");
+            if (req.get_header_value("X-CSRF-Token") != *csrf) throw HttpError(403, "CSRF token missing");
+            auto body = json::parse(req.body, nullptr, false);
+            if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
+                throw HttpError(400, "expected {\"command\": \"...\", ...}");
+            static const std::set<std::string> kAllowed{"trigger", "abort", "purpose", "sim-part", "snapshot"};
+            const auto command = body["command"].get<std::string>();
+            if (!kAllowed.count(command)) throw HttpError(400, "command '" + command + "' is not offered");
+            hg::log::category("hmi")->info("maintenance '{}' from {}", command, req.remote_addr);
+            auto answer = mailbox_.call(std::move(body), std::chrono::milliseconds(2000));
+            if (!answer) throw HttpError(503, "the daemon did not answer in time");
+            sendJson(res, *answer, answer->value("ok", false) ? 200 : 409);
+        }));
 }
 
 // The line view's data: the daemon's status (at most ten asks a second of the

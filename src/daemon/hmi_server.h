@@ -18,6 +18,7 @@
 #include "hmi_auth.h"
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -33,10 +34,14 @@ namespace hg::daemon {
 
 class HmiServer {
   public:
+    /// The last camera snapshot's overlay (PNG), null before the first (CameraSnapshot::png).
+    using SnapshotSource = std::function<std::shared_ptr<const std::vector<unsigned char>>()>;
+
     /// Binds the configured address (throws hg::FaultError naming it when it
-    /// cannot) and starts serving. `config` is the running configuration.
+    /// cannot) and starts serving. `config` is the running configuration;
+    /// `snapshots` gives the maintenance page its camera frame (none: 404).
     HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox,
-              Clock& clock = Clock::steady());
+              Clock& clock = Clock::steady(), SnapshotSource snapshots = {});
     ~HmiServer();
     HmiServer(const HmiServer&) = delete;
     HmiServer& operator=(const HmiServer&) = delete;
@@ -60,6 +65,7 @@ class HmiServer {
     std::shared_ptr<const station::DaemonConfig> config_;
     CommandMailbox& mailbox_;
     Clock& clock_;
+    SnapshotSource snapshots_;
     Sessions sessions_;
     RateLimiter limiter_;
     RateLimiter signIns_;

@@ -260,6 +260,36 @@ json calibration(const MaintenanceContext& c, const json&)
     return {{"ok", true}, {"calibration", c.runner.calibration()}};
 }
 
+// A camera frame on demand (docs/hmi.md, "Maintenance"): `rotation_deg` and
+// `declination_deg` (or `rail_mm`) move the fixture there first; without them
+// it stays put. The answer is the queued job's status; `snapshot` without
+// `grab` only reads the last one.
+json snapshot(const MaintenanceContext& c, const json& request)
+{
+    if (!request.value("grab", false)) return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
+    SnapshotJob job;
+    const auto& fixture = c.config->station.fixture;
+    const bool rail = fixture.type == geometry::FixtureType::Rail;
+    const std::vector<std::string> keys =
+        rail ? std::vector<std::string>{"rail_mm"} : std::vector<std::string>{"rotation_deg", "declination_deg"};
+    for (const auto& key : keys) {
+        if (!request.contains(key)) continue;
+        if (!request[key].is_number()) return {{"ok", false}, {"error", "snapshot: " + key + " is not a number"}};
+        if (!job.pose) job.pose = geometry::FixturePose{};
+        const double v = request[key].get<double>();
+        (key == "rail_mm"        ? job.pose->railMm
+         : key == "rotation_deg" ? job.pose->rotationDeg
+                                 : job.pose->declinationDeg) = v;
+    }
+    if (job.pose && !fixture.reachable(*job.pose))
+        return {
+            {"ok", false},
+            {"error", "snapshot: " + geometry::toString(*job.pose, fixture.type) + " is outside the fixture's ranges"}};
+    std::string why;
+    if (!c.runner.requestSnapshot(std::move(job), why)) return {{"ok", false}, {"error", "snapshot: " + why}};
+    return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
+}
+
 json simPart(const MaintenanceContext& c, const json& request)
 {
     auto parts = c.simulation ? c.simulation->parts() : std::vector<std::string>{};
@@ -273,8 +303,9 @@ json simPart(const MaintenanceContext& c, const json& request)
 
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
-    {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
-    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
+    {"status", status},    {"results", results},     {"trigger", trigger},
+    {"abort", abortCycle}, {"calibrate", calibrate}, {"calibration", calibration},
+    {"sim-part", simPart}, {"purpose", purpose},     {"snapshot", snapshot},
 };
 
 } // namespace

@@ -115,3 +115,52 @@ TEST(StationFile, BrokenExistingFileIsBadInputAndStaysUntouched)
     EXPECT_THROW(StationFileUpdate{file}, hg::InputError);
     EXPECT_EQ(readText(file), "camera: [unclosed\n");
 }
+
+TEST(StationFile, HistoryListsTheFileThenItsBackupsNewestFirst)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "s.yaml", kStation);
+    auto first = StationFileUpdate(file);
+    first.setIntrinsics(sampleResult(), "m1");
+    ASSERT_TRUE(first.commit());
+    auto second = StationFileUpdate(file);
+    auto r = sampleResult();
+    r.rmsPx = 0.3;
+    second.setIntrinsics(r, "m2");
+    ASSERT_TRUE(second.commit());
+    // An old backup that no longer parses is listed with its error, not skipped or fatal.
+    hgtest::writeFile(dir / "s.yaml.bak-20000101T000000Z", "camera: [unclosed\n");
+    // Another station's backups in the same folder are not this one's history.
+    hgtest::writeFile(dir / "other.yaml.bak-20991231T235959Z", kStation);
+
+    const auto history = calibrationHistory(file, 10);
+    ASSERT_EQ(history.size(), 4u);
+    EXPECT_EQ(history[0].file, file);
+    EXPECT_EQ(history[0].camera.at("method"), "m2");
+    EXPECT_DOUBLE_EQ(history[0].camera.at("rms_px").get<double>(), 0.3);
+    EXPECT_EQ(history[0].camera.at("views"), 3);
+    EXPECT_DOUBLE_EQ(history[0].camera.at("std_dev").at("fx").get<double>(), 0.5);
+    EXPECT_EQ(history[1].camera.at("method"), "m1"); // what the second calibration replaced
+    EXPECT_TRUE(history[2].camera.is_null());        // the original file: no calibration yet
+    EXPECT_TRUE(history[2].error.empty());
+    EXPECT_EQ(history[3].file.filename(), "s.yaml.bak-20000101T000000Z");
+    EXPECT_FALSE(history[3].error.empty());
+
+    EXPECT_EQ(calibrationHistory(file, 2).size(), 2u);
+    EXPECT_TRUE(calibrationHistory(file, 0).empty());
+}
+
+TEST(StationFile, HistoryOrdersBackupsOfOneSecondByTheirNumber)
+{
+    hgtest::TempDir dir;
+    auto file = hgtest::writeFile(dir / "s.yaml", kStation);
+    for (int i : {0, 2, 10}) {
+        const std::string suffix = i == 0 ? "" : "-" + std::to_string(i);
+        hgtest::writeFile(dir / ("s.yaml.bak-20261203T080000Z" + suffix), kStation);
+    }
+    const auto history = calibrationHistory(file, 10);
+    ASSERT_EQ(history.size(), 4u);
+    EXPECT_EQ(history[1].file.filename(), "s.yaml.bak-20261203T080000Z-10");
+    EXPECT_EQ(history[2].file.filename(), "s.yaml.bak-20261203T080000Z-2");
+    EXPECT_EQ(history[3].file.filename(), "s.yaml.bak-20261203T080000Z");
+}

@@ -9,9 +9,11 @@
 #include "hgtest/station.h"
 #include "manual_clock.h"
 
+#include <algorithm>
 #include <deque>
 #include <gtest/gtest.h>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 
 namespace hg::daemon {
 namespace {
@@ -29,6 +31,7 @@ class ScriptedDevices : public StationDevices {
 
     std::deque<Step> moves, grabs, recoveries; ///< the next answers; success when empty
     Status startStatus;
+    cv::Mat frame = cv::Mat(8, 8, CV_8UC1, cv::Scalar(200)); ///< what every grab returns (set before start)
 
     Status start() override { return startStatus; }
     void shutdown() override {}
@@ -44,7 +47,7 @@ class ScriptedDevices : public StationDevices {
     {
         std::lock_guard lock(mutex_);
         ++grabCount_;
-        image = cv::Mat(8, 8, CV_8UC1, cv::Scalar(200));
+        image = frame.clone();
         return next(grabs);
     }
     Status recover() override
@@ -550,6 +553,85 @@ TEST_F(CycleRunnerTest, AFaultResetOutsideAFaultChangesNothing)
     ASSERT_TRUE(eventually([&] { return done(4); }));
     EXPECT_EQ(at(reg::Result), 1);
     EXPECT_TRUE(devices.recoverTimes().empty());
+}
+
+} // namespace
+} // namespace hg::daemon
+
+namespace hg::daemon {
+namespace {
+
+// A camera frame on demand (docs/hmi.md, "Maintenance"): grabbed between
+// cycles at the pose asked for, segmented with the station's settings
+// (Otsu, dark object), the station back to ready after it.
+TEST_F(CycleRunnerTest, ASnapshotIsGrabbedAtItsPoseWithTheSilhouetteItShows)
+{
+    // Backlight 220 with a dark 20 × 10 px part at 20 on a 64 × 48 frame.
+    devices.frame = cv::Mat(48, 64, CV_8UC1, cv::Scalar(220));
+    devices.frame(cv::Rect(10, 12, 20, 10)).setTo(cv::Scalar(20));
+    startReady();
+    EXPECT_EQ(runner->snapshot().png(), nullptr);
+    std::string why;
+    ASSERT_TRUE(runner->requestSnapshot({geometry::FixturePose{30, 10, 0}}, why)) << why;
+    ASSERT_TRUE(eventually([&] { return runner->snapshot().status().value("state", "") == "done"; }));
+    const auto s = runner->snapshot().status();
+    EXPECT_EQ(s.at("id"), 1);
+    EXPECT_EQ(s.at("width"), 64);
+    EXPECT_EQ(s.at("height"), 48);
+    EXPECT_EQ(s.at("depth_bits"), 8);
+    EXPECT_DOUBLE_EQ(s.at("object_fraction").get<double>(), 200.0 / (64 * 48));
+    EXPECT_EQ(s.at("backlight_grey"), 220);
+    EXPECT_EQ(s.at("object_grey"), 20);
+    const double t = s.at("segmentation").at("threshold").get<double>();
+    EXPECT_TRUE(t >= 20 && t < 220) << t;
+    EXPECT_EQ(s.at("pose").at("rotation_deg"), 30);
+    ASSERT_EQ(devices.poses().size(), 1u);
+    EXPECT_EQ(devices.poses()[0], (geometry::FixturePose{30, 10, 0}));
+    const auto png = runner->snapshot().png();
+    ASSERT_NE(png, nullptr);
+    const auto decoded = cv::imdecode(*png, cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(decoded.size(), cv::Size(64, 48));
+    EXPECT_EQ(decoded.type(), CV_8UC3);
+    // Production was paused for it (the amber lamp busy) and resumes.
+    const auto lamps = devices.lamps();
+    EXPECT_NE(std::find(lamps.begin(), lamps.end(), LampPattern::Busy), lamps.end());
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    EXPECT_EQ(runner->state(), SequencerState::Ready);
+    // A second one without a pose: the fixture stays, the id counts up.
+    ASSERT_TRUE(runner->requestSnapshot({}, why)) << why;
+    ASSERT_TRUE(eventually([&] {
+        const auto st = runner->snapshot().status();
+        return st.value("state", "") == "done" && st.value("id", 0) == 2;
+    }));
+    EXPECT_EQ(devices.poses().size(), 1u);
+    EXPECT_TRUE(runner->snapshot().status().at("pose").is_null());
+}
+
+TEST_F(CycleRunnerTest, ASnapshotWhoseGrabFailsSaysWhyAndTheStationRecovers)
+{
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    startReady();
+    std::string why;
+    ASSERT_TRUE(runner->requestSnapshot({}, why)) << why;
+    ASSERT_TRUE(eventually([&] { return runner->snapshot().status().value("state", "") == "failed"; }));
+    EXPECT_NE(runner->snapshot().status().value("error", "").find("camera:"), std::string::npos);
+    EXPECT_EQ(runner->snapshot().png(), nullptr);
+    ASSERT_TRUE(eventually([&] { return devices.recoverTimes().size() == 1; }));
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    // The next trigger runs as ever.
+    trigger(7);
+    ASSERT_TRUE(eventually([&] { return done(7); }));
+    EXPECT_EQ(at(reg::Result), 1);
+}
+
+TEST_F(CycleRunnerTest, ASnapshotIsRefusedWhileTheStationIsFaulted)
+{
+    devices.startStatus = fails(StatusCode::IoError);
+    start();
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 3; }));
+    std::string why;
+    EXPECT_FALSE(runner->requestSnapshot({}, why));
+    EXPECT_NE(why.find("not ready (fault)"), std::string::npos) << why;
 }
 
 } // namespace

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <netinet/in.h>
+#include <opencv2/imgcodecs.hpp>
 #include <poll.h>
 #include <sys/socket.h>
 #include <thread>
@@ -120,11 +121,11 @@ class HmiServerTest : public ::testing::Test {
         }
         config = cfg;
     }
-    void start(std::function<void(station::DaemonConfig&)> tweak = {})
+    void start(std::function<void(station::DaemonConfig&)> tweak = {}, HmiServer::SnapshotSource snapshots = {})
     {
         auto cfg = std::make_shared<station::DaemonConfig>(*config);
         if (tweak) tweak(*cfg);
-        server = std::make_unique<HmiServer>(cfg, mailbox, clock);
+        server = std::make_unique<HmiServer>(cfg, mailbox, clock, std::move(snapshots));
         loop = std::make_unique<FakeLoop>(mailbox);
         client = std::make_unique<httplib::Client>("127.0.0.1", server->port());
         client->set_read_timeout(10, 0);
@@ -360,6 +361,59 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
         client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
     ASSERT_TRUE(stale);
     EXPECT_EQ(stale->status, 401);
+}
+
+// The maintenance page's camera frame (docs/hmi.md, "Maintenance"): asked for
+// by a signed-in engineer through the loop, shown to whoever reads the page.
+TEST_F(HmiServerTest, TheCameraSnapshotIsAskedForSignedInAndServedAsPng)
+{
+    std::shared_ptr<const std::vector<unsigned char>> png;
+    start({}, [&png] { return png; });
+    auto none = client->Get("/api/snapshot.png");
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->status, 404);
+
+    const std::string body = R"({"command": "snapshot", "grab": true, "rotation_deg": 30})";
+    auto anonymous = client->Post("/api/maintenance", body, "application/json");
+    ASSERT_TRUE(anonymous);
+    EXPECT_EQ(anonymous->status, 401);
+    const auto [cookie, csrf] = signIn();
+    auto asked =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
+    ASSERT_TRUE(asked);
+    EXPECT_EQ(asked->status, 200) << asked->body;
+    EXPECT_EQ(loop->commands().back(), json::parse(body));
+    EXPECT_EQ(getJson("/api/snapshot").at("did"), "snapshot");
+
+    std::vector<unsigned char> encoded;
+    cv::imencode(".png", cv::Mat(6, 9, CV_8UC3, cv::Scalar(1, 2, 3)), encoded);
+    png = std::make_shared<const std::vector<unsigned char>>(encoded);
+    auto shown = client->Get("/api/snapshot.png");
+    ASSERT_TRUE(shown);
+    EXPECT_EQ(shown->status, 200);
+    EXPECT_EQ(shown->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(shown->get_header_value("Cache-Control"), "no-store");
+    EXPECT_EQ(shown->body, std::string(encoded.begin(), encoded.end()));
+}
+
+// The calibration status from the loop, the history read from the station
+// file and its backups on the web thread.
+TEST_F(HmiServerTest, TheCalibrationHistoryListsTheStationFileAndItsBackups)
+{
+    hgtest::writeFile(dir / "station.yaml",
+                      "camera: {calibration: {method: rail, rms_px: 0.12, date: 20261203T080000Z}}\n");
+    hgtest::writeFile(dir / "station.yaml.bak-20261201T070000Z",
+                      "camera: {calibration: {method: rail, rms_px: 0.3}}\n");
+    start([&](station::DaemonConfig& c) { c.stationFile = dir / "station.yaml"; });
+    const auto answer = getJson("/api/calibration");
+    EXPECT_EQ(answer.at("did"), "calibration");
+    const auto& history = answer.at("history");
+    ASSERT_EQ(history.size(), 2u);
+    EXPECT_EQ(history[0].at("file"), "station.yaml");
+    EXPECT_DOUBLE_EQ(history[0].at("camera").at("rms_px").get<double>(), 0.12);
+    EXPECT_EQ(history[1].at("file"), "station.yaml.bak-20261201T070000Z");
+    EXPECT_DOUBLE_EQ(history[1].at("camera").at("rms_px").get<double>(), 0.3);
+    EXPECT_TRUE(history[1].at("fixture").is_null());
 }
 
 TEST_F(HmiServerTest, AClientBeyondItsRateIsToldToWaitAndServedAgainLater)

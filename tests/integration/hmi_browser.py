@@ -18,7 +18,10 @@ against the result store read here with sqlite3:
   production cycles (a master cycle and a maintenance-triggered one are
   left out);
 - maintenance: refused without a session, the purpose set from the page
-  after signing in reaches the daemon; bad requests get 4xx.
+  after signing in reaches the daemon; the calibration history lists the
+  station file; a camera snapshot grabbed at a pose typed on the page shows
+  the silhouette the station reports (its coloured pixels counted in the
+  browser); bad requests get 4xx.
 
   hmi_browser.py --source DIR --bin DIR [--cycles N] [--screenshots DIR]
 """
@@ -241,8 +244,39 @@ def maintenance_page(driver, url, port, sock, screenshots):
     while maintenance(sock, {"command": "purpose"})["purpose"] != "master" and time.monotonic() < deadline:
         time.sleep(0.05)
     check(maintenance(sock, {"command": "purpose"})["purpose"] == "master", "the purpose set on the page did not arrive")
+    history = texts(driver, "#calibration-history tr[data-file]", "data-file")
+    check(history[:1] == ["station.yaml"], f"calibration history lists {history}, not the station file first")
+    snapshot(driver)
     if screenshots:
         driver.save_screenshot(str(screenshots / "hmi-maintenance.png"))
+        driver.execute_script("document.getElementById('snapshot-facts').scrollIntoView()")
+        driver.save_screenshot(str(screenshots / "hmi-snapshot.png"))
+
+
+def snapshot(driver):
+    """A camera frame on demand: grabbed at a pose typed on the page; the picture's silhouette (every pixel
+    the overlay coloured: tinted or outlined, the backlight staying grey) read back in the browser from a
+    canvas and compared with the share of object pixels the station reports."""
+    driver.find_element(By.ID, "snap-rotation").send_keys("30")
+    driver.find_element(By.ID, "snap-declination").send_keys("10")
+    driver.find_element(By.ID, "grab").click()
+    WebDriverWait(driver, 60).until(lambda d: d.execute_script(
+        "const i = document.getElementById('snapshot-img');"
+        "return window.hgMaintenance.snapshotShown !== null && i.complete && i.naturalWidth > 0"))
+    status = json.loads(driver.execute_script(
+        "return fetch('/api/snapshot').then(r => r.text())"))["snapshot"]
+    check(status["state"] == "done" and status["pose"] == {"rotation_deg": 30, "declination_deg": 10},
+          f"snapshot status {status}")
+    coloured = driver.execute_script(
+        "const i = document.getElementById('snapshot-img'); const c = document.createElement('canvas');"
+        "c.width = i.naturalWidth; c.height = i.naturalHeight; const g = c.getContext('2d');"
+        "g.drawImage(i, 0, 0); const d = g.getImageData(0, 0, c.width, c.height).data; let n = 0;"
+        "for (let k = 0; k < d.length; k += 4) if (d[k] !== d[k + 1] || d[k + 1] !== d[k + 2]) ++n;"
+        "return [c.width, c.height, n]")
+    width, height, n = coloured
+    check((width, height) == (1280, 960), f"snapshot {width}x{height}, the camera's frame is 1280x960")
+    check(0.01 < status["object_fraction"] < 0.9 and abs(n / (width * height) - status["object_fraction"]) < 1e-9,
+          f"snapshot: {n} coloured pixels of {width * height}, the station reports {status['object_fraction']}")
 
 
 def main():

@@ -8,7 +8,10 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -46,5 +49,21 @@ class StationFileUpdate {
     YAML::Node root_;
     bool existed_ = false;
 };
+
+/// One station file's calibration records (docs/calibration.md): the
+/// `camera.calibration` and `fixture.calibration` maps, null where the file
+/// has none; `error` instead when the file could not be read.
+struct StationCalibration {
+    std::filesystem::path file;
+    nlohmann::json camera;
+    nlohmann::json fixture;
+    std::string error;
+};
+
+/// The calibration history of a station: the station file's records, then
+/// those of its backups (`<file>.bak-<UTC time>`, written by
+/// StationFileUpdate::commit before each calibration replaced them), newest
+/// first, at most `max` files.
+std::vector<StationCalibration> calibrationHistory(const std::filesystem::path& stationFile, std::size_t max);
 
 } // namespace hg::calib

@@ -113,9 +113,9 @@ bool CameraSnapshot::run(const SnapshotJob& job, StationDevices& devices, const 
             std::lock_guard lock(pngMutex_);
             png_ = std::move(png);
         }
-        const auto nowMs = std::chrono::duration_cast<std::chrono::milliseconds>(
-                               std::chrono::system_clock::now().time_since_epoch())
-                               .count();
+        const auto nowMs =
+            std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+                .count();
         queue_.update({{"state", "done"},
                        {"id", ++frames_},
                        {"time", store::formatUtc(nowMs)},

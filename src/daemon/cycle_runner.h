@@ -86,6 +86,7 @@ class CycleRunner {
     void schedule(const station::SequencerAction& action);
     void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
+    void prepareProgram(std::uint16_t number);
     void runCalibration(CalibrationJob job);
 
     void runCycle(const station::TriggerRequest& trigger);

@@ -92,6 +92,14 @@ void printStatus(const nlohmann::json& s)
               << "cycles:       " << seq["cycles"] << " (" << seq["faults"] << " with errors)\n"
               << "results:      " << s["results"]["records"] << " in " << s["results"]["database"].get<std::string>()
               << "\n";
+    // The PLC's handshake extensions (docs/plc.md): the changeover and the counters.
+    if (plc.contains("counters")) {
+        const auto& n = plc["counters"];
+        std::cout << "plc program:  " << plc["active_program"] << " " << plc["program_state"].get<std::string>()
+                  << ", result seq " << plc["result_seq"] << ", acquired " << plc["acq_done_seq"] << "\n"
+                  << "plc counters: triggers " << n["triggers"] << ", pass " << n["passes"] << ", fail " << n["fails"]
+                  << ", faults " << n["faults"] << ", missed " << n["missed_triggers"] << "\n";
+    }
     if (s.contains("purpose")) std::cout << "purpose:      " << s["purpose"].get<std::string>() << "\n";
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";

@@ -240,8 +240,10 @@ void CycleRunner::serveBetweenCycles()
     if (recoverAt_)
         wait = std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(*recoverAt_ - clock_.now()),
                           std::chrono::milliseconds(0), wait);
-    // Triggers first: a queued calibration or snapshot starts only when none is pending.
+    // Triggers first: a queued calibration or snapshot starts only when none is
+    // pending, and a changeover written meanwhile is prepared after the cycle (docs/plc.md).
     if (auto trigger = registers_.waitTrigger(wait)) return runCycle(*trigger);
+    if (auto program = registers_.takeChangeover()) return prepareProgram(*program);
     if (!maintenanceQueued) return;
     if (auto shot = snapshot_.take()) {
         if (state() == SequencerState::Fault)
@@ -253,6 +255,34 @@ void CycleRunner::serveBetweenCycles()
     if (state() == SequencerState::Fault)
         return calibration_.refuse("the station went into fault before the calibration started");
     runCalibration(std::move(*job));
+}
+
+// The recipe changeover (docs/plc.md): between cycles, so it never delays or
+// disturbs one; a trigger accepted meanwhile starts when the program is loaded.
+void CycleRunner::prepareProgram(std::uint16_t number)
+{
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+    }
+    auto log = hg::log::category("seq");
+    const auto it = cfg->programs.find(number);
+    std::string error;
+    station::ProgramState state = station::ProgramState::Ready;
+    if (it == cfg->programs.end()) {
+        // Between a reload's new configuration and its program list: the list's recheck follows.
+        state = station::ProgramState::UnknownProgram;
+        error = "not configured";
+    } else if (!inspector_.prepare(it->second, error)) {
+        state = station::ProgramState::LoadFailed;
+    }
+    registers_.programPrepared(number, state);
+    if (state == station::ProgramState::Ready)
+        log->info("part program {} ready", number);
+    else
+        log->error("part program {}: {}: {}", number, station::toString(state),
+                   error.empty() ? "the part program could not be loaded" : error);
 }
 
 void CycleRunner::recover()
@@ -362,6 +392,10 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
         error = "part program " + std::to_string(r.program) + " is no longer configured";
     else if (!inspector_.begin(*cycle.program, error) && error.empty())
         error = "the part program could not be loaded";
+    // The cycle loaded the program the changeover selected: PROGRAM_STATE says how that went.
+    if (cycle.program)
+        registers_.programPrepared(r.program,
+                                   error.empty() ? station::ProgramState::Ready : station::ProgramState::LoadFailed);
     if (error.empty()) return action;
     log->error("{}", error);
     return feed(SequencerEvent::ProgramFailed);
@@ -474,6 +508,9 @@ SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
     cycle.grabMs += clock_.msSince(start);
     if (r.ok()) {
         cycle.lastFrameAt = clock_.now();
+        // The last frame is in: the PLC may unload the part before the verdict (ACQ_DONE_SEQ, docs/plc.md).
+        if (action.view + 1 == cycle.poses.size() && !cycle.record.manual)
+            registers_.acquisitionDone(cycle.record.triggerSeq);
         inspector_.addView(action.view, cycle.poses[action.view], image);
     } else {
         hg::log::category("seq")->warn("view {}: grab failed: {}", action.view, r.message());

@@ -92,6 +92,7 @@ class CycleRunner {
     void schedule(const station::SequencerAction& action);
     void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
+    void prepareProgram(std::uint16_t number);
     void runCalibration(CalibrationJob job);
     void runSnapshot(SnapshotJob job);
     bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);

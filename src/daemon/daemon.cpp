@@ -213,8 +213,10 @@ void MainLoop::reload()
         auto fresh = loadConfig(config_->file, checkProgram_);
         for (const auto& key : needsRestart(*config_, *fresh))
             log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
-        registers_.setKnownPrograms(programNumbers(*fresh));
+        // The runner first: the program list's recheck of the active program (docs/plc.md,
+        // recipe changeover) is prepared from the new configuration.
         runner_.setConfig(fresh);
+        registers_.setKnownPrograms(programNumbers(*fresh));
         if (hmi_) hmi_->setConfig(fresh);
         config_ = fresh;
         log->info("configuration reloaded from {} ({} part programs)", config_->file.string(),

@@ -64,46 +64,23 @@ class EngineInspector : public Inspector {
     bool begin(const station::PartProgramRef& ref, std::string& error) override
     {
         // The worker must be idle, and forget the last program's inspector, before a reload may replace it.
-        pipeline_.begin(nullptr);
-        views_.clear();
-        current_ = nullptr;
-        auto it = loaded_.find(ref.number);
-        // A reload may point the number at another file: rebuild then, else reuse the map.
-        if (it == loaded_.end() || it->second.file != ref.partFile) {
-            try {
-                auto started = std::chrono::steady_clock::now();
-                LoadedProgram p;
-                p.file = ref.partFile;
-                p.program = model::loadPartProgram(ref.partFile);
-                // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
-                auto options = inspect::inspectionOptions(p.program.inspection);
-                p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
-                // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
-                const auto gauge = inspect::makeDeviationGauge(p.program, station_.calibration);
-                options.unprovenLandmarks = capabilityCheck(ref, p.program, station_, gauge.get());
-                p.inspector =
-                    std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
-                // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
-                p.inspector->prepareOutlines(plannedCameras(ref, station_));
-                hg::log::category("inspect")->info(
-                    "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
-                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
-                it = loaded_.insert_or_assign(ref.number, std::move(p)).first;
-            } catch (const std::exception& e) {
-                error = e.what();
-                return false;
-            } catch (...) {
-                // Whatever the program's load throws is the program's fault (FAULT 30), never the daemon's end.
-                error = "the part program could not be loaded";
-                return false;
-            }
-        }
-        current_ = &it->second;
+        idle();
+        current_ = load(ref, error);
+        if (!current_) return false;
         const inspect::Inspector* inspector = current_->inspector.get();
         pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
             return inspector->prepareView(view, settings);
         });
         return true;
+    }
+
+    // Between cycles (the runner's thread): the pipeline is idle, so a program
+    // loaded anew may replace the one the last cycle used.
+    bool prepare(const station::PartProgramRef& ref, std::string& error) override
+    {
+        if (loadedAsConfigured(ref)) return true;
+        idle();
+        return load(ref, error) != nullptr;
     }
 
     // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
@@ -197,6 +174,52 @@ class EngineInspector : public Inspector {
     }
 
   private:
+    void idle()
+    {
+        pipeline_.begin(nullptr);
+        views_.clear();
+        current_ = nullptr;
+    }
+
+    bool loadedAsConfigured(const station::PartProgramRef& ref) const
+    {
+        auto it = loaded_.find(ref.number);
+        return it != loaded_.end() && it->second.file == ref.partFile;
+    }
+
+    /// The program, loaded unless it is loaded from the same file already (a
+    /// reload may point the number at another file: rebuilt then); null with
+    /// `error` when it cannot be loaded.
+    LoadedProgram* load(const station::PartProgramRef& ref, std::string& error)
+    {
+        if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
+        try {
+            auto started = std::chrono::steady_clock::now();
+            LoadedProgram p;
+            p.file = ref.partFile;
+            p.program = model::loadPartProgram(ref.partFile);
+            // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
+            auto options = inspect::inspectionOptions(p.program.inspection);
+            p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
+            // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
+            const auto gauge = inspect::makeDeviationGauge(p.program, station_.calibration);
+            options.unprovenLandmarks = capabilityCheck(ref, p.program, station_, gauge.get());
+            p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
+            // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
+            p.inspector->prepareOutlines(plannedCameras(ref, station_));
+            hg::log::category("inspect")->info(
+                "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+            return &loaded_.insert_or_assign(ref.number, std::move(p)).first->second;
+        } catch (const std::exception& e) {
+            error = e.what();
+        } catch (...) {
+            // Whatever the program's load throws is the program's fault (FAULT 30), never the daemon's end.
+            error = "the part program could not be loaded";
+        }
+        return nullptr;
+    }
+
     // The part's archive (docs/daemon.md): frames, cameras, silhouettes and landmark
     // projections. The projections are taken now (they need the program); the
     // whole-frame segmentation for the outline is left to the returned function,

@@ -70,6 +70,10 @@ class Inspector {
     /// Loads (or reuses) the program's inspection map and plan; false with a
     /// reason when it cannot be loaded.
     virtual bool begin(const station::PartProgramRef& program, std::string& error) = 0;
+    /// The recipe changeover (docs/plc.md): loads the program's inspection map
+    /// and plan now, if they are not loaded, so its first cycle need not; false
+    /// with a reason when it cannot be loaded. Only between cycles.
+    virtual bool prepare(const station::PartProgramRef& /*program*/, std::string& /*error*/) { return true; }
     /// Hands over view `index` taken at `pose`; returns at once.
     virtual void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) = 0;
     /// How many first views measure the seat that corrects the planned poses

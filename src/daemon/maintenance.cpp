@@ -155,6 +155,17 @@ namespace {
 
 using nlohmann::json;
 
+// The PLC's counters (docs/plc.md), from the same snapshot as the other registers.
+json plcCounters(std::span<const std::uint16_t> regs)
+{
+    const auto n = station::readCounters(regs);
+    return {{"triggers", n.triggers},
+            {"passes", n.passes},
+            {"fails", n.fails},
+            {"faults", n.faults},
+            {"missed_triggers", n.missed}};
+}
+
 json status(const MaintenanceContext& c, const json&)
 {
     const auto regs = c.registers.snapshot();
@@ -172,6 +183,12 @@ json status(const MaintenanceContext& c, const json&)
               {"fault_code", regs[station::reg::FaultCode]},
               {"heartbeat", regs[station::reg::Heartbeat]},
               {"rejected_triggers", regs[station::reg::RejectedTriggers]},
+              {"acq_done_seq", regs[station::reg::AcqDoneSeq]},
+              {"result_seq", regs[station::reg::ResultSeq]},
+              {"active_program", regs[station::reg::ActiveProgram]},
+              {"program_state",
+               std::string(station::toString(static_cast<station::ProgramState>(regs[station::reg::ProgramState])))},
+              {"counters", plcCounters(regs)},
               {"clients", counters.clients},
               {"requests", counters.requests},
               {"exceptions", counters.exceptions},

@@ -29,9 +29,11 @@ class PlcRegisters {
         std::lock_guard lock(mutex_);
         const bool running = runningLocked();
         const auto purpose = map_.purpose();
+        const auto before = map_.snapshot();
         auto written = map_.write(address, values);
         if (map_.purpose() != purpose)
             hg::log::category("plc")->info("cycle purpose {} (PLC)", station::toString(map_.purpose()));
+        if (written == station::ModbusException::None) logChanges(before, address, values);
         // An abort applies to the running cycle only (docs/plc.md): one written
         // while idle is dropped, so it cannot abort the next part.
         if (!running) dropAbort();
@@ -54,6 +56,7 @@ class PlcRegisters {
     {
         std::lock_guard lock(mutex_);
         map_.setKnownPrograms(std::move(programs));
+        notifying(0);
     }
     void setStatus(station::PlcStatus status)
     {
@@ -85,6 +88,26 @@ class PlcRegisters {
         std::lock_guard lock(mutex_);
         map_.beat();
     }
+    void acquisitionDone(std::uint16_t seq)
+    {
+        std::lock_guard lock(mutex_);
+        map_.acquisitionDone(seq);
+    }
+    std::optional<std::uint16_t> takeChangeover()
+    {
+        std::lock_guard lock(mutex_);
+        return map_.takeChangeover();
+    }
+    void programPrepared(std::uint16_t program, station::ProgramState state)
+    {
+        std::lock_guard lock(mutex_);
+        map_.programPrepared(program, state);
+    }
+    station::PlcCounters counters() const
+    {
+        std::lock_guard lock(mutex_);
+        return map_.counters();
+    }
     station::PlcCommands takeCommands()
     {
         std::lock_guard lock(mutex_);
@@ -99,7 +122,7 @@ class PlcRegisters {
     }
 
     /// Waits up to `timeout` for an accepted trigger and takes it; returns
-    /// early without one when a command is written meanwhile.
+    /// early without one when a command or a program changeover is written meanwhile.
     std::optional<station::TriggerRequest> waitTrigger(std::chrono::milliseconds timeout)
     {
         std::unique_lock lock(mutex_);
@@ -121,6 +144,22 @@ class PlcRegisters {
     }
     /// Takes the latched commands and keeps only the fault reset.
     void dropAbort() { resetKept_ = map_.takeCommands().resetFault || resetKept_; }
+    /// The PLC's changeover and counter reset, in the log (docs/plc.md).
+    void logChanges(const std::array<std::uint16_t, station::reg::Count>& before, std::uint16_t address,
+                    std::span<const std::uint16_t> values) const
+    {
+        namespace reg = station::reg;
+        const auto after = map_.snapshot();
+        auto log = hg::log::category("plc");
+        if (after[reg::ActiveProgram] != before[reg::ActiveProgram] ||
+            after[reg::ProgramState] != before[reg::ProgramState])
+            log->info("part program {}: {}", after[reg::ActiveProgram],
+                      station::toString(static_cast<station::ProgramState>(after[reg::ProgramState])));
+        const auto command = static_cast<std::size_t>(reg::Command - address);
+        if (address <= reg::Command && command < values.size() &&
+            values[command] == static_cast<std::uint16_t>(station::PlcCommand::ResetCounters))
+            log->info("counters reset (PLC)");
+    }
 
     mutable std::mutex mutex_;
     std::condition_variable work_;

@@ -26,6 +26,34 @@ std::string_view toString(CyclePurpose p)
     return "production";
 }
 
+std::string_view toString(ProgramState s)
+{
+    switch (s) {
+    case ProgramState::None:
+        return "none";
+    case ProgramState::Ready:
+        return "ready";
+    case ProgramState::Preparing:
+        return "preparing";
+    case ProgramState::UnknownProgram:
+        return "unknown program";
+    case ProgramState::LoadFailed:
+        return "load failed";
+    }
+    return "none";
+}
+
+std::uint32_t readU32(std::span<const std::uint16_t> regs, std::uint16_t address)
+{
+    return (std::uint32_t{regs[address]} << 16) | regs[address + 1u];
+}
+
+PlcCounters readCounters(std::span<const std::uint16_t> regs)
+{
+    return {readU32(regs, reg::TriggerCount), readU32(regs, reg::PassCount), readU32(regs, reg::FailCount),
+            readU32(regs, reg::FaultCount), readU32(regs, reg::MissedCount)};
+}
+
 std::optional<CyclePurpose> parsePurpose(std::string_view name)
 {
     for (auto p : {CyclePurpose::Production, CyclePurpose::Master, CyclePurpose::Study})
@@ -94,13 +122,14 @@ ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::u
         if (a >= reg::Serial && a < reg::Serial + reg::SerialWords) {
             if (!validSerialByte(v >> 8) || !validSerialByte(v & 0xFF)) return ModbusException::IllegalDataValue;
         } else if (a == reg::Command) {
-            if (v > u16(PlcCommand::ResetFault)) return ModbusException::IllegalDataValue;
+            if (v > u16(PlcCommand::ResetCounters)) return ModbusException::IllegalDataValue;
         } else if (a == reg::CyclePurpose) {
             if (v > u16(CyclePurpose::Study)) return ModbusException::IllegalDataValue;
         }
     }
 
     std::optional<std::uint16_t> newTrigger;
+    bool programWritten = false;
     for (std::size_t i = 0; i < values.size(); ++i) {
         auto a = static_cast<std::uint16_t>(address + i);
         if (a == reg::TriggerSeq) {
@@ -110,10 +139,14 @@ ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::u
             auto command = static_cast<PlcCommand>(values[i]);
             if (command == PlcCommand::Abort) commands_.abort = true;
             if (command == PlcCommand::ResetFault) commands_.resetFault = true;
+            if (command == PlcCommand::ResetCounters) resetCounters();
             continue;
         }
+        if (a == reg::PartProgram) programWritten = true;
         regs_[a] = values[i];
     }
+    // The changeover first: a trigger in the same block runs the program it selects.
+    if (programWritten) selectProgram(regs_[reg::PartProgram], false);
     if (newTrigger) {
         // Program and serial written in the same block are already in place.
         TriggerRequest request{*newTrigger, regs_[reg::PartProgram],
@@ -140,9 +173,16 @@ RejectReason RegisterMap::accept(TriggerRequest request)
     if (reason != RejectReason::None) {
         regs_[reg::RejectedTriggers] = u16(regs_[reg::RejectedTriggers] + 1);
         regs_[reg::LastRejectReason] = u16(reason);
+        if (!request.manual) ++counters_.missed;
+        writeCounters();
         return reason;
     }
-    if (!request.manual) regs_[reg::AckSeq] = request.seq;
+    if (!request.manual) {
+        regs_[reg::AckSeq] = request.seq;
+        ++counters_.triggers;
+        plcCycleOpen_ = true;
+        writeCounters();
+    }
     regs_[reg::Status] = u16(PlcStatus::Busy);
     pending_.push_back(std::move(request));
     return RejectReason::None;
@@ -156,6 +196,79 @@ RejectReason RegisterMap::triggerManually(std::uint16_t program, const std::stri
 void RegisterMap::setKnownPrograms(std::set<std::uint16_t> programs)
 {
     knownPrograms_ = std::move(programs);
+    // A reload may drop the active program, add it, or point it at another file: check it again.
+    selectProgram(regs_[reg::ActiveProgram], true);
+}
+
+// The recipe changeover (docs/plc.md): PROGRAM_STATE changes in the write that
+// selects the program when the answer is known at once (none, unknown program);
+// otherwise it reads "preparing" until the cycle runner has loaded the program
+// between cycles. Writing the active program again changes nothing, unless its
+// load failed (a retry).
+void RegisterMap::selectProgram(std::uint16_t program, bool recheck)
+{
+    const auto state = static_cast<ProgramState>(regs_[reg::ProgramState]);
+    if (!recheck && program == regs_[reg::ActiveProgram] && state != ProgramState::LoadFailed) return;
+    regs_[reg::ActiveProgram] = program;
+    changeover_.reset();
+    if (program == 0) {
+        regs_[reg::ProgramState] = u16(ProgramState::None);
+    } else if (!knownPrograms_.contains(program)) {
+        regs_[reg::ProgramState] = u16(ProgramState::UnknownProgram);
+    } else {
+        regs_[reg::ProgramState] = u16(ProgramState::Preparing);
+        changeover_ = program;
+    }
+}
+
+std::optional<std::uint16_t> RegisterMap::takeChangeover()
+{
+    return std::exchange(changeover_, std::nullopt);
+}
+
+void RegisterMap::programPrepared(std::uint16_t program, ProgramState state)
+{
+    // A newer changeover (another program, or the same after a reload) reports on its own.
+    if (program != regs_[reg::ActiveProgram] || changeover_) return;
+    const auto now = static_cast<ProgramState>(regs_[reg::ProgramState]);
+    if (now == ProgramState::None || now == ProgramState::UnknownProgram) return;
+    regs_[reg::ProgramState] = u16(state);
+}
+
+void RegisterMap::setU32(std::uint16_t address, std::uint32_t value)
+{
+    regs_[address] = u16(value >> 16);
+    regs_[address + 1u] = u16(value & 0xFFFF);
+}
+
+void RegisterMap::writeCounters()
+{
+    setU32(reg::TriggerCount, counters_.triggers);
+    setU32(reg::PassCount, counters_.passes);
+    setU32(reg::FailCount, counters_.fails);
+    setU32(reg::FaultCount, counters_.faults);
+    setU32(reg::MissedCount, counters_.missed);
+}
+
+// COMMAND = 3. A trigger accepted before the reset whose result is still to come
+// stays counted, so TRIGGERS = PASSES + FAILS + FAULTS holds again with that result.
+void RegisterMap::resetCounters()
+{
+    counters_ = PlcCounters{};
+    counters_.triggers = plcCycleOpen_ ? 1 : 0;
+    writeCounters();
+}
+
+void RegisterMap::writeRingEntry(const PublishedResult& r, std::uint16_t resultSeq)
+{
+    const auto base = u16(reg::ResultRing + (resultSeq % reg::RingEntries) * reg::RingEntryWords);
+    regs_[base + ring::ResultSeq] = resultSeq;
+    regs_[base + ring::TriggerSeq] = r.seq;
+    regs_[base + ring::Result] = u16(r.result);
+    regs_[base + ring::FaultCode] = r.faultCode;
+    regs_[base + ring::LandmarksFailed] = r.landmarksFailed;
+    regs_[base + ring::LandmarksTotal] = r.landmarksTotal;
+    setU32(u16(base + ring::CycleMs), r.cycleMs);
 }
 
 void RegisterMap::setStatus(PlcStatus status)
@@ -196,7 +309,26 @@ void RegisterMap::publishResult(const PublishedResult& r)
         }
         regs_[reg::LandmarkOkBits + k] = word;
     }
+    // The handshake extensions of the same result (docs/plc.md): a cycle that ended
+    // before its last grab frees the part now; the counters include this result.
+    regs_[reg::AcqDoneSeq] = r.seq;
+    const auto resultSeq = u16(regs_[reg::ResultSeq] + 1);
+    regs_[reg::ResultSeq] = resultSeq;
+    if (r.result == PlcResult::Pass)
+        ++counters_.passes;
+    else if (r.result == PlcResult::Fail)
+        ++counters_.fails;
+    else
+        ++counters_.faults;
+    plcCycleOpen_ = false;
+    writeCounters();
+    writeRingEntry(r, resultSeq);
     regs_[reg::DoneSeq] = r.seq;
+}
+
+void RegisterMap::acquisitionDone(std::uint16_t seq)
+{
+    regs_[reg::AcqDoneSeq] = seq;
 }
 
 void RegisterMap::setPurpose(CyclePurpose purpose)

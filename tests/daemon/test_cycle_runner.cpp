@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 
 namespace hg::daemon {
 namespace {
@@ -112,9 +113,20 @@ class ScriptedDevices : public StationDevices {
 class PassingInspector : public Inspector {
   public:
     bool begin(const station::PartProgramRef&, std::string&) override { return true; }
+    /// The changeover's load: recorded; fails for the programs in `unloadable`.
+    bool prepare(const station::PartProgramRef& program, std::string& error) override
+    {
+        if (onPrepare) onPrepare(program.number);
+        std::lock_guard lock(mutex);
+        prepared.push_back(program.number);
+        if (!unloadable.contains(program.number)) return true;
+        error = "scripted load failure";
+        return false;
+    }
     void addView(std::size_t, const geometry::FixturePose&, cv::Mat) override {}
     InspectionOutcome finish() override
     {
+        if (onFinish) onFinish();
         InspectionOutcome out;
         out.ok = true;
         out.part = "block";
@@ -139,6 +151,17 @@ class PassingInspector : public Inspector {
     std::size_t seatAfter = 0;
     std::optional<align::AlignmentResult> provisional;
     std::atomic<int> provisionalCalls{0};
+    /// Called when the verdict is asked for: after the last grab, before the result is published.
+    std::function<void()> onFinish;
+    std::function<void(std::uint16_t)> onPrepare;
+    std::set<std::uint16_t> unloadable;
+    std::mutex mutex;
+    std::vector<std::uint16_t> prepared;
+    std::vector<std::uint16_t> preparedPrograms()
+    {
+        std::lock_guard lock(mutex);
+        return prepared;
+    }
 };
 
 /// The simulated line's nest: counts the parts put in, each seated by a known shift.
@@ -543,6 +566,133 @@ TEST_F(CycleRunnerTest, RecoverFailsThenSucceedsAfterTheSequencersWait)
     trigger(1);
     ASSERT_TRUE(eventually([&] { return done(1); }));
     EXPECT_EQ(at(reg::Result), 1);
+}
+
+// ---- the production-line handshake (docs/plc.md) -----------------------------
+
+TEST_F(CycleRunnerTest, AcquisitionDoneIsSetWhenTheLastFrameIsInBeforeDoneSeq)
+{
+    std::vector<std::array<std::uint16_t, 2>> atFinish; // ACQ_DONE_SEQ, DONE_SEQ when the verdict is asked for
+    std::vector<std::uint16_t> acqAtGrab;               // ACQ_DONE_SEQ as each grab is asked for
+    inspector.onFinish = [&] { atFinish.push_back({at(reg::AcqDoneSeq), at(reg::DoneSeq)}); };
+    for (int k = 0; k < 3; ++k)
+        devices.grabs.push_back([&] {
+            acqAtGrab.push_back(at(reg::AcqDoneSeq));
+            return Status::success();
+        });
+    startReady();
+    trigger(5);
+    ASSERT_TRUE(eventually([&] { return done(5); }));
+    // Not before the last grab, set once it is in, before the verdict and DONE_SEQ.
+    EXPECT_EQ(acqAtGrab, (std::vector<std::uint16_t>{0, 0, 0}));
+    ASSERT_EQ(atFinish.size(), 1u);
+    EXPECT_EQ(atFinish[0], (std::array<std::uint16_t, 2>{5, 0}));
+    EXPECT_EQ(at(reg::AcqDoneSeq), 5);
+    EXPECT_EQ(at(reg::ResultSeq), 1);
+}
+
+TEST_F(CycleRunnerTest, ACycleThatFaultsBeforeItsLastGrabSetsAcquisitionDoneWithDoneSeq)
+{
+    std::vector<std::uint16_t> acqAtMove;
+    devices.moves.push_back([] { return Status::success(); });
+    devices.moves.push_back([] { return Status::success(); });
+    // View 2's move times out twice: the cycle faults before its last grab.
+    devices.moves.push_back([&] {
+        acqAtMove.push_back(at(reg::AcqDoneSeq));
+        return fails(StatusCode::Timeout);
+    });
+    devices.moves.push_back([&] {
+        acqAtMove.push_back(at(reg::AcqDoneSeq));
+        return fails(StatusCode::Timeout);
+    });
+    startReady();
+    trigger(6);
+    ASSERT_TRUE(eventually([&] { return done(6); }));
+    EXPECT_EQ(at(reg::FaultCode), 20); // fixture-timeout
+    EXPECT_EQ(acqAtMove, (std::vector<std::uint16_t>{0, 0}));
+    EXPECT_EQ(at(reg::AcqDoneSeq), 6);
+    EXPECT_EQ(station::readCounters(registers.snapshot()), (station::PlcCounters{1, 0, 0, 1, 0}));
+}
+
+TEST_F(CycleRunnerTest, CountersFollowTheResultsAndCommandThreeResetsThem)
+{
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    // The abort arrives while the fixture moves to view 1: RESULT 3, counted as a fault.
+    devices.moves.push_back([] { return Status::success(); });
+    devices.moves.push_back([this] {
+        command(1);
+        return Status::success();
+    });
+    trigger(2);
+    ASSERT_TRUE(eventually([&] { return done(2); }));
+    EXPECT_EQ(at(reg::Result), 3);
+    trigger(2); // the same value: no trigger
+    std::array<std::uint16_t, 2> unknown{3, 9};
+    ASSERT_EQ(registers.write(reg::TriggerSeq, unknown), station::ModbusException::None); // refused: missed
+    // A manual cycle is not the PLC's: not counted.
+    EXPECT_EQ(registers.triggerManually(1, "BENCH"), station::RejectReason::None);
+    ASSERT_TRUE(eventually([&] { return runner->describe()["cycles"] == 3; }));
+    auto regs = registers.snapshot();
+    // Read in one snapshot with DONE_SEQ 2: the counters include its result.
+    EXPECT_EQ(regs[reg::DoneSeq], 2);
+    EXPECT_EQ(station::readCounters(regs), (station::PlcCounters{2, 1, 0, 1, 1}));
+    EXPECT_EQ(regs[reg::ResultSeq], 2);
+    EXPECT_EQ(regs[reg::ResultRing + 8 + station::ring::TriggerSeq], 1); // result 1 in entry 1
+    EXPECT_EQ(regs[reg::ResultRing + 16 + station::ring::TriggerSeq], 2);
+    EXPECT_EQ(regs[reg::ResultRing + 16 + station::ring::FaultCode], 40);
+    command(3);
+    EXPECT_EQ(station::readCounters(registers.snapshot()), station::PlcCounters{});
+    EXPECT_EQ(registers.snapshot()[reg::ResultSeq], 2); // not a counter
+}
+
+TEST_F(CycleRunnerTest, ChangeoverPreparesTheProgramBetweenCyclesAndShowsItReady)
+{
+    auto cfg = std::make_shared<station::DaemonConfig>(*config);
+    station::PartProgramRef two = cfg->programs.at(1);
+    two.number = 2;
+    cfg->programs[2] = two;
+    two.number = 4;
+    cfg->programs[4] = two;
+    config = cfg;
+    registers.setKnownPrograms({1, 2, 4});
+    inspector.unloadable = {4};
+    // PART_PROGRAM 2 is written while the fixture moves to view 1 of trigger 1's cycle.
+    std::atomic<bool> preparedDuringCycle{false};
+    inspector.onPrepare = [&](std::uint16_t) {
+        if (at(reg::DoneSeq) != 1) preparedDuringCycle = true;
+    };
+    devices.moves.push_back([] { return Status::success(); });
+    devices.moves.push_back([this] {
+        std::array<std::uint16_t, 1> program{2};
+        EXPECT_EQ(registers.write(reg::PartProgram, program), station::ModbusException::None);
+        return Status::success();
+    });
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::Result), 1); // the running cycle went on with program 1
+    ASSERT_TRUE(eventually([&] { return at(reg::ProgramState) == 1; }));
+    EXPECT_EQ(at(reg::ActiveProgram), 2);
+    EXPECT_FALSE(preparedDuringCycle.load());
+    EXPECT_EQ(inspector.preparedPrograms(), (std::vector<std::uint16_t>{2}));
+    EXPECT_EQ(devices.grabCount(), 3);
+
+    // Program 4 does not load: not ready, with the reason; a trigger is still accepted and
+    // its cycle tries the load itself (FAULT_CODE 30 when that fails too, docs/plc.md).
+    std::array<std::uint16_t, 1> four{4};
+    ASSERT_EQ(registers.write(reg::PartProgram, four), station::ModbusException::None);
+    ASSERT_TRUE(eventually([&] { return at(reg::ProgramState) == 4; }));
+    EXPECT_EQ(at(reg::ActiveProgram), 4);
+    // Program 9 is not configured: not ready at once, and its trigger is refused.
+    std::array<std::uint16_t, 2> nine{2, 9};
+    ASSERT_EQ(registers.write(reg::TriggerSeq, nine), station::ModbusException::None);
+    EXPECT_EQ(at(reg::ActiveProgram), 9);
+    EXPECT_EQ(at(reg::ProgramState), 3);
+    EXPECT_EQ(at(reg::AckSeq), 1);
+    EXPECT_EQ(at(reg::LastRejectReason), 2);
+    EXPECT_EQ(inspector.preparedPrograms(), (std::vector<std::uint16_t>{2, 4}));
 }
 
 TEST_F(CycleRunnerTest, AFaultResetOutsideAFaultChangesNothing)

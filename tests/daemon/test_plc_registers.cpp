@@ -82,5 +82,53 @@ TEST(PlcRegisters, WaitEndsWithoutATriggerWhenACommandIsWritten)
     EXPECT_TRUE(r.takeCommands().resetFault);
 }
 
+// The recipe changeover wakes the runner between cycles (docs/plc.md).
+TEST(PlcRegisters, WaitEndsWithoutATriggerWhenAProgramIsSelected)
+{
+    PlcRegisters r;
+    makeReady(r);
+    auto waiter = std::async(std::launch::async, [&] { return r.waitTrigger(std::chrono::hours(1)); });
+    std::array<std::uint16_t, 1> program{1};
+    ASSERT_EQ(r.write(station::reg::PartProgram, program), ModbusException::None);
+    EXPECT_FALSE(waiter.get());
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(1));
+}
+
+// A reader never sees DONE_SEQ of one result with the counters or the ring of another.
+TEST(PlcRegisters, CountersAndRingChangeWithDoneSeq)
+{
+    PlcRegisters r;
+    makeReady(r);
+    std::atomic<bool> stop{false};
+    std::atomic<int> inconsistent{0};
+    std::thread reader([&] {
+        std::vector<std::uint16_t> v;
+        while (!stop) {
+            if (r.read(100, 124, v) != ModbusException::None) continue;
+            const auto doneSeq = v[1];
+            const auto resultSeq = v[15];
+            const auto passes = (std::uint32_t{v[38]} << 16) | v[39];
+            const std::size_t entry = 60 + (resultSeq % 8) * 8;
+            // Trigger n is result n: DONE_SEQ, RESULT_SEQ, PASSES, ACQ_DONE_SEQ and the newest entry agree.
+            if (doneSeq != resultSeq || passes != resultSeq || v[14] != doneSeq ||
+                (resultSeq != 0 && (v[entry] != resultSeq || v[entry + 1] != doneSeq)))
+                ++inconsistent;
+        }
+    });
+    for (std::uint16_t seq = 1; seq < 5000; ++seq) {
+        std::array<std::uint16_t, 2> block{seq, 1};
+        EXPECT_EQ(r.write(0, block), ModbusException::None);
+        EXPECT_TRUE(r.waitTrigger(0ms));
+        PublishedResult p;
+        p.seq = seq;
+        p.result = PlcResult::Pass;
+        r.publishResult(p);
+    }
+    stop = true;
+    reader.join();
+    EXPECT_EQ(inconsistent.load(), 0);
+    EXPECT_EQ(r.counters().passes, 4999u);
+}
+
 } // namespace
 } // namespace hg::daemon

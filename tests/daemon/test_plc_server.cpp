@@ -93,6 +93,11 @@ TEST(PlcServer, AccessRulesAnswerTheDocumentedExceptions)
     EXPECT_EQ(j["write_block_into_read_only"], 2);
     EXPECT_EQ(j["bad_serial_value"], 3);
     EXPECT_EQ(j["bad_command_value"], 3);
+    EXPECT_EQ(j["bad_command_4"], 3); // COMMAND takes 0..3
+    EXPECT_EQ(j["write_handshake_register"], 2);
+    EXPECT_EQ(j["write_counter"], 2);
+    EXPECT_EQ(j["write_between_counters_and_ring"], 2);
+    EXPECT_EQ(j["read_read_only"], 0);    // 100..223 in one read
     EXPECT_EQ(j["bad_purpose_value"], 3); // CYCLE_PURPOSE takes 0, 1, 2 only
     EXPECT_EQ(s.registers.snapshot()[11], 0);
     EXPECT_EQ(j["read_past_map"], 2);
@@ -120,6 +125,18 @@ TEST(PlcServer, IndependentClientReadsWhatThePublisherWrote)
     EXPECT_EQ(v[7], 1);    // 70000 = 0x0001'1170: high word
     EXPECT_EQ(v[8], 4464); // low word 0x1170
     EXPECT_EQ(v[20], 5);   // bits 0 and 2
+
+    // The handshake extensions of the same result, decoded by the independent client.
+    auto h = hgdaemon::plcClient(s.port(), "handshake");
+    ASSERT_EQ(h.status, 0) << h.err;
+    auto j = nlohmann::json::parse(h.out);
+    EXPECT_EQ(j["acq_done_seq"], 77);
+    EXPECT_EQ(j["result_seq"], 1);
+    EXPECT_EQ(j["counters"]["fails"], 1);
+    ASSERT_EQ(j["ring"].size(), 1u);
+    EXPECT_EQ(j["ring"][0]["trigger_seq"], 77);
+    EXPECT_EQ(j["ring"][0]["cycle_ms"], 70000);
+    EXPECT_EQ(j["ring"][0]["landmarks_failed"], 1);
 }
 
 TEST(PlcServer, MalformedFramesDropOnlyTheirClient)

@@ -45,9 +45,10 @@ TEST(PlcRegisterMap, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
 {
     RegisterMap r;
     makeReady(r);
-    for (std::uint16_t a : {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 120, 135})
+    for (std::uint16_t a :
+         {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 114, 115, 116, 117, 120, 135, 136, 145, 160, 223})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "read-only " << a;
-    for (std::uint16_t a : {12, 50, 99, 112, 119, 136, 1000, 65535})
+    for (std::uint16_t a : {12, 50, 99, 112, 118, 119, 146, 159, 224, 1000, 65535})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "unmapped " << a;
     // A block that starts writable and runs into a read-only register changes nothing.
     std::array<std::uint16_t, 13> block{};
@@ -63,7 +64,7 @@ TEST(PlcRegisterMap, BadValuesAnswerIllegalDataValueAndChangeNothing)
     makeReady(r);
     EXPECT_EQ(writeOne(r, 2, 0x4101), ModbusException::IllegalDataValue);  // control character in SERIAL
     EXPECT_EQ(writeOne(r, 9, 0x80'41), ModbusException::IllegalDataValue); // non-ASCII byte
-    EXPECT_EQ(writeOne(r, 10, 3), ModbusException::IllegalDataValue);      // unknown command
+    EXPECT_EQ(writeOne(r, 10, 4), ModbusException::IllegalDataValue);      // unknown command
     // All-or-nothing: program 7 in the same block as a bad serial word is not applied.
     std::array<std::uint16_t, 3> block{7, 0x4142, 0x1F00};
     EXPECT_EQ(r.write(1, block), ModbusException::IllegalDataValue);
@@ -76,10 +77,13 @@ TEST(PlcRegisterMap, ReadsInsideTheMapSucceedAndPastItFail)
     RegisterMap r;
     makeReady(r);
     std::vector<std::uint16_t> v;
-    EXPECT_EQ(r.read(0, 136, v), ModbusException::None);
-    EXPECT_EQ(v.size(), 136u);
-    EXPECT_EQ(r.read(130, 7, v), ModbusException::IllegalDataAddress);
-    EXPECT_EQ(r.read(136, 1, v), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(r.read(0, 125, v), ModbusException::None);
+    EXPECT_EQ(v.size(), 125u);
+    // Every read-only register, 100..223, in one read of 124.
+    EXPECT_EQ(r.read(100, 124, v), ModbusException::None);
+    EXPECT_EQ(v.size(), 124u);
+    EXPECT_EQ(r.read(220, 5, v), ModbusException::IllegalDataAddress);
+    EXPECT_EQ(r.read(224, 1, v), ModbusException::IllegalDataAddress);
     EXPECT_EQ(r.read(0, 0, v), ModbusException::IllegalDataAddress);
 }
 
@@ -204,7 +208,10 @@ TEST(PlcRegisterMap, TheSeatIsPublishedWithTheResultInTheFreeRegistersOfItsBlock
     EXPECT_EQ(v[12], 2003);  // SEAT_SHIFT_UM (112)
     EXPECT_EQ(v[13], 65535); // SEAT_ROTATION_MDEG (113)
     EXPECT_EQ(v[11], 0);     // LAST_REJECT_REASON untouched
-    EXPECT_EQ(v[14], 0);     // 114..119 stay free
+    EXPECT_EQ(v[14], 7);     // ACQ_DONE_SEQ: a cycle that ended before its last grab frees the part with DONE_SEQ
+    EXPECT_EQ(v[15], 1);     // RESULT_SEQ: the first result
+    EXPECT_EQ(v[18], 0);     // 118..119 stay free
+    EXPECT_EQ(v[19], 0);
     // The PLC cannot write them.
     EXPECT_EQ(writeOne(r, 112, 1), ModbusException::IllegalDataAddress);
     EXPECT_EQ(writeOne(r, 113, 1), ModbusException::IllegalDataAddress);
@@ -343,6 +350,236 @@ TEST(PlcRegisterMap, ThePurposeIsLatchedWithTheTriggerAndTheLastWriterWins)
     ASSERT_EQ(writeOne(r, 11, 0), ModbusException::None);
     ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);
     EXPECT_EQ(r.takeTrigger()->purpose, CyclePurpose::Production);
+}
+
+} // namespace
+} // namespace hg::station
+
+namespace hg::station {
+namespace {
+
+// The production-line handshake (docs/plc.md): ACQ_DONE_SEQ, RESULT_SEQ, the
+// counters, the ring of the last results and the recipe changeover, with
+// register values worked out by hand.
+
+PublishedResult result(std::uint16_t seq, PlcResult verdict, std::uint32_t cycleMs = 0)
+{
+    PublishedResult p;
+    p.seq = seq;
+    p.result = verdict;
+    p.cycleMs = cycleMs;
+    return p;
+}
+
+std::vector<std::uint16_t> readBlock(const RegisterMap& r, std::uint16_t address, std::uint16_t count)
+{
+    std::vector<std::uint16_t> v;
+    EXPECT_EQ(r.read(address, count, v), ModbusException::None);
+    return v;
+}
+
+void triggerProgram1(RegisterMap& r, std::uint16_t seq)
+{
+    std::array<std::uint16_t, 2> block{seq, 1};
+    ASSERT_EQ(r.write(0, block), ModbusException::None);
+}
+
+TEST(PlcHandshake, AcquisitionDoneComesFirstAndDoneSeqBringsItAlongWhenTheCycleEndedEarlier)
+{
+    RegisterMap r;
+    makeReady(r);
+    triggerProgram1(r, 5);
+    ASSERT_TRUE(r.takeTrigger());
+    r.acquisitionDone(5);
+    EXPECT_EQ(readOne(r, 114), 5); // ACQ_DONE_SEQ
+    EXPECT_EQ(readOne(r, 101), 0); // DONE_SEQ not yet
+    r.publishResult(result(5, PlcResult::Pass));
+    EXPECT_EQ(readOne(r, 114), 5);
+    EXPECT_EQ(readOne(r, 101), 5);
+    // Trigger 6 faults before its last grab: ACQ_DONE_SEQ moves in the same write as DONE_SEQ.
+    triggerProgram1(r, 6);
+    ASSERT_TRUE(r.takeTrigger());
+    EXPECT_EQ(readOne(r, 114), 5);
+    auto faulted = result(6, PlcResult::Aborted);
+    faulted.faultCode = 10;
+    r.publishResult(faulted);
+    EXPECT_EQ(readOne(r, 114), 6);
+    EXPECT_EQ(readOne(r, 101), 6);
+    // A manual cycle's result leaves it alone, like DONE_SEQ.
+    auto manual = result(0, PlcResult::Pass);
+    manual.manual = true;
+    r.publishResult(manual);
+    EXPECT_EQ(readOne(r, 114), 6);
+    EXPECT_EQ(readOne(r, 115), 2); // RESULT_SEQ counts the PLC's results only
+}
+
+TEST(PlcHandshake, CountersAreU32HighWordFirstAndCountThePlcsTriggersAndResults)
+{
+    RegisterMap r;
+    makeReady(r);
+    // 65 537 passes = 0x0001'0001; RESULT_SEQ wraps at 65 536 to 1.
+    for (std::uint32_t i = 1; i <= 65'537; ++i) {
+        const auto seq = static_cast<std::uint16_t>(i % 60'000 + 1);
+        triggerProgram1(r, seq);
+        ASSERT_TRUE(r.takeTrigger());
+        r.publishResult(result(seq, PlcResult::Pass));
+    }
+    auto v = readBlock(r, 136, 10);
+    EXPECT_EQ(v, (std::vector<std::uint16_t>{0x0001, 0x0001, 0x0001, 0x0001, 0, 0, 0, 0, 0, 0}));
+    EXPECT_EQ(readOne(r, 115), 1); // RESULT_SEQ 65 537 mod 65 536
+    // A fail, an error, a refused trigger (busy) and a refused manual trigger (not counted).
+    triggerProgram1(r, 7);
+    triggerProgram1(r, 8); // busy: missed
+    EXPECT_EQ(r.triggerManually(1, "X"), RejectReason::Busy);
+    ASSERT_TRUE(r.takeTrigger());
+    r.publishResult(result(7, PlcResult::Fail));
+    triggerProgram1(r, 9);
+    ASSERT_TRUE(r.takeTrigger());
+    r.publishResult(result(9, PlcResult::Aborted));
+    v = readBlock(r, 136, 10);
+    // triggers 65 539 = 0x0001'0003, passes 0x0001'0001, fails 1, faults 1, missed 1.
+    EXPECT_EQ(v, (std::vector<std::uint16_t>{0x0001, 0x0003, 0x0001, 0x0001, 0, 1, 0, 1, 0, 1}));
+    EXPECT_EQ(readOne(r, 110), 2); // REJECTED_TRIGGERS counts the manual refusal too
+    const auto snapshot = r.snapshot();
+    EXPECT_EQ(readCounters(snapshot), (PlcCounters{65'539, 65'537, 1, 1, 1}));
+    EXPECT_EQ(r.counters(), readCounters(snapshot));
+    EXPECT_EQ(readU32(snapshot, reg::TriggerCount), 0x0001'0003u);
+}
+
+TEST(PlcHandshake, ResultSeqWrapsFrom65535To0AndTheRingKeepsItsPlace)
+{
+    RegisterMap r;
+    makeReady(r);
+    for (std::uint32_t i = 1; i <= 65'535; ++i) {
+        triggerProgram1(r, static_cast<std::uint16_t>(i % 2 + 1));
+        ASSERT_TRUE(r.takeTrigger());
+        r.publishResult(result(static_cast<std::uint16_t>(i % 2 + 1), PlcResult::Pass));
+    }
+    EXPECT_EQ(readOne(r, 115), 65'535);
+    EXPECT_EQ(readOne(r, 160 + 7 * 8), 65'535); // 65 535 mod 8 = 7
+    triggerProgram1(r, 500);
+    ASSERT_TRUE(r.takeTrigger());
+    r.publishResult(result(500, PlcResult::Fail, 1234));
+    EXPECT_EQ(readOne(r, 115), 0);
+    // 65 536 results: entry 0 holds result sequence number 0, trigger 500.
+    EXPECT_EQ(readBlock(r, 160, 8), (std::vector<std::uint16_t>{0, 500, 2, 0, 0, 0, 0, 1234}));
+    EXPECT_EQ(readOne(r, 160 + 7 * 8), 65'535); // the one before it stays
+}
+
+TEST(PlcHandshake, TheRingHoldsTheLastEightResultsAtResultSeqModEight)
+{
+    RegisterMap r;
+    makeReady(r);
+    // Ten results: trigger 100 + n, alternating pass and fail, cycle time 70 000 + n ms.
+    for (std::uint16_t n = 1; n <= 10; ++n) {
+        triggerProgram1(r, static_cast<std::uint16_t>(100 + n));
+        ASSERT_TRUE(r.takeTrigger());
+        auto p = result(static_cast<std::uint16_t>(100 + n), n % 2 ? PlcResult::Pass : PlcResult::Fail, 70'000u + n);
+        p.landmarksFailed = static_cast<std::uint16_t>(n % 2 ? 0 : n);
+        p.landmarksTotal = 12;
+        r.publishResult(p);
+    }
+    const auto ring = readBlock(r, 160, 64);
+    // Entries 0..2 hold results 8, 9, 10 (9 and 10 overwrote 1 and 2), entries 3..7 results 3..7.
+    const std::vector<std::uint16_t> expected{
+        8,  108, 2, 0, 8,  12, 1, 70008 - 65536, // entry 0: result 8, a fail with 8 failed, 70 008 ms
+        9,  109, 1, 0, 0,  12, 1, 70009 - 65536, // entry 1: result 9 overwrote result 1
+        10, 110, 2, 0, 10, 12, 1, 70010 - 65536, // entry 2: result 10, the newest
+        3,  103, 1, 0, 0,  12, 1, 70003 - 65536, // entry 3: result 3, the oldest kept
+        4,  104, 2, 0, 4,  12, 1, 70004 - 65536, //
+        5,  105, 1, 0, 0,  12, 1, 70005 - 65536, //
+        6,  106, 2, 0, 6,  12, 1, 70006 - 65536, //
+        7,  107, 1, 0, 0,  12, 1, 70007 - 65536, //
+    };
+    EXPECT_EQ(ring, expected);
+    EXPECT_EQ(readOne(r, 115), 10); // RESULT_SEQ: newest entry 10 mod 8 = 2
+}
+
+TEST(PlcHandshake, ResetCountersIsCommandThreeAndKeepsATriggerWhoseResultIsToCome)
+{
+    RegisterMap r;
+    makeReady(r);
+    triggerProgram1(r, 1);
+    ASSERT_TRUE(r.takeTrigger());
+    r.publishResult(result(1, PlcResult::Pass));
+    triggerProgram1(r, 2);
+    triggerProgram1(r, 3); // busy: missed
+    EXPECT_EQ(r.counters(), (PlcCounters{2, 1, 0, 0, 1}));
+    // Reset while trigger 2 runs: it stays counted, so its result keeps TRIGGERS = PASSES + FAILS + FAULTS.
+    ASSERT_EQ(writeOne(r, 10, 3), ModbusException::None);
+    EXPECT_EQ(readOne(r, 10), 0); // COMMAND reads 0
+    EXPECT_EQ(readBlock(r, 136, 10), (std::vector<std::uint16_t>{0, 1, 0, 0, 0, 0, 0, 0, 0, 0}));
+    EXPECT_FALSE(r.takeCommands().any()); // nothing for the runner: the write did it
+    ASSERT_TRUE(r.takeTrigger());
+    r.publishResult(result(2, PlcResult::Fail));
+    EXPECT_EQ(r.counters(), (PlcCounters{1, 0, 1, 0, 0}));
+    // Between cycles a reset gives all zeros; RESULT_SEQ and the ring are not counters.
+    ASSERT_EQ(writeOne(r, 10, 3), ModbusException::None);
+    EXPECT_EQ(readBlock(r, 136, 10), std::vector<std::uint16_t>(10, 0));
+    EXPECT_EQ(readOne(r, 115), 2);
+    for (std::uint16_t bad : {4, 5, 255, 65535}) EXPECT_EQ(writeOne(r, 10, bad), ModbusException::IllegalDataValue);
+}
+
+TEST(PlcHandshake, ChangeoverShowsPreparingUntilTheDaemonPreparedTheProgram)
+{
+    RegisterMap r;
+    makeReady(r);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{0, 0})); // ACTIVE_PROGRAM 0, PROGRAM_STATE none
+    ASSERT_EQ(writeOne(r, 1, 7), ModbusException::None);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{7, 2})); // preparing
+    EXPECT_TRUE(r.hasWork());
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(7));
+    EXPECT_FALSE(r.takeChangeover());
+    r.programPrepared(7, ProgramState::Ready);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{7, 1})); // ready
+    // Writing the active program again (every trigger block does) changes nothing.
+    ASSERT_EQ(writeOne(r, 1, 7), ModbusException::None);
+    EXPECT_FALSE(r.takeChangeover());
+    EXPECT_EQ(readOne(r, 117), 1);
+    // Program 1 selected, then 7 again before 1 was prepared: the report on 1 is stale.
+    ASSERT_EQ(writeOne(r, 1, 1), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 1, 7), ModbusException::None);
+    r.programPrepared(1, ProgramState::Ready);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{7, 2}));
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(7));
+    r.programPrepared(7, ProgramState::LoadFailed);
+    EXPECT_EQ(readOne(r, 117), 4); // load failed
+    // The same program written again retries the load.
+    ASSERT_EQ(writeOne(r, 1, 7), ModbusException::None);
+    EXPECT_EQ(readOne(r, 117), 2);
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(7));
+    r.programPrepared(7, ProgramState::Ready);
+    // PART_PROGRAM 0: no program.
+    ASSERT_EQ(writeOne(r, 1, 0), ModbusException::None);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{0, 0}));
+    EXPECT_FALSE(r.takeChangeover());
+}
+
+TEST(PlcHandshake, AnUnknownProgramIsNotReadyAtOnceAndItsTriggerIsRefused)
+{
+    RegisterMap r;
+    makeReady(r);
+    std::array<std::uint16_t, 2> block{3, 9}; // TRIGGER_SEQ 3 with program 9, not configured
+    ASSERT_EQ(r.write(0, block), ModbusException::None);
+    EXPECT_EQ(readBlock(r, 116, 2), (std::vector<std::uint16_t>{9, 3})); // unknown program, in the same write
+    EXPECT_FALSE(r.takeChangeover());
+    EXPECT_FALSE(r.takeTrigger());
+    EXPECT_EQ(readOne(r, 100), 0);
+    EXPECT_EQ(readOne(r, 111), 2); // LAST_REJECT_REASON unknown program
+    EXPECT_EQ(r.counters().missed, 1u);
+    // A reload that configures it: the daemon prepares it; one that drops the active program: unknown.
+    r.setKnownPrograms({1, 7, 9});
+    EXPECT_EQ(readOne(r, 117), 2);
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(9));
+    r.programPrepared(9, ProgramState::Ready);
+    r.setKnownPrograms({1, 7, 9}); // the same list: prepared again (the file may have changed)
+    EXPECT_EQ(r.takeChangeover(), std::optional<std::uint16_t>(9));
+    r.setKnownPrograms({1});
+    EXPECT_EQ(readOne(r, 117), 3);
+    EXPECT_FALSE(r.takeChangeover());
+    r.programPrepared(9, ProgramState::Ready); // a late report cannot make an unknown program ready
+    EXPECT_EQ(readOne(r, 117), 3);
+    EXPECT_EQ(toString(ProgramState::LoadFailed), "load failed");
 }
 
 } // namespace

@@ -14,6 +14,12 @@
 // refused even before the sequencer picks the first one up), and the request
 // is queued for the sequencer. Otherwise REJECTED_TRIGGERS counts it and
 // LAST_REJECT_REASON says why; nothing else changes.
+//
+// The production-line handshake (extensions, docs/plc.md "The production-line
+// handshake"): ACQ_DONE_SEQ (the part may leave the nest once its last frame is
+// in), the recipe changeover (ACTIVE_PROGRAM, PROGRAM_STATE), RESULT_SEQ, the
+// 32-bit counters and the ring of the last 8 results. Everything a result
+// changes is written by publishResult() with DONE_SEQ.
 #pragma once
 
 #include <array>
@@ -52,11 +58,43 @@ inline constexpr std::uint16_t LastRejectReason = 111; ///< extension, RejectRea
 /// Extension: the measured seat of the part (docs/alignment.md), with the result.
 inline constexpr std::uint16_t SeatShiftUm = 112;      ///< shift of the reference point, µm, saturating at 65535
 inline constexpr std::uint16_t SeatRotationMdeg = 113; ///< rotation angle, millidegrees, saturating at 65535
-inline constexpr std::uint16_t LandmarkOkBits = 120;   ///< 120..135
+/// Extension: TRIGGER_SEQ whose last frame is grabbed; with DONE_SEQ when a cycle ends before it.
+inline constexpr std::uint16_t AcqDoneSeq = 114;
+/// Extension: +1 with every result published to the PLC (wraps at 65536), written with DONE_SEQ.
+inline constexpr std::uint16_t ResultSeq = 115;
+/// Extension: the recipe changeover, the PART_PROGRAM value PROGRAM_STATE speaks of.
+inline constexpr std::uint16_t ActiveProgram = 116;
+inline constexpr std::uint16_t ProgramState = 117;   ///< extension, station::ProgramState
+inline constexpr std::uint16_t LandmarkOkBits = 120; ///< 120..135
 inline constexpr std::uint16_t LandmarkOkWords = 16;
+/// Extension: the counters, u32 each, high word first (PlcCounters).
+inline constexpr std::uint16_t TriggerCount = 136; ///< 136..137, triggers accepted
+inline constexpr std::uint16_t PassCount = 138;    ///< 138..139, results RESULT 1
+inline constexpr std::uint16_t FailCount = 140;    ///< 140..141, results RESULT 2
+inline constexpr std::uint16_t FaultCount = 142;   ///< 142..143, results RESULT 3
+inline constexpr std::uint16_t MissedCount = 144;  ///< 144..145, triggers refused
+/// Extension: the last RingEntries results, entry k = RESULT_SEQ mod RingEntries at
+/// ResultRing + k · RingEntryWords; the words of an entry are in namespace ring.
+inline constexpr std::uint16_t ResultRing = 160; ///< 160..223
+inline constexpr std::uint16_t RingEntries = 8;
+inline constexpr std::uint16_t RingEntryWords = 8;
 /// One past the last mapped address; reads of [0, Count) are allowed (gaps read 0).
-inline constexpr std::uint16_t Count = 136;
+/// 100..Count-1 is 124 registers: one FC03 (at most 125) reads every read-only register.
+inline constexpr std::uint16_t Count = ResultRing + RingEntries * RingEntryWords;
+static_assert(Count - AckSeq <= 125, "the read-only block must fit one FC03 read");
 } // namespace reg
+
+/// The words of a ring entry (offsets from its first register); 2..7 are in
+/// the order of RESULT..CYCLE_MS (103..108).
+namespace ring {
+inline constexpr std::uint16_t ResultSeq = 0;
+inline constexpr std::uint16_t TriggerSeq = 1;
+inline constexpr std::uint16_t Result = 2;
+inline constexpr std::uint16_t FaultCode = 3;
+inline constexpr std::uint16_t LandmarksFailed = 4;
+inline constexpr std::uint16_t LandmarksTotal = 5;
+inline constexpr std::uint16_t CycleMs = 6; ///< 6..7, u32 high word first
+} // namespace ring
 
 /// Largest number of landmarks LANDMARK_OK_BITS can report.
 inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
@@ -67,8 +105,28 @@ inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
 enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4, Maintenance = 5 };
 /// RESULT register values (docs/contracts.md §6).
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
-/// COMMAND register values (extension).
-enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2 };
+/// COMMAND register values (extension). ResetCounters acts in the write itself.
+enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2, ResetCounters = 3 };
+/// PROGRAM_STATE register values (extension, docs/plc.md "Recipe changeover"):
+/// what the daemon made of ACTIVE_PROGRAM. Only Ready lets a PLC trigger at once.
+enum class ProgramState : std::uint16_t { None = 0, Ready = 1, Preparing = 2, UnknownProgram = 3, LoadFailed = 4 };
+std::string_view toString(ProgramState s);
+/// The counters registers (extension), u32 each, wrapping at 2^32. Only the
+/// PLC's triggers count (the maintenance socket's manual cycles never do), and
+/// between results TRIGGERS = PASSES + FAILS + FAULTS (+ 1 while a PLC trigger
+/// is accepted and its result not yet published).
+struct PlcCounters {
+    std::uint32_t triggers = 0; ///< triggers accepted (ACK_SEQ latched)
+    std::uint32_t passes = 0;   ///< results with RESULT 1
+    std::uint32_t fails = 0;    ///< results with RESULT 2
+    std::uint32_t faults = 0;   ///< results with RESULT 3: any FAULT_CODE (station fault, program, abort, seat)
+    std::uint32_t missed = 0;   ///< triggers refused (REJECTED_TRIGGERS without the manual ones)
+    bool operator==(const PlcCounters&) const = default;
+};
+/// The u32 at `address`, `address + 1` (high word first).
+std::uint32_t readU32(std::span<const std::uint16_t> regs, std::uint16_t address);
+/// The counters in a register snapshot.
+PlcCounters readCounters(std::span<const std::uint16_t> regs);
 /// CYCLE_PURPOSE register values (extension, docs/study.md): what the cycles
 /// are for. Master and study cycles stay out of production statistics.
 enum class CyclePurpose : std::uint16_t { Production = 0, Master = 1, Study = 2 };
@@ -150,6 +208,16 @@ class RegisterMap {
     void publishResult(const PublishedResult& r);
     /// HEARTBEAT += 1 (wraps at 65536).
     void beat();
+    /// ACQ_DONE_SEQ = seq: the last frame of the PLC's trigger `seq` is in.
+    void acquisitionDone(std::uint16_t seq);
+
+    /// The program whose changeover waits to be prepared (PART_PROGRAM written
+    /// with a new value, or the configuration reloaded), if any; taken once.
+    std::optional<std::uint16_t> takeChangeover();
+    /// The daemon prepared `program` (Ready or LoadFailed): PROGRAM_STATE shows
+    /// it while ACTIVE_PROGRAM is still `program` and no newer changeover waits.
+    void programPrepared(std::uint16_t program, ProgramState state);
+    PlcCounters counters() const { return counters_; }
     /// CYCLE_PURPOSE as the maintenance socket sets it: the same register the
     /// PLC writes, so whichever was written last applies to the next trigger.
     void setPurpose(CyclePurpose purpose);
@@ -160,7 +228,7 @@ class RegisterMap {
     /// Takes the commands written since the last call (abort, reset fault).
     PlcCommands takeCommands();
     /// True when a trigger or a command waits to be taken.
-    bool hasWork() const { return !pending_.empty() || commands_.any(); }
+    bool hasWork() const { return !pending_.empty() || commands_.any() || changeover_.has_value(); }
 
     /// Counters for the maintenance socket and logs.
     std::uint16_t rejectedTriggers() const;
@@ -174,11 +242,20 @@ class RegisterMap {
   private:
     RejectReason accept(TriggerRequest request);
     static bool writable(std::uint16_t address);
+    /// PART_PROGRAM was written with `program`: ACTIVE_PROGRAM and PROGRAM_STATE follow.
+    void selectProgram(std::uint16_t program, bool recheck);
+    void setU32(std::uint16_t address, std::uint32_t value);
+    void writeCounters();
+    void resetCounters();
+    void writeRingEntry(const PublishedResult& r, std::uint16_t resultSeq);
 
     std::array<std::uint16_t, reg::Count> regs_{};
     std::set<std::uint16_t> knownPrograms_;
     std::deque<TriggerRequest> pending_;
     PlcCommands commands_;
+    std::optional<std::uint16_t> changeover_;
+    PlcCounters counters_;
+    bool plcCycleOpen_ = false; ///< a PLC trigger is accepted and its result not yet published
 };
 
 /// The serial number in SERIAL (2 ASCII characters per register, high byte

@@ -47,6 +47,22 @@ async function showFailed() {
   document.getElementById("failed-images").replaceChildren(hg.images(result));
 }
 
+// The PLC's own counters (docs/plc.md) and the program the changeover made active.
+function showPlc(plc) {
+  const c = plc.counters;
+  if (c) {
+    text("count-triggers", c.triggers);
+    text("count-passes", c.passes);
+    text("count-fails", c.fails);
+    text("count-faults", c.faults);
+    text("count-missed", c.missed_triggers);
+    const judged = c.passes + c.fails;
+    text("count-yield", judged ? `${(100 * c.passes / judged).toFixed(1)} %` : null);
+  }
+  if (plc.active_program !== undefined)
+    text("active-program", plc.active_program ? `${plc.active_program} (${plc.program_state})` : "none");
+}
+
 function showResult(r) {
   if (!r) return;
   const v = document.getElementById("verdict");
@@ -71,6 +87,7 @@ async function poll() {
     text("purpose", s.purpose);
     text("fault", s.sequencer.fault || "none");
     showLamps(s.lamps);
+    showPlc(s.plc);
     showDisk(s.disk);
     if (s.last_result && s.last_result.id !== shownResult) {
       shownResult = s.last_result.id;

@@ -5,7 +5,8 @@ driven by chromium-driver through selenium, against the simulated line
 cycles, nominal and defective parts in turn, and checks what the pages show
 against the result store read here with sqlite3:
 
-- the line view shows each cycle's verdict and result id within two of its
+- the line view shows the PLC's counters as the registers hold them, and
+  each cycle's verdict and result id within two of its
   own status polls (250 ms apart) after DONE_SEQ — counted by the page's polls,
   not by the wall clock, so a loaded machine cannot fail it; the wall-clock
   latency is printed;
@@ -44,6 +45,7 @@ from simline_harness import check, failures, free_port, maintenance, start_line,
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium import webdriver  # noqa: E402
 from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.common.exceptions import TimeoutException  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
 
@@ -131,7 +133,23 @@ def line_view_cycles(driver, url, client, sock, db, cycles, screenshots):
             failed_part(driver, row, serial)
         if screenshots and i == cycles - 1:
             driver.save_screenshot(str(screenshots / "hmi-line.png"))
+    plc_counters(driver, client)
     return latencies, seq
+
+
+def plc_counters(driver, client):
+    """The line view's PLC counters are the registers' (docs/plc.md: five u32, high word first, at 136)."""
+    r = client.read_holding_registers(136, 10, slave=1).registers
+    triggers, passes, fails, faults, missed = ((r[2 * k] << 16) | r[2 * k + 1] for k in range(5))
+    want = [str(v) for v in (triggers, passes, fails, faults, missed)]
+    ids = ["#count-triggers", "#count-passes", "#count-fails", "#count-faults", "#count-missed"]
+    try:
+        WebDriverWait(driver, 30).until(lambda d: [texts(d, i)[0] for i in ids] == want)
+    except TimeoutException:
+        pass  # reported by the check below, with what the page shows
+    shown = [texts(driver, i)[0] for i in ids]
+    check(shown == want, f"line view PLC counters {shown}, the registers {want}")
+    check(passes + fails == triggers and passes > 0 and fails > 0, f"PLC counters {want} after the cycles")
 
 
 def failed_part(driver, row, serial):

@@ -38,6 +38,10 @@ std::shared_ptr<spdlog::logger> logger()
 std::string describeError(int rc)
 {
     if (rc == MOSQ_ERR_ERRNO) return std::strerror(errno);
+    if (rc == MOSQ_ERR_TLS)
+        return std::string(mosquitto_strerror(rc)) +
+               " (the broker's certificate not signed by tls.ca_file or not naming the URL's host, or the client "
+               "certificate refused: the OpenSSL error above says which)";
     return mosquitto_strerror(rc);
 }
 

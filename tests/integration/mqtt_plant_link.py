@@ -45,6 +45,7 @@ from pathlib import Path
 import jsonschema
 import paho.mqtt.client as mqtt
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, die_with_parent, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
 

@@ -288,16 +288,26 @@ void MqttPublisher::run()
             setStatus(false, e.what());
             outbox.reset();
         }
-        waitBeforeRetry();
+        waitBeforeRetry(outbox.get());
     }
 }
 
-void MqttPublisher::waitBeforeRetry()
+void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox)
 {
     std::unique_lock lock(mutex_);
     if (stopping_) return;
     logger()->info("plant link: next attempt in {:.1f} s", retry_.count() / 1000.0);
-    wake_.wait_for(lock, retry_, [this] { return stopping_; });
+    const auto until = SteadyClock::now() + retry_;
+    // In slices, so `ctl status` sees the results that wait pile up while the broker is away.
+    while (!stopping_ && SteadyClock::now() < until) {
+        wake_.wait_until(lock, std::min(until, SteadyClock::now() + std::chrono::milliseconds(500)),
+                         [this] { return stopping_; });
+        try {
+            if (outbox) pending_ = outbox->pendingCount();
+        } catch (const FaultError&) {
+            // Counted again at the next slice or attempt.
+        }
+    }
     retry_ = std::min(retry_ * 2, config_.retryMax);
 }
 

@@ -49,7 +49,7 @@ class MqttPublisher {
   private:
     void run();
     void serve(ResultOutbox& outbox);
-    void waitBeforeRetry();
+    void waitBeforeRetry(ResultOutbox* outbox);
     bool stopping();
     void setStatus(bool connected, const std::string& error);
 

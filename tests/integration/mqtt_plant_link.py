@@ -256,7 +256,10 @@ def plain_line(args, folder, schemas):
         # The broker away: the PLC gets every verdict, the results wait on disk.
         broker.stop()
         wait_until(lambda: not station.connected(), 15, "the daemon sees the broker gone")
+        outage = time.monotonic()
         station.cycles(args.outage_cycles)
+        print(f"broker away: {args.outage_cycles} cycles, every verdict to the PLC, in "
+              f"{time.monotonic() - outage:.1f} s", flush=True)
         check(station.waiting() == args.outage_cycles,
               f"{station.waiting()} results waiting in the store after {args.outage_cycles} cycles without broker")
         started = time.monotonic()

@@ -14,8 +14,11 @@ TEST(MqttPayloads, TheResultIsTheStoredRowWithStationAndCycleId)
     OutboxEntry entry;
     entry.id = 12;
     entry.cycleId = "0b6f3c9e-5d0a-4f8e-9a43-8d1c2e7f6a10";
-    entry.row = {{"id", 12},           {"serial", "SN-1"},  {"program", 3},
-                 {"verdict", "fail"},  {"landmarks", {{{"id", "c1"}, {"status", "out_of_tolerance"}}}},
+    entry.row = {{"id", 12},
+                 {"serial", "SN-1"},
+                 {"program", 3},
+                 {"verdict", "fail"},
+                 {"landmarks", {{{"id", "c1"}, {"status", "out_of_tolerance"}}}},
                  {"time", "2026-12-03T08:14:03.250Z"}};
     auto message = resultMessage(entry, "gauge-7");
     EXPECT_EQ(message["station"], "gauge-7");
@@ -28,8 +31,9 @@ TEST(MqttPayloads, TheResultIsTheStoredRowWithStationAndCycleId)
 TEST(MqttPayloads, StateIsOnlineUnlessOfflineAndTheWillHasNoTime)
 {
     const auto ready = stateMessage("g", "ready", 1'796'285'643'250);
-    EXPECT_EQ(ready, (nlohmann::json{{"station", "g"}, {"state", "ready"}, {"online", true},
-                                     {"time", "2026-12-03T08:14:03.250Z"}}));
+    EXPECT_EQ(
+        ready,
+        (nlohmann::json{{"station", "g"}, {"state", "ready"}, {"online", true}, {"time", "2026-12-03T08:14:03.250Z"}}));
     const auto will = stateMessage("g", "offline", 0);
     EXPECT_EQ(will, (nlohmann::json{{"station", "g"}, {"state", "offline"}, {"online", false}}));
 }

@@ -101,6 +101,16 @@ void printStatus(const nlohmann::json& s)
                   << ", faults " << n["faults"] << ", missed " << n["missed_triggers"] << "\n";
     }
     if (s.contains("purpose")) std::cout << "purpose:      " << s["purpose"].get<std::string>() << "\n";
+    if (s.contains("mqtt") && s["mqtt"].is_object()) {
+        // The plant link (docs/mqtt.md): where it publishes, and what waits for the broker.
+        const auto& m = s["mqtt"];
+        std::cout << "plant link:   " << m.value("url", std::string("?")) << " as "
+                  << m.value("station_id", std::string("?"))
+                  << (m.value("connected", false) ? ", connected, " : ", not connected, ") << m.value("pending", 0)
+                  << " results waiting";
+        if (m.contains("last_error")) std::cout << " (last error: " << m["last_error"].get<std::string>() << ")";
+        std::cout << "\n";
+    }
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
     if (s.contains("lamps") && s["lamps"].is_object()) {

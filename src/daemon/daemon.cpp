@@ -6,6 +6,7 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
+#include "mqtt_publisher.h"
 #include "notify.h"
 #include "plc_server.h"
 #include "result_store.h"
@@ -43,6 +44,7 @@ std::vector<std::string> needsRestart(const station::DaemonConfig& a, const stat
         keys.push_back("plc");
     if (a.results.database != b.results.database) keys.push_back("results.database");
     if (a.maintenance.socket != b.maintenance.socket) keys.push_back("maintenance.socket");
+    if (!(a.mqtt == b.mqtt)) keys.push_back("mqtt");
     return keys;
 }
 
@@ -247,8 +249,18 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
         hmi = std::make_unique<HmiServer>(config, mailbox, daemon::Clock::steady(),
                                           [&runner] { return runner.snapshot().png(); });
     loop.setHmi(hmi.get());
-    const auto commands = maintenanceCommands(
-        {registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0});
+    // The plant link reads the outbox on its own thread and connection (docs/mqtt.md).
+    std::unique_ptr<MqttPublisher> mqtt;
+    if (config->mqtt.enabled)
+        mqtt = std::make_unique<MqttPublisher>(config->mqtt, config->results.database, [&runner] {
+            // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
+            const auto state = runner.state();
+            return station::isBusy(state) ? std::string("busy") : std::string(station::toString(state));
+        });
+    MaintenanceContext context{
+        registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};
+    if (mqtt) context.mqttStatus = [&mqtt] { return mqtt->status(); };
+    const auto commands = maintenanceCommands(context);
     MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands);
     notifier.status("starting devices");
     runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
@@ -258,6 +270,8 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     mailbox.close();
     if (hmi) hmi->stop();
     runner.stop();
+    // After the runner: a cycle recorded while stopping may still go out; the state goes offline last.
+    if (mqtt) mqtt->stop();
     plc.stop();
     hg::log::category("daemon")->info("stopped");
 }

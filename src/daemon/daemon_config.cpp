@@ -228,7 +228,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "watchdog", "simulation"});
+                        "mqtt", "watchdog", "simulation"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -264,6 +264,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         if (auto g = n->optional("group")) cfg.maintenance.group = g->asString();
     }
     if (auto n = root.optional("http")) parseHmi(*n, base, cfg.http);
+    if (auto n = root.optional("mqtt")) parseMqtt(*n, base, cfg.mqtt);
     if (auto n = root.optional("watchdog")) {
         n->allowOnlyKeys({"max_cycle_s"});
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);

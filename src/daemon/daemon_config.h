@@ -13,6 +13,7 @@
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/vision/segmentation.h"
+#include "mqtt_config.h"
 
 #include <chrono>
 #include <cstdint>
@@ -133,6 +134,8 @@ struct DaemonConfig {
     SequencerConfig sequencer;
     MaintenanceConfig maintenance;
     HmiConfig http;
+    /// The plant link (docs/mqtt.md): results, state and counters published to a broker.
+    MqttConfig mqtt;
     WatchdogConfig watchdog;
     /// Simulated line only (`camera.driver.backend: sim`): the parts the
     /// simulated camera can render, by name ("nominal" first, then defect

@@ -199,6 +199,7 @@ json status(const MaintenanceContext& c, const json&)
               {"yielded", counters.yielded}}},
             {"results", {{"database", c.store.file().string()}, {"records", c.store.count()}}},
             {"http", c.hmiPort ? json{{"address", c.config->http.bindAddress}, {"port", c.hmiPort}} : json()},
+            {"mqtt", c.mqttStatus ? c.mqttStatus() : json()},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
             {"purpose", std::string(station::toString(c.registers.purpose()))},

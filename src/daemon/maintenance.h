@@ -79,6 +79,8 @@ struct MaintenanceContext {
     const std::shared_ptr<const station::DaemonConfig>& config;
     /// The web HMI's port; 0 when it is off.
     int hmiPort = 0;
+    /// The plant link's state (docs/mqtt.md); empty when it is off.
+    std::function<nlohmann::json()> mqttStatus = {};
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,

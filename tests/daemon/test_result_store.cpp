@@ -9,6 +9,8 @@
 #include <cmath>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <regex>
+#include <set>
 #include <thread>
 
 namespace hg::daemon {
@@ -103,7 +105,7 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
     EXPECT_EQ(recent[1]["purpose"], "production");
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "3\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
 }
 
 TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
@@ -131,14 +133,156 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
         EXPECT_EQ(recent[1]["purpose"], "production");
         EXPECT_EQ(recent[1]["serial"], "OLD");
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "3\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
               "OLD|production\nSN-4|master\n");
     // Only the three purposes are stored, also in a migrated table.
     auto bad = hgtest::run("sqlite3 " + file.string() + " \"UPDATE inspections SET purpose = 'golden' WHERE id = 1\"");
     EXPECT_NE(bad.status, 0);
-    ResultStore again(file); // reopening a version 3 database changes nothing
+    ResultStore again(file); // reopening a version 4 database changes nothing
     EXPECT_EQ(again.count(), 2);
+}
+
+std::vector<std::int64_t> idsOf(const std::vector<OutboxEntry>& entries)
+{
+    std::vector<std::int64_t> ids;
+    for (const auto& e : entries) ids.push_back(e.id);
+    return ids;
+}
+
+TEST(ResultOutbox, EveryCommittedResultWaitsInOrderWithItsOwnCycleId)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    ResultStore store(file);
+    for (std::uint16_t seq = 1; seq <= 5; ++seq) store.commit(record(seq, station::Verdict::Pass));
+    ResultOutbox outbox(file);
+    const auto all = outbox.pending(0, 10);
+    EXPECT_EQ(idsOf(all), (std::vector<std::int64_t>{1, 2, 3, 4, 5}));
+    std::set<std::string> cycleIds;
+    const std::regex uuid4("[0-9a-f]{8}-[0-9a-f]{4}-4[0-9a-f]{3}-[89ab][0-9a-f]{3}-[0-9a-f]{12}");
+    for (const auto& e : all) {
+        EXPECT_TRUE(std::regex_match(e.cycleId, uuid4)) << e.cycleId;
+        cycleIds.insert(e.cycleId);
+    }
+    EXPECT_EQ(cycleIds.size(), 5u);
+    // The row is the store's row as every reader gives it.
+    const auto recent = store.recent(5);
+    EXPECT_EQ(all[1].row, recent[3]);
+    EXPECT_EQ(all[1].row["serial"], "SN-2");
+    // Batches: after an id, at most a limit.
+    EXPECT_EQ(idsOf(outbox.pending(2, 2)), (std::vector<std::int64_t>{3, 4}));
+    EXPECT_TRUE(outbox.pending(5, 10).empty());
+    EXPECT_EQ(outbox.pendingCount(), 5);
+    // The cycle id is stored with the row, for the sqlite3 program too.
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT cycle_id FROM inspections WHERE id = 4'").out,
+              all[3].cycleId + "\n");
+}
+
+TEST(ResultOutbox, AcknowledgedResultsLeaveTheOutboxAndStayMarkedAfterARestart)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        for (std::uint16_t seq = 1; seq <= 5; ++seq) store.commit(record(seq, station::Verdict::Fail));
+        ResultOutbox outbox(file);
+        // Acknowledgements may come out of order: each one marks its own result only.
+        outbox.markPublished({4, 2}, 1'700'000'000'999);
+        outbox.markPublished({}, 1);
+        EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{1, 3, 5}));
+        EXPECT_EQ(outbox.pendingCount(), 3);
+        // A second acknowledgement of a result (a redelivery) keeps its first time.
+        outbox.markPublished({2}, 1'800'000'000'000);
+    }
+    // The daemon restarted (or was killed): the marks are in the file.
+    ResultStore store(file);
+    ResultOutbox outbox(file);
+    EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{1, 3, 5}));
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
+                          " 'SELECT id, published_unix_ms FROM inspections WHERE published_unix_ms IS NOT NULL'")
+                  .out,
+              "2|1700000000999\n4|1700000000999\n");
+    // A result committed later waits behind the older ones.
+    store.commit(record(6, station::Verdict::Pass));
+    EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{1, 3, 5, 6}));
+}
+
+TEST(ResultOutbox, CountsByVerdictAndThenOnlyTheNewResults)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    ResultStore store(file);
+    store.commit(record(1, station::Verdict::Pass));
+    store.commit(record(2, station::Verdict::Fail));
+    store.commit(record(3, station::Verdict::Pass));
+    store.commit(record(4, station::Verdict::Error));
+    ResultOutbox outbox(file);
+    std::int64_t last = 0;
+    auto counts = outbox.countAfter(0, last);
+    EXPECT_EQ(last, 4);
+    EXPECT_EQ(counts, (ResultCounters{4, 2, 1, 0, 1}));
+    store.commit(record(5, station::Verdict::Aborted));
+    counts += outbox.countAfter(last, last);
+    EXPECT_EQ(last, 5);
+    EXPECT_EQ(counts, (ResultCounters{5, 2, 1, 1, 1}));
+    EXPECT_EQ(outbox.countAfter(last, last), ResultCounters{}) << "nothing new";
+    EXPECT_EQ(last, 5);
+}
+
+TEST(ResultOutbox, RowsOfAVersionThreeStorePredateThePlantLink)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v3.db";
+    // The schema of version 3, as the daemon before the plant link wrote it.
+    hgtest::run("sqlite3 " + file.string() +
+                " \"CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_utc TEXT NOT NULL, "
+                "started_unix_ms INTEGER NOT NULL, trigger_seq INTEGER NOT NULL, manual INTEGER NOT NULL, serial TEXT "
+                "NOT NULL, program INTEGER NOT NULL, part TEXT NOT NULL, verdict TEXT NOT NULL, fault_code INTEGER NOT "
+                "NULL, cycle_ms INTEGER NOT NULL, landmarks_failed INTEGER NOT NULL, landmarks_total INTEGER NOT NULL, "
+                "landmarks_json TEXT NOT NULL, timing_json TEXT NOT NULL, images_dir TEXT NOT NULL DEFAULT '', "
+                "alignment_json TEXT NOT NULL DEFAULT 'null', simulation_json TEXT NOT NULL DEFAULT 'null', purpose "
+                "TEXT NOT NULL DEFAULT 'production'); "
+                "INSERT INTO inspections VALUES (1, 't', 0, 3, 0, 'OLD', 1, 'block', 'pass', 0, 10, 0, 0, '[]', '{}', "
+                "'', 'null', 'null', 'production'); PRAGMA user_version=3;\"");
+    ResultStore store(file);
+    store.commit(record(4, station::Verdict::Pass));
+    ResultOutbox outbox(file);
+    EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
+                          " \"SELECT serial, published_unix_ms, cycle_id = '' FROM inspections ORDER BY id\"")
+                  .out,
+              "OLD|0|1\nSN-4||0\n");
+    // The counters count every stored result, the old ones too.
+    std::int64_t last = 0;
+    EXPECT_EQ(outbox.countAfter(0, last).cycles, 2);
+}
+
+TEST(ResultOutbox, MarksWhileTheStoreCommitsLoseNothing)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    ResultStore store(file);
+    ResultOutbox outbox(file);
+    constexpr int kResults = 200;
+    // The publisher's side on its own thread and connection, as in the daemon: send in order, mark.
+    std::vector<std::int64_t> seen;
+    std::thread publisher([&] {
+        const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+        std::int64_t last = 0;
+        while (static_cast<int>(seen.size()) < kResults && std::chrono::steady_clock::now() < deadline) {
+            auto batch = outbox.pending(last, 7);
+            for (const auto& e : batch) seen.push_back(e.id);
+            if (!batch.empty()) last = batch.back().id;
+            outbox.markPublished(idsOf(batch), 1);
+        }
+    });
+    for (int i = 1; i <= kResults; ++i) store.commit(record(static_cast<std::uint16_t>(i), station::Verdict::Pass));
+    publisher.join();
+    ASSERT_EQ(seen.size(), static_cast<std::size_t>(kResults));
+    for (int i = 0; i < kResults; ++i) EXPECT_EQ(seen[static_cast<std::size_t>(i)], i + 1);
+    EXPECT_EQ(outbox.pendingCount(), 0);
 }
 
 TEST(ResultStore, KeepsALandmarksAsymmetricLimitsForTheStudies)

@@ -1,0 +1,75 @@
+// The plant link (docs/mqtt.md): every committed result, the station's state
+// and its counters published to an MQTT broker with libmosquitto, on a thread
+// of its own, off the inspection path. The result store is the outbox: the
+// publisher reads the results not yet acknowledged from the store, oldest
+// first and in batches, through its own SQLite connection, keeps a bounded
+// number in flight, and marks each one published when the broker acknowledges
+// it (PUBACK). Whatever the broker does, the cycles never wait for it; results
+// wait on disk, in order, and go out when it is back, also after a restart.
+//
+// Publish only: the client subscribes to nothing and takes no commands.
+#pragma once
+
+#include "daemon_config.h"
+#include "result_store.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+
+namespace hg::daemon {
+
+/// The payloads (docs/mqtt.md, "Topics"; docs/schemas/mqtt-*.schema.json).
+nlohmann::json resultMessage(const OutboxEntry& entry, const std::string& stationId);
+nlohmann::json stateMessage(const std::string& stationId, const std::string& state, std::int64_t unixMs);
+nlohmann::json countersMessage(const std::string& stationId, const ResultCounters& counters, std::int64_t unixMs);
+
+class MqttPublisher {
+  public:
+    /// The station's state as the PLC's STATUS sees it ("ready", "moving", ...);
+    /// called from the publisher's thread.
+    using StateSource = std::function<std::string()>;
+
+    /// Starts the thread. `database` is the result store the daemon opened.
+    MqttPublisher(station::MqttConfig config, std::filesystem::path database, StateSource state);
+    ~MqttPublisher();
+    MqttPublisher(const MqttPublisher&) = delete;
+    MqttPublisher& operator=(const MqttPublisher&) = delete;
+
+    /// Publishes the state `offline`, disconnects and ends the thread (unacknowledged results stay in the outbox).
+    void stop();
+    /// For `ctl status`: connected, results waiting, the last error.
+    nlohmann::json status() const;
+
+  private:
+    void run();
+    void serve(ResultOutbox& outbox);
+    void waitBeforeRetry(ResultOutbox* outbox);
+    bool stopping();
+    void setStatus(bool connected, const std::string& error);
+
+    const station::MqttConfig config_;
+    const std::filesystem::path database_;
+    StateSource state_;
+
+    std::mutex mutex_; // guards stopping_ and the waits
+    std::condition_variable wake_;
+    bool stopping_ = false;
+    std::chrono::milliseconds retry_; ///< the next wait before a connection attempt (publisher thread)
+    ResultCounters counters_;         ///< the store's counts (publisher thread) ...
+    std::int64_t counted_ = 0;        ///< ... of the results up to this id
+
+    mutable std::mutex statusMutex_;
+    bool connected_ = false;
+    std::string lastError_;
+    std::atomic<std::int64_t> pending_{0};
+
+    std::thread thread_;
+};
+
+} // namespace hg::daemon

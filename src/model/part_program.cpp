@@ -168,16 +168,16 @@ Landmark parseLandmark(const ConfigNode& node, const Solid& solid, const StepMod
     // only the map's approximation of it.
     if (brep) lm.position = nearest.point;
     lm.onBRep = brep != nullptr;
-    const Eigen::Vector3d meshNormal = nearest.normal;
+    const Eigen::Vector3d surfaceNormal = nearest.normal;
     if (auto n = node.optional("normal")) {
         const Eigen::Vector3d given = n->asVector3();
         if (!(given.norm() > 1e-12)) n->fail("normal has zero length");
         lm.normal = given.normalized();
-        if (lm.normal.dot(meshNormal) <= 0.0)
+        if (lm.normal.dot(surfaceNormal) <= 0.0)
             n->fail(fmt::format("normal {} of landmark '{}' points into the part (the surface normal there is {})",
-                                str(lm.normal), lm.id, str(meshNormal)));
+                                str(lm.normal), lm.id, str(surfaceNormal)));
     } else {
-        lm.normal = meshNormal;
+        lm.normal = surfaceNormal;
         lm.normalFromMesh = true;
     }
     if (auto bv = node.optional("best_views")) lm.bestViews = parseBestViews(*bv, kind);

@@ -36,9 +36,11 @@
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Shell.hxx>
@@ -113,7 +115,20 @@ std::string describeContent(const TopoDS_Shape& shape)
         TopExp::MapShapes(shape, kind, map);
         if (map.Extent() > 0) parts.push_back(fmt::format("{} {}{}", map.Extent(), word, map.Extent() == 1 ? "" : "s"));
     }
-    return parts.empty() ? "nothing" : fmt::format("{}", fmt::join(parts, ", "));
+    if (parts.empty()) return "nothing";
+    // Edges of one face only (seams and degenerate edges aside) leave the surface open.
+    TopTools_IndexedDataMapOfShapeListOfShape edgeFaces;
+    TopExp::MapShapesAndAncestors(shape, TopAbs_EDGE, TopAbs_FACE, edgeFaces);
+    int freeEdges = 0;
+    for (int i = 1; i <= edgeFaces.Extent(); ++i) {
+        const TopoDS_Edge& edge = TopoDS::Edge(edgeFaces.FindKey(i));
+        const TopTools_ListOfShape& faces = edgeFaces(i);
+        if (!BRep_Tool::Degenerated(edge) && faces.Extent() == 1 &&
+            !BRep_Tool::IsClosed(edge, TopoDS::Face(faces.First())))
+            ++freeEdges;
+    }
+    const std::string text = fmt::format("{}", fmt::join(parts, ", "));
+    return freeEdges == 0 ? text : fmt::format("{} ({} free edges: the surface is not closed)", text, freeEdges);
 }
 
 TopoDS_Shape readShape(const std::string& name)
@@ -224,6 +239,37 @@ std::optional<BRepPoint> nearestOnFace(const TopoDS_Vertex& vertex, const TopoDS
     return result;
 }
 
+// Every face's triangulation, placed and oriented as the face is, in one
+// mesh (vertices of shared edges not yet merged).
+TriangleMesh triangles(const std::string& name, const TopoDS_Shape& shape, const TopTools_IndexedMapOfShape& faces,
+                       double linearDeflectionMm, double angularDeflectionRad)
+{
+    BRepMesh_IncrementalMesh mesher(shape, linearDeflectionMm, /*isRelative=*/false, angularDeflectionRad,
+                                    /*isInParallel=*/false);
+    if (!mesher.IsDone()) fail(name, "the tessellation failed");
+    TriangleMesh mesh;
+    for (int f = 1; f <= faces.Extent(); ++f) {
+        const TopoDS_Face& face = TopoDS::Face(faces(f));
+        TopLoc_Location location;
+        const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
+        if (triangulation.IsNull()) fail(name, fmt::format("face {} could not be tessellated", f));
+        const gp_Trsf trsf = location.Transformation();
+        const int offset = static_cast<int>(mesh.vertices.size());
+        for (int i = 1; i <= triangulation->NbNodes(); ++i)
+            mesh.vertices.push_back(toEigen(triangulation->Node(i).Transformed(trsf)));
+        // Triangles run counter-clockwise about the surface's normal: a
+        // reversed face, or a mirroring placement, turns them the other way.
+        const bool flip = (face.Orientation() == TopAbs_REVERSED) != trsf.IsNegative();
+        for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
+            int a, b, c;
+            triangulation->Triangle(t).Get(a, b, c);
+            if (flip) std::swap(b, c);
+            mesh.triangles.push_back({offset + a - 1, offset + b - 1, offset + c - 1});
+        }
+    }
+    return mesh;
+}
+
 } // namespace
 
 bool isStepFile(const std::filesystem::path& file)
@@ -287,28 +333,11 @@ StepModel StepModel::read(const std::filesystem::path& file)
 TriangleMesh StepModel::tessellate(double linearDeflectionMm, double angularDeflectionRad)
 {
     const std::string& name = impl_->name;
-    BRepMesh_IncrementalMesh mesher(impl_->shape, linearDeflectionMm, /*isRelative=*/false, angularDeflectionRad,
-                                    /*isInParallel=*/false);
-    if (!mesher.IsDone()) fail(name, "the tessellation failed");
     TriangleMesh mesh;
-    for (int f = 1; f <= impl_->faces.Extent(); ++f) {
-        const TopoDS_Face& face = TopoDS::Face(impl_->faces(f));
-        TopLoc_Location location;
-        const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
-        if (triangulation.IsNull()) fail(name, fmt::format("face {} could not be tessellated", f));
-        const gp_Trsf trsf = location.Transformation();
-        const int offset = static_cast<int>(mesh.vertices.size());
-        for (int i = 1; i <= triangulation->NbNodes(); ++i)
-            mesh.vertices.push_back(toEigen(triangulation->Node(i).Transformed(trsf)));
-        // Triangles run counter-clockwise about the surface's normal: a
-        // reversed face, or a mirroring placement, turns them the other way.
-        const bool flip = (face.Orientation() == TopAbs_REVERSED) != trsf.IsNegative();
-        for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
-            int a, b, c;
-            triangulation->Triangle(t).Get(a, b, c);
-            if (flip) std::swap(b, c);
-            mesh.triangles.push_back({offset + a - 1, offset + b - 1, offset + c - 1});
-        }
+    try {
+        mesh = triangles(name, impl_->shape, impl_->faces, linearDeflectionMm, angularDeflectionRad);
+    } catch (const Standard_Failure& e) {
+        fail(name, fmt::format("the tessellation failed: {}", e.GetMessageString()));
     }
     // Points of shared edges coincide to rounding; a nanometre is far below any chord error.
     weld(mesh, 1e-6);
@@ -319,6 +348,16 @@ TriangleMesh StepModel::tessellate(double linearDeflectionMm, double angularDefl
 
 BRepPoint StepModel::closestPoint(const Eigen::Vector3d& point, double radius) const
 {
+    try {
+        return nearestPoint(point, radius);
+    } catch (const Standard_Failure& e) {
+        fail(impl_->name, fmt::format("the nearest surface point to ({}, {}, {}) failed: {}", point.x(), point.y(),
+                                      point.z(), e.GetMessageString()));
+    }
+}
+
+BRepPoint StepModel::nearestPoint(const Eigen::Vector3d& point, double radius) const
+{
     const TopoDS_Vertex query = BRepBuilderAPI_MakeVertex(gp_Pnt(point.x(), point.y(), point.z()));
     BRepPoint best;
     best.distance = std::numeric_limits<double>::infinity();
@@ -328,7 +367,7 @@ BRepPoint StepModel::closestPoint(const Eigen::Vector3d& point, double radius) c
     }
     if (!std::isfinite(best.distance)) throw InputError(impl_->name, "mesh", "no face has a nearest point");
     // On an edge or a corner every face that meets there has a say, as the
-    // mesh's angle-weighted normal does (docs/part-program.md, "Normals").
+    // mesh's angle-weighted normal does (docs/part-program.md, "STEP parts").
     const TopoDS_Vertex snapped = BRepBuilderAPI_MakeVertex(gp_Pnt(best.point.x(), best.point.y(), best.point.z()));
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int f = 1; f <= impl_->faces.Extent(); ++f) {

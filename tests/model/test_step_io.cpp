@@ -336,6 +336,28 @@ TEST(StepPartCli, FileWithAFaceOrAShellButNoSolidIsRefused)
     EXPECT_NE(err.find("holds no solid, only 1 shell, 6 faces"), std::string::npos) << err;
 }
 
+// A solid whose shell lacks a face (the box's first, struck from its
+// CLOSED_SHELL record: Open CASCADE's writer would write such a solid as a
+// bare shell) bounds no volume; the reader's shape healing makes it an open
+// shell, refused with its 4 free edges.
+TEST(StepPartCli, SolidThatIsNotClosedIsRefused)
+{
+    hgtest::TempDir dir;
+    writeStep(BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(40, 30, 20)).Shape(), dir / "box.step");
+    std::ifstream in(dir / "box.step");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t shell = text.find("CLOSED_SHELL('',(");
+    ASSERT_NE(shell, std::string::npos);
+    const std::size_t first = shell + std::string("CLOSED_SHELL('',(").size();
+    const std::size_t comma = text.find(',', first);
+    ASSERT_NE(comma, std::string::npos);
+    text.erase(first, comma + 1 - first);
+    hgtest::writeFile(dir / "open.step", text);
+    const std::string err = refusal(dir, "open.step");
+    EXPECT_NE(err.find("holds no solid, only 1 shell, 5 faces"), std::string::npos) << err;
+    EXPECT_NE(err.find("(4 free edges: the surface is not closed)"), std::string::npos) << err;
+}
+
 TEST(StepPart, MissingFileIsAnInputErrorNamingIt)
 {
     hgtest::TempDir dir;

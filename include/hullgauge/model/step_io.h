@@ -71,6 +71,7 @@ class StepModel {
   private:
     struct Impl;
     explicit StepModel(std::unique_ptr<Impl> impl);
+    BRepPoint nearestPoint(const Eigen::Vector3d& point, double radius) const;
     std::unique_ptr<Impl> impl_;
 };
 

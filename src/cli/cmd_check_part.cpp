@@ -152,7 +152,7 @@ int run(const CheckArgs& args)
                              bounds.min().y(), bounds.min().z(), bounds.max().x(), bounds.max().y(), bounds.max().z());
     std::cout << fmt::format("cube        origin ({:.4f}, {:.4f}, {:.4f}) size {:.6g} mm{}\n", oct.cubeOrigin.x(),
                              oct.cubeOrigin.y(), oct.cubeOrigin.z(), oct.cubeSize,
-                             oct.cubeFromMesh ? " (from the mesh)" : "");
+                             oct.cubeFromMesh ? (program.brep ? " (from the B-rep)" : " (from the mesh)") : "");
     std::cout << fmt::format("octree      depth {}, ΔV = {:.6g} mm (MAD), {} adjacency layers = {:.6g} mm measurable\n",
                              oct.depth, oct.voxelSize(), oct.adjacencyDepth, oct.maxMeasurableErrorMm());
     std::cout << fmt::format("landmarks   {} (on the surface within {:.3g} mm)\n", program.landmarks.size(),

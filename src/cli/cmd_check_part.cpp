@@ -18,6 +18,7 @@
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
+#include "hullgauge/model/step_io.h"
 
 namespace hg::cli {
 namespace {
@@ -52,6 +53,36 @@ std::string zoneText(const model::Landmark& lm)
     return fmt::format("tolerance {:.4g} mm", lm.toleranceMm);
 }
 
+/// A STEP part (docs/part-program.md, "STEP parts"): what was read from the
+/// exact B-rep and how it was tessellated.
+nlohmann::json stepJson(const model::StepModel& brep)
+{
+    const model::StepSummary& s = brep.summary();
+    const model::StepTessellation& t = brep.tessellation();
+    return {{"solids", s.solids},
+            {"faces", s.faces},
+            {"volume_mm3", s.volumeMm3},
+            {"bounds_min", toJson(s.bounds.min())},
+            {"bounds_max", toJson(s.bounds.max())},
+            {"linear_deflection_mm", t.linearDeflectionMm},
+            {"angular_deflection_rad", t.angularDeflectionRad},
+            {"triangles", t.triangles}};
+}
+
+std::string stepText(const model::StepModel& brep)
+{
+    const model::StepSummary& s = brep.summary();
+    const model::StepTessellation& t = brep.tessellation();
+    const Eigen::Vector3d& lo = s.bounds.min();
+    const Eigen::Vector3d& hi = s.bounds.max();
+    return fmt::format("step        {} solid{}{}, {} faces, volume {:.6g} mm³ (exact), bounds ({:.4f}, {:.4f}, "
+                       "{:.4f}) to ({:.4f}, {:.4f}, {:.4f}) mm\n"
+                       "tessellated deflection {:.4g} mm, {:.3g} rad: {} triangles\n",
+                       s.solids, s.solids == 1 ? "" : "s", s.solids > 1 ? " (their union)" : "", s.faces, s.volumeMm3,
+                       lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z(), t.linearDeflectionMm, t.angularDeflectionRad,
+                       t.triangles);
+}
+
 int run(const CheckArgs& args)
 {
     const std::string& partFile = args.part;
@@ -74,6 +105,7 @@ int run(const CheckArgs& args)
                        {"closed", check.ok()},
                        {"bounds_min", toJson(bounds.min())},
                        {"bounds_max", toJson(bounds.max())}};
+        if (program.brep) out["step"] = stepJson(*program.brep);
         out["octree"] = {{"cube_origin", toJson(oct.cubeOrigin)},
                          {"cube_size", oct.cubeSize},
                          {"cube_from_mesh", oct.cubeFromMesh},
@@ -89,6 +121,7 @@ int run(const CheckArgs& args)
                  {"position", toJson(lm.position)},
                  {"normal", toJson(lm.normal)},
                  {"normal_from_mesh", lm.normalFromMesh},
+                 {"on_brep", lm.onBRep},
                  {"distance_to_surface_mm", lm.distanceToSurfaceMm},
                  {"tolerance_mm", lm.toleranceMm},
                  {"limits_mm",
@@ -113,12 +146,13 @@ int run(const CheckArgs& args)
     std::cout << fmt::format("part        {}\n", program.part);
     std::cout << fmt::format("mesh        {}: {} triangles, {} vertices, closed 2-manifold, outward\n",
                              program.meshFile.string(), mesh.triangles.size(), mesh.vertices.size());
+    if (program.brep) std::cout << stepText(*program.brep);
     std::cout << fmt::format("volume      {:.6g} mm³, area {:.6g} mm²\n", mesh.signedVolume(), mesh.area());
     std::cout << fmt::format("bounds      ({:.4f}, {:.4f}, {:.4f}) to ({:.4f}, {:.4f}, {:.4f}) mm\n", bounds.min().x(),
                              bounds.min().y(), bounds.min().z(), bounds.max().x(), bounds.max().y(), bounds.max().z());
     std::cout << fmt::format("cube        origin ({:.4f}, {:.4f}, {:.4f}) size {:.6g} mm{}\n", oct.cubeOrigin.x(),
                              oct.cubeOrigin.y(), oct.cubeOrigin.z(), oct.cubeSize,
-                             oct.cubeFromMesh ? " (from the mesh)" : "");
+                             oct.cubeFromMesh ? (program.brep ? " (from the B-rep)" : " (from the mesh)") : "");
     std::cout << fmt::format("octree      depth {}, ΔV = {:.6g} mm (MAD), {} adjacency layers = {:.6g} mm measurable\n",
                              oct.depth, oct.voxelSize(), oct.adjacencyDepth, oct.maxMeasurableErrorMm());
     std::cout << fmt::format("landmarks   {} (on the surface within {:.3g} mm)\n", program.landmarks.size(),
@@ -127,8 +161,9 @@ int run(const CheckArgs& args)
         std::cout << fmt::format("  {:<16} at ({:.4f}, {:.4f}, {:.4f}) off {:.2e} mm, normal ({:.4f}, {:.4f}, {:.4f})"
                                  "{}, {}, {} best-view group{}\n",
                                  lm.id, lm.position.x(), lm.position.y(), lm.position.z(), lm.distanceToSurfaceMm,
-                                 lm.normal.x(), lm.normal.y(), lm.normal.z(), lm.normalFromMesh ? " (mesh)" : "",
-                                 zoneText(lm), lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
+                                 lm.normal.x(), lm.normal.y(), lm.normal.z(),
+                                 lm.normalFromMesh ? (lm.onBRep ? " (B-rep)" : " (mesh)") : "", zoneText(lm),
+                                 lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
     std::cout << fmt::format("parameters  {}\n", program.parameters.size());
     for (const auto& p : program.parameters)
         std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id,

@@ -232,7 +232,9 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     const std::string name = file.string();
     const std::string ext = lowerExtension(file);
     if (ext == ".step" || ext == ".stp")
-        throw InputError(name, "mesh", "STEP files are not supported; export the part as STL, OBJ or PLY");
+        throw InputError(name, "mesh",
+                         "a STEP file is read as a part program's mesh only (docs/part-program.md); here export the "
+                         "part as STL, OBJ or PLY");
     if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off")
         throw InputError(name, "mesh", "unknown mesh format '" + ext + "' (expected .stl, .obj, .ply or .off)");
     std::error_code ec;

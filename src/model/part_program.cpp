@@ -14,9 +14,15 @@
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/step_io.h"
 
 namespace hg::model {
 namespace {
+
+// The angular deflection of a STEP part's tessellation: about 6°, so small
+// curved faces (fillets, small bores) get facets even where the chord error
+// alone would allow few.
+constexpr double kStepAngularDeflectionRad = 0.1;
 
 std::string str(const Eigen::Vector3d& p)
 {
@@ -117,7 +123,27 @@ void parseTolerance(const ConfigNode& node, Landmark& lm)
     lm.toleranceMm = 0.5 * (v[1] - v[0]);
 }
 
-Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfaceTolerance,
+/// The surface at a landmark: the nearest point, its distance and the outward normal.
+struct SurfaceAt {
+    Eigen::Vector3d point;
+    double distance = 0.0;
+    Eigen::Vector3d normal;
+};
+
+/// A STEP part's exact B-rep (docs/part-program.md, "STEP parts"), else the
+/// mesh; on an edge or a corner (within the surface tolerance) both take the
+/// mean of the faces that meet there (the mesh: angle-weighted).
+SurfaceAt surfaceAt(const Eigen::Vector3d& position, const Solid& solid, const StepModel* brep, double radius)
+{
+    if (brep) {
+        const BRepPoint exact = brep->closestPoint(position, radius);
+        return {exact.point, exact.distance, exact.normal};
+    }
+    const SurfacePoint nearest = solid.closestPoint(position);
+    return {nearest.point, nearest.distance, solid.surfaceNormal(nearest.point, radius)};
+}
+
+Landmark parseLandmark(const ConfigNode& node, const Solid& solid, const StepModel* brep, double surfaceTolerance,
                        std::optional<geometry::FixtureType>& kind)
 {
     node.allowOnlyKeys({"id", "position", "normal", "tolerance_mm", "limits_mm", "best_views"});
@@ -133,24 +159,25 @@ Landmark parseLandmark(const ConfigNode& node, const Solid& solid, double surfac
     parseTolerance(node, lm);
 
     // On the surface (within the documented tolerance).
-    const SurfacePoint nearest = solid.closestPoint(lm.position);
+    const SurfaceAt nearest = surfaceAt(lm.position, solid, brep, surfaceTolerance);
     lm.distanceToSurfaceMm = nearest.distance;
     if (nearest.distance > surfaceTolerance)
         posNode.fail(fmt::format("landmark '{}' is {:.3f} mm from the surface (nearest point {}; allowed {:.3g} mm)",
                                  lm.id, nearest.distance, str(nearest.point), surfaceTolerance));
-
-    // The mesh normal at the landmark; on an edge or a corner (within the
-    // surface tolerance) the angle-weighted mean of the faces that meet there.
-    const Eigen::Vector3d meshNormal = solid.surfaceNormal(nearest.point, surfaceTolerance);
+    // A STEP part's landmark lies on the exact surface: the tessellation is
+    // only the map's approximation of it.
+    if (brep) lm.position = nearest.point;
+    lm.onBRep = brep != nullptr;
+    const Eigen::Vector3d surfaceNormal = nearest.normal;
     if (auto n = node.optional("normal")) {
         const Eigen::Vector3d given = n->asVector3();
         if (!(given.norm() > 1e-12)) n->fail("normal has zero length");
         lm.normal = given.normalized();
-        if (lm.normal.dot(meshNormal) <= 0.0)
+        if (lm.normal.dot(surfaceNormal) <= 0.0)
             n->fail(fmt::format("normal {} of landmark '{}' points into the part (the surface normal there is {})",
-                                str(lm.normal), lm.id, str(meshNormal)));
+                                str(lm.normal), lm.id, str(surfaceNormal)));
     } else {
-        lm.normal = meshNormal;
+        lm.normal = surfaceNormal;
         lm.normalFromMesh = true;
     }
     if (auto bv = node.optional("best_views")) lm.bestViews = parseBestViews(*bv, kind);
@@ -264,6 +291,34 @@ AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::str
     return s;
 }
 
+/// The CAD model and the octree around it. A STEP part is read first, the
+/// octree placed around its exact bounding box, and then tessellated with the
+/// chord error ΔV/20 (docs/part-program.md, "STEP parts"); a mesh is read as it is.
+void loadModel(const ConfigNode& meshNode, const ConfigNode& octreeNode, PartProgram& program)
+{
+    // The model file's own error, reported at the key that names it.
+    TriangleMesh mesh;
+    std::shared_ptr<StepModel> brep;
+    try {
+        if (isStepFile(program.meshFile))
+            brep = std::make_shared<StepModel>(StepModel::read(program.meshFile));
+        else
+            mesh = loadMesh(program.meshFile);
+    } catch (const InputError& e) {
+        meshNode.fail(e.what());
+    }
+    program.octree = parseOctree(octreeNode, brep ? brep->summary().bounds : mesh.bounds());
+    if (brep) {
+        try {
+            mesh = brep->tessellate(program.tessellationDeflectionMm(), kStepAngularDeflectionRad);
+        } catch (const InputError& e) {
+            meshNode.fail(e.what());
+        }
+        program.brep = brep;
+    }
+    program.solid = std::make_shared<const Solid>(std::move(mesh));
+}
+
 } // namespace
 
 double OctreeSpec::voxelSize() const
@@ -348,23 +403,14 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     if (meshText.empty()) meshNode.fail("mesh path is empty");
     program.meshFile =
         std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText) : file.parent_path() / meshText;
-    TriangleMesh mesh;
-    try {
-        mesh = loadMesh(program.meshFile);
-    } catch (const InputError& e) {
-        // The mesh file's own error, reported at the key that names it.
-        meshNode.fail(e.what());
-    }
-    const Eigen::AlignedBox3d bounds = mesh.bounds();
-    program.solid = std::make_shared<const Solid>(std::move(mesh));
-
-    program.octree = parseOctree(root["octree"], bounds);
+    loadModel(meshNode, root["octree"], program);
 
     const double surfaceTolerance = program.surfaceToleranceMm();
     const ConfigNode landmarks = root["landmarks"];
     std::map<std::string, std::size_t> index;
     for (const ConfigNode& node : landmarks.items()) {
-        Landmark lm = parseLandmark(node, *program.solid, surfaceTolerance, program.bestViewFixture);
+        Landmark lm =
+            parseLandmark(node, *program.solid, program.brep.get(), surfaceTolerance, program.bestViewFixture);
         if (index.count(lm.id)) node["id"].fail("duplicate landmark id '" + lm.id + "'");
         index[lm.id] = program.landmarks.size();
         program.landmarks.push_back(std::move(lm));

@@ -19,6 +19,8 @@
 
 namespace hg::model {
 
+class StepModel; // hullgauge/model/step_io.h
+
 struct OctreeSpec {
     Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero(); // low corner of the reconstruction cube, mm
     double cubeSize = 0.0;                                // edge of the cube, mm
@@ -41,11 +43,16 @@ struct Landmark {
     Eigen::Vector3d position; // part frame, mm, on the CAD surface
     Eigen::Vector3d normal;   // unit, outward
     bool normalFromMesh = false;
+    /// A STEP part's landmark: `position` is the nearest point of the exact
+    /// B-rep to the given one, and a normal not given is the B-rep's there
+    /// (docs/part-program.md, "STEP parts").
+    bool onBRep = false;
     double toleranceMm = 0.0; ///< half the tolerance zone (with `limits_mm`: (upper − lower) / 2)
     /// `limits_mm: [lower, upper]`: asymmetric limits of the signed offset instead of ±tolerance_mm.
     std::optional<std::pair<double, double>> limitsMm;
     std::vector<BestViewGroup> bestViews;
-    /// Distance from `position` to the mesh surface, mm (within surfaceToleranceMm()).
+    /// Distance from the given position to the surface (a STEP part's exact
+    /// B-rep, else the mesh), mm (within surfaceToleranceMm()).
     double distanceToSurfaceMm = 0.0;
 };
 
@@ -111,6 +118,8 @@ struct PartProgram {
     std::string part;               // free-text name
     std::filesystem::path meshFile; // resolved relative to the YAML file
     std::shared_ptr<const Solid> solid;
+    /// A STEP part's exact B-rep, which `solid` is the tessellation of; null for a mesh file.
+    std::shared_ptr<const StepModel> brep;
     OctreeSpec octree;
     std::vector<Landmark> landmarks;
     std::vector<GeometricParameter> parameters;
@@ -124,6 +133,9 @@ struct PartProgram {
     /// surface by the chord error; a quarter voxel keeps the landmark in the
     /// voxel the map puts it in.
     double surfaceToleranceMm() const;
+    /// A STEP part's chord error: ΔV/20, so the tessellation moves the
+    /// surface by a twentieth of the map's resolution at most.
+    double tessellationDeflectionMm() const { return octree.voxelSize() / 20.0; }
     const Landmark* findLandmark(const std::string& id) const;
 };
 

@@ -1,0 +1,78 @@
+// CAD parts as STEP files (docs/part-program.md, "STEP parts"): the exact
+// boundary representation read with Open CASCADE, tessellated into the
+// project's TriangleMesh for the inspection map, and kept for the exact
+// surface queries the landmarks are snapped with.
+//
+// Units are millimetres in the part frame: the reader converts the file's
+// own length unit. Open CASCADE stays behind this header (pimpl), so only
+// step_io.cpp is compiled against it.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "hullgauge/model/mesh.h"
+
+namespace hg::model {
+
+/// What the STEP file held, measured on the exact B-rep.
+struct StepSummary {
+    std::size_t solids = 0; ///< solids in the file (their union is the part)
+    std::size_t faces = 0;  ///< faces of the part after the union
+    double volumeMm3 = 0.0; ///< exact volume (BRepGProp)
+    Eigen::AlignedBox3d bounds;
+};
+
+/// The tessellation the inspection map is built from.
+struct StepTessellation {
+    double linearDeflectionMm = 0.0; ///< largest chord error (absolute)
+    double angularDeflectionRad = 0.0;
+    std::size_t triangles = 0;
+};
+
+/// A point of the exact surface with its outward unit normal.
+struct BRepPoint {
+    Eigen::Vector3d point = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    double distance = 0.0; ///< from the query point, mm
+};
+
+/// True when the path names a STEP file (.step or .stp, any case).
+bool isStepFile(const std::filesystem::path& file);
+
+class StepModel {
+  public:
+    /// Reads every solid of `file`; several are fused into one part. Throws
+    /// InputError(file, "mesh", problem) for a file that is missing,
+    /// truncated or unreadable, holds no solid, or whose solid is not closed.
+    static StepModel read(const std::filesystem::path& file);
+    ~StepModel();
+    StepModel(StepModel&&) noexcept;
+    StepModel& operator=(StepModel&&) noexcept;
+
+    const StepSummary& summary() const;
+    /// Tessellates every face with the chord error `linearDeflectionMm` and
+    /// the angle `angularDeflectionRad` (absolute, not relative to the face
+    /// size) and returns the closed, outward mesh (InputError otherwise).
+    TriangleMesh tessellate(double linearDeflectionMm, double angularDeflectionRad);
+    /// The last tessellation's parameters and size.
+    const StepTessellation& tessellation() const;
+
+    /// Nearest point of the exact surface to `point`, and the outward normal
+    /// there: the mean of the normals of the faces within `radius` of that
+    /// point (one face inside a face, the bisector on an edge).
+    BRepPoint closestPoint(const Eigen::Vector3d& point, double radius) const;
+
+  private:
+    struct Impl;
+    explicit StepModel(std::unique_ptr<Impl> impl);
+    BRepPoint nearestPoint(const Eigen::Vector3d& point, double radius) const;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace hg::model

@@ -1,0 +1,381 @@
+// STEP import through Open CASCADE (docs/part-program.md, "STEP parts"): the
+// one translation unit compiled against it (src/CMakeLists.txt).
+#include "hullgauge/model/step_io.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
+#include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepExtrema_DistShapeShape.hxx>
+#include <BRepGProp.hxx>
+#include <BRepLProp_SLProps.hxx>
+#include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Tool.hxx>
+#include <Bnd_Box.hxx>
+#include <GProp_GProps.hxx>
+#include <GeomAPI_ProjectPointOnSurf.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Message_PrinterOStream.hxx>
+#include <Poly_Triangulation.hxx>
+#include <STEPControl_Controller.hxx>
+#include <STEPControl_Reader.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ListOfShape.hxx>
+#include <TopoDS.hxx>
+#include <TopoDS_Edge.hxx>
+#include <TopoDS_Face.hxx>
+#include <TopoDS_Shape.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Vertex.hxx>
+#include <spdlog/fmt/fmt.h>
+
+#include "hullgauge/common/error.h"
+#include "hullgauge/model/mesh_io.h"
+
+namespace hg::model {
+
+struct StepModel::Impl {
+    std::string name; // the file, as errors name it
+    TopoDS_Shape shape;
+    TopTools_IndexedMapOfShape faces;
+    StepSummary summary;
+    StepTessellation tessellation;
+};
+
+namespace {
+
+Eigen::Vector3d toEigen(const gp_Pnt& p)
+{
+    return {p.X(), p.Y(), p.Z()};
+}
+
+[[noreturn]] void fail(const std::string& name, const std::string& problem)
+{
+    throw InputError(name, "mesh", problem);
+}
+
+// Open CASCADE writes its reader's diagnostics to standard output through a
+// process-wide messenger; the command line promises one line on stderr for
+// bad input (README, "The tools") and JSON alone on stdout, so the printer
+// goes once, and the problems are reported as InputError instead.
+void silenceOpenCascade()
+{
+    static std::once_flag once;
+    std::call_once(once, [] {
+        Message::DefaultMessenger()->RemovePrinters(STANDARD_TYPE(Message_PrinterOStream));
+        // Coordinates in millimetres whatever unit the file declares (the
+        // parameter exists once the STEP controller is initialised).
+        STEPControl_Controller::Init();
+        Interface_Static::SetCVal("xstep.cascade.unit", "MM");
+    });
+}
+
+// A STEP exchange file ends with END-ISO-10303-21; (ISO 10303-21): a file
+// cut short in transfer is told apart from a damaged one before parsing.
+bool endsLikeStep(const std::filesystem::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    const std::streamoff tail = std::min<std::streamoff>(size, 256);
+    std::string text(static_cast<std::size_t>(tail), '\0');
+    in.seekg(size - tail);
+    in.read(text.data(), tail);
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
+    const std::string end = "END-ISO-10303-21;";
+    return text.size() >= end.size() && text.compare(text.size() - end.size(), end.size(), end) == 0;
+}
+
+// "2 shells, 6 faces": what a file without a solid holds instead.
+std::string describeContent(const TopoDS_Shape& shape)
+{
+    std::vector<std::string> parts;
+    const std::array<std::pair<TopAbs_ShapeEnum, const char*>, 4> kinds = {
+        {{TopAbs_SHELL, "shell"}, {TopAbs_FACE, "face"}, {TopAbs_WIRE, "wire"}, {TopAbs_EDGE, "edge"}}};
+    for (const auto& [kind, word] : kinds) {
+        TopTools_IndexedMapOfShape map;
+        TopExp::MapShapes(shape, kind, map);
+        if (map.Extent() > 0) parts.push_back(fmt::format("{} {}{}", map.Extent(), word, map.Extent() == 1 ? "" : "s"));
+    }
+    if (parts.empty()) return "nothing";
+    // Edges of one face only (seams and degenerate edges aside) leave the surface open.
+    TopTools_IndexedDataMapOfShapeListOfShape edgeFaces;
+    TopExp::MapShapesAndAncestors(shape, TopAbs_EDGE, TopAbs_FACE, edgeFaces);
+    int freeEdges = 0;
+    for (int i = 1; i <= edgeFaces.Extent(); ++i) {
+        const TopoDS_Edge& edge = TopoDS::Edge(edgeFaces.FindKey(i));
+        const TopTools_ListOfShape& faces = edgeFaces(i);
+        if (!BRep_Tool::Degenerated(edge) && faces.Extent() == 1 &&
+            !BRep_Tool::IsClosed(edge, TopoDS::Face(faces.First())))
+            ++freeEdges;
+    }
+    const std::string text = fmt::format("{}", fmt::join(parts, ", "));
+    return freeEdges == 0 ? text : fmt::format("{} ({} free edges: the surface is not closed)", text, freeEdges);
+}
+
+TopoDS_Shape readShape(const std::string& name)
+{
+    STEPControl_Reader reader;
+    const IFSelect_ReturnStatus status = reader.ReadFile(name.c_str());
+    if (status != IFSelect_RetDone) fail(name, "not a readable STEP file (the reader found a syntax error)");
+    if (reader.TransferRoots() == 0) fail(name, "the STEP file holds no shape the reader can transfer");
+    const TopoDS_Shape shape = reader.OneShape();
+    if (shape.IsNull()) fail(name, "the STEP file holds no shape");
+    return shape;
+}
+
+// Every solid must be bounded by closed shells: an open one (a face missing)
+// encloses no volume to inspect.
+void requireClosedSolids(const std::string& name, const TopTools_IndexedMapOfShape& solids)
+{
+    for (int i = 1; i <= solids.Extent(); ++i)
+        for (TopExp_Explorer shell(solids(i), TopAbs_SHELL); shell.More(); shell.Next())
+            if (!BRep_Tool::IsClosed(shell.Current()))
+                fail(name, fmt::format("solid {} of {} is not closed (its shell has free edges)", i, solids.Extent()));
+}
+
+// The part: the one solid, or the union of several (an assembly's bodies
+// that touch or overlap become one; docs/part-program.md, "STEP parts").
+TopoDS_Shape unionOf(const std::string& name, const TopTools_IndexedMapOfShape& solids)
+{
+    if (solids.Extent() == 1) return solids(1);
+    TopTools_ListOfShape arguments, tools;
+    arguments.Append(solids(1));
+    for (int i = 2; i <= solids.Extent(); ++i) tools.Append(solids(i));
+    BRepAlgoAPI_Fuse fuse;
+    fuse.SetArguments(arguments);
+    fuse.SetTools(tools);
+    fuse.Build();
+    if (!fuse.IsDone()) fail(name, fmt::format("the union of its {} solids failed", solids.Extent()));
+    return fuse.Shape();
+}
+
+/// Merges vertices closer than `tol` (a face's seam and the edges it shares
+/// with its neighbours carry the same points in each face's triangulation)
+/// and drops the triangles that collapse.
+void weld(TriangleMesh& mesh, double tol)
+{
+    using Cell = std::array<long long, 3>;
+    struct CellHash {
+        std::size_t operator()(const Cell& c) const
+        {
+            return std::size_t(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+        }
+    };
+    std::unordered_map<Cell, std::vector<int>, CellHash> grid;
+    std::vector<Eigen::Vector3d> kept;
+    std::vector<int> index(mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        const Eigen::Vector3d& p = mesh.vertices[i];
+        const Cell c = {std::llround(p.x() / tol), std::llround(p.y() / tol), std::llround(p.z() / tol)};
+        int found = -1;
+        for (long long dx = -1; dx <= 1 && found < 0; ++dx)
+            for (long long dy = -1; dy <= 1 && found < 0; ++dy)
+                for (long long dz = -1; dz <= 1 && found < 0; ++dz) {
+                    auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+                    if (it == grid.end()) continue;
+                    for (int k : it->second)
+                        if ((kept[k] - p).norm() <= tol) found = k;
+                }
+        if (found < 0) {
+            found = static_cast<int>(kept.size());
+            kept.push_back(p);
+            grid[c].push_back(found);
+        }
+        index[i] = found;
+    }
+    std::vector<std::array<int, 3>> triangles;
+    for (const auto& t : mesh.triangles) {
+        const std::array<int, 3> w = {index[t[0]], index[t[1]], index[t[2]]};
+        if (w[0] != w[1] && w[1] != w[2] && w[0] != w[2]) triangles.push_back(w);
+    }
+    mesh.vertices = std::move(kept);
+    mesh.triangles = std::move(triangles);
+}
+
+// The outward unit normal of `face` at its point nearest to `p`, and that point.
+std::optional<BRepPoint> nearestOnFace(const TopoDS_Vertex& vertex, const TopoDS_Face& face)
+{
+    BRepExtrema_DistShapeShape dist(vertex, face);
+    if (!dist.IsDone() || dist.NbSolution() == 0) return std::nullopt;
+    BRepPoint result;
+    result.distance = dist.Value();
+    const gp_Pnt on = dist.PointOnShape2(1);
+    result.point = toEigen(on);
+    double u = 0.0, v = 0.0;
+    if (dist.SupportTypeShape2(1) == BRepExtrema_IsInFace) {
+        dist.ParOnFaceS2(1, u, v);
+    } else {
+        // On the face's boundary: the surface parameters of that point.
+        GeomAPI_ProjectPointOnSurf project(on, BRep_Tool::Surface(face));
+        if (project.NbPoints() == 0) return std::nullopt;
+        project.LowerDistanceParameters(u, v);
+    }
+    BRepAdaptor_Surface surface(face);
+    BRepLProp_SLProps props(surface, u, v, 1, 1e-9);
+    if (!props.IsNormalDefined()) return std::nullopt;
+    gp_Dir n = props.Normal();
+    // The surface's own normal points out of the material only on a forward face.
+    if (face.Orientation() == TopAbs_REVERSED) n.Reverse();
+    result.normal = Eigen::Vector3d(n.X(), n.Y(), n.Z());
+    return result;
+}
+
+// Every face's triangulation, placed and oriented as the face is, in one
+// mesh (vertices of shared edges not yet merged).
+TriangleMesh triangles(const std::string& name, const TopoDS_Shape& shape, const TopTools_IndexedMapOfShape& faces,
+                       double linearDeflectionMm, double angularDeflectionRad)
+{
+    BRepMesh_IncrementalMesh mesher(shape, linearDeflectionMm, /*isRelative=*/false, angularDeflectionRad,
+                                    /*isInParallel=*/false);
+    if (!mesher.IsDone()) fail(name, "the tessellation failed");
+    TriangleMesh mesh;
+    for (int f = 1; f <= faces.Extent(); ++f) {
+        const TopoDS_Face& face = TopoDS::Face(faces(f));
+        TopLoc_Location location;
+        const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
+        if (triangulation.IsNull()) fail(name, fmt::format("face {} could not be tessellated", f));
+        const gp_Trsf trsf = location.Transformation();
+        const int offset = static_cast<int>(mesh.vertices.size());
+        for (int i = 1; i <= triangulation->NbNodes(); ++i)
+            mesh.vertices.push_back(toEigen(triangulation->Node(i).Transformed(trsf)));
+        // Triangles run counter-clockwise about the surface's normal: a
+        // reversed face, or a mirroring placement, turns them the other way.
+        const bool flip = (face.Orientation() == TopAbs_REVERSED) != trsf.IsNegative();
+        for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
+            int a, b, c;
+            triangulation->Triangle(t).Get(a, b, c);
+            if (flip) std::swap(b, c);
+            mesh.triangles.push_back({offset + a - 1, offset + b - 1, offset + c - 1});
+        }
+    }
+    return mesh;
+}
+
+} // namespace
+
+bool isStepFile(const std::filesystem::path& file)
+{
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext == ".step" || ext == ".stp";
+}
+
+StepModel::StepModel(std::unique_ptr<Impl> impl) : impl_(std::move(impl))
+{
+}
+StepModel::~StepModel() = default;
+StepModel::StepModel(StepModel&&) noexcept = default;
+StepModel& StepModel::operator=(StepModel&&) noexcept = default;
+
+const StepSummary& StepModel::summary() const
+{
+    return impl_->summary;
+}
+
+const StepTessellation& StepModel::tessellation() const
+{
+    return impl_->tessellation;
+}
+
+StepModel StepModel::read(const std::filesystem::path& file)
+{
+    auto impl = std::make_unique<Impl>();
+    const std::string& name = impl->name = file.string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) fail(name, "no such file");
+    if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
+    if (!endsLikeStep(file)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
+    silenceOpenCascade();
+    try {
+        const TopoDS_Shape content = readShape(name);
+        TopTools_IndexedMapOfShape solids;
+        TopExp::MapShapes(content, TopAbs_SOLID, solids);
+        if (solids.Extent() == 0) fail(name, "the STEP file holds no solid, only " + describeContent(content));
+        requireClosedSolids(name, solids);
+        impl->shape = unionOf(name, solids);
+        impl->summary.solids = static_cast<std::size_t>(solids.Extent());
+    } catch (const Standard_Failure& e) {
+        fail(name, fmt::format("Open CASCADE could not read it: {}", e.GetMessageString()));
+    }
+    TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
+    impl->summary.faces = static_cast<std::size_t>(impl->faces.Extent());
+    GProp_GProps props;
+    BRepGProp::VolumeProperties(impl->shape, props);
+    impl->summary.volumeMm3 = props.Mass();
+    if (!(impl->summary.volumeMm3 > 0.0)) fail(name, "the solid encloses no volume (its faces point inward)");
+    Bnd_Box box;
+    BRepBndLib::AddOptimal(impl->shape, box, false, false);
+    double x0, y0, z0, x1, y1, z1;
+    box.Get(x0, y0, z0, x1, y1, z1);
+    impl->summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
+    return StepModel(std::move(impl));
+}
+
+TriangleMesh StepModel::tessellate(double linearDeflectionMm, double angularDeflectionRad)
+{
+    const std::string& name = impl_->name;
+    TriangleMesh mesh;
+    try {
+        mesh = triangles(name, impl_->shape, impl_->faces, linearDeflectionMm, angularDeflectionRad);
+    } catch (const Standard_Failure& e) {
+        fail(name, fmt::format("the tessellation failed: {}", e.GetMessageString()));
+    }
+    // Points of shared edges coincide to rounding; a nanometre is far below any chord error.
+    weld(mesh, 1e-6);
+    requireSolidMesh(mesh, name);
+    impl_->tessellation = {linearDeflectionMm, angularDeflectionRad, mesh.triangles.size()};
+    return mesh;
+}
+
+BRepPoint StepModel::closestPoint(const Eigen::Vector3d& point, double radius) const
+{
+    try {
+        return nearestPoint(point, radius);
+    } catch (const Standard_Failure& e) {
+        fail(impl_->name, fmt::format("the nearest surface point to ({}, {}, {}) failed: {}", point.x(), point.y(),
+                                      point.z(), e.GetMessageString()));
+    }
+}
+
+BRepPoint StepModel::nearestPoint(const Eigen::Vector3d& point, double radius) const
+{
+    const TopoDS_Vertex query = BRepBuilderAPI_MakeVertex(gp_Pnt(point.x(), point.y(), point.z()));
+    BRepPoint best;
+    best.distance = std::numeric_limits<double>::infinity();
+    for (int f = 1; f <= impl_->faces.Extent(); ++f) {
+        const auto onFace = nearestOnFace(query, TopoDS::Face(impl_->faces(f)));
+        if (onFace && onFace->distance < best.distance) best = *onFace;
+    }
+    if (!std::isfinite(best.distance)) throw InputError(impl_->name, "mesh", "no face has a nearest point");
+    // On an edge or a corner every face that meets there has a say, as the
+    // mesh's angle-weighted normal does (docs/part-program.md, "STEP parts").
+    const TopoDS_Vertex snapped = BRepBuilderAPI_MakeVertex(gp_Pnt(best.point.x(), best.point.y(), best.point.z()));
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int f = 1; f <= impl_->faces.Extent(); ++f) {
+        const auto onFace = nearestOnFace(snapped, TopoDS::Face(impl_->faces(f)));
+        if (onFace && onFace->distance <= radius) sum += onFace->normal;
+    }
+    if (sum.norm() > 1e-12) best.normal = sum.normalized();
+    return best;
+}
+
+} // namespace hg::model

@@ -1,0 +1,369 @@
+// STEP parts (docs/part-program.md, "STEP parts"): files made here from Open
+// CASCADE primitives — a box with a through bore, a stepped block of two fused
+// boxes, a block with filleted vertical edges — checked against their analytic
+// volumes and surfaces; a STEP part inspected like its STL twin; truncated
+// files and files without a solid refused by the real program.
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepAlgoAPI_Fuse.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepFilletAPI_MakeFillet.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Static.hxx>
+#include <STEPControl_Controller.hxx>
+#include <STEPControl_Writer.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <gp_Ax2.hxx>
+#include <gp_Pln.hxx>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/model/step_io.h"
+
+namespace {
+
+using Eigen::Vector3d;
+using hg::model::PartProgram;
+namespace fs = std::filesystem;
+constexpr double kPi = std::numbers::pi;
+
+// Part (a): the box [0, 40] x [0, 30] x [0, 20] less a through bore r = 6 along z about (20, 15).
+constexpr double kBoreRadius = 6.0;
+const Vector3d kBoreAxis(20, 15, 0);
+// Part (c): the same box with its four vertical edges filleted, r = 4.
+constexpr double kFilletRadius = 4.0;
+
+TopoDS_Shape boxWithBore()
+{
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(40, 30, 20)).Shape();
+    const gp_Ax2 axis(gp_Pnt(kBoreAxis.x(), kBoreAxis.y(), -1), gp::DZ());
+    const TopoDS_Shape bore = BRepPrimAPI_MakeCylinder(axis, kBoreRadius, 22).Shape();
+    return BRepAlgoAPI_Cut(box, bore).Shape();
+}
+
+// Part (b): the simulated line's stepped block (config/sim/make-meshes.py):
+// tall block x in [-30, 0] up to z = 30, step x in [0, 30] up to z = 15, y in [-20, 20].
+TopoDS_Shape steppedBlock()
+{
+    const TopoDS_Shape tall = BRepPrimAPI_MakeBox(gp_Pnt(-30, -20, 0), gp_Pnt(0, 20, 30)).Shape();
+    const TopoDS_Shape step = BRepPrimAPI_MakeBox(gp_Pnt(0, -20, 0), gp_Pnt(30, 20, 15)).Shape();
+    return BRepAlgoAPI_Fuse(tall, step).Shape();
+}
+
+TopoDS_Shape filletedBlock()
+{
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(40, 30, 20)).Shape();
+    BRepFilletAPI_MakeFillet fillet(box);
+    for (TopExp_Explorer e(box, TopAbs_EDGE); e.More(); e.Next()) {
+        // The vertical edges: their two vertices differ in z only.
+        TopExp_Explorer v(e.Current(), TopAbs_VERTEX);
+        const gp_Pnt a = BRep_Tool::Pnt(TopoDS::Vertex(v.Current()));
+        v.Next();
+        const gp_Pnt b = BRep_Tool::Pnt(TopoDS::Vertex(v.Current()));
+        if (std::abs(a.X() - b.X()) < 1e-9 && std::abs(a.Y() - b.Y()) < 1e-9)
+            fillet.Add(kFilletRadius, TopoDS::Edge(e.Current()));
+    }
+    return fillet.Shape();
+}
+
+fs::path writeStep(const TopoDS_Shape& shape, const fs::path& file)
+{
+    STEPControl_Writer writer;
+    EXPECT_EQ(writer.Transfer(shape, STEPControl_AsIs), IFSelect_RetDone);
+    EXPECT_EQ(writer.Write(file.c_str()), IFSelect_RetDone);
+    return file;
+}
+
+/// A part program for `mesh` with the cube derived from the part, and `landmarks` (YAML list items).
+std::string programYaml(const std::string& mesh, int depth, const std::string& landmarks)
+{
+    return "part: p\nmesh: " + mesh + "\noctree:\n  depth: " + std::to_string(depth) +
+           "\n  adjacency_depth: 3\nlandmarks:\n" + landmarks;
+}
+
+PartProgram loadStepPart(const hgtest::TempDir& dir, const TopoDS_Shape& shape, int depth, const std::string& landmarks)
+{
+    writeStep(shape, dir / "part.step");
+    hgtest::writeFile(dir / "part.yaml", programYaml("part.step", depth, landmarks));
+    return hg::model::loadPartProgram(dir / "part.yaml");
+}
+
+std::string exe()
+{
+    return (hgtest::binaryDir() / "bin/hullgauge").string();
+}
+
+// The tessellation's chords lie within the deflection δ of the surface, so the
+// mesh volume differs from the exact one by at most (curved area) · δ: more for
+// a bore (the chords cut into the void), less for a convex fillet.
+TEST(StepPart, BoreTessellationVolumeWithinTheDeflectionOfTheAnalyticVolume)
+{
+    hgtest::TempDir dir;
+    const PartProgram p =
+        loadStepPart(dir, boxWithBore(), 7, "  - {id: top, position: [10, 5, 20], tolerance_mm: 0.2}\n");
+    ASSERT_TRUE(p.brep);
+    const double exact = 40.0 * 30.0 * 20.0 - kPi * kBoreRadius * kBoreRadius * 20.0;
+    const double deflection = p.octree.voxelSize() / 20.0;
+    EXPECT_DOUBLE_EQ(p.brep->tessellation().linearDeflectionMm, deflection);
+    EXPECT_NEAR(p.brep->summary().volumeMm3, exact, 1e-6 * exact);
+    EXPECT_EQ(p.brep->summary().solids, 1u);
+    const double mesh = p.solid->mesh().signedVolume();
+    const double curvedArea = 2.0 * kPi * kBoreRadius * 20.0;
+    std::cout << "bore: deflection " << deflection << " mm, mesh volume error " << mesh - exact << " mm³ (bound "
+              << curvedArea * deflection << "), " << p.solid->mesh().triangles.size() << " triangles\n";
+    EXPECT_GT(mesh, exact);
+    EXPECT_LT(mesh - exact, curvedArea * deflection);
+    EXPECT_EQ(p.brep->tessellation().triangles, p.solid->mesh().triangles.size());
+}
+
+TEST(StepPart, FilletTessellationVolumeWithinTheDeflectionOfTheAnalyticVolume)
+{
+    hgtest::TempDir dir;
+    const PartProgram p =
+        loadStepPart(dir, filletedBlock(), 7, "  - {id: top, position: [20, 15, 20], tolerance_mm: 0.2}\n");
+    const double r = kFilletRadius;
+    const double exact = 40.0 * 30.0 * 20.0 - 4.0 * (r * r - kPi * r * r / 4.0) * 20.0;
+    EXPECT_NEAR(p.brep->summary().volumeMm3, exact, 1e-6 * exact);
+    const double deflection = p.tessellationDeflectionMm();
+    const double mesh = p.solid->mesh().signedVolume();
+    const double curvedArea = 4.0 * (kPi / 2.0 * r) * 20.0;
+    std::cout << "fillet: deflection " << deflection << " mm, mesh volume error " << mesh - exact << " mm³ (bound "
+              << curvedArea * deflection << ")\n";
+    EXPECT_LT(mesh, exact);
+    EXPECT_LT(exact - mesh, curvedArea * deflection);
+}
+
+TEST(StepPart, SteppedBlockOfTwoFusedBoxesIsExactAndItsConcaveEdgeTakesTheBisector)
+{
+    hgtest::TempDir dir;
+    const PartProgram p = loadStepPart(dir, steppedBlock(), 5,
+                                       "  - {id: step-top, position: [15, 0, 15.25], tolerance_mm: 0.2}\n"
+                                       "  - {id: riser-foot, position: [0, 0, 15], tolerance_mm: 0.2}\n");
+    EXPECT_NEAR(p.brep->summary().volumeMm3, 54000.0, 1e-6);
+    EXPECT_NEAR(p.solid->mesh().signedVolume(), 54000.0, 1e-6);
+    EXPECT_TRUE(p.brep->summary().bounds.isApprox(Eigen::AlignedBox3d(Vector3d(-30, -20, 0), Vector3d(30, 20, 30))));
+    const auto& top = p.landmarks[0];
+    EXPECT_TRUE(top.onBRep);
+    EXPECT_NEAR((top.position - Vector3d(15, 0, 15)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR(top.distanceToSurfaceMm, 0.25, 1e-9);
+    EXPECT_NEAR((top.normal - Vector3d(0, 0, 1)).norm(), 0.0, 1e-9);
+    const auto& foot = p.landmarks[1];
+    EXPECT_NEAR((foot.position - Vector3d(0, 0, 15)).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((foot.normal - Vector3d(1, 0, 1).normalized()).norm(), 0.0, 1e-9);
+}
+
+// Landmarks given 0.3 mm off the bore's wall, in the void and in the
+// material, snap onto the cylinder r = 6 (within 1 µm), normals towards the axis.
+TEST(StepPart, LandmarksOffTheBoreWallSnapToTheCylinderWithNormalsIntoTheBore)
+{
+    hgtest::TempDir dir;
+    auto at = [](double radius, double deg, double z) -> Vector3d {
+        const double a = deg * kPi / 180.0;
+        return kBoreAxis + Vector3d(radius * std::cos(a), radius * std::sin(a), z);
+    };
+    auto yaml = [](const std::string& id, const Vector3d& q) {
+        std::ostringstream s;
+        s.precision(17);
+        s << "  - {id: " << id << ", position: [" << q.x() << ", " << q.y() << ", " << q.z()
+          << "], tolerance_mm: 0.2}\n";
+        return s.str();
+    };
+    const std::vector<std::pair<double, double>> cases = {{5.7, 30.0}, {6.3, 200.0}, {5.7, 123.0}};
+    std::string landmarks;
+    for (std::size_t i = 0; i < cases.size(); ++i)
+        landmarks += yaml("b" + std::to_string(i), at(cases[i].first, cases[i].second, 10.0 - 3.0 * double(i)));
+    // Depth 5: ΔV = 1.67 mm, so a landmark may lie up to ΔV/4 = 0.42 mm off the surface.
+    const PartProgram p = loadStepPart(dir, boxWithBore(), 5, landmarks);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+        const auto& lm = p.landmarks[i];
+        const Vector3d expected = at(kBoreRadius, cases[i].second, 10.0 - 3.0 * double(i));
+        const Vector3d inward = (kBoreAxis + Vector3d(0, 0, expected.z()) - expected).normalized();
+        const double error = (lm.position - expected).norm();
+        worst = std::max(worst, error);
+        EXPECT_LT(error, 1e-3) << lm.id; // 1 µm
+        const Vector3d radial = lm.position - Vector3d(kBoreAxis.x(), kBoreAxis.y(), lm.position.z());
+        EXPECT_NEAR(radial.norm(), kBoreRadius, 1e-3) << lm.id;
+        EXPECT_NEAR(lm.distanceToSurfaceMm, 0.3, 1e-3) << lm.id;
+        EXPECT_NEAR((lm.normal - inward).norm(), 0.0, 1e-6) << lm.id;
+        EXPECT_TRUE(lm.normalFromMesh && lm.onBRep);
+    }
+    std::cout << "bore: largest snap error " << worst * 1e3 << " µm\n";
+}
+
+TEST(StepPart, LandmarksOnAFilletSnapToTheFilletRadiusFromItsAxis)
+{
+    hgtest::TempDir dir;
+    const Vector3d axis(36, 26, 0); // the fillet of the edge x = 40, y = 30
+    const double c = std::cos(kPi / 4.0);
+    const Vector3d given = axis + Vector3d(4.2 * c, 4.2 * c, 10.0);
+    std::ostringstream yaml;
+    yaml.precision(17);
+    yaml << "  - {id: f, position: [" << given.x() << ", " << given.y() << ", " << given.z()
+         << "], tolerance_mm: 0.2}\n";
+    const PartProgram p = loadStepPart(dir, filletedBlock(), 5, yaml.str());
+    const auto& lm = p.landmarks[0];
+    const Vector3d radial = lm.position - Vector3d(axis.x(), axis.y(), lm.position.z());
+    std::cout << "fillet: snap error " << std::abs(radial.norm() - kFilletRadius) * 1e3 << " µm\n";
+    EXPECT_NEAR(radial.norm(), kFilletRadius, 1e-3);
+    EXPECT_NEAR((lm.position - (axis + Vector3d(4 * c, 4 * c, 10))).norm(), 0.0, 1e-3);
+    EXPECT_NEAR((lm.normal - Vector3d(c, c, 0)).norm(), 0.0, 1e-6);
+}
+
+// The file's unit is the file's: a part written in metres is read in millimetres.
+TEST(StepPart, AFileInMetresIsReadInMillimetres)
+{
+    hgtest::TempDir dir;
+    STEPControl_Controller::Init(); // declares the parameter
+    const std::string before = Interface_Static::CVal("write.step.unit");
+    ASSERT_TRUE(Interface_Static::SetCVal("write.step.unit", "M"));
+    writeStep(steppedBlock(), dir / "m.step");
+    Interface_Static::SetCVal("write.step.unit", before.c_str());
+    std::ifstream in(dir / "m.step");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(text.find(".MILLI."), std::string::npos);
+    const auto model = hg::model::StepModel::read(dir / "m.step");
+    EXPECT_NEAR(model.summary().volumeMm3, 54000.0, 1e-6);
+}
+
+// The STEP part and its STL twin (config/sim), inspected from the same
+// frames: the same verdict and landmark statuses, nominal and face-low.
+TEST(StepPartCli, InspectedLikeItsStlTwin)
+{
+    hgtest::TempDir dir;
+    const fs::path sim = hgtest::sourceDir() / "config/sim";
+    std::ifstream in(sim / "stepped-block.yaml");
+    const std::string program((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string stlLine = "mesh: stepped-block.stl";
+    ASSERT_NE(program.find(stlLine), std::string::npos);
+    std::string stepProgram = program, stlProgram = program;
+    stepProgram.replace(program.find(stlLine), stlLine.size(), "mesh: stepped-block.step");
+    stlProgram.replace(program.find(stlLine), stlLine.size(), "mesh: " + (sim / "stepped-block.stl").string());
+    writeStep(steppedBlock(), dir / "stepped-block.step");
+    hgtest::writeFile(dir / "step.yaml", stepProgram);
+    hgtest::writeFile(dir / "stl.yaml", stlProgram);
+    for (const std::string variant : {"stepped-block", "stepped-block-face-low"}) {
+        const auto views = dir / variant;
+        const auto simulate =
+            hgtest::run(exe() + " simulate --mesh " + (sim / (variant + ".stl")).string() + " --station " +
+                        (sim / "station.yaml").string() + " --poses " + (sim / "stepped-block-views.yaml").string() +
+                        " --noise 1.5 --seed 3 --out " + views.string());
+        ASSERT_EQ(simulate.status, 0) << simulate.err;
+        const std::string inspect = exe() + " inspect --views " + (views / "manifest.json").string() + " --part ";
+        const auto step = hgtest::run(inspect + (dir / "step.yaml").string());
+        const auto stl = hgtest::run(inspect + (dir / "stl.yaml").string());
+        EXPECT_EQ(step.status, variant == "stepped-block" ? 0 : 1) << step.err;
+        EXPECT_EQ(step.status, stl.status) << variant;
+        const auto js = nlohmann::json::parse(step.out), jl = nlohmann::json::parse(stl.out);
+        EXPECT_EQ(js["verdict"], jl["verdict"]);
+        ASSERT_EQ(js["landmarks"].size(), jl["landmarks"].size());
+        for (std::size_t i = 0; i < js["landmarks"].size(); ++i)
+            EXPECT_EQ(js["landmarks"][i]["status"], jl["landmarks"][i]["status"]) << js["landmarks"][i]["id"];
+    }
+}
+
+TEST(StepPartCli, CheckPartReportsWhatWasRead)
+{
+    hgtest::TempDir dir;
+    writeStep(boxWithBore(), dir / "part.step");
+    hgtest::writeFile(dir / "part.yaml",
+                      programYaml("part.step", 7, "  - {id: top, position: [10, 5, 20], tolerance_mm: 0.2}\n"));
+    const auto r = hgtest::run(exe() + " check-part --json --part " + (dir / "part.yaml").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    const double exact = 24000.0 - kPi * 36.0 * 20.0;
+    EXPECT_EQ(j["step"]["solids"], 1);
+    EXPECT_GE(j["step"]["faces"].get<int>(), 7);
+    EXPECT_NEAR(j["step"]["volume_mm3"].get<double>(), exact, 1e-6 * exact);
+    EXPECT_DOUBLE_EQ(j["step"]["linear_deflection_mm"].get<double>(),
+                     j["octree"]["voxel_size_mm"].get<double>() / 20.0);
+    EXPECT_EQ(j["step"]["triangles"], j["mesh"]["triangles"]);
+    EXPECT_EQ(j["landmarks"][0]["on_brep"], true);
+    const auto text = hgtest::run(exe() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(text.status, 0);
+    EXPECT_NE(text.out.find("step        1 solid, "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("tessellated deflection"), std::string::npos) << text.out;
+}
+
+/// check-part on a program whose mesh is `file`: exit 2, one line on stderr naming the file.
+std::string refusal(const hgtest::TempDir& dir, const std::string& file)
+{
+    hgtest::writeFile(dir / "part.yaml",
+                      programYaml(file, 5, "  - {id: top, position: [10, 5, 20], tolerance_mm: 0.2}\n"));
+    const auto r = hgtest::run(exe() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2) << r.out;
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("part.yaml:2: mesh: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+    return r.err;
+}
+
+TEST(StepPartCli, TruncatedFileIsRefused)
+{
+    hgtest::TempDir dir;
+    writeStep(boxWithBore(), dir / "whole.step");
+    std::ifstream in(dir / "whole.step");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    hgtest::writeFile(dir / "half.step", text.substr(0, text.size() / 2));
+    const std::string err = refusal(dir, "half.step");
+    EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+}
+
+TEST(StepPartCli, FileWithAFaceOrAShellButNoSolidIsRefused)
+{
+    hgtest::TempDir dir;
+    writeStep(BRepBuilderAPI_MakeFace(gp_Pln(gp::XOY()), 0, 10, 0, 10).Shape(), dir / "face.step");
+    std::string err = refusal(dir, "face.step");
+    EXPECT_NE(err.find("holds no solid, only "), std::string::npos) << err;
+    EXPECT_NE(err.find("1 face"), std::string::npos) << err;
+
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(40, 30, 20)).Shape();
+    writeStep(TopExp_Explorer(box, TopAbs_SHELL).Current(), dir / "shell.step");
+    err = refusal(dir, "shell.step");
+    EXPECT_NE(err.find("holds no solid, only 1 shell, 6 faces"), std::string::npos) << err;
+}
+
+// A solid whose shell lacks a face (the box's first, struck from its
+// CLOSED_SHELL record: Open CASCADE's writer would write such a solid as a
+// bare shell) bounds no volume; the reader's shape healing makes it an open
+// shell, refused with its 4 free edges.
+TEST(StepPartCli, SolidThatIsNotClosedIsRefused)
+{
+    hgtest::TempDir dir;
+    writeStep(BRepPrimAPI_MakeBox(gp_Pnt(0, 0, 0), gp_Pnt(40, 30, 20)).Shape(), dir / "box.step");
+    std::ifstream in(dir / "box.step");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t shell = text.find("CLOSED_SHELL('',(");
+    ASSERT_NE(shell, std::string::npos);
+    const std::size_t first = shell + std::string("CLOSED_SHELL('',(").size();
+    const std::size_t comma = text.find(',', first);
+    ASSERT_NE(comma, std::string::npos);
+    text.erase(first, comma + 1 - first);
+    hgtest::writeFile(dir / "open.step", text);
+    const std::string err = refusal(dir, "open.step");
+    EXPECT_NE(err.find("holds no solid, only 1 shell, 5 faces"), std::string::npos) << err;
+    EXPECT_NE(err.find("(4 free edges: the surface is not closed)"), std::string::npos) << err;
+}
+
+TEST(StepPart, MissingFileIsAnInputErrorNamingIt)
+{
+    hgtest::TempDir dir;
+    EXPECT_THROW(hg::model::StepModel::read(dir / "none.stp"), hg::InputError);
+    EXPECT_TRUE(hg::model::isStepFile("A.STP"));
+    EXPECT_FALSE(hg::model::isStepFile("a.stl"));
+}
+
+} // namespace

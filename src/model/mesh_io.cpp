@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <fstream>
 #include <numeric>
+#include <sstream>
 #include <unordered_map>
 #include <vector>
 
@@ -183,6 +184,29 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
                      fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
 }
 
+// PLY: CGAL's reader files each `property` line under the element declared
+// before it and indexes past its list of elements when none is (a crash, not
+// an error). The header is read first so such a file is named at its line.
+void checkPlyHeader(const std::filesystem::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    bool elementDeclared = false;
+    // Lines 1 and 2 are the signature and the format, which the reader checks itself.
+    for (int number = 1; std::getline(in, line); ++number) {
+        std::istringstream words(line);
+        std::string keyword;
+        words >> keyword;
+        if (number <= 2) continue;
+        if (keyword == "end_header") return;
+        if (keyword == "element") elementDeclared = true;
+        if (keyword == "property" && !elementDeclared)
+            throw InputError(file.string(), "header",
+                             "'property' before any 'element' (a property belongs to the element declared above it)",
+                             number);
+    }
+}
+
 } // namespace
 
 std::string MeshCheck::problem() const
@@ -241,6 +265,7 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     if (ec) throw InputError(name, "mesh", "cannot read the file: " + ec.message());
     if (size == 0) throw InputError(name, "mesh", "the file is empty");
     if (ext == ".stl") checkStlSize(file, size);
+    if (ext == ".ply") checkPlyHeader(file);
 
     std::vector<Point> points;
     std::vector<Polygon> polygons;

@@ -215,6 +215,23 @@ TEST(MeshIo, BadFilesAreNamed)
               std::string::npos);
 }
 
+// Found by the PLY harness (docs/fuzzing.md): a property line before any
+// element line crashed the reader; it is named at its header line instead.
+TEST(MeshIo, PlyPropertyBeforeAnyElementIsNamedAtItsLine)
+{
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "p.ply", "ply\nformat ascii 1.0\nproperty double x\n"
+                                                       "element vertex 1\nend_header\n0\n");
+    const InputError e = loadError(file);
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("'property' before any 'element'"), std::string::npos) << e.what();
+    // The same header with its element first still reaches the reader (and its own error).
+    const auto fine = hgtest::writeFile(dir / "q.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"
+                                                       "property double x\nend_header\n0\n");
+    EXPECT_EQ(loadError(fine).field(), "mesh");
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

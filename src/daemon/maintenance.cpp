@@ -133,7 +133,11 @@ std::string answerMaintenanceRequest(const std::string& request, const Maintenan
     } catch (const std::exception& e) {
         answer = {{"ok", false}, {"error", e.what()}};
     }
-    return answer.dump() + "\n";
+    // An error may quote the request's own bytes (a JSON syntax error shows what
+    // it read), which need not be UTF-8; the answer is always valid JSON, so such
+    // bytes are sent as U+FFFD rather than failing the dump (docs/daemon.md,
+    // "Maintenance socket").
+    return answer.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 void MaintenanceServer::answer(const Client& client)

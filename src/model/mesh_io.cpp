@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <fstream>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
 #include <vector>
@@ -184,26 +185,35 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
                      fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
 }
 
-// PLY: CGAL's reader files each `property` line under the element declared
-// before it and indexes past its list of elements when none is (a crash, not
-// an error). The header is read first so such a file is named at its line.
+// PLY: CGAL's reader crashes instead of failing on two kinds of header: a
+// `property` line before any `element` line (it files the property under the
+// last element declared) and a vertex coordinate x, y or z that is not a float
+// or double (it reads the coordinate as one or the other). The header is read
+// first so such a file is named at its line.
 void checkPlyHeader(const std::filesystem::path& file)
 {
     std::ifstream in(file, std::ios::binary);
     std::string line;
-    bool elementDeclared = false;
+    std::optional<std::string> element;
     // Lines 1 and 2 are the signature and the format, which the reader checks itself.
     for (int number = 1; std::getline(in, line); ++number) {
         std::istringstream words(line);
-        std::string keyword;
-        words >> keyword;
+        std::string keyword, type, name;
+        words >> keyword >> type >> name;
         if (number <= 2) continue;
         if (keyword == "end_header") return;
-        if (keyword == "element") elementDeclared = true;
-        if (keyword == "property" && !elementDeclared)
+        if (keyword == "element") element = type;
+        if (keyword != "property") continue;
+        if (!element)
             throw InputError(file.string(), "header",
                              "'property' before any 'element' (a property belongs to the element declared above it)",
                              number);
+        const bool coordinate = name == "x" || name == "y" || name == "z";
+        const bool real = type == "float" || type == "float32" || type == "double" || type == "float64";
+        if ((*element == "vertex" || *element == "vertices") && coordinate && !real)
+            throw InputError(
+                file.string(), "header",
+                fmt::format("vertex coordinate '{}' is {} (a coordinate is a float or a double)", name, type), number);
     }
 }
 

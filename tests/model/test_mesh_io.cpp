@@ -232,6 +232,22 @@ TEST(MeshIo, PlyPropertyBeforeAnyElementIsNamedAtItsLine)
     EXPECT_EQ(loadError(fine).field(), "mesh");
 }
 
+// Found by the PLY harness (docs/fuzzing.md): a vertex coordinate declared
+// int16 (the simulated line's block with its z so declared) crashed the reader.
+TEST(MeshIo, PlyVertexCoordinateThatIsNotARealNumberIsNamedAtItsLine)
+{
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "z.ply", "ply\nformat ascii 1.0\ncomment stepped block\n"
+                                                       "element vertex 3\nproperty float x\nproperty float y\n"
+                                                       "property int16 z\nelement face 1\n"
+                                                       "property list uchar int vertex_indices\nend_header\n"
+                                                       "-30 -20 0\n30 -20 0\n30 -20 15\n3 0 1 2\n");
+    const InputError e = loadError(file);
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 7);
+    EXPECT_NE(std::string(e.what()).find("vertex coordinate 'z' is int16"), std::string::npos) << e.what();
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

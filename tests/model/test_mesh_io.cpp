@@ -248,6 +248,23 @@ TEST(MeshIo, PlyVertexCoordinateThatIsNotARealNumberIsNamedAtItsLine)
     EXPECT_NE(std::string(e.what()).find("vertex coordinate 'z' is int16"), std::string::npos) << e.what();
 }
 
+// Found by the PLY harness (docs/fuzzing.md): an element count of -2 (read as
+// 2^64 - 2) of an element without properties kept the reader busy for ever.
+TEST(MeshIo, PlyElementCountThatIsNegativeOrBeyondTheFileIsNamedAtItsLine)
+{
+    using namespace std::string_literals; // the element's name holds NUL bytes
+    hgtest::TempDir dir;
+    const std::string head = "ply\nformat binary_big_endian 1.0\n";
+    InputError e =
+        loadError(hgtest::writeFile(dir / "n.ply", head + "element verte\0\0 -2comment20 15\nend_header\n"s));
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("count '-2comment20' is not a whole number"), std::string::npos) << e.what();
+    e = loadError(hgtest::writeFile(dir / "b.ply", head + "element vertex 4000000000\nproperty float x\nend_header\n"));
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("element 'vertex': count '4000000000'"), std::string::npos) << e.what();
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

@@ -120,26 +120,35 @@ bool MaintenanceServer::readFrom(Client& client)
     return true;
 }
 
-void MaintenanceServer::answer(const Client& client)
+std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler)
 {
     nlohmann::json answer;
-    const auto end = client.request.find('\n');
+    const auto end = request.find('\n');
     try {
         if (end == std::string::npos) throw InputError("request", "line", "longer than 64 KiB without a newline");
-        auto request = parseJson(client.request.substr(0, end), "request");
-        if (!request.is_object() || !request.contains("command"))
+        auto parsed = parseJson(request.substr(0, end), "request");
+        if (!parsed.is_object() || !parsed.contains("command"))
             throw InputError("request", "command", "expected one JSON object with a \"command\" on one line");
-        answer = handler_(request);
+        answer = handler(parsed);
     } catch (const std::exception& e) {
         answer = {{"ok", false}, {"error", e.what()}};
     }
+    // An error may quote the request's own bytes (a JSON syntax error shows what
+    // it read), which need not be UTF-8; the answer is always valid JSON, so such
+    // bytes are sent as U+FFFD rather than failing the dump (docs/daemon.md,
+    // "Maintenance socket").
+    return answer.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+}
+
+void MaintenanceServer::answer(const Client& client)
+{
+    const std::string text = answerMaintenanceRequest(client.request, handler_);
     // The answer is small (a status or a page of results); a client that does
     // not read it gets one second before it is dropped.
     timeval tv{1, 0};
     setsockopt(client.fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
     int flags = fcntl(client.fd, F_GETFL);
     fcntl(client.fd, F_SETFL, flags & ~O_NONBLOCK);
-    auto text = answer.dump() + "\n";
     std::size_t sent = 0;
     while (sent < text.size()) {
         ssize_t n = write(client.fd, text.data() + sent, text.size() - sent);

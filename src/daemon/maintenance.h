@@ -66,6 +66,13 @@ class MaintenanceServer {
     std::vector<Client> clients_;
 };
 
+/// The answer line to a client's `request` bytes (its first line; all of it
+/// when it has none, which the server sends at 64 KiB): `handler`'s answer, or
+/// {"ok": false, "error": ...} for a line that is not one JSON object with a
+/// "command" or a handler that throws. Pure but for the handler; the fuzzing
+/// harness calls it (docs/fuzzing.md).
+std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler);
+
 /// What the maintenance commands act on; all of it lives as long as the server.
 struct MaintenanceContext {
     PlcRegisters& registers;

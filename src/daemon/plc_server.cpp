@@ -92,7 +92,6 @@ struct PlcServer::Connection {
 
 struct PlcServer::Impl {
     modbus_t* ctx = nullptr;
-    modbus_mapping_t* scratch = nullptr; // the reply buffer; never the source of truth
     int listenFd = -1;
     int wakeRead = -1;
     int wakeWrite = -1;
@@ -120,7 +119,6 @@ void PlcServer::start()
     impl_->ctx = modbus_new_tcp(config_.bindAddress.c_str(), config_.port);
     if (!impl_->ctx)
         throw FaultError("plc: cannot create the Modbus TCP context: " + std::string(modbus_strerror(errno)));
-    impl_->scratch = modbus_mapping_new_start_address(0, 0, 0, 0, 0, station::reg::Count, 0, 0);
     impl_->listenFd = modbus_tcp_listen(impl_->ctx, config_.maxClients);
     if (impl_->listenFd < 0) {
         std::string why = modbus_strerror(errno);
@@ -161,7 +159,6 @@ void PlcServer::stop()
     if (impl_->listenFd >= 0) ::close(impl_->listenFd);
     if (impl_->wakeRead >= 0) ::close(impl_->wakeRead);
     if (impl_->wakeWrite >= 0) ::close(impl_->wakeWrite);
-    if (impl_->scratch) modbus_mapping_free(impl_->scratch);
     if (impl_->ctx) modbus_free(impl_->ctx);
     delete impl_;
     impl_ = nullptr;
@@ -292,44 +289,52 @@ bool PlcServer::receive(Connection& c)
     if (c.buffer.empty()) c.partialSince = now;
     c.buffer.insert(c.buffer.end(), chunk, chunk + n);
     // The frame is delimited by the MBAP header's length, whatever the function code.
-    while (c.buffer.size() >= 6) {
-        const int length = be16(c.buffer.data() + 4);
-        if (be16(c.buffer.data() + 2) != 0 || length < 2 || length > kMaxMbapLength) {
+    for (int length; (length = modbusFrameLength(c.buffer.data(), c.buffer.size())) != 0;) {
+        if (length < 0) {
             impl_->drops.warn(now, "client {} dropped: malformed MBAP header (protocol {}, length {})", c.peer,
-                              be16(c.buffer.data() + 2), length);
+                              be16(c.buffer.data() + 2), be16(c.buffer.data() + 4));
             std::lock_guard lock(impl_->countersMutex);
             ++impl_->counters.droppedConnections;
             return false;
         }
-        if (c.buffer.size() < static_cast<std::size_t>(6 + length)) break;
         c.lastRequest = now;
-        if (!handle(c, c.buffer.data(), 6 + length)) return false;
-        c.buffer.erase(c.buffer.begin(), c.buffer.begin() + 6 + length);
+        if (!handle(c, c.buffer.data(), length)) return false;
+        c.buffer.erase(c.buffer.begin(), c.buffer.begin() + length);
         c.partialSince = now;
     }
     return true;
 }
 
-bool PlcServer::replyException(Connection& c, const std::uint8_t* req, std::uint8_t code)
+namespace {
+
+std::vector<std::uint8_t> exceptionFrame(const std::uint8_t* req, std::uint8_t code)
 {
-    {
-        std::lock_guard lock(impl_->countersMutex);
-        ++impl_->counters.exceptions;
-    }
     // A function code with the top bit already set keeps it (0x83 answers 0x83, never 0x03).
-    const std::uint8_t reply[9] = {req[0], req[1], 0, 0, 0, 3, req[6], static_cast<std::uint8_t>(req[7] | 0x80), code};
-    return send(c.fd, reply, sizeof reply, MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(sizeof reply);
+    return {req[0], req[1], 0, 0, 0, 3, req[6], static_cast<std::uint8_t>(req[7] | 0x80), code};
 }
 
-bool PlcServer::replyDeviceIdentification(Connection& c, const std::uint8_t* req, int length)
+/// The request's transaction and unit id around `pdu`.
+std::vector<std::uint8_t> replyFrame(const std::uint8_t* req, const std::vector<std::uint8_t>& pdu)
+{
+    std::vector<std::uint8_t> frame(kHeader + pdu.size());
+    frame[0] = req[0];
+    frame[1] = req[1];
+    frame[4] = static_cast<std::uint8_t>((pdu.size() + 1) >> 8);
+    frame[5] = static_cast<std::uint8_t>(pdu.size() + 1);
+    frame[6] = req[6];
+    std::copy(pdu.begin(), pdu.end(), frame.begin() + kHeader);
+    return frame;
+}
+
+ModbusAnswer deviceIdentification(const std::uint8_t* req, int length)
 {
     // Request PDU: 2B 0E <read device id code> <object id>.
-    if (length != kHeader + 4) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+    if (length != kHeader + 4) return {exceptionFrame(req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE), true};
     const std::uint8_t code = req[kHeader + 2];
     std::uint8_t first = req[kHeader + 3];
-    if (code < 1 || code > 4) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+    if (code < 1 || code > 4) return {exceptionFrame(req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE), true};
     if (code == 4 && first >= kIdentification.size())
-        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+        return {exceptionFrame(req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS), true};
     // Basic conformity with stream and individual access (0x81); the regular and
     // extended codes answer the basic objects, as a basic device must.
     if (code != 4 && first >= kIdentification.size()) first = 0;
@@ -346,80 +351,90 @@ bool PlcServer::replyDeviceIdentification(Connection& c, const std::uint8_t* req
         pdu.push_back(static_cast<std::uint8_t>(kIdentification[id].size()));
         pdu.insert(pdu.end(), kIdentification[id].begin(), kIdentification[id].end());
     }
-    std::vector<std::uint8_t> reply{req[0],
-                                    req[1],
-                                    0,
-                                    0,
-                                    static_cast<std::uint8_t>((pdu.size() + 1) >> 8),
-                                    static_cast<std::uint8_t>(pdu.size() + 1),
-                                    req[6]};
-    reply.insert(reply.end(), pdu.begin(), pdu.end());
-    return send(c.fd, reply.data(), reply.size(), MSG_NOSIGNAL | MSG_DONTWAIT) == static_cast<ssize_t>(reply.size());
+    return {replyFrame(req, pdu), false};
 }
 
-bool PlcServer::handle(Connection& c, const std::uint8_t* req, int length)
+} // namespace
+
+int modbusFrameLength(const std::uint8_t* data, std::size_t size)
+{
+    if (size < 6) return 0;
+    const int length = be16(data + 4);
+    if (be16(data + 2) != 0 || length < 2 || length > kMaxMbapLength) return -1;
+    return size < static_cast<std::size_t>(6 + length) ? 0 : 6 + length;
+}
+
+ModbusAnswer answerModbusRequest(PlcRegisters& registers, int unitId, const std::uint8_t* req, int length)
 {
     auto log = hg::log::category("plc");
-    {
-        std::lock_guard lock(impl_->countersMutex);
-        ++impl_->counters.requests;
-    }
     const std::uint8_t unit = req[kHeader - 1];
     const std::uint8_t function = req[kHeader];
-    if (unit != config_.unitId) {
-        log->debug("request for unit {} (ours is {})", unit, config_.unitId);
-        return replyException(c, req, kGatewayTargetFailed);
+    auto exception = [&](std::uint8_t code) { return ModbusAnswer{exceptionFrame(req, code), true}; };
+    if (unit != unitId) {
+        log->debug("request for unit {} (ours is {})", unit, unitId);
+        return exception(kGatewayTargetFailed);
     }
     const std::uint8_t* pdu = req + kHeader;
-    // libmodbus builds the normal replies on this connection's socket (non-blocking:
-    // a client that does not read its answers is closed rather than stalling the loop).
-    modbus_set_socket(impl_->ctx, c.fd);
-    auto reply = [&] { return modbus_reply(impl_->ctx, req, length, impl_->scratch) >= 0; };
     switch (function) {
     case MODBUS_FC_READ_HOLDING_REGISTERS: {
-        if (length != kHeader + 5) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (length != kHeader + 5) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         auto count = be16(pdu + 3);
-        if (count < 1 || count > MODBUS_MAX_READ_REGISTERS)
-            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (count < 1 || count > MODBUS_MAX_READ_REGISTERS) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values;
-        if (registers_.read(address, count, values) != ModbusException::None)
-            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+        if (registers.read(address, count, values) != ModbusException::None)
+            return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
         // One snapshot, taken under the register lock, is what the reply carries.
-        std::copy(values.begin(), values.end(), impl_->scratch->tab_registers + address);
+        std::vector<std::uint8_t> reply{MODBUS_FC_READ_HOLDING_REGISTERS, static_cast<std::uint8_t>(2 * count)};
+        for (std::uint16_t v : values) {
+            reply.push_back(static_cast<std::uint8_t>(v >> 8));
+            reply.push_back(static_cast<std::uint8_t>(v));
+        }
         log->trace("read {}+{}", address, count);
-        return reply();
+        return {replyFrame(req, reply), false};
     }
     case MODBUS_FC_WRITE_SINGLE_REGISTER: {
-        if (length != kHeader + 5) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (length != kHeader + 5) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         std::uint16_t value = be16(pdu + 3);
-        auto ex = registers_.write(address, std::span<const std::uint16_t>(&value, 1));
-        if (ex != ModbusException::None) return replyException(c, req, static_cast<std::uint8_t>(ex));
+        auto ex = registers.write(address, std::span<const std::uint16_t>(&value, 1));
+        if (ex != ModbusException::None) return exception(static_cast<std::uint8_t>(ex));
         log->debug("write {} = {}", address, value);
-        return reply();
+        return {std::vector<std::uint8_t>(req, req + length), false}; // the echo of the request
     }
     case MODBUS_FC_WRITE_MULTIPLE_REGISTERS: {
-        if (length < kHeader + 6) return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+        if (length < kHeader + 6) return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         auto address = be16(pdu + 1);
         auto count = be16(pdu + 3);
         auto bytes = pdu[5];
         if (count < 1 || count > MODBUS_MAX_WRITE_REGISTERS || bytes != count * 2 || length != kHeader + 6 + bytes)
-            return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+            return exception(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
         std::vector<std::uint16_t> values(count);
         for (std::size_t i = 0; i < count; ++i) values[i] = be16(pdu + 6 + 2 * i);
-        auto ex = registers_.write(address, values);
-        if (ex != ModbusException::None) return replyException(c, req, static_cast<std::uint8_t>(ex));
+        auto ex = registers.write(address, values);
+        if (ex != ModbusException::None) return exception(static_cast<std::uint8_t>(ex));
         log->debug("write {}+{}", address, count);
-        return reply();
+        return {replyFrame(req, {MODBUS_FC_WRITE_MULTIPLE_REGISTERS, pdu[1], pdu[2], pdu[3], pdu[4]}), false};
     }
     case kEncapsulatedInterface:
-        if (length > kHeader + 1 && pdu[1] == kReadDeviceIdentification)
-            return replyDeviceIdentification(c, req, length);
-        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+        if (length > kHeader + 1 && pdu[1] == kReadDeviceIdentification) return deviceIdentification(req, length);
+        return exception(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
     default:
-        return replyException(c, req, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+        return exception(MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
     }
+}
+
+bool PlcServer::handle(Connection& c, const std::uint8_t* req, int length)
+{
+    const ModbusAnswer answer = answerModbusRequest(registers_, config_.unitId, req, length);
+    {
+        std::lock_guard lock(impl_->countersMutex);
+        ++impl_->counters.requests;
+        if (answer.exception) ++impl_->counters.exceptions;
+    }
+    // Non-blocking: a client that does not read its answers is closed rather than stalling the loop.
+    return send(c.fd, answer.frame.data(), answer.frame.size(), MSG_NOSIGNAL | MSG_DONTWAIT) ==
+           static_cast<ssize_t>(answer.frame.size());
 }
 
 } // namespace hg::daemon

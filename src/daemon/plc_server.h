@@ -4,11 +4,12 @@
 // `max_clients` non-blocking connections, and a wake-up pipe for stop(). Each
 // connection assembles its own frames from the MBAP header's length, so a
 // client that sends a request a byte at a time never holds up the others
-// (docs/plc.md, "Connections"). A complete request is checked here (unit id,
-// function code, address range, values via PlcRegisters) and answered with
-// libmodbus' modbus_reply; exceptions and device identification (FC 43/14)
-// are built here. A reply to FC03 is built from one snapshot taken under the
-// register lock, so the PLC never reads a half-published result.
+// (docs/plc.md, "Connections"). A complete request is checked and answered by
+// answerModbusRequest (unit id, function code, address range, values via
+// PlcRegisters), a pure function of the request bytes and the registers that
+// the server sends and the fuzzing harness calls (docs/fuzzing.md). A reply to
+// FC03 is built from one snapshot taken under the register lock, so the PLC
+// never reads a half-published result.
 //
 // Robustness: a connection from an address outside `allowed_clients` is
 // closed at once; a malformed frame (bad protocol id, bad length) or a frame
@@ -22,6 +23,7 @@
 #include "plc_registers.h"
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -29,6 +31,24 @@
 #include <vector>
 
 namespace hg::daemon {
+
+/// The length of the first Modbus TCP frame in `data` (MBAP header + PDU, as
+/// the header's length field delimits it, whatever the function code): 0 while
+/// fewer bytes than that have come, -1 for a malformed header (protocol id not
+/// 0, length outside 2..254).
+int modbusFrameLength(const std::uint8_t* data, std::size_t size);
+
+/// The reply frame to one complete request, and whether it is an exception.
+struct ModbusAnswer {
+    std::vector<std::uint8_t> frame;
+    bool exception = false;
+};
+
+/// Answers one complete request of `length` bytes (modbusFrameLength's, at
+/// least 8): reads or writes `registers`, builds the normal reply as Modbus TCP
+/// frames it (Modbus application protocol 6.3, 6.6, 6.12, 6.21) or an
+/// exception reply. No I/O.
+ModbusAnswer answerModbusRequest(PlcRegisters& registers, int unitId, const std::uint8_t* req, int length);
 
 class PlcServer {
   public:
@@ -68,8 +88,6 @@ class PlcServer {
     bool receive(Connection& c);
     /// Answers one complete request (MBAP header + PDU); false when the client must be closed.
     bool handle(Connection& c, const std::uint8_t* req, int length);
-    bool replyException(Connection& c, const std::uint8_t* req, std::uint8_t code);
-    bool replyDeviceIdentification(Connection& c, const std::uint8_t* req, int length);
     /// Closes connections whose frame straggles or which stayed silent too long.
     void expire();
     void close(std::size_t index, const char* why);

@@ -99,7 +99,7 @@ class Reader {
         const auto n = get<std::uint64_t>();
         if (n > static_cast<std::uint64_t>(end_ - p_) / sizeof(std::int32_t)) fail("array longer than the file");
         std::vector<std::int32_t> v(n);
-        std::memcpy(v.data(), p_, n * sizeof(std::int32_t));
+        if (n > 0) std::memcpy(v.data(), p_, n * sizeof(std::int32_t)); // an empty vector's data() may be null
         p_ += n * sizeof(std::int32_t);
         return v;
     }

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cstdint>
 #include <fstream>
 #include <numeric>
+#include <optional>
+#include <sstream>
 #include <unordered_map>
 #include <vector>
 
@@ -183,6 +186,60 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
                      fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
 }
 
+/// `text` as an error message can show it: bytes that are not printable ASCII as \xNN.
+std::string printable(const std::string& text)
+{
+    std::string out;
+    for (unsigned char c : text)
+        out += c >= 0x20 && c < 0x7f ? std::string(1, static_cast<char>(c)) : fmt::format("\\x{:02x}", c);
+    return out;
+}
+
+// PLY: CGAL's reader crashes or hangs instead of failing on three kinds of
+// header: a `property` line before any `element` line (it files the property
+// under the last element declared), a vertex coordinate x, y or z that is not a
+// float or double (it reads the coordinate as one or the other), and an
+// element count that is negative (read as 2^64 - n) or beyond the file (an
+// element without properties is then read for ever). The header is read first
+// so such a file is named at its line. Every item of an element takes at least
+// a byte, so a count above the file's size cannot be right.
+void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
+{
+    std::ifstream in(file, std::ios::binary);
+    std::string line;
+    std::optional<std::string> element;
+    // Lines 1 and 2 are the signature and the format, which the reader checks itself.
+    for (int number = 1; std::getline(in, line); ++number) {
+        std::istringstream words(line);
+        std::string keyword, type, name;
+        words >> keyword >> type >> name;
+        if (number <= 2) continue;
+        if (keyword == "end_header") return;
+        if (keyword == "element") {
+            element = type;
+            std::uintmax_t count = 0;
+            const auto [end, error] = std::from_chars(name.data(), name.data() + name.size(), count);
+            if (end == name.data() || error != std::errc() || count > size)
+                throw InputError(file.string(), "header",
+                                 fmt::format("element '{}': count '{}' is not a whole number of at most {} (the "
+                                             "file's size in bytes)",
+                                             printable(type), printable(name), size),
+                                 number);
+        }
+        if (keyword != "property") continue;
+        if (!element)
+            throw InputError(file.string(), "header",
+                             "'property' before any 'element' (a property belongs to the element declared above it)",
+                             number);
+        const bool coordinate = name == "x" || name == "y" || name == "z";
+        const bool real = type == "float" || type == "float32" || type == "double" || type == "float64";
+        if ((*element == "vertex" || *element == "vertices") && coordinate && !real)
+            throw InputError(
+                file.string(), "header",
+                fmt::format("vertex coordinate '{}' is {} (a coordinate is a float or a double)", name, type), number);
+    }
+}
+
 } // namespace
 
 std::string MeshCheck::problem() const
@@ -243,6 +300,7 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     if (ec) throw InputError(name, "mesh", "cannot read the file: " + ec.message());
     if (size == 0) throw InputError(name, "mesh", "the file is empty");
     if (ext == ".stl") checkStlSize(file, size);
+    if (ext == ".ply") checkPlyHeader(file, size);
 
     std::vector<Point> points;
     std::vector<Polygon> polygons;

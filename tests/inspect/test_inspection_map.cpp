@@ -216,6 +216,34 @@ TEST(InspectionMap, CorruptTruncatedOrMissingFilesAreRejected)
 
 namespace {
 
+/// A .hgmap file around `payload`: magic, format `version`, the payload's size
+/// and checksum (FNV-1a over 64-bit little-endian words, the tail byte by byte).
+std::vector<std::uint8_t> seal(const std::vector<std::uint8_t>& payload, std::uint32_t version)
+{
+    std::uint64_t h = 14695981039346656037ull;
+    std::size_t n = 0;
+    for (; n + 8 <= payload.size(); n += 8) {
+        std::uint64_t w = 0;
+        for (int b = 0; b < 8; ++b) w |= std::uint64_t{payload[n + b]} << (8 * b);
+        h = (h ^ w) * 1099511628211ull;
+    }
+    for (; n < payload.size(); ++n) h = (h ^ payload[n]) * 1099511628211ull;
+    std::vector<std::uint8_t> file;
+    auto raw = [&file](const void* v, std::size_t size) {
+        const auto* b = static_cast<const std::uint8_t*>(v);
+        file.insert(file.end(), b, b + size);
+    };
+    const std::uint32_t reserved = 0;
+    const std::uint64_t size = payload.size();
+    raw("HGMAP\r\n\x1a", 8);
+    raw(&version, 4);
+    raw(&reserved, 4);
+    raw(&size, 8);
+    raw(&h, 8);
+    file.insert(file.end(), payload.begin(), payload.end());
+    return file;
+}
+
 /// Writes a version-1 .hgmap byte by byte from the format of
 /// docs/inspection.md ("File"), independently of InspectionMap::serialise:
 /// a 2 mm cube at (0, 0, 0), depth 1 (ΔV = 1 mm), adjacency 1, networks at
@@ -306,28 +334,36 @@ std::vector<std::uint8_t> handWrittenVersion1Map()
     i32(1);
     i32(0); // root node
 
-    // FNV-1a over 64-bit little-endian words, the tail byte by byte.
-    std::uint64_t h = 14695981039346656037ull;
-    std::size_t n = 0;
-    for (; n + 8 <= p.size(); n += 8) {
-        std::uint64_t w = 0;
-        for (int b = 0; b < 8; ++b) w |= std::uint64_t{p[n + b]} << (8 * b);
-        h = (h ^ w) * 1099511628211ull;
-    }
-    for (; n < p.size(); ++n) h = (h ^ p[n]) * 1099511628211ull;
-
-    std::vector<std::uint8_t> payload;
-    payload.swap(p);
-    raw("HGMAP\r\n\x1a", 8);
-    u32(1); // format version
-    u32(0); // reserved
-    u64(payload.size());
-    u64(h);
-    p.insert(p.end(), payload.begin(), payload.end());
-    return p;
+    return seal(p, 1);
 }
 
 } // namespace
+
+// Found by the .hgmap harness (docs/fuzzing.md): an empty child or neighbour
+// array was copied from a null pointer (undefined behaviour, reported by the
+// `asan` preset's UBSan); a map without nodes is refused by name instead.
+TEST(InspectionMap, EmptyArraysAreReadAndAMapWithoutNodesIsRefused)
+{
+    std::vector<std::uint8_t> p(4, 0); // part name ""
+    auto raw = [&p](const auto& v) {
+        const auto* b = reinterpret_cast<const std::uint8_t*>(&v);
+        p.insert(p.end(), b, b + sizeof v);
+    };
+    for (double v : {0.0, 0.0, 0.0, 2.0}) raw(v); // cube origin and size
+    for (std::int32_t v : {1, 1, 1}) raw(v);      // depth, adjacency, coarsest level
+    for (std::uint64_t v : {std::uint64_t{0}, std::uint64_t{0}, std::uint64_t{0}})
+        raw(v);                              // nodes, children, neighbours
+    for (std::uint32_t v : {0u, 0u}) raw(v); // landmarks, parameters
+    raw(std::uint64_t{0});                   // landmark -> node table
+    raw(std::int32_t{0});                    // root node
+    try {
+        InspectionMap::deserialise(seal(p, 3), "empty.hgmap");
+        ADD_FAILURE() << "a map without nodes was read";
+    } catch (const hg::InputError& e) {
+        EXPECT_EQ(e.file(), "empty.hgmap");
+        EXPECT_EQ(e.field(), "inspection map");
+    }
+}
 
 TEST(InspectionMap, HandWrittenVersionOneFileIsRead)
 {

@@ -215,6 +215,56 @@ TEST(MeshIo, BadFilesAreNamed)
               std::string::npos);
 }
 
+// Found by the PLY harness (docs/fuzzing.md): a property line before any
+// element line crashed the reader; it is named at its header line instead.
+TEST(MeshIo, PlyPropertyBeforeAnyElementIsNamedAtItsLine)
+{
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "p.ply", "ply\nformat ascii 1.0\nproperty double x\n"
+                                                       "element vertex 1\nend_header\n0\n");
+    const InputError e = loadError(file);
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("'property' before any 'element'"), std::string::npos) << e.what();
+    // The same header with its element first still reaches the reader (and its own error).
+    const auto fine = hgtest::writeFile(dir / "q.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"
+                                                       "property double x\nend_header\n0\n");
+    EXPECT_EQ(loadError(fine).field(), "mesh");
+}
+
+// Found by the PLY harness (docs/fuzzing.md): a vertex coordinate declared
+// int16 (the simulated line's block with its z so declared) crashed the reader.
+TEST(MeshIo, PlyVertexCoordinateThatIsNotARealNumberIsNamedAtItsLine)
+{
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "z.ply", "ply\nformat ascii 1.0\ncomment stepped block\n"
+                                                       "element vertex 3\nproperty float x\nproperty float y\n"
+                                                       "property int16 z\nelement face 1\n"
+                                                       "property list uchar int vertex_indices\nend_header\n"
+                                                       "-30 -20 0\n30 -20 0\n30 -20 15\n3 0 1 2\n");
+    const InputError e = loadError(file);
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 7);
+    EXPECT_NE(std::string(e.what()).find("vertex coordinate 'z' is int16"), std::string::npos) << e.what();
+}
+
+// Found by the PLY harness (docs/fuzzing.md): an element count of -2 (read as
+// 2^64 - 2) of an element without properties kept the reader busy for ever.
+TEST(MeshIo, PlyElementCountThatIsNegativeOrBeyondTheFileIsNamedAtItsLine)
+{
+    using namespace std::string_literals; // the element's name holds NUL bytes
+    hgtest::TempDir dir;
+    const std::string head = "ply\nformat binary_big_endian 1.0\n";
+    InputError e =
+        loadError(hgtest::writeFile(dir / "n.ply", head + "element verte\0\0 -2comment20 15\nend_header\n"s));
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("count '-2comment20' is not a whole number"), std::string::npos) << e.what();
+    e = loadError(hgtest::writeFile(dir / "b.ply", head + "element vertex 4000000000\nproperty float x\nend_header\n"));
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("element 'vertex': count '4000000000'"), std::string::npos) << e.what();
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

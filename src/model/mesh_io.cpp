@@ -231,12 +231,16 @@ void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
             throw InputError(file.string(), "header",
                              "'property' before any 'element' (a property belongs to the element declared above it)",
                              number);
+        // `property list COUNT_TYPE ITEM_TYPE NAME`: the name is the fifth word, and a list is no coordinate.
+        const bool list = type == "list";
+        if (list) words >> type >> name;
         const bool coordinate = name == "x" || name == "y" || name == "z";
-        const bool real = type == "float" || type == "float32" || type == "double" || type == "float64";
+        const bool real = !list && (type == "float" || type == "float32" || type == "double" || type == "float64");
         if ((*element == "vertex" || *element == "vertices") && coordinate && !real)
-            throw InputError(
-                file.string(), "header",
-                fmt::format("vertex coordinate '{}' is {} (a coordinate is a float or a double)", name, type), number);
+            throw InputError(file.string(), "header",
+                             fmt::format("vertex coordinate '{}' is {}{} (a coordinate is a float or a double)",
+                                         printable(name), list ? "a list of " : "", printable(type)),
+                             number);
     }
 }
 

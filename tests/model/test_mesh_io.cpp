@@ -248,6 +248,23 @@ TEST(MeshIo, PlyVertexCoordinateThatIsNotARealNumberIsNamedAtItsLine)
     EXPECT_NE(std::string(e.what()).find("vertex coordinate 'z' is int16"), std::string::npos) << e.what();
 }
 
+// Found by the PLY harness (docs/fuzzing.md): a vertex coordinate declared as a
+// list (`property list uchar float z`) made CGAL's reader assert (release
+// builds: dereference a null property).
+TEST(MeshIo, PlyVertexCoordinateDeclaredAsAListIsNamedAtItsLine)
+{
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "l.ply", "ply\nformat ascii 1.0\n"
+                                                       "element vertex 3\nproperty float x\nproperty float y\n"
+                                                       "property list uchar float z\nelement face 1\n"
+                                                       "property list uchar int vertex_indices\nend_header\n"
+                                                       "-30 -20 1 0\n30 -20 1 0\n30 -20 1 15\n3 0 1 2\n");
+    const InputError e = loadError(file);
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 6);
+    EXPECT_NE(std::string(e.what()).find("vertex coordinate 'z' is a list of float"), std::string::npos) << e.what();
+}
+
 // Found by the PLY harness (docs/fuzzing.md): an element count of -2 (read as
 // 2^64 - 2) of an element without properties kept the reader busy for ever.
 TEST(MeshIo, PlyElementCountThatIsNegativeOrBeyondTheFileIsNamedAtItsLine)

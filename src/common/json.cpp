@@ -111,4 +111,9 @@ nlohmann::json parseJson(const std::string& text, const std::string& name)
     }
 }
 
+std::string dumpJson(const nlohmann::json& value)
+{
+    return value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 } // namespace hg

@@ -2,6 +2,7 @@
 
 #include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/store/export.h"
@@ -35,7 +36,7 @@ void sendJson(httplib::Response& res, const json& body, int status = 200)
 {
     res.status = status;
     res.set_header("Cache-Control", "no-store");
-    res.set_content(body.dump(), kJson);
+    res.set_content(dumpJson(body), kJson);
 }
 
 void sendError(httplib::Response& res, int status, const std::string& message)

@@ -137,7 +137,7 @@ std::string answerMaintenanceRequest(const std::string& request, const Maintenan
     // it read), which need not be UTF-8; the answer is always valid JSON, so such
     // bytes are sent as U+FFFD rather than failing the dump (docs/daemon.md,
     // "Maintenance socket").
-    return answer.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+    return dumpJson(answer) + "\n";
 }
 
 void MaintenanceServer::answer(const Client& client)

@@ -1,6 +1,7 @@
 #include "mqtt_publisher.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/store/result_reader.h"
 
@@ -128,7 +129,7 @@ bool Session::start()
         if (level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) logger()->warn("libmosquitto: {}", text);
     });
     // The state's last will: the broker tells the plant when the station vanishes (docs/mqtt.md).
-    const auto will = stateMessage(config.stationId, "offline", 0).dump();
+    const auto will = dumpJson(stateMessage(config.stationId, "offline", 0));
     int rc = mosquitto_will_set(client, config.topic("state").c_str(), static_cast<int>(will.size()), will.data(),
                                 config.qos, true);
     if (rc == MOSQ_ERR_SUCCESS && !config.username.empty())
@@ -155,7 +156,7 @@ bool Session::start()
 
 bool Session::publish(const std::string& topic, const json& payload, bool retain, int* mid)
 {
-    const auto text = payload.dump();
+    const auto text = dumpJson(payload);
     const int rc =
         mosquitto_publish(client, mid, topic.c_str(), static_cast<int>(text.size()), text.data(), config.qos, retain);
     if (rc != MOSQ_ERR_SUCCESS) failure = "publishing on " + topic + " failed: " + describeError(rc);

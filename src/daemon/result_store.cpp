@@ -1,6 +1,7 @@
 #include "result_store.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/store/result_reader.h"
 
@@ -168,11 +169,11 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     sqlite3_bind_int64(insert.stmt, 10, r.cycleMs);
     sqlite3_bind_int64(insert.stmt, 11, static_cast<std::int64_t>(r.landmarksFailed()));
     sqlite3_bind_int64(insert.stmt, 12, static_cast<std::int64_t>(r.landmarks.size()));
-    text(13, r.landmarksJson().dump());
-    text(14, r.timingMs.dump());
+    text(13, dumpJson(r.landmarksJson()));
+    text(14, dumpJson(r.timingMs));
     text(15, imagesDir);
-    text(16, r.alignment.dump());
-    text(17, r.simulation.dump());
+    text(16, dumpJson(r.alignment));
+    text(17, dumpJson(r.simulation));
     text(18, std::string(station::toString(r.purpose)));
     text(19, newCycleId());
     // A single INSERT in autocommit mode is its own transaction: durable when step() returns.

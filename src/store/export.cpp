@@ -2,6 +2,7 @@
 #include "hullgauge/store/export.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/store/result_reader.h"
 #include "hullgauge/study/gauge_study.h"
 
@@ -216,7 +217,7 @@ void writeJson(std::ostream& out, const std::vector<json>& rows, std::int64_t ex
     const json doc{
         {"format", "hullgauge-results"}, {"version", 1}, {"exported", formatUtc(exportedUnixMs)}, {"results", rows}};
     // A serial that is not UTF-8 is written with U+FFFD rather than refused.
-    out << doc.dump(-1, ' ', false, json::error_handler_t::replace) << "\n";
+    out << dumpJson(doc) << "\n";
 }
 
 // ---------------------------------------------------------------- AQDEF (Q-DAS DFQ)

@@ -70,4 +70,13 @@ TEST(Json, AbsurdNestingIsRefused)
     EXPECT_NE(e.problem().find("deeper than 64"), std::string::npos) << e.problem();
 }
 
+TEST(Json, TextThatIsNotUtf8IsWrittenWithReplacementCharacters)
+{
+    // "Bohrung ø" typed in Latin-1 (ø = 0xF8) and a lone continuation byte.
+    const nlohmann::json value = {{"name", std::string("Bohrung \xF8")}, {"q", std::string("a\x80z")}};
+    EXPECT_THROW((void)value.dump(), nlohmann::json::type_error); // what the library does on its own
+    EXPECT_EQ(hg::dumpJson(value), "{\"name\":\"Bohrung \xEF\xBF\xBD\",\"q\":\"a\xEF\xBF\xBDz\"}");
+    EXPECT_EQ(hg::dumpJson({{"ok", "ø"}}), "{\"ok\":\"ø\"}");
+}
+
 } // namespace

@@ -267,6 +267,9 @@ TEST_F(HmiServerTest, BadRequestsAreAnsweredWith4xxNamingTheProblem)
     EXPECT_NE(getJson("/api/results?verdict=maybe", 400)["error"].get<std::string>().find("verdict"),
               std::string::npos);
     getJson("/api/results?limit=100000", 400);
+    // A parameter that is not UTF-8 is named in the answer, its bad byte replaced (U+FFFD).
+    EXPECT_NE(getJson("/api/results?verdict=%F8", 400)["error"].get<std::string>().find("\xEF\xBF\xBD"),
+              std::string::npos);
     getJson("/api/results/99", 404);
     getJson("/api/results/1/images/view_9.png", 404);
     // The row whose folder lies outside the archive has no images to serve.

@@ -56,6 +56,23 @@ TEST(ResultStore, CommitsInWalModeAndSqliteReadsIt)
     EXPECT_EQ(again.count(), 2);
 }
 
+TEST(ResultStore, ALandmarkNameThatIsNotUtf8IsStoredWithAReplacementCharacter)
+{
+    // A part program typed in Latin-1: "Bohrung ø" with ø = 0xF8. The row is
+    // written (never lost to a JSON error) and shows where the name was wrong.
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        auto r = record(3, station::Verdict::Pass);
+        r.landmarks[0].id = std::string("Bohrung \xF8");
+        EXPECT_EQ(store.commit(r), 1);
+    }
+    auto rows = hgtest::run("sqlite3 " + file.string() +
+                            " \"SELECT json_extract(landmarks_json, '$[0].id') FROM inspections\"");
+    EXPECT_EQ(rows.out, "Bohrung \xEF\xBF\xBD\n");
+}
+
 TEST(ResultStore, KeepsTheSeatAndTheSimulatedPartWithTheRecord)
 {
     hgtest::TempDir dir;

@@ -15,4 +15,11 @@ namespace hg {
 /// and the line.
 nlohmann::json parseJson(const std::string& text, const std::string& name);
 
+/// Compact text of `value` for anything hullgauge writes (HTTP answers, result
+/// rows, MQTT payloads). A string that is not valid UTF-8 (a landmark name typed
+/// in Latin-1 in a part program, a URL parameter echoed in an error) has each
+/// ill-formed byte replaced by U+FFFD instead of throwing: the answer or the
+/// record is still written, and shows where the text was wrong.
+std::string dumpJson(const nlohmann::json& value);
+
 } // namespace hg

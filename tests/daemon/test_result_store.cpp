@@ -30,6 +30,19 @@ station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict)
     return r;
 }
 
+/// A new store at `file` holding `r` alone, closed again.
+void storeOnly(const std::filesystem::path& file, const station::InspectionRecord& r)
+{
+    ResultStore store(file);
+    store.commit(r);
+}
+
+/// The sqlite3 program's answer to `query` on `file`: an independent reader.
+std::string sql(const std::filesystem::path& file, const std::string& query)
+{
+    return hgtest::run("sqlite3 " + file.string() + " \"" + query + "\"").out;
+}
+
 TEST(ResultStore, CommitsInWalModeAndSqliteReadsIt)
 {
     hgtest::TempDir dir;
@@ -61,16 +74,11 @@ TEST(ResultStore, ALandmarkNameThatIsNotUtf8IsStoredWithAReplacementCharacter)
     // A part program typed in Latin-1: "Bohrung ø" with ø = 0xF8. The row is
     // written (never lost to a JSON error) and shows where the name was wrong.
     hgtest::TempDir dir;
-    auto file = dir / "results.db";
-    {
-        ResultStore store(file);
-        auto r = record(3, station::Verdict::Pass);
-        r.landmarks[0].id = std::string("Bohrung \xF8");
-        EXPECT_EQ(store.commit(r), 1);
-    }
-    auto rows = hgtest::run("sqlite3 " + file.string() +
-                            " \"SELECT json_extract(landmarks_json, '$[0].id') FROM inspections\"");
-    EXPECT_EQ(rows.out, "Bohrung \xEF\xBF\xBD\n");
+    auto r = record(3, station::Verdict::Pass);
+    r.landmarks[0].id = std::string("Bohrung \xF8");
+    storeOnly(dir / "results.db", r);
+    EXPECT_EQ(sql(dir / "results.db", "SELECT json_extract(landmarks_json, '$[0].id') FROM inspections"),
+              "Bohrung \xEF\xBF\xBD\n");
 }
 
 TEST(ResultStore, KeepsTheSeatAndTheSimulatedPartWithTheRecord)
@@ -305,18 +313,13 @@ TEST(ResultOutbox, MarksWhileTheStoreCommitsLoseNothing)
 TEST(ResultStore, KeepsALandmarksAsymmetricLimitsForTheStudies)
 {
     hgtest::TempDir dir;
-    auto file = dir / "results.db";
-    {
-        ResultStore store(file);
-        auto r = record(3, station::Verdict::Pass);
-        r.landmarks[0].limitsMm = std::pair{-0.05, 0.15};
-        store.commit(r);
-    }
+    auto r = record(3, station::Verdict::Pass);
+    r.landmarks[0].limitsMm = std::pair{-0.05, 0.15};
+    storeOnly(dir / "results.db", r);
     // Read by the gauge studies (docs/study.md): T = upper − lower; no limits → ±tolerance_mm.
-    auto rows = hgtest::run("sqlite3 " + file.string() +
-                            " \"SELECT json_extract(landmarks_json, '$[0].limits_mm'), "
-                            "json_type(landmarks_json, '$[1].limits_mm') IS NULL FROM inspections\"");
-    EXPECT_EQ(rows.out, "[-0.05,0.15]|1\n");
+    EXPECT_EQ(sql(dir / "results.db", "SELECT json_extract(landmarks_json, '$[0].limits_mm'), "
+                                      "json_type(landmarks_json, '$[1].limits_mm') IS NULL FROM inspections"),
+              "[-0.05,0.15]|1\n");
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)

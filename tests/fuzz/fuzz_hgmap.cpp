@@ -1,9 +1,10 @@
 // The inspection map reader (docs/fuzzing.md): InspectionMap::deserialise on the
 // bytes, as InspectionMap::load does with a .hgmap file's. Each input is read
-// twice: as it is, and sealed — the header's payload size and checksum
-// rewritten to match the payload — since a mutated payload almost never keeps
+// twice: as it is, and sealed — magic, payload size and checksum
+// rewritten to match the payload (tests/support/hgtest/hgmap_file.h) — since a mutated payload almost never keeps
 // its checksum and would stop at the corruption check before the records.
 #include "fuzz_support.h"
+#include "hgtest/hgmap_file.h"
 #include "hullgauge/inspect/inspection_map.h"
 
 #include <cstring>
@@ -11,22 +12,8 @@
 
 namespace {
 
-// The header (src/inspect/inspection_map.cpp): magic (8), version (4), reserved (4), payload size (8), checksum (8).
+// The header (docs/inspection.md, "File"): magic (8), version (4), reserved (4), payload size (8), checksum (8).
 constexpr std::size_t kHeader = 32;
-
-/// The map's checksum: FNV-1a over 64-bit little-endian words, the tail byte-wise.
-std::uint64_t checksum(const std::uint8_t* data, std::size_t n)
-{
-    std::uint64_t h = 14695981039346656037ull;
-    std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-        std::uint64_t w;
-        std::memcpy(&w, data + i, 8);
-        h = (h ^ w) * 1099511628211ull;
-    }
-    for (; i < n; ++i) h = (h ^ data[i]) * 1099511628211ull;
-    return h;
-}
 
 } // namespace
 
@@ -36,9 +23,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<std::uint8_t> bytes(data, data + size);
     hg::fuzz::expectDocumentedErrors([&] { (void)hg::inspect::InspectionMap::deserialise(bytes, "input.hgmap"); });
     if (size < kHeader) return 0;
-    const std::uint64_t payload = size - kHeader, sum = checksum(bytes.data() + kHeader, payload);
-    std::memcpy(bytes.data() + 16, &payload, 8);
-    std::memcpy(bytes.data() + 24, &sum, 8);
+    std::uint32_t version = 0;
+    std::memcpy(&version, data + 8, 4);
+    bytes = hgtest::sealMap({data + kHeader, data + size}, version);
     hg::fuzz::expectDocumentedErrors([&] { (void)hg::inspect::InspectionMap::deserialise(bytes, "input.hgmap"); });
     return 0;
 }

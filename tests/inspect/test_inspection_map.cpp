@@ -5,6 +5,7 @@
 #include <ctime>
 #include <fstream>
 
+#include "hgtest/hgmap_file.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/inspect/inspection_map.h"
@@ -216,34 +217,6 @@ TEST(InspectionMap, CorruptTruncatedOrMissingFilesAreRejected)
 
 namespace {
 
-/// A .hgmap file around `payload`: magic, format `version`, the payload's size
-/// and checksum (FNV-1a over 64-bit little-endian words, the tail byte by byte).
-std::vector<std::uint8_t> seal(const std::vector<std::uint8_t>& payload, std::uint32_t version)
-{
-    std::uint64_t h = 14695981039346656037ull;
-    std::size_t n = 0;
-    for (; n + 8 <= payload.size(); n += 8) {
-        std::uint64_t w = 0;
-        for (int b = 0; b < 8; ++b) w |= std::uint64_t{payload[n + b]} << (8 * b);
-        h = (h ^ w) * 1099511628211ull;
-    }
-    for (; n < payload.size(); ++n) h = (h ^ payload[n]) * 1099511628211ull;
-    std::vector<std::uint8_t> file;
-    auto raw = [&file](const void* v, std::size_t size) {
-        const auto* b = static_cast<const std::uint8_t*>(v);
-        file.insert(file.end(), b, b + size);
-    };
-    const std::uint32_t reserved = 0;
-    const std::uint64_t size = payload.size();
-    raw("HGMAP\r\n\x1a", 8);
-    raw(&version, 4);
-    raw(&reserved, 4);
-    raw(&size, 8);
-    raw(&h, 8);
-    file.insert(file.end(), payload.begin(), payload.end());
-    return file;
-}
-
 /// Writes a version-1 .hgmap byte by byte from the format of
 /// docs/inspection.md ("File"), independently of InspectionMap::serialise:
 /// a 2 mm cube at (0, 0, 0), depth 1 (ΔV = 1 mm), adjacency 1, networks at
@@ -334,7 +307,7 @@ std::vector<std::uint8_t> handWrittenVersion1Map()
     i32(1);
     i32(0); // root node
 
-    return seal(p, 1);
+    return hgtest::sealMap(p, 1);
 }
 
 } // namespace
@@ -357,7 +330,7 @@ TEST(InspectionMap, EmptyArraysAreReadAndAMapWithoutNodesIsRefused)
     raw(std::uint64_t{0});                   // landmark -> node table
     raw(std::int32_t{0});                    // root node
     try {
-        InspectionMap::deserialise(seal(p, 3), "empty.hgmap");
+        InspectionMap::deserialise(hgtest::sealMap(p, 3), "empty.hgmap");
         ADD_FAILURE() << "a map without nodes was read";
     } catch (const hg::InputError& e) {
         EXPECT_EQ(e.file(), "empty.hgmap");

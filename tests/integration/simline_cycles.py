@@ -34,12 +34,9 @@ defective variant (half the run `face-low`, half `corner-missing`), and checks:
 Every wait is bounded.
 """
 import argparse
-import ctypes
 import json
 import math
 import os
-import signal
-import socket
 import sqlite3
 import subprocess
 import sys
@@ -49,31 +46,27 @@ from pathlib import Path
 
 import yaml
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from simline_harness import check, failures, free_port, start_line, stop_line  # noqa: E402
+
 LANDMARKS = ["tall-top", "tall-corner", "tall-side", "tall-foot", "riser", "step-top", "step-side", "end-front",
              "end-back", "step-top-back"]
 FAILING = {"nominal": set(), "face-low": {"step-top", "step-top-back"}, "corner-missing": {"tall-corner", "tall-side"}}
 RESULT_CODE = {"pass": 1, "fail": 2}
 
-failures = []
 
-
-def check(condition, message):
-    if not condition:
-        failures.append(message)
-        print(f"FAILED: {message}", file=sys.stderr, flush=True)
-    return condition
-
-
-def die_with_parent():
-    """In the child: SIGTERM when this script ends, however it ends (a CTest timeout kills it outright),
-    so the simulated line never outlives it."""
-    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+def group_gone(pgid, timeout_s):
+    """Whether no process of group `pgid` is left, polled under a deadline (the group's last
+    processes may still be exiting when its leader was reaped)."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            os.killpg(pgid, 0)
+        except ProcessLookupError:
+            return True
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
 
 
 def ok_bits(failing):
@@ -145,21 +138,9 @@ def main():
 
     workdir = Path(tempfile.mkdtemp(prefix="hg-simline-"))
     plc_port = free_port()
-    line_out = open(workdir / "simline.out", "w")
-    line = subprocess.Popen([str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(workdir),
-                             "--plc-port", str(plc_port), "--fixture-port", "0"] +
-                            (["--config", str(args.config)] if args.config else []),
-                            stdout=line_out, stderr=subprocess.STDOUT, start_new_session=True,
-                            preexec_fn=die_with_parent)
+    line, line_out, _ = start_line(args.source, args.bin, workdir, plc_port,
+                                   ["--config", str(args.config)] if args.config else [], timeout_s=90)
     try:
-        deadline = time.monotonic() + 90
-        while not (workdir / "simline.ready").exists():
-            if line.poll() is not None:
-                print((workdir / "simline.out").read_text(), file=sys.stderr)
-                raise SystemExit(f"tools/simline exited with {line.returncode} before the line was ready")
-            if time.monotonic() > deadline:
-                raise SystemExit("the simulated line was not ready within 90 s")
-            time.sleep(0.1)
         sock = str(workdir / "hullgauged.sock")
 
         listed = subprocess.run([hullgauge, "ctl", "--socket", sock, "--json", "sim-part", "--list"],
@@ -214,17 +195,8 @@ def main():
                   f"LANDMARK_OK_BITS word 0 {regs[20]:#06x}, expected {ok_bits(FAILING[last_part]):#06x}")
 
         # SIGTERM stops the line; nothing of it is left running.
-        line.send_signal(signal.SIGTERM)
-        try:
-            check(line.wait(timeout=40) == 0, f"tools/simline exit status {line.returncode} after SIGTERM")
-        except subprocess.TimeoutExpired:
-            check(False, "tools/simline did not stop within 40 s of SIGTERM")
-        time.sleep(0.2)
-        try:
-            os.killpg(line.pid, 0)
-            check(False, "processes of the simulated line survived its stop")
-        except ProcessLookupError:
-            pass
+        stop_line(line, line_out)
+        check(group_gone(line.pid, timeout_s=5), "processes of the simulated line survived its stop")
 
         # The result store: one row per cycle, the PLC's sequence, serial, verdict and failing landmarks.
         db = sqlite3.connect(f"file:{workdir / 'results.db'}?mode=ro", uri=True)
@@ -264,10 +236,7 @@ def main():
             check(mean_after < 0.1 * mean_before,
                   f"corrected views {mean_after:.4f}° off on average, {mean_before:.4f}° without the correction")
     finally:
-        if line.poll() is None:
-            os.killpg(line.pid, signal.SIGKILL)
-            line.wait()
-        line_out.close()
+        stop_line(line, line_out)
 
     if failures:
         print(f"{len(failures)} checks failed; work folder {workdir}", file=sys.stderr)

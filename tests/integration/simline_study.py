@@ -24,38 +24,16 @@ bracket middle — printed with the cycles that lacked it).
 Every wait is bounded; ports are free ports on 127.0.0.1.
 """
 import argparse
-import ctypes
 import json
 import math
-import os
-import signal
-import socket
 import sqlite3
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-failures = []
-
-
-def check(condition, message):
-    if not condition:
-        failures.append(message)
-        print(f"FAILED: {message}", file=sys.stderr, flush=True)
-    return condition
-
-
-def die_with_parent():
-    """In the child: SIGTERM when this script ends, however it ends, so the line never outlives it."""
-    ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from simline_harness import check, failures, free_port, start_line, stop_line  # noqa: E402
 
 
 def deviation_overlay(source, folder):
@@ -66,24 +44,6 @@ def deviation_overlay(source, folder):
         raise SystemExit("config/sim/stepped-block.yaml has an inspection section: adapt this test")
     (folder / "stepped-block.yaml").write_text(text.rstrip("\n") + "\ninspection:\n  deviation: true\n")
     return folder
-
-
-def start_line(args, workdir, plc_port):
-    out = open(workdir / "simline.out", "w")
-    overlays = ["--config", str(args.source / "config" / "sim-fast"),
-                "--config", str(deviation_overlay(args.source, workdir / "overlay"))]
-    line = subprocess.Popen([str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir",
-                             str(workdir), "--plc-port", str(plc_port), "--fixture-port", "0"] + overlays,
-                            stdout=out, stderr=subprocess.STDOUT, start_new_session=True, preexec_fn=die_with_parent)
-    deadline = time.monotonic() + 90
-    while not (workdir / "simline.ready").exists():
-        if line.poll() is not None:
-            print((workdir / "simline.out").read_text(), file=sys.stderr)
-            raise SystemExit(f"tools/simline exited with {line.returncode} before the line was ready")
-        if time.monotonic() > deadline:
-            raise SystemExit("the simulated line was not ready within 90 s")
-        time.sleep(0.1)
-    return line, out
 
 
 def ratio(a, b):
@@ -177,19 +137,13 @@ def main():
     args = ap.parse_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-study-"))
     plc_port = free_port()
-    line, line_out = start_line(args, workdir, plc_port)
+    overlays = ["--config", str(args.source / "config" / "sim-fast"),
+                "--config", str(deviation_overlay(args.source, workdir / "overlay"))]
+    line, line_out, _ = start_line(args.source, args.bin, workdir, plc_port, overlays, timeout_s=90)
     try:
         run(args, workdir, str(workdir / "hullgauged.sock"), plc_port)
-        line.send_signal(signal.SIGTERM)
-        try:
-            check(line.wait(timeout=40) == 0, f"tools/simline exit status {line.returncode} after SIGTERM")
-        except subprocess.TimeoutExpired:
-            check(False, "tools/simline did not stop within 40 s of SIGTERM")
     finally:
-        if line.poll() is None:
-            os.killpg(line.pid, signal.SIGKILL)
-            line.wait()
-        line_out.close()
+        stop_line(line, line_out)
 
     db_file = workdir / "results.db"
     study = subprocess.run([str(args.bin / "hullgauge"), "study", "type1", "--store", str(db_file), "--json"],

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <ostream>
 
 #include <opencv2/core.hpp>
 
@@ -55,6 +56,11 @@ std::string toString(const Roi& roi)
 {
     return "[" + std::to_string(roi.x) + ", " + std::to_string(roi.y) + ", " + std::to_string(roi.width) + ", " +
            std::to_string(roi.height) + "]";
+}
+
+std::ostream& operator<<(std::ostream& out, const Roi& roi)
+{
+    return out << toString(roi);
 }
 
 namespace {

@@ -170,6 +170,9 @@ void reshapeIntegerFeature(std::string& xml, const std::string& name, int increm
     if (end == std::string::npos || inc == std::string::npos || inc > end)
         throw std::runtime_error("the Aravis fake camera description has no '" + name + "' with <Inc>; cannot reshape it");
     xml.replace(inc, std::strlen("<Inc>1</Inc>"), "<Inc>" + std::to_string(increment) + "</Inc>");
+    // A size of Min + k * Inc: with steps above 1 the smallest size is one step, as on GigE cameras.
+    const auto min = xml.find("<Min>1</Min>", begin);
+    if (min != std::string::npos && min < inc) xml.replace(min, std::strlen("<Min>1</Min>"), "<Min>" + std::to_string(increment) + "</Min>");
     if (readOnly) xml.insert(inc, "<ImposedAccessMode>RO</ImposedAccessMode>\n\t\t");
 }
 

@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <string>
@@ -59,6 +60,7 @@ struct Roi {
 
 /// "[x, y, width, height]", for messages.
 std::string toString(const Roi& roi);
+std::ostream& operator<<(std::ostream& out, const Roi& roi);
 
 /// How a device lets one axis of its region be set: GenICam's OffsetX/Width
 /// (OffsetY/Height) take Min + k * Inc, each between its Min and Max.

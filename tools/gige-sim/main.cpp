@@ -18,6 +18,11 @@
 // ExposureTime (µs) and Gain (dB); the simulator extends that description
 // with them (over the fake's own registers) and serves the result.
 //
+// --region-increments gives the region features OffsetX/OffsetY/Width/Height
+// a camera's coarser Inc (and Min of the sizes), --read-only-offset-x makes
+// OffsetX read-only: the driver's region alignment and its fallback to whole
+// frames are tested against them (docs/camera.md "Regions per grab").
+//
 // Prints "ready <address> <serial> <width>x<height> <n> images" on stdout once
 // the control port listens; runs until SIGTERM/SIGINT.
 #include <signal.h>
@@ -168,11 +173,13 @@ void reshapeIntegerFeature(std::string& xml, const std::string& name, int increm
     const auto end = begin == std::string::npos ? begin : xml.find("</Integer>", begin);
     const auto inc = begin == std::string::npos ? begin : xml.find("<Inc>1</Inc>", begin);
     if (end == std::string::npos || inc == std::string::npos || inc > end)
-        throw std::runtime_error("the Aravis fake camera description has no '" + name + "' with <Inc>; cannot reshape it");
+        throw std::runtime_error("the Aravis fake camera description has no '" + name +
+                                 "' with <Inc>; cannot reshape it");
     xml.replace(inc, std::strlen("<Inc>1</Inc>"), "<Inc>" + std::to_string(increment) + "</Inc>");
     // A size of Min + k * Inc: with steps above 1 the smallest size is one step, as on GigE cameras.
     const auto min = xml.find("<Min>1</Min>", begin);
-    if (min != std::string::npos && min < inc) xml.replace(min, std::strlen("<Min>1</Min>"), "<Min>" + std::to_string(increment) + "</Min>");
+    if (min != std::string::npos && min < inc)
+        xml.replace(min, std::strlen("<Min>1</Min>"), "<Min>" + std::to_string(increment) + "</Min>");
     if (readOnly) xml.insert(inc, "<ImposedAccessMode>RO</ImposedAccessMode>\n\t\t");
 }
 
@@ -209,7 +216,8 @@ std::string extendedDescription(const RegionFeatures& region)
     insertAt(xml, "<pFeature>GainRaw</pFeature>", "<pFeature>Gain</pFeature>\n\t\t");
     insertAt(xml, "<pFeature>AcquisitionControl</pFeature>", "\n\t\t<pFeature>AnalogControl</pFeature>", true);
     const char* names[] = {"OffsetX", "OffsetY", "Width", "Height"};
-    for (int i = 0; i < 4; ++i) reshapeIntegerFeature(xml, names[i], region.increments[i], i == 0 && region.offsetXReadOnly);
+    for (int i = 0; i < 4; ++i)
+        reshapeIntegerFeature(xml, names[i], region.increments[i], i == 0 && region.offsetXReadOnly);
     return xml;
 }
 

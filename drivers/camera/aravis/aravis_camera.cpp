@@ -19,6 +19,11 @@
 //   and, when the device does not answer, reopens it with exponential backoff
 //   and restarts the stream. grab() only pops frames and waits on the
 //   worker's verdict, never longer than its own timeout.
+// - Regions per grab (docs/camera.md "Regions per grab"): setRegion() hands
+//   the aligned region to the same worker, which writes OffsetX/OffsetY/
+//   Width/Height in the SFNC-safe order (acquisition stopped for a new size)
+//   before the next trigger; the pool stays sized for the configured ROI and
+//   every frame's region comes from its GVSP image leader.
 #include "aravis_camera.h"
 
 #include "hullgauge/common/error.h"
@@ -465,12 +470,12 @@ class AravisCamera final : public Camera {
                                                                 std::to_string(timeout.count()) + " ms: " + reason_ +
                                                                 "; checking whether the camera still answers");
         } else if (health_ == Health::Lost) {
-            t.refusal = Frame::failed(FrameStatus::Error,
-                                      id + ": lost (" + reason_ + "); " +
-                                          (link_ || closing_
-                                               ? std::string("closing the old connection, then reconnecting")
-                                               : "reconnecting in the background, next attempt in " +
-                                                     std::to_string(msUntil(nextAttempt_)) + " ms"));
+            t.refusal =
+                Frame::failed(FrameStatus::Error,
+                              id + ": lost (" + reason_ + "); " +
+                                  (link_ || closing_ ? std::string("closing the old connection, then reconnecting")
+                                                     : "reconnecting in the background, next attempt in " +
+                                                           std::to_string(msUntil(nextAttempt_)) + " ms"));
         } else if (wantedRegion_ != deviceRegion_) {
             t.refusal = Frame::failed(FrameStatus::Timeout, id + ": region " + toString(wantedRegion_) +
                                                                 " not applied within " +
@@ -813,7 +818,11 @@ class AravisCamera final : public Camera {
         if (!s && s.code() != StatusCode::Timeout) {
             auto now = readRegion(link);
             Status undone = now ? writeRegion(link, now.value(), configured_) : now.status();
-            if (!undone) return undone.code() == StatusCode::Timeout ? undone : Status::failure(s.message() + "; and the configured ROI could not be restored: " + undone.message());
+            if (!undone)
+                return undone.code() == StatusCode::Timeout
+                           ? undone
+                           : Status::failure(s.message() +
+                                             "; and the configured ROI could not be restored: " + undone.message());
         }
         if (!live && s.code() != StatusCode::Timeout) {
             arv_camera_start_acquisition(link.camera, &error);

@@ -4,7 +4,9 @@
 // calibration (camera_from_part = camera_from_fixture * fixture motion,
 // docs/contracts.md §2) and renders the backlit silhouette of the part under test, as
 // it is seated in the nest (setSeat, docs/daemon.md "Seating": camera_from_part
-// · seat), with the hg::sim renderer, into a pool slot cropped to the ROI.
+// · seat), with the hg::sim renderer, into a pool slot cropped to the ROI, or
+// to the region setRegion() asked for (docs/camera.md "Regions per grab"; the
+// fault switch refuse_region stands for a camera that cannot set one).
 //
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
 // and read back but do not change the image; Part switches the part under
@@ -443,8 +445,8 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     PoseSource poseSource_;
     SimulatedCameraFault fault_;
     geometry::RigidTransform seat_; ///< nominal_from_part of the part in the nest
-    cv::Rect roi_;    ///< the configured ROI on the sensor (the whole sensor when unset)
-    cv::Rect region_; ///< the region grabs deliver while active (setRegion), within roi_
+    cv::Rect roi_;                  ///< the configured ROI on the sensor (the whole sensor when unset)
+    cv::Rect region_;               ///< the region grabs deliver while active (setRegion), within roi_
     double exposureUs_ = 10000.0;
     double gainDb_ = 0.0;
     std::shared_ptr<SlotPool> pool_;

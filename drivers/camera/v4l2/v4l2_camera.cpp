@@ -8,6 +8,8 @@
 // gain has no unit, so gain_db is refused and the raw control is set by name
 // under `features`; a control value outside the control's range is refused
 // (the kernel would clamp it silently). `device_format` pins the device format.
+// Regions per grab crop with VIDIOC_S_SELECTION with the stream stopped, into
+// the buffers of the configured ROI (docs/camera.md "Regions per grab").
 #include "v4l2_camera.h"
 
 #include <fcntl.h>
@@ -406,9 +408,8 @@ class V4l2Camera final : public Camera {
             why = "VIDIOC_G_FMT: " + errnoText(errno);
             return std::nullopt;
         }
-        const bool fits = !pool_ || std::all_of(pool_->slots.begin(), pool_->slots.end(), [&](const auto& slot) {
-            return slot.length >= fmt.fmt.pix.sizeimage;
-        });
+        const bool fits = !pool_ || std::all_of(pool_->slots.begin(), pool_->slots.end(),
+                                                [&](const auto& slot) { return slot.length >= fmt.fmt.pix.sizeimage; });
         if (static_cast<int>(fmt.fmt.pix.width) != region->width ||
             static_cast<int>(fmt.fmt.pix.height) != region->height || !fits) {
             why = "the image became " + std::to_string(fmt.fmt.pix.width) + "x" + std::to_string(fmt.fmt.pix.height) +

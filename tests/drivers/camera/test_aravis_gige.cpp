@@ -7,9 +7,11 @@
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/camera.h"
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <gtest/gtest.h>
+#include <iostream>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -372,8 +374,8 @@ class AravisRegions : public AravisGige {
   protected:
     void startRegionSim(const std::vector<std::string>& extra = {})
     {
-        std::vector<std::string> args{"--image", (dir_ / "view00.png").string(), "--frame-rate", "100",
-                                      "--region-increments", "4,2,8,2"};
+        std::vector<std::string> args{"--image", (dir_ / "view00.png").string(), "--frame-rate",
+                                      "100",     "--region-increments",          "4,2,8,2"};
         args.insert(args.end(), extra.begin(), extra.end());
         sim_.start(args);
     }
@@ -505,6 +507,53 @@ TEST_F(AravisRegions, CameraWithReadOnlyOffsetXFallsBackToWholeFramesWithOneWarn
     }
     EXPECT_EQ(log.count(spdlog::level::warn, "delivering whole frames"), 1) << log.text();
     EXPECT_NE(log.text().find("OffsetX is not writable"), std::string::npos) << log.text();
+}
+
+/// Figures for docs/camera.md: bytes per frame and grab times of whole frames
+/// and of a 600 x 400 region of a 2448 x 2048 Mono8 sensor. Only the bytes are
+/// checked; the times are printed (they depend on the machine and its load).
+TEST_F(AravisRegions, BytesAndGrabTimesOfWholeFramesAndARegionAt2448x2048)
+{
+    const cv::Size sensor(2448, 2048);
+    cv::Mat big(sensor, CV_8UC1);
+    cv::RNG(11).fill(big, cv::RNG::UNIFORM, 0, 256);
+    ASSERT_TRUE(cv::imwrite((dir_ / "big.png").string(), big));
+    sim_.start({"--image", (dir_ / "big.png").string(), "--region-increments", "4,2,8,2"});
+    auto cam = makeCamera("    trigger: software\n    socket_buffer_bytes: 4194304\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    using Ms = std::chrono::duration<double, std::milli>;
+    auto measure = [&](const Roi& request, const char* name) {
+        ASSERT_TRUE(cam->setRegion(request).ok());
+        std::vector<double> grabs;
+        double changeMs = 0.0, firstMs = 0.0;
+        std::size_t bytes = 0;
+        for (int k = 0; k < 12; ++k) {
+            const auto t0 = Clock::now();
+            auto f = grabComplete(*cam);
+            const double ms = Ms(Clock::now() - t0).count();
+            ASSERT_TRUE(f.ok()) << f.message;
+            const Roi& r = f.region;
+            EXPECT_EQ(f.payloadBytes, static_cast<std::size_t>(r.width) * r.height);
+            EXPECT_EQ(maxDifference(f.image, big(cv::Rect(r.x, r.y, r.width, r.height))), 0.0);
+            bytes = f.payloadBytes;
+            if (k == 0) {
+                changeMs = f.regionChangeMs;
+                firstMs = ms;
+            } else {
+                grabs.push_back(ms);
+            }
+        }
+        std::sort(grabs.begin(), grabs.end());
+        std::cout << name << ": " << bytes << " bytes per frame; region change " << changeMs << " ms; first grab "
+                  << firstMs << " ms; later grabs median " << grabs[grabs.size() / 2] << " ms (min " << grabs.front()
+                  << ", max " << grabs.back() << ")\n";
+        RecordProperty(std::string(name) + "_bytes", std::to_string(bytes));
+        RecordProperty(std::string(name) + "_grab_median_ms", std::to_string(grabs[grabs.size() / 2]));
+    };
+    measure(Roi{}, "whole");
+    measure(Roi{900, 800, 600, 400}, "region");
+    measure(Roi{}, "whole again");
 }
 
 TEST_F(AravisGige, RoiTheSensorCannotHoldIsRefused)

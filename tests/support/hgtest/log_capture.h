@@ -40,8 +40,8 @@ class LogCapture {
     {
         int n = 0;
         for (const auto& m : sink_->last_raw())
-            if (m.level == level && std::string_view(m.payload.data(), m.payload.size()).find(fragment) !=
-                                        std::string_view::npos)
+            if (m.level == level &&
+                std::string_view(m.payload.data(), m.payload.size()).find(fragment) != std::string_view::npos)
                 ++n;
         return n;
     }

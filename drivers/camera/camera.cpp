@@ -2,7 +2,9 @@
 // bookkeeping around the backends' hooks, and parsing of `camera.driver`.
 #include "hullgauge/drivers/camera.h"
 
+#include <algorithm>
 #include <array>
+#include <ostream>
 
 #include <opencv2/core.hpp>
 
@@ -48,6 +50,69 @@ std::string_view toString(FrameStatus s)
 }
 
 // ---------------------------------------------------------------------------
+// Regions
+
+std::string toString(const Roi& roi)
+{
+    return "[" + std::to_string(roi.x) + ", " + std::to_string(roi.y) + ", " + std::to_string(roi.width) + ", " +
+           std::to_string(roi.height) + "]";
+}
+
+std::ostream& operator<<(std::ostream& out, const Roi& roi)
+{
+    return out << toString(roi);
+}
+
+namespace {
+
+/// Largest `min + k * inc` <= v (any sign).
+int floorToStep(int v, int min, int inc)
+{
+    const int k = (v - min) >= 0 ? (v - min) / inc : -((min - v + inc - 1) / inc);
+    return min + k * inc;
+}
+
+/// Smallest `min + k * inc` >= v, k >= 0.
+int ceilToStep(int v, int min, int inc)
+{
+    return v <= min ? min : min + (v - min + inc - 1) / inc * inc;
+}
+
+/// One axis of alignRegion: [a, b) inside [lo, hi) grown to the device's
+/// steps; [lo, hi) itself when no aligned span inside it contains [a, b).
+std::pair<int, int> alignAxis(int a, int b, int lo, int hi, const RegionAxisRules& r)
+{
+    const int offsetInc = std::max(1, r.offsetInc);
+    int offset = floorToStep(a, r.offsetMin, offsetInc);
+    const int size = ceilToStep(b - offset, std::max(1, r.sizeMin), std::max(1, r.sizeInc));
+    if (offset + size > hi) offset -= (offset + size - hi + offsetInc - 1) / offsetInc * offsetInc;
+    if (offset < lo || offset + size > hi || offset + size < b) return {lo, hi - lo};
+    return {offset, size};
+}
+
+} // namespace
+
+Result<Roi> alignRegion(const Roi& requested, const Roi& bounds, const RegionRules& rules)
+{
+    if (requested.isFullSensor()) return bounds;
+    if (requested.width <= 0 || requested.height <= 0)
+        return Status::failure(StatusCode::NotAllowed, "region " + toString(requested) +
+                                                           ": width and height must both be positive "
+                                                           "(or both 0 for the configured region)");
+    const int x0 = std::max(requested.x, bounds.x);
+    const int y0 = std::max(requested.y, bounds.y);
+    const int x1 = std::min(requested.x + requested.width, bounds.x + bounds.width);
+    const int y1 = std::min(requested.y + requested.height, bounds.y + bounds.height);
+    if (x0 >= x1 || y0 >= y1)
+        return Status::failure(StatusCode::NotAllowed, "region " + toString(requested) +
+                                                           " lies outside the sensor region " + toString(bounds) +
+                                                           " the camera delivers");
+    const auto [x, width] = alignAxis(x0, x1, bounds.x, bounds.x + bounds.width, rules.x);
+    const auto [y, height] = alignAxis(y0, y1, bounds.y, bounds.y + bounds.height, rules.y);
+    return Roi{x, y, width, height};
+}
+
+// ---------------------------------------------------------------------------
 // Frame
 
 Frame::Frame(Frame&& other) noexcept
@@ -61,6 +126,9 @@ Frame& Frame::operator=(Frame&& other) noexcept
         release();
         status = other.status;
         image = std::move(other.image);
+        region = other.region;
+        payloadBytes = other.payloadBytes;
+        regionChangeMs = other.regionChangeMs;
         frameId = other.frameId;
         timestamp = other.timestamp;
         message = std::move(other.message);
@@ -130,6 +198,24 @@ Frame Camera::grab(std::chrono::milliseconds timeout)
 {
     if (auto s = require({LifecycleState::Active}, "grab"); !s) return Frame::failed(FrameStatus::Error, s.message());
     return doGrab(timeout);
+}
+
+Result<Roi> Camera::setRegion(const Roi& requested)
+{
+    std::lock_guard lock(mutex());
+    if (auto s = require({LifecycleState::Active}, "setting the region"); !s) return s;
+    const Roi bounds = configuredRegion();
+    auto aligned = alignRegion(requested, bounds, regionRules());
+    if (!aligned) return aligned.status().prefixed(kind() + ": ");
+    if (wholeFramesOnly()) return bounds;
+    return doSetRegion(aligned.value());
+}
+
+void Camera::fallBackToWholeFrames(const std::string& why)
+{
+    if (!wholeFramesOnly_.exchange(true))
+        log::category("camera")->warn("{}; delivering whole frames ({}) from now on", why,
+                                      toString(configuredRegion()));
 }
 
 Status Camera::requireOpen(std::string_view call) const

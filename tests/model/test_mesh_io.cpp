@@ -5,8 +5,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
-#include <spdlog/sinks/ringbuffer_sink.h>
 
+#include "hgtest/log_capture.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
@@ -18,29 +18,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
-
-// Captures the "model" log category while alive.
-class LogCapture {
-  public:
-    LogCapture() : sink_(std::make_shared<spdlog::sinks::ringbuffer_sink_mt>(64))
-    {
-        log::category("model")->sinks().push_back(sink_);
-    }
-    ~LogCapture()
-    {
-        auto& sinks = log::category("model")->sinks();
-        sinks.erase(std::remove(sinks.begin(), sinks.end(), sink_), sinks.end());
-    }
-    std::string text() const
-    {
-        std::string all;
-        for (const auto& line : sink_->last_formatted()) all += line;
-        return all;
-    }
-
-  private:
-    std::shared_ptr<spdlog::sinks::ringbuffer_sink_mt> sink_;
-};
 
 InputError loadError(const fs::path& file)
 {
@@ -171,7 +148,7 @@ TEST(MeshIo, InvertedMeshIsFlippedWithAWarning)
     EXPECT_TRUE(checkMesh(box).inverted());
     EXPECT_NE(checkMesh(box).problem().find("inverted orientation"), std::string::npos);
     saveMesh(box, dir / "inv.stl");
-    LogCapture log;
+    hgtest::LogCapture log("model");
     const TriangleMesh m = loadMesh(dir / "inv.stl");
     EXPECT_NEAR(m.signedVolume(), 24.0, 1e-12);
     EXPECT_NE(log.text().find("oriented inward"), std::string::npos) << log.text();
@@ -186,7 +163,7 @@ TEST(MeshIo, InconsistentTriangleIsReorientedWithAWarning)
     EXPECT_EQ(c.inconsistentEdges, 3u);
     EXPECT_FALSE(c.ok());
     saveMesh(box, dir / "mixed.obj");
-    LogCapture log;
+    hgtest::LogCapture log("model");
     const TriangleMesh m = loadMesh(dir / "mixed.obj");
     EXPECT_NEAR(m.signedVolume(), 24.0, 1e-12);
     EXPECT_NE(log.text().find("inconsistent orientation"), std::string::npos) << log.text();

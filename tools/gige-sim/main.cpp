@@ -18,6 +18,11 @@
 // ExposureTime (µs) and Gain (dB); the simulator extends that description
 // with them (over the fake's own registers) and serves the result.
 //
+// --region-increments gives the region features OffsetX/OffsetY/Width/Height
+// a camera's coarser Inc (and Min of the sizes), --read-only-offset-x makes
+// OffsetX read-only: the driver's region alignment and its fallback to whole
+// frames are tested against them (docs/camera.md "Regions per grab").
+//
 // Prints "ready <address> <serial> <width>x<height> <n> images" on stdout once
 // the control port listens; runs until SIGTERM/SIGINT.
 #include <signal.h>
@@ -151,10 +156,38 @@ void insertAt(std::string& xml, const std::string& anchor, const std::string& te
     xml.insert(after ? pos + anchor.size() : pos, text);
 }
 
+/// How the region features of the description differ from Aravis' fake camera
+/// (increments of 1, all writable), to stand for cameras that have coarser
+/// increments or cannot move their region.
+struct RegionFeatures {
+    std::vector<int> increments{1, 1, 1, 1}; ///< Inc of OffsetX, OffsetY, Width, Height
+    bool offsetXReadOnly = false;
+};
+
+/// Replaces the <Inc> of the Integer feature `name`, and makes it read-only
+/// (ImposedAccessMode RO) when asked: the registers behind stay as they are.
+void reshapeIntegerFeature(std::string& xml, const std::string& name, int increment, bool readOnly)
+{
+    const std::string open = "<Integer Name=\"" + name + "\"";
+    const auto begin = xml.find(open);
+    const auto end = begin == std::string::npos ? begin : xml.find("</Integer>", begin);
+    const auto inc = begin == std::string::npos ? begin : xml.find("<Inc>1</Inc>", begin);
+    if (end == std::string::npos || inc == std::string::npos || inc > end)
+        throw std::runtime_error("the Aravis fake camera description has no '" + name +
+                                 "' with <Inc>; cannot reshape it");
+    xml.replace(inc, std::strlen("<Inc>1</Inc>"), "<Inc>" + std::to_string(increment) + "</Inc>");
+    // A size of Min + k * Inc: with steps above 1 the smallest size is one step, as on GigE cameras.
+    const auto min = xml.find("<Min>1</Min>", begin);
+    if (min != std::string::npos && min < inc)
+        xml.replace(min, std::strlen("<Min>1</Min>"), "<Min>" + std::to_string(increment) + "</Min>");
+    if (readOnly) xml.insert(inc, "<ImposedAccessMode>RO</ImposedAccessMode>\n\t\t");
+}
+
 /// The fake camera's GenICam description, extended with Mono12 and the SFNC
 /// features ExposureTime (µs, over the exposure register) and Gain (dB, stored
-/// in tenths of a dB in the fake's raw gain register).
-std::string extendedDescription()
+/// in tenths of a dB in the fake's raw gain register), its region features as
+/// `region` says.
+std::string extendedDescription(const RegionFeatures& region)
 {
     ArvFakeCamera* plain = arv_fake_camera_new("HGSIMXML");
     size_t size = 0;
@@ -182,6 +215,9 @@ std::string extendedDescription()
     insertAt(xml, "<pFeature>ExposureTimeAbs</pFeature>", "\n\t\t<pFeature>ExposureTime</pFeature>", true);
     insertAt(xml, "<pFeature>GainRaw</pFeature>", "<pFeature>Gain</pFeature>\n\t\t");
     insertAt(xml, "<pFeature>AcquisitionControl</pFeature>", "\n\t\t<pFeature>AnalogControl</pFeature>", true);
+    const char* names[] = {"OffsetX", "OffsetY", "Width", "Height"};
+    for (int i = 0; i < 4; ++i)
+        reshapeIntegerFeature(xml, names[i], region.increments[i], i == 0 && region.offsetXReadOnly);
     return xml;
 }
 
@@ -197,6 +233,7 @@ int main(int argc, char** argv)
     std::vector<std::string> imageFiles;
     double frameRate = 25.0;
     double triggerPollHz = 500.0;
+    RegionFeatures region;
     app.add_option("--address", address, "IPv4 address of a local interface to serve on (default 127.0.0.1)");
     app.add_option("--serial", serial, "serial number the camera reports");
     auto* dirOpt = app.add_option("--images", imagesDir, "folder of images served in name order");
@@ -205,6 +242,13 @@ int main(int argc, char** argv)
     app.add_option("--frame-rate", frameRate, "free-run frame rate, frames per second")->check(CLI::Range(0.1, 1000.0));
     app.add_option("--trigger-poll-hz", triggerPollHz, "how often a software trigger is looked for, Hz")
         ->check(CLI::Range(1.0, 10000.0));
+    app.add_option("--region-increments", region.increments,
+                   "Inc of OffsetX, OffsetY, Width and Height (4 integers, default 1 1 1 1)")
+        ->expected(4)
+        ->delimiter(',')
+        ->check(CLI::Range(1, 256));
+    app.add_flag("--read-only-offset-x", region.offsetXReadOnly,
+                 "make OffsetX read-only (a camera that cannot move its region)");
     dirOpt->excludes(manOpt)->excludes(fileOpt);
     manOpt->excludes(fileOpt);
     try {
@@ -243,7 +287,7 @@ int main(int argc, char** argv)
 
         // The description is served from a file the fake camera reads at start.
         xmlFile = fs::temp_directory_path() / ("hullgauge-gige-sim-" + std::to_string(getpid()) + ".xml");
-        std::ofstream(xmlFile) << extendedDescription();
+        std::ofstream(xmlFile) << extendedDescription(region);
     } catch (const std::exception& e) {
         std::cerr << "hullgauge-gige-sim: " << e.what() << '\n';
         return 2;

@@ -19,6 +19,11 @@
 //   and, when the device does not answer, reopens it with exponential backoff
 //   and restarts the stream. grab() only pops frames and waits on the
 //   worker's verdict, never longer than its own timeout.
+// - Regions per grab (docs/camera.md "Regions per grab"): setRegion() hands
+//   the aligned region to the same worker, which writes OffsetX/OffsetY/
+//   Width/Height in the SFNC-safe order (acquisition stopped for a new size)
+//   before the next trigger; the pool stays sized for the configured ROI and
+//   every frame's region comes from its GVSP image leader.
 #include "aravis_camera.h"
 
 #include "hullgauge/common/error.h"
@@ -143,6 +148,8 @@ struct Link {
     ArvStream* stream = nullptr;
     std::shared_ptr<BufferHome> home;
     gpointer signalOwner = nullptr;
+    /// Size of every pool buffer: the payload of the configured ROI, the largest region.
+    std::size_t bufferBytes = 0;
 
     Link() = default;
     Link(const Link&) = delete;
@@ -203,6 +210,19 @@ ArvPixelFormat arvPixelFormat(PixelFormat f)
     return ARV_PIXEL_FORMAT_MONO_8;
 }
 
+/// The region a frame covers on the sensor, from its GVSP image leader.
+Roi regionOf(ArvBuffer* buffer)
+{
+    return Roi{static_cast<int>(arv_buffer_get_image_x(buffer)), static_cast<int>(arv_buffer_get_image_y(buffer)),
+               arv_buffer_get_image_width(buffer), arv_buffer_get_image_height(buffer)};
+}
+
+/// A GVCP command that got no answer: the device is gone, not refusing.
+bool isTimeout(const GError* error)
+{
+    return error && g_error_matches(error, ARV_DEVICE_ERROR, ARV_DEVICE_ERROR_TIMEOUT);
+}
+
 long long msUntil(Clock::time_point t)
 {
     return std::max<long long>(0, std::chrono::duration_cast<milliseconds>(t - Clock::now()).count());
@@ -224,9 +244,11 @@ class AravisCamera final : public Camera {
   protected:
     HookResult onConfigure() override
     {
+        allowRegions();
         auto link = std::make_shared<Link>();
         if (Status s = openDevice(*link); !s) return s;
         if (Status s = applyAll(*link, settings()); !s) return s;
+        if (Status s = readRegionSetup(*link); !s) return s;
         std::lock_guard lock(mutex_);
         link_ = std::move(link);
         health_ = Health::Streaming;
@@ -237,7 +259,8 @@ class AravisCamera final : public Camera {
     {
         auto link = currentLink();
         if (!link) return Status::failure(lostMessage());
-        return applyAll(*link, s);
+        if (Status status = applyAll(*link, s); !status) return status;
+        return readRegionSetup(*link);
     }
 
     HookResult onActivate() override
@@ -255,9 +278,17 @@ class AravisCamera final : public Camera {
             if (s) s = applyAll(*link, settings());
             if (!s) return HookResult::error(s); // the device is closed now
         }
-        if (Status s = startStream(*link); !s) return HookResult::error(s);
+        // The last activation may have left a smaller region on the device: the
+        // pool is sized from the configured ROI's payload.
+        auto current = readRegion(*link);
+        Status s = current.status();
+        if (s) s = writeRegion(*link, current.value(), configured_);
+        if (s) s = startStream(*link);
+        if (!s) return HookResult::error(s);
         {
             std::lock_guard lock(mutex_);
+            wantedRegion_ = deviceRegion_ = configured_;
+            reportChange_ = false;
             link_ = std::move(link);
             health_ = Health::Streaming;
             stopping_ = false;
@@ -289,28 +320,12 @@ class AravisCamera final : public Camera {
 
     Frame doGrab(milliseconds timeout) override
     {
-        const auto start = Clock::now();
-        const auto deadline = start + timeout;
-        std::shared_ptr<Link> link;
-        {
-            std::unique_lock lock(mutex_);
-            // While the worker checks or restores the link, wait for its verdict, never past the deadline.
-            wakeup_.wait_until(lock, deadline, [&] { return health_ == Health::Streaming; });
-            if (health_ == Health::Suspect)
-                return Frame::failed(FrameStatus::Timeout, "camera " + config_.id() + ": no frame within " +
-                                                               std::to_string(timeout.count()) + " ms: " + reason_ +
-                                                               "; checking whether the camera still answers");
-            if (health_ == Health::Lost)
-                return Frame::failed(FrameStatus::Error,
-                                     "camera " + config_.id() + ": lost (" + reason_ + "); " +
-                                         (link_ || closing_
-                                              ? std::string("closing the old connection, then reconnecting")
-                                              : "reconnecting in the background, next attempt in " +
-                                                    std::to_string(msUntil(nextAttempt_)) + " ms"));
-            link = link_;
-        }
+        const auto deadline = Clock::now() + timeout;
+        GrabTicket ticket = awaitLink(timeout, deadline);
+        if (!ticket.link) return std::move(ticket.refusal);
+        Link& link = *ticket.link;
 
-        drainStaleFrames(*link);
+        drainStaleFrames(link);
         std::uint64_t trigger = 0;
         if (settings().trigger == TriggerMode::Software) {
             std::lock_guard lock(mutex_);
@@ -318,7 +333,7 @@ class AravisCamera final : public Camera {
             trigger = ++triggersRequested_;
         }
         if (trigger) wakeup_.notify_all();
-        ArvBuffer* buffer = arv_stream_timeout_pop_buffer(link->stream, static_cast<guint64>(msUntil(deadline)) * 1000);
+        ArvBuffer* buffer = popFrameOf(link, ticket.region, deadline);
         if (buffer) {
             std::lock_guard lock(mutex_);
             consecutiveTimeouts_ = 0;
@@ -329,14 +344,18 @@ class AravisCamera final : public Camera {
             ++consecutiveTimeouts_;
             if (consecutiveTimeouts_ > 1) m << " (" << consecutiveTimeouts_ << " timeouts in a row)";
             if (trigger && triggerFailed_ == trigger) m << "; software trigger not acknowledged: " << triggerError_;
-            if (health_ == Health::Streaming && link_ == link) {
+            if (health_ == Health::Streaming && link_ == ticket.link) {
                 health_ = Health::Suspect;
                 reason_ = "no frame within " + std::to_string(timeout.count()) + " ms";
                 wakeup_.notify_all();
             }
-            return Frame::failed(FrameStatus::Timeout, m.str());
+            Frame f = Frame::failed(FrameStatus::Timeout, m.str());
+            f.regionChangeMs = ticket.regionChangeMs;
+            return f;
         }
-        return toFrame(*link, buffer);
+        Frame f = toFrame(link, buffer);
+        f.regionChangeMs = ticket.regionChangeMs;
+        return f;
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override
@@ -387,6 +406,27 @@ class AravisCamera final : public Camera {
         return info;
     }
 
+    RegionRules regionRules() const override { return rules_; }
+    Roi configuredRegion() const override { return configured_; }
+
+    /// Hands the region to the link worker, which applies it before the next
+    /// trigger (every GVCP command of an active camera is the worker's, see the
+    /// header); grab() waits for it.
+    Result<Roi> doSetRegion(const Roi& aligned) override
+    {
+        if (!regionsUnsupported_.empty()) {
+            fallBackToWholeFrames("camera " + config_.id() + ": cannot deliver region " + toString(aligned) + ": " +
+                                  regionsUnsupported_);
+            return configured_;
+        }
+        {
+            std::lock_guard lock(mutex_);
+            wantedRegion_ = aligned;
+        }
+        wakeup_.notify_all();
+        return aligned;
+    }
+
   private:
     /// What the link worker knows of the device while the camera is active.
     enum class Health {
@@ -406,6 +446,63 @@ class AravisCamera final : public Camera {
         return "camera " + config_.id() +
                ": not connected (lost and not reopened yet; while active the driver "
                "reconnects by itself, else clean up and configure again)";
+    }
+
+    /// What a grab needs before it triggers: the link and the region its frame must cover.
+    struct GrabTicket {
+        std::shared_ptr<Link> link; ///< null: `refusal` answers the grab
+        Frame refusal;
+        Roi region;
+        double regionChangeMs = 0.0;
+    };
+
+    /// Waits, never past `deadline`, while the worker checks or restores the
+    /// link or puts the region asked for on the device.
+    GrabTicket awaitLink(milliseconds timeout, Clock::time_point deadline)
+    {
+        GrabTicket t;
+        std::unique_lock lock(mutex_);
+        wakeup_.wait_until(lock, deadline,
+                           [&] { return health_ == Health::Streaming && wantedRegion_ == deviceRegion_; });
+        const std::string id = "camera " + config_.id();
+        if (health_ == Health::Suspect) {
+            t.refusal = Frame::failed(FrameStatus::Timeout, id + ": no frame within " +
+                                                                std::to_string(timeout.count()) + " ms: " + reason_ +
+                                                                "; checking whether the camera still answers");
+        } else if (health_ == Health::Lost) {
+            t.refusal =
+                Frame::failed(FrameStatus::Error,
+                              id + ": lost (" + reason_ + "); " +
+                                  (link_ || closing_ ? std::string("closing the old connection, then reconnecting")
+                                                     : "reconnecting in the background, next attempt in " +
+                                                           std::to_string(msUntil(nextAttempt_)) + " ms"));
+        } else if (wantedRegion_ != deviceRegion_) {
+            t.refusal = Frame::failed(FrameStatus::Timeout, id + ": region " + toString(wantedRegion_) +
+                                                                " not applied within " +
+                                                                std::to_string(timeout.count()) + " ms");
+        } else {
+            t.link = link_;
+            t.region = deviceRegion_;
+            if (reportChange_) t.regionChangeMs = regionChangeMs_;
+            reportChange_ = false;
+        }
+        return t;
+    }
+
+    /// The next frame of `region`, or null at the deadline. In free run frames
+    /// of the region before a change may still arrive: they go back to the pool.
+    ArvBuffer* popFrameOf(Link& link, const Roi& region, Clock::time_point deadline)
+    {
+        for (;;) {
+            ArvBuffer* buffer =
+                arv_stream_timeout_pop_buffer(link.stream, static_cast<guint64>(msUntil(deadline)) * 1000);
+            if (!buffer || arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS || regionOf(buffer) == region)
+                return buffer;
+            logger()->trace("camera {}: dropped frame {} of region {} (now {})", config_.id(),
+                            arv_buffer_get_frame_id(buffer), toString(regionOf(buffer)), toString(region));
+            arv_stream_push_buffer(link.stream, buffer);
+            if (Clock::now() >= deadline) return nullptr;
+        }
     }
 
     // --- device --------------------------------------------------------------
@@ -535,7 +632,9 @@ class AravisCamera final : public Camera {
             }
             switch (health_) {
             case Health::Streaming:
-                if (triggerPending_) {
+                if (wantedRegion_ != deviceRegion_) {
+                    applyRegion(lock);
+                } else if (triggerPending_) {
                     sendTrigger(lock);
                 } else {
                     // Bounded wait: a heartbeat flag set without the lock is seen within 100 ms.
@@ -634,6 +733,7 @@ class AravisCamera final : public Camera {
         }
         logger()->info("camera {}: reconnected", config_.id());
         link_ = std::move(fresh);
+        deviceRegion_ = configured_; // applyAll put it back; the region asked for follows
         health_ = Health::Streaming;
         consecutiveTimeouts_ = 0;
         controlLost_ = false;
@@ -667,6 +767,181 @@ class AravisCamera final : public Camera {
         logger()->debug("camera {}: closed the connection that stopped answering in {} ms", config_.id(), took);
     }
 
+    // --- regions (docs/camera.md "Regions per grab") ---------------------------
+
+    /// Puts wantedRegion_ on the device (worker thread). A GVCP timeout means
+    /// the device is gone (reconnect); any other failure is a refusal: whole
+    /// frames from now on, after one warning.
+    void applyRegion(std::unique_lock<std::mutex>& lock)
+    {
+        const Roi want = wantedRegion_;
+        const Roi from = deviceRegion_;
+        auto link = link_;
+        lock.unlock();
+        const auto t0 = Clock::now();
+        Status s = changeRegion(*link, from, want);
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        link.reset();
+        lock.lock();
+        if (s.code() == StatusCode::Timeout) {
+            declareLost("region change: " + s.message());
+        } else if (!s) {
+            fallBackToWholeFrames("camera " + config_.id() + ": region " + toString(want) + " refused: " + s.message());
+            wantedRegion_ = deviceRegion_ = configured_;
+        } else {
+            deviceRegion_ = want;
+            logger()->debug("camera {}: region {} -> {} in {:.1f} ms", config_.id(), toString(from), toString(want),
+                            ms);
+        }
+        regionChangeMs_ = ms;
+        reportChange_ = true;
+        wakeup_.notify_all();
+    }
+
+    /// From region `from` to `want` on a streaming device. A new size changes
+    /// the payload, which GigE Vision cameras lock while acquiring (SFNC
+    /// TLParamsLocked; Aravis' fake camera keeps sending the payload size it
+    /// started with): acquisition is stopped around it. A move of the same size
+    /// is written live where the offsets are not locked. A refused region is
+    /// undone (the configured ROI put back) before the answer.
+    Status changeRegion(Link& link, const Roi& from, const Roi& want)
+    {
+        const bool live = want.width == from.width && want.height == from.height && !isLocked(link, "OffsetX") &&
+                          !isLocked(link, "OffsetY");
+        GError* error = nullptr;
+        if (!live) {
+            arv_camera_stop_acquisition(link.camera, &error);
+            if (error) return deviceFailure(error, "cannot stop acquisition");
+        }
+        Status s = writeRegion(link, from, want);
+        if (s) s = checkRegion(link, want);
+        if (!s && s.code() != StatusCode::Timeout) {
+            auto now = readRegion(link);
+            Status undone = now ? writeRegion(link, now.value(), configured_) : now.status();
+            if (!undone)
+                return undone.code() == StatusCode::Timeout
+                           ? undone
+                           : Status::failure(s.message() +
+                                             "; and the configured ROI could not be restored: " + undone.message());
+        }
+        if (!live && s.code() != StatusCode::Timeout) {
+            arv_camera_start_acquisition(link.camera, &error);
+            if (error) return deviceFailure(error, "cannot restart acquisition");
+        }
+        return s;
+    }
+
+    /// The device holds `want` exactly and its payload fits the pool's buffers.
+    Status checkRegion(Link& link, const Roi& want)
+    {
+        auto held = readRegion(link);
+        if (!held) return held.status();
+        if (held.value() != want) return Status::failure(StatusCode::NotAllowed, "it became " + toString(held.value()));
+        GError* error = nullptr;
+        const guint payload = arv_camera_get_payload(link.camera, &error);
+        if (error) return deviceFailure(error, "cannot read the payload size");
+        if (payload > link.bufferBytes)
+            return Status::failure(StatusCode::NotAllowed, "its payload of " + std::to_string(payload) +
+                                                               " bytes exceeds the pool's buffers of " +
+                                                               std::to_string(link.bufferBytes) + " bytes");
+        return Status::success();
+    }
+
+    /// Writes the region in an order every intermediate state of which the
+    /// device accepts (SFNC: OffsetX + Width <= the sensor's width at all
+    /// times): per axis, a larger offset after the size, a smaller one before.
+    /// Values the device holds already are not written.
+    Status writeRegion(Link& link, const Roi& from, const Roi& want)
+    {
+        auto axis = [&](const char* offsetName, const char* sizeName, int offset0, int size0, int offset, int size) {
+            Status s;
+            if (offset > offset0) {
+                if (size != size0) s = writeInteger(link, sizeName, size);
+                if (s) s = writeInteger(link, offsetName, offset);
+            } else {
+                if (offset != offset0) s = writeInteger(link, offsetName, offset);
+                if (s && size != size0) s = writeInteger(link, sizeName, size);
+            }
+            return s;
+        };
+        Status s = axis("OffsetX", "Width", from.x, from.width, want.x, want.width);
+        if (s) s = axis("OffsetY", "Height", from.y, from.height, want.y, want.height);
+        return s;
+    }
+
+    /// One integer feature, refused (NotAllowed) when it is missing or read-only.
+    Status writeInteger(Link& link, const char* name, int value)
+    {
+        ArvGcFeatureNode* node = featureNode(link, name);
+        if (!node || !arv_gc_feature_node_is_implemented(node, nullptr))
+            return Status::failure(StatusCode::NotAllowed, std::string("the camera has no ") + name);
+        if (arv_gc_feature_node_get_actual_access_mode(node) == ARV_GC_ACCESS_MODE_RO)
+            return Status::failure(StatusCode::NotAllowed, std::string(name) + " is not writable");
+        GError* error = nullptr;
+        arv_camera_set_integer(link.camera, name, value, &error);
+        if (error) return deviceFailure(error, std::string(name) + " = " + std::to_string(value) + " refused");
+        return Status::success();
+    }
+
+    bool isLocked(Link& link, const char* name)
+    {
+        ArvGcFeatureNode* node = featureNode(link, name);
+        return !node || arv_gc_feature_node_is_locked(node, nullptr);
+    }
+
+    Result<Roi> readRegion(Link& link)
+    {
+        Roi r;
+        GError* error = nullptr;
+        arv_camera_get_region(link.camera, &r.x, &r.y, &r.width, &r.height, &error);
+        if (error) return deviceFailure(error, "cannot read the region");
+        return r;
+    }
+
+    /// `what` and the error's text; code Timeout when the device did not answer, else NotAllowed.
+    static Status deviceFailure(GError*& error, const std::string& what)
+    {
+        const StatusCode code = isTimeout(error) ? StatusCode::Timeout : StatusCode::NotAllowed;
+        return Status::failure(code, what + ": " + takeError(error));
+    }
+
+    /// The configured ROI on the sensor, the device's increments and whether
+    /// it can set a region at all (all four features present and writable).
+    /// Read at configure: the same device is reopened on reconnection.
+    Status readRegionSetup(Link& link)
+    {
+        auto held = readRegion(link);
+        if (!held) return Status::failure("camera " + config_.id() + ": " + held.message());
+        configured_ = held.value();
+        GError* error = nullptr;
+        auto axis = [&](const char* offsetName, const char* sizeName) {
+            RegionAxisRules r;
+            gint64 min = 0, max = 0;
+            r.offsetInc = static_cast<int>(arv_camera_get_integer_increment(link.camera, offsetName, &error));
+            if (!error) arv_camera_get_integer_bounds(link.camera, offsetName, &min, &max, &error);
+            r.offsetMin = static_cast<int>(min);
+            if (!error) r.sizeInc = static_cast<int>(arv_camera_get_integer_increment(link.camera, sizeName, &error));
+            if (!error) arv_camera_get_integer_bounds(link.camera, sizeName, &min, &max, &error);
+            r.sizeMin = static_cast<int>(std::max<gint64>(1, min));
+            r.offsetInc = std::max(1, r.offsetInc);
+            r.sizeInc = std::max(1, r.sizeInc);
+            return r;
+        };
+        regionsUnsupported_.clear();
+        for (const char* name : {"OffsetX", "OffsetY", "Width", "Height"}) {
+            ArvGcFeatureNode* node = featureNode(link, name);
+            if (!node || !arv_gc_feature_node_is_implemented(node, nullptr))
+                regionsUnsupported_ = std::string("the camera has no ") + name;
+            else if (arv_gc_feature_node_get_actual_access_mode(node) == ARV_GC_ACCESS_MODE_RO)
+                regionsUnsupported_ = std::string(name) + " is not writable";
+            if (!regionsUnsupported_.empty()) return Status::success();
+        }
+        rules_.x = axis("OffsetX", "Width");
+        if (!error) rules_.y = axis("OffsetY", "Height");
+        if (error) regionsUnsupported_ = "cannot read the region's increments: " + takeError(error);
+        return Status::success();
+    }
+
     /// Pixel format, ROI, exposure, gain and trigger, each read back.
     Status applyAll(Link& link, const CameraSettings& s)
     {
@@ -694,22 +969,15 @@ class AravisCamera final : public Camera {
               << sensorH << " sensor";
             return Status::failure(m.str());
         }
-        // Offsets first to zero so a larger width fits, then the region.
-        if (!error && arv_camera_is_region_offset_available(camera, nullptr)) {
-            arv_camera_set_integer(camera, "OffsetX", 0, &error);
-            if (!error) arv_camera_set_integer(camera, "OffsetY", 0, &error);
-        }
-        if (!error) arv_camera_set_region(camera, x, y, w, h, &error);
-        if (error) return Status::failure(where + "ROI refused: " + takeError(error));
-        int rx = 0, ry = 0, rw = 0, rh = 0;
-        arv_camera_get_region(camera, &rx, &ry, &rw, &rh, &error);
-        if (error) return Status::failure(where + "cannot read the ROI back: " + takeError(error));
-        if (rx != x || ry != y || rw != w || rh != h) {
-            std::ostringstream m;
-            m << where << "ROI [" << x << ", " << y << ", " << w << ", " << h << "] became [" << rx << ", " << ry
-              << ", " << rw << ", " << rh << "] (camera increments or limits)";
-            return Status::failure(m.str());
-        }
+        const Roi want{x, y, w, h};
+        auto held = readRegion(link);
+        Status written = held ? writeRegion(link, held.value(), want) : held.status();
+        if (!written) return Status::failure(where + "ROI refused: " + written.message());
+        held = readRegion(link);
+        if (!held) return Status::failure(where + "cannot read the ROI back: " + held.message());
+        if (held.value() != want)
+            return Status::failure(where + "ROI " + toString(want) + " became " + toString(held.value()) +
+                                   " (camera increments or limits)");
 
         if (s.exposureUs) {
             if (arv_camera_is_exposure_auto_available(camera, nullptr))
@@ -760,6 +1028,8 @@ class AravisCamera final : public Camera {
                 g_object_set(link.stream, "frame-retention", static_cast<guint>(*config_.frameRetentionMs * 1000),
                              nullptr);
         }
+        // Sized once, from the configured ROI's payload: every region lies within it.
+        link.bufferBytes = payload;
         link.home = std::make_shared<BufferHome>();
         link.home->stream = link.stream;
         for (int i = 0; i < config_.bufferCount; ++i)
@@ -824,8 +1094,12 @@ class AravisCamera final : public Camera {
         // The view aliases Aravis' buffer: no copy (the buffer is ours until given back).
         cv::Mat view(h, w, cvTypeOf(want), const_cast<void*>(data));
         logger()->trace("camera {}: frame {} {}x{}", config_.id(), id, w, h);
-        return Frame::over(view, id, std::chrono::nanoseconds(arv_buffer_get_timestamp(buffer)), FrameStatus::Ok,
-                           std::move(giveBack));
+        const Roi region = regionOf(buffer);
+        Frame f = Frame::over(view, id, std::chrono::nanoseconds(arv_buffer_get_timestamp(buffer)), FrameStatus::Ok,
+                              std::move(giveBack));
+        f.region = region;
+        f.payloadBytes = size;
+        return f;
     }
 
     // --- features ------------------------------------------------------------
@@ -914,6 +1188,16 @@ class AravisCamera final : public Camera {
     int consecutiveTimeouts_ = 0;
     milliseconds backoff_{0};
     Clock::time_point nextAttempt_{};
+
+    // Regions: set at configure (and by setSettings while inactive), fixed while active.
+    RegionRules rules_;
+    Roi configured_;                 ///< the configured ROI on the sensor (the whole sensor unless roi is set)
+    std::string regionsUnsupported_; ///< why this device cannot set a region; empty when it can
+    // Guarded by mutex_:
+    Roi wantedRegion_;            ///< the region setRegion() asked for
+    Roi deviceRegion_;            ///< the region the device holds: frames of another one are stale
+    double regionChangeMs_ = 0.0; ///< how long the last change took, for the next grab
+    bool reportChange_ = false;
 };
 
 } // namespace

@@ -4,7 +4,9 @@
 // calibration (camera_from_part = camera_from_fixture * fixture motion,
 // docs/contracts.md §2) and renders the backlit silhouette of the part under test, as
 // it is seated in the nest (setSeat, docs/daemon.md "Seating": camera_from_part
-// · seat), with the hg::sim renderer, into a pool slot cropped to the ROI.
+// · seat), with the hg::sim renderer, into a pool slot cropped to the ROI, or
+// to the region setRegion() asked for (docs/camera.md "Regions per grab"; the
+// fault switch refuse_region stands for a camera that cannot set one).
 //
 // Features (for `hullgauge camera`): ExposureTime (µs) and Gain (dB) are held
 // and read back but do not change the image; Part switches the part under
@@ -114,7 +116,7 @@ struct SimConfig {
     SimulatedCameraFault fault = SimulatedCameraFault::None;
 };
 
-constexpr std::array<std::string_view, 4> kFaultNames{"none", "timeout", "incomplete", "dropped"};
+constexpr std::array<std::string_view, 5> kFaultNames{"none", "timeout", "incomplete", "dropped", "refuse_region"};
 
 std::optional<SimulatedCameraFault> faultFromString(std::string_view name)
 {
@@ -208,7 +210,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     }
 
   protected:
-    HookResult onConfigure() override { return doApplySettings(settings()); }
+    HookResult onConfigure() override
+    {
+        allowRegions();
+        return doApplySettings(settings());
+    }
 
     Status doApplySettings(const CameraSettings& s) override
     {
@@ -229,6 +235,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
 
     HookResult onActivate() override
     {
+        {
+            std::lock_guard lock(mutex_);
+            region_ = roi_;
+        }
+        // Sized once for the configured ROI: every region lies within it (alignRegion).
         pool_ = std::make_shared<SlotPool>();
         for (int i = 0; i < config_.bufferCount; ++i)
             pool_->slots.emplace_back(roi_.size(), cvTypeOf(settings().pixelFormat));
@@ -250,8 +261,10 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         PoseSource source;
         SimulatedCameraFault fault;
         geometry::RigidTransform seat;
+        cv::Rect region;
         {
             std::lock_guard lock(mutex_);
+            region = region_;
             renderer = current_;
             seat = seat_;
             source = poseSource_;
@@ -273,22 +286,45 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         if (!slot)
             return Frame::failed(FrameStatus::Timeout, "sim camera: all " + std::to_string(config_.bufferCount) +
                                                            " buffers are held by the caller");
-        cv::Mat& out = pool_->slots[*slot];
-        render(renderer.get(), *pose, seat, out);
+        // The region's image, continuous, in the front of the slot (which holds the configured ROI).
+        cv::Mat out(region.size(), pool_->slots[*slot].type(), pool_->slots[*slot].data);
+        render(renderer.get(), *pose, seat, region, out);
         const auto id = ++frameCount_;
         const bool incomplete = fault == SimulatedCameraFault::Incomplete;
         if (incomplete) dropPackets(out);
         auto pool = pool_;
         const std::size_t index = *slot;
-        return Frame::over(
+        Frame frame = Frame::over(
             out, id, std::chrono::steady_clock::now().time_since_epoch(),
             incomplete ? FrameStatus::Incomplete : FrameStatus::Ok, [pool, index] { pool->give(index); },
             incomplete ? "sim camera: packets missing (fault switch incomplete)" : "");
+        frame.region = Roi{region.x, region.y, region.width, region.height};
+        frame.payloadBytes = out.total() * out.elemSize();
+        return frame;
     }
 
-    /// The part at `pose`, seated so (or the bare back light without a part) into `out`, cropped to the ROI.
+    RegionRules regionRules() const override { return {}; }
+    Roi configuredRegion() const override { return Roi{roi_.x, roi_.y, roi_.width, roi_.height}; }
+
+    /// The twin sets any region at once (increments of 1); the fault switch
+    /// refuse_region stands for a camera whose offset and size features are not writable.
+    Result<Roi> doSetRegion(const Roi& aligned) override
+    {
+        std::lock_guard lock(mutex_);
+        if (fault_ == SimulatedCameraFault::RefuseRegion) {
+            fallBackToWholeFrames("sim camera: region " + toString(aligned) +
+                                  " refused: OffsetX, OffsetY, Width and Height are not writable (fault switch "
+                                  "refuse_region)");
+            region_ = roi_;
+            return configuredRegion();
+        }
+        region_ = cv::Rect(aligned.x, aligned.y, aligned.width, aligned.height);
+        return aligned;
+    }
+
+    /// The part at `pose`, seated so (or the bare back light without a part) into `out`, cropped to `region`.
     void render(const sim::SilhouetteRenderer* renderer, const geometry::FixturePose& pose,
-                const geometry::RigidTransform& seat, cv::Mat& out) const
+                const geometry::RigidTransform& seat, const cv::Rect& region, cv::Mat& out) const
     {
         const PixelFormat format = settings().pixelFormat;
         sim::RenderOptions options = config_.render;
@@ -297,9 +333,9 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         const geometry::CameraModel camera = align::seatedCamera(station_.cameraAt(pose), seat);
         const cv::Mat image = (renderer ? *renderer : backlight_).render(camera, options);
         if (format == PixelFormat::Mono12)
-            image(roi_).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
+            image(region).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
         else
-            image(roi_).copyTo(out);
+            image(region).copyTo(out);
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override
@@ -335,10 +371,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         if (name == "PixelFormat") return std::string(toString(settings().pixelFormat));
         if (name == "ExposureTime") return num(exposureUs_);
         if (name == "Gain") return num(gainDb_);
-        if (name == "OffsetX") return std::to_string(roi_.x);
-        if (name == "OffsetY") return std::to_string(roi_.y);
-        if (name == "Width") return std::to_string(roi_.width);
-        if (name == "Height") return std::to_string(roi_.height);
+        const cv::Rect region = currentRegion();
+        if (name == "OffsetX") return std::to_string(region.x);
+        if (name == "OffsetY") return std::to_string(region.y);
+        if (name == "Width") return std::to_string(region.width);
+        if (name == "Height") return std::to_string(region.height);
         if (name == "SensorWidth") return std::to_string(station_.camera.imageSize.width);
         if (name == "SensorHeight") return std::to_string(station_.camera.imageSize.height);
         return Status::failure("sim camera: no feature named '" + name + "'");
@@ -351,8 +388,9 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
             auto fault = faultFromString(value);
             if (!fault)
                 return Status::failure(StatusCode::NotAllowed,
-                                       "sim camera: Fault is one of none, timeout, incomplete, dropped; got '" + value +
-                                           "'");
+                                       "sim camera: Fault is one of none, timeout, incomplete, dropped, "
+                                       "refuse_region; got '" +
+                                           value + "'");
             injectFault(*fault);
             return Status::success();
         }
@@ -383,6 +421,13 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     }
 
   private:
+    /// The region grabs deliver: the configured ROI until setRegion() changes it while active.
+    cv::Rect currentRegion() const
+    {
+        std::lock_guard lock(mutex_);
+        return state() == LifecycleState::Active ? region_ : roi_;
+    }
+
     std::shared_ptr<const sim::SilhouetteRenderer> find(const std::string& name) const
     {
         for (const auto& [n, r] : renderers_)
@@ -394,13 +439,14 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     geometry::Station station_;
     const sim::SilhouetteRenderer backlight_{}; ///< nothing in front of the back light
     std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
-    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_
+    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_, region_
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
     PoseSource poseSource_;
     SimulatedCameraFault fault_;
     geometry::RigidTransform seat_; ///< nominal_from_part of the part in the nest
-    cv::Rect roi_;
+    cv::Rect roi_;                  ///< the configured ROI on the sensor (the whole sensor when unset)
+    cv::Rect region_;               ///< the region grabs deliver while active (setRegion), within roi_
     double exposureUs_ = 10000.0;
     double gainDb_ = 0.0;
     std::shared_ptr<SlotPool> pool_;
@@ -436,7 +482,9 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
     if (auto n = driver.optional("fault")) {
         auto fault = faultFromString(n->asString());
-        if (!fault) n->fail("unknown fault '" + n->asString() + "' (expected none, timeout, incomplete or dropped)");
+        if (!fault)
+            n->fail("unknown fault '" + n->asString() +
+                    "' (expected none, timeout, incomplete, dropped or refuse_region)");
         c.fault = *fault;
     }
     if (auto n = driver.optional("target")) {

@@ -8,6 +8,8 @@
 // gain has no unit, so gain_db is refused and the raw control is set by name
 // under `features`; a control value outside the control's range is refused
 // (the kernel would clamp it silently). `device_format` pins the device format.
+// Regions per grab crop with VIDIOC_S_SELECTION with the stream stopped, into
+// the buffers of the configured ROI (docs/camera.md "Regions per grab").
 #include "v4l2_camera.h"
 
 #include <fcntl.h>
@@ -21,6 +23,7 @@
 #include <cstring>
 #include <mutex>
 #include <sstream>
+#include <utility>
 
 #include <linux/videodev2.h>
 #include <opencv2/core.hpp>
@@ -62,10 +65,13 @@ struct V4l2Config {
 /// so the mappings outlive a stop; requeueing happens only while its session
 /// is streaming.
 struct MappedPool {
+    /// Where a buffer is: with the driver, viewed by a Frame, or with us (after STREAMOFF).
+    enum class Where { Queued, Held, Idle };
     struct Slot {
         void* start = MAP_FAILED;
         std::size_t length = 0;
-        cv::Mat grey; ///< conversion target for YUYV
+        cv::Mat grey; ///< conversion target for YUYV, of the configured size
+        Where where = Where::Queued;
     };
     std::mutex mutex;
     int fd = -1; ///< -1 once the session ended
@@ -79,6 +85,30 @@ struct MappedPool {
     void requeue(unsigned index)
     {
         std::lock_guard lock(mutex);
+        queueLocked(index);
+    }
+    void hold(unsigned index)
+    {
+        std::lock_guard lock(mutex);
+        slots[index].where = Where::Held;
+    }
+    /// After STREAMOFF every buffer not viewed by a Frame is ours again.
+    void streamedOff()
+    {
+        std::lock_guard lock(mutex);
+        for (auto& s : slots)
+            if (s.where == Where::Queued) s.where = Where::Idle;
+    }
+    /// Before STREAMON: the idle buffers go back to the driver.
+    void queueIdle()
+    {
+        std::lock_guard lock(mutex);
+        for (unsigned i = 0; i < slots.size(); ++i)
+            if (slots[i].where == Where::Idle) queueLocked(i);
+    }
+    void queueLocked(unsigned index)
+    {
+        slots[index].where = Where::Idle;
         if (fd < 0) return;
         v4l2_buffer b{};
         b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -86,6 +116,8 @@ struct MappedPool {
         b.index = index;
         if (xioctl(fd, VIDIOC_QBUF, &b) == -1)
             log::category("camera")->warn("v4l2: requeue buffer {}: {}", index, errnoText(errno));
+        else
+            slots[index].where = Where::Queued;
     }
     void end()
     {
@@ -138,6 +170,8 @@ class V4l2Camera final : public Camera {
             closeDevice();
             return s;
         }
+        allowRegions();
+        readCropSupport();
         log::category("camera")->info("v4l2 {}: opened ({}, {}), {} {}x{}", config_.device, card_, driverName_,
                                       v4l2::fourccName(fourcc_), width_, height_);
         return Status::success();
@@ -145,8 +179,46 @@ class V4l2Camera final : public Camera {
 
     Status doApplySettings(const CameraSettings& s) override { return applyAll(s); }
 
+    RegionRules regionRules() const override { return {}; } // the driver adjusts the crop itself
+    Roi configuredRegion() const override { return configured_; }
+
+    /// VIDIOC_S_SELECTION (V4L2_SEL_TGT_CROP) with the stream stopped: the
+    /// image size follows the crop, which the buffers of the configured ROI
+    /// hold. A device that adjusts the crop to one not containing the region,
+    /// or whose format does not follow it, is undone and gives whole frames.
+    Result<Roi> doSetRegion(const Roi& aligned) override
+    {
+        const std::string where = "v4l2 " + config_.device + ": ";
+        if (!cropUnsupported_.empty()) {
+            fallBackToWholeFrames(where + "cannot deliver region " + toString(aligned) + ": " + cropUnsupported_);
+            return configured_;
+        }
+        if (aligned == region_) return region_;
+        const auto t0 = Clock::now();
+        v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        xioctl(fd_, VIDIOC_STREAMOFF, &type);
+        pool_->streamedOff();
+        std::string why;
+        auto region = cropTo(aligned, why);
+        if (!region) {
+            cropTo(configured_, why);
+            fallBackToWholeFrames(where + "region " + toString(aligned) + " refused: " + why);
+        }
+        pool_->queueIdle();
+        if (xioctl(fd_, VIDIOC_STREAMON, &type) == -1)
+            return fail(Status::failure(StatusCode::IoError, where + "cannot restart streaming: " + errnoText(errno)));
+        regionChangeMs_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        return region_;
+    }
+
     HookResult onActivate() override
     {
+        if (region_ != configured_) {
+            // The last activation ended on another region: the buffers are sized from the configured one.
+            std::string why;
+            if (!cropTo(configured_, why))
+                return Status::failure("v4l2 " + config_.device + ": cannot restore the configured crop: " + why);
+        }
         v4l2_requestbuffers req{};
         req.count = static_cast<std::uint32_t>(config_.bufferCount);
         req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -297,6 +369,60 @@ class V4l2Camera final : public Camera {
     }
 
   private:
+    /// Whether the device crops at all: it reports crop bounds.
+    void readCropSupport()
+    {
+        v4l2_selection sel{};
+        sel.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        sel.target = V4L2_SEL_TGT_CROP_BOUNDS;
+        cropUnsupported_.clear();
+        if (xioctl(fd_, VIDIOC_G_SELECTION, &sel) == -1)
+            cropUnsupported_ = "the device cannot crop (VIDIOC_G_SELECTION: " + errnoText(errno) + ")";
+        configured_ = settings().roi.isFullSensor() ? Roi{0, 0, width_, height_} : settings().roi;
+        region_ = configured_;
+    }
+
+    /// Sets the crop (stream stopped) to a rectangle containing `want`
+    /// (V4L2_SEL_FLAG_GE) and takes the format it implies. The region
+    /// delivered, or std::nullopt with `why`.
+    std::optional<Roi> cropTo(const Roi& want, std::string& why)
+    {
+        v4l2_selection sel{};
+        sel.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        sel.target = V4L2_SEL_TGT_CROP;
+        sel.flags = V4L2_SEL_FLAG_GE;
+        sel.r = {want.x, want.y, static_cast<std::uint32_t>(want.width), static_cast<std::uint32_t>(want.height)};
+        if (xioctl(fd_, VIDIOC_S_SELECTION, &sel) == -1) {
+            why = "VIDIOC_S_SELECTION: " + errnoText(errno);
+            return std::nullopt;
+        }
+        const Roi chosen{sel.r.left, sel.r.top, static_cast<int>(sel.r.width), static_cast<int>(sel.r.height)};
+        auto region = v4l2::acceptedCrop(want, chosen, configured_);
+        if (!region) {
+            why = "the device cropped to " + toString(chosen);
+            return std::nullopt;
+        }
+        v4l2_format fmt{};
+        fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+        if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1) {
+            why = "VIDIOC_G_FMT: " + errnoText(errno);
+            return std::nullopt;
+        }
+        const bool fits = !pool_ || std::all_of(pool_->slots.begin(), pool_->slots.end(),
+                                                [&](const auto& slot) { return slot.length >= fmt.fmt.pix.sizeimage; });
+        if (static_cast<int>(fmt.fmt.pix.width) != region->width ||
+            static_cast<int>(fmt.fmt.pix.height) != region->height || !fits) {
+            why = "the image became " + std::to_string(fmt.fmt.pix.width) + "x" + std::to_string(fmt.fmt.pix.height) +
+                  " (" + std::to_string(fmt.fmt.pix.sizeimage) + " bytes) for the crop " + toString(*region);
+            return std::nullopt;
+        }
+        width_ = region->width;
+        height_ = region->height;
+        bytesPerLine_ = fmt.fmt.pix.bytesperline;
+        region_ = *region;
+        return region;
+    }
+
     /// The control whose name (as VIDIOC_QUERYCTRL reports it) is `name`.
     std::optional<v4l2_queryctrl> findControl(const std::string& name)
     {
@@ -423,13 +549,19 @@ class V4l2Camera final : public Camera {
         }
         cv::Mat view;
         if (v4l2::needsConversion(fourcc_)) {
-            v4l2::yuyvToGrey(data, bytesPerLine_, width_, height_, slot.grey);
-            view = slot.grey;
+            // The region's grey image in the front of the slot's (configured-size) conversion target.
+            view = cv::Mat(height_, width_, CV_8UC1, slot.grey.data);
+            v4l2::yuyvToGrey(data, bytesPerLine_, width_, height_, view);
         } else {
             // GREY/Y12/Y16 are the frame itself: a strided view of the mapped buffer.
             view = cv::Mat(height_, width_, cvTypeOf(settings().pixelFormat), slot.start, bytesPerLine_);
         }
-        return Frame::over(view, b.sequence, ts, status, std::move(recycle), message);
+        pool->hold(index);
+        Frame f = Frame::over(view, b.sequence, ts, status, std::move(recycle), message);
+        f.region = region_;
+        f.payloadBytes = b.bytesused;
+        f.regionChangeMs = std::exchange(regionChangeMs_, 0.0);
+        return f;
     }
 
     void stopStream()
@@ -457,6 +589,10 @@ class V4l2Camera final : public Camera {
     int height_ = 0;
     std::size_t bytesPerLine_ = 0;
     std::shared_ptr<MappedPool> pool_;
+    Roi configured_;              ///< the configured ROI on the sensor (the whole image unless roi is set)
+    Roi region_;                  ///< the crop frames cover now
+    std::string cropUnsupported_; ///< why the device cannot crop; empty when it can
+    double regionChangeMs_ = 0.0; ///< the last crop change's duration, for the next frame
 };
 
 } // namespace

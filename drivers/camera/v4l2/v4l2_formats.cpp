@@ -51,4 +51,19 @@ void yuyvToGrey(const std::uint8_t* src, std::size_t bytesPerLine, int width, in
     }
 }
 
+namespace {
+bool contains(const Roi& outer, const Roi& inner)
+{
+    return inner.x >= outer.x && inner.y >= outer.y && inner.x + inner.width <= outer.x + outer.width &&
+           inner.y + inner.height <= outer.y + outer.height;
+}
+} // namespace
+
+std::optional<Roi> acceptedCrop(const Roi& asked, const Roi& chosen, const Roi& bounds)
+{
+    if (chosen.width <= 0 || chosen.height <= 0 || !contains(chosen, asked) || !contains(bounds, chosen))
+        return std::nullopt;
+    return chosen;
+}
+
 } // namespace hg::drivers::v4l2

@@ -32,4 +32,9 @@ std::string fourccName(std::uint32_t fourcc);
 /// `dst` must be CV_8UC1 of width x height.
 void yuyvToGrey(const std::uint8_t* src, std::size_t bytesPerLine, int width, int height, cv::Mat& dst);
 
+/// The crop a device chose for `asked` (VIDIOC_S_SELECTION adjusts instead
+/// of refusing), as the region frames will cover; std::nullopt when it does
+/// not contain `asked` or leaves `bounds` (then the crop must be undone).
+std::optional<Roi> acceptedCrop(const Roi& asked, const Roi& chosen, const Roi& bounds);
+
 } // namespace hg::drivers::v4l2

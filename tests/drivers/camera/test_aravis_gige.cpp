@@ -2,13 +2,16 @@
 // on 127.0.0.1 (in a private network namespace per test process). Expected
 // pixels are the images the test itself wrote for the simulator to serve.
 #include "gige_sim_process.h"
+#include "hgtest/log_capture.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/camera.h"
 
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <gtest/gtest.h>
+#include <iostream>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -359,6 +362,198 @@ TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)
     EXPECT_LE(Clock::now() - t0, 10s);
     // A failed configure changes nothing (docs/drivers.md): configure again to retry.
     EXPECT_EQ(cam->state(), LifecycleState::Unconfigured);
+}
+
+// --- Regions per grab (docs/camera.md "Regions per grab") ------------------------
+
+using hg::drivers::Roi;
+
+/// One served image; the fake camera with a GigE camera's coarser region
+/// increments: offsets in steps of 4 (x) and 2 (y), widths 8, 16, ..., heights 2, 4, ...
+class AravisRegions : public AravisGige {
+  protected:
+    void startRegionSim(const std::vector<std::string>& extra = {})
+    {
+        std::vector<std::string> args{"--image", (dir_ / "view00.png").string(), "--frame-rate",
+                                      "100",     "--region-increments",          "4,2,8,2"};
+        args.insert(args.end(), extra.begin(), extra.end());
+        sim_.start(args);
+    }
+
+    /// Grabs until a complete frame (free run over UDP may lose packets of one), at most 20 tries.
+    static hg::drivers::Frame grabComplete(Camera& cam)
+    {
+        for (int attempt = 0; attempt < 20; ++attempt) {
+            auto f = cam.grab(2000ms);
+            if (f.status != FrameStatus::Incomplete) return f;
+        }
+        return hg::drivers::Frame::failed(FrameStatus::Incomplete, "20 incomplete frames in a row");
+    }
+
+    /// Each request, the region it must give (rounded out by hand), then two
+    /// grabs of it: size, origin, bytes and pixels of the served image's window.
+    void grabRegions(Camera& cam)
+    {
+        const cv::Mat& served = images_[0];
+        struct Case {
+            Roi request;
+            Roi expected;
+        };
+        const Case cases[] = {
+            // x 13 -> 12, right edge 63 -> width 56; y 7 -> 6, bottom 38 -> height 32
+            {{13, 7, 50, 31}, {12, 6, 56, 32}},
+            // the same size moved: written while streaming (offsets not locked)
+            {{40, 20, 56, 32}, {40, 20, 56, 32}},
+            // clamped to [150, 160) x [100, 120): 148 + 16 > 160, one step back to 144
+            {{150, 100, 30, 40}, {144, 100, 16, 20}},
+            {{0, 0, 8, 2}, {0, 0, 8, 2}},
+            {{}, {0, 0, kWidth, kHeight}},
+        };
+        for (const Case& c : cases) {
+            SCOPED_TRACE("request " + toString(c.request));
+            auto region = cam.setRegion(c.request);
+            ASSERT_TRUE(region.ok()) << region.message();
+            EXPECT_EQ(region.value(), c.expected);
+            for (int k = 0; k < 2; ++k) {
+                auto f = grabComplete(cam);
+                ASSERT_TRUE(f.ok()) << f.message;
+                EXPECT_EQ(f.region, c.expected);
+                ASSERT_EQ(f.image.size(), cv::Size(c.expected.width, c.expected.height));
+                EXPECT_EQ(f.payloadBytes, static_cast<std::size_t>(c.expected.width) * c.expected.height);
+                const cv::Rect window(c.expected.x, c.expected.y, c.expected.width, c.expected.height);
+                EXPECT_EQ(maxDifference(f.image, served(window)), 0.0) << "grab " << k;
+                if (k == 1) {
+                    EXPECT_EQ(f.regionChangeMs, 0.0) << "no change before the second grab";
+                }
+            }
+        }
+    }
+};
+
+TEST_F(AravisRegions, SoftwareTriggeredRegionsAreRoundedOutwardAndCarryTheServedPixels)
+{
+    startRegionSim();
+    auto cam = makeCamera("    trigger: software\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto whole = cam->grab(2000ms);
+    ASSERT_TRUE(whole.ok()) << whole.message;
+    EXPECT_EQ(whole.region, (Roi{0, 0, kWidth, kHeight}));
+    EXPECT_EQ(whole.payloadBytes, static_cast<std::size_t>(kWidth) * kHeight);
+    EXPECT_EQ(maxDifference(whole.image, images_[0]), 0.0);
+    whole.release();
+
+    grabRegions(*cam);
+
+    auto outside = cam->setRegion(Roi{200, 10, 10, 10});
+    EXPECT_EQ(outside.code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(outside.message(),
+              "camera: region [200, 10, 10, 10] lies outside the sensor region [0, 0, 160, 120] the camera delivers");
+
+    // A region is left on the device at deactivate; the next activation starts whole again.
+    ASSERT_TRUE(cam->setRegion(Roi{13, 7, 50, 31}).ok());
+    ASSERT_TRUE(cam->grab(2000ms).ok());
+    ASSERT_TRUE(cam->deactivate());
+    ASSERT_TRUE(cam->activate());
+    auto again = cam->grab(2000ms);
+    ASSERT_TRUE(again.ok()) << again.message;
+    EXPECT_EQ(again.region, (Roi{0, 0, kWidth, kHeight}));
+    EXPECT_EQ(maxDifference(again.image, images_[0]), 0.0);
+}
+
+TEST_F(AravisRegions, FreeRunRegionsDropTheFramesOfTheRegionBefore)
+{
+    startRegionSim();
+    auto cam = makeCamera("    trigger: free_run\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    grabRegions(*cam);
+}
+
+TEST_F(AravisRegions, ConfiguredRoiBoundsTheRegions)
+{
+    startRegionSim();
+    auto cam = makeCamera("    roi: [16, 10, 96, 64]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    // Clamped to [16, 20) x [10, 12), then width 8 and height 2.
+    EXPECT_EQ(cam->setRegion(Roi{0, 0, 20, 12}).value(), (Roi{16, 10, 8, 2}));
+    auto f = cam->grab(2000ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    EXPECT_EQ(f.region, (Roi{16, 10, 8, 2}));
+    EXPECT_EQ(maxDifference(f.image, images_[0](cv::Rect(16, 10, 8, 2))), 0.0);
+    EXPECT_EQ(cam->setRegion(Roi{}).value(), (Roi{16, 10, 96, 64}));
+    auto g = cam->grab(2000ms);
+    ASSERT_TRUE(g.ok()) << g.message;
+    EXPECT_EQ(g.region, (Roi{16, 10, 96, 64}));
+}
+
+TEST_F(AravisRegions, CameraWithReadOnlyOffsetXFallsBackToWholeFramesWithOneWarning)
+{
+    startRegionSim({"--read-only-offset-x"});
+    hgtest::LogCapture log("camera");
+    auto cam = makeCamera("    trigger: software\n");
+    ASSERT_TRUE(cam->configure());
+    EXPECT_EQ(cam->getFeature("OffsetX").value(), "0");
+    ASSERT_TRUE(cam->activate());
+    for (int k = 0; k < 3; ++k) {
+        auto region = cam->setRegion(Roi{13, 7, 50, 31});
+        ASSERT_TRUE(region.ok()) << region.message();
+        EXPECT_EQ(region.value(), (Roi{0, 0, kWidth, kHeight}));
+        auto f = cam->grab(2000ms);
+        ASSERT_TRUE(f.ok()) << f.message;
+        EXPECT_EQ(f.region, (Roi{0, 0, kWidth, kHeight})) << "never a wrong crop";
+        EXPECT_EQ(maxDifference(f.image, images_[0]), 0.0);
+    }
+    EXPECT_EQ(log.count(spdlog::level::warn, "delivering whole frames"), 1) << log.text();
+    EXPECT_NE(log.text().find("OffsetX is not writable"), std::string::npos) << log.text();
+}
+
+/// Figures for docs/camera.md: bytes per frame and grab times of whole frames
+/// and of a 600 x 400 region of a 2448 x 2048 Mono8 sensor. Only the bytes are
+/// checked; the times are printed (they depend on the machine and its load).
+TEST_F(AravisRegions, BytesAndGrabTimesOfWholeFramesAndARegionAt2448x2048)
+{
+    const cv::Size sensor(2448, 2048);
+    cv::Mat big(sensor, CV_8UC1);
+    cv::RNG(11).fill(big, cv::RNG::UNIFORM, 0, 256);
+    ASSERT_TRUE(cv::imwrite((dir_ / "big.png").string(), big));
+    sim_.start({"--image", (dir_ / "big.png").string(), "--region-increments", "4,2,8,2"});
+    auto cam = makeCamera("    trigger: software\n    socket_buffer_bytes: 4194304\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    using Ms = std::chrono::duration<double, std::milli>;
+    auto measure = [&](const Roi& request, const char* name) {
+        ASSERT_TRUE(cam->setRegion(request).ok());
+        std::vector<double> grabs;
+        double changeMs = 0.0, firstMs = 0.0;
+        std::size_t bytes = 0;
+        for (int k = 0; k < 12; ++k) {
+            const auto t0 = Clock::now();
+            auto f = grabComplete(*cam);
+            const double ms = Ms(Clock::now() - t0).count();
+            ASSERT_TRUE(f.ok()) << f.message;
+            const Roi& r = f.region;
+            EXPECT_EQ(f.payloadBytes, static_cast<std::size_t>(r.width) * r.height);
+            EXPECT_EQ(maxDifference(f.image, big(cv::Rect(r.x, r.y, r.width, r.height))), 0.0);
+            bytes = f.payloadBytes;
+            if (k == 0) {
+                changeMs = f.regionChangeMs;
+                firstMs = ms;
+            } else {
+                grabs.push_back(ms);
+            }
+        }
+        std::sort(grabs.begin(), grabs.end());
+        std::cout << name << ": " << bytes << " bytes per frame; region change " << changeMs << " ms; first grab "
+                  << firstMs << " ms; later grabs median " << grabs[grabs.size() / 2] << " ms (min " << grabs.front()
+                  << ", max " << grabs.back() << ")\n";
+        RecordProperty(std::string(name) + "_bytes", std::to_string(bytes));
+        RecordProperty(std::string(name) + "_grab_median_ms", std::to_string(grabs[grabs.size() / 2]));
+    };
+    measure(Roi{}, "whole");
+    measure(Roi{900, 800, 600, 400}, "region");
+    measure(Roi{}, "whole again");
 }
 
 TEST_F(AravisGige, RoiTheSensorCannotHoldIsRefused)

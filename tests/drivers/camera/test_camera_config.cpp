@@ -146,6 +146,80 @@ TEST(CameraFrame, ReleaseGivesTheBufferBackExactlyOnce)
     EXPECT_EQ(recycled, 2);
 }
 
+// alignRegion against hand-rounded boxes. Rules of a typical GigE camera:
+// offsets in steps of 4 (x) and 2 (y), widths 8, 16, 24, ..., heights 2, 4, ...
+constexpr hg::drivers::RegionRules kCoarse{{0, 4, 8, 8}, {0, 2, 2, 2}};
+using hg::drivers::alignRegion;
+using hg::drivers::Roi;
+
+TEST(CameraConfigRegions, RequestsAreRoundedOutwardToTheIncrements)
+{
+    const Roi sensor{0, 0, 160, 120};
+    // x: 13 -> 12; right edge 63 -> width 51 -> 56. y: 7 -> 6; bottom 38 -> height 32.
+    EXPECT_EQ(alignRegion(Roi{13, 7, 50, 31}, sensor, kCoarse).value(), (Roi{12, 6, 56, 32}));
+    EXPECT_EQ(alignRegion(Roi{0, 0, 8, 2}, sensor, kCoarse).value(), (Roi{0, 0, 8, 2}));
+    EXPECT_EQ(alignRegion(Roi{}, sensor, kCoarse).value(), sensor);
+    // Width 1 -> the minimum, 8.
+    EXPECT_EQ(alignRegion(Roi{41, 3, 1, 1}, sensor, kCoarse).value(), (Roi{40, 2, 8, 2}));
+}
+
+TEST(CameraConfigRegions, RequestsOverTheEdgeAreClampedAndShiftedInside)
+{
+    const Roi sensor{0, 0, 160, 120};
+    // x: [150, 160) -> offset 148, width 12 -> 16 ends at 164 > 160: one offset step back to 144.
+    EXPECT_EQ(alignRegion(Roi{150, 100, 30, 40}, sensor, kCoarse).value(), (Roi{144, 100, 16, 20}));
+    // Negative origin: clamped to [0, 15) on both axes; 15 -> 16 wide and high.
+    EXPECT_EQ(alignRegion(Roi{-5, -5, 20, 20}, sensor, kCoarse).value(), (Roi{0, 0, 16, 16}));
+    // Within a configured ROI [16, 10, 96, 64]: clamped to [16, 20) x [10, 12).
+    EXPECT_EQ(alignRegion(Roi{0, 0, 20, 12}, Roi{16, 10, 96, 64}, kCoarse).value(), (Roi{16, 10, 8, 2}));
+    // A 100 px sensor with steps of 16: [85, 100) needs offset 80 width 32 (past 100);
+    // stepping back to 64 no longer reaches 100, so x takes the whole sensor.
+    const hg::drivers::RegionRules steps16{{0, 16, 16, 16}, {0, 1, 1, 1}};
+    EXPECT_EQ(alignRegion(Roi{85, 0, 15, 10}, Roi{0, 0, 100, 50}, steps16).value(), (Roi{0, 0, 100, 10}));
+}
+
+TEST(CameraConfigRegions, EmptyOrOutsideRequestsAreRefusedNamingBothBoxes)
+{
+    const Roi sensor{0, 0, 160, 120};
+    auto outside = alignRegion(Roi{200, 10, 10, 10}, sensor, kCoarse);
+    EXPECT_EQ(outside.code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(outside.message(), "region [200, 10, 10, 10] lies outside the sensor region [0, 0, 160, 120] the "
+                                 "camera delivers");
+    // Touching the edge is not overlapping it.
+    EXPECT_FALSE(alignRegion(Roi{160, 0, 10, 10}, sensor, kCoarse).ok());
+    auto empty = alignRegion(Roi{10, 10, 0, 4}, sensor, kCoarse);
+    EXPECT_EQ(empty.code(), hg::StatusCode::NotAllowed);
+    EXPECT_NE(empty.message().find("width and height must both be positive"), std::string::npos);
+    EXPECT_FALSE(alignRegion(Roi{10, 10, -4, 4}, sensor, kCoarse).ok());
+}
+
+TEST(CameraConfigRegions, EveryAnswerContainsTheRequestOnTheIncrementsInsideTheBounds)
+{
+    // Seeded random requests against the definition, not against the algorithm.
+    cv::RNG rng(7);
+    const Roi bounds{8, 6, 144, 100};
+    for (int k = 0; k < 2000; ++k) {
+        const Roi r{rng.uniform(-20, 170), rng.uniform(-20, 130), rng.uniform(1, 120), rng.uniform(1, 90)};
+        auto a = alignRegion(r, bounds, kCoarse);
+        const int x0 = std::max(r.x, bounds.x), x1 = std::min(r.x + r.width, bounds.x + bounds.width);
+        const int y0 = std::max(r.y, bounds.y), y1 = std::min(r.y + r.height, bounds.y + bounds.height);
+        if (x0 >= x1 || y0 >= y1) {
+            EXPECT_FALSE(a.ok()) << toString(r);
+            continue;
+        }
+        ASSERT_TRUE(a.ok()) << toString(r) << ": " << a.message();
+        const Roi g = a.value();
+        SCOPED_TRACE(toString(r) + " -> " + toString(g));
+        EXPECT_TRUE(g.x <= x0 && g.y <= y0 && g.x + g.width >= x1 && g.y + g.height >= y1);
+        EXPECT_TRUE(g.x >= bounds.x && g.y >= bounds.y && g.x + g.width <= bounds.x + bounds.width &&
+                    g.y + g.height <= bounds.y + bounds.height);
+        EXPECT_EQ(g.x % 4, 0);
+        EXPECT_EQ(g.y % 2, 0);
+        EXPECT_EQ(g.width % 8, 0);
+        EXPECT_EQ(g.height % 2, 0);
+    }
+}
+
 TEST(CameraFrame, PixelFormatNames)
 {
     EXPECT_EQ(hg::drivers::pixelFormatFromString("Mono16"), PixelFormat::Mono16);

@@ -1,5 +1,6 @@
 // The simulated camera against analytic silhouettes: a cube seen face-on by a
 // pinhole camera projects to a square whose size follows from similar triangles.
+#include "hgtest/log_capture.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hullgauge/calib/target.h"
@@ -264,6 +265,111 @@ TEST_F(SimCameraTest, FaultSwitchesTimeOutCutPacketsAndDropAFrame)
     EXPECT_EQ(next.frameId, id + 3);
     EXPECT_GT(next.image.at<std::uint8_t>(0, 0), 200);
     EXPECT_FALSE(cam->setFeature("Fault", "sometimes"));
+}
+
+TEST_F(SimCameraTest, RegionGrabsEqualTheSameWindowOfAWholeFrame)
+{
+    using hg::drivers::Roi;
+    auto cam = make("    blur_sigma_px: 1.5\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    pose_ = hg::geometry::FixturePose{30.0, 0.0, 0.0}; // slanted, blurred edges: every grey level counts
+    auto whole = cam->grab(100ms);
+    ASSERT_TRUE(whole.ok()) << whole.message;
+    EXPECT_EQ(whole.region, (Roi{0, 0, 640, 480}));
+    EXPECT_EQ(whole.payloadBytes, 640u * 480u);
+    const cv::Mat full = whole.image.clone();
+    whole.release();
+
+    // The twin's increments are 1: the region is the request itself.
+    auto region = cam->setRegion(Roi{300, 200, 150, 100});
+    ASSERT_TRUE(region.ok()) << region.message();
+    EXPECT_EQ(region.value(), (Roi{300, 200, 150, 100}));
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok()) << f.message;
+    EXPECT_EQ(f.region, (Roi{300, 200, 150, 100}));
+    ASSERT_EQ(f.image.size(), cv::Size(150, 100));
+    EXPECT_EQ(f.payloadBytes, 150u * 100u);
+    const cv::Mat window = full(cv::Rect(300, 200, 150, 100));
+    EXPECT_EQ(cv::norm(f.image, window, cv::NORM_INF), 0.0);
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(window, &lo, &hi);
+    EXPECT_LT(lo, 100.0) << "the window must cut the silhouette's edge";
+    EXPECT_GT(hi, 200.0);
+    f.release();
+
+    // Partly off the sensor: clamped to it. Wholly off, or empty: refused.
+    EXPECT_EQ(cam->setRegion(Roi{600, 450, 100, 100}).value(), (Roi{600, 450, 40, 30}));
+    auto corner = cam->grab(100ms);
+    ASSERT_TRUE(corner.ok());
+    EXPECT_EQ(cv::norm(corner.image, full(cv::Rect(600, 450, 40, 30)), cv::NORM_INF), 0.0);
+    corner.release();
+    auto outside = cam->setRegion(Roi{700, 10, 10, 10});
+    EXPECT_EQ(outside.code(), hg::StatusCode::NotAllowed);
+    EXPECT_NE(outside.message().find("region [700, 10, 10, 10] lies outside the sensor region [0, 0, 640, 480]"),
+              std::string::npos)
+        << outside.message();
+    EXPECT_EQ(cam->setRegion(Roi{10, 10, 0, 5}).code(), hg::StatusCode::NotAllowed);
+
+    // Roi{} returns to whole frames.
+    EXPECT_EQ(cam->setRegion(Roi{}).value(), (Roi{0, 0, 640, 480}));
+    auto again = cam->grab(100ms);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(cv::norm(again.image, full, cv::NORM_INF), 0.0);
+    again.release();
+
+    ASSERT_TRUE(cam->deactivate());
+    auto inactive = cam->setRegion(Roi{0, 0, 10, 10});
+    EXPECT_EQ(inactive.code(), hg::StatusCode::NotAllowed);
+    EXPECT_NE(inactive.message().find("not allowed while inactive (needs active)"), std::string::npos);
+}
+
+TEST_F(SimCameraTest, ConfiguredRoiBoundsTheRegions)
+{
+    using hg::drivers::Roi;
+    auto cam = make("    roi: [100, 80, 400, 300]\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    auto whole = cam->grab(100ms);
+    ASSERT_TRUE(whole.ok());
+    EXPECT_EQ(whole.region, (Roi{100, 80, 400, 300}));
+    const cv::Mat roi = whole.image.clone();
+    whole.release();
+    // The pool holds the configured ROI: a region reaching out of it is cut to it.
+    EXPECT_EQ(cam->setRegion(Roi{50, 50, 100, 100}).value(), (Roi{100, 80, 50, 70}));
+    auto f = cam->grab(100ms);
+    ASSERT_TRUE(f.ok());
+    EXPECT_EQ(f.region, (Roi{100, 80, 50, 70}));
+    EXPECT_EQ(cv::norm(f.image, roi(cv::Rect(0, 0, 50, 70)), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cam->setRegion(Roi{}).value(), (Roi{100, 80, 400, 300}));
+}
+
+TEST_F(SimCameraTest, RefusedRegionFallsBackToWholeFramesWithOneWarning)
+{
+    using hg::drivers::Roi;
+    hgtest::LogCapture log("camera");
+    auto cam = make("    fault: refuse_region\n");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    EXPECT_EQ(cam->getFeature("Fault").value(), "refuse_region");
+    for (int k = 0; k < 3; ++k) {
+        auto region = cam->setRegion(Roi{300, 200, 150, 100});
+        ASSERT_TRUE(region.ok()) << region.message();
+        EXPECT_EQ(region.value(), (Roi{0, 0, 640, 480})) << "request " << k;
+        auto f = cam->grab(100ms);
+        ASSERT_TRUE(f.ok()) << f.message;
+        EXPECT_EQ(f.region, (Roi{0, 0, 640, 480}));
+        EXPECT_EQ(f.image.size(), cv::Size(640, 480));
+    }
+    EXPECT_EQ(log.count(spdlog::level::warn, "delivering whole frames"), 1) << log.text();
+    EXPECT_NE(log.text().find("OffsetX, OffsetY, Width and Height are not writable"), std::string::npos);
+    // A fresh configure of a camera that can set regions again does.
+    ASSERT_TRUE(cam->deactivate());
+    ASSERT_TRUE(cam->cleanup());
+    sim_.camera->injectFault(hg::drivers::SimulatedCameraFault::None);
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    EXPECT_EQ(cam->setRegion(Roi{300, 200, 150, 100}).value(), (Roi{300, 200, 150, 100}));
 }
 
 TEST(SimCameraTable, OpensFromTheStationAloneAndShowsTheBareBackLight)

@@ -55,4 +55,19 @@ TEST(V4l2Formats, YuyvToGreyTakesTheLumaAndHonoursTheStride)
     EXPECT_EQ(cv::norm(grey, expected, cv::NORM_INF), 0.0) << grey;
 }
 
+TEST(V4l2Formats, AnAdjustedCropCountsOnlyWhenItContainsTheRegionInsideTheBounds)
+{
+    using hg::drivers::Roi;
+    const Roi bounds{0, 0, 320, 180};
+    // Grown to even sizes around the request: accepted as the region delivered.
+    EXPECT_EQ(v4l2::acceptedCrop(Roi{11, 5, 51, 31}, Roi{10, 4, 52, 32}, bounds), (Roi{10, 4, 52, 32}));
+    EXPECT_EQ(v4l2::acceptedCrop(Roi{10, 4, 52, 32}, Roi{10, 4, 52, 32}, bounds), (Roi{10, 4, 52, 32}));
+    // Shrunk or moved off the request: not a crop of it.
+    EXPECT_FALSE(v4l2::acceptedCrop(Roi{11, 5, 51, 31}, Roi{12, 5, 50, 31}, bounds).has_value());
+    EXPECT_FALSE(v4l2::acceptedCrop(Roi{11, 5, 51, 31}, Roi{11, 5, 50, 31}, bounds).has_value());
+    // Out of the configured bounds, or empty.
+    EXPECT_FALSE(v4l2::acceptedCrop(Roi{300, 5, 20, 31}, Roi{300, 4, 24, 32}, bounds).has_value());
+    EXPECT_FALSE(v4l2::acceptedCrop(Roi{11, 5, 51, 31}, Roi{0, 0, 0, 0}, bounds).has_value());
+}
+
 } // namespace

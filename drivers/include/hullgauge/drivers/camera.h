@@ -15,9 +15,12 @@
 // stop/cleanup/recovery safely: its buffer is then freed instead of requeued.
 #pragma once
 
+#include <atomic>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <string>
@@ -55,6 +58,33 @@ struct Roi {
     bool operator==(const Roi&) const = default;
 };
 
+/// "[x, y, width, height]", for messages.
+std::string toString(const Roi& roi);
+std::ostream& operator<<(std::ostream& out, const Roi& roi);
+
+/// How a device lets one axis of its region be set: GenICam's OffsetX/Width
+/// (OffsetY/Height) take Min + k * Inc, each between its Min and Max.
+struct RegionAxisRules {
+    int offsetMin = 0;
+    int offsetInc = 1;
+    int sizeMin = 1;
+    int sizeInc = 1;
+};
+struct RegionRules {
+    RegionAxisRules x;
+    RegionAxisRules y;
+};
+
+/// The region a camera delivers when asked for `requested` (sensor pixels),
+/// docs/camera.md "Regions per grab": Roi{} is `bounds` itself; otherwise the
+/// request is clamped to `bounds` (the configured ROI, on the device's
+/// increments) and rounded OUTWARD to the increments, so the answer always
+/// contains the part of the request inside `bounds` and lies within `bounds`.
+/// Where no such box exists on an axis, that axis takes the whole of `bounds`.
+/// NotAllowed for a negative or half-empty size, or a request that does not
+/// overlap `bounds` at all (the message names both boxes).
+Result<Roi> alignRegion(const Roi& requested, const Roi& bounds, const RegionRules& rules);
+
 /// What configure() applies to the device.
 struct CameraSettings {
     PixelFormat pixelFormat = PixelFormat::Mono8;
@@ -90,8 +120,16 @@ class Frame {
                       std::function<void()> recycle, std::string message = {});
 
     FrameStatus status = FrameStatus::Error;
-    /// CV_8UC1 (Mono8) or CV_16UC1 (Mono12/Mono16), of the ROI's size.
+    /// CV_8UC1 (Mono8) or CV_16UC1 (Mono12/Mono16), of the region's size.
     cv::Mat image;
+    /// Where `image` lies on the sensor (sensor pixels, never Roi{}): image
+    /// pixel (u, v) is sensor pixel (region.x + u, region.y + v), so the
+    /// full-sensor camera model applies after that shift (docs/camera.md).
+    Roi region;
+    /// Bytes of image payload the frame carried from the camera (GVSP data, V4L2 bytesused, the sim's image).
+    std::size_t payloadBytes = 0;
+    /// ms the camera took to apply the region change this frame is the first of; 0 when the region did not change.
+    double regionChangeMs = 0.0;
     /// Camera frame counter (GVSP block id, V4L2 sequence, or the driver's own count).
     std::uint64_t frameId = 0;
     /// Camera timestamp (device clock, ns) where the device has one, else the host's monotonic clock.
@@ -143,6 +181,16 @@ class Camera : public Device {
     /// device is lost: backends recover in the background (see docs/camera.md).
     [[nodiscard]] Frame grab(std::chrono::milliseconds timeout);
 
+    /// Active only. The region of the sensor the following grabs deliver
+    /// (docs/camera.md "Regions per grab"): `requested` aligned by
+    /// alignRegion() to the device's increments within the configured ROI;
+    /// Roi{} returns to the configured ROI. Answers the region the frames will
+    /// cover, or NotAllowed for a request alignRegion() refuses. A device that
+    /// cannot set the region delivers whole frames (the configured ROI) from
+    /// then on, after one warning; Frame::region always tells what a frame covers.
+    /// The change may complete in the background (aravis): grab() waits for it.
+    Result<Roi> setRegion(const Roi& requested);
+
     /// Maintenance: device features by name (Inactive or Active).
     Result<std::vector<FeatureInfo>> listFeatures();
     Result<std::string> getFeature(const std::string& name);
@@ -157,6 +205,18 @@ class Camera : public Device {
     // onDeactivate stops streaming; onCleanup closes the device.
     virtual Status doApplySettings(const CameraSettings& settings) = 0;
     virtual Frame doGrab(std::chrono::milliseconds timeout) = 0;
+    /// `aligned` is already checked and aligned (never Roi{}); answers the region the frames will cover.
+    virtual Result<Roi> doSetRegion(const Roi& aligned) = 0;
+    /// The device's region rules and the configured ROI on the sensor, valid while Inactive or Active.
+    virtual RegionRules regionRules() const = 0;
+    virtual Roi configuredRegion() const = 0;
+
+    /// From now until allowRegions(): whole frames (the configured ROI) only;
+    /// logs `why` as a warning the first time only.
+    void fallBackToWholeFrames(const std::string& why);
+    bool wholeFramesOnly() const { return wholeFramesOnly_.load(); }
+    /// A freshly configured device may set regions again.
+    void allowRegions() { wholeFramesOnly_ = false; }
     virtual Result<std::vector<FeatureInfo>> doListFeatures() = 0;
     virtual Result<std::string> doGetFeature(const std::string& name) = 0;
     virtual Status doSetFeature(const std::string& name, const std::string& value) = 0;
@@ -167,6 +227,7 @@ class Camera : public Device {
 
     std::string configPath_;
     CameraSettings settings_;
+    std::atomic<bool> wholeFramesOnly_{false};
 };
 
 /// Parses the settings keys shared by every backend (pixel_format, exposure_us,

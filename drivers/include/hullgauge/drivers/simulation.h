@@ -20,9 +20,10 @@ namespace hg::drivers {
 /// Fault switches of the simulated camera (docs/camera.md, `camera.driver.fault`).
 enum class SimulatedCameraFault {
     None,
-    Timeout,    ///< the camera is silent: every grab waits out its timeout
-    Incomplete, ///< frames arrive with missing packets (status incomplete, rows missing)
-    Dropped,    ///< the next frame is lost: that grab times out, the frame counter skips it (one-shot)
+    Timeout,      ///< the camera is silent: every grab waits out its timeout
+    Incomplete,   ///< frames arrive with missing packets (status incomplete, rows missing)
+    Dropped,      ///< the next frame is lost: that grab times out, the frame counter skips it (one-shot)
+    RefuseRegion, ///< OffsetX/Y, Width/Height not writable: a region request falls back to whole frames
 };
 std::string_view toString(SimulatedCameraFault fault);
 

@@ -103,8 +103,9 @@ std::function<int()> factory(CLI::App& app)
     auto* cmd = app.add_subcommand("landmarks", "landmark help for part programs");
     cmd->require_subcommand(1);
     auto args = std::make_shared<SuggestArgs>();
-    auto* sub = cmd->add_subcommand("suggest", "propose inspectable landmarks on faces, edges and holes of a CAD model, "
-                                               "spread over the part, as a part program's landmarks list");
+    auto* sub =
+        cmd->add_subcommand("suggest", "propose inspectable landmarks on faces, edges and holes of a CAD model, "
+                                       "spread over the part, as a part program's landmarks list");
     sub->add_option("--mesh", args->mesh, "CAD model: STL, OBJ, PLY, OFF or STEP")
         ->required()
         ->check(CLI::ExistingFile);

@@ -207,24 +207,62 @@ std::optional<Vec3> cylinderAxis(const Topology& topo, const std::vector<std::si
     return axis;
 }
 
-/// Least-squares circle (Kåsa) through 2-D points: centre and radius.
-std::optional<std::pair<Eigen::Vector2d, double>> fitCircle(const std::vector<Eigen::Vector2d>& pts)
+/// A facet's normal line in the plane square to the axis (2-D): through the
+/// middle of the facet's projection — for a facet of a cylinder (a planar
+/// strip whose corners lie on the surface) the middle of a chord, whatever
+/// vertices a mesher added inside it — along its normal.
+struct NormalLine {
+    Eigen::Vector2d through;
+    Eigen::Vector2d along;
+    double weight = 0.0; ///< the facet's area
+};
+
+NormalLine normalLine(const TriangleMesh& mesh, const Topology& topo, const std::vector<std::size_t>& facet,
+                      const Vec3& u, const Vec3& v)
 {
-    if (pts.size() < 3) return std::nullopt;
-    Eigen::MatrixXd a(static_cast<Eigen::Index>(pts.size()), 3);
-    Eigen::VectorXd b(static_cast<Eigen::Index>(pts.size()));
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        const auto r = static_cast<Eigen::Index>(i);
-        a(r, 0) = pts[i].x();
-        a(r, 1) = pts[i].y();
-        a(r, 2) = 1.0;
-        b(r) = -pts[i].squaredNorm();
+    Vec3 n = Vec3::Zero(), c = Vec3::Zero();
+    double area = 0.0;
+    for (std::size_t t : facet) {
+        n += topo.areas[t] * topo.normals[t];
+        c += topo.areas[t] * topo.centroids[t];
+        area += topo.areas[t];
     }
-    const Eigen::Vector3d s = a.colPivHouseholderQr().solve(b);
-    const Eigen::Vector2d centre(-s(0) / 2.0, -s(1) / 2.0);
-    const double r2 = centre.squaredNorm() - s(2);
-    if (!(r2 > 0.0)) return std::nullopt;
-    return std::make_pair(centre, std::sqrt(r2));
+    const Eigen::Vector2d m = Eigen::Vector2d(n.dot(u), n.dot(v)).normalized();
+    const Eigen::Vector2d chord(-m.y(), m.x());
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t t : facet)
+        for (int i : mesh.triangles[t]) {
+            const Vec3& p = mesh.vertices[static_cast<std::size_t>(i)];
+            const double s = Eigen::Vector2d(p.dot(u), p.dot(v)).dot(chord);
+            lo = std::min(lo, s);
+            hi = std::max(hi, s);
+        }
+    const Eigen::Vector2d centroid(c.dot(u) / area, c.dot(v) / area);
+    return {centroid.dot(m) * m + 0.5 * (lo + hi) * chord, m, area};
+}
+
+/// The axis' point (2-D): the least-squares meeting point of the facets'
+/// normal lines, none when they are all parallel (a plane) or do not meet
+/// within 1e-3 of the radius (no cylinder: the brief's "normals pointing to a
+/// common axis").
+std::optional<Eigen::Vector2d> axisPoint(const std::vector<NormalLine>& lines)
+{
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        const Eigen::Matrix2d across = Eigen::Matrix2d::Identity() - lines[i].along * lines[i].along.transpose();
+        a += lines[i].weight * across;
+        b += lines[i].weight * across * lines[i].through;
+    }
+    if (!(std::abs(a.determinant()) > 1e-12 * a.squaredNorm())) return std::nullopt;
+    const Eigen::Vector2d c = a.ldlt().solve(b);
+    double radius = 0.0;
+    for (const auto& l : lines) radius = std::max(radius, (l.through - c).norm());
+    for (const auto& l : lines) {
+        const Eigen::Vector2d d = c - l.through;
+        if ((d - d.dot(l.along) * l.along).norm() > 1e-3 * radius + 1e-6) return std::nullopt;
+    }
+    return c;
 }
 
 /// True when the points' angles about `centre` leave no gap wider than kCylinderMaxGapRad.
@@ -238,8 +276,9 @@ bool runsRound(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d& c
     return gap <= kCylinderMaxGapRad;
 }
 
+/// `tris` is a smooth patch, `planar` the planar region (facet) of every triangle.
 std::optional<Cylinder> fitCylinder(const TriangleMesh& mesh, const Topology& topo,
-                                    const std::vector<std::size_t>& tris)
+                                    const std::vector<std::size_t>& tris, const std::vector<int>& planar)
 {
     const auto axis = cylinderAxis(topo, tris);
     if (!axis) return std::nullopt;
@@ -249,20 +288,23 @@ std::optional<Cylinder> fitCylinder(const TriangleMesh& mesh, const Topology& to
     for (std::size_t t : tris) verts.insert(verts.end(), mesh.triangles[t].begin(), mesh.triangles[t].end());
     std::sort(verts.begin(), verts.end());
     verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    std::map<int, std::vector<std::size_t>> facets;
+    for (std::size_t t : tris) facets[planar[t]].push_back(t);
+    std::vector<NormalLine> lines;
+    for (const auto& [id, facet] : facets) lines.push_back(normalLine(mesh, topo, facet, u, v));
+    const auto centre = axisPoint(lines);
+    if (!centre) return std::nullopt;
+    const Eigen::Vector2d c = *centre;
     std::vector<Eigen::Vector2d> pts;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo, r = 0.0;
     for (int i : verts) {
         const Vec3& p = mesh.vertices[static_cast<std::size_t>(i)];
         pts.emplace_back(p.dot(u), p.dot(v));
+        r = std::max(r, (pts.back() - c).norm());
         lo = std::min(lo, p.dot(*axis));
         hi = std::max(hi, p.dot(*axis));
     }
-    const auto circle = fitCircle(pts);
-    if (!circle) return std::nullopt;
-    const auto& [c, r] = *circle;
-    for (const auto& p : pts)
-        if (std::abs((p - c).norm() - r) > 1e-3 * r + 1e-6) return std::nullopt;
-    if (!runsRound(pts, c)) return std::nullopt;
+    if (!(r > 0.0) || !runsRound(pts, c)) return std::nullopt;
     Cylinder cyl;
     cyl.axis = *axis;
     cyl.radius = r;
@@ -298,8 +340,8 @@ Features featuresOf(const TriangleMesh& mesh, const Topology& topo, const Candid
 {
     const double cosSharp = std::cos(options.sharpAngleDeg * kPi / 180.0);
     const double cosPlanar = std::cos(options.planarAngleDeg * kPi / 180.0);
-    const std::vector<int> patch = components(
-        topo, [&](std::size_t, std::size_t t, std::size_t u) { return !sharpEdge(topo, t, u, cosSharp); });
+    const std::vector<int> patch =
+        components(topo, [&](std::size_t, std::size_t t, std::size_t u) { return !sharpEdge(topo, t, u, cosSharp); });
     const std::vector<int> planar = components(topo, [&](std::size_t seed, std::size_t t, std::size_t u) {
         return patch[t] == patch[u] && topo.normals[seed].dot(topo.normals[u]) >= cosPlanar;
     });
@@ -308,9 +350,9 @@ Features featuresOf(const TriangleMesh& mesh, const Topology& topo, const Candid
     std::vector<std::optional<Cylinder>> patchCylinder(patches.size());
     for (std::size_t p = 0; p < patches.size(); ++p) {
         const int first = planar[patches[p].front()];
-        const bool curved = std::any_of(patches[p].begin(), patches[p].end(),
-                                        [&](std::size_t t) { return planar[t] != first; });
-        if (curved) patchCylinder[p] = fitCylinder(mesh, topo, patches[p]);
+        const bool curved =
+            std::any_of(patches[p].begin(), patches[p].end(), [&](std::size_t t) { return planar[t] != first; });
+        if (curved) patchCylinder[p] = fitCylinder(mesh, topo, patches[p], planar);
     }
     Features f;
     f.of.resize(topo.normals.size());
@@ -380,7 +422,8 @@ FacePoint deepestPoint(const TriangleMesh& mesh, const Topology& topo, const Fea
         }
     }
     std::vector<std::size_t> bySize = tris;
-    std::sort(bySize.begin(), bySize.end(), [&](std::size_t a, std::size_t b) { return topo.areas[a] > topo.areas[b]; });
+    std::sort(bySize.begin(), bySize.end(),
+              [&](std::size_t a, std::size_t b) { return topo.areas[a] > topo.areas[b]; });
     if (bySize.size() > kFacePointTrials) bySize.resize(kFacePointTrials);
     for (std::size_t t : bySize) trials.push_back(topo.centroids[t]);
     FacePoint best;
@@ -448,7 +491,7 @@ void addCylinders(const model::Solid& solid, const Features& f, std::vector<Land
 // into polylines.
 
 struct LineEdge {
-    int a = 0, b = 0;      ///< vertices
+    int a = 0, b = 0;         ///< vertices
     std::size_t t = 0, u = 0; ///< the two triangles
 };
 
@@ -527,7 +570,8 @@ std::vector<Polyline> walkLines(const TriangleMesh& mesh, const Topology& topo, 
             line.points.push_back(mesh.vertices[static_cast<std::size_t>(v)]);
             line.normals.push_back((topo.normals[e.t] + topo.normals[e.u]).normalized());
             if (line.normals.size() == 1)
-                line.apartDeg = std::acos(std::clamp(topo.normals[e.t].dot(topo.normals[e.u]), -1.0, 1.0)) * 180.0 / kPi;
+                line.apartDeg =
+                    std::acos(std::clamp(topo.normals[e.t].dot(topo.normals[e.u]), -1.0, 1.0)) * 180.0 / kPi;
         }
         line.closed = v == *start;
         out.push_back(std::move(line));
@@ -535,16 +579,27 @@ std::vector<Polyline> walkLines(const TriangleMesh& mesh, const Topology& topo, 
     return out;
 }
 
-/// The point at arc length `s` along the line, and its segment's normal.
+/// The point at arc length `s` along the line, and its segment's normal; at a
+/// vertex between two segments the mean of theirs (as the loader's
+/// angle-weighted normal has it there, docs/part-program.md "Normals from the
+/// mesh").
 std::pair<Vec3, Vec3> pointAlong(const Polyline& line, double s)
 {
-    for (std::size_t i = 1; i < line.points.size(); ++i) {
-        const double l = (line.points[i] - line.points[i - 1]).norm();
-        if (s <= l || i + 1 == line.points.size()) {
-            const double w = l > 0.0 ? std::clamp(s / l, 0.0, 1.0) : 0.0;
-            return {line.points[i - 1] + w * (line.points[i] - line.points[i - 1]), line.normals[i - 1]};
+    const std::size_t segments = line.normals.size();
+    for (std::size_t i = 0; i < segments; ++i) {
+        const Vec3& a = line.points[i];
+        const Vec3& b = line.points[i + 1];
+        const double l = (b - a).norm();
+        if (s > l && i + 1 < segments) {
+            s -= l;
+            continue;
         }
-        s -= l;
+        const double tol = 1e-9 * std::max(1.0, l);
+        const bool atEnd = s >= l - tol && (i + 1 < segments || line.closed);
+        const bool atStart = s <= tol && (i > 0 || line.closed);
+        if (atEnd) return {b, (line.normals[i] + line.normals[(i + 1) % segments]).normalized()};
+        if (atStart) return {a, (line.normals[i] + line.normals[(i + segments - 1) % segments]).normalized()};
+        return {a + std::clamp(s / l, 0.0, 1.0) * (b - a), line.normals[i]};
     }
     return {line.points.front(), line.normals.front()};
 }
@@ -556,8 +611,7 @@ std::string lineText(const Features& f, const std::pair<int, int>& pair, const P
             return "rim of the " + cylinderText(*c) + ", " + decimal(line.length(), 3) +
                    " mm round: one of 4 points a quarter round apart";
     return "convex edge, the faces' normals " + decimal(line.apartDeg, 1) + "° apart, " + decimal(line.length(), 3) +
-           " mm " +
-           (line.closed ? "round: one of 4 points a quarter round apart" : "long: its midpoint");
+           " mm " + (line.closed ? "round: one of 4 points a quarter round apart" : "long: its midpoint");
 }
 
 void addLines(const TriangleMesh& mesh, const Topology& topo, const Features& f, const CandidateOptions& options,
@@ -676,12 +730,51 @@ std::vector<LandmarkAnalysis> judge(const SuggestProblem& problem, const Suggest
     }
     PlanOptions planOptions = options.plan;
     // The verdict is all a candidate needs: no nearest inspectable point for a
-    // rejected one, and the type-four visibility report (3.3.8) only for the
-    // nearest layer, which `hullgauge plan` repeats for the landmarks chosen.
+    // rejected one, no type-four visibility report (3.3.8; `hullgauge plan`
+    // makes it for the landmarks chosen).
     planOptions.nearestSearchLimit = 0;
-    planOptions.pareLayers = 1;
+    planOptions.reportUnseenVoids = false;
     if (plan.landmarks.empty()) return {};
     return analyseLandmarks(plan, planOptions);
+}
+
+/// The spread and the planner's verdicts on the landmarks it chose.
+struct Spread {
+    std::vector<std::size_t> usable;        ///< candidates (indices into all) the spread chose from
+    std::vector<SpreadPick> picks;          ///< indices into usable
+    std::vector<LandmarkAnalysis> verdicts; ///< per pick, judged as the chosen set
+};
+
+/// Farthest-point selection among the usable candidates, judged again as the
+/// part program will hold them: the planner's candidate poses depend on the
+/// other landmarks (a face square to the turntable axis adds its grazing
+/// declination for all of them, planner.h), so a pick whose only witnesses
+/// came from a candidate not chosen is left out and the spread made again.
+Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& options,
+                      const std::vector<LandmarkCandidate>& all, std::vector<std::size_t> usable,
+                      const std::array<std::size_t, kFeatureKinds>& minimum)
+{
+    for (;;) {
+        std::vector<Vec3> points;
+        std::vector<FeatureKind> kinds;
+        for (std::size_t i : usable) {
+            points.push_back(all[i].position);
+            kinds.push_back(all[i].kind);
+        }
+        Spread s{usable, spreadSelect(points, kinds, options.count, minimum), {}};
+        std::vector<LandmarkCandidate> chosen;
+        for (const SpreadPick& p : s.picks) chosen.push_back(all[usable[p.index]]);
+        s.verdicts = judge(problem, options, chosen);
+        std::vector<std::size_t> failed;
+        for (std::size_t k = 0; k < s.picks.size(); ++k)
+            if (!s.verdicts[k].inspectable()) failed.push_back(usable[s.picks[k].index]);
+        if (failed.empty()) return s;
+        for (std::size_t i : failed)
+            log::category("plan")->debug("candidate {} ({} at {}) is not inspectable among the chosen: left out", i + 1,
+                                         toString(all[i].kind), vecText(all[i].position));
+        std::erase_if(usable,
+                      [&](std::size_t i) { return std::find(failed.begin(), failed.end(), i) != failed.end(); });
+    }
 }
 
 std::string reasonFor(const SpreadPick& pick, const std::vector<std::string>& idOf, FeatureKind kind,
@@ -693,8 +786,7 @@ std::string reasonFor(const SpreadPick& pick, const std::vector<std::string>& id
     const std::string from = formatNumber(pick.distanceMm, 3) + " mm from " + idOf[*pick.nearest];
     if (pick.forMinimumShare)
         return std::string("the ") + toString(kind) + " farthest from the earlier suggestions (at least " +
-               std::to_string(minimumOfKind) + " of " + std::to_string(count) + " on " + toString(kind) +
-               "s): " + from;
+               std::to_string(minimumOfKind) + " of " + std::to_string(count) + " on " + toString(kind) + "s): " + from;
     return "farthest from the earlier suggestions: " + from;
 }
 
@@ -729,42 +821,38 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
     std::vector<std::size_t> usable; // indices into all
     for (std::size_t i = 0; i < all.size(); ++i) {
         ++s.candidates[kindIndex(all[i].kind)];
-        if (!verdicts[i].inspectable()) continue;
+        if (!verdicts[i].inspectable()) {
+            log::category("plan")->debug("candidate {} ({} at {}) left out: {}", i + 1, toString(all[i].kind),
+                                         vecText(all[i].position), verdicts[i].reason);
+            continue;
+        }
         ++s.inspectable[kindIndex(all[i].kind)];
         usable.push_back(i);
     }
-    for (std::size_t i = 0; i < all.size(); ++i)
-        if (!verdicts[i].inspectable())
-            log::category("plan")->debug("candidate {} ({} at {}) left out: {}", i + 1, toString(all[i].kind),
-                                         vecText(all[i].position), verdicts[i].reason);
     log::category("plan")->info("landmark suggestion: {} candidates ({} face, {} edge, {} hole), {} inspectable",
                                 all.size(), s.candidates[0], s.candidates[1], s.candidates[2], usable.size());
-    std::vector<Vec3> points;
-    std::vector<FeatureKind> kinds;
-    for (std::size_t i : usable) {
-        points.push_back(all[i].position);
-        kinds.push_back(all[i].kind);
-    }
     auto share = [&](double fraction) { return static_cast<std::size_t>(std::ceil(fraction * options.count - 1e-9)); };
     std::array<std::size_t, kFeatureKinds> minimum{};
     minimum[kindIndex(FeatureKind::Face)] = share(options.minFaceShare);
     minimum[kindIndex(FeatureKind::Edge)] = share(options.minEdgeShare);
     minimum[kindIndex(FeatureKind::Hole)] = share(options.minHoleShare);
 
-    std::vector<std::string> idOf(points.size());
+    const Spread spread = spreadVerified(problem, options, all, usable, minimum);
+    std::vector<std::string> idOf(spread.usable.size());
     std::array<std::size_t, kFeatureKinds> numbered{};
-    for (const SpreadPick& pick : spreadSelect(points, kinds, options.count, minimum)) {
-        const std::size_t i = usable[pick.index];
+    for (std::size_t k = 0; k < spread.picks.size(); ++k) {
+        const SpreadPick& pick = spread.picks[k];
+        const LandmarkCandidate& c = all[spread.usable[pick.index]];
         SuggestedLandmark lm;
-        lm.candidate = all[i];
-        lm.id = std::string(toString(all[i].kind)) + "-" + std::to_string(++numbered[kindIndex(all[i].kind)]);
+        lm.candidate = c;
+        lm.id = std::string(toString(c.kind)) + "-" + std::to_string(++numbered[kindIndex(c.kind)]);
         idOf[pick.index] = lm.id;
-        lm.reason = reasonFor(pick, idOf, all[i].kind, minimum[kindIndex(all[i].kind)], options.count);
-        lm.witnessPoses = verdicts[i].witnessPoses.size();
-        lm.bestMedMm = verdicts[i].bestMedMm;
+        lm.reason = reasonFor(pick, idOf, c.kind, minimum[kindIndex(c.kind)], options.count);
+        lm.witnessPoses = spread.verdicts[k].witnessPoses.size();
+        lm.bestMedMm = spread.verdicts[k].bestMedMm;
         s.landmarks.push_back(std::move(lm));
     }
-    addNotes(s, options.count, usable.size());
+    addNotes(s, options.count, spread.usable.size());
     return s;
 }
 

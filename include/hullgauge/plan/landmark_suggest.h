@@ -143,7 +143,7 @@ struct SuggestedLandmark {
 };
 
 struct Suggestion {
-    std::vector<SuggestedLandmark> landmarks; ///< in the order chosen
+    std::vector<SuggestedLandmark> landmarks;             ///< in the order chosen
     std::array<std::size_t, kFeatureKinds> candidates{};  ///< found on the part, per kind
     std::array<std::size_t, kFeatureKinds> inspectable{}; ///< of those, inspectable at the station
     /// Remarks for the engineer: fewer suggestions than asked for, a kind the station cannot inspect.

@@ -73,7 +73,7 @@ int run(const SuggestArgs& args)
     const geometry::Station st = geometry::loadStation(station);
 
     plan::SuggestProblem problem;
-    problem.solid = cad.solid.get();
+    problem.solid = cad.solid;
     problem.brep = cad.brep.get();
     problem.station = &st;
     problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};

@@ -4,6 +4,8 @@
 
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/inspect/capability.h"
+#include "hullgauge/inspect/deviation.h"
 #include "hullgauge/model/step_io.h"
 
 #include <Eigen/Eigenvalues>
@@ -708,15 +710,14 @@ void snapToBRep(std::vector<LandmarkCandidate>& candidates, const model::StepMod
     }
 }
 
-/// The planner's verdict on every candidate (chapter 2, Rules 1-4), as
-/// `hullgauge plan` judges a landmark with this tolerance: with the sub-voxel
+/// The candidates as `hullgauge plan` takes landmarks: with the sub-voxel
 /// deviation (the default) a tolerance below ΔV is planned at ΔV.
-std::vector<LandmarkAnalysis> judge(const SuggestProblem& problem, const SuggestOptions& options,
-                                    const std::vector<LandmarkCandidate>& candidates)
+PlanProblem planProblem(const SuggestProblem& problem, const SuggestOptions& options,
+                        const std::vector<LandmarkCandidate>& candidates)
 {
     PlanProblem plan;
     plan.part = "suggestion";
-    plan.solid = problem.solid;
+    plan.solid = problem.solid.get();
     plan.station = problem.station;
     plan.frame = problem.frame;
     const double tolerance = std::max(options.toleranceMm, problem.frame.voxelSize());
@@ -728,32 +729,85 @@ std::vector<LandmarkAnalysis> judge(const SuggestProblem& problem, const Suggest
         lm.toleranceMm = tolerance;
         plan.landmarks.push_back(lm);
     }
-    PlanOptions planOptions = options.plan;
-    // The verdict is all a candidate needs: no nearest inspectable point for a
-    // rejected one, no type-four visibility report (3.3.8; `hullgauge plan`
-    // makes it for the landmarks chosen).
-    planOptions.nearestSearchLimit = 0;
-    planOptions.reportUnseenVoids = false;
-    if (plan.landmarks.empty()) return {};
-    return analyseLandmarks(plan, planOptions);
+    return plan;
 }
 
-/// The spread and the planner's verdicts on the landmarks it chose.
-struct Spread {
-    std::vector<std::size_t> usable;        ///< candidates (indices into all) the spread chose from
-    std::vector<SpreadPick> picks;          ///< indices into usable
-    std::vector<LandmarkAnalysis> verdicts; ///< per pick, judged as the chosen set
+/// The verdict is all a candidate needs: no nearest inspectable point for a
+/// rejected one, no type-four visibility report (3.3.8; `hullgauge plan`
+/// makes it for the landmarks chosen).
+PlanOptions verdictOptions(const SuggestOptions& options)
+{
+    PlanOptions planOptions = options.plan;
+    planOptions.nearestSearchLimit = 0;
+    planOptions.reportUnseenVoids = false;
+    return planOptions;
+}
+
+/// The planner's verdict on every candidate (chapter 2, Rules 1-4).
+std::vector<LandmarkAnalysis> judge(const SuggestProblem& problem, const SuggestOptions& options,
+                                    const std::vector<LandmarkCandidate>& candidates)
+{
+    if (candidates.empty()) return {};
+    return analyseLandmarks(planProblem(problem, options, candidates), verdictOptions(options));
+}
+
+/// The chosen landmarks planned as `hullgauge plan` plans them, then the
+/// capability check at the planned views (zone ≥ 4 U, docs/inspection.md
+/// "Capability"): `refused` holds (index into chosen, why) of every landmark
+/// `plan` would refuse.
+struct PlanCheck {
+    ViewPlan plan;
+    std::vector<std::pair<std::size_t, std::string>> refused;
 };
 
-/// Farthest-point selection among the usable candidates, judged again as the
+PlanCheck planChosen(const SuggestProblem& problem, const SuggestOptions& options,
+                     const std::vector<LandmarkCandidate>& chosen)
+{
+    PlanCheck check;
+    if (chosen.empty()) return check;
+    check.plan = planViews(planProblem(problem, options, chosen), verdictOptions(options));
+    std::vector<bool> observed(chosen.size(), false);
+    std::vector<geometry::CameraModel> cameras;
+    for (const PlannedView& v : check.plan.views) {
+        cameras.push_back(v.camera);
+        for (std::size_t l : v.landmarks) observed[l] = true;
+    }
+    for (std::size_t i = 0; i < chosen.size(); ++i)
+        if (!check.plan.landmarks[i].inspectable() || !observed[i])
+            check.refused.emplace_back(i, check.plan.landmarks[i].inspectable() ? "observed by no planned view"
+                                                                                : check.plan.landmarks[i].reason);
+    std::vector<inspect::MapLandmark> landmarks;
+    for (std::size_t i = 0; i < chosen.size(); ++i)
+        landmarks.push_back(
+            {"candidate-" + std::to_string(i + 1), chosen[i].position, chosen[i].normal, options.toleranceMm});
+    const inspect::DeviationGauge gauge(problem.solid, problem.station->calibration);
+    const auto capability =
+        inspect::assessCapability(landmarks, problem.frame.voxelSize(), &gauge, cameras, problem.station->imageQuality);
+    for (std::size_t i = 0; i < chosen.size(); ++i)
+        if (!capability[i].capable && observed[i]) check.refused.emplace_back(i, inspect::describe(capability[i]));
+    return check;
+}
+
+/// The spread and the plan of the landmarks it chose.
+struct Spread {
+    std::vector<std::size_t> usable; ///< candidates (indices into all) the spread chose from
+    std::vector<SpreadPick> picks;   ///< indices into usable
+    ViewPlan plan;                   ///< of the picks, in their order
+    /// Per kind: candidates inspectable alone that `plan` refused with the others.
+    std::array<std::size_t, kFeatureKinds> refused{};
+};
+
+/// Farthest-point selection among the usable candidates, then planned as the
 /// part program will hold them: the planner's candidate poses depend on the
 /// other landmarks (a face square to the turntable axis adds its grazing
-/// declination for all of them, planner.h), so a pick whose only witnesses
-/// came from a candidate not chosen is left out and the spread made again.
+/// declination for all of them, planner.h), and so does the capability check
+/// on the views planned for them all. A pick `plan` would refuse is left out
+/// and the spread made again, until `plan` takes every pick.
 Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& options,
                       const std::vector<LandmarkCandidate>& all, std::vector<std::size_t> usable,
                       const std::array<std::size_t, kFeatureKinds>& minimum)
 {
+    std::array<std::size_t, kFeatureKinds> refusedSoFar{};
     for (;;) {
         std::vector<Vec3> points;
         std::vector<FeatureKind> kinds;
@@ -761,19 +815,22 @@ Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& optio
             points.push_back(all[i].position);
             kinds.push_back(all[i].kind);
         }
-        Spread s{usable, spreadSelect(points, kinds, options.count, minimum), {}};
+        Spread s{usable, spreadSelect(points, kinds, options.count, minimum), {}, refusedSoFar};
         std::vector<LandmarkCandidate> chosen;
         for (const SpreadPick& p : s.picks) chosen.push_back(all[usable[p.index]]);
-        s.verdicts = judge(problem, options, chosen);
-        std::vector<std::size_t> failed;
-        for (std::size_t k = 0; k < s.picks.size(); ++k)
-            if (!s.verdicts[k].inspectable()) failed.push_back(usable[s.picks[k].index]);
-        if (failed.empty()) return s;
-        for (std::size_t i : failed)
-            log::category("plan")->debug("candidate {} ({} at {}) is not inspectable among the chosen: left out", i + 1,
-                                         toString(all[i].kind), vecText(all[i].position));
+        PlanCheck check = planChosen(problem, options, chosen);
+        s.plan = std::move(check.plan);
+        if (check.refused.empty()) return s;
+        std::vector<std::size_t> refused;
+        for (const auto& [k, why] : check.refused) {
+            const std::size_t i = usable[s.picks[k].index];
+            refused.push_back(i);
+            ++refusedSoFar[kindIndex(all[i].kind)];
+            log::category("plan")->info("candidate {} ({} at {}) left out: planned with the others, {}", i + 1,
+                                        toString(all[i].kind), vecText(all[i].position), why);
+        }
         std::erase_if(usable,
-                      [&](std::size_t i) { return std::find(failed.begin(), failed.end(), i) != failed.end(); });
+                      [&](std::size_t i) { return std::find(refused.begin(), refused.end(), i) != refused.end(); });
     }
 }
 
@@ -790,7 +847,8 @@ std::string reasonFor(const SpreadPick& pick, const std::vector<std::string>& id
     return "farthest from the earlier suggestions: " + from;
 }
 
-void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
+void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable,
+              const std::array<std::size_t, kFeatureKinds>& refused)
 {
     if (inspectable < asked)
         s.notes.push_back("asked for " + std::to_string(asked) + " landmarks, but only " + std::to_string(inspectable) +
@@ -803,6 +861,16 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
                               toString(k) +
                               " candidates is inspectable at this station (weak convexity, Rules 1-4: "
                               "docs/planning.md)");
+    for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole}) {
+        const bool suggested = std::any_of(s.landmarks.begin(), s.landmarks.end(),
+                                           [&](const SuggestedLandmark& l) { return l.candidate.kind == k; });
+        if (!suggested && refused[kindIndex(k)] > 0)
+            s.notes.push_back(std::string("no ") + toString(k) + " is suggested: `hullgauge plan` refuses the " +
+                              std::to_string(refused[kindIndex(k)]) + " of the " +
+                              std::to_string(s.inspectable[kindIndex(k)]) + " inspectable " + toString(k) +
+                              " candidates tried with the others (the capability check, docs/inspection.md; the "
+                              "plan category's log names each)");
+    }
 }
 
 } // namespace
@@ -848,11 +916,12 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
         lm.id = std::string(toString(c.kind)) + "-" + std::to_string(++numbered[kindIndex(c.kind)]);
         idOf[pick.index] = lm.id;
         lm.reason = reasonFor(pick, idOf, c.kind, minimum[kindIndex(c.kind)], options.count);
-        lm.witnessPoses = spread.verdicts[k].witnessPoses.size();
-        lm.bestMedMm = spread.verdicts[k].bestMedMm;
+        lm.witnessPoses = spread.plan.landmarks[k].witnessPoses.size();
+        lm.bestMedMm = spread.plan.landmarks[k].bestMedMm;
         s.landmarks.push_back(std::move(lm));
     }
-    addNotes(s, options.count, spread.usable.size());
+    s.plannedViews = spread.plan.views.size();
+    addNotes(s, options.count, spread.usable.size(), spread.refused);
     return s;
 }
 

@@ -73,12 +73,12 @@ geometry::Station simStation()
     return geometry::loadStation(hgtest::sourceDir() / "config/sim/station.yaml");
 }
 
-SuggestProblem problemFor(const model::Solid& solid, const geometry::Station& station, int depth = 8,
-                          int adjacency = 3)
+SuggestProblem problemFor(const std::shared_ptr<const model::Solid>& solid, const geometry::Station& station,
+                          int depth = 8, int adjacency = 3)
 {
-    const auto cube = model::boundingCube(solid.mesh().bounds(), depth, adjacency);
+    const auto cube = model::boundingCube(solid->mesh().bounds(), depth, adjacency);
     SuggestProblem p;
-    p.solid = &solid;
+    p.solid = solid;
     p.station = &station;
     p.frame = {cube->cubeOrigin, cube->cubeSize, cube->depth};
     return p;
@@ -150,11 +150,11 @@ TEST(LandmarkSuggest, SpreadKeepsTheMinimumShareOfAKind)
 TEST(LandmarkSuggest, BoxCandidatesAreItsFaceCentresAndEdgeMidpoints)
 {
     const Vector3d lo(-20, -15, 0), hi(20, 15, 20);
-    const model::Solid box(model::makeBox(lo, hi));
-    const auto candidates = findCandidates(box);
+    const auto box = std::make_shared<const model::Solid>(model::makeBox(lo, hi));
+    const auto candidates = findCandidates(*box);
     std::size_t faces = 0, edges = 0;
     for (const auto& c : candidates) {
-        EXPECT_LE(box.closestPoint(c.position).distance, 1e-9);
+        EXPECT_LE(box->closestPoint(c.position).distance, 1e-9);
         EXPECT_LT(degreesBetween(c.normal, boxNormalAt(c.position, lo, hi)), 1e-6) << c.feature;
         // On a face or an edge, at its middle: every coordinate off the
         // face's (edge's) planes is the box's middle there.
@@ -186,10 +186,10 @@ TEST(LandmarkSuggest, BoxCandidatesAreItsFaceCentresAndEdgeMidpoints)
 // the face and the true wall there. Re-entrant edges give nothing.
 TEST(LandmarkSuggest, BoreCandidatesLieOnItsWallAndRimsWithNormalsToTheAxis)
 {
-    const model::Solid part(boxWithBore());
+    const auto part = std::make_shared<const model::Solid>(boxWithBore());
     std::size_t wall = 0, rim = 0;
-    for (const auto& c : findCandidates(part)) {
-        EXPECT_LE(part.closestPoint(c.position).distance, 1e-9);
+    for (const auto& c : findCandidates(*part)) {
+        EXPECT_LE(part->closestPoint(c.position).distance, 1e-9);
         if (c.kind != FeatureKind::Hole) {
             EXPECT_LT(degreesBetween(c.normal, boxNormalAt(c.position, kBoreLo, kBoreHi)), 1e-6) << c.feature;
             continue;
@@ -225,7 +225,7 @@ TEST(LandmarkSuggest, BoreCandidatesLieOnItsWallAndRimsWithNormalsToTheAxis)
 TEST(LandmarkSuggest, BoxSuggestionIsTheHandWorkedSpread)
 {
     const Vector3d lo(-20, -15, 0), hi(20, 15, 20);
-    const model::Solid box(model::makeBox(lo, hi));
+    const auto box = std::make_shared<const model::Solid>(model::makeBox(lo, hi));
     const auto station = simStation();
     SuggestOptions options;
     options.count = 4;
@@ -246,7 +246,7 @@ TEST(LandmarkSuggest, BoxSuggestionIsTheHandWorkedSpread)
     EXPECT_LT((s.landmarks[3].candidate.position - Vector3d(0, 0, 20)).norm(), 1e-9);
     EXPECT_NE(s.landmarks[3].reason.find("at least 1 of 4 on faces"), std::string::npos) << s.landmarks[3].reason;
     for (const auto& lm : s.landmarks) {
-        EXPECT_LE(box.closestPoint(lm.candidate.position).distance, 1e-6);
+        EXPECT_LE(box->closestPoint(lm.candidate.position).distance, 1e-6);
         EXPECT_LT(degreesBetween(lm.candidate.normal, boxNormalAt(lm.candidate.position, lo, hi)), 1e-6);
         EXPECT_GT(lm.witnessPoses, 0u);
     }
@@ -257,7 +257,7 @@ TEST(LandmarkSuggest, BoxSuggestionIsTheHandWorkedSpread)
 // among eight suggestions, each on the mesh with its analytic normal.
 TEST(LandmarkSuggest, BoxWithABoreGetsFacesEdgesAndTheBore)
 {
-    const model::Solid part(boxWithBore());
+    const auto part = std::make_shared<const model::Solid>(boxWithBore());
     const auto station = simStation();
     const Suggestion s = suggestLandmarks(problemFor(part, station), {});
     ASSERT_EQ(s.landmarks.size(), 8u);
@@ -266,7 +266,7 @@ TEST(LandmarkSuggest, BoxWithABoreGetsFacesEdgesAndTheBore)
     for (const auto& lm : s.landmarks) {
         const LandmarkCandidate& c = lm.candidate;
         EXPECT_TRUE(ids.insert(lm.id).second) << lm.id;
-        EXPECT_LE(part.closestPoint(c.position).distance, 1e-6) << lm.id;
+        EXPECT_LE(part->closestPoint(c.position).distance, 1e-6) << lm.id;
         if (c.kind == FeatureKind::Hole && std::abs(c.position.y()) < 1e-9) {
             EXPECT_LT(degreesBetween(c.normal, -radialOfBore(c.position)), 1e-6) << lm.id;
         } else if (c.kind == FeatureKind::Hole) {
@@ -283,7 +283,8 @@ TEST(LandmarkSuggest, BoxWithABoreGetsFacesEdgesAndTheBore)
 // mesh; faces and edges (no bore); the normals those of the block's planes.
 TEST(LandmarkSuggest, SteppedBlockSuggestionsLieOnItsFacesAndEdges)
 {
-    const model::Solid block(model::loadMesh(hgtest::sourceDir() / "config/sim/stepped-block.stl"));
+    const auto block =
+        std::make_shared<const model::Solid>(model::loadMesh(hgtest::sourceDir() / "config/sim/stepped-block.stl"));
     const auto station = simStation();
     const Suggestion s = suggestLandmarks(problemFor(block, station, 8, 4), {});
     ASSERT_EQ(s.landmarks.size(), 8u);
@@ -291,7 +292,7 @@ TEST(LandmarkSuggest, SteppedBlockSuggestionsLieOnItsFacesAndEdges)
     EXPECT_EQ(s.candidates[2], 0u);
     for (const auto& lm : s.landmarks) {
         const Vector3d& p = lm.candidate.position;
-        EXPECT_LE(block.closestPoint(p).distance, 1e-6) << lm.id;
+        EXPECT_LE(block->closestPoint(p).distance, 1e-6) << lm.id;
         // The point lies in the tall block's or the step's box; its normal is that box's there.
         const bool tall = p.x() <= 0.0 && !(p.x() > -1e-9 && p.z() < 15.0 - 1e-9);
         const Vector3d lo(tall ? -30 : 0, -20, 0), hi(tall ? 0 : 30, 20, tall ? 30 : 15);
@@ -303,7 +304,7 @@ TEST(LandmarkSuggest, SteppedBlockSuggestionsLieOnItsFacesAndEdges)
 // all, with a note saying so.
 TEST(LandmarkSuggest, MoreThanThereAreGivesAllWithANote)
 {
-    const model::Solid box(model::makeBox(Vector3d(-20, -15, 0), Vector3d(20, 15, 20)));
+    const auto box = std::make_shared<const model::Solid>(model::makeBox(Vector3d(-20, -15, 0), Vector3d(20, 15, 20)));
     const auto station = simStation();
     SuggestOptions options;
     options.count = 50;
@@ -321,7 +322,7 @@ TEST(LandmarkSuggest, MoreThanThereAreGivesAllWithANote)
 TEST(LandmarkSuggest, FragmentLoadsAsThePartProgramsLandmarks)
 {
     const auto meshFile = hgtest::sourceDir() / "config/sim/stepped-block.stl";
-    const model::Solid block(model::loadMesh(meshFile));
+    const auto block = std::make_shared<const model::Solid>(model::loadMesh(meshFile));
     const auto station = simStation();
     const Suggestion s = suggestLandmarks(problemFor(block, station, 8, 4), {});
     hgtest::TempDir dir;

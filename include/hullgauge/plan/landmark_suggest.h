@@ -32,7 +32,10 @@
 // fixture's reachable poses and Rules 1-4 of 5.3.4-5.3.6), and of the
 // inspectable ones `count` are chosen by farthest-point selection
 // (spreadSelect) with a minimum share of faces, of edges and of holes when the
-// part has inspectable ones.
+// part has inspectable ones. The chosen set is planned as `hullgauge plan`
+// plans it (planViews, then the capability check at the planned views:
+// docs/inspection.md "Capability"); a landmark plan would refuse is left out
+// and the spread made again.
 #pragma once
 
 #include "hullgauge/geometry/station.h"
@@ -42,6 +45,7 @@
 
 #include <array>
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -126,7 +130,7 @@ struct SuggestOptions {
 /// where the candidates are snapped to, as the part program's loader snaps
 /// landmarks), the station and the inspection map's frame (ΔV).
 struct SuggestProblem {
-    const model::Solid* solid = nullptr;
+    std::shared_ptr<const model::Solid> solid;
     const model::StepModel* brep = nullptr;
     const geometry::Station* station = nullptr;
     inspect::VoxelFrame frame;
@@ -146,6 +150,8 @@ struct Suggestion {
     std::vector<SuggestedLandmark> landmarks;             ///< in the order chosen
     std::array<std::size_t, kFeatureKinds> candidates{};  ///< found on the part, per kind
     std::array<std::size_t, kFeatureKinds> inspectable{}; ///< of those, inspectable at the station
+    /// Views `hullgauge plan` plans for the suggested landmarks.
+    std::size_t plannedViews = 0;
     /// Remarks for the engineer: fewer suggestions than asked for, a kind the station cannot inspect.
     std::vector<std::string> notes;
 };

@@ -184,7 +184,7 @@ std::vector<std::vector<std::size_t>> members(const std::vector<int>& label)
 
 // ---------------------------------------------------------------------------
 // Cylinders: a smooth patch whose normals are square to one axis and whose
-// vertices lie on one circle about it, at least 300° round.
+// facets' normal lines meet that axis, at least 300° round it.
 
 struct Cylinder {
     Vec3 axis = Vec3::UnitZ();  ///< unit, its largest component positive
@@ -245,8 +245,8 @@ NormalLine normalLine(const TriangleMesh& mesh, const Topology& topo, const std:
 
 /// The axis' point (2-D): the least-squares meeting point of the facets'
 /// normal lines, none when they are all parallel (a plane) or do not meet
-/// within 1e-3 of the radius (no cylinder: the brief's "normals pointing to a
-/// common axis").
+/// within 1e-3 of the radius (no cylinder: its normals do not point to one
+/// axis).
 std::optional<Eigen::Vector2d> axisPoint(const std::vector<NormalLine>& lines)
 {
     Eigen::Matrix2d a = Eigen::Matrix2d::Zero();

@@ -59,9 +59,9 @@ std::size_t count(const std::string& text, const std::string& what)
 /// Plans `part` at the simulated station; every landmark must be inspectable and observed.
 void expectPlanned(const hgtest::TempDir& dir, const fs::path& part, std::size_t landmarks)
 {
-    const auto r = hgtest::run(tool() + " plan --part " + part.string() + " --station " +
-                               (simDir() / "station.yaml").string() + " --out " + (dir / "plan.json").string() +
-                               " --report " + (dir / "plan.md").string());
+    const auto r =
+        hgtest::run(tool() + " plan --part " + part.string() + " --station " + (simDir() / "station.yaml").string() +
+                    " --out " + (dir / "plan.json").string() + " --report " + (dir / "plan.md").string());
     ASSERT_EQ(r.status, 0) << r.err;
     std::ifstream in(dir / "plan.json");
     const auto plan = nlohmann::json::parse(in);
@@ -73,15 +73,15 @@ void expectPlanned(const hgtest::TempDir& dir, const fs::path& part, std::size_t
     }
 }
 
-// The acceptance: the simulated line's stepped block, judged with its
+// The simulated line's stepped block, judged with its
 // program's octree (depth 8, adjacency_depth 4) and tolerance (0.4 mm).
 TEST(LandmarksCommand, SuggestionSplicedIntoTheSimulatedProgramPassesPlan)
 {
     hgtest::TempDir dir;
     const fs::path mesh = simDir() / "stepped-block.stl";
-    const auto r = hgtest::run(tool() + " landmarks suggest --mesh " + mesh.string() + " --station " +
-                               (simDir() / "station.yaml").string() +
-                               " --depth 8 --adjacency-depth 4 --tolerance 0.4 --count 8");
+    const auto r =
+        hgtest::run(tool() + " landmarks suggest --mesh " + mesh.string() + " --station " +
+                    (simDir() / "station.yaml").string() + " --depth 8 --adjacency-depth 4 --tolerance 0.4 --count 8");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(count(r.out, "  - {id: "), 8u) << r.out;
     EXPECT_EQ(count(r.out, "  # face: ") + count(r.out, "  # edge: "), 8u) << r.out;
@@ -112,8 +112,8 @@ TEST(LandmarksCommand, BoxWithABoreSuggestionPassesPlan)
     EXPECT_GE(count(fragment, "  # edge: "), 1u) << fragment;
     EXPECT_GE(count(fragment, "  # hole: "), 1u) << fragment;
     // The octree the fragment was judged with (the defaults: depth 8, adjacency_depth 3).
-    hgtest::writeFile(dir / "part.yaml", "part: bored\nmesh: bored.stl\noctree:\n  depth: 8\n  adjacency_depth: 3\n" +
-                                             fragment);
+    hgtest::writeFile(dir / "part.yaml",
+                      "part: bored\nmesh: bored.stl\noctree:\n  depth: 8\n  adjacency_depth: 3\n" + fragment);
     expectPlanned(dir, dir / "part.yaml", count(fragment, "  - {id: "));
 }
 

@@ -19,8 +19,9 @@
 //    the same two features form a feature line; an open line gives its
 //    midpoint, a closed one four points a quarter round apart;
 //  * hole — a bore: a smooth region (no sharp edge inside) whose normals are
-//    all square to one axis, whose vertices lie on one circle about it, that
-//    runs at least 300° round the axis and whose normals point to the axis.
+//    all square to one axis, whose facets' normal lines (through the middle
+//    of each facet, along its normal) meet that axis, that runs at least 300°
+//    round it and whose normals point to it.
 //    Four points round its wall at mid-length, and the feature lines where it
 //    meets a face (its rims, as edges above) are holes too.
 // The normal is the face's, the bisector of the two faces on an edge (what

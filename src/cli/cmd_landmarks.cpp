@@ -83,6 +83,13 @@ int run(const SuggestArgs& args)
 
     std::cerr << "hullgauge landmarks suggest: " << args.mesh << " at " << station << "...\n";
     const plan::Suggestion s = plan::suggestLandmarks(problem, options);
+    // A part program needs at least one landmark: an empty list is no suggestion.
+    if (s.landmarks.empty())
+        throw InputError(args.mesh, "landmarks",
+                         "no point of the part found (" +
+                             std::to_string(s.candidates[0] + s.candidates[1] + s.candidates[2]) +
+                             " candidates) is inspectable at the station " + station + " with tolerance_mm " +
+                             formatNumber(args.toleranceMm, 6) + (s.notes.empty() ? "" : ": " + s.notes.front()));
     const std::string yaml = plan::landmarksYaml(s, args.toleranceMm, header(args, station, cad, s));
     if (args.out.empty()) {
         std::cout << yaml;

@@ -130,6 +130,19 @@ TEST(LandmarksCommand, MoreThanThereAreGivesFewerWithANote)
     EXPECT_NE(r.out.find("# Note: asked for 100 landmarks"), std::string::npos) << r.out;
 }
 
+// A tolerance no view of the station resolves (eq. 5.3.6-3: the finest MED
+// at 400 mm with f = 2500 px is far above 1 µm): nothing to suggest, exit 2.
+TEST(LandmarksCommand, NothingInspectableExitsTwo)
+{
+    const auto r = hgtest::run(tool() + " landmarks suggest --mesh " + (simDir() / "stepped-block.stl").string() +
+                               " --station " + (simDir() / "station.yaml").string() + " --tolerance 0.001");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("stepped-block.stl: landmarks: no point of the part found (25 candidates) is inspectable"),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
 TEST(LandmarksCommand, BadMeshExitsTwoNamingIt)
 {
     hgtest::TempDir dir;

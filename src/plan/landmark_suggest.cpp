@@ -853,8 +853,9 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable,
     if (inspectable < asked)
         s.notes.push_back("asked for " + std::to_string(asked) + " landmarks, but only " + std::to_string(inspectable) +
                           " of the " + std::to_string(s.candidates[0] + s.candidates[1] + s.candidates[2]) +
-                          " candidates are inspectable at this station: " + std::to_string(s.landmarks.size()) +
-                          " suggested");
+                          " candidates pass `hullgauge plan` at this station (weak convexity, Rules 1-4, the "
+                          "capability check): " +
+                          std::to_string(s.landmarks.size()) + " suggested");
     for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole})
         if (s.candidates[kindIndex(k)] > 0 && s.inspectable[kindIndex(k)] == 0)
             s.notes.push_back(std::string("none of the ") + std::to_string(s.candidates[kindIndex(k)]) + " " +

@@ -291,6 +291,13 @@ AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::str
     return s;
 }
 
+/// A STEP part's tessellation for the octree `octree`: chord error ΔV/20
+/// (PartProgram::tessellationDeflectionMm, docs/part-program.md "STEP parts").
+TriangleMesh tessellateFor(StepModel& brep, const OctreeSpec& octree)
+{
+    return brep.tessellate(octree.voxelSize() / 20.0, kStepAngularDeflectionRad);
+}
+
 /// The CAD model and the octree around it. A STEP part is read first, the
 /// octree placed around its exact bounding box, and then tessellated with the
 /// chord error ΔV/20 (docs/part-program.md, "STEP parts"); a mesh is read as it is.
@@ -310,7 +317,7 @@ void loadModel(const ConfigNode& meshNode, const ConfigNode& octreeNode, PartPro
     program.octree = parseOctree(octreeNode, brep ? brep->summary().bounds : mesh.bounds());
     if (brep) {
         try {
-            mesh = brep->tessellate(program.tessellationDeflectionMm(), kStepAngularDeflectionRad);
+            mesh = tessellateFor(*brep, program.octree);
         } catch (const InputError& e) {
             meshNode.fail(e.what());
         }
@@ -383,6 +390,31 @@ std::optional<OctreeSpec> boundingCube(const Eigen::AlignedBox3d& bounds, int de
     spec.cubeSize = extent / (1.0 - 2.0 * margin / cells);
     spec.cubeOrigin = bounds.center() - Eigen::Vector3d::Constant(spec.cubeSize / 2.0);
     return spec;
+}
+
+CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth)
+{
+    CadModel model;
+    model.file = file;
+    TriangleMesh mesh;
+    std::shared_ptr<StepModel> brep;
+    if (isStepFile(file))
+        brep = std::make_shared<StepModel>(StepModel::read(file));
+    else
+        mesh = loadMesh(file);
+    const auto cube = boundingCube(brep ? brep->summary().bounds : mesh.bounds(), depth, adjacencyDepth);
+    if (!cube)
+        throw InputError(file.string(), "octree.depth",
+                         fmt::format("depth {} is too small for a default cube with {} layers of type-four voxels "
+                                     "around the part; raise the depth",
+                                     depth, adjacencyDepth));
+    model.octree = *cube;
+    if (brep) {
+        mesh = tessellateFor(*brep, model.octree);
+        model.brep = brep;
+    }
+    model.solid = std::make_shared<const Solid>(std::move(mesh));
+    return model;
 }
 
 PartProgram loadPartProgram(const std::filesystem::path& file)

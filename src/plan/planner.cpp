@@ -205,7 +205,7 @@ class Analyser {
         WitnessSearch search = searchWitnesses(r);
         warnFailingDesignerViews(lm, r);
         judge(lm, r, search);
-        a.unseenVoids = unseenVoids(r);
+        if (options_.reportUnseenVoids) a.unseenVoids = unseenVoids(r);
         return r;
     }
 

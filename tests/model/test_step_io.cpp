@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -29,8 +30,10 @@
 
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/geometry/station.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/model/step_io.h"
+#include "hullgauge/plan/landmark_suggest.h"
 
 namespace {
 
@@ -220,6 +223,59 @@ TEST(StepPart, LandmarksOnAFilletSnapToTheFilletRadiusFromItsAxis)
     EXPECT_NEAR(radial.norm(), kFilletRadius, 1e-3);
     EXPECT_NEAR((lm.position - (axis + Vector3d(4 * c, 4 * c, 10))).norm(), 0.0, 1e-3);
     EXPECT_NEAR((lm.normal - Vector3d(c, c, 0)).norm(), 0.0, 1e-6);
+}
+
+// `hullgauge landmarks suggest` on a STEP part (docs/part-program.md,
+// "Suggesting landmarks"): the box [-20, 20] x [-15, 15] x [0, 30] with a
+// bore r = 5 along y about x = 0, z = 18, at the simulated station. The
+// model has the cube its part program would derive; every suggestion lies on
+// the exact surface (within the 1 µm the B-rep is snapped to) with the exact
+// normal: a face's, the bisector on an edge, towards the axis in the bore.
+TEST(StepPart, LandmarksSuggestedLieOnTheExactSurfaceWithItsNormals)
+{
+    hgtest::TempDir dir;
+    const TopoDS_Shape box = BRepPrimAPI_MakeBox(gp_Pnt(-20, -15, 0), gp_Pnt(20, 15, 30)).Shape();
+    const gp_Ax2 axis(gp_Pnt(0, -16, 18), gp::DY());
+    const TopoDS_Shape bored = BRepAlgoAPI_Cut(box, BRepPrimAPI_MakeCylinder(axis, 5.0, 32).Shape()).Shape();
+    writeStep(bored, dir / "bored.step");
+    const hg::model::CadModel cad = hg::model::loadCadModel(dir / "bored.step", 8, 3);
+    ASSERT_TRUE(cad.brep);
+    hgtest::writeFile(dir / "part.yaml",
+                      programYaml("bored.step", 8, "  - {id: top, position: [0, 0, 30], tolerance_mm: 0.5}\n"));
+    const PartProgram program = hg::model::loadPartProgram(dir / "part.yaml");
+    EXPECT_TRUE(cad.octree.cubeOrigin.isApprox(program.octree.cubeOrigin));
+    EXPECT_DOUBLE_EQ(cad.octree.cubeSize, program.octree.cubeSize);
+    EXPECT_EQ(cad.solid->mesh().triangles.size(), program.solid->mesh().triangles.size());
+
+    const auto station = hg::geometry::loadStation(hgtest::sourceDir() / "config/sim/station.yaml");
+    hg::plan::SuggestProblem problem;
+    problem.solid = cad.solid;
+    problem.brep = cad.brep.get();
+    problem.station = &station;
+    problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};
+    const hg::plan::Suggestion s = hg::plan::suggestLandmarks(problem, {});
+    ASSERT_EQ(s.landmarks.size(), 8u);
+    EXPECT_GT(s.candidates[2], 0u); // the bore's wall and rims
+    std::set<hg::plan::FeatureKind> kinds;
+    for (const auto& lm : s.landmarks) kinds.insert(lm.candidate.kind);
+    EXPECT_EQ(kinds.size(), 3u); // faces, edges and the bore
+    for (const auto& lm : s.landmarks) {
+        const Vector3d& p = lm.candidate.position;
+        // The box's planes the point lies on, and whether it is on the bore's wall.
+        Vector3d expected = Vector3d::Zero();
+        const Vector3d lo(-20, -15, 0), hi(20, 15, 30);
+        for (int a = 0; a < 3; ++a) {
+            if (std::abs(p[a] - lo[a]) < 1e-3) expected[a] -= 1.0;
+            if (std::abs(p[a] - hi[a]) < 1e-3) expected[a] += 1.0;
+        }
+        const Vector3d radial(p.x(), 0.0, p.z() - 18.0);
+        if (std::abs(radial.norm() - 5.0) < 1e-3) {
+            EXPECT_EQ(lm.candidate.kind, hg::plan::FeatureKind::Hole) << lm.id;
+            expected = expected.normalized() - radial.normalized();
+        }
+        ASSERT_GT(expected.norm(), 0.5) << lm.id << " at " << p.transpose() << " is on no face of the part";
+        EXPECT_NEAR((lm.candidate.normal - expected.normalized()).norm(), 0.0, 1e-6) << lm.id;
+    }
 }
 
 // The file's unit is the file's: a part written in metres is read in millimetres.

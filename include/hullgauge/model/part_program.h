@@ -139,6 +139,22 @@ struct PartProgram {
     const Landmark* findLandmark(const std::string& id) const;
 };
 
+/// A CAD model read on its own, before a part program names its landmarks
+/// (`hullgauge landmarks suggest`, docs/part-program.md "Suggesting
+/// landmarks"): the solid, a STEP part's B-rep, and the default cube a part
+/// program with this depth and adjacency depth derives (boundingCube). A STEP
+/// part is tessellated exactly as loadPartProgram tessellates it.
+struct CadModel {
+    std::filesystem::path file;
+    std::shared_ptr<const Solid> solid;
+    std::shared_ptr<const StepModel> brep; ///< null for a mesh file
+    OctreeSpec octree;
+};
+
+/// Reads a mesh (STL, OBJ, PLY, OFF) or STEP file; a bad file throws
+/// InputError naming it, as does a depth too small for the default cube.
+CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth);
+
 /// Reads and validates a part program; every problem throws InputError with
 /// file, line and field ("part.yaml:23: landmarks[2].position: ...").
 PartProgram loadPartProgram(const std::filesystem::path& file);

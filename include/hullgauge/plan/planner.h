@@ -66,6 +66,11 @@ struct PlanOptions {
     double exactTimeLimitSeconds = 10.0;
     /// Type-four layers checked for visibility (3.3.8 paring), >= 1.
     int pareLayers = 1;
+    /// Report the void type-four neighbours no pose proves void
+    /// (LandmarkAnalysis::unseenVoids); off where only the verdicts are
+    /// wanted (the landmark suggestion, landmark_suggest.h): it does not
+    /// change a verdict and costs most for landmarks near concave features.
+    bool reportUnseenVoids = true;
     /// Surface points tried when looking for the nearest inspectable point.
     std::size_t nearestSearchLimit = 500;
 };

@@ -220,8 +220,9 @@ struct FaceInfo2 {
 using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<int, Kernel>;
 using FaceBase =
     CGAL::Constrained_triangulation_face_base_2<Kernel, CGAL::Triangulation_face_base_with_info_2<FaceInfo2, Kernel>>;
-using Cdt = CGAL::Constrained_Delaunay_triangulation_2<
-    Kernel, CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>, CGAL::Exact_predicates_tag>;
+using Cdt =
+    CGAL::Constrained_Delaunay_triangulation_2<Kernel, CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>,
+                                               CGAL::Exact_predicates_tag>;
 
 void markNesting(Cdt& cdt, Cdt::Face_handle start, int level, std::list<Cdt::Edge>& border)
 {
@@ -451,7 +452,8 @@ void orientConsistently(TriangleMesh& m, MeshRepairReport& report)
         const bool turnBack = 2 * r > all;
         if (reversed[i] != turnBack) std::swap(m.triangles[i][1], m.triangles[i][2]);
     }
-    for (const auto& [sheet, counts] : perSheet) report.reorientedFaces += std::min(counts.first, counts.second - counts.first);
+    for (const auto& [sheet, counts] : perSheet)
+        report.reorientedFaces += std::min(counts.first, counts.second - counts.first);
 }
 
 // Degenerate faces (collinear corners, a needle or a cap of no area) are
@@ -602,13 +604,14 @@ std::vector<std::string> MeshRepairReport::items() const
         out.push_back(count(reorientedFaces, "face", "faces") + " of inconsistent orientation reversed");
     if (flippedShells) out.push_back(count(flippedShells, "shell", "shells") + " oriented inward flipped");
     if (retriangulatedFaces)
-        out.push_back(count(retriangulatedFaces, "planar face", "planar faces") +
-                      " overlapping itself re-triangulated inside its outline");
+        out.push_back(
+            count(retriangulatedFaces, "planar face overlapping itself", "planar faces overlapping themselves") +
+            " re-triangulated inside the outline");
     if (selfIntersections)
-        out.push_back(fmt::format("{} removed ({} by autorefinement)",
-                                  count(selfIntersections, "self-intersecting triangle pair",
-                                        "self-intersecting triangle pairs"),
-                                  autorefinedPairs));
+        out.push_back(
+            fmt::format("{} removed ({} by autorefinement)",
+                        count(selfIntersections, "self-intersecting triangle pair", "self-intersecting triangle pairs"),
+                        autorefinedPairs));
     return out;
 }
 
@@ -628,11 +631,11 @@ std::string MeshRepairReport::defects() const
         out.push_back(fmt::format("a gap: {} within {:.3g} mm of another",
                                   count(mergedVertices, "vertex on an open edge", "vertices on open edges"),
                                   gapToleranceMm));
-    if (reorientedFaces)
-        out.push_back(count(reorientedFaces, "face", "faces") + " of inconsistent orientation");
+    if (reorientedFaces) out.push_back(count(reorientedFaces, "face", "faces") + " of inconsistent orientation");
     if (flippedShells) out.push_back(count(flippedShells, "shell", "shells") + " oriented inward");
     if (retriangulatedFaces)
-        out.push_back(count(retriangulatedFaces, "planar face", "planar faces") + " overlapping itself");
+        out.push_back(
+            count(retriangulatedFaces, "planar face overlapping itself", "planar faces overlapping themselves"));
     if (selfIntersections)
         out.push_back(count(selfIntersections, "self-intersecting triangle pair", "self-intersecting triangle pairs"));
     return fmt::format("{}", fmt::join(out, ", "));

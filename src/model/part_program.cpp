@@ -297,8 +297,7 @@ MeshRepairOptions parseMeshRepair(const ConfigNode& root)
     MeshRepairOptions options;
     if (auto n = root.optional("mesh_repair")) {
         const std::string mode = n->asString();
-        if (mode != "repair" && mode != "strict")
-            n->fail("unknown mode '" + mode + "' (expected repair or strict)");
+        if (mode != "repair" && mode != "strict") n->fail("unknown mode '" + mode + "' (expected repair or strict)");
         options.mode = mode == "strict" ? MeshRepairMode::Strict : MeshRepairMode::Repair;
     }
     // A gap wider than a millimetre is a hole in the CAD model, not rounding in its export.
@@ -407,9 +406,8 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys(
-        {"part", "mesh", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters", "inspection", "alignment",
-         "decision_rule"});
+    root.allowOnlyKeys({"part", "mesh", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters", "inspection",
+                        "alignment", "decision_rule"});
 
     PartProgram program;
     program.file = file;

@@ -30,17 +30,17 @@ struct MeshRepairOptions {
 
 /// What the repair did, per kind; every count zero for a mesh that needed none.
 struct MeshRepairReport {
-    double gapToleranceMm = 0.0;          ///< the tolerance the gaps were closed with
-    std::size_t duplicateFaces = 0;       ///< exact repeats of another face, removed
-    std::size_t opposedFaces = 0;         ///< coincident faces of opposite orientation (zero-thickness walls), removed in pairs
-    std::size_t degenerateFaces = 0;      ///< faces without area, removed
-    std::size_t mergedVertices = 0;       ///< vertices on open edges merged into another within the tolerance
-    std::size_t closedEdges = 0;          ///< open edges those merges closed (borders stitched)
-    std::size_t reorientedFaces = 0;      ///< faces running against their neighbours, reversed
-    std::size_t flippedShells = 0;        ///< closed shells oriented the wrong way (outer inward, void outward), flipped
-    std::size_t selfIntersections = 0;    ///< self-intersecting triangle pairs found, all removed
-    std::size_t retriangulatedFaces = 0;  ///< planar faces folded over themselves, re-triangulated
-    std::size_t autorefinedPairs = 0;     ///< of the pairs, those removed by autorefinement (crossing shells)
+    double gapToleranceMm = 0.0;    ///< the tolerance the gaps were closed with
+    std::size_t duplicateFaces = 0; ///< exact repeats of another face, removed
+    std::size_t opposedFaces = 0; ///< coincident faces of opposite orientation (zero-thickness walls), removed in pairs
+    std::size_t degenerateFaces = 0;     ///< faces without area, removed
+    std::size_t mergedVertices = 0;      ///< vertices on open edges merged into another within the tolerance
+    std::size_t closedEdges = 0;         ///< open edges those merges closed (borders stitched)
+    std::size_t reorientedFaces = 0;     ///< faces running against their neighbours, reversed
+    std::size_t flippedShells = 0;       ///< closed shells oriented the wrong way (outer inward, void outward), flipped
+    std::size_t selfIntersections = 0;   ///< self-intersecting triangle pairs found, all removed
+    std::size_t retriangulatedFaces = 0; ///< planar faces folded over themselves, re-triangulated
+    std::size_t autorefinedPairs = 0;    ///< of the pairs, those removed by autorefinement (crossing shells)
 
     /// True when nothing was repaired.
     bool clean() const;

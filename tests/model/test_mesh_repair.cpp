@@ -169,8 +169,7 @@ TEST(MeshRepair, GapOfAHundredthOfAMillimetreIsClosed)
               std::string::npos)
         << r.repair.repairs();
     const std::string refusal = strictRefusal(dir, m, "gap-strict.stl");
-    EXPECT_NE(refusal.find("a gap: 1 vertex on an open edge within 0.02 mm of another"), std::string::npos)
-        << refusal;
+    EXPECT_NE(refusal.find("a gap: 1 vertex on an open edge within 0.02 mm of another"), std::string::npos) << refusal;
 }
 
 // A gap wider than the tolerance is a hole: refused, naming the open edges
@@ -209,8 +208,7 @@ TEST(MeshRepair, OpenSurfaceWithALargeHoleIsRefused)
         FAIL() << "an open surface was accepted";
     } catch (const InputError& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find(fmt::format("open.stl: mesh: not closed: {} open edges", open)), std::string::npos)
-            << what;
+        EXPECT_NE(what.find(fmt::format("open.stl: mesh: not closed: {} open edges", open)), std::string::npos) << what;
     }
 }
 
@@ -244,7 +242,7 @@ Vector3d centroid(const TriangleMesh& m, std::size_t i)
 
 /// Two triangles sharing an edge whose corners all satisfy `on` (a face of the part).
 std::pair<std::size_t, std::size_t> neighboursWhere(const TriangleMesh& m,
-                                                   const std::function<bool(const Vector3d&)>& on)
+                                                    const std::function<bool(const Vector3d&)>& on)
 {
     std::vector<std::size_t> face;
     for (std::size_t i = 0; i < m.triangles.size(); ++i)
@@ -427,9 +425,8 @@ TriangleMesh gearAsExported()
 {
     TriangleMesh m = gear();
     const double tipX = 12.0 * std::cos(0.1 * 2.0 * kPi / kTeeth);
-    const auto tipFace = trianglesWhere(m, [&](const Vector3d& p) {
-        return std::abs(std::hypot(p.x(), p.y()) - 12.0) < 1e-9 && p.x() > tipX - 1e-9;
-    });
+    const auto tipFace = trianglesWhere(
+        m, [&](const Vector3d& p) { return std::abs(std::hypot(p.x(), p.y()) - 12.0) < 1e-9 && p.x() > tipX - 1e-9; });
     EXPECT_EQ(tipFace.size(), 2u);
     rewriteFacet(m, tipFace, false);
     // Tooth 6 points along −x: its flank from the root at 5.75 pitches to the tip at 5.9 pitches.
@@ -461,8 +458,7 @@ TEST(MeshRepairHeldOut, HexNutWhoseFacesMeetThemselvesLoadsAsItsSolid)
     EXPECT_EQ(r.repair.duplicateFaces, 2u);
     EXPECT_EQ(r.repair.retriangulatedFaces, 2u); // the bore's seam facet and the folded flat
     EXPECT_GT(r.repair.selfIntersections, 0u);
-    EXPECT_EQ(r.repair.autorefinedPairs + r.repair.opposedFaces + r.repair.mergedVertices + r.repair.flippedShells,
-              0u);
+    EXPECT_EQ(r.repair.autorefinedPairs + r.repair.opposedFaces + r.repair.mergedVertices + r.repair.flippedShells, 0u);
     EXPECT_NEAR(r.mesh.signedVolume(), kNutVolume, kStlVolumeTolerance * kNutVolume);
     EXPECT_TRUE(checkMesh(r.mesh).ok());
 }
@@ -498,8 +494,8 @@ TEST(MeshRepairHeldOut, SpurGearWithCoincidentFacesLoadsAsItsSolid)
 
 std::string programYaml(const std::string& mesh, int depth, const std::string& landmarks)
 {
-    return "part: p\nmesh: " + mesh + "\noctree:\n  depth: " + std::to_string(depth) + "\n  adjacency_depth: 12\nlandmarks:\n" +
-           landmarks;
+    return "part: p\nmesh: " + mesh + "\noctree:\n  depth: " + std::to_string(depth) +
+           "\n  adjacency_depth: 12\nlandmarks:\n" + landmarks;
 }
 
 std::string landmarkYaml(const std::string& id, const Vector3d& p)
@@ -510,7 +506,8 @@ std::string landmarkYaml(const std::string& id, const Vector3d& p)
     return s.str();
 }
 
-std::vector<inspect::LandmarkStatus> statuses(const PartProgram& program, const std::vector<inspect::CapturedView>& views)
+std::vector<inspect::LandmarkStatus> statuses(const PartProgram& program,
+                                              const std::vector<inspect::CapturedView>& views)
 {
     const inspect::InspectionMap map = inspect::buildInspectionMap(program, 1);
     const inspect::InspectionResult result = inspect::Inspector(map).inspect(views, {});
@@ -565,8 +562,8 @@ TEST(MeshRepairHeldOut, HexNutIsInspectedLikeItsCleanTwin)
     const std::string landmarks = landmarkYaml("top", Vector3d(5, 0.5, kNutH)) +
                                   landmarkYaml("flat", Vector3d(flat, 0.5, 3)) +
                                   landmarkYaml("bottom", Vector3d(-5, 0.5, 0));
-    hgtest::PartAsMade low{"top-low", difference(nut(), makeBox(Vector3d(-10, -10, kNutH - 1.0), Vector3d(10, 10, 9))),
-                           {-1.0, 0.0, 0.0}};
+    hgtest::PartAsMade low{
+        "top-low", difference(nut(), makeBox(Vector3d(-10, -10, kNutH - 1.0), Vector3d(10, 10, 9))), {-1.0, 0.0, 0.0}};
     expectInspectedLikeTheCleanTwin(nut(), nutAsExported(), 7, landmarks, low, "top");
 }
 

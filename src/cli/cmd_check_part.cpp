@@ -83,6 +83,37 @@ std::string stepText(const model::StepModel& brep)
                        t.triangles);
 }
 
+/// What the mesh file needed to be read as a solid (docs/part-program.md,
+/// "Meshes as they come"); every count zero for a clean mesh.
+nlohmann::json repairJson(const model::PartProgram& program)
+{
+    const model::MeshRepairReport& r = program.meshRepairReport;
+    return {{"mode", model::toString(program.meshRepair.mode)},
+            {"gap_tolerance_mm", program.meshRepair.gapToleranceMm},
+            {"repaired", !r.clean()},
+            {"duplicate_faces", r.duplicateFaces},
+            {"opposed_faces", r.opposedFaces},
+            {"degenerate_faces", r.degenerateFaces},
+            {"merged_vertices", r.mergedVertices},
+            {"closed_edges", r.closedEdges},
+            {"reoriented_faces", r.reorientedFaces},
+            {"flipped_shells", r.flippedShells},
+            {"self_intersections", r.selfIntersections},
+            {"retriangulated_faces", r.retriangulatedFaces},
+            {"autorefined_pairs", r.autorefinedPairs},
+            {"repairs", r.items()}};
+}
+
+std::string repairText(const model::PartProgram& program)
+{
+    const model::MeshRepairReport& r = program.meshRepairReport;
+    if (r.clean()) return "repaired    nothing (the mesh needed no repair)\n";
+    std::string text = fmt::format("repaired    {} kind{} of defect (mesh_repair: {}):\n", r.items().size(),
+                                   r.items().size() == 1 ? "" : "s", model::toString(program.meshRepair.mode));
+    for (const std::string& item : r.items()) text += "  " + item + "\n";
+    return text;
+}
+
 int run(const CheckArgs& args)
 {
     const std::string& partFile = args.part;
@@ -105,7 +136,10 @@ int run(const CheckArgs& args)
                        {"closed", check.ok()},
                        {"bounds_min", toJson(bounds.min())},
                        {"bounds_max", toJson(bounds.max())}};
-        if (program.brep) out["step"] = stepJson(*program.brep);
+        if (program.brep)
+            out["step"] = stepJson(*program.brep);
+        else
+            out["mesh_repair"] = repairJson(program);
         out["octree"] = {{"cube_origin", toJson(oct.cubeOrigin)},
                          {"cube_size", oct.cubeSize},
                          {"cube_from_mesh", oct.cubeFromMesh},
@@ -146,7 +180,7 @@ int run(const CheckArgs& args)
     std::cout << fmt::format("part        {}\n", program.part);
     std::cout << fmt::format("mesh        {}: {} triangles, {} vertices, closed 2-manifold, outward\n",
                              program.meshFile.string(), mesh.triangles.size(), mesh.vertices.size());
-    if (program.brep) std::cout << stepText(*program.brep);
+    std::cout << (program.brep ? stepText(*program.brep) : repairText(program));
     std::cout << fmt::format("volume      {:.6g} mm³, area {:.6g} mm²\n", mesh.signedVolume(), mesh.area());
     std::cout << fmt::format("bounds      ({:.4f}, {:.4f}, {:.4f}) to ({:.4f}, {:.4f}, {:.4f}) mm\n", bounds.min().x(),
                              bounds.min().y(), bounds.min().z(), bounds.max().x(), bounds.max().y(), bounds.max().z());

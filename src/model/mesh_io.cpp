@@ -1,4 +1,5 @@
-// Mesh import and export through CGAL's readers and polygon-soup repair.
+// Mesh import and export through CGAL's readers; the repair of what the
+// files hold is mesh_repair.cpp (docs/part-program.md, "Meshes as they come").
 
 #include "hullgauge/model/mesh_io.h"
 
@@ -7,6 +8,7 @@
 #include <charconv>
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -15,11 +17,7 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
-#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
-#include <CGAL/Polygon_mesh_processing/orientation.h>
-#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
 #include <cmath>
@@ -288,7 +286,46 @@ void requireSolidMesh(TriangleMesh& mesh, const std::string& name)
         log::category("model")->warn("{}: {} degenerate (zero-area) triangles", name, check.degenerateTriangles);
 }
 
-TriangleMesh loadMesh(const std::filesystem::path& file)
+namespace {
+
+/// The polygon's corners without consecutive repeats (a corner written twice).
+std::vector<std::size_t> distinctCorners(const Polygon& polygon)
+{
+    std::vector<std::size_t> out;
+    for (std::size_t v : polygon)
+        if (out.empty() || out.back() != v) out.push_back(v);
+    while (out.size() > 1 && out.front() == out.back()) out.pop_back();
+    return out;
+}
+
+// OBJ, PLY and OFF may hold polygons: each is triangulated on its own
+// (CGAL's triangulation of a face, a fan where that fails), so the repair
+// sees triangles only. A polygon of fewer than three corners stays a
+// degenerate triangle for the repair to count.
+void appendTriangles(const std::vector<Point>& points, const Polygon& polygon, TriangleMesh& soup)
+{
+    const std::vector<std::size_t> corners = distinctCorners(polygon);
+    auto add = [&](std::size_t a, std::size_t b, std::size_t c) {
+        soup.triangles.push_back({static_cast<int>(a), static_cast<int>(b), static_cast<int>(c)});
+    };
+    if (corners.size() < 3) return add(polygon[0], polygon[0], polygon[polygon.size() - 1]);
+    if (corners.size() == 3) return add(corners[0], corners[1], corners[2]);
+    SurfaceMesh sm;
+    std::vector<SurfaceMesh::Vertex_index> face;
+    for (std::size_t v : corners) face.push_back(sm.add_vertex(points[v]));
+    if (sm.add_face(face) != SurfaceMesh::null_face() && PMP::triangulate_faces(sm)) {
+        for (auto f : sm.faces()) {
+            auto h = sm.halfedge(f);
+            add(corners[sm.source(h)], corners[sm.target(h)], corners[sm.target(sm.next(h))]);
+        }
+        return;
+    }
+    for (std::size_t k = 1; k + 1 < corners.size(); ++k) add(corners[0], corners[k], corners[k + 1]);
+}
+
+/// The file's facets as a triangle soup, points written more than once (STL
+/// stores each vertex once per facet) merged.
+TriangleMesh readSoup(const std::filesystem::path& file)
 {
     const std::string name = file.string();
     const std::string ext = lowerExtension(file);
@@ -313,83 +350,46 @@ TriangleMesh loadMesh(const std::filesystem::path& file)
     if (polygons.empty()) throw InputError(name, "mesh", "the file holds no facets");
     // The soup repair below indexes the points without checking: an index past
     // them (a PLY face naming vertex 1e6 of 8) or a non-finite coordinate is bad input.
-    for (std::size_t f = 0; f < polygons.size(); ++f)
+    for (std::size_t f = 0; f < polygons.size(); ++f) {
+        if (polygons[f].empty()) throw InputError(name, fmt::format("face {}", f + 1), "the face has no vertices");
         for (auto v : polygons[f])
             if (v >= points.size())
                 throw InputError(name, fmt::format("face {}", f + 1),
                                  fmt::format("vertex index {} is past the file's {} vertices", v, points.size()));
+    }
     for (std::size_t i = 0; i < points.size(); ++i)
         if (!std::isfinite(points[i].x()) || !std::isfinite(points[i].y()) || !std::isfinite(points[i].z()))
             throw InputError(name, fmt::format("vertex {}", i + 1), "coordinate is not a finite number");
+    if (points.size() > std::size_t(std::numeric_limits<int>::max()))
+        throw InputError(name, "mesh", fmt::format("{} vertices are more than a mesh may hold", points.size()));
 
-    // Merge duplicate points (STL repeats every vertex per facet), drop
-    // repeated polygons and polygons that collapse to fewer than 3 points.
-    PMP::repair_polygon_soup(points, polygons);
-    std::vector<Eigen::Vector3d> coords;
-    coords.reserve(points.size());
-    for (const auto& p : points) coords.emplace_back(p.x(), p.y(), p.z());
-    MeshCheck check = analyse(coords, polygons);
-    if (!check.closedManifold()) throw InputError(name, "mesh", check.problem());
-    if (!check.consistentlyOriented()) {
-        log::category("model")->warn("{}: {}; re-oriented", name, check.problem());
-        PMP::orient_polygon_soup(points, polygons);
-    }
+    PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
+    TriangleMesh soup;
+    soup.vertices.reserve(points.size());
+    for (const auto& p : points) soup.vertices.emplace_back(p.x(), p.y(), p.z());
+    for (const Polygon& polygon : polygons) appendTriangles(points, polygon, soup);
+    return soup;
+}
 
-    SurfaceMesh sm;
-    PMP::polygon_soup_to_polygon_mesh(points, polygons, sm);
-    if (!CGAL::is_triangle_mesh(sm) && !PMP::triangulate_faces(sm))
-        throw InputError(name, "mesh", "a polygon could not be triangulated");
-    if (PMP::does_self_intersect(sm)) {
-        std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
-        PMP::self_intersections(sm, std::back_inserter(pairs));
-        auto centroid = [&](SurfaceMesh::Face_index f) {
-            Eigen::Vector3d c = Eigen::Vector3d::Zero();
-            for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
-                const Point& p = sm.point(v);
-                c += Eigen::Vector3d(p.x(), p.y(), p.z()) / 3.0;
-            }
-            return c;
-        };
-        throw InputError(name, "mesh",
-                         fmt::format("the surface intersects itself ({} triangle pairs, the first near {} and {})",
-                                     pairs.size(), str(centroid(pairs.front().first)),
-                                     str(centroid(pairs.front().second))));
-    }
+} // namespace
 
-    // Each closed component outward, inner shells (voids) inward.
-    const double before = [&] {
-        double v = 0;
-        for (auto f : sm.faces()) {
-            auto h = sm.halfedge(f);
-            const Point &a = sm.point(sm.source(h)), &b = sm.point(sm.target(h)), &c = sm.point(sm.target(sm.next(h)));
-            v += CGAL::scalar_product(a - CGAL::ORIGIN, CGAL::cross_product(b - CGAL::ORIGIN, c - CGAL::ORIGIN));
-        }
-        return v / 6.0;
-    }();
-    PMP::orient_to_bound_a_volume(sm);
+ImportedMesh importMesh(const std::filesystem::path& file, const MeshRepairOptions& options)
+{
+    const std::string name = file.string();
+    ImportedMesh out;
+    out.mesh = repairMesh(readSoup(file), name, options, out.repair);
+    if (options.mode == MeshRepairMode::Strict && !out.repair.clean())
+        throw InputError(name, "mesh", "needs repair (mesh_repair: strict): " + out.repair.defects());
+    if (!out.repair.clean()) log::category("model")->warn("{}: mesh repaired: {}", name, out.repair.repairs());
+    requireSolidMesh(out.mesh, name);
+    log::category("model")->debug("{}: {} vertices, {} triangles, volume {:.6g} mm³", name, out.mesh.vertices.size(),
+                                  out.mesh.triangles.size(), out.mesh.signedVolume());
+    return out;
+}
 
-    TriangleMesh mesh;
-    mesh.vertices.reserve(sm.number_of_vertices());
-    std::vector<int> index(sm.number_of_vertices() + sm.number_of_removed_vertices(), -1);
-    for (auto v : sm.vertices()) {
-        index[v] = static_cast<int>(mesh.vertices.size());
-        const Point& p = sm.point(v);
-        mesh.vertices.emplace_back(p.x(), p.y(), p.z());
-    }
-    for (auto f : sm.faces()) {
-        auto h = sm.halfedge(f);
-        mesh.triangles.push_back({index[sm.source(h)], index[sm.target(h)], index[sm.target(sm.next(h))]});
-    }
-    const double after = mesh.signedVolume();
-    if (before < 0 && std::abs(after + before) <= 1e-9 * std::abs(before))
-        log::category("model")->warn("{}: mesh is oriented inward (signed volume {:.6g} mm³); flipped", name, before);
-    else if (std::abs(after - before) > 1e-9 * std::abs(after))
-        log::category("model")->warn("{}: shells re-oriented to bound a volume ({:.6g} -> {:.6g} mm³)", name, before,
-                                     after);
-    requireSolidMesh(mesh, name);
-    log::category("model")->debug("{}: {} vertices, {} triangles, volume {:.6g} mm³", name, mesh.vertices.size(),
-                                  mesh.triangles.size(), after);
-    return mesh;
+TriangleMesh loadMesh(const std::filesystem::path& file)
+{
+    return importMesh(file).mesh;
 }
 
 void saveMesh(const TriangleMesh& mesh, const std::filesystem::path& file, MeshEncoding encoding)

@@ -298,6 +298,20 @@ TriangleMesh tessellateFor(StepModel& brep, const OctreeSpec& octree)
     return brep.tessellate(octree.voxelSize() / 20.0, kStepAngularDeflectionRad);
 }
 
+/// `mesh_repair: repair | strict` and `mesh_gap_mm` (docs/part-program.md, "Meshes as they come").
+MeshRepairOptions parseMeshRepair(const ConfigNode& root)
+{
+    MeshRepairOptions options;
+    if (auto n = root.optional("mesh_repair")) {
+        const std::string mode = n->asString();
+        if (mode != "repair" && mode != "strict") n->fail("unknown mode '" + mode + "' (expected repair or strict)");
+        options.mode = mode == "strict" ? MeshRepairMode::Strict : MeshRepairMode::Repair;
+    }
+    // A gap wider than a millimetre is a hole in the CAD model, not rounding in its export.
+    if (auto n = root.optional("mesh_gap_mm")) options.gapToleranceMm = n->asDoubleIn(0.0, 1.0);
+    return options;
+}
+
 /// The CAD model and the octree around it. A STEP part is read first, the
 /// octree placed around its exact bounding box, and then tessellated with the
 /// chord error ΔV/20 (docs/part-program.md, "STEP parts"); a mesh is read as it is.
@@ -309,8 +323,11 @@ void loadModel(const ConfigNode& meshNode, const ConfigNode& octreeNode, PartPro
     try {
         if (isStepFile(program.meshFile))
             brep = std::make_shared<StepModel>(StepModel::read(program.meshFile));
-        else
-            mesh = loadMesh(program.meshFile);
+        else {
+            ImportedMesh imported = importMesh(program.meshFile, program.meshRepair);
+            mesh = std::move(imported.mesh);
+            program.meshRepairReport = imported.repair;
+        }
     } catch (const InputError& e) {
         meshNode.fail(e.what());
     }
@@ -421,8 +438,8 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys(
-        {"part", "mesh", "octree", "landmarks", "parameters", "inspection", "alignment", "decision_rule"});
+    root.allowOnlyKeys({"part", "mesh", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters", "inspection",
+                        "alignment", "decision_rule"});
 
     PartProgram program;
     program.file = file;
@@ -435,6 +452,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     if (meshText.empty()) meshNode.fail("mesh path is empty");
     program.meshFile =
         std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText) : file.parent_path() / meshText;
+    program.meshRepair = parseMeshRepair(root);
     loadModel(meshNode, root["octree"], program);
 
     const double surfaceTolerance = program.surfaceToleranceMm();

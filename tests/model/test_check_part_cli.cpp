@@ -134,3 +134,65 @@ TEST(CheckPartCli, WithAStationTheExpectedUncertaintyOfEveryLandmarkIsPrinted)
 }
 
 } // namespace
+
+namespace {
+
+// A mesh as CAD exports it (docs/part-program.md, "Meshes as they come"): the
+// block with two of its faces written twice and the whole shell inside out.
+// check-part lists the repairs; `mesh_repair: strict` refuses it, exit 2.
+TEST(CheckPartCli, RepairedMeshIsListedAndStrictModeRefusesIt)
+{
+    hgtest::TempDir dir;
+    hg::model::TriangleMesh block = hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));
+    block.flip();
+    block.triangles.push_back(block.triangles[0]);
+    block.triangles.push_back(block.triangles[5]);
+    hg::model::saveMesh(block, dir / "block.stl");
+    hgtest::writeFile(dir / "part.yaml", kPart);
+    auto r = hgtest::run(hullgauge() + " check-part --json --part " + (dir / "part.yaml").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["mesh_repair"]["mode"], "repair");
+    EXPECT_EQ(j["mesh_repair"]["repaired"], true);
+    EXPECT_EQ(j["mesh_repair"]["duplicate_faces"], 2);
+    EXPECT_EQ(j["mesh_repair"]["flipped_shells"], 1);
+    EXPECT_EQ(j["mesh_repair"]["self_intersections"], 0);
+    EXPECT_DOUBLE_EQ(j["mesh_repair"]["gap_tolerance_mm"].get<double>(), 0.02);
+    EXPECT_NEAR(j["mesh"]["volume_mm3"].get<double>(), 1000.0, 1e-9);
+    const auto text = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(text.status, 0);
+    EXPECT_NE(text.out.find("repaired    2 kinds of defect (mesh_repair: repair):\n  2 duplicate faces removed\n"
+                            "  1 shell oriented inward flipped\n"),
+              std::string::npos)
+        << text.out;
+
+    // mesh_repair: strict, given after `mesh` (line 3).
+    std::string strict = kPart;
+    strict.insert(strict.find("octree:"), "mesh_repair: strict\n");
+    hgtest::writeFile(dir / "part.yaml", strict);
+    r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("part.yaml:2: mesh: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("block.stl: mesh: needs repair (mesh_repair: strict): 2 duplicate faces, 1 shell oriented "
+                         "inward"),
+              std::string::npos)
+        << r.err;
+
+    // A clean mesh passes strict mode and reports nothing repaired.
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("repaired    nothing"), std::string::npos) << r.out;
+
+    strict.replace(strict.find("mesh_repair: strict"), 19, "mesh_repair: lenient");
+    hgtest::writeFile(dir / "part.yaml", strict);
+    r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("part.yaml:3: mesh_repair: unknown mode 'lenient' (expected repair or strict)"),
+              std::string::npos)
+        << r.err;
+}
+
+} // namespace

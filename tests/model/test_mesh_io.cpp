@@ -169,13 +169,27 @@ TEST(MeshIo, InconsistentTriangleIsReorientedWithAWarning)
     EXPECT_NE(log.text().find("inconsistent orientation"), std::string::npos) << log.text();
 }
 
-TEST(MeshIo, SelfIntersectingMeshIsRefused)
+// Two overlapping closed shells are two bodies exported as one soup: the
+// part is their union, 8 + 8 − 1 mm³ (docs/part-program.md, "Meshes as they come").
+TEST(MeshIo, SelfIntersectingMeshOfOverlappingShellsIsRepairedToTheirUnion)
 {
     hgtest::TempDir dir;
     TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2));
-    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3))); // two overlapping closed shells
+    m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
     saveMesh(m, dir / "overlap.stl");
-    EXPECT_NE(std::string(loadError(dir / "overlap.stl").what()).find("intersects itself"), std::string::npos);
+    LogCapture log;
+    const ImportedMesh r = importMesh(dir / "overlap.stl");
+    EXPECT_NEAR(r.mesh.signedVolume(), 15.0, 1e-9);
+    EXPECT_TRUE(checkMesh(r.mesh).ok());
+    EXPECT_GT(r.repair.selfIntersections, 0u);
+    EXPECT_NE(log.text().find("self-intersecting triangle pairs removed"), std::string::npos) << log.text();
+    // mesh_repair: strict refuses it, naming the defect.
+    try {
+        importMesh(dir / "overlap.stl", {MeshRepairMode::Strict});
+        FAIL() << "strict mode accepted a self-intersecting mesh";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("self-intersecting triangle pairs"), std::string::npos) << e.what();
+    }
 }
 
 TEST(MeshIo, BadFilesAreNamed)

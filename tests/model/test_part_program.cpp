@@ -81,7 +81,13 @@ TEST_F(PartProgramTest, LoadsEveryField)
     EXPECT_EQ(p.part, "block-1");
     EXPECT_EQ(p.meshFile, dir / "meshes/block.stl");
     ASSERT_TRUE(p.solid);
-    EXPECT_NEAR(p.solid->mesh().signedVolume(), 1000.0, 1e-9);
+    // The vertex kept is the one the file writes first (here the top face's): the block with that corner
+    // moved, 1000 + 0.05 · 100 / 3 mm³ (the pyramid over the face x = 10).
+    TriangleMesh moved = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));
+    moved.vertices[7] = Vector3d(10.05, 10, 10);
+    const double volume = p.solid->mesh().signedVolume();
+    EXPECT_TRUE(std::abs(volume - 1000.0) < 1e-9 || std::abs(volume - moved.signedVolume()) < 1e-4)
+        << volume; // 10.05 in single precision
 
     // Default cube: 4 voxels (adjacency 3 + 1) of margin around the 10 mm part
     // at depth 6: S = 10 / (1 - 8/64) = 80/7 mm, centred on (5, 5, 5).
@@ -360,6 +366,39 @@ TEST_F(PartProgramTest, BrokenMeshIsReportedAtTheMeshKey)
     EXPECT_EQ(e.field(), "mesh");
     EXPECT_EQ(e.line(), 2);
     EXPECT_NE(std::string(e.what()).find("block.stl: mesh: not closed: 3 open edges"), std::string::npos) << e.what();
+}
+
+// docs/part-program.md, "Meshes as they come": `mesh_gap_mm` sets the gap
+// the repair closes, and the program keeps the repair report.
+TEST_F(PartProgramTest, MeshGapToleranceClosesAGapOfThatWidthOnly)
+{
+    // The corner (10, 10, 10) written 0.05 mm off in the top face's triangles: a slit.
+    TriangleMesh block = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));
+    block.vertices.push_back(Vector3d(10.05, 10, 10));
+    for (std::size_t i = 0; i < block.triangles.size(); ++i)
+        for (int& v : block.triangles[i])
+            if (v == 7 && block.faceNormal(i).z() > 0.5) v = 8;
+    saveMesh(block, dir / "meshes/block.stl");
+    const std::string withGap = "mesh_gap_mm: 0.1\n";
+    std::string yaml = kGood;
+    EXPECT_NE(std::string(error(yaml).what()).find("gaps up to 0.02 mm are closed; this one is wider"),
+              std::string::npos);
+    yaml.insert(yaml.find("octree:"), withGap);
+    const PartProgram p = loadPartProgram(write(yaml));
+    EXPECT_DOUBLE_EQ(p.meshRepair.gapToleranceMm, 0.1);
+    EXPECT_EQ(p.meshRepair.mode, MeshRepairMode::Repair);
+    EXPECT_EQ(p.meshRepairReport.mergedVertices, 1u);
+    // The vertex kept is the one the file writes first (here the top face's): the block with that corner
+    // moved, 1000 + 0.05 · 100 / 3 mm³ (the pyramid over the face x = 10).
+    TriangleMesh moved = makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10));
+    moved.vertices[7] = Vector3d(10.05, 10, 10);
+    const double volume = p.solid->mesh().signedVolume();
+    EXPECT_TRUE(std::abs(volume - 1000.0) < 1e-9 || std::abs(volume - moved.signedVolume()) < 1e-4)
+        << volume; // 10.05 in single precision
+    yaml.replace(yaml.find(withGap), withGap.size(), "mesh_gap_mm: 2\n");
+    const InputError e = error(yaml);
+    EXPECT_EQ(e.field(), "mesh_gap_mm");
+    EXPECT_EQ(e.line(), 3);
 }
 
 } // namespace

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "hullgauge/model/mesh.h"
+#include "hullgauge/model/mesh_repair.h"
 
 namespace hg::model {
 
@@ -60,11 +61,23 @@ MeshCheck checkMesh(const TriangleMesh& mesh);
 /// a warning (log category "model").
 void requireSolidMesh(TriangleMesh& mesh, const std::string& name);
 
+/// A mesh file as read: the solid, and what was repaired to make it one.
+struct ImportedMesh {
+    TriangleMesh mesh;
+    MeshRepairReport repair;
+};
+
 /// Loads STL (ASCII or binary), OBJ, PLY or OFF through CGAL's readers, merges
-/// duplicate points, orients the soup consistently, triangulates polygons and
-/// checks that the result bounds a volume (closed 2-manifold, no
-/// self-intersection, outward). Any problem throws InputError naming the file
-/// and the record, e.g. "m.stl: facet 812: file ends after 40 of 50 bytes".
+/// points written more than once, triangulates polygons and repairs what CAD
+/// exports leave (mesh_repair.h; docs/part-program.md, "Meshes as they
+/// come"). The result bounds a volume (closed 2-manifold, no
+/// self-intersection, outward). A mesh that cannot be read as a solid, or
+/// with MeshRepairMode::Strict one that needed any repair, throws InputError
+/// naming the file and the record, e.g. "m.stl: facet 812: file ends after 40
+/// of 50 bytes"; repairs are logged as a warning (category "model").
+ImportedMesh importMesh(const std::filesystem::path& file, const MeshRepairOptions& options = {});
+
+/// importMesh with the default options, the mesh only.
 TriangleMesh loadMesh(const std::filesystem::path& file);
 
 enum class MeshEncoding { Binary, Ascii };

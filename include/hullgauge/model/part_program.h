@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "hullgauge/geometry/fixture.h"
+#include "hullgauge/model/mesh_repair.h"
 #include "hullgauge/model/solid.h"
 
 namespace hg::model {
@@ -117,6 +118,10 @@ struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
     std::filesystem::path meshFile; // resolved relative to the YAML file
+    /// `mesh_repair` and `mesh_gap_mm` (docs/part-program.md, "Meshes as they come").
+    MeshRepairOptions meshRepair;
+    /// What was repaired in the mesh file (all zero for a STEP part).
+    MeshRepairReport meshRepairReport;
     std::shared_ptr<const Solid> solid;
     /// A STEP part's exact B-rep, which `solid` is the tessellation of; null for a mesh file.
     std::shared_ptr<const StepModel> brep;

@@ -1,0 +1,64 @@
+// Repair of meshes as CAD systems export them (docs/part-program.md, "Meshes
+// as they come"): duplicated and coincident faces, degenerate faces, small
+// gaps, faces and shells oriented the wrong way, and surfaces that meet
+// themselves are repaired before the mesh is judged; only what cannot be read
+// as a solid is refused. The ideal object must still be an exact, closed
+// description (dissertation 3.5.1), so every repair is counted and reported.
+//
+// Units: millimetres in the part frame.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "hullgauge/model/mesh.h"
+
+namespace hg::model {
+
+/// `mesh_repair` of a part program: repair and report (the default), or refuse
+/// a mesh that needed any repair, naming the defect.
+enum class MeshRepairMode { Repair, Strict };
+std::string toString(MeshRepairMode mode);
+
+struct MeshRepairOptions {
+    MeshRepairMode mode = MeshRepairMode::Repair;
+    /// Vertices on open edges closer than this to another vertex on an open
+    /// edge are merged (a gap the export left between two faces), mm.
+    double gapToleranceMm = 0.02;
+};
+
+/// What the repair did, per kind; every count zero for a mesh that needed none.
+struct MeshRepairReport {
+    double gapToleranceMm = 0.0;    ///< the tolerance the gaps were closed with
+    std::size_t duplicateFaces = 0; ///< exact repeats of another face, removed
+    std::size_t opposedFaces = 0; ///< coincident faces of opposite orientation (zero-thickness walls), removed in pairs
+    std::size_t degenerateFaces = 0;     ///< faces without area, removed
+    std::size_t mergedVertices = 0;      ///< vertices on open edges merged into another within the tolerance
+    std::size_t closedEdges = 0;         ///< open edges those merges closed (borders stitched)
+    std::size_t reorientedFaces = 0;     ///< faces running against their neighbours, reversed
+    std::size_t flippedShells = 0;       ///< closed shells oriented the wrong way (outer inward, void outward), flipped
+    std::size_t selfIntersections = 0;   ///< self-intersecting triangle pairs found, all removed
+    std::size_t retriangulatedFaces = 0; ///< planar faces folded over themselves, re-triangulated
+    std::size_t autorefinedPairs = 0;    ///< of the pairs, those removed by autorefinement (crossing shells)
+
+    /// True when nothing was repaired.
+    bool clean() const;
+    /// The defects found, "2 duplicate faces, 1 shell oriented inward" (strict mode's refusal).
+    std::string defects() const;
+    /// The repairs made, "2 duplicate faces removed, 1 shell flipped" (the warning).
+    std::string repairs() const;
+    /// One entry per kind repaired, as in repairs().
+    std::vector<std::string> items() const;
+};
+
+/// Repairs a triangle soup (indices into `soup.vertices`; points meant to be
+/// one already merged) into a closed, outward-oriented 2-manifold without
+/// self-intersections, counting each repair in `report`. What cannot be read
+/// as a solid (a hole wider than the tolerance, edges shared by more than two
+/// faces, sheets touching at a point, a self-intersection the repair cannot
+/// remove) throws InputError(name, "mesh", problem) naming the first place.
+TriangleMesh repairMesh(TriangleMesh soup, const std::string& name, const MeshRepairOptions& options,
+                        MeshRepairReport& report);
+
+} // namespace hg::model

@@ -177,7 +177,7 @@ TEST(MeshIo, SelfIntersectingMeshOfOverlappingShellsIsRepairedToTheirUnion)
     TriangleMesh m = makeBox(Vector3d(0, 0, 0), Vector3d(2, 2, 2));
     m.append(makeBox(Vector3d(1, 1, 1), Vector3d(3, 3, 3)));
     saveMesh(m, dir / "overlap.stl");
-    LogCapture log;
+    hgtest::LogCapture log("model");
     const ImportedMesh r = importMesh(dir / "overlap.stl");
     EXPECT_NEAR(r.mesh.signedVolume(), 15.0, 1e-9);
     EXPECT_TRUE(checkMesh(r.mesh).ok());

@@ -329,32 +329,35 @@ VoxelTester::VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMeth
 // covers [c, c+1] x [r, r+1]); false when one lies behind the camera. The
 // corners in the camera frame are the low corner plus the box's edges turned
 // into the camera (three vectors), not 8 full transforms; without distortion
-// the pinhole projection is done here (one division per corner).
+// the pinhole projection is done here, all 8 corners at once.
 bool VoxelTester::projectCorners(std::size_t viewIndex, const Box3& voxel, std::array<Vec2, 8>& corners) const
 {
+    using Corners = Eigen::Array<double, 8, 1>;
+    // Eigen's corner order: bit 0 = x, bit 1 = y, bit 2 = z.
+    static const Corners bx = (Corners() << 0, 1, 0, 1, 0, 1, 0, 1).finished();
+    static const Corners by = (Corners() << 0, 0, 1, 1, 0, 0, 1, 1).finished();
+    static const Corners bz = (Corners() << 0, 0, 0, 0, 1, 1, 1, 1).finished();
     const geometry::CameraModel& camera = (*views_)[viewIndex].camera;
-    const bool pinhole = state_[viewIndex].pinhole;
     const geometry::RigidTransform& T = camera.cameraFromPart();
-    const geometry::Mat3& K = camera.intrinsics().K;
     const Vec3 lo = T.apply(voxel.min());
     const Vec3 size = voxel.sizes();
     const Vec3 ex = T.R.col(0) * size.x(), ey = T.R.col(1) * size.y(), ez = T.R.col(2) * size.z();
-    for (int i = 0; i < 8; ++i) {
-        // Eigen's corner order: bit 0 = x, bit 1 = y, bit 2 = z.
-        Vec3 pc = lo;
-        if (i & 1) pc += ex;
-        if (i & 2) pc += ey;
-        if (i & 4) pc += ez;
-        if (!(pc.z() > 0)) return false;
-        Vec2 px;
-        if (pinhole) {
-            const double w = 1.0 / pc.z();
-            const double x = pc.x() * w, y = pc.y() * w;
-            px = Vec2(K(0, 0) * x + K(0, 1) * y + K(0, 2), K(1, 1) * y + K(1, 2));
-        } else {
-            px = *camera.projectCameraPoint(pc);
-        }
-        corners[static_cast<std::size_t>(i)] = Vec2(px.x() + 0.5, px.y() + 0.5);
+    const Corners X = lo.x() + bx * ex.x() + by * ey.x() + bz * ez.x();
+    const Corners Y = lo.y() + bx * ex.y() + by * ey.y() + bz * ez.y();
+    const Corners Z = lo.z() + bx * ex.z() + by * ey.z() + bz * ez.z();
+    if (!(Z > 0.0).all()) return false;
+    if (state_[viewIndex].pinhole) {
+        const geometry::Mat3& K = camera.intrinsics().K;
+        const Corners x = X / Z, y = Y / Z;
+        const Corners u = K(0, 0) * x + K(0, 1) * y + (K(0, 2) + 0.5), v = K(1, 1) * y + (K(1, 2) + 0.5);
+        for (std::size_t i = 0; i < 8; ++i)
+            corners[i] = Vec2(u[static_cast<Eigen::Index>(i)], v[static_cast<Eigen::Index>(i)]);
+        return true;
+    }
+    for (std::size_t i = 0; i < 8; ++i) {
+        const auto k = static_cast<Eigen::Index>(i);
+        const Vec2 px = *camera.projectCameraPoint(Vec3(X[k], Y[k], Z[k]));
+        corners[i] = Vec2(px.x() + 0.5, px.y() + 0.5);
     }
     return true;
 }

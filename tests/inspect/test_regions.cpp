@@ -138,8 +138,8 @@ struct SimLine {
         for (std::size_t k = 0; k < poses.size(); ++k) {
             o.seed = 7 + k;
             const CameraModel camera = station.cameraAt(poses[k]);
-            views.push_back({"v" + std::to_string(k), camera,
-                             renderer.render(hg::align::seatedCamera(camera, seat), o)});
+            views.push_back(
+                {"v" + std::to_string(k), camera, renderer.render(hg::align::seatedCamera(camera, seat), o)});
         }
         return views;
     }

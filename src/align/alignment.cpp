@@ -164,7 +164,8 @@ struct Aligner::Impl {
     // How much of the outline disagrees with a fit: every sample without an
     // edge near it counts 1, every edge its biweight loss at a fixed scale.
     double disagreement(const Fit& fit, const std::vector<AlignmentView>& views, std::size_t samples) const;
-    double searchBandPx(const AlignmentView& view, const Vec3& point) const;
+    double searchBandPx(const geometry::CameraModel& camera, const Vec3& point) const;
+    std::vector<ContourSample> samplesOf(const geometry::CameraModel& camera) const;
     double marginMm() const { return settings.maxShiftMm + geometry::degToRad(settings.maxRotationDeg) * lever; }
     SolverLimits solverLimits() const
     {
@@ -225,29 +226,64 @@ double Aligner::marginMm() const
     return impl_->marginMm();
 }
 
-double Aligner::Impl::searchBandPx(const AlignmentView& view, const Vec3& point) const
+std::vector<cv::Rect> Aligner::searchRegions(const geometry::CameraModel& camera) const
+{
+    const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
+    const double focal = std::max(camera.intrinsics().K(0, 0), camera.intrinsics().K(1, 1));
+    const double turn = std::sin(geometry::degToRad(impl_->settings.maxRotationDeg));
+    std::vector<cv::Rect> out;
+    for (const ContourSample& s : impl_->samplesOf(camera)) {
+        SampleImage at;
+        if (!projectSample(*impl_->graph, s, camera, at)) continue;
+        // A seat within the limits moves the sample by at most the margin,
+        // seen from no nearer than its depth less the margin; later rounds
+        // search kRefineBandPx about the seated sample, along a normal turned
+        // by at most the rotation limit.
+        const double depth = camera.cameraFromPart().apply(s.point).z() - impl_->marginMm();
+        const double moved = depth > 1e-6 ? impl_->marginMm() * focal / depth + 1.0 : 1e6;
+        const double band = std::max(impl_->searchBandPx(camera, s.point), moved + kRefineBandPx);
+        const vision::EdgeReach reach = vision::findEdgeReach(band);
+        const Vec2 a = at.pixel - reach.inside * at.normal, b = at.pixel + reach.outside * at.normal;
+        const double pad = reach.lateral + moved + (reach.inside + reach.outside) * turn;
+        const cv::Point lo(static_cast<int>(std::floor(std::min(a.x(), b.x()) - pad)),
+                           static_cast<int>(std::floor(std::min(a.y(), b.y()) - pad)));
+        const cv::Point hi(static_cast<int>(std::ceil(std::max(a.x(), b.x()) + pad)) + 1,
+                           static_cast<int>(std::ceil(std::max(a.y(), b.y()) + pad)) + 1);
+        const cv::Rect r = cv::Rect(lo, hi) & frame;
+        if (!r.empty()) out.push_back(r);
+    }
+    return out;
+}
+
+double Aligner::Impl::searchBandPx(const geometry::CameraModel& camera, const Vec3& point) const
 {
     const double margin = marginMm();
-    const double depth = view.camera.cameraFromPart().apply(point).z();
-    const double mmPerPx = depth / view.camera.intrinsics().K(0, 0);
+    const double depth = camera.cameraFromPart().apply(point).z();
+    const double mmPerPx = depth / camera.intrinsics().K(0, 0);
     return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
+}
+
+std::vector<ContourSample> Aligner::Impl::samplesOf(const geometry::CameraModel& camera) const
+{
+    std::vector<ContourSample> samples =
+        sampleContour(*graph, *solid, camera, settings.maxRotationDeg * kSearchReach + 0.5, kMaxSamplesPerView);
+    if (settings.method == model::AlignmentMethod::Datums)
+        samples.erase(
+            std::remove_if(samples.begin(), samples.end(), [](const ContourSample& c) { return c.datum < 0; }),
+            samples.end());
+    return samples;
 }
 
 ViewEdges Aligner::Impl::firstEdges(const AlignmentView& view) const
 {
     ViewEdges out;
-    out.samples =
-        sampleContour(*graph, *solid, view.camera, settings.maxRotationDeg * kSearchReach + 0.5, kMaxSamplesPerView);
-    if (settings.method == model::AlignmentMethod::Datums)
-        out.samples.erase(
-            std::remove_if(out.samples.begin(), out.samples.end(), [](const ContourSample& c) { return c.datum < 0; }),
-            out.samples.end());
+    out.samples = samplesOf(view.camera);
     const EdgeImage image{view.grey, view.threshold, view.objectIsDark};
     for (std::size_t k = 0; k < out.samples.size(); ++k) {
         SampleImage at;
         if (!imageOf(*graph, out.samples[k], view.camera, at)) continue;
         double offset = 0.0;
-        if (findEdge(image, at, searchBandPx(view, out.samples[k].point), offset))
+        if (findEdge(image, at, searchBandPx(view.camera, out.samples[k].point), offset))
             out.first.push_back({k, at.pixel + offset * at.normal, at.normal});
     }
     return out;

@@ -111,6 +111,28 @@ std::optional<Vec2> verifiedStart(const model::Solid& solid, const geometry::Cam
     return std::nullopt;
 }
 
+} // namespace
+
+std::optional<cv::Rect> edgeReadRect(const geometry::CameraModel& camera, const MapLandmark& lm, double marginPx)
+{
+    const auto pixel = camera.project(lm.position);
+    const auto g = normalImage(camera, lm);
+    if (!pixel || !g) return std::nullopt;
+    const Vec2 u = g->normalized();
+    // The outline starts within kOutlineReachPx of the landmark's image along u.
+    const vision::EdgeReach reach = vision::findEdgeReach(kEdgeBandPx);
+    const Vec2 a = *pixel - (kOutlineReachPx + reach.inside) * u;
+    const Vec2 b = *pixel + (kOutlineReachPx + reach.outside) * u;
+    const double pad = reach.lateral + marginPx;
+    const int c0 = static_cast<int>(std::floor(std::min(a.x(), b.x()) - pad));
+    const int r0 = static_cast<int>(std::floor(std::min(a.y(), b.y()) - pad));
+    const int c1 = static_cast<int>(std::ceil(std::max(a.x(), b.x()) + pad));
+    const int r1 = static_cast<int>(std::ceil(std::max(a.y(), b.y()) + pad));
+    return cv::Rect(cv::Point(c0, r0), cv::Point(c1 + 1, r1 + 1));
+}
+
+namespace {
+
 /// A local feature of half-length ℓ seen ℓ·tan(tilt) short (mm, standard).
 double tiltMm(const geometry::CameraModel& camera, const MapLandmark& lm)
 {

@@ -40,6 +40,30 @@ int chebyshev(const Eigen::Vector3i& a, const Eigen::Vector3i& b)
     return (a - b).cwiseAbs().maxCoeff();
 }
 
+/// The network voxels the landmark's normal line crosses within `A` layers of
+/// its voxel `node0`, in order along the normal (docs/inspection.md, "boundary
+/// bracket"): geometry only, found once per inspector.
+std::vector<std::int32_t> normalLineNodes(const InspectionMap& map, const MapLandmark& lm, std::int32_t node0, int A,
+                                          int level)
+{
+    const Eigen::Vector3i c0 = keyIndex(map.nodes()[static_cast<std::size_t>(node0)].key);
+    const double dv = map.frame().voxelSize(level);
+    const double reach = (A + 1.0) * dv * std::sqrt(3.0);
+    const double step = dv / 16.0;
+    std::vector<std::int32_t> nodes;
+    VoxelKey previous = ~VoxelKey{0};
+    for (double s = -reach; s <= reach; s += step) {
+        // Consecutive samples mostly share a voxel: look each voxel up once.
+        const VoxelKey key = map.frame().keyAt(lm.position + s * lm.normal, level);
+        if (key == previous) continue;
+        previous = key;
+        const std::int32_t n = map.find(key);
+        if (n < 0 || chebyshev(keyIndex(map.nodes()[static_cast<std::size_t>(n)].key), c0) > A) continue;
+        if (nodes.empty() || nodes.back() != n) nodes.push_back(n);
+    }
+    return nodes;
+}
+
 /// Per-inspection memo of reconstructed labels, parallel to the map's nodes
 /// (3.3.1: "each voxel will be reconstructed only once").
 class Memo {
@@ -119,61 +143,39 @@ Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::s
         if (!idx) throw std::invalid_argument("masked landmark '" + id + "' is not in the map");
         active_[*idx] = 0;
     }
+    normalLines_.resize(map.landmarks().size());
+    for (std::size_t l = 0; l < map.landmarks().size(); ++l)
+        if (active_[l])
+            normalLines_[l] = normalLineNodes(map, map.landmarks()[l], map.landmarkNode(l, level_), adjacency_, level_);
+}
+
+RegionQuery Inspector::regionQuery() const
+{
+    RegionQuery q;
+    q.level = level_;
+    q.adjacency = adjacency_;
+    q.active = active_;
+    // The seat moves the part by up to the aligner's margin (docs/alignment.md).
+    q.marginMm = aligner_ ? aligner_->marginMm() : 0.0;
+    q.edges = gauge_ != nullptr;
+    return q;
+}
+
+ViewRegions Inspector::regions(const geometry::CameraModel& camera) const
+{
+    ViewRegions r = viewRegions(*map_, camera, regionQuery());
+    if (aligner_) {
+        std::vector<cv::Rect> edges = r.edges;
+        for (const cv::Rect& band : aligner_->searchRegions(camera)) edges.push_back(band);
+        r.edges = mergeOverlapping(edges);
+        for (const cv::Rect& e : r.edges) r.bounds = r.bounds.empty() ? e : (r.bounds | e);
+    }
+    return r;
 }
 
 std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& camera) const
 {
-    const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
-    const VoxelFrame& voxels = map_->frame();
-    const double s = voxels.voxelSize(level_);
-    const int nmax = (1 << level_) - 1;
-    std::vector<cv::Rect> rects;
-    for (std::size_t l = 0; l < map_->landmarks().size(); ++l) {
-        if (!active_[l]) continue;
-        const std::int32_t n = map_->landmarkNode(l, level_);
-        const Eigen::Vector3i c = keyIndex(map_->nodes()[static_cast<std::size_t>(n)].key);
-        const Eigen::Vector3i lo = (c.array() - adjacency_).max(0).matrix();
-        const Eigen::Vector3i hi = (c.array() + adjacency_).min(nmax).matrix() + Eigen::Vector3i::Ones();
-        // The seat moves the part by up to the aligner's margin (docs/alignment.md).
-        const double margin = aligner_ ? aligner_->marginMm() : 0.0;
-        const Box3 box(voxels.origin + s * lo.cast<double>() - Vec3::Constant(margin),
-                       voxels.origin + s * hi.cast<double>() + Vec3::Constant(margin));
-        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-        bool ok = true;
-        for (int i = 0; i < 8 && ok; ++i) {
-            const auto px = camera.project(box.corner(static_cast<Box3::CornerType>(i)));
-            if (!px) {
-                ok = false;
-                break;
-            }
-            x0 = std::min(x0, px->x());
-            y0 = std::min(y0, px->y());
-            x1 = std::max(x1, px->x());
-            y1 = std::max(y1, px->y());
-        }
-        if (!ok) continue;
-        // Pixel (c, r) spans c ± 0.5; one pixel of margin for distortion bending.
-        const int c0 = static_cast<int>(std::floor(x0 + 0.5)) - 1, r0 = static_cast<int>(std::floor(y0 + 0.5)) - 1;
-        const int c1 = static_cast<int>(std::floor(x1 + 0.5)) + 1, r1 = static_cast<int>(std::floor(y1 + 0.5)) + 1;
-        if (c1 < 0 || r1 < 0 || c0 >= frame.width || r0 >= frame.height) continue;
-        const cv::Rect r = cv::Rect(cv::Point(c0, r0), cv::Point(c1 + 1, r1 + 1)) & frame;
-        if (!r.empty()) rects.push_back(r);
-    }
-    // Merge overlapping rectangles until none overlap, so that a footprint in a
-    // landmark's network always lies in one region.
-    bool merged = true;
-    while (merged) {
-        merged = false;
-        for (std::size_t i = 0; i < rects.size() && !merged; ++i)
-            for (std::size_t j = i + 1; j < rects.size(); ++j)
-                if ((rects[i] & rects[j]).area() > 0) {
-                    rects[i] |= rects[j];
-                    rects.erase(rects.begin() + static_cast<std::ptrdiff_t>(j));
-                    merged = true;
-                    break;
-                }
-    }
-    return rects;
+    return viewRegions(*map_, camera, regionQuery()).voxels;
 }
 
 SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::SegmentationSettings& segmentation) const
@@ -184,7 +186,13 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
                                     std::to_string(v.camera.imageSize().width) + "x" +
                                     std::to_string(v.camera.imageSize().height));
     const cv::Mat grey = vision::toGrey(v.frame);
-    const double threshold = vision::computeThreshold(grey, segmentation);
+    // Only the regions' pixels: their statistics give the threshold, they
+    // alone are segmented (docs/inspection.md, "Pixels in proportion to the goal").
+    const cv::Rect frame(0, 0, grey.cols, grey.rows);
+    const std::vector<cv::Rect> rects =
+        options_.wholeFrame ? std::vector<cv::Rect>{frame} : regionsOfInterest(v.camera);
+    const double threshold = options_.wholeFrame ? vision::computeThreshold(grey, segmentation)
+                                                 : vision::computeThreshold(grey, rects, segmentation);
     const bool mask = segmentation.method == vision::SegmentationMethod::Mask;
     // A mask frame's edge lies half-way between its two values.
     const double edgeLevel = mask ? (grey.depth() == CV_8U ? 127.5 : 32767.5) : threshold;
@@ -193,8 +201,7 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
     if (aligner_) sv.alignment = aligner_->prepare({sv.camera, sv.grey, sv.threshold, sv.objectIsDark});
     // The ray casts of the sub-voxel step: found when the program was loaded, else now (docs/inspection.md).
     if (gauge_) sv.outlines = outlinesFor(v.camera);
-    for (const cv::Rect& r : regionsOfInterest(v.camera))
-        sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
+    for (const cv::Rect& r : rects) sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
     return sv;
 }
 
@@ -451,22 +458,9 @@ struct NormalLine {
     bool hidden = false; ///< a hidden voxel next to the landmark voxel
 };
 
-NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& search, const MapLandmark& lm, int level)
+NormalLine reconstructNormalLine(const InspectionMap& map, LandmarkSearch& search, const MapLandmark& lm,
+                                 const std::vector<std::int32_t>& nodes)
 {
-    const double dv = map.frame().voxelSize(level);
-    const double reach = (search.A + 1.0) * dv * std::sqrt(3.0);
-    const double step = dv / 16.0;
-    std::vector<std::int32_t> nodes;
-    VoxelKey previous = ~VoxelKey{0};
-    for (double s = -reach; s <= reach; s += step) {
-        // Consecutive samples mostly share a voxel: look each voxel up once.
-        const VoxelKey key = map.frame().keyAt(lm.position + s * lm.normal, level);
-        if (key == previous) continue;
-        previous = key;
-        const std::int32_t n = map.find(key);
-        if (n < 0 || !search.within(n)) continue;
-        if (nodes.empty() || nodes.back() != n) nodes.push_back(n);
-    }
     NormalLine line;
     for (std::int32_t n : nodes) {
         const MapNode& node = map.nodes()[static_cast<std::size_t>(n)];
@@ -619,8 +613,9 @@ ParameterResult measureParameter(const InspectionMap& map, const MapParameter& p
 /// One landmark (3.3.8, then 4.5.2 and 4.6.2): discrimination of the views,
 /// the traversal, the bracket along the normal and the status.
 LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, LandmarkSearch& search, int level,
-                               const std::vector<SilhouetteView>* views, const std::vector<std::string>* viewIds,
-                               bool checkResolution, std::unordered_set<std::int32_t>& allWrong)
+                               const std::vector<std::int32_t>& normalLine, const std::vector<SilhouetteView>* views,
+                               const std::vector<std::string>* viewIds, bool checkResolution,
+                               std::unordered_set<std::int32_t>& allWrong)
 {
     const double dv = map.frame().voxelSize(level);
     LandmarkResult lr;
@@ -631,7 +626,7 @@ LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, 
     const TraversalOutcome t = traverseLandmark(map, search);
     lr.errorNumber = static_cast<int>(search.wrong.size());
     allWrong.insert(search.wrong.begin(), search.wrong.end());
-    const NormalLine line = reconstructNormalLine(map, search, lm, level);
+    const NormalLine line = reconstructNormalLine(map, search, lm, normalLine);
     lr.voxelsReconstructed = search.counter;
     if (!notObservable(lr, t, line, checkResolution, dv)) measureAlongNormal(lr, lm, line, t.objectFound, dv);
     if (t.frontAtLimit && lr.status != LandmarkStatus::Ok && lr.reason.empty())
@@ -669,8 +664,8 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
             continue;
         }
         LandmarkSearch search{map, memo, map.landmarkNode(l, level_), adjacency_};
-        result.landmarks.push_back(inspectLandmark(map, map.landmarks()[l], search, level_, views, viewIds,
-                                                   views && options_.requireResolution, allWrong));
+        result.landmarks.push_back(inspectLandmark(map, map.landmarks()[l], search, level_, normalLines_[l], views,
+                                                   viewIds, views && options_.requireResolution, allWrong));
         stopped = options_.earlyExit && result.landmarks.back().status != LandmarkStatus::Ok;
     }
     result.statistics = errorStatistics(result.landmarks, allWrong.size(), dv);

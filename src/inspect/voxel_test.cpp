@@ -265,51 +265,180 @@ double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::R
     return localBackgroundArea(local, region, stopAt);
 }
 
+namespace {
+
+/// Background pixels of the pixel rectangle [c0, c1] x [r0, r1] (region-local)
+/// from the per-row prefix counts.
+std::int64_t backgroundPixels(const SilhouetteIndex::Region& reg, int c0, int c1, int r0, int r1)
+{
+    std::int64_t n = 0;
+    for (int r = r0; r <= r1; ++r) {
+        const std::int32_t* cnt = reg.count.data() + static_cast<std::size_t>(r) * reg.stride;
+        n += cnt[c1 + 1] - cnt[c0];
+    }
+    return n;
+}
+
+/// The footprint's pixel bounding box (frame pixels) from shifted corners.
+struct CornerBounds {
+    double xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;
+    explicit CornerBounds(const std::array<Vec2, 8>& corners)
+    {
+        for (const Vec2& c : corners) {
+            xmin = std::min(xmin, c.x());
+            xmax = std::max(xmax, c.x());
+            ymin = std::min(ymin, c.y());
+            ymax = std::max(ymax, c.y());
+        }
+    }
+    /// The pixels the footprint's bounding box touches (a pixel is touched
+    /// from its low edge up to, not including, its high edge).
+    cv::Rect pixels() const
+    {
+        const int c0 = static_cast<int>(std::floor(xmin)), r0 = static_cast<int>(std::floor(ymin));
+        return {c0, r0, static_cast<int>(std::floor(xmax)) - c0 + 1, static_cast<int>(std::floor(ymax)) - r0 + 1};
+    }
+};
+
+/// The one label of every pixel under the footprint's bounding box — 1 all
+/// background, 0 all object — the exact answer without the outline; -1 when
+/// the box holds both.
+int uniformLabel(const SilhouetteIndex::Region& reg, const CornerBounds& b)
+{
+    const int c0 = static_cast<int>(std::floor(b.xmin)) - reg.rect.x;
+    const int r0 = static_cast<int>(std::floor(b.ymin)) - reg.rect.y;
+    const int c1 = std::max(c0, static_cast<int>(std::ceil(b.xmax)) - 1 - reg.rect.x);
+    const int r1 = std::max(r0, static_cast<int>(std::ceil(b.ymax)) - 1 - reg.rect.y);
+    const std::int64_t bg = backgroundPixels(reg, c0, c1, r0, r1);
+    if (bg == 0) return 0;
+    if (bg == static_cast<std::int64_t>(r1 - r0 + 1) * (c1 - c0 + 1)) return 1;
+    return -1;
+}
+
+} // namespace
+
+VoxelTester::VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMethod method)
+    : views_(views), method_(method)
+{
+    state_.resize(views->size());
+    for (std::size_t v = 0; v < views->size(); ++v)
+        state_[v].pinhole = !(*views)[v].camera.intrinsics().hasDistortion();
+}
+
+// The 8 corners of `voxel` in pixel coordinates shifted by +0.5 (pixel (c, r)
+// covers [c, c+1] x [r, r+1]); false when one lies behind the camera. The
+// corners in the camera frame are the low corner plus the box's edges turned
+// into the camera (three vectors), not 8 full transforms; without distortion
+// the pinhole projection is done here, all 8 corners at once.
+bool VoxelTester::projectCorners(std::size_t viewIndex, const Box3& voxel, std::array<Vec2, 8>& corners) const
+{
+    using Corners = Eigen::Array<double, 8, 1>;
+    // Eigen's corner order: bit 0 = x, bit 1 = y, bit 2 = z.
+    static const Corners bx = (Corners() << 0, 1, 0, 1, 0, 1, 0, 1).finished();
+    static const Corners by = (Corners() << 0, 0, 1, 1, 0, 0, 1, 1).finished();
+    static const Corners bz = (Corners() << 0, 0, 0, 0, 1, 1, 1, 1).finished();
+    const geometry::CameraModel& camera = (*views_)[viewIndex].camera;
+    const geometry::RigidTransform& T = camera.cameraFromPart();
+    const Vec3 lo = T.apply(voxel.min());
+    const Vec3 size = voxel.sizes();
+    const Vec3 ex = T.R.col(0) * size.x(), ey = T.R.col(1) * size.y(), ez = T.R.col(2) * size.z();
+    const Corners X = lo.x() + bx * ex.x() + by * ey.x() + bz * ez.x();
+    const Corners Y = lo.y() + bx * ex.y() + by * ey.y() + bz * ez.y();
+    const Corners Z = lo.z() + bx * ex.z() + by * ey.z() + bz * ez.z();
+    if (!(Z > 0.0).all()) return false;
+    if (state_[viewIndex].pinhole) {
+        const geometry::Mat3& K = camera.intrinsics().K;
+        const Corners x = X / Z, y = Y / Z;
+        const Corners u = K(0, 0) * x + K(0, 1) * y + (K(0, 2) + 0.5), v = K(1, 1) * y + (K(1, 2) + 0.5);
+        for (std::size_t i = 0; i < 8; ++i)
+            corners[i] = Vec2(u[static_cast<Eigen::Index>(i)], v[static_cast<Eigen::Index>(i)]);
+        return true;
+    }
+    for (std::size_t i = 0; i < 8; ++i) {
+        const auto k = static_cast<Eigen::Index>(i);
+        const Vec2 px = *camera.projectCameraPoint(Vec3(X[k], Y[k], Z[k]));
+        corners[i] = Vec2(px.x() + 0.5, px.y() + 0.5);
+    }
+    return true;
+}
+
+const SilhouetteIndex::Region* VoxelTester::regionContaining(std::size_t viewIndex, const cv::Rect& rect) const
+{
+    const ViewState& s = state_[viewIndex];
+    if (s.lastRegion && (s.lastRegion->rect & rect) == rect) return s.lastRegion;
+    const SilhouetteIndex::Region* r = (*views_)[viewIndex].index.regionContaining(rect);
+    if (r) s.lastRegion = r;
+    return r;
+}
+
 FootprintMeasure VoxelTester::measure(const Box3& voxel, std::size_t viewIndex, double stopFraction) const
 {
-    const SilhouetteView& view = (*views_)[viewIndex];
     FootprintMeasure m;
     std::array<Vec2, 8> corners;
-    for (int i = 0; i < 8; ++i) {
-        const auto px = view.camera.project(voxel.corner(static_cast<Box3::CornerType>(i)));
-        if (!px) return m;
-        corners[static_cast<std::size_t>(i)] = Vec2(px->x() + 0.5, px->y() + 0.5);
-    }
+    if (!projectCorners(viewIndex, voxel, corners)) return m;
     m.inFront = true;
+    measureFootprint(corners, viewIndex, stopFraction, m);
+    return m;
+}
+
+void VoxelTester::measureFootprint(std::array<Vec2, 8>& corners, std::size_t viewIndex, double stopFraction,
+                                   FootprintMeasure& m) const
+{
+    const SilhouetteView& view = (*views_)[viewIndex];
+    const CornerBounds bounds(corners);
     Poly outline;
     outline.n = monotoneChain(corners.data(), 8, outline.v.data());
     m.outlineVertices = outline.n;
     m.area = polygonArea(outline);
-    if (outline.n < 3 || m.area <= 0.0) return m;
-
+    if (outline.n < 3 || m.area <= 0.0) return;
     // The region that holds the footprint (by its bounding box); what lies
     // outside that region (or the frame) is unknown.
-    double xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;
-    for (int i = 0; i < outline.n; ++i) {
-        xmin = std::min(xmin, outline[i].x());
-        xmax = std::max(xmax, outline[i].x());
-        ymin = std::min(ymin, outline[i].y());
-        ymax = std::max(ymax, outline[i].y());
-    }
-    const cv::Rect bbox(static_cast<int>(std::floor(xmin)), static_cast<int>(std::floor(ymin)),
-                        static_cast<int>(std::floor(xmax)) - static_cast<int>(std::floor(xmin)) + 1,
-                        static_cast<int>(std::floor(ymax)) - static_cast<int>(std::floor(ymin)) + 1);
-    const SilhouetteIndex::Region* reg = view.index.regionContaining(bbox);
-    if (!reg) {
-        const cv::Point c(static_cast<int>(std::floor(0.5 * (xmin + xmax))),
-                          static_cast<int>(std::floor(0.5 * (ymin + ymax))));
-        reg = view.index.regionAt(c.x, c.y);
+    const SilhouetteIndex::Region* reg = regionContaining(viewIndex, bounds.pixels());
+    if (reg) {
+        // Most footprints lie wholly in object or wholly in background.
+        const int uniform = uniformLabel(*reg, bounds);
+        if (uniform >= 0) {
+            m.background = uniform == 1 ? m.area : 0.0;
+            return;
+        }
+    } else {
+        reg = view.index.regionAt(static_cast<int>(std::floor(0.5 * (bounds.xmin + bounds.xmax))),
+                                  static_cast<int>(std::floor(0.5 * (bounds.ymin + bounds.ymax))));
     }
     if (!reg) {
         m.unknown = m.area;
-        return m;
+        return;
     }
     for (int i = 0; i < outline.n; ++i) outline[i] -= Vec2(reg->rect.x, reg->rect.y);
     clipToRect(outline, 0.0, 0.0, reg->rect.width, reg->rect.height);
     const double inside = outline.n >= 3 ? polygonArea(outline) : 0.0;
     m.unknown = std::max(0.0, m.area - inside);
     if (inside > 0.0) m.background = localBackgroundArea(outline, *reg, stopFraction * m.area);
-    return m;
+}
+
+// One view's share of the 50 % rule. A footprint whose bounding box lies in a
+// region with one label throughout decides without its outline: all
+// background is void, all object (and nothing unknown) is object — the
+// common case, as most voxels the traversal tests lie clear of the outline.
+// Its area is positive without computing it: a box with volume, wholly in
+// front of the camera, projects onto a set with an interior.
+VoxelTester::Vote VoxelTester::vote(const Box3& voxel, std::size_t viewIndex) const
+{
+    std::array<Vec2, 8> corners;
+    if (!projectCorners(viewIndex, voxel, corners)) return Vote::None;
+    const CornerBounds bounds(corners);
+    if (const SilhouetteIndex::Region* reg = regionContaining(viewIndex, bounds.pixels())) {
+        const int uniform = uniformLabel(*reg, bounds);
+        if (uniform >= 0 && voxel.sizes().minCoeff() > 0.0) return uniform == 1 ? Vote::Void : Vote::Object;
+    }
+    // The relative 1e-9 keeps "exactly 50 %" void in spite of rounding in the area sums.
+    FootprintMeasure m;
+    m.inFront = true;
+    measureFootprint(corners, viewIndex, 0.5, m);
+    if (m.area <= 0.0) return Vote::None;
+    const double half = 0.5 * m.area * (1.0 - 1e-9);
+    if (m.background >= half) return Vote::Void;
+    return m.background + m.unknown < half ? Vote::Object : Vote::None;
 }
 
 VoxelLabel VoxelTester::centrePointLabel(const Box3& voxel, std::size_t viewIndex) const
@@ -334,14 +463,11 @@ VoxelLabel VoxelTester::classify(const Box3& voxel) const
             objectDecided = objectDecided || l == VoxelLabel::Object;
             continue;
         }
-        // 50 % rule (3.3.4, Rule 1): half the footprint in background in one view
-        // proves the voxel void. The relative 1e-9 keeps "exactly 50 %" void in
-        // spite of rounding in the area sums.
-        const FootprintMeasure m = measure(voxel, v, 0.5);
-        if (!m.inFront || m.area <= 0.0) continue;
-        const double half = 0.5 * m.area * (1.0 - 1e-9);
-        if (m.background >= half) return VoxelLabel::Void;
-        if (m.background + m.unknown < half) objectDecided = true;
+        // 50 % rule (3.3.4, Rule 1): half the footprint in background in one
+        // view proves the voxel void.
+        const Vote vote = this->vote(voxel, v);
+        if (vote == Vote::Void) return VoxelLabel::Void;
+        objectDecided = objectDecided || vote == Vote::Object;
     }
     return objectDecided ? VoxelLabel::Object : VoxelLabel::Undecided;
 }

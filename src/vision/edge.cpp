@@ -131,6 +131,19 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     return out;
 }
 
+EdgeReach findEdgeReach(double bandPx)
+{
+    // nearestCrossing reads whole steps up to ceil(band); the levels reach
+    // kHalfWindow + kLevelSpan beyond the crossing; backgroundNoise reads
+    // pixels kLast = 20 px out, rounded to the nearest.
+    const double search = std::ceil(bandPx);
+    EdgeReach r;
+    r.inside = std::max(search, bandPx + kHalfWindow + kLevelSpan);
+    r.outside = std::max(search, bandPx + 20.0 + 0.5);
+    r.lateral = 1.0;
+    return r;
+}
+
 // covered = ∫ (B − v)/C over the window W: the noise of the W pixels it
 // integrates, and of the levels B and O (each a mean over the level span,
 // about kLevelSpan + 0.5 pixels' worth), weighted by ∂covered/∂B =

@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -119,6 +121,61 @@ cv::Mat toGrey(const cv::Mat& frame)
     }
 }
 
+namespace {
+
+/// Four interleaved integer histograms: a backlit frame holds few distinct
+/// grey values, and one histogram would serialise every increment on the
+/// same counter.
+class Histogram {
+  public:
+    explicit Histogram(const cv::Mat& grey)
+        : wide_(grey.depth() == CV_16U), bins_(wide_ ? 65536 : 256), counts_(4 * bins_, 0)
+    {
+    }
+    /// Every `stride`-th pixel of row r from column c0 to c1 (exclusive).
+    void tallyRow(const cv::Mat& grey, int r, int c0, int c1, int stride)
+    {
+        if (wide_)
+            tally(grey.ptr<std::uint16_t>(r), c0, c1, stride);
+        else
+            tally(grey.ptr<std::uint8_t>(r), c0, c1, stride);
+    }
+    std::vector<double> merged() const
+    {
+        std::vector<double> hist(bins_, 0.0);
+        for (std::size_t k = 0; k < 4; ++k)
+            for (std::size_t i = 0; i < bins_; ++i) hist[i] += counts_[k * bins_ + i];
+        return hist;
+    }
+    double fullScale() const { return wide_ ? 65535.0 : 255.0; }
+
+  private:
+    template <typename T> void tally(const T* row, int c0, int c1, int stride)
+    {
+        std::size_t k = 0;
+        for (int c = c0; c < c1; c += stride, k = (k + 1) & 3) ++counts_[k * bins_ + row[c]];
+    }
+    bool wide_;
+    std::size_t bins_;
+    std::vector<std::uint32_t> counts_;
+};
+
+/// The means of the two classes Otsu's threshold t separates, {v <= t} and {v > t};
+/// nullopt when one is empty.
+std::optional<std::pair<double, double>> classMeans(const std::vector<double>& hist, int t)
+{
+    double w0 = 0.0, s0 = 0.0, w1 = 0.0, s1 = 0.0;
+    for (std::size_t i = 0; i < hist.size(); ++i) {
+        const bool low = static_cast<int>(i) <= t;
+        (low ? w0 : w1) += hist[i];
+        (low ? s0 : s1) += static_cast<double>(i) * hist[i];
+    }
+    if (w0 <= 0.0 || w1 <= 0.0) return std::nullopt;
+    return std::make_pair(s0 / w0, s1 / w1);
+}
+
+} // namespace
+
 double computeThreshold(const cv::Mat& grey, const SegmentationSettings& settings)
 {
     if (grey.channels() != 1) throw std::invalid_argument("computeThreshold needs a single-channel frame");
@@ -131,26 +188,29 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
         break;
     }
     const int stride = std::max(1, settings.otsuStride);
-    const bool wide = grey.depth() == CV_16U;
-    const std::size_t bins = wide ? 65536 : 256;
-    // Four interleaved integer histograms: a backlit frame holds few distinct
-    // grey values, and one histogram would serialise every increment on the
-    // same counter (this pass is a fifth of an inspection's compute otherwise).
-    std::vector<std::uint32_t> counts(4 * bins, 0);
-    auto tally = [&](const auto* row) {
-        int c = 0, k = 0;
-        for (; c < grey.cols; c += stride, k = (k + 1) & 3) ++counts[static_cast<std::size_t>(k) * bins + row[c]];
-    };
-    for (int r = 0; r < grey.rows; r += stride) {
-        if (wide)
-            tally(grey.ptr<std::uint16_t>(r));
-        else
-            tally(grey.ptr<std::uint8_t>(r));
+    Histogram h(grey);
+    for (int r = 0; r < grey.rows; r += stride) h.tallyRow(grey, r, 0, grey.cols, stride);
+    return static_cast<double>(otsuBin(h.merged()));
+}
+
+double computeThreshold(const cv::Mat& grey, const std::vector<cv::Rect>& regions, const SegmentationSettings& settings)
+{
+    if (grey.channels() != 1) throw std::invalid_argument("computeThreshold needs a single-channel frame");
+    if (settings.method != SegmentationMethod::Otsu) return computeThreshold(grey, settings);
+    Histogram h(grey);
+    const cv::Rect frame(0, 0, grey.cols, grey.rows);
+    for (const cv::Rect& region : regions) {
+        const cv::Rect r = region & frame;
+        for (int row = r.y; row < r.y + r.height; ++row) h.tallyRow(grey, row, r.x, r.x + r.width, 1);
     }
-    std::vector<double> hist(bins, 0.0);
-    for (std::size_t k = 0; k < 4; ++k)
-        for (std::size_t i = 0; i < bins; ++i) hist[i] += counts[k * bins + i];
-    return static_cast<double>(otsuBin(hist));
+    const std::vector<double> hist = h.merged();
+    const int t = otsuBin(hist);
+    // Regions that show one class only (every landmark's network inside the
+    // part in this view, or outside it) give Otsu noise to split: then the
+    // middle of the grey range, which separates a backlit frame's two levels.
+    const auto means = classMeans(hist, t);
+    if (!means || means->second - means->first < kMinClassContrast * h.fullScale()) return 0.5 * h.fullScale();
+    return static_cast<double>(t);
 }
 
 cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold, const SegmentationSettings& settings)

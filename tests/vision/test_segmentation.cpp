@@ -47,6 +47,32 @@ TEST(Segmentation, OtsuSeparatesBacklitModes8Bit)
     EXPECT_EQ(cv::countNonZero(sil != disc), 0);
 }
 
+// Otsu from the regions' pixels alone (docs/inspection.md, "Pixels in
+// proportion to the goal"). Two levels 20 and 200 without noise leave Otsu's
+// criterion flat for every t in [20, 199]: the middle of that run, (20 + 200) / 2 = 110.
+TEST(Segmentation, OtsuFromRegionsReadsOnlyTheirPixels)
+{
+    cv::Mat f(100, 200, CV_8U, cv::Scalar(200));
+    f(cv::Rect(0, 0, 200, 50)).setTo(20);   // object above row 50
+    f(cv::Rect(150, 0, 50, 100)).setTo(90); // a third level the regions never see
+    SegmentationSettings s;
+    const std::vector<cv::Rect> straddling = {{10, 40, 30, 20}, {60, 30, 20, 40}};
+    EXPECT_EQ(computeThreshold(f, straddling, s), 110.0);
+    // Clipped to the frame: a region running off it counts its pixels inside only.
+    EXPECT_EQ(computeThreshold(f, {{-20, 40, 60, 20}}, s), 110.0);
+    // One class only (all object, with noise): Otsu would split the noise; the middle of the range.
+    cv::Mat noisy = f.clone();
+    cv::Mat noise(f.size(), CV_8U);
+    cv::randu(noise, 0, 5);
+    noisy += noise;
+    EXPECT_EQ(computeThreshold(noisy, {{10, 5, 100, 30}}, s), 127.5);
+    EXPECT_EQ(computeThreshold(cv::Mat(40, 40, CV_16U, cv::Scalar(60000)), {{0, 0, 40, 40}}, s), 32767.5);
+    // Fixed and mask ignore the regions.
+    s.method = SegmentationMethod::Fixed;
+    s.threshold = 77.0;
+    EXPECT_EQ(computeThreshold(f, straddling, s), 77.0);
+}
+
 TEST(Segmentation, OtsuOn16BitUsesFullResolution)
 {
     const cv::Mat f = backlit(CV_16U, 55000, 5000, 100.0, 2);

@@ -120,6 +120,14 @@ class Aligner {
     /// within the limits: the margin the inspection's regions of interest need.
     double marginMm() const;
     const model::AlignmentSettings& settings() const;
+    /// Every pixel the edge searches may read in a view through this nominal
+    /// camera, at any seat within the limits (frame pixels, clipped, not
+    /// merged): per contour sample its first search band along the normal
+    /// (twice the limits), every later round's 3-pixel search about a seated
+    /// estimate, and what the sub-pixel edge reads around them
+    /// (docs/inspection.md, "Pixels in proportion to the goal"). Makes the
+    /// contour samples as prepare does (ray casts: once per planned view).
+    std::vector<cv::Rect> searchRegions(const geometry::CameraModel& camera) const;
 
   private:
     struct Impl;

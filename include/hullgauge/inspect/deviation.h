@@ -52,6 +52,15 @@ struct ViewOutlines {
     std::vector<std::optional<OutlinePoint>> landmarks;
 };
 
+/// The frame pixels the sub-voxel step may read beside landmark `lm` in a view
+/// through `camera` (inclusive pixel rectangle, not clipped to the frame): the
+/// edge search along the image of the normal from where the CAD outline runs
+/// (within a pixel of the landmark's image), every pixel findEdge reads, and
+/// `marginPx` more all round for a seat that moves the outline (docs/inspection.md,
+/// "Pixels in proportion to the goal"). nullopt where the step leaves the
+/// view out (the landmark behind the camera, its normal far out of the image plane).
+std::optional<cv::Rect> edgeReadRect(const geometry::CameraModel& camera, const MapLandmark& lm, double marginPx);
+
 /// One view's measurement of a landmark.
 struct ViewDeviation {
     std::string viewId;

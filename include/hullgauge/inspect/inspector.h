@@ -33,6 +33,7 @@
 #include "hullgauge/inspect/deviation.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/inspect/measures.h"
+#include "hullgauge/inspect/regions.h"
 #include "hullgauge/inspect/voxel_test.h"
 #include "hullgauge/vision/segmentation.h"
 
@@ -64,6 +65,11 @@ struct InspectionOptions {
     /// than 4 U and the user inspects anyway (`inspect --force`): never ok,
     /// at best uncertain (docs/inspection.md, "Capability").
     std::vector<std::string> unprovenLandmarks;
+    /// Segment and index every pixel of every frame, Otsu's threshold from the
+    /// whole frame, instead of the regions of interest alone
+    /// (docs/inspection.md, "Pixels in proportion to the goal"): the
+    /// reference the regions are tested against. Never on the line.
+    bool wholeFrame = false;
 };
 
 struct ViewReport {
@@ -190,6 +196,14 @@ class Inspector {
     /// Frame rectangles (merged, non-overlapping) holding every footprint the
     /// inspection can ask for in this camera.
     std::vector<cv::Rect> regionsOfInterest(const geometry::CameraModel& camera) const;
+    /// Every pixel an inspection through this (nominal) camera touches: the
+    /// voxels' rectangles, the sub-pixel edges' reads (with a gauge; with an
+    /// aligner the seat's margin on both and the aligner's search band along
+    /// the outline) and their bounding box (docs/inspection.md, "Pixels in
+    /// proportion to the goal").
+    ViewRegions regions(const geometry::CameraModel& camera) const;
+    /// The query `regions` answers with viewRegions (and the aligner's band).
+    RegionQuery regionQuery() const;
 
     int level() const { return level_; }
     int adjacency() const { return adjacency_; }
@@ -212,6 +226,8 @@ class Inspector {
     int level_;
     int adjacency_;
     std::vector<std::uint8_t> active_;
+    /// Per landmark, the network voxels on its normal line (map geometry).
+    std::vector<std::vector<std::int32_t>> normalLines_;
     std::shared_ptr<const align::Aligner> aligner_;
     std::shared_ptr<const DeviationGauge> gauge_;
     /// Outline points of the planned views, found when the program was loaded.

@@ -27,6 +27,7 @@
 // beside it, selectable, as the baseline the dissertation argues against.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -125,10 +126,7 @@ enum class VoxelTestMethod { VolumeSource, CentrePoint };
 
 class VoxelTester {
   public:
-    VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMethod method = VoxelTestMethod::VolumeSource)
-        : views_(views), method_(method)
-    {
-    }
+    VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMethod method = VoxelTestMethod::VolumeSource);
 
     /// The 50 % rule over all views (see the file comment).
     VoxelLabel classify(const Box3& voxel) const;
@@ -143,8 +141,24 @@ class VoxelTester {
     std::uint64_t testsPerformed() const { return tests_; }
 
   private:
+    enum class Vote { None, Void, Object };
+    Vote vote(const Box3& voxel, std::size_t viewIndex) const;
+    void measureFootprint(std::array<Vec2, 8>& corners, std::size_t viewIndex, double stopFraction,
+                          FootprintMeasure& m) const;
+
+    /// Per view: whether its camera has no lens distortion (the corners are
+    /// then projected inline), and the region the last footprint lay in
+    /// (neighbouring voxels mostly share it).
+    struct ViewState {
+        bool pinhole = false;
+        mutable const SilhouetteIndex::Region* lastRegion = nullptr;
+    };
+    bool projectCorners(std::size_t viewIndex, const Box3& voxel, std::array<Vec2, 8>& corners) const;
+    const SilhouetteIndex::Region* regionContaining(std::size_t viewIndex, const cv::Rect& rect) const;
+
     const std::vector<SilhouetteView>* views_;
     VoxelTestMethod method_;
+    std::vector<ViewState> state_;
     mutable std::uint64_t tests_ = 0;
 };
 

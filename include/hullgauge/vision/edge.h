@@ -45,6 +45,19 @@ struct EdgeFound {
 /// and of the two levels it is normalised by.
 double edgeSigmaPx(double noise, double contrast, double covered = 3.0);
 
+/// How far from `pixel` along its normal findEdge reads grey levels (pixels):
+/// the crossing search over [-band, band], the object level up to 4.5 px
+/// inside the crossing, the background noise up to 20 px beyond it (rounded
+/// to whole pixels). Every pixel read lies within `lateral` of that segment
+/// (bilinear reads take the pixel after). docs/inspection.md, "Pixels in
+/// proportion to the goal".
+struct EdgeReach {
+    double inside = 0.0;  ///< px towards the object
+    double outside = 0.0; ///< px towards the background
+    double lateral = 1.0; ///< px either side, in rows and columns
+};
+EdgeReach findEdgeReach(double bandPx);
+
 /// The silhouette edge along pixel + s·normal (normal: unit, pointing from the
 /// object to the background), s in [-band, band]: the threshold crossing
 /// nearest s = 0, refined by the integral of the normalised profile. nullopt

@@ -6,13 +6,17 @@
 // colour; thresholds are in the frame's own grey units (0..255 or 0..65535).
 //
 // Goal-driven use: the inspection needs only the pixels its voxels project to,
-// so `segmentRegion` thresholds a rectangle of the frame. The Otsu threshold is
-// taken from a strided histogram of the whole frame (`otsuStride`), not from the
-// regions: a region around one landmark may be almost all object or all
-// background in a given view, and its histogram then has no second mode.
+// so `segmentRegion` thresholds a rectangle of the frame and the Otsu
+// threshold is taken from the histogram of those rectangles' pixels alone
+// (docs/inspection.md, "Pixels in proportion to the goal"). Where they show
+// one class only — every landmark's network inside the part in that view —
+// the middle of the grey range stands in. Whole frames (the archive's
+// silhouettes, maintenance) take Otsu's threshold from a strided histogram of
+// the whole frame (`otsuStride`).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -70,6 +74,17 @@ cv::Mat toGrey(const cv::Mat& frame);
 /// A pixel is object when `objectIsDark ? v <= t : v > t`. For `Mask` the
 /// threshold is 0 (object is v > 0 regardless of polarity).
 double computeThreshold(const cv::Mat& grey, const SegmentationSettings& settings);
+
+/// Two class means of an Otsu split closer than this fraction of full scale
+/// are one class split by noise (the edge search's own minimum contrast, docs/alignment.md).
+constexpr double kMinClassContrast = 0.03;
+
+/// The threshold from the pixels of `regions` (clipped to the frame) only:
+/// Otsu over every one of them; when they show no two classes (one empty, or
+/// their means closer than kMinClassContrast of full scale) the middle of the
+/// grey range (127.5 or 32767.5). `Fixed` and `Mask` as above.
+double computeThreshold(const cv::Mat& grey, const std::vector<cv::Rect>& regions,
+                        const SegmentationSettings& settings);
 
 /// Silhouette of `roi` (clipped to the frame) of a grey frame at threshold `t`:
 /// CV_8U of the roi's size, 255 = object.

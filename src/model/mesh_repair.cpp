@@ -183,10 +183,12 @@ void removeRepeatedFaces(TriangleMesh& m, MeshRepairReport& report)
     for (const auto& [sorted, faces] : byVertices) {
         if (faces.size() < 2) continue;
         // Rotated to start at the smallest index, a triangle runs (min, mid, max) or (min, max, mid).
-        auto forward = [&](std::size_t i) {
+        // The middle index by value: clang before 16 cannot capture a structured binding.
+        const int mid = sorted[1];
+        auto forward = [&m, mid](std::size_t i) {
             const Triangle& t = m.triangles[i];
             const int k = static_cast<int>(std::min_element(t.begin(), t.end()) - t.begin());
-            return t[(k + 1) % 3] == sorted[1];
+            return t[(k + 1) % 3] == mid;
         };
         std::vector<std::size_t> up, down;
         for (std::size_t i : faces) (forward(i) ? up : down).push_back(i);

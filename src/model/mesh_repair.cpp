@@ -130,9 +130,13 @@ void closeGaps(TriangleMesh& m, double tol, MeshRepairReport& report)
         return {std::llround(std::floor(p.x() / tol)), std::llround(std::floor(p.y() / tol)),
                 std::llround(std::floor(p.z() / tol))};
     };
+    // A coordinate beyond 2^50 tolerances has no grid cell (its neighbours'
+    // cells would overflow); such a vertex is never merged, and the checks
+    // after the repair name the absurd part.
+    auto griddable = [&](const Eigen::Vector3d& p) { return ((p / tol).cwiseAbs().array() < 0x1p50).all(); };
     UnionFind sets(m.vertices.size());
     for (int v = 0; v < static_cast<int>(m.vertices.size()); ++v) {
-        if (!open[v]) continue;
+        if (!open[v] || !griddable(m.vertices[v])) continue;
         const Cell c = cellOf(m.vertices[v]);
         for (long long dx = -1; dx <= 1; ++dx)
             for (long long dy = -1; dy <= 1; ++dy)
@@ -323,6 +327,9 @@ std::optional<std::vector<Triangle>> retriangulate(const TriangleMesh& m, const 
         }
     // A vertex the triangulation added is a crossing of the outline with itself.
     if (cdt.number_of_vertices() != handles.size()) return std::nullopt;
+    // An outline on one line (a face of zero area) has no inside to mark: its
+    // triangulation is not two-dimensional and has no faces to walk.
+    if (cdt.dimension() != 2) return std::nullopt;
     markInside(cdt);
     std::vector<Triangle> out;
     for (auto f : cdt.finite_face_handles()) {

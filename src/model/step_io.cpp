@@ -27,6 +27,9 @@
 #include <GProp_GProps.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_CheckIterator.hxx>
+#include <Interface_InterfaceModel.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -54,6 +57,7 @@
 #include <TopoDS_Vertex.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <spdlog/fmt/fmt.h>
 
 #include "hullgauge/common/error.h"
@@ -192,6 +196,34 @@ void collect(const TDF_Label& label, const TopLoc_Location& placement, const std
     tree.entries.push_back(std::move(entry));
 }
 
+// Open CASCADE's reader loads a file whose references dangle, or point to an
+// entity of the wrong type, and records a failure for each, leaving the
+// field null; the transfer then dereferences the null (docs/fuzzing.md,
+// "Findings, fixed"). A file with load failures is refused before transfer,
+// naming the first entity and what was wrong with it.
+void requireConsistentEntities(const std::string& name, STEPControl_Reader& reader)
+{
+    const Handle(XSControl_WorkSession) session = reader.WS();
+    Interface_CheckIterator checks = session->ModelCheckList(/*complete=*/false);
+    int failures = 0;
+    std::string first;
+    for (checks.Start(); checks.More(); checks.Next()) {
+        const Handle(Interface_Check)& check = checks.Value();
+        if (check->NbFails() == 0) continue;
+        if (first.empty()) {
+            const Handle(Standard_Transient) entity = check->Entity();
+            const Handle(TCollection_HAsciiString) label =
+                entity.IsNull() ? Handle(TCollection_HAsciiString)() : session->Model()->StringLabel(entity);
+            first = fmt::format("{}{}", label.IsNull() ? "" : fmt::format("entity {}: ", label->ToCString()),
+                                check->CFail(1, /*final=*/true));
+        }
+        failures += check->NbFails();
+    }
+    if (failures > 0)
+        fail(name, fmt::format("not a consistent STEP file: {}{}", first,
+                               failures > 1 ? fmt::format(" (and {} more failures)", failures - 1) : ""));
+}
+
 // The reader's XCAF document with the names (product and instance names as
 // the CAD system wrote them); colours, layers and the rest are not read.
 ProductTree readTree(const std::string& name)
@@ -206,6 +238,7 @@ ProductTree readTree(const std::string& name)
     reader.SetViewMode(false);
     if (reader.ReadFile(name.c_str()) != IFSelect_RetDone)
         fail(name, "not a readable STEP file (the reader found a syntax error)");
+    requireConsistentEntities(name, reader.ChangeReader());
     Handle(TDocStd_Document) document = new TDocStd_Document("MDTV-XCAF");
     XCAFDoc_DocumentTool::Set(document->Main());
     if (!reader.Transfer(document)) fail(name, "the STEP file holds no shape the reader can transfer");

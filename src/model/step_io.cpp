@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -348,11 +349,17 @@ TopoDS_Shape unionOf(const std::string& name, const TopTools_IndexedMapOfShape& 
 /// and drops the triangles that collapse.
 void weld(TriangleMesh& mesh, double tol)
 {
-    using Cell = std::array<long long, 3>;
+    // Cells of the tolerance's size numbered in doubles, hashed unsigned: a
+    // part a hundred metres from its origin has cell numbers past 10^11, whose
+    // products with signed integers overflowed (docs/fuzzing.md, "Findings,
+    // fixed"); far out, neighbouring cells that round to one number are
+    // searched twice.
+    using Cell = std::array<double, 3>;
     struct CellHash {
         std::size_t operator()(const Cell& c) const
         {
-            return std::size_t(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+            const std::hash<double> h;
+            return h(c[0]) * 73856093u ^ h(c[1]) * 19349663u ^ h(c[2]) * 83492791u;
         }
     };
     std::unordered_map<Cell, std::vector<int>, CellHash> grid;
@@ -360,11 +367,11 @@ void weld(TriangleMesh& mesh, double tol)
     std::vector<int> index(mesh.vertices.size());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
         const Eigen::Vector3d& p = mesh.vertices[i];
-        const Cell c = {std::llround(p.x() / tol), std::llround(p.y() / tol), std::llround(p.z() / tol)};
+        const Cell c = {std::floor(p.x() / tol), std::floor(p.y() / tol), std::floor(p.z() / tol)};
         int found = -1;
-        for (long long dx = -1; dx <= 1 && found < 0; ++dx)
-            for (long long dy = -1; dy <= 1 && found < 0; ++dy)
-                for (long long dz = -1; dz <= 1 && found < 0; ++dz) {
+        for (int dx = -1; dx <= 1 && found < 0; ++dx)
+            for (int dy = -1; dy <= 1 && found < 0; ++dy)
+                for (int dz = -1; dz <= 1 && found < 0; ++dz) {
                     auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
                     if (it == grid.end()) continue;
                     for (int k : it->second)

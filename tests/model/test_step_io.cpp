@@ -670,6 +670,28 @@ TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
 >>>>>>> bc94ab4 (STEP harness (fuzz_step): StepModel::read, the default cube and the tessellation on mutated STEP files, seeds written by Open CASCADE (bored box, stepped block, spheres, a face) and cut ones, a dictionary of ISO 10303-21 words; a file whose references dangle or point to entities of the wrong type is refused naming the entity before Open CASCADE's transfer dereferences the null)
 }
 
+// Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre
+// from its origin, 10^12 weld tolerances, overflowed the weld's integer cell
+// hash (signed overflow, undefined behaviour; meaningful under the `asan`
+// preset). The box's six faces tessellate into 12 triangles on 4 points
+// each, which the weld merges into the box's 8 corners.
+TEST(StepPart, PartAKilometreFromItsOriginIsWeldedIntoItsCorners)
+{
+    hgtest::TempDir dir;
+    const gp_Pnt low(1e6, 0, 0), high(1e6 + 40, 30, 20);
+    writeStep(BRepPrimAPI_MakeBox(low, high).Shape(), dir / "far.step");
+    auto part = hg::model::StepModel::read(dir / "far.step");
+    EXPECT_NEAR(part.summary().volumeMm3, 40.0 * 30.0 * 20.0, 1e-6 * 24000.0);
+    const hg::model::TriangleMesh mesh = part.tessellate(0.05, 0.1);
+    EXPECT_EQ(mesh.triangles.size(), 12u);
+    ASSERT_EQ(mesh.vertices.size(), 8u);
+    for (const Vector3d& v : mesh.vertices) {
+        EXPECT_TRUE(v.x() == low.X() || v.x() == high.X()) << v.transpose();
+        EXPECT_TRUE(v.y() == low.Y() || v.y() == high.Y()) << v.transpose();
+        EXPECT_TRUE(v.z() == low.Z() || v.z() == high.Z()) << v.transpose();
+    }
+}
+
 TEST(StepPart, MissingFileIsAnInputErrorNamingIt)
 {
     hgtest::TempDir dir;

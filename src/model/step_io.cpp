@@ -498,20 +498,22 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
         const TopTools_IndexedMapOfShape solids = partSolids(name, tree, solid, impl->summary);
         requireClosedSolids(name, solids);
         impl->shape = unionOf(name, solids);
+        // The summary is measured inside the guard too: Open CASCADE throws
+        // from the volume integration and from a void bounding box as well.
+        TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
+        impl->summary.faces = static_cast<std::size_t>(impl->faces.Extent());
+        GProp_GProps props;
+        BRepGProp::VolumeProperties(impl->shape, props);
+        impl->summary.volumeMm3 = props.Mass();
+        if (!(impl->summary.volumeMm3 > 0.0)) fail(name, "the solid encloses no volume (its faces point inward)");
+        Bnd_Box box;
+        BRepBndLib::AddOptimal(impl->shape, box, false, false);
+        double x0, y0, z0, x1, y1, z1;
+        box.Get(x0, y0, z0, x1, y1, z1);
+        impl->summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
     } catch (const Standard_Failure& e) {
         fail(name, fmt::format("Open CASCADE could not read it: {}", e.GetMessageString()));
     }
-    TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
-    impl->summary.faces = static_cast<std::size_t>(impl->faces.Extent());
-    GProp_GProps props;
-    BRepGProp::VolumeProperties(impl->shape, props);
-    impl->summary.volumeMm3 = props.Mass();
-    if (!(impl->summary.volumeMm3 > 0.0)) fail(name, "the solid encloses no volume (its faces point inward)");
-    Bnd_Box box;
-    BRepBndLib::AddOptimal(impl->shape, box, false, false);
-    double x0, y0, z0, x1, y1, z1;
-    box.Get(x0, y0, z0, x1, y1, z1);
-    impl->summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
     return StepModel(std::move(impl));
 }
 

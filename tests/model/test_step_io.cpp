@@ -415,7 +415,6 @@ TEST(StepPartCli, SolidThatIsNotClosedIsRefused)
     EXPECT_NE(err.find("(4 free edges: the surface is not closed)"), std::string::npos) << err;
 }
 
-<<<<<<< HEAD
 // Assemblies (docs/part-program.md, "STEP parts"): `mesh_solid` chooses one
 // solid of the product tree by name. The bracket (box less the bore) and the
 // pin (r = 5, 30 long) placed at (100, 0, 0).
@@ -586,7 +585,8 @@ TEST(StepAssembly, CadModelOfOneSolidIsThatSolidAndItsTessellation)
     }
     EXPECT_THROW(hg::model::loadCadModel(hgtest::sourceDir() / "config/sim/stepped-block.stl", 7, 3, "pin"),
                  hg::InputError);
-=======
+}
+
 // The sphere of r = 5 mm Open CASCADE writes (tests/fuzz/corpus/step/sphere.step);
 // @BOUNDS@ stands for more bounds of its one face after #18.
 const std::string kSphereStep = "ISO-10303-21;\n"
@@ -667,7 +667,6 @@ TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
     const auto sphere = hg::model::StepModel::read(dir / "sphere.step");
     EXPECT_NEAR(sphere.summary().volumeMm3, 4.0 / 3.0 * kPi * 125.0, 1e-6 * 524.0);
     EXPECT_EQ(sphere.summary().solids, 1u);
->>>>>>> bc94ab4 (STEP harness (fuzz_step): StepModel::read, the default cube and the tessellation on mutated STEP files, seeds written by Open CASCADE (bored box, stepped block, spheres, a face) and cut ones, a dictionary of ISO 10303-21 words; a file whose references dangle or point to entities of the wrong type is refused naming the entity before Open CASCADE's transfer dereferences the null)
 }
 
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre

@@ -38,8 +38,11 @@ std::string keyText(const YAML::Node& key)
 /// Refuses a map that names one key twice. yaml-cpp keeps both entries and
 /// answers lookups with the first, so `depth: 8` then `depth: 3` would build
 /// depth 8 without a word; bad input must be named instead (docs/style.md
-/// point 4). `budget` bounds the walk over a document whose aliases repeat
-/// one subtree many times.
+/// point 4). A key that is a map or a sequence (YAML's `? {a: 1}` or
+/// `[a, b]: 1`) names nothing a reader looks up, and reading it as a name
+/// threw yaml-cpp's own exception past every caller (docs/fuzzing.md,
+/// "Findings, fixed"): it is refused at its line too. `budget` bounds the
+/// walk over a document whose aliases repeat one subtree many times.
 void rejectDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path, long& budget)
 {
     if (--budget < 0) throw InputError(file, path, "document too large (more than 1000000 nodes, aliases counted)");
@@ -53,6 +56,9 @@ void rejectDuplicateKeys(const YAML::Node& node, const std::string& file, const 
     for (const auto& entry : node) {
         const std::string key = keyText(entry.first);
         const int line = entry.first.Mark().is_null() ? 0 : entry.first.Mark().line + 1;
+        if (entry.first.IsMap() || entry.first.IsSequence())
+            throw InputError(file, path.empty() ? "(document)" : path, "a key must be a name, found " + key,
+                             line > 0 ? std::optional<int>(line) : std::nullopt);
         const std::string childPath = path.empty() ? key : path + "." + key;
         for (const auto& [k, firstLine] : seen)
             if (k == key)

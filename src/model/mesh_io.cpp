@@ -19,8 +19,11 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Polygon_2_algorithms.h>
+#include <CGAL/Polygon_mesh_processing/compute_normal.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Projection_traits_3.h>
 #include <CGAL/Surface_mesh.h>
 #include <cmath>
 #include <spdlog/fmt/fmt.h>
@@ -321,6 +324,19 @@ bool triangulable(const std::vector<Point>& points, const std::vector<std::size_
     return std::isfinite(n) && std::isfinite(longest) && n > 1e-12 * longest;
 }
 
+/// Whether the polygon face is simple seen along its normal, as CGAL's
+/// triangulation projects it. A polygon that is not planar and whose
+/// projection crosses itself made that triangulation dereference a null face
+/// (docs/fuzzing.md, "Findings, fixed"); a crossing polygon has no inside to
+/// triangulate anyway and is fanned like the other failures.
+bool simpleAlongItsNormal(const SurfaceMesh& sm, SurfaceMesh::Face_index f)
+{
+    const Kernel::Vector_3 normal = PMP::compute_face_normal(f, sm);
+    std::vector<Point> corners;
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) corners.push_back(sm.point(v));
+    return CGAL::is_simple_2(corners.begin(), corners.end(), CGAL::Projection_traits_3<Kernel>(normal));
+}
+
 /// CGAL's triangulation of a polygon face; false where it fails, as it does on
 /// a polygon whose distinct corners lie on one point or one line (a
 /// precondition of its constrained triangulation, thrown as an exception).
@@ -352,7 +368,8 @@ void appendTriangles(const std::vector<Point>& points, const Polygon& polygon, T
     SurfaceMesh sm;
     std::vector<SurfaceMesh::Vertex_index> face;
     for (std::size_t v : corners) face.push_back(sm.add_vertex(points[v]));
-    if (sm.add_face(face) != SurfaceMesh::null_face() && triangulatedWithoutFailure(sm)) {
+    const SurfaceMesh::Face_index whole = sm.add_face(face);
+    if (whole != SurfaceMesh::null_face() && simpleAlongItsNormal(sm, whole) && triangulatedWithoutFailure(sm)) {
         for (auto f : sm.faces()) {
             auto h = sm.halfedge(f);
             add(corners[sm.source(h)], corners[sm.target(h)], corners[sm.target(sm.next(h))]);
@@ -360,6 +377,26 @@ void appendTriangles(const std::vector<Point>& points, const Polygon& polygon, T
         return;
     }
     for (std::size_t k = 1; k + 1 < corners.size(); ++k) add(corners[0], corners[k], corners[k + 1]);
+}
+
+/// CGAL's reader of the four formats. It sizes a PLY list by the count the
+/// file gives before reading the items: a negative count in a signed count
+/// type (`property list char int ...`) throws std::length_error, a count far
+/// beyond the file std::bad_alloc — bad input either way (docs/fuzzing.md,
+/// "Findings, fixed").
+void readPolygonSoup(const std::filesystem::path& file, const std::string& ext, std::vector<Point>& points,
+                     std::vector<Polygon>& polygons)
+{
+    const std::string name = file.string();
+    bool read = false;
+    try {
+        read = CGAL::IO::read_polygon_soup(name, points, polygons, CGAL::parameters::verbose(false));
+    } catch (const std::length_error&) {
+        throw InputError(name, "mesh", "a list's length is negative or beyond what memory holds");
+    } catch (const std::bad_alloc&) {
+        throw InputError(name, "mesh", "a list's length is beyond what memory holds");
+    }
+    if (!read) throw InputError(name, "mesh", "not a readable " + ext.substr(1) + " file");
 }
 
 /// The file's facets as a triangle soup, points written more than once (STL
@@ -384,8 +421,7 @@ TriangleMesh readSoup(const std::filesystem::path& file)
 
     std::vector<Point> points;
     std::vector<Polygon> polygons;
-    if (!CGAL::IO::read_polygon_soup(name, points, polygons, CGAL::parameters::verbose(false)))
-        throw InputError(name, "mesh", "not a readable " + ext.substr(1) + " file");
+    readPolygonSoup(file, ext, points, polygons);
     if (polygons.empty()) throw InputError(name, "mesh", "the file holds no facets");
     // The soup repair below indexes the points without checking: an index past
     // them (a PLY face naming vertex 1e6 of 8) or a non-finite coordinate is bad input.

@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -27,6 +28,9 @@
 #include <GProp_GProps.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <IFSelect_ReturnStatus.hxx>
+#include <Interface_Check.hxx>
+#include <Interface_CheckIterator.hxx>
+#include <Interface_InterfaceModel.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -54,6 +58,7 @@
 #include <TopoDS_Vertex.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <XSControl_WorkSession.hxx>
 #include <spdlog/fmt/fmt.h>
 
 #include "hullgauge/common/error.h"
@@ -192,6 +197,34 @@ void collect(const TDF_Label& label, const TopLoc_Location& placement, const std
     tree.entries.push_back(std::move(entry));
 }
 
+// Open CASCADE's reader loads a file whose references dangle, or point to an
+// entity of the wrong type, and records a failure for each, leaving the
+// field null; the transfer then dereferences the null (docs/fuzzing.md,
+// "Findings, fixed"). A file with load failures is refused before transfer,
+// naming the first entity and what was wrong with it.
+void requireConsistentEntities(const std::string& name, STEPControl_Reader& reader)
+{
+    const Handle(XSControl_WorkSession) session = reader.WS();
+    Interface_CheckIterator checks = session->ModelCheckList(/*complete=*/false);
+    int failures = 0;
+    std::string first;
+    for (checks.Start(); checks.More(); checks.Next()) {
+        const Handle(Interface_Check)& check = checks.Value();
+        if (check->NbFails() == 0) continue;
+        if (first.empty()) {
+            const Handle(Standard_Transient) entity = check->Entity();
+            const Handle(TCollection_HAsciiString) label =
+                entity.IsNull() ? Handle(TCollection_HAsciiString)() : session->Model()->StringLabel(entity);
+            first = fmt::format("{}{}", label.IsNull() ? "" : fmt::format("entity {}: ", label->ToCString()),
+                                check->CFail(1, /*final=*/true));
+        }
+        failures += check->NbFails();
+    }
+    if (failures > 0)
+        fail(name, fmt::format("not a consistent STEP file: {}{}", first,
+                               failures > 1 ? fmt::format(" (and {} more failures)", failures - 1) : ""));
+}
+
 // The reader's XCAF document with the names (product and instance names as
 // the CAD system wrote them); colours, layers and the rest are not read.
 ProductTree readTree(const std::string& name)
@@ -206,6 +239,7 @@ ProductTree readTree(const std::string& name)
     reader.SetViewMode(false);
     if (reader.ReadFile(name.c_str()) != IFSelect_RetDone)
         fail(name, "not a readable STEP file (the reader found a syntax error)");
+    requireConsistentEntities(name, reader.ChangeReader());
     Handle(TDocStd_Document) document = new TDocStd_Document("MDTV-XCAF");
     XCAFDoc_DocumentTool::Set(document->Main());
     if (!reader.Transfer(document)) fail(name, "the STEP file holds no shape the reader can transfer");
@@ -315,11 +349,17 @@ TopoDS_Shape unionOf(const std::string& name, const TopTools_IndexedMapOfShape& 
 /// and drops the triangles that collapse.
 void weld(TriangleMesh& mesh, double tol)
 {
-    using Cell = std::array<long long, 3>;
+    // Cells of the tolerance's size numbered in doubles, hashed unsigned: a
+    // part a hundred metres from its origin has cell numbers past 10^11, whose
+    // products with signed integers overflowed (docs/fuzzing.md, "Findings,
+    // fixed"); far out, neighbouring cells that round to one number are
+    // searched twice.
+    using Cell = std::array<double, 3>;
     struct CellHash {
         std::size_t operator()(const Cell& c) const
         {
-            return std::size_t(c[0] * 73856093LL ^ c[1] * 19349663LL ^ c[2] * 83492791LL);
+            const std::hash<double> h;
+            return h(c[0]) * 73856093u ^ h(c[1]) * 19349663u ^ h(c[2]) * 83492791u;
         }
     };
     std::unordered_map<Cell, std::vector<int>, CellHash> grid;
@@ -327,11 +367,11 @@ void weld(TriangleMesh& mesh, double tol)
     std::vector<int> index(mesh.vertices.size());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
         const Eigen::Vector3d& p = mesh.vertices[i];
-        const Cell c = {std::llround(p.x() / tol), std::llround(p.y() / tol), std::llround(p.z() / tol)};
+        const Cell c = {std::floor(p.x() / tol), std::floor(p.y() / tol), std::floor(p.z() / tol)};
         int found = -1;
-        for (long long dx = -1; dx <= 1 && found < 0; ++dx)
-            for (long long dy = -1; dy <= 1 && found < 0; ++dy)
-                for (long long dz = -1; dz <= 1 && found < 0; ++dz) {
+        for (int dx = -1; dx <= 1 && found < 0; ++dx)
+            for (int dy = -1; dy <= 1 && found < 0; ++dy)
+                for (int dz = -1; dz <= 1 && found < 0; ++dz) {
                     auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
                     if (it == grid.end()) continue;
                     for (int k : it->second)
@@ -458,20 +498,22 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
         const TopTools_IndexedMapOfShape solids = partSolids(name, tree, solid, impl->summary);
         requireClosedSolids(name, solids);
         impl->shape = unionOf(name, solids);
+        // The summary is measured inside the guard too: Open CASCADE throws
+        // from the volume integration and from a void bounding box as well.
+        TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
+        impl->summary.faces = static_cast<std::size_t>(impl->faces.Extent());
+        GProp_GProps props;
+        BRepGProp::VolumeProperties(impl->shape, props);
+        impl->summary.volumeMm3 = props.Mass();
+        if (!(impl->summary.volumeMm3 > 0.0)) fail(name, "the solid encloses no volume (its faces point inward)");
+        Bnd_Box box;
+        BRepBndLib::AddOptimal(impl->shape, box, false, false);
+        double x0, y0, z0, x1, y1, z1;
+        box.Get(x0, y0, z0, x1, y1, z1);
+        impl->summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
     } catch (const Standard_Failure& e) {
         fail(name, fmt::format("Open CASCADE could not read it: {}", e.GetMessageString()));
     }
-    TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
-    impl->summary.faces = static_cast<std::size_t>(impl->faces.Extent());
-    GProp_GProps props;
-    BRepGProp::VolumeProperties(impl->shape, props);
-    impl->summary.volumeMm3 = props.Mass();
-    if (!(impl->summary.volumeMm3 > 0.0)) fail(name, "the solid encloses no volume (its faces point inward)");
-    Bnd_Box box;
-    BRepBndLib::AddOptimal(impl->shape, box, false, false);
-    double x0, y0, z0, x1, y1, z1;
-    box.Get(x0, y0, z0, x1, y1, z1);
-    impl->summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
     return StepModel(std::move(impl));
 }
 

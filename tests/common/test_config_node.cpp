@@ -50,6 +50,21 @@ TEST(ConfigNode, FlowMapDuplicateIsRefused)
     EXPECT_EQ(e.field(), "pose.rotation_deg");
 }
 
+// Found by the station harness (docs/fuzzing.md): a `? ` before a key made
+// the map under it a key (a complex key), and listing the keys escaped as
+// yaml-cpp's conversion error, ending the program.
+TEST(ConfigNode, KeyThatIsAMapOrASequenceIsRefusedAtItsLine)
+{
+    auto e = parseError("fixture:\n  speeds:\n    rotation: {max_speed: 3600}\n    ? declination: {max_speed: 1800}\n");
+    EXPECT_EQ(e.field(), "fixture.speeds");
+    EXPECT_EQ(e.line().value_or(0), 4);
+    EXPECT_NE(e.problem().find("a key must be a name, found a map"), std::string::npos) << e.problem();
+    e = parseError("[a, b]: 1\n");
+    EXPECT_EQ(e.field(), "(document)");
+    EXPECT_EQ(e.line().value_or(0), 1);
+    EXPECT_NE(e.problem().find("a key must be a name, found a sequence"), std::string::npos) << e.problem();
+}
+
 TEST(ConfigNode, SameKeyInSiblingMapsIsFine)
 {
     auto n = hg::ConfigNode::parse("a: {x: 1}\nb: {x: 2}\nc: [{id: 1}, {id: 2}]\n", "ok.yaml");

@@ -587,6 +587,110 @@ TEST(StepAssembly, CadModelOfOneSolidIsThatSolidAndItsTessellation)
                  hg::InputError);
 }
 
+// The sphere of r = 5 mm Open CASCADE writes (tests/fuzz/corpus/step/sphere.step);
+// @BOUNDS@ stands for more bounds of its one face after #18.
+const std::string kSphereStep = "ISO-10303-21;\n"
+                                "HEADER;\n"
+                                "FILE_DESCRIPTION(('Open CASCADE Model'),'2;1');\n"
+                                "FILE_NAME('Open CASCADE Shape Model','2026-01-01T00:00:00',('Author'),(\n"
+                                "    'Open CASCADE'),'Open CASCADE STEP processor 7.6','Open CASCADE 7.6'\n"
+                                "  ,'Unknown');\n"
+                                "FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\n"
+                                "ENDSEC;\n"
+                                "DATA;\n"
+                                "#1 = APPLICATION_PROTOCOL_DEFINITION('international standard',\n"
+                                "  'automotive_design',2000,#2);\n"
+                                "#2 = APPLICATION_CONTEXT(\n"
+                                "  'core data for automotive mechanical design processes');\n"
+                                "#3 = SHAPE_DEFINITION_REPRESENTATION(#4,#10);\n"
+                                "#4 = PRODUCT_DEFINITION_SHAPE('','',#5);\n"
+                                "#5 = PRODUCT_DEFINITION('design','',#6,#9);\n"
+                                "#6 = PRODUCT_DEFINITION_FORMATION('','',#7);\n"
+                                "#7 = PRODUCT('Open CASCADE STEP translator 7.6 5',\n"
+                                "  'Open CASCADE STEP translator 7.6 5','',(#8));\n"
+                                "#8 = PRODUCT_CONTEXT('',#2,'mechanical');\n"
+                                "#9 = PRODUCT_DEFINITION_CONTEXT('part definition',#2,'design');\n"
+                                "#10 = ADVANCED_BREP_SHAPE_REPRESENTATION('',(#11,#15),#27);\n"
+                                "#11 = AXIS2_PLACEMENT_3D('',#12,#13,#14);\n"
+                                "#12 = CARTESIAN_POINT('',(0.,0.,0.));\n"
+                                "#13 = DIRECTION('',(0.,0.,1.));\n"
+                                "#14 = DIRECTION('',(1.,0.,-0.));\n"
+                                "#15 = MANIFOLD_SOLID_BREP('',#16);\n"
+                                "#16 = CLOSED_SHELL('',(#17));\n"
+                                "#17 = ADVANCED_FACE('',(#18@BOUNDS@),#22,.T.);\n"
+                                "#18 = FACE_BOUND('',#19,.T.);\n"
+                                "#19 = VERTEX_LOOP('',#20);\n"
+                                "#20 = VERTEX_POINT('',#21);\n"
+                                "#21 = CARTESIAN_POINT('',(3.061616997868E-16,-7.498798913309E-32,-5.));\n"
+                                "#22 = SPHERICAL_SURFACE('',#23,5.);\n"
+                                "#23 = AXIS2_PLACEMENT_3D('',#24,#25,#26);\n"
+                                "#24 = CARTESIAN_POINT('',(0.,0.,0.));\n"
+                                "#25 = DIRECTION('',(0.,0.,1.));\n"
+                                "#26 = DIRECTION('',(1.,0.,-0.));\n"
+                                "#27 = ( GEOMETRIC_REPRESENTATION_CONTEXT(3) \n"
+                                "GLOBAL_UNCERTAINTY_ASSIGNED_CONTEXT((#31)) GLOBAL_UNIT_ASSIGNED_CONTEXT(\n"
+                                "(#28,#29,#30)) REPRESENTATION_CONTEXT('Context #1',\n"
+                                "  '3D Context with UNIT and UNCERTAINTY') );\n"
+                                "#28 = ( LENGTH_UNIT() NAMED_UNIT(*) SI_UNIT(.MILLI.,.METRE.) );\n"
+                                "#29 = ( NAMED_UNIT(*) PLANE_ANGLE_UNIT() SI_UNIT($,.RADIAN.) );\n"
+                                "#30 = ( NAMED_UNIT(*) SI_UNIT($,.STERADIAN.) SOLID_ANGLE_UNIT() );\n"
+                                "#31 = UNCERTAINTY_MEASURE_WITH_UNIT(LENGTH_MEASURE(1.E-07),#28,\n"
+                                "  'distance_accuracy_value','confusion accuracy');\n"
+                                "#32 = PRODUCT_RELATED_PRODUCT_CATEGORY('part',$,(#7));\n"
+                                "ENDSEC;\n"
+                                "END-ISO-10303-21;\n";
+
+std::string sphereStep(const std::string& moreBounds)
+{
+    std::string text = kSphereStep;
+    text.replace(text.find("@BOUNDS@"), 8, moreBounds);
+    return text;
+}
+
+// Found by the STEP harness (docs/fuzzing.md): a face bound naming an entity
+// the file does not hold (#99) was loaded as a null that Open CASCADE's
+// transfer dereferenced (a segmentation fault in StepShape_FaceBound::Bound).
+TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
+{
+    hgtest::TempDir dir;
+    hgtest::writeFile(dir / "dangling.step", sphereStep(",#99"));
+    try {
+        (void)hg::model::StepModel::read(dir / "dangling.step");
+        FAIL() << "a dangling reference was read";
+    } catch (const hg::InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("not a consistent STEP file: entity #17: "), std::string::npos) << what;
+        EXPECT_NE(what.find("face_bound"), std::string::npos) << what;
+    }
+    // The same file without the second bound is the sphere: 4/3 pi r^3.
+    hgtest::writeFile(dir / "sphere.step", sphereStep(""));
+    const auto sphere = hg::model::StepModel::read(dir / "sphere.step");
+    EXPECT_NEAR(sphere.summary().volumeMm3, 4.0 / 3.0 * kPi * 125.0, 1e-6 * 524.0);
+    EXPECT_EQ(sphere.summary().solids, 1u);
+}
+
+// Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre
+// from its origin, 10^12 weld tolerances, overflowed the weld's integer cell
+// hash (signed overflow, undefined behaviour; meaningful under the `asan`
+// preset). The box's six faces tessellate into 12 triangles on 4 points
+// each, which the weld merges into the box's 8 corners.
+TEST(StepPart, PartAKilometreFromItsOriginIsWeldedIntoItsCorners)
+{
+    hgtest::TempDir dir;
+    const gp_Pnt low(1e6, 0, 0), high(1e6 + 40, 30, 20);
+    writeStep(BRepPrimAPI_MakeBox(low, high).Shape(), dir / "far.step");
+    auto part = hg::model::StepModel::read(dir / "far.step");
+    EXPECT_NEAR(part.summary().volumeMm3, 40.0 * 30.0 * 20.0, 1e-6 * 24000.0);
+    const hg::model::TriangleMesh mesh = part.tessellate(0.05, 0.1);
+    EXPECT_EQ(mesh.triangles.size(), 12u);
+    ASSERT_EQ(mesh.vertices.size(), 8u);
+    for (const Vector3d& v : mesh.vertices) {
+        EXPECT_TRUE(v.x() == low.X() || v.x() == high.X()) << v.transpose();
+        EXPECT_TRUE(v.y() == low.Y() || v.y() == high.Y()) << v.transpose();
+        EXPECT_TRUE(v.z() == low.Z() || v.z() == high.Z()) << v.transpose();
+    }
+}
+
 TEST(StepPart, MissingFileIsAnInputErrorNamingIt)
 {
     hgtest::TempDir dir;

@@ -669,6 +669,33 @@ TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
     EXPECT_EQ(sphere.summary().solids, 1u);
 }
 
+// Found by the STEP harness (docs/fuzzing.md): an oriented edge that is its
+// own edge (the fuzzed file's #346 named an entity the file lost, which
+// Open CASCADE's reader resolved to the oriented edge itself) sent the
+// reader's own checks into endless recursion, a stack overflow inside its
+// ReadFile. The checks now run between the parse and the reader's.
+TEST(StepPart, AnOrientedEdgeThatIsItsOwnEdgeIsRefusedNamingIt)
+{
+    hgtest::TempDir dir;
+    std::ifstream in(hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string edge = "#20 = ORIENTED_EDGE('',*,*,#21,.F.);";
+    ASSERT_NE(text.find(edge), std::string::npos);
+    text.replace(text.find(edge), edge.size(), "#20 = ORIENTED_EDGE('',*,*,#20,.F.);");
+    hgtest::writeFile(dir / "loop.step", text);
+    try {
+        (void)hg::model::StepModel::read(dir / "loop.step");
+        FAIL() << "an oriented edge that is its own edge was read";
+    } catch (const hg::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("entity #20: an oriented edge whose edge is itself"), std::string::npos)
+            << e.what();
+    }
+    // The fuzzed file itself, kept as a seed of the harness.
+    EXPECT_THROW(
+        hg::model::StepModel::read(hgtest::sourceDir() / "tests/fuzz/corpus/step/oriented-edge-its-own-edge.step"),
+        hg::InputError);
+}
+
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre
 // from its origin, 10^12 weld tolerances, overflowed the weld's integer cell
 // hash (signed overflow, undefined behaviour; meaningful under the `asan`

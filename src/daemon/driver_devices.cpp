@@ -116,13 +116,30 @@ class DriverDevices : public StationDevices, public SimulationControl {
         if (fixture_->state() == LifecycleState::Active) (void)fixture_->stop();
     }
 
-    Status grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    // docs/camera.md, "Regions per grab": the camera rounds the region outward
+    // to its increments, or delivers whole frames from then on.
+    Status setRegion(const cv::Rect& region) override
+    {
+        const drivers::Roi roi =
+            region.empty() ? drivers::Roi{} : drivers::Roi{region.x, region.y, region.width, region.height};
+        auto delivered = camera_->setRegion(roi);
+        if (!delivered.ok()) return delivered.status();
+        hg::log::category("camera")->trace("region {} asked, {} delivered", drivers::toString(roi),
+                                           drivers::toString(delivered.value()));
+        return Status::success();
+    }
+
+    Status grab(std::chrono::milliseconds timeout, GrabbedFrame& out) override
     {
         auto frame = camera_->grab(timeout);
+        out.regionChangeMs = frame.regionChangeMs;
         switch (frame.status) {
         case drivers::FrameStatus::Ok:
-            // The pipeline keeps the image after the buffer returns to the pool.
-            image = frame.image.clone();
+            // The pipeline keeps the image after the buffer returns to the pool:
+            // one copy, of the region the camera sent.
+            out.image = frame.image.clone();
+            out.origin = cv::Point(frame.region.x, frame.region.y);
+            out.payloadBytes = frame.payloadBytes;
             return Status::success();
         case drivers::FrameStatus::Timeout:
             return Status::failure(StatusCode::Timeout, frame.message);

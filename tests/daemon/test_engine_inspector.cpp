@@ -70,7 +70,7 @@ InspectionOutcome inspect(hg::daemon::Inspector& inspector, const DaemonConfig& 
     std::string error;
     EXPECT_TRUE(inspector.begin(config.programs.at(1), error)) << error;
     const auto& poses = config.programs.at(1).views;
-    for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k]);
+    for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k], {});
     return inspector.finish();
 }
 
@@ -406,7 +406,7 @@ TEST_F(EngineParity, TheFirstTwoViewsSeatCorrectsThePosesOfTheRest)
         ASSERT_TRUE(inspector->begin(config_->programs.at(1), error)) << error;
         ASSERT_EQ(inspector->seatViews(), 2u); // the default alignment.correct_poses_after
         const auto first = frames(*config_, part, seat, {planned[0], planned[1]});
-        for (std::size_t k = 0; k < 2; ++k) inspector->addView(k, planned[k], first[k]);
+        for (std::size_t k = 0; k < 2; ++k) inspector->addView(k, planned[k], first[k], {});
         const auto provisional = inspector->provisionalSeat();
         ASSERT_TRUE(provisional && provisional->measured && provisional->withinLimits);
         const double shiftError = (provisional->seat.apply(c) - seat.apply(c)).norm();
@@ -419,7 +419,7 @@ TEST_F(EngineParity, TheFirstTwoViewsSeatCorrectsThePosesOfTheRest)
             rest.push_back(hg::align::correctPose(fixture, planned[k], provisional->seat, c).pose);
         const auto later = frames(*config_, part, seat, rest);
         for (std::size_t k = 0; k < rest.size(); ++k) {
-            inspector->addView(k + 2, rest[k], later[k]);
+            inspector->addView(k + 2, rest[k], later[k], {});
             // Judged with the true seat: the corrected view sees the part from the planned direction.
             const double before = hg::align::sightErrorDeg(fixture, planned[k + 2], planned[k + 2], seat, c);
             const double after = hg::align::sightErrorDeg(fixture, planned[k + 2], rest[k], seat, c);

@@ -59,7 +59,16 @@ nlohmann::json stepJson(const model::StepModel& brep)
 {
     const model::StepSummary& s = brep.summary();
     const model::StepTessellation& t = brep.tessellation();
+    nlohmann::json tree = nlohmann::json::array();
+    for (const model::StepSolid& solid : s.tree)
+        tree.push_back({{"name", solid.name},
+                        {"instance", solid.instance},
+                        {"solids", solid.solids},
+                        {"volume_mm3", solid.volumeMm3},
+                        {"chosen", solid.chosen}});
     return {{"solids", s.solids},
+            {"mesh_solid", s.chosen.empty() ? nlohmann::json(nullptr) : nlohmann::json(s.chosen)},
+            {"tree", tree},
             {"faces", s.faces},
             {"volume_mm3", s.volumeMm3},
             {"bounds_min", toJson(s.bounds.min())},
@@ -69,18 +78,34 @@ nlohmann::json stepJson(const model::StepModel& brep)
             {"triangles", t.triangles}};
 }
 
+/// The file's solids by name, the chosen one marked (docs/part-program.md, "STEP parts").
+std::string treeText(const model::StepSummary& s)
+{
+    std::string text = fmt::format("solids      {} in the file's product tree{}\n", s.tree.size(),
+                                   s.chosen.empty() ? " (all in the part)" : "");
+    for (const model::StepSolid& solid : s.tree)
+        text += fmt::format("  {}: {}{}volume {:.6g} mm³{}\n", model::describe(solid),
+                            solid.solids == 1 ? "" : std::to_string(solid.solids) + " bodies, ",
+                            solid.solids == 1 ? "" : "their union's ", solid.volumeMm3,
+                            solid.chosen ? " (chosen: mesh_solid)" : "");
+    return text;
+}
+
 std::string stepText(const model::StepModel& brep)
 {
     const model::StepSummary& s = brep.summary();
     const model::StepTessellation& t = brep.tessellation();
     const Eigen::Vector3d& lo = s.bounds.min();
     const Eigen::Vector3d& hi = s.bounds.max();
-    return fmt::format("step        {} solid{}{}, {} faces, volume {:.6g} mm³ (exact), bounds ({:.4f}, {:.4f}, "
+    const std::string what = !s.chosen.empty() ? fmt::format("solid '{}' of {} (mesh_solid)", s.chosen, s.solids)
+                                               : fmt::format("{} solid{}{}", s.solids, s.solids == 1 ? "" : "s",
+                                                             s.solids > 1 ? " (their union)" : "");
+    return fmt::format("step        {}, {} faces, volume {:.6g} mm³ (exact), bounds ({:.4f}, {:.4f}, "
                        "{:.4f}) to ({:.4f}, {:.4f}, {:.4f}) mm\n"
                        "tessellated deflection {:.4g} mm, {:.3g} rad: {} triangles\n",
-                       s.solids, s.solids == 1 ? "" : "s", s.solids > 1 ? " (their union)" : "", s.faces, s.volumeMm3,
-                       lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z(), t.linearDeflectionMm, t.angularDeflectionRad,
-                       t.triangles);
+                       what, s.faces, s.volumeMm3, lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z(), t.linearDeflectionMm,
+                       t.angularDeflectionRad, t.triangles) +
+           treeText(s);
 }
 
 /// What the mesh file needed to be read as a solid (docs/part-program.md,

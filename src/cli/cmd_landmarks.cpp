@@ -28,6 +28,7 @@ constexpr const char* kInstalledStation = "/etc/hullgauge/station.yaml";
 
 struct SuggestArgs {
     std::string mesh;
+    std::string solid;
     std::string station;
     std::string out;
     std::size_t count = 8;
@@ -53,7 +54,8 @@ std::vector<std::string> header(const SuggestArgs& args, const std::string& stat
     const std::size_t found = s.candidates[0] + s.candidates[1] + s.candidates[2];
     const std::size_t inspectable = s.inspectable[0] + s.inspectable[1] + s.inspectable[2];
     return {
-        "Landmarks suggested for " + args.mesh + " at the station " + station +
+        "Landmarks suggested for " + args.mesh + (args.solid.empty() ? "" : " (solid " + args.solid + ")") +
+            " at the station " + station +
             " (hullgauge landmarks suggest; docs/part-program.md, \"Suggesting landmarks\").",
         "Judged with octree depth " + std::to_string(args.depth) + ", adjacency_depth " +
             std::to_string(args.adjacencyDepth) + " (ΔV = " + formatNumber(cad.octree.voxelSize(), 4) +
@@ -69,7 +71,7 @@ std::vector<std::string> header(const SuggestArgs& args, const std::string& stat
 int run(const SuggestArgs& args)
 {
     const std::string station = stationFile(args);
-    const model::CadModel cad = model::loadCadModel(args.mesh, args.depth, args.adjacencyDepth);
+    const model::CadModel cad = model::loadCadModel(args.mesh, args.depth, args.adjacencyDepth, args.solid);
     const geometry::Station st = geometry::loadStation(station);
 
     plan::SuggestProblem problem;
@@ -116,6 +118,9 @@ std::function<int()> factory(CLI::App& app)
     sub->add_option("--mesh", args->mesh, "CAD model: STL, OBJ, PLY, OFF or STEP")
         ->required()
         ->check(CLI::ExistingFile);
+    sub->add_option("--solid", args->solid,
+                    "the STEP file's solid to suggest on, by product or instance name, as a part program's mesh_solid "
+                    "(default: the union of all)");
     sub->add_option("--station", args->station,
                     std::string("station the landmarks must be inspectable at (default: ") + kInstalledStation + ")");
     sub->add_option("--count", args->count, "landmarks to suggest")->check(CLI::Range(1, 10000))->capture_default_str();

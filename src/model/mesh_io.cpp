@@ -11,7 +11,9 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 #include <vector>
 
@@ -298,6 +300,39 @@ std::vector<std::size_t> distinctCorners(const Polygon& polygon)
     return out;
 }
 
+/// Whether CGAL's triangulation may be given the polygon: no two corners on
+/// one point and a normal (Newell's) of non-zero length, i.e. not all corners
+/// on one line. Its preconditions are checked only in debug builds.
+bool triangulable(const std::vector<Point>& points, const std::vector<std::size_t>& corners)
+{
+    std::set<std::tuple<double, double, double>> seen;
+    double nx = 0.0, ny = 0.0, nz = 0.0, longest = 0.0;
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+        const Point& a = points[corners[k]];
+        const Point& b = points[corners[(k + 1) % corners.size()]];
+        if (!seen.emplace(a.x(), a.y(), a.z()).second) return false;
+        longest = std::max(longest, CGAL::squared_distance(a, b));
+        nx += (a.y() - b.y()) * (a.z() + b.z());
+        ny += (a.z() - b.z()) * (a.x() + b.x());
+        nz += (a.x() - b.x()) * (a.y() + b.y());
+    }
+    const double n = std::sqrt(nx * nx + ny * ny + nz * nz);
+    // Twice the polygon's area against its longest side squared: rounding, not area, below 1e-12.
+    return std::isfinite(n) && std::isfinite(longest) && n > 1e-12 * longest;
+}
+
+/// CGAL's triangulation of a polygon face; false where it fails, as it does on
+/// a polygon whose distinct corners lie on one point or one line (a
+/// precondition of its constrained triangulation, thrown as an exception).
+bool triangulatedWithoutFailure(SurfaceMesh& sm)
+{
+    try {
+        return PMP::triangulate_faces(sm);
+    } catch (const CGAL::Failure_exception&) {
+        return false;
+    }
+}
+
 // OBJ, PLY and OFF may hold polygons: each is triangulated on its own
 // (CGAL's triangulation of a face, a fan where that fails), so the repair
 // sees triangles only. A polygon of fewer than three corners stays a
@@ -310,10 +345,14 @@ void appendTriangles(const std::vector<Point>& points, const Polygon& polygon, T
     };
     if (corners.size() < 3) return add(polygon[0], polygon[0], polygon[polygon.size() - 1]);
     if (corners.size() == 3) return add(corners[0], corners[1], corners[2]);
+    if (!triangulable(points, corners)) {
+        for (std::size_t k = 1; k + 1 < corners.size(); ++k) add(corners[0], corners[k], corners[k + 1]);
+        return;
+    }
     SurfaceMesh sm;
     std::vector<SurfaceMesh::Vertex_index> face;
     for (std::size_t v : corners) face.push_back(sm.add_vertex(points[v]));
-    if (sm.add_face(face) != SurfaceMesh::null_face() && PMP::triangulate_faces(sm)) {
+    if (sm.add_face(face) != SurfaceMesh::null_face() && triangulatedWithoutFailure(sm)) {
         for (auto f : sm.faces()) {
             auto h = sm.halfedge(f);
             add(corners[sm.source(h)], corners[sm.target(h)], corners[sm.target(sm.next(h))]);

@@ -130,9 +130,13 @@ void closeGaps(TriangleMesh& m, double tol, MeshRepairReport& report)
         return {std::llround(std::floor(p.x() / tol)), std::llround(std::floor(p.y() / tol)),
                 std::llround(std::floor(p.z() / tol))};
     };
+    // A coordinate beyond 2^50 tolerances has no grid cell (its neighbours'
+    // cells would overflow); such a vertex is never merged, and the checks
+    // after the repair name the absurd part.
+    auto griddable = [&](const Eigen::Vector3d& p) { return ((p / tol).cwiseAbs().array() < 0x1p50).all(); };
     UnionFind sets(m.vertices.size());
     for (int v = 0; v < static_cast<int>(m.vertices.size()); ++v) {
-        if (!open[v]) continue;
+        if (!open[v] || !griddable(m.vertices[v])) continue;
         const Cell c = cellOf(m.vertices[v]);
         for (long long dx = -1; dx <= 1; ++dx)
             for (long long dy = -1; dy <= 1; ++dy)
@@ -183,10 +187,12 @@ void removeRepeatedFaces(TriangleMesh& m, MeshRepairReport& report)
     for (const auto& [sorted, faces] : byVertices) {
         if (faces.size() < 2) continue;
         // Rotated to start at the smallest index, a triangle runs (min, mid, max) or (min, max, mid).
-        auto forward = [&](std::size_t i) {
+        // The middle index by value: clang before 16 cannot capture a structured binding.
+        const int mid = sorted[1];
+        auto forward = [&m, mid](std::size_t i) {
             const Triangle& t = m.triangles[i];
             const int k = static_cast<int>(std::min_element(t.begin(), t.end()) - t.begin());
-            return t[(k + 1) % 3] == sorted[1];
+            return t[(k + 1) % 3] == mid;
         };
         std::vector<std::size_t> up, down;
         for (std::size_t i : faces) (forward(i) ? up : down).push_back(i);
@@ -321,6 +327,9 @@ std::optional<std::vector<Triangle>> retriangulate(const TriangleMesh& m, const 
         }
     // A vertex the triangulation added is a crossing of the outline with itself.
     if (cdt.number_of_vertices() != handles.size()) return std::nullopt;
+    // An outline on one line (a face of zero area) has no inside to mark: its
+    // triangulation is not two-dimensional and has no faces to walk.
+    if (cdt.dimension() != 2) return std::nullopt;
     markInside(cdt);
     std::vector<Triangle> out;
     for (auto f : cdt.finite_face_handles()) {

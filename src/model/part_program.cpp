@@ -312,24 +312,46 @@ MeshRepairOptions parseMeshRepair(const ConfigNode& root)
     return options;
 }
 
+/// `mesh_solid` (docs/part-program.md, "STEP parts"): a solid of a STEP file
+/// by name; a mesh file has no named solids to choose from.
+std::string parseMeshSolid(const std::optional<ConfigNode>& node, const std::filesystem::path& meshFile)
+{
+    if (!node) return {};
+    const std::string name = node->asString();
+    if (name.empty()) node->fail("solid name is empty");
+    if (!isStepFile(meshFile))
+        node->fail(fmt::format("{} is a mesh (STL, OBJ, PLY or OFF): one surface without named solids; mesh_solid "
+                               "chooses a solid of a STEP file (.step, .stp)",
+                               meshFile.filename().string()));
+    return name;
+}
+
+/// The model file's own error, reported at the key it concerns: a solid's
+/// name at `mesh_solid`, everything else at `mesh`.
+[[noreturn]] void failAt(const InputError& e, const ConfigNode& meshNode, const std::optional<ConfigNode>& solidNode)
+{
+    if (e.field() == "mesh_solid" && solidNode) solidNode->fail(e.what());
+    meshNode.fail(e.what());
+}
+
 /// The CAD model and the octree around it. A STEP part is read first, the
 /// octree placed around its exact bounding box, and then tessellated with the
 /// chord error ΔV/20 (docs/part-program.md, "STEP parts"); a mesh is read as it is.
-void loadModel(const ConfigNode& meshNode, const ConfigNode& octreeNode, PartProgram& program)
+void loadModel(const ConfigNode& meshNode, const std::optional<ConfigNode>& solidNode, const ConfigNode& octreeNode,
+               PartProgram& program)
 {
-    // The model file's own error, reported at the key that names it.
     TriangleMesh mesh;
     std::shared_ptr<StepModel> brep;
     try {
         if (isStepFile(program.meshFile))
-            brep = std::make_shared<StepModel>(StepModel::read(program.meshFile));
+            brep = std::make_shared<StepModel>(StepModel::read(program.meshFile, program.meshSolid));
         else {
             ImportedMesh imported = importMesh(program.meshFile, program.meshRepair);
             mesh = std::move(imported.mesh);
             program.meshRepairReport = imported.repair;
         }
     } catch (const InputError& e) {
-        meshNode.fail(e.what());
+        failAt(e, meshNode, solidNode);
     }
     program.octree = parseOctree(octreeNode, brep ? brep->summary().bounds : mesh.bounds());
     if (brep) {
@@ -341,6 +363,17 @@ void loadModel(const ConfigNode& meshNode, const ConfigNode& octreeNode, PartPro
         program.brep = brep;
     }
     program.solid = std::make_shared<const Solid>(std::move(mesh));
+}
+
+/// loadCadModel's STEP file: a name no solid or several carry is the `--solid` option's error.
+std::shared_ptr<StepModel> readCadStep(const std::filesystem::path& file, const std::string& solid)
+{
+    try {
+        return std::make_shared<StepModel>(StepModel::read(file, solid));
+    } catch (const InputError& e) {
+        if (e.field() != "mesh_solid") throw;
+        throw InputError(e.file(), "--solid", e.problem());
+    }
 }
 
 } // namespace
@@ -409,14 +442,18 @@ std::optional<OctreeSpec> boundingCube(const Eigen::AlignedBox3d& bounds, int de
     return spec;
 }
 
-CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth)
+CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth, const std::string& solid)
 {
     CadModel model;
     model.file = file;
     TriangleMesh mesh;
     std::shared_ptr<StepModel> brep;
     if (isStepFile(file))
-        brep = std::make_shared<StepModel>(StepModel::read(file));
+        brep = readCadStep(file, solid);
+    else if (!solid.empty())
+        throw InputError(file.string(), "--solid",
+                         "a mesh (STL, OBJ, PLY or OFF) is one surface without named solids; --solid chooses a "
+                         "solid of a STEP file (.step, .stp)");
     else
         mesh = loadMesh(file);
     const auto cube = boundingCube(brep ? brep->summary().bounds : mesh.bounds(), depth, adjacencyDepth);
@@ -438,8 +475,8 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
-    root.allowOnlyKeys({"part", "mesh", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters", "inspection",
-                        "alignment", "decision_rule"});
+    root.allowOnlyKeys({"part", "mesh", "mesh_solid", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters",
+                        "inspection", "alignment", "decision_rule"});
 
     PartProgram program;
     program.file = file;
@@ -453,7 +490,9 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     program.meshFile =
         std::filesystem::path(meshText).is_absolute() ? std::filesystem::path(meshText) : file.parent_path() / meshText;
     program.meshRepair = parseMeshRepair(root);
-    loadModel(meshNode, root["octree"], program);
+    const std::optional<ConfigNode> solidNode = root.optional("mesh_solid");
+    program.meshSolid = parseMeshSolid(solidNode, program.meshFile);
+    loadModel(meshNode, solidNode, root["octree"], program);
 
     const double surfaceTolerance = program.surfaceToleranceMm();
     const ConfigNode landmarks = root["landmarks"];

@@ -21,6 +21,7 @@
 #include <BRepGProp.hxx>
 #include <BRepLProp_SLProps.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
+#include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
@@ -31,20 +32,28 @@
 #include <Message_Messenger.hxx>
 #include <Message_PrinterOStream.hxx>
 #include <Poly_Triangulation.hxx>
+#include <STEPCAFControl_Reader.hxx>
 #include <STEPControl_Controller.hxx>
-#include <STEPControl_Reader.hxx>
 #include <Standard_Failure.hxx>
+#include <TCollection_AsciiString.hxx>
+#include <TDF_Label.hxx>
+#include <TDF_LabelSequence.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopTools_ListOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Edge.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
 #include <TopoDS_Shell.hxx>
 #include <TopoDS_Vertex.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
 #include <spdlog/fmt/fmt.h>
 
 #include "hullgauge/common/error.h"
@@ -131,15 +140,148 @@ std::string describeContent(const TopoDS_Shape& shape)
     return freeEdges == 0 ? text : fmt::format("{} ({} free edges: the surface is not closed)", text, freeEdges);
 }
 
-TopoDS_Shape readShape(const std::string& name)
+/// A solid of the file's product tree, its bodies placed in the file's frame.
+struct TreeEntry {
+    StepSolid info;
+    TopTools_IndexedMapOfShape solids;
+};
+
+/// The file as the reader's XCAF document holds it.
+struct ProductTree {
+    TopoDS_Compound content; // every free shape: what a file without a solid holds instead
+    std::vector<TreeEntry> entries;
+};
+
+std::string labelName(const TDF_Label& label)
 {
-    STEPControl_Reader reader;
-    const IFSelect_ReturnStatus status = reader.ReadFile(name.c_str());
-    if (status != IFSelect_RetDone) fail(name, "not a readable STEP file (the reader found a syntax error)");
-    if (reader.TransferRoots() == 0) fail(name, "the STEP file holds no shape the reader can transfer");
-    const TopoDS_Shape shape = reader.OneShape();
-    if (shape.IsNull()) fail(name, "the STEP file holds no shape");
-    return shape;
+    Handle(TDataStd_Name) attribute;
+    if (!label.FindAttribute(TDataStd_Name::GetID(), attribute)) return {};
+    // No replacement character: the name is converted to UTF-8 as it is.
+    return TCollection_AsciiString(attribute->Get()).ToCString();
+}
+
+// Open CASCADE names an instance it was given no name for by a link to its
+// product's label ("=>[0:1:1:2]"), which no CAD system shows: no name.
+std::string instanceName(const TDF_Label& component)
+{
+    const std::string name = labelName(component);
+    return name.rfind("=>[", 0) == 0 ? std::string() : name;
+}
+
+// The leaves of the product tree below `label`, placed by the locations of
+// the instances above them (docs/part-program.md, "STEP parts").
+void collect(const TDF_Label& label, const TopLoc_Location& placement, const std::string& instance, ProductTree& tree)
+{
+    if (XCAFDoc_ShapeTool::IsAssembly(label)) {
+        TDF_LabelSequence components;
+        XCAFDoc_ShapeTool::GetComponents(label, components, /*getsubchilds=*/false);
+        for (int i = 1; i <= components.Length(); ++i) {
+            TDF_Label product;
+            if (!XCAFDoc_ShapeTool::GetReferredShape(components(i), product)) continue;
+            collect(product, placement * XCAFDoc_ShapeTool::GetLocation(components(i)), instanceName(components(i)),
+                    tree);
+        }
+        return;
+    }
+    TreeEntry entry;
+    TopExp::MapShapes(XCAFDoc_ShapeTool::GetShape(label).Moved(placement), TopAbs_SOLID, entry.solids);
+    if (entry.solids.Extent() == 0) return; // a surface or a sketch in the tree: nothing to inspect
+    entry.info.name = labelName(label);
+    entry.info.instance = instance;
+    entry.info.solids = static_cast<std::size_t>(entry.solids.Extent());
+    tree.entries.push_back(std::move(entry));
+}
+
+// The reader's XCAF document with the names (product and instance names as
+// the CAD system wrote them); colours, layers and the rest are not read.
+ProductTree readTree(const std::string& name)
+{
+    STEPCAFControl_Reader reader;
+    reader.SetNameMode(true);
+    reader.SetColorMode(false);
+    reader.SetLayerMode(false);
+    reader.SetPropsMode(false);
+    reader.SetGDTMode(false);
+    reader.SetMatMode(false);
+    reader.SetViewMode(false);
+    if (reader.ReadFile(name.c_str()) != IFSelect_RetDone)
+        fail(name, "not a readable STEP file (the reader found a syntax error)");
+    Handle(TDocStd_Document) document = new TDocStd_Document("MDTV-XCAF");
+    XCAFDoc_DocumentTool::Set(document->Main());
+    if (!reader.Transfer(document)) fail(name, "the STEP file holds no shape the reader can transfer");
+    const Handle(XCAFDoc_ShapeTool) shapes = XCAFDoc_DocumentTool::ShapeTool(document->Main());
+    TDF_LabelSequence free;
+    shapes->GetFreeShapes(free);
+    if (free.IsEmpty()) fail(name, "the STEP file holds no shape");
+    ProductTree tree;
+    BRep_Builder builder;
+    builder.MakeCompound(tree.content);
+    for (int i = 1; i <= free.Length(); ++i) {
+        builder.Add(tree.content, XCAFDoc_ShapeTool::GetShape(free(i)));
+        collect(free(i), TopLoc_Location(), "", tree);
+    }
+    // A solid without a name is called by its place in the file's order.
+    for (std::size_t i = 0; i < tree.entries.size(); ++i) {
+        StepSolid& info = tree.entries[i].info;
+        if (info.name.empty()) info.name = fmt::format("solid {}", i + 1);
+        TopoDS_Compound bodies;
+        builder.MakeCompound(bodies);
+        for (int k = 1; k <= tree.entries[i].solids.Extent(); ++k) builder.Add(bodies, tree.entries[i].solids(k));
+        GProp_GProps props;
+        BRepGProp::VolumeProperties(bodies, props);
+        info.volumeMm3 = props.Mass();
+    }
+    return tree;
+}
+
+std::string listOf(const std::vector<const TreeEntry*>& entries)
+{
+    std::vector<std::string> names;
+    for (const TreeEntry* entry : entries) names.push_back(describe(entry->info));
+    return fmt::format("{}", fmt::join(names, ", "));
+}
+
+// `mesh_solid`: the index of the one entry whose product or instance name is `wanted`.
+std::size_t chosenEntry(const std::string& name, const ProductTree& tree, const std::string& wanted)
+{
+    std::vector<const TreeEntry*> all, matches;
+    std::size_t index = 0;
+    for (std::size_t i = 0; i < tree.entries.size(); ++i) {
+        const TreeEntry& entry = tree.entries[i];
+        all.push_back(&entry);
+        if (entry.info.name == wanted || entry.info.instance == wanted) {
+            matches.push_back(&entry);
+            index = i;
+        }
+    }
+    if (matches.empty())
+        throw InputError(name, "mesh_solid",
+                         fmt::format("no solid named '{}'; the file's {} solid{}: {}", wanted, all.size(),
+                                     all.size() == 1 ? " is" : "s are", listOf(all)));
+    if (matches.size() > 1)
+        throw InputError(name, "mesh_solid",
+                         fmt::format("'{}' names {} solids (ambiguous): {}; give one's instance name", wanted,
+                                     matches.size(), listOf(matches)));
+    return index;
+}
+
+/// The solids the part is made of: the chosen one's, or every solid of the file.
+TopTools_IndexedMapOfShape partSolids(const std::string& name, ProductTree& tree, const std::string& wanted,
+                                      StepSummary& summary)
+{
+    TopTools_IndexedMapOfShape solids;
+    for (const TreeEntry& entry : tree.entries)
+        for (int k = 1; k <= entry.solids.Extent(); ++k) solids.Add(entry.solids(k));
+    if (solids.Extent() == 0) fail(name, "the STEP file holds no solid, only " + describeContent(tree.content));
+    summary.solids = static_cast<std::size_t>(solids.Extent());
+    if (!wanted.empty()) {
+        TreeEntry& entry = tree.entries[chosenEntry(name, tree, wanted)];
+        solids = entry.solids;
+        entry.info.chosen = true;
+        summary.chosen = wanted;
+    }
+    for (const TreeEntry& entry : tree.entries) summary.tree.push_back(entry.info);
+    return solids;
 }
 
 // Every solid must be bounded by closed shells: an open one (a face missing)
@@ -272,6 +414,12 @@ TriangleMesh triangles(const std::string& name, const TopoDS_Shape& shape, const
 
 } // namespace
 
+std::string describe(const StepSolid& solid)
+{
+    if (solid.instance.empty() || solid.instance == solid.name) return fmt::format("'{}'", solid.name);
+    return fmt::format("'{}' (instance '{}')", solid.name, solid.instance);
+}
+
 bool isStepFile(const std::filesystem::path& file)
 {
     std::string ext = file.extension().string();
@@ -296,7 +444,7 @@ const StepTessellation& StepModel::tessellation() const
     return impl_->tessellation;
 }
 
-StepModel StepModel::read(const std::filesystem::path& file)
+StepModel StepModel::read(const std::filesystem::path& file, const std::string& solid)
 {
     auto impl = std::make_unique<Impl>();
     const std::string& name = impl->name = file.string();
@@ -306,13 +454,10 @@ StepModel StepModel::read(const std::filesystem::path& file)
     if (!endsLikeStep(file)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
     silenceOpenCascade();
     try {
-        const TopoDS_Shape content = readShape(name);
-        TopTools_IndexedMapOfShape solids;
-        TopExp::MapShapes(content, TopAbs_SOLID, solids);
-        if (solids.Extent() == 0) fail(name, "the STEP file holds no solid, only " + describeContent(content));
+        ProductTree tree = readTree(name);
+        const TopTools_IndexedMapOfShape solids = partSolids(name, tree, solid, impl->summary);
         requireClosedSolids(name, solids);
         impl->shape = unionOf(name, solids);
-        impl->summary.solids = static_cast<std::size_t>(solids.Extent());
     } catch (const Standard_Failure& e) {
         fail(name, fmt::format("Open CASCADE could not read it: {}", e.GetMessageString()));
     }

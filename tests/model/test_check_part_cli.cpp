@@ -1,4 +1,5 @@
 // hullgauge check-part: exit status and messages of the real program.
+#include <numbers>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include "hgtest/station.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/primitives.h"
+#include "step_assembly.h"
 
 namespace {
 
@@ -192,6 +194,101 @@ TEST(CheckPartCli, RepairedMeshIsListedAndStrictModeRefusesIt)
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("part.yaml:3: mesh_repair: unknown mode 'lenient' (expected repair or strict)"),
               std::string::npos)
+        << r.err;
+}
+
+} // namespace
+
+namespace {
+
+// A STEP assembly (docs/part-program.md, "STEP parts"): check-part lists its
+// solids by name and marks the one `mesh_solid` chose; a name the file does
+// not hold, and `mesh_solid` on a mesh file, exit 2 at the key's line.
+const char* kAssemblyPart = R"(part: pin
+mesh: assembly.step
+mesh_solid: pin
+octree:
+  depth: 6
+  adjacency_depth: 3
+landmarks:
+  - id: cap
+    position: [100, 0, 30]
+    tolerance_mm: 0.2
+)";
+
+TEST(CheckPartCli, StepAssemblyListsItsSolidsByNameAndTheChosenOne)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    hgtest::writeFile(dir / "part.yaml", kAssemblyPart);
+    auto r = hgtest::run(hullgauge() + " check-part --json --part " + (dir / "part.yaml").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["step"]["solids"], 2);
+    EXPECT_EQ(j["step"]["mesh_solid"], "pin");
+    ASSERT_EQ(j["step"]["tree"].size(), 2u);
+    EXPECT_EQ(j["step"]["tree"][0]["name"], "bracket");
+    EXPECT_EQ(j["step"]["tree"][0]["chosen"], false);
+    EXPECT_EQ(j["step"]["tree"][1]["name"], "pin");
+    EXPECT_EQ(j["step"]["tree"][1]["chosen"], true);
+    const double pin = std::numbers::pi * hgtest::kPinRadius * hgtest::kPinRadius * hgtest::kPinLength;
+    EXPECT_NEAR(j["step"]["tree"][1]["volume_mm3"].get<double>(), pin, 1e-6 * pin);
+    EXPECT_NEAR(j["step"]["volume_mm3"].get<double>(), pin, 1e-6 * pin);
+
+    const auto text = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(text.status, 0) << text.err;
+    EXPECT_NE(text.out.find("step        solid 'pin' of 2 (mesh_solid), "), std::string::npos) << text.out;
+    EXPECT_NE(text.out.find("solids      2 in the file's product tree\n  'bracket': volume "), std::string::npos)
+        << text.out;
+    EXPECT_NE(text.out.find("  'pin': volume 2356.19 mm³ (chosen: mesh_solid)\n"), std::string::npos) << text.out;
+
+    // Without mesh_solid both are listed, the union is the part.
+    std::string all = kAssemblyPart;
+    all.erase(all.find("mesh_solid: pin\n"), 16);
+    hgtest::writeFile(dir / "part.yaml", all);
+    r = hgtest::run(hullgauge() + " check-part --json --part " + (dir / "part.yaml").string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto u = nlohmann::json::parse(r.out);
+    EXPECT_TRUE(u["step"]["mesh_solid"].is_null());
+    EXPECT_EQ(u["step"]["tree"][0]["name"], "bracket");
+    EXPECT_EQ(u["step"]["tree"][1]["name"], "pin");
+}
+
+TEST(CheckPartCli, UnknownSolidOrSolidOfAMeshExitsTwoAtTheKeysLine)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    std::string text = kAssemblyPart;
+    text.replace(text.find("mesh_solid: pin"), 15, "mesh_solid: nut");
+    hgtest::writeFile(dir / "part.yaml", text);
+    auto r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("part.yaml:3: mesh_solid: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("no solid named 'nut'; the file's 2 solids are: 'bracket', 'pin'"), std::string::npos)
+        << r.err;
+
+    hg::model::saveMesh(hg::model::makeBox(Vector3d(0, 0, 0), Vector3d(10, 10, 10)), dir / "block.stl");
+    std::string mesh = kPart;
+    mesh.insert(mesh.find("octree:"), "mesh_solid: pin\n");
+    hgtest::writeFile(dir / "part.yaml", mesh);
+    r = hgtest::run(hullgauge() + " check-part --part " + (dir / "part.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("part.yaml:3: mesh_solid: block.stl is a mesh (STL, OBJ, PLY or OFF)"), std::string::npos)
+        << r.err;
+}
+
+// `landmarks suggest --solid`: the same names, refused as an option's value.
+TEST(CheckPartCli, LandmarksSuggestRefusesAnUnknownSolidListingTheNames)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    const auto r = hgtest::run(hullgauge() + " landmarks suggest --mesh " + (dir / "assembly.step").string() +
+                               " --solid nut --station " + (hgtest::sourceDir() / "config/sim/station.yaml").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_EQ(r.out, "");
+    EXPECT_NE(r.err.find("--solid: no solid named 'nut'; the file's 2 solids are: 'bracket', 'pin'"), std::string::npos)
         << r.err;
 }
 

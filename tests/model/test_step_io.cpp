@@ -34,6 +34,7 @@
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/model/step_io.h"
 #include "hullgauge/plan/landmark_suggest.h"
+#include "step_assembly.h"
 
 namespace {
 
@@ -412,6 +413,178 @@ TEST(StepPartCli, SolidThatIsNotClosedIsRefused)
     const std::string err = refusal(dir, "open.step");
     EXPECT_NE(err.find("holds no solid, only 1 shell, 5 faces"), std::string::npos) << err;
     EXPECT_NE(err.find("(4 free edges: the surface is not closed)"), std::string::npos) << err;
+}
+
+// Assemblies (docs/part-program.md, "STEP parts"): `mesh_solid` chooses one
+// solid of the product tree by name. The bracket (box less the bore) and the
+// pin (r = 5, 30 long) placed at (100, 0, 0).
+std::string assemblyProgram(const std::string& solidLine, const std::string& landmarks)
+{
+    return "part: p\nmesh: assembly.step\n" + solidLine + "octree:\n  depth: 7\n  adjacency_depth: 3\nlandmarks:\n" +
+           landmarks;
+}
+
+PartProgram loadAssemblyPart(const hgtest::TempDir& dir, const std::string& solidLine, const std::string& landmarks)
+{
+    hgtest::writeFile(dir / "part.yaml", assemblyProgram(solidLine, landmarks));
+    return hg::model::loadPartProgram(dir / "part.yaml");
+}
+
+/// The exact bounding box (BRepBndLib's optimal box) is `box` within 1 nm.
+void expectBox(const Eigen::AlignedBox3d& bounds, const Eigen::AlignedBox3d& box)
+{
+    EXPECT_NEAR((bounds.min() - box.min()).norm(), 0.0, 1e-6) << bounds.min().transpose();
+    EXPECT_NEAR((bounds.max() - box.max()).norm(), 0.0, 1e-6) << bounds.max().transpose();
+}
+
+const double kPinVolume = kPi * hgtest::kPinRadius * hgtest::kPinRadius * hgtest::kPinLength;
+const double kBracketVolume = 40.0 * 30.0 * 20.0 - kPi * kBoreRadius * kBoreRadius * 20.0;
+
+TEST(StepAssembly, MeshSolidPinIsTheCylinderAlonePlacedByItsInstance)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    const PartProgram p =
+        loadAssemblyPart(dir, "mesh_solid: pin\n", "  - {id: cap, position: [100, 0, 30], tolerance_mm: 0.2}\n");
+    ASSERT_TRUE(p.brep);
+    EXPECT_EQ(p.meshSolid, "pin");
+    const auto& s = p.brep->summary();
+    EXPECT_EQ(s.chosen, "pin");
+    EXPECT_EQ(s.solids, 2u);
+    ASSERT_EQ(s.tree.size(), 2u);
+    EXPECT_EQ(s.tree[0].name, "bracket");
+    EXPECT_EQ(s.tree[1].name, "pin");
+    // The writer's link to the product ("=>[0:1:1:2]") is no instance name.
+    EXPECT_EQ(s.tree[0].instance, "");
+    EXPECT_FALSE(s.tree[0].chosen);
+    EXPECT_TRUE(s.tree[1].chosen);
+    EXPECT_NEAR(s.tree[0].volumeMm3, kBracketVolume, 1e-6 * kBracketVolume);
+    EXPECT_NEAR(s.volumeMm3, kPinVolume, 1e-6 * kPinVolume);
+    const Eigen::AlignedBox3d cylinder(Vector3d(95, -5, 0), Vector3d(105, 5, 30));
+    expectBox(s.bounds, cylinder);
+    // The tessellation of a convex cylinder lies inside it by at most (curved area) · δ.
+    const double mesh = p.solid->mesh().signedVolume();
+    const double bound = 2.0 * kPi * hgtest::kPinRadius * hgtest::kPinLength * p.tessellationDeflectionMm();
+    std::cout << "pin: mesh volume error " << mesh - kPinVolume << " mm³ (bound " << bound << ")\n";
+    EXPECT_LT(mesh, kPinVolume);
+    EXPECT_LT(kPinVolume - mesh, bound);
+    const Eigen::AlignedBox3d meshBounds = p.solid->mesh().bounds();
+    EXPECT_TRUE(cylinder.contains(meshBounds));
+    EXPECT_NEAR((p.landmarks[0].normal - Vector3d(0, 0, 1)).norm(), 0.0, 1e-9);
+}
+
+TEST(StepAssembly, WithoutMeshSolidThePartIsTheUnionOfAllSolids)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    const PartProgram p = loadAssemblyPart(dir, "", "  - {id: top, position: [10, 5, 20], tolerance_mm: 0.2}\n");
+    const auto& s = p.brep->summary();
+    EXPECT_EQ(s.chosen, "");
+    EXPECT_EQ(s.solids, 2u);
+    EXPECT_NEAR(s.volumeMm3, kBracketVolume + kPinVolume, 1e-6 * (kBracketVolume + kPinVolume));
+    expectBox(s.bounds, Eigen::AlignedBox3d(Vector3d(0, -5, 0), Vector3d(105, 30, 30)));
+    const double bore = 2.0 * kPi * kBoreRadius * 20.0, pin = 2.0 * kPi * hgtest::kPinRadius * hgtest::kPinLength;
+    EXPECT_LT(std::abs(p.solid->mesh().signedVolume() - s.volumeMm3), (bore + pin) * p.tessellationDeflectionMm());
+}
+
+/// loadPartProgram's refusal, as text ("part.yaml:3: mesh_solid: ...").
+std::string refusedProgram(const fs::path& file)
+{
+    try {
+        hg::model::loadPartProgram(file);
+    } catch (const hg::InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << file << " was accepted";
+    return {};
+}
+
+TEST(StepAssembly, AnUnknownNameIsRefusedAtItsLineListingTheNames)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    hgtest::writeFile(dir / "part.yaml", assemblyProgram("mesh_solid: nut\n",
+                                                         "  - {id: top, position: [10, 5, 20], tolerance_mm: 0.2}\n"));
+    const std::string err = refusedProgram(dir / "part.yaml");
+    EXPECT_NE(err.find("part.yaml:3: mesh_solid: "), std::string::npos) << err;
+    EXPECT_NE(err.find("no solid named 'nut'; the file's 2 solids are: 'bracket', 'pin'"), std::string::npos) << err;
+}
+
+// A product without a name is called "solid N", N its place in the file's
+// order; the third product here, a 5 mm cube placed at (-100, 0, 0).
+TEST(StepAssembly, AnUnnamedSolidIsCalledByItsPlaceInTheFile)
+{
+    hgtest::TempDir dir;
+    const TopoDS_Shape cube = BRepPrimAPI_MakeBox(5.0, 5.0, 5.0).Shape();
+    hgtest::writeStepAssembly({{"bracket", hgtest::bracketShape(), {{"", Vector3d::Zero()}}},
+                               {"pin", hgtest::pinShape(), {{"", Vector3d(100, 0, 0)}}},
+                               {"", cube, {{"", Vector3d(-100, 0, 0)}}}},
+                              dir / "assembly.step");
+    const PartProgram p =
+        loadAssemblyPart(dir, "mesh_solid: solid 3\n", "  - {id: top, position: [-97.5, 2.5, 5], tolerance_mm: 0.2}\n");
+    const auto& s = p.brep->summary();
+    ASSERT_EQ(s.tree.size(), 3u);
+    EXPECT_EQ(s.tree[2].name, "solid 3");
+    EXPECT_TRUE(s.tree[2].chosen);
+    EXPECT_NEAR(s.volumeMm3, 125.0, 1e-9);
+    expectBox(s.bounds, Eigen::AlignedBox3d(Vector3d(-100, 0, 0), Vector3d(-95, 5, 5)));
+}
+
+// Two instances of one product: its name is ambiguous, an instance's name is not.
+TEST(StepAssembly, AProductPlacedTwiceIsAmbiguousAndItsInstanceNamesChoose)
+{
+    hgtest::TempDir dir;
+    hgtest::writeStepAssembly(
+        {{"bracket", hgtest::bracketShape(), {{"", Vector3d::Zero()}}},
+         {"pin", hgtest::pinShape(), {{"pin:1", Vector3d(100, 0, 0)}, {"pin:2", Vector3d(0, 100, 0)}}}},
+        dir / "assembly.step");
+    hgtest::writeFile(dir / "part.yaml", assemblyProgram("mesh_solid: pin\n",
+                                                         "  - {id: cap, position: [0, 100, 30], tolerance_mm: 0.2}\n"));
+    const std::string err = refusedProgram(dir / "part.yaml");
+    EXPECT_NE(err.find("part.yaml:3: mesh_solid: "), std::string::npos) << err;
+    EXPECT_NE(err.find("'pin' names 2 solids (ambiguous): 'pin' (instance 'pin:1'), 'pin' (instance 'pin:2')"),
+              std::string::npos)
+        << err;
+    const PartProgram p =
+        loadAssemblyPart(dir, "mesh_solid: pin:2\n", "  - {id: cap, position: [0, 100, 30], tolerance_mm: 0.2}\n");
+    const auto& s = p.brep->summary();
+    EXPECT_NEAR(s.volumeMm3, kPinVolume, 1e-6 * kPinVolume);
+    expectBox(s.bounds, Eigen::AlignedBox3d(Vector3d(-5, 95, 0), Vector3d(5, 105, 30)));
+    EXPECT_TRUE(s.tree[2].chosen);
+    EXPECT_EQ(s.tree[2].instance, "pin:2");
+}
+
+TEST(StepAssembly, MeshSolidOnAMeshFileIsRefusedNamingWhy)
+{
+    hgtest::TempDir dir;
+    hgtest::writeFile(dir / "part.yaml",
+                      "part: p\nmesh: " + (hgtest::sourceDir() / "config/sim/stepped-block.stl").string() +
+                          "\nmesh_solid: pin\noctree:\n  depth: 5\n  adjacency_depth: 3\n"
+                          "landmarks:\n  - {id: t, position: [15, 0, 15], tolerance_mm: 0.2}\n");
+    const std::string err = refusedProgram(dir / "part.yaml");
+    EXPECT_NE(err.find("part.yaml:3: mesh_solid: stepped-block.stl is a mesh (STL, OBJ, PLY or OFF)"),
+              std::string::npos)
+        << err;
+}
+
+// `hullgauge landmarks suggest --solid` reads the model as mesh_solid does.
+TEST(StepAssembly, CadModelOfOneSolidIsThatSolidAndItsTessellation)
+{
+    hgtest::TempDir dir;
+    hgtest::writeBracketAndPin(dir / "assembly.step");
+    const hg::model::CadModel cad = hg::model::loadCadModel(dir / "assembly.step", 7, 3, "pin");
+    ASSERT_TRUE(cad.brep);
+    EXPECT_NEAR(cad.brep->summary().volumeMm3, kPinVolume, 1e-6 * kPinVolume);
+    EXPECT_TRUE(Eigen::AlignedBox3d(Vector3d(95, -5, 0), Vector3d(105, 5, 30)).contains(cad.solid->mesh().bounds()));
+    try {
+        hg::model::loadCadModel(dir / "assembly.step", 7, 3, "nut");
+        ADD_FAILURE() << "an unknown solid was accepted";
+    } catch (const hg::InputError& e) {
+        EXPECT_EQ(e.field(), "--solid");
+        EXPECT_NE(e.problem().find("'bracket', 'pin'"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(hg::model::loadCadModel(hgtest::sourceDir() / "config/sim/stepped-block.stl", 7, 3, "pin"),
+                 hg::InputError);
 }
 
 TEST(StepPart, MissingFileIsAnInputErrorNamingIt)

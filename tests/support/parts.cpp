@@ -371,14 +371,15 @@ std::vector<hg::geometry::CameraModel> grazingViewSet(const TestPart& part, cons
 }
 
 void expectJudgedAgainstTruth(const hg::inspect::InspectionResult& r, const TestPart& part, const PartAsMade& asMade,
-                              const std::vector<std::string>& skip)
+                              const std::vector<std::string>& skip, const std::vector<std::string>& tips)
 {
     using hg::inspect::LandmarkStatus;
-    const double dv = r.voxelSizeMm;
     ASSERT_EQ(r.landmarks.size(), part.landmarks.size());
     for (std::size_t i = 0; i < r.landmarks.size(); ++i) {
         const hg::inspect::LandmarkResult& l = r.landmarks[i];
         if (std::find(skip.begin(), skip.end(), l.id) != skip.end()) continue;
+        const bool tip = std::find(tips.begin(), tips.end(), l.id) != tips.end();
+        const double dv = (tip ? 2.0 : 1.0) * r.voxelSizeMm;
         const double e = asMade.offsetMm[i];
         const std::string where = asMade.name + " " + l.id + " (e = " + std::to_string(e) + " mm, status " +
                                   hg::inspect::toString(l.status) + ", " + l.reason + ")";

@@ -118,6 +118,9 @@ struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
     std::filesystem::path meshFile; // resolved relative to the YAML file
+    /// `mesh_solid`: the solid of a STEP file that is the part, by name;
+    /// empty for the union of all (docs/part-program.md, "STEP parts").
+    std::string meshSolid;
     /// `mesh_repair` and `mesh_gap_mm` (docs/part-program.md, "Meshes as they come").
     MeshRepairOptions meshRepair;
     /// What was repaired in the mesh file (all zero for a STEP part).
@@ -158,7 +161,10 @@ struct CadModel {
 
 /// Reads a mesh (STL, OBJ, PLY, OFF) or STEP file; a bad file throws
 /// InputError naming it, as does a depth too small for the default cube.
-CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth);
+/// `solid` names the STEP file's solid that is the part, as `mesh_solid`
+/// does (InputError with field "--solid" for a name no solid or several
+/// carry, or for a mesh file); empty: the union of all.
+CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacencyDepth, const std::string& solid = {});
 
 /// Reads and validates a part program; every problem throws InputError with
 /// file, line and field ("part.yaml:23: landmarks[2].position: ...").

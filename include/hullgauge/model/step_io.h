@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -20,12 +21,34 @@
 
 namespace hg::model {
 
+/// One solid of the file's product tree (docs/part-program.md, "STEP parts",
+/// assemblies): a part placed in its assembly, or a free part.
+struct StepSolid {
+    /// The product's name as the CAD system shows it, or "solid N" (N its
+    /// 1-based position in StepSummary::tree) when the file gives none.
+    std::string name;
+    /// Its instance name in the assembly (the reader gives the occurrence's
+    /// id when it has no name); empty for a free part.
+    std::string instance;
+    std::size_t solids = 0; ///< bodies of the product (usually one; several are fused)
+    double volumeMm3 = 0.0; ///< exact, as placed
+    bool chosen = false;    ///< part of the part program's part
+};
+
+/// 'pin', or 'pin' (instance 'pin:2') when the instance has a name of its
+/// own: a solid as errors and check-part name it.
+std::string describe(const StepSolid& solid);
+
 /// What the STEP file held, measured on the exact B-rep.
 struct StepSummary {
-    std::size_t solids = 0; ///< solids in the file (their union is the part)
+    std::size_t solids = 0; ///< solids in the file
     std::size_t faces = 0;  ///< faces of the part after the union
     double volumeMm3 = 0.0; ///< exact volume (BRepGProp)
     Eigen::AlignedBox3d bounds;
+    /// The file's solids in its order, with their names.
+    std::vector<StepSolid> tree;
+    /// The `mesh_solid` chosen; empty when the part is the union of all.
+    std::string chosen;
 };
 
 /// The tessellation the inspection map is built from.
@@ -47,10 +70,13 @@ bool isStepFile(const std::filesystem::path& file);
 
 class StepModel {
   public:
-    /// Reads every solid of `file`; several are fused into one part. Throws
-    /// InputError(file, "mesh", problem) for a file that is missing,
-    /// truncated or unreadable, holds no solid, or whose solid is not closed.
-    static StepModel read(const std::filesystem::path& file);
+    /// Reads every solid of `file` and names it from the file's product tree;
+    /// the part is the one named `solid` (a product or instance name), or
+    /// without a name the union of all. Throws InputError(file, "mesh",
+    /// problem) for a file that is missing, truncated or unreadable, holds no
+    /// solid, or whose solid is not closed, and InputError(file, "mesh_solid",
+    /// problem) when no solid or several carry the name (listing the names).
+    static StepModel read(const std::filesystem::path& file, const std::string& solid = {});
     ~StepModel();
     StepModel(StepModel&&) noexcept;
     StepModel& operator=(StepModel&&) noexcept;

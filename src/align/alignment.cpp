@@ -278,7 +278,7 @@ ViewEdges Aligner::Impl::firstEdges(const AlignmentView& view) const
 {
     ViewEdges out;
     out.samples = samplesOf(view.camera);
-    const EdgeImage image{view.grey, view.threshold, view.objectIsDark};
+    const EdgeImage image{view.grey, view.threshold, view.objectIsDark, view.origin, view.camera.imageSize()};
     for (std::size_t k = 0; k < out.samples.size(); ++k) {
         SampleImage at;
         if (!imageOf(*graph, out.samples[k], view.camera, at)) continue;
@@ -297,7 +297,8 @@ Aligner::Impl::measure(const std::vector<AlignmentView>& views,
     std::vector<Correspondence> out;
     for (std::size_t v = 0; v < views.size(); ++v) {
         const geometry::CameraModel camera = seatedCamera(views[v].camera, seat);
-        const EdgeImage image{views[v].grey, views[v].threshold, views[v].objectIsDark};
+        const EdgeImage image{views[v].grey, views[v].threshold, views[v].objectIsDark, views[v].origin,
+                              views[v].camera.imageSize()};
         for (const ContourSample& s : prepared[v]->samples) {
             SampleImage at;
             if (!imageOf(*graph, s, camera, at)) continue;
@@ -460,11 +461,14 @@ void checkViews(const std::vector<AlignmentView>& views)
         if (view.grey.empty()) throw std::invalid_argument(name + ": no frame");
         if (view.grey.type() != CV_8UC1 && view.grey.type() != CV_16UC1)
             throw std::invalid_argument(name + ": the frame must be 8- or 16-bit grey");
-        if (view.grey.size() != view.camera.imageSize())
-            throw std::invalid_argument(name + ": frame is " + std::to_string(view.grey.cols) + "x" +
-                                        std::to_string(view.grey.rows) + ", camera expects " +
-                                        std::to_string(view.camera.imageSize().width) + "x" +
-                                        std::to_string(view.camera.imageSize().height));
+        const cv::Rect sensor(cv::Point(0, 0), view.camera.imageSize());
+        const cv::Rect delivered(view.origin, view.grey.size());
+        if ((delivered & sensor) != delivered)
+            throw std::invalid_argument(name + ": frame " + std::to_string(view.grey.cols) + "x" +
+                                        std::to_string(view.grey.rows) + " at sensor (" +
+                                        std::to_string(view.origin.x) + ", " + std::to_string(view.origin.y) +
+                                        ") leaves the camera's " + std::to_string(sensor.width) + "x" +
+                                        std::to_string(sensor.height) + " sensor");
     }
 }
 

@@ -134,9 +134,11 @@ int run(const InspectArgs& args)
     for (std::size_t i = 0; i < manifest.views.size(); ++i) {
         const vision::ManifestView& mv = manifest.views[i];
         cv::Mat frame = vision::readViewImage(manifest, i);
+        // A region image (manifest `origin`) keeps the sensor's camera; a whole image sizes it.
         geometry::Intrinsics in = mv.camera.intrinsics();
-        in.imageSize = frame.size();
-        views.push_back({mv.id, geometry::CameraModel(in, mv.camera.cameraFromPart()), std::move(frame)});
+        if (!mv.origin) in.imageSize = frame.size();
+        views.push_back({mv.id, geometry::CameraModel(in, mv.camera.cameraFromPart()), std::move(frame),
+                         mv.origin.value_or(cv::Point(0, 0))});
     }
     if (views.empty()) throw InputError(args.views, "views", "no views");
 

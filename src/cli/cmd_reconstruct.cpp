@@ -38,10 +38,19 @@ int run(const ReconstructArgs& args)
     std::vector<inspect::SilhouetteView> views;
     for (std::size_t i = 0; i < manifest.views.size(); ++i) {
         const cv::Mat frame = vision::readViewImage(manifest, i);
-        geometry::Intrinsics in = manifest.views[i].camera.intrinsics();
-        in.imageSize = frame.size();
-        views.push_back({geometry::CameraModel(in, manifest.views[i].camera.cameraFromPart()),
-                         inspect::SilhouetteIndex::fromSilhouette(vision::segment(frame, manifest.segmentation))});
+        const vision::ManifestView& mv = manifest.views[i];
+        geometry::Intrinsics in = mv.camera.intrinsics();
+        const cv::Mat silhouette = vision::segment(frame, manifest.segmentation);
+        if (!mv.origin) {
+            in.imageSize = frame.size();
+            views.push_back({geometry::CameraModel(in, mv.camera.cameraFromPart()),
+                             inspect::SilhouetteIndex::fromSilhouette(silhouette)});
+            continue;
+        }
+        // A region image (manifest `origin`): the sensor outside it is unknown to the voxel test.
+        inspect::SilhouetteIndex index(in.imageSize);
+        index.addRegion(cv::Rect(*mv.origin, frame.size()), silhouette);
+        views.push_back({geometry::CameraModel(in, mv.camera.cameraFromPart()), std::move(index)});
     }
     if (views.empty()) throw InputError(args.views, "views", "no views");
     const auto hull = inspect::reconstructHull(

@@ -94,15 +94,17 @@ bool CameraSnapshot::run(const SnapshotJob& job, StationDevices& devices, const 
         }
         clock.sleepUntil(clock.now() + cfg.sequencer.settle, [] { return false; });
     }
+    // Whole frames: the last cycle left the camera on its last view's region (docs/camera.md).
+    if (auto r = devices.setRegion({}); !r.ok()) log->warn("snapshot: whole frames asked: {}", r.message());
     const auto grabStart = clock.now();
-    cv::Mat frame;
-    if (auto r = devices.grab(cfg.sequencer.grabTimeout, frame); !r.ok()) {
+    GrabbedFrame grabbed;
+    if (auto r = devices.grab(cfg.sequencer.grabTimeout, grabbed); !r.ok()) {
         queue_.update({{"state", "failed"}, {"error", "camera: " + r.message()}});
         return false;
     }
     const double grabMs = std::chrono::duration<double, std::milli>(clock.now() - grabStart).count();
     try {
-        const auto grey = vision::toGrey(frame);
+        const auto grey = vision::toGrey(grabbed.image);
         const auto& seg = cfg.segmentation;
         const double threshold = vision::computeThreshold(grey, seg);
         const auto mask = vision::segmentRegion(grey, cv::Rect(0, 0, grey.cols, grey.rows), threshold, seg);

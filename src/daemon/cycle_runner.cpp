@@ -43,6 +43,9 @@ struct CycleRunner::Cycle {
     Clock::time_point started;
     std::optional<Clock::time_point> lastFrameAt; ///< when the last good frame was in (the latency)
     double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0, commitMs = 0, publishMs = 0;
+    /// The camera's time applying the views' regions (within grabMs), and the bytes it sent.
+    double regionMs = 0;
+    std::size_t payloadBytes = 0;
     double lastFrameToPublishMs = -1;
     InspectionOutcome outcome;
     bool interruptFed = false; ///< the abort or the shutdown was fed to the sequencer
@@ -443,6 +446,7 @@ SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
 {
     // The first views have measured the seat: the rest are taken where they see the seated part as planned.
     if (!cycle.posesChecked && action.view > 0 && action.view == inspector_.seatViews()) correctPoses(cycle);
+    askRegion(cycle, action.view);
     const auto start = clock_.now();
     auto r = devices_.moveTo(cycle.poses[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
     cycle.moveMs += clock_.msSince(start);
@@ -500,18 +504,34 @@ SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
     return feed(SequencerEvent::Settled);
 }
 
+// The camera is asked for the view's region as the fixture starts to move
+// there, so a camera that applies it in the background does so during the
+// motion (docs/camera.md, "Regions per grab"; docs/daemon.md, "Regions per
+// view"). A camera that cannot sends whole frames: each frame says what it covers.
+void CycleRunner::askRegion(Cycle& cycle, std::size_t view)
+{
+    const cv::Rect region = inspector_.region(view, cycle.poses[view]);
+    if (auto r = devices_.setRegion(region); !r.ok())
+        hg::log::category("seq")->warn("view {}: region [{}, {}, {}, {}] not set ({}): whole frames", view, region.x,
+                                       region.y, region.width, region.height, r.message());
+}
+
 SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
 {
+    // A retried grab follows a recovery, which may have put the camera back on whole frames.
+    if (action.retry) askRegion(cycle, action.view);
     const auto start = clock_.now();
-    cv::Mat image;
-    auto r = devices_.grab(cycle.cfg->sequencer.grabTimeout, image);
+    GrabbedFrame frame;
+    auto r = devices_.grab(cycle.cfg->sequencer.grabTimeout, frame);
     cycle.grabMs += clock_.msSince(start);
+    cycle.regionMs += frame.regionChangeMs;
+    cycle.payloadBytes += frame.payloadBytes;
     if (r.ok()) {
         cycle.lastFrameAt = clock_.now();
         // The last frame is in: the PLC may unload the part before the verdict (ACQ_DONE_SEQ, docs/plc.md).
         if (action.view + 1 == cycle.poses.size() && !cycle.record.manual)
             registers_.acquisitionDone(cycle.record.triggerSeq);
-        inspector_.addView(action.view, cycle.poses[action.view], image);
+        inspector_.addView(action.view, cycle.poses[action.view], std::move(frame.image), frame.origin);
     } else {
         hg::log::category("seq")->warn("view {}: grab failed: {}", action.view, r.message());
     }
@@ -579,6 +599,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     record.timingMs = {{"move", cycle.moveMs},
                        {"settle", cycle.settleMs},
                        {"grab", cycle.grabMs},
+                       {"region", cycle.regionMs},
                        {"prepare", outcome.prepareMs},
                        {"traversal", outcome.traversalMs},
                        {"processing", outcome.processingMs},
@@ -668,7 +689,8 @@ void CycleRunner::report(Cycle& cycle)
                       {"purpose", std::string(station::toString(record.purpose))},
                       {"images_dir", cycle.imagesDir},
                       {"alignment", record.alignment},
-                      {"timing_ms", timing}};
+                      {"timing_ms", timing},
+                      {"payload_bytes", cycle.payloadBytes}};
         if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
     }
     hg::log::category("seq")->info(

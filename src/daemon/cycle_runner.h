@@ -104,6 +104,7 @@ class CycleRunner {
     station::SequencerAction move(Cycle& cycle, const station::SequencerAction& action);
     void correctPoses(Cycle& cycle);
     station::SequencerAction settle(Cycle& cycle, const station::SequencerAction& action);
+    void askRegion(Cycle& cycle, std::size_t view);
     station::SequencerAction grab(Cycle& cycle, const station::SequencerAction& action);
     station::SequencerAction finishInspection(Cycle& cycle);
     void endCycle(Cycle& cycle, bool stopMotion);

@@ -236,6 +236,8 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     cfg.stationFile = existingFile(root["station"], base);
     cfg.station = geometry::loadStation(cfg.stationFile);
     cfg.segmentation = vision::stationSegmentation(cfg.station);
+    if (cfg.station.document)
+        if (auto n = (*cfg.station.document)["camera"].optional("regions")) cfg.cameraRegions = n->asBool();
     if (auto n = root.optional("lamps_section")) {
         cfg.lampsSection = n->asString();
         if (cfg.station.document && !cfg.station.document->has(cfg.lampsSection))

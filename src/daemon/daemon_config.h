@@ -128,6 +128,10 @@ struct DaemonConfig {
     vision::SegmentationSettings segmentation;
     /// Name of the station section that lists the operator lamps (default "lamps").
     std::string lampsSection = "lamps";
+    /// The station file's `camera.regions` (default true): per view the camera
+    /// sends only the bounds of what its inspection reads (docs/daemon.md,
+    /// "Regions per view"); false: whole frames.
+    bool cameraRegions = true;
     std::map<std::uint16_t, PartProgramRef> programs;
     PlcConfig plc;
     ResultsConfig results;

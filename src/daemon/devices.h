@@ -26,6 +26,17 @@ namespace hg::daemon {
 /// Operator lamp patterns (docs/contracts.md §6), chosen by station::lampPattern.
 using station::LampPattern;
 
+/// One grabbed frame and where it lies on the sensor (docs/camera.md,
+/// "Regions per grab"): image pixel (u, v) is sensor pixel (origin.x + u,
+/// origin.y + v); the station's camera model stays the full-sensor one.
+struct GrabbedFrame {
+    cv::Mat image;          ///< owned, or a view the caller may keep
+    cv::Point origin{0, 0}; ///< sensor position of image's pixel (0, 0)
+    std::size_t payloadBytes = 0;
+    /// ms the camera took to apply the region this frame is the first of (0: unchanged).
+    double regionChangeMs = 0.0;
+};
+
 class StationDevices {
   public:
     virtual ~StationDevices() = default;
@@ -39,8 +50,13 @@ class StationDevices {
     /// second attempt — reset a latched drive fault and re-home if needed first.
     virtual Status moveTo(const geometry::FixturePose& pose, std::chrono::milliseconds timeout, bool retry) = 0;
     virtual void stopMotion() = 0;
-    /// Grab one frame into `image` (owned copy or a view the caller may keep).
-    virtual Status grab(std::chrono::milliseconds timeout, cv::Mat& image) = 0;
+    /// The region of the sensor the following grabs deliver (sensor pixels;
+    /// empty: whole frames). A camera that cannot (or a request it refuses)
+    /// delivers whole frames — GrabbedFrame::origin and the image's size always
+    /// say what a frame covers; the failure is only reported.
+    virtual Status setRegion(const cv::Rect& region) = 0;
+    /// Grab one frame into `frame` (owned copy or a view the caller may keep).
+    virtual Status grab(std::chrono::milliseconds timeout, GrabbedFrame& frame) = 0;
     /// Bring the devices back after a fault (reset faults, re-home, restart streaming).
     virtual Status recover() = 0;
     virtual void showLamps(LampPattern pattern) = 0;

@@ -1,11 +1,14 @@
 #include "driver_devices.h"
 
+#include "frame_pool.h"
+
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/mesh_io.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
@@ -71,6 +74,12 @@ class DriverDevices : public StationDevices, public SimulationControl {
         };
         environment.simulation = &sim_;
         camera_ = drivers::makeCamera(doc, std::move(environment));
+        if (!sim_.camera && seating_) {
+            // Only the simulated camera renders a seat; a real camera sees the part as it lies.
+            hg::log::category("daemon")->warn("simulation.seating ignored: the camera is not the simulated one");
+            seating_.reset();
+        }
+        for (const auto& [number, program] : config.programs) maxViews_ = std::max(maxViews_, program.views.size());
         if (sim_.camera && config.simulatedParts.empty())
             throw InputError(config.file.string(), "simulation.parts",
                              "the simulated camera needs the parts it can render (nominal and variants)");
@@ -85,6 +94,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
         if (auto r = bringUp(*fixture_); !r.ok()) return r;
         if (auto r = homeIfNeeded(); !r.ok()) return r.prefixed("fixture: ");
         if (auto r = bringUp(*camera_); !r.ok()) return r;
+        reserveFrames();
         hg::log::category("daemon")->info("fixture ({}) and camera active", fixture_->backend());
         return Status::success();
     }
@@ -116,13 +126,30 @@ class DriverDevices : public StationDevices, public SimulationControl {
         if (fixture_->state() == LifecycleState::Active) (void)fixture_->stop();
     }
 
-    Status grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    // docs/camera.md, "Regions per grab": the camera rounds the region outward
+    // to its increments, or delivers whole frames from then on.
+    Status setRegion(const cv::Rect& region) override
+    {
+        const drivers::Roi roi =
+            region.empty() ? drivers::Roi{} : drivers::Roi{region.x, region.y, region.width, region.height};
+        auto delivered = camera_->setRegion(roi);
+        if (!delivered.ok()) return delivered.status();
+        hg::log::category("camera")->trace("region {} asked, {} delivered", drivers::toString(roi),
+                                           drivers::toString(delivered.value()));
+        return Status::success();
+    }
+
+    Status grab(std::chrono::milliseconds timeout, GrabbedFrame& out) override
     {
         auto frame = camera_->grab(timeout);
+        out.regionChangeMs = frame.regionChangeMs;
         switch (frame.status) {
         case drivers::FrameStatus::Ok:
-            // The pipeline keeps the image after the buffer returns to the pool.
-            image = frame.image.clone();
+            // The pipeline keeps the image after the buffer returns to the pool:
+            // one copy, of the region the camera sent.
+            out.image = frames_.copy(frame.image);
+            out.origin = cv::Point(frame.region.x, frame.region.y);
+            out.payloadBytes = frame.payloadBytes;
             return Status::success();
         case drivers::FrameStatus::Timeout:
             return Status::failure(StatusCode::Timeout, frame.message);
@@ -186,6 +213,16 @@ class DriverDevices : public StationDevices, public SimulationControl {
         return r.prefixed(device.kind() + ": ");
     }
 
+    /// Two cycles' frames of the configured region (docs/daemon.md, "Memory"):
+    /// the cycle's, and the last one's while its job and archive finish.
+    void reserveFrames()
+    {
+        const drivers::Roi roi = camera_->wholeRegion();
+        const std::size_t slots = 2 * std::max<std::size_t>(maxViews_, 1);
+        frames_.reserve(slots, static_cast<std::size_t>(roi.width) * static_cast<std::size_t>(roi.height));
+        hg::log::category("daemon")->debug("frame pool: {} slots of {}x{}", slots, roi.width, roi.height);
+    }
+
     Status homeIfNeeded()
     {
         drivers::FixtureStatus status;
@@ -204,6 +241,8 @@ class DriverDevices : public StationDevices, public SimulationControl {
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;
     std::unique_ptr<drivers::Lamps> lamps_;
+    std::size_t maxViews_ = 0; ///< the most views of a part program
+    FramePool frames_;         ///< the grabbed frames the cycle keeps (runner thread only)
 };
 
 } // namespace

@@ -52,12 +52,24 @@ struct LoadedProgram {
     model::PartProgram program;
     std::unique_ptr<inspect::InspectionMap> map;
     std::unique_ptr<inspect::Inspector> inspector;
+    /// The planned poses and, per planned view, the bounds of what its
+    /// inspection reads: the region the camera sends (empty with
+    /// `camera.regions: false`; docs/daemon.md, "Regions per view").
+    std::vector<geometry::FixturePose> poses;
+    std::vector<cv::Rect> regions;
 };
+
+/// The bounds of every pixel the inspection reads through `camera`; empty
+/// when it reads none (the camera then sends whole frames).
+cv::Rect viewBounds(const inspect::Inspector& inspector, const geometry::CameraModel& camera)
+{
+    return inspector.regions(camera).bounds;
+}
 
 class EngineInspector : public Inspector {
   public:
     explicit EngineInspector(const station::DaemonConfig& config)
-        : station_(config.station), segmentation_(config.segmentation)
+        : station_(config.station), segmentation_(config.segmentation), regions_(config.cameraRegions)
     {
     }
 
@@ -83,15 +95,27 @@ class EngineInspector : public Inspector {
         return load(ref, error) != nullptr;
     }
 
-    // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
-    void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) override
+    // A planned pose's region was found when the program was loaded; a pose
+    // corrected for the seat gets the region of the camera it is taken with,
+    // the one its inspection reads through (docs/daemon.md, "Regions per view").
+    cv::Rect region(std::size_t index, const geometry::FixturePose& pose) override
     {
-        inspect::CapturedView view{"v" + std::to_string(index), station_.cameraAt(pose), std::move(image)};
+        if (!regions_ || !current_) return {};
+        if (index < current_->poses.size() && current_->poses[index] == pose) return current_->regions[index];
+        return viewBounds(*current_->inspector, station_.cameraAt(pose));
+    }
+
+    // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
+    void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image, cv::Point origin) override
+    {
+        inspect::CapturedView view{"v" + std::to_string(index), station_.cameraAt(pose), std::move(image), origin};
         // Kept (shared pixels) for the archive, with the camera and pose as inspected.
         ViewEvidence kept;
         kept.image = view.frame;
         kept.capture = vision::ManifestView{
             view.id, {}, view.camera, false, vision::ManifestFixturePose{station_.fixture.type, pose}};
+        // A region of the sensor: the manifest says where (docs/contracts.md §3).
+        if (view.frame.size() != view.camera.imageSize()) kept.capture->origin = origin;
         kept.segmentation = segmentation_;
         kept.calibration = station_.calibration;
         kept.imageQuality = station_.imageQuality;
@@ -206,7 +230,12 @@ class EngineInspector : public Inspector {
             options.unprovenLandmarks = capabilityCheck(ref, p.program, station_, gauge.get());
             p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
             // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
-            p.inspector->prepareOutlines(plannedCameras(ref, station_));
+            const std::vector<geometry::CameraModel> cameras = plannedCameras(ref, station_);
+            p.inspector->prepareOutlines(cameras);
+            // The region the camera sends per planned view (docs/daemon.md, "Regions per view").
+            p.poses = ref.views;
+            for (const geometry::CameraModel& c : cameras)
+                p.regions.push_back(regions_ ? viewBounds(*p.inspector, c) : cv::Rect());
             hg::log::category("inspect")->info(
                 "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
@@ -235,9 +264,11 @@ class EngineInspector : public Inspector {
             result.alignment ? result.alignment->seat : geometry::RigidTransform::identity();
         for (auto& e : views) {
             const geometry::CameraModel seated = align::seatedCamera(e.capture->camera, seat);
+            // Drawn on the archived image: a region's pixels are the sensor's less its origin.
+            const cv::Point origin = e.capture->origin.value_or(cv::Point(0, 0));
             for (const auto& l : current_->program.landmarks)
                 if (auto px = seated.project(l.position))
-                    e.landmarks.push_back({cv::Point2d((*px).x(), (*px).y()), l.id, status[l.id]});
+                    e.landmarks.push_back({cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id, status[l.id]});
         }
         return [views = std::move(views)]() mutable {
             for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);
@@ -247,6 +278,7 @@ class EngineInspector : public Inspector {
 
     geometry::Station station_;
     vision::SegmentationSettings segmentation_;
+    bool regions_ = true; ///< `camera.regions`: the camera sends each view's bounds
     std::map<std::uint16_t, LoadedProgram> loaded_;
     LoadedProgram* current_ = nullptr;
     std::vector<ViewEvidence> views_;

@@ -29,9 +29,14 @@ bool FixtureCalibration::run(const CalibrationJob& job, StationDevices& devices,
         clock.sleepUntil(clock.now() + cfg.sequencer.settle, cancelled);
         return Status::success();
     };
+    // The target is found on whole frames: the last cycle left the camera on its last view's region.
+    if (auto r = devices.setRegion({}); !r.ok()) log->warn("calibration: whole frames asked: {}", r.message());
     io.grab = [&](cv::Mat& image) {
         stepNs_ = clock.nowNs();
-        return devices.grab(cfg.sequencer.grabTimeout, image);
+        GrabbedFrame frame;
+        auto r = devices.grab(cfg.sequencer.grabTimeout, frame);
+        image = frame.image;
+        return r;
     };
     io.progress = [&](std::size_t, std::size_t, const std::string& line) {
         log->info("calibration {}", line);

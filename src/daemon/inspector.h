@@ -19,7 +19,8 @@
 
 namespace hg::daemon {
 
-/// A landmark drawn on an archived part's picture: pixel position and status.
+/// A landmark drawn on an archived part's picture: pixel position (of the
+/// archived image: sensor pixels less its origin) and status.
 struct LandmarkMark {
     cv::Point2d pixel;
     std::string id;
@@ -28,8 +29,8 @@ struct LandmarkMark {
 
 /// What a view contributes to the part's archive (docs/daemon.md, "Archived parts").
 struct ViewEvidence {
-    cv::Mat image;      ///< the grabbed frame, as grabbed
-    cv::Mat silhouette; ///< CV_8U mask, non-zero = part
+    cv::Mat image;      ///< the grabbed frame, as grabbed (the whole sensor, or a region of it)
+    cv::Mat silhouette; ///< CV_8U mask, non-zero = part, of the image's size
     std::vector<LandmarkMark> landmarks;
     /// The view as the archive's manifest lists it: id, the posed camera the
     /// inspection used, the fixture pose (the archive sets the image). Absent:
@@ -74,8 +75,15 @@ class Inspector {
     /// and plan now, if they are not loaded, so its first cycle need not; false
     /// with a reason when it cannot be loaded. Only between cycles.
     virtual bool prepare(const station::PartProgramRef& /*program*/, std::string& /*error*/) { return true; }
-    /// Hands over view `index` taken at `pose`; returns at once.
-    virtual void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image) = 0;
+    /// The window of the sensor view `index` taken at `pose` needs — the
+    /// bounds of every pixel its inspection reads (docs/inspection.md,
+    /// "Pixels in proportion to the goal") — which the camera is asked to send
+    /// (docs/daemon.md, "Regions per view"); empty: the whole frame. After begin().
+    virtual cv::Rect region(std::size_t /*index*/, const geometry::FixturePose& /*pose*/) { return {}; }
+    /// Hands over view `index` taken at `pose`: its frame and the sensor
+    /// position of the frame's pixel (0, 0) (a region of the sensor, or the
+    /// whole of it at (0, 0)); returns at once.
+    virtual void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image, cv::Point origin) = 0;
     /// How many first views measure the seat that corrects the planned poses
     /// of the views after them (the program's `alignment.correct_poses_after`;
     /// 0: none). Valid after begin().

@@ -93,6 +93,7 @@ std::optional<std::vector<inspect::SilhouetteView>> ViewPipeline::firstPrepared(
         const Slot& s = slots_[k];
         if (!s.error.empty() || !s.view) return std::nullopt;
         out.push_back({s.view->camera, {}, s.view->grey, s.view->threshold, s.view->objectIsDark, s.view->alignment});
+        out.back().origin = s.view->origin; // a region of the sensor: where its grey levels lie
     }
     return out;
 }

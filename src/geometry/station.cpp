@@ -42,8 +42,9 @@ Vec3 parseAxis(const ConfigNode& node)
 
 Intrinsics parseCamera(const ConfigNode& cam)
 {
-    cam.allowOnlyKeys(
-        {"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration", "image_quality"});
+    // `regions` is the daemon's (docs/daemon.md, "Regions per view").
+    cam.allowOnlyKeys({"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration",
+                       "image_quality", "regions"});
     Intrinsics in;
     auto sizeNode = cam["image_size"];
     auto size = sizeNode.items();

@@ -329,7 +329,7 @@ std::optional<ViewDeviation> DeviationGauge::measureInView(const MapLandmark& lm
     const OutlinePoint& outline = stored;
     const auto scale = pixelsPerMm(camera, outline.touch, lm.normal, u);
     if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
-    const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark};
+    const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark, view.origin, camera.imageSize()};
     const auto edge = vision::findEdge(image, *start, u, kEdgeBandPx);
     if (!edge) return std::nullopt;
     // A surface moved inward is seen from its outer side: its outline runs

@@ -178,30 +178,64 @@ std::vector<cv::Rect> Inspector::regionsOfInterest(const geometry::CameraModel& 
     return viewRegions(*map_, camera, regionQuery()).voxels;
 }
 
+namespace {
+
+/// The sensor pixels a captured view's frame holds; throws naming the view
+/// when they leave the sensor (docs/inspection.md, "Frames that are regions").
+cv::Rect deliveredPixels(const CapturedView& v)
+{
+    const cv::Size sensor = v.camera.imageSize();
+    const cv::Rect delivered(v.origin, v.frame.size());
+    if (v.frame.empty() || (delivered & cv::Rect(cv::Point(0, 0), sensor)) != delivered)
+        throw std::invalid_argument("view '" + v.id + "': frame " + std::to_string(v.frame.cols) + "x" +
+                                    std::to_string(v.frame.rows) + " at sensor (" + std::to_string(v.origin.x) + ", " +
+                                    std::to_string(v.origin.y) + ") does not lie on the camera's " +
+                                    std::to_string(sensor.width) + "x" + std::to_string(sensor.height) + " sensor");
+    return delivered;
+}
+
+/// Rectangles in sensor pixels, clipped to the delivered ones (the rest is
+/// unknown to the voxel test), empty ones dropped.
+std::vector<cv::Rect> clippedTo(const std::vector<cv::Rect>& rects, const cv::Rect& delivered)
+{
+    std::vector<cv::Rect> out;
+    for (const cv::Rect& r : rects)
+        if (const cv::Rect c = r & delivered; !c.empty()) out.push_back(c);
+    return out;
+}
+
+std::vector<cv::Rect> shifted(std::vector<cv::Rect> rects, cv::Point by)
+{
+    for (cv::Rect& r : rects) r -= by;
+    return rects;
+}
+
+} // namespace
+
 SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::SegmentationSettings& segmentation) const
 {
-    if (v.frame.cols != v.camera.imageSize().width || v.frame.rows != v.camera.imageSize().height)
-        throw std::invalid_argument("view '" + v.id + "': frame is " + std::to_string(v.frame.cols) + "x" +
-                                    std::to_string(v.frame.rows) + ", camera expects " +
-                                    std::to_string(v.camera.imageSize().width) + "x" +
-                                    std::to_string(v.camera.imageSize().height));
+    const cv::Rect delivered = deliveredPixels(v);
     const cv::Mat grey = vision::toGrey(v.frame);
     // Only the regions' pixels: their statistics give the threshold, they
-    // alone are segmented (docs/inspection.md, "Pixels in proportion to the goal").
-    const cv::Rect frame(0, 0, grey.cols, grey.rows);
+    // alone are segmented (docs/inspection.md, "Pixels in proportion to the
+    // goal"). Regions are sensor pixels; the frame's are `origin` less.
     const std::vector<cv::Rect> rects =
-        options_.wholeFrame ? std::vector<cv::Rect>{frame} : regionsOfInterest(v.camera);
+        options_.wholeFrame ? std::vector<cv::Rect>{delivered} : clippedTo(regionsOfInterest(v.camera), delivered);
+    const std::vector<cv::Rect> local = shifted(rects, v.origin);
     const double threshold = options_.wholeFrame ? vision::computeThreshold(grey, segmentation)
-                                                 : vision::computeThreshold(grey, rects, segmentation);
+                                                 : vision::computeThreshold(grey, local, segmentation);
     const bool mask = segmentation.method == vision::SegmentationMethod::Mask;
     // A mask frame's edge lies half-way between its two values.
     const double edgeLevel = mask ? (grey.depth() == CV_8U ? 127.5 : 32767.5) : threshold;
-    SilhouetteView sv{v.camera, SilhouetteIndex(grey.size()), grey, edgeLevel, !mask && segmentation.objectIsDark};
+    SilhouetteView sv{v.camera, SilhouetteIndex(v.camera.imageSize()), grey, edgeLevel,
+                      !mask && segmentation.objectIsDark};
+    sv.origin = v.origin;
     // The view's share of the alignment now, not after the last frame (docs/alignment.md).
-    if (aligner_) sv.alignment = aligner_->prepare({sv.camera, sv.grey, sv.threshold, sv.objectIsDark});
+    if (aligner_) sv.alignment = aligner_->prepare({sv.camera, sv.grey, sv.threshold, sv.objectIsDark, sv.origin});
     // The ray casts of the sub-voxel step: found when the program was loaded, else now (docs/inspection.md).
     if (gauge_) sv.outlines = outlinesFor(v.camera);
-    for (const cv::Rect& r : rects) sv.index.addRegion(r, vision::segmentRegion(grey, r, threshold, segmentation));
+    for (std::size_t k = 0; k < rects.size(); ++k)
+        sv.index.addRegion(rects[k], vision::segmentRegion(grey, local[k], threshold, segmentation));
     return sv;
 }
 
@@ -323,7 +357,7 @@ std::optional<align::AlignmentResult> Inspector::measureSeat(const std::vector<S
     std::vector<std::shared_ptr<const align::ViewEdges>> prepared;
     frames.reserve(views.size());
     for (const SilhouetteView& v : views) {
-        frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark});
+        frames.push_back({v.camera, v.grey, v.threshold, v.objectIsDark, v.origin});
         prepared.push_back(v.alignment ? v.alignment : aligner_->prepare(frames.back()));
     }
     return aligner_->align(frames, prepared);

@@ -2,6 +2,8 @@
 
 #include "hullgauge/common/log.h"
 
+#include <spdlog/fmt/fmt.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -401,6 +403,27 @@ cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const 
 cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const RenderOptions& options) const
 {
     return shadeCoverage(coverage(camera, options), options);
+}
+
+cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const RenderOptions& options,
+                                   const cv::Rect& window) const
+{
+    const cv::Rect sensor(cv::Point(0, 0), camera.imageSize());
+    if (window.empty() || (window & sensor) != window)
+        throw std::invalid_argument(fmt::format("render window {}x{}+{}+{} is not within the {}x{} sensor",
+                                                window.width, window.height, window.x, window.y, sensor.width,
+                                                sensor.height));
+    // OpenCV's Gaussian kernel for a float image reaches 4σ from its centre.
+    const int margin = options.blurSigmaPx > 0.0 ? static_cast<int>(std::ceil(4.0 * options.blurSigmaPx)) + 1 : 0;
+    const cv::Rect padded =
+        cv::Rect(window.x - margin, window.y - margin, window.width + 2 * margin, window.height + 2 * margin) & sensor;
+    // A crop is the same camera with its principal point moved by the crop's corner.
+    geometry::Intrinsics cropped = camera.intrinsics();
+    cropped.K(0, 2) -= padded.x;
+    cropped.K(1, 2) -= padded.y;
+    cropped.imageSize = padded.size();
+    const cv::Mat image = render(geometry::CameraModel(cropped, camera.cameraFromPart()), options);
+    return image(window - padded.tl());
 }
 
 cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options)

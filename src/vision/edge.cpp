@@ -20,17 +20,58 @@ double grey(const cv::Mat& image, int row, int col)
     return image.depth() == CV_8U ? image.at<std::uint8_t>(row, col) : image.at<std::uint16_t>(row, col);
 }
 
-// Bilinear grey level at (x, y); false outside the frame.
-bool sample(const cv::Mat& image, const Vec2& at, double& value)
-{
-    const double x = at.x(), y = at.y();
-    if (!(x >= 0.0 && y >= 0.0 && x <= image.cols - 1.0 && y <= image.rows - 1.0)) return false;
-    const int c = std::min(static_cast<int>(x), image.cols - 2), r = std::min(static_cast<int>(y), image.rows - 2);
-    const double fx = x - c, fy = y - r;
-    value = (1 - fy) * ((1 - fx) * grey(image, r, c) + fx * grey(image, r, c + 1)) +
-            fy * ((1 - fx) * grey(image, r + 1, c) + fx * grey(image, r + 1, c + 1));
-    return true;
-}
+// Reads grey levels at sensor positions from a frame that may be a region of
+// the sensor (edge.h): off the sensor a read fails as it always did; on the
+// sensor but outside the delivered region it fails and marks the search
+// `missed`, which then finds no edge (docs/inspection.md, "Frames that are regions").
+class SensorReader {
+  public:
+    explicit SensorReader(const EdgeImage& image)
+        : image_(image.grey), origin_(image.origin),
+          sensor_(image.sensor.empty() ? cv::Size(image.origin.x + image.grey.cols, image.origin.y + image.grey.rows)
+                                       : image.sensor)
+    {
+    }
+
+    // Bilinear grey level at sensor (x, y); false off the sensor or the region.
+    bool sample(const Vec2& at, double& value)
+    {
+        const double x = at.x(), y = at.y();
+        if (!(x >= 0.0 && y >= 0.0 && x <= sensor_.width - 1.0 && y <= sensor_.height - 1.0)) return false;
+        const int c = std::min(static_cast<int>(x), sensor_.width - 2),
+                  r = std::min(static_cast<int>(y), sensor_.height - 2);
+        const int u = c - origin_.x, v = r - origin_.y;
+        if (u < 0 || v < 0 || u + 1 >= image_.cols || v + 1 >= image_.rows) {
+            missed_ = true;
+            return false;
+        }
+        const double fx = x - c, fy = y - r;
+        value = (1 - fy) * ((1 - fx) * grey(image_, v, u) + fx * grey(image_, v, u + 1)) +
+                fy * ((1 - fx) * grey(image_, v + 1, u) + fx * grey(image_, v + 1, u + 1));
+        return true;
+    }
+
+    // The whole pixel (col, row) of the sensor; false off the sensor or the region.
+    bool pixel(int col, int row, double& value)
+    {
+        if (col < 0 || row < 0 || col >= sensor_.width || row >= sensor_.height) return false;
+        const int u = col - origin_.x, v = row - origin_.y;
+        if (u < 0 || v < 0 || u >= image_.cols || v >= image_.rows) {
+            missed_ = true;
+            return false;
+        }
+        value = grey(image_, v, u);
+        return true;
+    }
+
+    bool missed() const { return missed_; }
+
+  private:
+    const cv::Mat& image_;
+    cv::Point origin_;
+    cv::Size sensor_;
+    bool missed_ = false;
+};
 
 // Signed "background-ness" of a grey level: > 0 on the background side.
 double side(const EdgeImage& image, double value)
@@ -40,7 +81,8 @@ double side(const EdgeImage& image, double value)
 
 // The threshold crossing (object -> background going outward) nearest s = 0,
 // from a profile sampled every pixel.
-bool nearestCrossing(const EdgeImage& image, const Vec2& pixel, const Vec2& normal, double band, double& crossing)
+bool nearestCrossing(const EdgeImage& image, SensorReader& reader, const Vec2& pixel, const Vec2& normal, double band,
+                     double& crossing)
 {
     const int n = static_cast<int>(std::ceil(band));
     double best = 1e300;
@@ -48,7 +90,7 @@ bool nearestCrossing(const EdgeImage& image, const Vec2& pixel, const Vec2& norm
     bool havePrev = false;
     for (int k = -n; k <= n; ++k) {
         double v = 0.0;
-        if (!sample(image.grey, pixel + k * normal, v)) {
+        if (!reader.sample(pixel + k * normal, v)) {
             havePrev = false;
             continue;
         }
@@ -70,7 +112,7 @@ bool nearestCrossing(const EdgeImage& image, const Vec2& pixel, const Vec2& norm
 // Gaussian; robust to a stray feature, and not zero where most pixels share
 // one grey level as the median absolute deviation is), never below the
 // quantisation's 1/√12 level.
-double backgroundNoise(const cv::Mat& image, const Vec2& edge, const Vec2& normal)
+double backgroundNoise(SensorReader& reader, const Vec2& edge, const Vec2& normal)
 {
     // On the stack: this runs for every edge the aligner and the gauge look at.
     constexpr int kFirst = 4, kLast = 20, kCount = kLast - kFirst + 1;
@@ -78,8 +120,7 @@ double backgroundNoise(const cv::Mat& image, const Vec2& edge, const Vec2& norma
     for (int k = kFirst; k <= kLast; ++k) {
         const Vec2 p = edge + k * normal;
         const int c = static_cast<int>(std::lround(p.x())), r = static_cast<int>(std::lround(p.y()));
-        if (c < 0 || r < 0 || c >= image.cols || r >= image.rows) return 0.0;
-        values[static_cast<std::size_t>(k - kFirst)] = grey(image, r, c);
+        if (!reader.pixel(c, r, values[static_cast<std::size_t>(k - kFirst)])) return 0.0;
     }
     std::array<double, kCount> sorted = values;
     std::nth_element(sorted.begin(), sorted.begin() + kCount / 2, sorted.end());
@@ -93,8 +134,9 @@ double backgroundNoise(const cv::Mat& image, const Vec2& edge, const Vec2& norma
 
 std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, const Vec2& normal, double bandPx)
 {
+    SensorReader reader(image);
     double crossing = 0.0;
-    if (!nearestCrossing(image, pixel, normal, bandPx, crossing)) return std::nullopt;
+    if (!nearestCrossing(image, reader, pixel, normal, bandPx, crossing) || reader.missed()) return std::nullopt;
     // Levels of object and background on either side of the edge, then the
     // integral of the normalised profile over a window across it: the
     // window's start plus the covered length is the edge.
@@ -102,10 +144,10 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     int no = 0, nb = 0;
     for (double s = 0.0; s <= kLevelSpan + 1e-9; s += kStep) {
         double v = 0.0;
-        if (sample(image.grey, pixel + (crossing - kHalfWindow - s) * normal, v)) object += v, ++no;
-        if (sample(image.grey, pixel + (crossing + kHalfWindow + s) * normal, v)) background += v, ++nb;
+        if (reader.sample(pixel + (crossing - kHalfWindow - s) * normal, v)) object += v, ++no;
+        if (reader.sample(pixel + (crossing + kHalfWindow + s) * normal, v)) background += v, ++nb;
     }
-    if (no == 0 || nb == 0) return std::nullopt;
+    if (no == 0 || nb == 0 || reader.missed()) return std::nullopt;
     object /= no;
     background /= nb;
     const double contrast = background - object;
@@ -118,7 +160,7 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     const int steps = static_cast<int>(std::lround(2.0 * kHalfWindow / kStep));
     for (int k = 0; k <= steps; ++k) {
         double v = 0.0;
-        if (!sample(image.grey, pixel + (crossing - kHalfWindow + k * kStep) * normal, v)) return std::nullopt;
+        if (!reader.sample(pixel + (crossing - kHalfWindow + k * kStep) * normal, v)) return std::nullopt;
         const double objectness = (background - v) / contrast;
         covered += (k == 0 || k == steps ? 0.5 : 1.0) * objectness * kStep;
     }
@@ -126,7 +168,8 @@ std::optional<EdgeFound> findEdge(const EdgeImage& image, const Vec2& pixel, con
     out.offset = crossing - kHalfWindow + covered;
     if (std::abs(out.offset - crossing) > 1.0) return std::nullopt;
     out.contrast = contrast;
-    out.noise = backgroundNoise(image.grey, pixel + crossing * normal, normal);
+    out.noise = backgroundNoise(reader, pixel + crossing * normal, normal);
+    if (reader.missed()) return std::nullopt;
     out.sigmaPx = edgeSigmaPx(out.noise, contrast, covered);
     return out;
 }

@@ -178,6 +178,26 @@ class ManifestReader {
         return p;
     }
 
+    /// A region image's place on the sensor: whole pixels within image_size.
+    cv::Point origin(const json& j, const std::string& at, cv::Size sensor) const
+    {
+        const std::string field = at + ".origin";
+        if (!j.is_array() || j.size() != 2) fail(field, "expected [x, y] in sensor pixels");
+        cv::Point p;
+        int* xy[] = {&p.x, &p.y};
+        for (int k = 0; k < 2; ++k) {
+            const double value = number(j[static_cast<std::size_t>(k)], field);
+            if (value != std::floor(value) || value < 0.0 || value > 1e6)
+                fail(field, "expected whole non-negative pixels, found " + j[static_cast<std::size_t>(k)].dump());
+            *xy[k] = static_cast<int>(value);
+        }
+        if (sensor.width <= 0) fail(field, "needs image_size, the sensor's size the region lies on");
+        if (p.x >= sensor.width || p.y >= sensor.height)
+            fail(field, "[" + std::to_string(p.x) + ", " + std::to_string(p.y) + "] lies outside the " +
+                            std::to_string(sensor.width) + "x" + std::to_string(sensor.height) + " sensor");
+        return p;
+    }
+
     ManifestView view(const json& j, std::size_t index, const fs::path& folder) const
     {
         const std::string at = "views[" + std::to_string(index) + "]";
@@ -228,7 +248,8 @@ class ManifestReader {
             v.camera = geometry::CameraModel(in, pose);
         }
         if (j.contains("fixture_pose")) v.fixturePose = fixturePose(j["fixture_pose"], at + ".fixture_pose");
-        warnUnknownKeys(j, {"id", "image", "K", "dist", "R", "t", "P", "image_size", "fixture_pose"}, at);
+        if (j.contains("origin")) v.origin = origin(j["origin"], at, in.imageSize);
+        warnUnknownKeys(j, {"id", "image", "K", "dist", "R", "t", "P", "image_size", "fixture_pose", "origin"}, at);
         return v;
     }
 
@@ -386,6 +407,7 @@ std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder
         j["t"] = std::vector<double>{pose.t.x(), pose.t.y(), pose.t.z()};
         if (in.imageSize.width > 0 && in.imageSize.height > 0)
             j["image_size"] = {in.imageSize.width, in.imageSize.height};
+        if (v.origin) j["origin"] = {v.origin->x, v.origin->y};
         if (v.fixturePose) {
             const geometry::FixturePose& p = v.fixturePose->pose;
             if (v.fixturePose->type == geometry::FixtureType::Rail)
@@ -473,6 +495,16 @@ cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
         throw InputError(name, field, "'" + v.image.string() + "': " + e.what());
     }
     const cv::Size expected = v.camera.imageSize();
+    if (v.origin) {
+        const cv::Rect placed(*v.origin, grey.size());
+        if ((placed & cv::Rect(cv::Point(0, 0), expected)) != placed)
+            throw InputError(name, field,
+                             "image '" + v.image.string() + "' is " + std::to_string(grey.cols) + "x" +
+                                 std::to_string(grey.rows) + " at origin [" + std::to_string(v.origin->x) + ", " +
+                                 std::to_string(v.origin->y) + "]: it leaves the " + std::to_string(expected.width) +
+                                 "x" + std::to_string(expected.height) + " sensor of image_size");
+        return grey;
+    }
     if (expected.width > 0 && expected.height > 0 && grey.size() != expected) {
         throw InputError(name, field,
                          "image '" + v.image.string() + "' is " + std::to_string(grey.cols) + "x" +

@@ -272,16 +272,20 @@ TEST(Alignment, UnknownDatumAndBadLimitsAreRefused)
     EXPECT_THROW(Aligner(plate.part.solid, {}, bad), std::invalid_argument);
 }
 
-TEST(Alignment, AFrameOfTheWrongSizeNamesTheView)
+TEST(Alignment, AFrameLeavingTheSensorNamesTheView)
 {
     const Plate plate;
     const Aligner aligner(plate.part.solid, {}, AlignmentSettings{});
-    std::vector<AlignmentView> views{{plate.cameras.front(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(200)), 128.0, true}};
+    // A 10 x 10 region whose last 5 columns lie beyond the sensor's right edge.
+    const cv::Point origin(plate.cameras.front().imageSize().width - 5, 0);
+    std::vector<AlignmentView> views{
+        {plate.cameras.front(), cv::Mat(10, 10, CV_8UC1, cv::Scalar(200)), 128.0, true, origin}};
     try {
         aligner.align(views);
         FAIL() << "accepted";
     } catch (const std::invalid_argument& e) {
         EXPECT_NE(std::string(e.what()).find("alignment view 0"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("leaves the camera's"), std::string::npos) << e.what();
     }
 }
 

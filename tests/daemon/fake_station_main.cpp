@@ -58,7 +58,8 @@ class FakeDevices : public StationDevices, public SimulationControl {
         return Status::success();
     }
     void stopMotion() override {}
-    Status grab(std::chrono::milliseconds timeout, cv::Mat& image) override
+    Status setRegion(const cv::Rect&) override { return Status::success(); }
+    Status grab(std::chrono::milliseconds timeout, GrabbedFrame& frame) override
     {
         auto mode = env("HG_FAKE_GRAB_FAIL");
         if (mode == "timeout") {
@@ -66,7 +67,7 @@ class FakeDevices : public StationDevices, public SimulationControl {
             return Status::failure(StatusCode::Timeout, "fake: no frame");
         }
         if (mode == "bad") return Status::failure(StatusCode::BadFrame, "fake: 12 packets missing");
-        image = cv::Mat(48, 64, CV_8UC1, cv::Scalar(dented_ ? 100 : 200));
+        frame.image = cv::Mat(48, 64, CV_8UC1, cv::Scalar(dented_ ? 100 : 200));
         return Status::success();
     }
     Status recover() override { return start(); }
@@ -91,7 +92,10 @@ class FakeInspector : public Inspector {
         frames_.clear();
         return true;
     }
-    void addView(std::size_t, const hg::geometry::FixturePose&, cv::Mat image) override { frames_.push_back(image); }
+    void addView(std::size_t, const hg::geometry::FixturePose&, cv::Mat image, cv::Point) override
+    {
+        frames_.push_back(image);
+    }
     InspectionOutcome finish() override
     {
         InspectionOutcome out;

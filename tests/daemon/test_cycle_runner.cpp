@@ -5,8 +5,15 @@
 // Waiting is polling under a deadline; time on the runner's clock passes only
 // when the test moves it (settle times pass at once).
 #include "cycle_runner.h"
+#include "engine_inspector.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
+#include "hullgauge/align/alignment.h"
+#include "hullgauge/inspect/inspector.h"
+#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/sim/renderer.h"
 #include "manual_clock.h"
 
 #include <algorithm>
@@ -44,12 +51,45 @@ class ScriptedDevices : public StationDevices {
         return next(moves);
     }
     void stopMotion() override { stopped_ = true; }
-    Status grab(std::chrono::milliseconds, cv::Mat& image) override
+    /// The camera's regions (docs/camera.md, "Regions per grab"): a grab
+    /// sends the region last asked for, cut from `frame` (or from what
+    /// `render` makes at the last pose moved to); refusing, whole frames.
+    bool refuseRegions = false;
+    double regionChangeMs = 0.0; ///< reported by the first grab after a change
+    std::function<cv::Mat(const geometry::FixturePose&)> render;
+    Status setRegion(const cv::Rect& region) override
+    {
+        std::lock_guard lock(mutex_);
+        calls_.push_back("region " + describe(region));
+        if (refuseRegions) return Status::failure(StatusCode::NotAllowed, "scripted: no regions");
+        changed_ = changed_ || region != region_;
+        region_ = region;
+        return Status::success();
+    }
+    Status grab(std::chrono::milliseconds, GrabbedFrame& out) override
     {
         std::lock_guard lock(mutex_);
         ++grabCount_;
-        image = frame.clone();
+        calls_.push_back("grab");
+        const cv::Mat whole = render && !poses_.empty() ? render(poses_.back()) : frame;
+        const cv::Rect cut = region_.empty() ? cv::Rect(0, 0, whole.cols, whole.rows) : region_;
+        out.image = whole(cut).clone();
+        out.origin = cut.tl();
+        out.payloadBytes = out.image.total() * out.image.elemSize();
+        out.regionChangeMs = changed_ ? regionChangeMs : 0.0;
+        changed_ = false;
         return next(grabs);
+    }
+    static std::string describe(const cv::Rect& r)
+    {
+        return "[" + std::to_string(r.x) + ", " + std::to_string(r.y) + ", " + std::to_string(r.width) + ", " +
+               std::to_string(r.height) + "]";
+    }
+    /// "region [x, y, w, h]" and "grab", in the order the runner called them.
+    std::vector<std::string> calls() const
+    {
+        std::lock_guard lock(mutex_);
+        return calls_;
     }
     Status recover() override
     {
@@ -105,6 +145,9 @@ class ScriptedDevices : public StationDevices {
     std::vector<geometry::FixturePose> poses_;
     std::vector<Clock::time_point> recoverTimes_;
     int grabCount_ = 0;
+    std::vector<std::string> calls_;
+    cv::Rect region_;
+    bool changed_ = false;
     std::atomic<bool> stopped_{false};
 };
 
@@ -123,7 +166,7 @@ class PassingInspector : public Inspector {
         error = "scripted load failure";
         return false;
     }
-    void addView(std::size_t, const geometry::FixturePose&, cv::Mat) override {}
+    void addView(std::size_t, const geometry::FixturePose&, cv::Mat, cv::Point) override {}
     InspectionOutcome finish() override
     {
         if (onFinish) onFinish();
@@ -739,6 +782,8 @@ TEST_F(CycleRunnerTest, ASnapshotIsGrabbedAtItsPoseWithTheSilhouetteItShows)
     EXPECT_EQ(s.at("pose").at("rotation_deg"), 30);
     ASSERT_EQ(devices.poses().size(), 1u);
     EXPECT_EQ(devices.poses()[0], (geometry::FixturePose{30, 10, 0}));
+    // Whole frames, whatever region the last cycle left the camera on.
+    EXPECT_EQ(devices.calls(), (std::vector<std::string>{"region [0, 0, 0, 0]", "grab"}));
     const auto png = runner->snapshot().png();
     ASSERT_NE(png, nullptr);
     const auto decoded = cv::imdecode(*png, cv::IMREAD_UNCHANGED);
@@ -784,6 +829,164 @@ TEST_F(CycleRunnerTest, ASnapshotIsRefusedWhileTheStationIsFaulted)
     std::string why;
     EXPECT_FALSE(runner->requestSnapshot({}, why));
     EXPECT_NE(why.find("not ready (fault)"), std::string::npos) << why;
+}
+
+} // namespace
+} // namespace hg::daemon
+
+namespace hg::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Regions per view (docs/daemon.md, "Regions per view") on the simulated line
+// (config/sim): the daemon's engine inspector, and a camera that cuts each
+// grab from the simulated camera's rendering at the pose commanded, of a part
+// seated 0.2 mm / 0.2° off (so the views after the first two are taken at
+// poses corrected for the seat).
+class CameraRegions : public ::testing::Test {
+  protected:
+    struct Run {
+        std::vector<std::string> calls;           ///< the camera's calls, in order
+        std::vector<geometry::FixturePose> poses; ///< the poses commanded
+        std::vector<nlohmann::json> records;      ///< one per part
+    };
+
+    static fs::path simFolder() { return hgtest::sourceDir() / "config" / "sim"; }
+
+    static geometry::RigidTransform seat()
+    {
+        const auto turn = geometry::RigidTransform::rotation(geometry::Vec3(1, -2, 3).normalized(), 0.2);
+        const geometry::Vec3 centre(0, 0, 15);
+        return {turn.R, centre + geometry::Vec3(0.2, -0.1, 0.0) - turn.R * centre};
+    }
+
+    /// One cycle per part through the runner; `regions` the station's camera.regions.
+    static Run run(const std::vector<std::string>& parts, bool regions, bool refuse)
+    {
+        hgtest::TempDir dir;
+        auto cfg = std::make_shared<station::DaemonConfig>(station::loadDaemonConfig(simFolder() / "hullgauged.yaml"));
+        cfg->results.database = dir / "results.db";
+        cfg->results.imageDir = dir / "images";
+        cfg->results.saveFailedImages = false;
+        cfg->cameraRegions = regions;
+        const ConfigNode driver = (*cfg->station.document)["camera"]["driver"];
+        sim::RenderOptions options;
+        options.backgroundLevel = driver["background_level"].asDouble();
+        options.objectLevel = driver["object_level"].asDouble();
+        options.blurSigmaPx = driver["blur_sigma_px"].asDouble();
+        options.noiseSigma = driver["noise_sigma"].asDouble();
+        options.seed = 7;
+        std::map<std::string, fs::path> meshes(cfg->simulatedParts.begin(), cfg->simulatedParts.end());
+        std::unique_ptr<sim::SilhouetteRenderer> renderer;
+
+        ManualClock clock;
+        ScriptedDevices devices(clock);
+        devices.refuseRegions = refuse;
+        devices.regionChangeMs = 1.5;
+        devices.render = [&](const geometry::FixturePose& pose) {
+            return renderer->render(align::seatedCamera(cfg->station.cameraAt(pose), seat()), options);
+        };
+        auto inspector = makeEngineInspector(*cfg);
+        ResultStore store(dir / "results.db");
+        PlcRegisters registers;
+        registers.setKnownPrograms({1});
+        Run out;
+        {
+            CycleRunner runner(registers, devices, *inspector, store, cfg, clock);
+            runner.start([] {});
+            EXPECT_TRUE(eventually([&] { return registers.snapshot()[reg::Status] == 0; }, 60s));
+            std::uint16_t seq = 0;
+            for (const std::string& part : parts) {
+                renderer = std::make_unique<sim::SilhouetteRenderer>(
+                    std::vector<model::TriangleMesh>{model::loadMesh(meshes.at(part))});
+                std::array<std::uint16_t, 2> block{++seq, 1};
+                EXPECT_EQ(registers.write(reg::TriggerSeq, block), station::ModbusException::None);
+                EXPECT_TRUE(eventually([&] { return registers.snapshot()[reg::DoneSeq] == seq; }, 120s)) << part;
+                out.records.push_back(store.recent(1).at(0));
+            }
+        }
+        out.calls = devices.calls();
+        out.poses = devices.poses();
+        return out;
+    }
+
+    /// The region asked for before each grab, in order (empty: whole frames).
+    static std::vector<std::string> regionBeforeEachGrab(const std::vector<std::string>& calls)
+    {
+        std::vector<std::string> out;
+        std::string last = "region [0, 0, 0, 0]";
+        for (const std::string& c : calls)
+            if (c == "grab")
+                out.push_back(last);
+            else
+                last = c;
+        return out;
+    }
+
+    /// What a record decides: verdict, landmarks, the seat; not its timings (ms).
+    static nlohmann::json judged(nlohmann::json record)
+    {
+        nlohmann::json alignment = record["alignment"];
+        if (alignment.is_object()) {
+            alignment.erase("ms");
+            if (alignment.contains("pose_correction")) alignment["pose_correction"].erase("ms");
+        }
+        return {{"verdict", record["verdict"]}, {"landmarks", record["landmarks"]}, {"alignment", alignment}};
+    }
+};
+
+TEST_F(CameraRegions, TheCameraSendsEachViewsBoundsAndTheVerdictsAreThoseOfWholeFrames)
+{
+    const std::vector<std::string> parts = {"nominal", "face-low"};
+    const Run regions = run(parts, true, false);
+    const Run whole = run(parts, false, false);
+
+    // Each grab was preceded by the bounds of what that view's inspection
+    // reads through the camera of the pose commanded (the core's own
+    // Inspector::regions, built as the program says: docs/inspection.md).
+    auto cfg = station::loadDaemonConfig(simFolder() / "hullgauged.yaml");
+    const auto program = model::loadPartProgram(cfg.programs.at(1).partFile);
+    const auto options = inspect::inspectionOptions(program.inspection);
+    const auto map = inspect::buildInspectionMap(program, options);
+    const inspect::Inspector core(map, options, inspect::makeAligner(program),
+                                  inspect::makeDeviationGauge(program, cfg.station.calibration));
+    std::vector<std::string> expected;
+    for (const auto& pose : regions.poses)
+        expected.push_back("region " + ScriptedDevices::describe(core.regions(cfg.station.cameraAt(pose)).bounds));
+    ASSERT_EQ(regions.poses.size(), 2 * cfg.programs.at(1).views.size());
+    EXPECT_EQ(regionBeforeEachGrab(regions.calls), expected);
+    bool corrected = false;
+    for (std::size_t k = 0; k < regions.poses.size(); ++k)
+        corrected = corrected || !(regions.poses[k] == cfg.programs.at(1).views[k % cfg.programs.at(1).views.size()]);
+    EXPECT_TRUE(corrected) << "views after the first two are taken at poses corrected for the seat";
+    // With camera.regions false the camera is asked for whole frames.
+    for (const std::string& r : regionBeforeEachGrab(whole.calls)) EXPECT_EQ(r, "region [0, 0, 0, 0]");
+
+    // The same verdicts, landmarks and seats, to the last bit, as the whole frames give.
+    ASSERT_EQ(regions.records.size(), parts.size());
+    ASSERT_EQ(whole.records.size(), parts.size());
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+        SCOPED_TRACE(parts[i]);
+        EXPECT_EQ(judged(regions.records[i]), judged(whole.records[i]));
+        EXPECT_EQ(regions.records[i]["verdict"], parts[i] == "nominal" ? "pass" : "fail");
+        // The camera's time applying the regions is in the cycle's timing (1.5 ms per change).
+        EXPECT_GT(regions.records[i]["timing"]["region"].get<double>(), 0.0);
+        EXPECT_EQ(whole.records[i]["timing"]["region"].get<double>(), 0.0);
+    }
+}
+
+// docs/camera.md, "A camera that cannot": it sends whole frames; the
+// inspection, told so by each frame's origin and size, judges the same.
+TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)
+{
+    const std::vector<std::string> parts = {"face-low"};
+    const Run refused = run(parts, true, true);
+    const Run whole = run(parts, false, false);
+    EXPECT_NE(regionBeforeEachGrab(refused.calls).front(), "region [0, 0, 0, 0]") << "regions were asked for";
+    ASSERT_EQ(refused.records.size(), 1u);
+    EXPECT_EQ(judged(refused.records[0]), judged(whole.records[0]));
+    EXPECT_EQ(refused.records[0]["verdict"], "fail");
 }
 
 } // namespace

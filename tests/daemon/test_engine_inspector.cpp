@@ -70,7 +70,7 @@ InspectionOutcome inspect(hg::daemon::Inspector& inspector, const DaemonConfig& 
     std::string error;
     EXPECT_TRUE(inspector.begin(config.programs.at(1), error)) << error;
     const auto& poses = config.programs.at(1).views;
-    for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k]);
+    for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k], {});
     return inspector.finish();
 }
 
@@ -406,7 +406,7 @@ TEST_F(EngineParity, TheFirstTwoViewsSeatCorrectsThePosesOfTheRest)
         ASSERT_TRUE(inspector->begin(config_->programs.at(1), error)) << error;
         ASSERT_EQ(inspector->seatViews(), 2u); // the default alignment.correct_poses_after
         const auto first = frames(*config_, part, seat, {planned[0], planned[1]});
-        for (std::size_t k = 0; k < 2; ++k) inspector->addView(k, planned[k], first[k]);
+        for (std::size_t k = 0; k < 2; ++k) inspector->addView(k, planned[k], first[k], {});
         const auto provisional = inspector->provisionalSeat();
         ASSERT_TRUE(provisional && provisional->measured && provisional->withinLimits);
         const double shiftError = (provisional->seat.apply(c) - seat.apply(c)).norm();
@@ -419,7 +419,7 @@ TEST_F(EngineParity, TheFirstTwoViewsSeatCorrectsThePosesOfTheRest)
             rest.push_back(hg::align::correctPose(fixture, planned[k], provisional->seat, c).pose);
         const auto later = frames(*config_, part, seat, rest);
         for (std::size_t k = 0; k < rest.size(); ++k) {
-            inspector->addView(k + 2, rest[k], later[k]);
+            inspector->addView(k + 2, rest[k], later[k], {});
             // Judged with the true seat: the corrected view sees the part from the planned direction.
             const double before = hg::align::sightErrorDeg(fixture, planned[k + 2], planned[k + 2], seat, c);
             const double after = hg::align::sightErrorDeg(fixture, planned[k + 2], rest[k], seat, c);
@@ -489,6 +489,52 @@ TEST(ArchiveRule, FailedPartsWithSaveFailedImagesAndEveryInspectedPartWithArchiv
     // A cycle that inspected nothing has nothing to archive.
     EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Aborted));
     EXPECT_FALSE(hg::daemon::archivesPart(results, Verdict::Error));
+}
+
+} // namespace
+
+namespace {
+
+// Regions per view (docs/daemon.md): frames the camera sent as each view's
+// bounds are archived as grabbed with their origin (docs/contracts.md §3), and
+// `hullgauge inspect` on that archive gives the daemon's landmarks exactly —
+// which are those of the whole frames.
+TEST_F(EngineParity, AnArchiveOfRegionFramesReproducesTheDaemonsLandmarks)
+{
+    hgtest::TempDir dir;
+    auto inspector = hg::daemon::makeEngineInspector(*config_);
+    const auto& poses = config_->programs.at(1).views;
+    for (const std::string part : {"nominal", "face-low"}) {
+        SCOPED_TRACE(part);
+        const auto images = frames(*config_, part);
+        std::string error;
+        ASSERT_TRUE(inspector->begin(config_->programs.at(1), error)) << error;
+        std::vector<cv::Rect> cuts;
+        for (std::size_t k = 0; k < images.size(); ++k) {
+            const cv::Rect cut = inspector->region(k, poses[k]);
+            ASSERT_FALSE(cut.empty()) << k;
+            ASSERT_LT(cut.area(), images[k].size().area()) << k << ": a region of the sensor";
+            cuts.push_back(cut);
+            inspector->addView(k, poses[k], images[k](cut).clone(), cut.tl());
+        }
+        auto outcome = inspector->finish();
+        ASSERT_TRUE(outcome.ok) << outcome.error;
+        const auto wholeOutcome = inspect(*inspector, *config_, images);
+        EXPECT_EQ(outcome.pass, wholeOutcome.pass);
+        EXPECT_EQ(notOk(outcome), notOk(wholeOutcome));
+
+        const fs::path folder = archive(*config_, outcome, dir / "images", part);
+        ASSERT_FALSE(folder.empty());
+        const auto manifest = hg::vision::readManifest(folder / "manifest.json");
+        ASSERT_EQ(manifest.views.size(), images.size());
+        for (std::size_t k = 0; k < images.size(); ++k) {
+            ASSERT_TRUE(manifest.views[k].origin.has_value()) << k;
+            EXPECT_EQ(*manifest.views[k].origin, cuts[k].tl());
+            EXPECT_EQ(manifest.views[k].camera.imageSize(), images[k].size()) << "the sensor's size";
+            EXPECT_EQ(cv::norm(hg::vision::readViewImage(manifest, k), images[k](cuts[k]), cv::NORM_INF), 0.0);
+        }
+        EXPECT_EQ(expectSameLandmarks(outcome, inspectOffline(config_->programs.at(1).partFile, folder)), 10u);
+    }
 }
 
 } // namespace

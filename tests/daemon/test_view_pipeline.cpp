@@ -271,7 +271,7 @@ class EnginePipeline : public ::testing::Test {
         std::string error;
         EXPECT_TRUE(inspector.begin(config_->programs.at(1), error)) << error;
         const auto& poses = config_->programs.at(1).views;
-        for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k]);
+        for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k], {});
         return inspector.finish();
     }
 
@@ -336,7 +336,7 @@ TEST_F(EnginePipeline, WrongFrameSizeIsAnOutcomeErrorNamingTheView)
     // An aborted cycle leaves nothing behind for the next one.
     std::string error;
     ASSERT_TRUE(inspector->begin(config_->programs.at(1), error));
-    inspector->addView(0, config_->programs.at(1).views[0], images[0]);
+    inspector->addView(0, config_->programs.at(1).views[0], images[0], {});
     inspector->cancel();
     auto again = inspect(*inspector, frames("nominal"));
     ASSERT_TRUE(again.ok) << again.error;

@@ -249,3 +249,65 @@ TEST(Regions, NoPixelOutsideTheRegionsIsRead)
         EXPECT_LT(touched, all) << "the regions' bounding boxes leave part of the frames out";
     }
 }
+
+// Frames that are regions of the sensor (docs/inspection.md, "Frames that are
+// regions"): each view's frame cut to its bounds, as a camera delivering one
+// region per grab sends it, inspects to the last bit as the whole frame does.
+TEST(Regions, FramesCutToEachViewsBoundsInspectAsWholeFrames)
+{
+    const SimLine line;
+    const Inspector inspector = line.inspector(false);
+    const auto segmentation = hg::vision::stationSegmentation(line.station);
+    for (const std::string mesh :
+         {"stepped-block.stl", "stepped-block-face-low.stl", "stepped-block-corner-missing.stl"}) {
+        SCOPED_TRACE(mesh);
+        const auto frames = line.render(mesh, kSeat);
+        std::vector<CapturedView> cut = frames;
+        for (CapturedView& v : cut) {
+            const cv::Rect bounds = inspector.regions(v.camera).bounds;
+            ASSERT_FALSE(bounds.empty()) << v.id;
+            ASSERT_LT(bounds.area(), v.camera.imageSize().area()) << v.id << ": a real cut";
+            v.frame = v.frame(bounds).clone();
+            v.origin = bounds.tl();
+        }
+        expectSameResult(inspector.inspect(frames, segmentation), inspector.inspect(cut, segmentation));
+    }
+}
+
+// A region that holds none of what the inspection reads: nothing is guessed —
+// no landmark is ok and the part does not pass.
+TEST(Regions, AFrameMissingTheRegionsReadsNothingOutsideIt)
+{
+    const SimLine line;
+    const Inspector inspector = line.inspector(false);
+    const auto segmentation = hg::vision::stationSegmentation(line.station);
+    std::vector<CapturedView> cut = line.render("stepped-block.stl", kSeat);
+    for (CapturedView& v : cut) {
+        // A 32 x 32 corner of the sensor, clear of every region.
+        const cv::Rect corner(0, 0, 32, 32);
+        ASSERT_TRUE((inspector.regions(v.camera).bounds & corner).empty()) << v.id;
+        v.frame = v.frame(corner).clone();
+    }
+    const InspectionResult r = inspector.inspect(cut, segmentation);
+    EXPECT_FALSE(r.pass);
+    for (const LandmarkResult& l : r.landmarks) EXPECT_NE(l.status, LandmarkStatus::Ok) << l.id;
+}
+
+TEST(Regions, AFrameLeavingTheSensorIsAnErrorNamingTheView)
+{
+    const SimLine line;
+    const Inspector inspector = line.inspector(false);
+    std::vector<CapturedView> views = line.render("stepped-block.stl", RigidTransform{});
+    CapturedView& last = views.back();
+    const cv::Size sensor = last.camera.imageSize();
+    last.frame = last.frame(cv::Rect(0, 0, 100, 80)).clone();
+    last.origin = cv::Point(sensor.width - 50, 10);
+    try {
+        (void)inspector.inspect(views, hg::vision::stationSegmentation(line.station));
+        FAIL() << "accepted";
+    } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("view '" + last.id + "'"), std::string::npos) << what;
+        EXPECT_NE(what.find("does not lie on the camera's"), std::string::npos) << what;
+    }
+}

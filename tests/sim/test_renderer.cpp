@@ -439,6 +439,40 @@ TEST(Renderer, BlurSpreadsEdgeByItsSigma)
     EXPECT_NEAR(variance, 4.0 + 0.21, 0.02);
 }
 
+TEST(Renderer, AWindowHasTheWholeImagesPixels)
+{
+    // A camera sending a region (docs/camera.md "Regions per grab") sees the
+    // pixels the whole sensor would show there: the window rendered alone
+    // against the whole image's crop, blurred (its kernel reaches past the
+    // window) and distorted, inside the sensor and against its corner.
+    const std::vector<double> dist{-0.25, 0.12, 0.001, -0.0008, -0.02};
+    const CameraModel cam = makeCamera(1500.0, {1280, 1024}, generalPose(), dist);
+    SilhouetteRenderer renderer({model::makeBox(kBoxLo, kBoxHi)});
+    RenderOptions opt;
+    opt.blurSigmaPx = 1.5;
+    const cv::Mat whole = renderer.render(cam, opt);
+    // Windows reaching into the box's silhouette: around its centre, and from
+    // it to the sensor's first and last pixel.
+    const cv::Rect box = cv::boundingRect(whole < 128);
+    const cv::Point centre(box.x + box.width / 2, box.y + box.height / 2);
+    for (const cv::Rect window : {cv::Rect(centre.x - 128, centre.y - 65, 257, 131), cv::Rect(cv::Point(0, 0), centre),
+                                  cv::Rect(centre, cv::Point(1280, 1024))}) {
+        const cv::Mat part = renderer.render(cam, opt, window);
+        ASSERT_EQ(part.size(), window.size());
+        cv::Mat difference;
+        cv::absdiff(part, whole(window), difference);
+        double largest = 0.0;
+        cv::minMaxLoc(difference, nullptr, &largest);
+        // The same geometry projected with the principal point moved: equal
+        // but for a rounding of the last bit of a pixel's float grey now and then.
+        EXPECT_LE(largest, 1.0) << window;
+        EXPECT_LE(cv::countNonZero(difference), window.area() / 1000) << window;
+        EXPECT_GT(cv::countNonZero(part < 128), 0) << window; // the box is in every window
+    }
+    EXPECT_THROW(renderer.render(cam, opt, cv::Rect(1200, 0, 100, 10)), std::invalid_argument);
+    EXPECT_THROW(renderer.render(cam, opt, cv::Rect(10, 10, 0, 10)), std::invalid_argument);
+}
+
 TEST(Renderer, RejectsBadOptions)
 {
     CameraModel cam = makeCamera(1000.0, {64, 48}, generalPose());

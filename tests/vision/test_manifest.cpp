@@ -239,7 +239,26 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"CxAbsurd",
                 views(R"({"id": "c", "image": "c.png", "K": [[1000, 0, -9.2e18], [0, 1000, 240], [0, 0, 1]], )" + kR +
                       ", " + kT + "}"),
-                "views[2].K", "within ±1e7 px"}),
+                "views[2].K", "within ±1e7 px"},
+        BadCase{"OriginNotPair",
+                views(R"({"id": "c", "image": "c.png", "image_size": [640, 480], "origin": [3], )" + kK + ", " + kR +
+                      ", " + kT + "}"),
+                "views[2].origin", "expected [x, y]"},
+        BadCase{"OriginFractional",
+                views(R"({"id": "c", "image": "c.png", "image_size": [640, 480], "origin": [3.5, 0], )" + kK + ", " +
+                      kR + ", " + kT + "}"),
+                "views[2].origin", "whole non-negative pixels, found 3.5"},
+        BadCase{"OriginNegative",
+                views(R"({"id": "c", "image": "c.png", "image_size": [640, 480], "origin": [0, -8], )" + kK + ", " +
+                      kR + ", " + kT + "}"),
+                "views[2].origin", "whole non-negative pixels, found -8"},
+        BadCase{"OriginWithoutSensorSize",
+                views(R"({"id": "c", "image": "c.png", "origin": [10, 20], )" + kK + ", " + kR + ", " + kT + "}"),
+                "views[2].origin", "needs image_size"},
+        BadCase{"OriginOffTheSensor",
+                views(R"({"id": "c", "image": "c.png", "image_size": [640, 480], "origin": [640, 0], )" + kK + ", " +
+                      kR + ", " + kT + "}"),
+                "views[2].origin", "[640, 0] lies outside the 640x480 sensor"}),
     [](const ::testing::TestParamInfo<BadCase>& param) { return std::string(param.param.name); });
 
 TEST(Manifest, SyntaxErrorNamesTheLine)
@@ -261,6 +280,33 @@ TEST(Manifest, MissingFileIsBadInput)
 {
     hgtest::TempDir tmp;
     EXPECT_THROW(readManifest(tmp / "absent.json"), InputError);
+}
+
+TEST(Manifest, ARegionImageIsReadWhereItLiesAndRefusedWhereItLeavesTheSensor)
+{
+    // docs/contracts.md §3: `origin` places a region image on the sensor of
+    // image_size; a 64x48 region at [576, 432] ends on the 640x480 sensor's
+    // last pixel, one pixel further it leaves it.
+    hgtest::TempDir tmp;
+    cv::Mat region(48, 64, CV_8UC1, cv::Scalar(200));
+    ASSERT_TRUE(cv::imwrite((tmp / "region.png").string(), region));
+    const auto view = [](const std::string& id, const std::string& origin) {
+        return R"({"id": ")" + id + R"(", "image": "region.png", "image_size": [640, 480], "origin": )" + origin +
+               ", " + kK + ", " + kR + ", " + kT + "}";
+    };
+    const auto file = hgtest::writeFile(tmp / "manifest.json", R"({"views": [)" + view("in", "[576, 432]") + ", " +
+                                                                   view("out", "[577, 432]") + "]}");
+    const CaptureManifest m = readManifest(file);
+    ASSERT_TRUE(m.views[0].origin);
+    EXPECT_EQ(*m.views[0].origin, cv::Point(576, 432));
+    EXPECT_EQ(readViewImage(m, 0).size(), cv::Size(64, 48));
+    try {
+        (void)readViewImage(m, 1);
+        FAIL() << "a region leaving the sensor was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(e.problem().find("64x48 at origin [577, 432]: it leaves the 640x480 sensor"), std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(Manifest, ReadsViewImagesAsGreyOfTheirDepth)

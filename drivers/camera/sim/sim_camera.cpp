@@ -331,11 +331,13 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
         options.seed = config_.render.seed + frameCount_; // fresh, reproducible noise per frame
         const geometry::CameraModel camera = align::seatedCamera(station_.cameraAt(pose), seat);
-        const cv::Mat image = (renderer ? *renderer : backlight_).render(camera, options);
+        // Only the region is rendered: a whole sensor's float images per grab
+        // would set the daemon's memory peak (docs/daemon.md "Memory").
+        const cv::Mat image = (renderer ? *renderer : backlight_).render(camera, options, region);
         if (format == PixelFormat::Mono12)
-            image(region).convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
+            image.convertTo(out, CV_16U, 1.0 / 16.0); // 12 significant bits
         else
-            image(region).copyTo(out);
+            image.copyTo(out);
     }
 
     Result<std::vector<FeatureInfo>> doListFeatures() override

@@ -54,9 +54,12 @@ using geometry::Vec3;
 /// One view as the aligner sees it.
 struct AlignmentView {
     geometry::CameraModel camera; ///< camera_from_part of the nominal seat (the calibrated view)
-    cv::Mat grey{};               ///< CV_8UC1 or CV_16UC1, camera.imageSize()
+    cv::Mat grey{};               ///< CV_8UC1 or CV_16UC1: the sensor, or a region of it
     double threshold = 0.0;       ///< grey level of the silhouette edge (the segmentation threshold)
     bool objectIsDark = true;     ///< backlit: the part is darker than the background
+    /// Sensor position of grey's pixel (0, 0): a frame that is a region of the
+    /// sensor (docs/camera.md, "Regions per grab"); it must lie on the sensor.
+    cv::Point origin{0, 0};
 };
 
 /// A direction of the seat the views do not determine: left at nominal.

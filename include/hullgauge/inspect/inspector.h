@@ -146,11 +146,15 @@ nlohmann::json toJson(const InspectionResult& result);
 /// A reconstruction oracle: the label of a voxel box (Void, Object or Undecided).
 using VoxelOracle = std::function<VoxelLabel(const Box3&)>;
 
-/// A captured view: id, calibrated camera, grey or colour frame (8/16 bit).
+/// A captured view: id, calibrated camera (the whole sensor), grey or colour
+/// frame (8/16 bit) — the whole sensor or a region of it: frame pixel (u, v)
+/// is sensor pixel (origin.x + u, origin.y + v) (docs/camera.md, "Regions per
+/// grab"; docs/inspection.md, "Frames that are regions").
 struct CapturedView {
     std::string id;
     geometry::CameraModel camera;
     cv::Mat frame;
+    cv::Point origin{0, 0};
 };
 
 class Inspector {
@@ -166,14 +170,17 @@ class Inspector {
               std::shared_ptr<const DeviationGauge> gauge = nullptr);
 
     /// Segments only the regions the map's voxels project to, then inspects.
-    /// Frames must match their camera's image size (std::invalid_argument naming the view).
+    /// Each frame, placed at its origin, must lie on its camera's sensor
+    /// (std::invalid_argument naming the view); pixels of the sensor the frame
+    /// does not hold are unknown, never read (docs/inspection.md, "Frames
+    /// that are regions").
     InspectionResult inspect(const std::vector<CapturedView>& views,
                              const vision::SegmentationSettings& segmentation) const;
     /// Segments one view's regions of interest into its silhouette index: the
     /// per-view half of `inspect`, so a caller can prepare view k while the
     /// fixture moves to view k+1 (docs/daemon.md, "The pipeline"). Const and free of shared
     /// state: safe to call from several threads. Throws std::invalid_argument
-    /// naming the view when the frame does not match its camera.
+    /// naming the view when the frame leaves its camera's sensor.
     SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;
     /// Inspects prepared silhouettes (ids name the views in the result): aligns
     /// first when the inspector has an aligner (the views' cameras are the

@@ -89,7 +89,8 @@ class SilhouetteIndex {
     std::vector<Region> regions_;
 };
 
-/// One calibrated view: the camera and the silhouette index of its frame.
+/// One calibrated view: the camera and the silhouette index of its frame
+/// (sensor pixels).
 struct SilhouetteView {
     geometry::CameraModel camera;
     SilhouetteIndex index;
@@ -103,6 +104,10 @@ struct SilhouetteView {
     /// Where the CAD outline runs beside each landmark, when the inspector
     /// measures deviations (docs/inspection.md, "Sub-voxel deviation").
     std::shared_ptr<const ViewOutlines> outlines{};
+    /// Sensor position of grey's pixel (0, 0) when the frame is a region of
+    /// the sensor (docs/inspection.md, "Frames that are regions"); the index
+    /// and the camera stay in sensor pixels.
+    cv::Point origin{0, 0};
 };
 
 /// How one view sees one voxel.

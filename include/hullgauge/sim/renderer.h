@@ -77,6 +77,15 @@ class SilhouetteRenderer {
     /// The backlit grey image (CV_8UC1 or CV_16UC1).
     cv::Mat render(const geometry::CameraModel& camera, const RenderOptions& options = {}) const;
 
+    /// The backlit grey image of `window` (within camera.imageSize()) alone,
+    /// what a camera sending a region delivers: the part is projected with the
+    /// principal point moved by the window's corner and the blur sees a margin
+    /// of its kernel's reach around the window (or the sensor's edge), so the
+    /// pixels are the whole image's; the noise is drawn for the window alone
+    /// (same σ, same seed). Memory and time go with the window, not the sensor.
+    /// Throws std::invalid_argument when the window is empty or leaves the sensor.
+    cv::Mat render(const geometry::CameraModel& camera, const RenderOptions& options, const cv::Rect& window) const;
+
   private:
     std::vector<model::TriangleMesh> meshes_;
 };

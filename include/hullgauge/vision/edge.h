@@ -17,11 +17,19 @@
 
 namespace hg::vision {
 
-/// A grey frame as the edge search reads it.
+/// A grey frame as the edge search reads it. Positions are sensor pixels;
+/// the frame may be a region of the sensor (docs/camera.md, "Regions per
+/// grab"): its pixel (u, v) is sensor pixel (origin.x + u, origin.y + v).
+/// A read off the sensor is treated as before (the search skips it); a read
+/// on the sensor but outside the delivered region finds no edge — a pixel
+/// the camera did not send is never guessed (docs/inspection.md, "Frames
+/// that are regions").
 struct EdgeImage {
     cv::Mat grey;           ///< CV_8UC1 or CV_16UC1
     double threshold = 0.0; ///< the silhouette's grey level
     bool objectIsDark = true;
+    cv::Point origin{0, 0}; ///< sensor position of grey's pixel (0, 0)
+    cv::Size sensor{};      ///< the sensor's size; empty: origin + grey's size
 };
 
 /// A silhouette edge found along pixel + s·normal.
@@ -62,7 +70,8 @@ EdgeReach findEdgeReach(double bandPx);
 /// object to the background), s in [-band, band]: the threshold crossing
 /// nearest s = 0, refined by the integral of the normalised profile. nullopt
 /// without a clean crossing (contrast under 3 % of full scale, a level within
-/// a quarter of the contrast of the threshold, or the window leaving the frame).
+/// a quarter of the contrast of the threshold, the window leaving the
+/// sensor, or any read on the sensor outside the delivered region).
 std::optional<EdgeFound> findEdge(const EdgeImage& image, const Eigen::Vector2d& pixel, const Eigen::Vector2d& normal,
                                   double bandPx);
 

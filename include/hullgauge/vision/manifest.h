@@ -18,7 +18,8 @@
 // `calibration_uncertainty: {intrinsics_std_dev: {fx, fy, cx, cy, k1, k2, p1,
 // p2, k3}, fixture_rms_mm}` and `image_quality: {noise_grey, contrast_grey}`,
 // the station's, which the sub-voxel deviation's budget and the capability
-// check use. Any other
+// check use; per view `origin: [x, y]`, where a region image lies on the
+// sensor (`image_size` then the sensor's size). Any other
 // key is kept out of the model and logged at warning level (category
 // "vision"), so third-party additions do not stop a run but typos show.
 //
@@ -57,6 +58,11 @@ struct ManifestView {
     /// True when the file gave the view as a 3x4 P (written back as K, R, t).
     bool fromProjectionMatrix = false;
     std::optional<ManifestFixturePose> fixturePose;
+    /// Extension `origin: [x, y]`: the image is a region of the sensor, its
+    /// pixel (u, v) the sensor's (x + u, y + v) (docs/contracts.md §3; the
+    /// daemon's archive of frames grabbed as regions, docs/camera.md "Regions
+    /// per grab"). Needs `image_size`, the sensor's size, which the camera keeps.
+    std::optional<cv::Point> origin{};
 };
 
 struct CaptureManifest {
@@ -87,9 +93,9 @@ void writeManifest(const CaptureManifest& manifest, const std::filesystem::path&
 std::string manifestJson(const CaptureManifest& manifest, const std::filesystem::path& folder);
 
 /// Reads the image of view `index` (8- or 16-bit, grey or colour, converted
-/// to one channel of the same depth). An unreadable image, or one whose size
-/// differs from the view's image_size, throws InputError naming
-/// "views[index].image".
+/// to one channel of the same depth). An unreadable image, one whose size
+/// differs from the view's image_size, or (with `origin`) one that placed at
+/// its origin leaves the image_size, throws InputError naming "views[index].image".
 cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index);
 
 } // namespace hg::vision

@@ -190,6 +190,9 @@ class Camera : public Device {
     /// then on, after one warning; Frame::region always tells what a frame covers.
     /// The change may complete in the background (aravis): grab() waits for it.
     Result<Roi> setRegion(const Roi& requested);
+    /// The configured ROI on the sensor: what a whole frame covers, the most
+    /// any region holds (the daemon's frame pool is sized by it). Inactive or Active.
+    Roi wholeRegion() const { return configuredRegion(); }
 
     /// Maintenance: device features by name (Inactive or Active).
     Result<std::vector<FeatureInfo>> listFeatures();

@@ -33,8 +33,7 @@ cv::Mat FramePool::copy(const cv::Mat& image)
         for (cv::Mat& slot : slots_) {
             if (!isFree(slot)) continue;
             // A slot of another pixel type (the camera's format changed) is made anew.
-            if (slot.empty() || slot.type() != image.type())
-                slot.create(1, static_cast<int>(pixels_), image.type());
+            if (slot.empty() || slot.type() != image.type()) slot.create(1, static_cast<int>(pixels_), image.type());
             // The image's rows at the slot's front: a view sharing the slot's count.
             cv::Mat view = slot.colRange(0, static_cast<int>(pixels)).reshape(1, image.rows);
             image.copyTo(view);

@@ -266,12 +266,15 @@ class EnginePipeline : public ::testing::Test {
         return out;
     }
 
-    static hg::daemon::InspectionOutcome inspect(hg::daemon::Inspector& inspector, const std::vector<cv::Mat>& images)
+    /// Each image at its origin on the sensor (whole frames: (0, 0)).
+    static hg::daemon::InspectionOutcome inspect(hg::daemon::Inspector& inspector, const std::vector<cv::Mat>& images,
+                                                 const std::vector<cv::Point>& origins = {})
     {
         std::string error;
         EXPECT_TRUE(inspector.begin(config_->programs.at(1), error)) << error;
         const auto& poses = config_->programs.at(1).views;
-        for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k], {});
+        for (std::size_t k = 0; k < images.size(); ++k)
+            inspector.addView(k, poses[k], images[k], k < origins.size() ? origins[k] : cv::Point());
         return inspector.finish();
     }
 
@@ -323,15 +326,19 @@ TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
     EXPECT_EQ(drawnFailing, (std::set<std::string>{"step-top", "step-top-back"}));
 }
 
-TEST_F(EnginePipeline, WrongFrameSizeIsAnOutcomeErrorNamingTheView)
+TEST_F(EnginePipeline, AFrameLeavingTheSensorIsAnOutcomeErrorNamingTheView)
 {
+    // A 640x480 frame is a region of the 1280x960 sensor (docs/inspection.md,
+    // "Frames that are regions"); placed at (800, 600) it leaves the sensor.
     auto inspector = hg::daemon::makeEngineInspector(*config_);
     auto images = frames("nominal");
-    cv::resize(images[1], images[1], cv::Size(640, 480));
-    auto outcome = inspect(*inspector, images);
+    images[1] = images[1](cv::Rect(640, 480, 640, 480)).clone();
+    auto outcome = inspect(*inspector, images, {{0, 0}, {800, 600}});
     EXPECT_FALSE(outcome.ok);
     EXPECT_NE(outcome.error.find("view 'v1'"), std::string::npos) << outcome.error;
-    EXPECT_NE(outcome.error.find("640x480"), std::string::npos) << outcome.error;
+    EXPECT_NE(outcome.error.find("640x480 at sensor (800, 600) does not lie on the camera's 1280x960 sensor"),
+              std::string::npos)
+        << outcome.error;
 
     // An aborted cycle leaves nothing behind for the next one.
     std::string error;

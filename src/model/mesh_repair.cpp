@@ -556,11 +556,13 @@ void removeSelfIntersections(TriangleMesh& m, const std::string& name, double pl
 void orientShells(TriangleMesh& m, const std::string& name, MeshRepairReport& report)
 {
     SurfaceMesh sm = toSurfaceMesh(m, name);
-    // Orientation is defined for closed shells only (CGAL's precondition). A
-    // surface still open here, or opened by an earlier step on a garbled file
-    // (docs/fuzzing.md, "Findings, fixed"), is left for the check after the
-    // repair, which names its first open edge.
-    if (!CGAL::is_closed(sm)) return;
+    // Orientation is defined for closed shells only (CGAL's precondition),
+    // and CGAL reads the first shell's orientation without asking whether
+    // there is one. A surface still open here, or opened or emptied by an
+    // earlier step on a garbled file (docs/fuzzing.md, "Findings, fixed"), is
+    // left for the check after the repair, which names the open edge or the
+    // missing triangles.
+    if (sm.number_of_faces() == 0 || !CGAL::is_closed(sm)) return;
     auto component = sm.add_property_map<SurfaceMesh::Face_index, std::size_t>("f:component", 0).first;
     const std::size_t shells = PMP::connected_components(sm, component);
     std::vector<SurfaceMesh::Face_index> first(shells, SurfaceMesh::null_face());

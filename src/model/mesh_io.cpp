@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -247,6 +248,135 @@ void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
     }
 }
 
+/// Bytes of a PLY scalar type; 0 for a name PLY does not have.
+int plyTypeBytes(const std::string& type)
+{
+    static const std::map<std::string, int> bytes{{"char", 1},  {"int8", 1},    {"uchar", 1},  {"uint8", 1},
+                                                  {"short", 2}, {"int16", 2},   {"ushort", 2}, {"uint16", 2},
+                                                  {"int", 4},   {"int32", 4},   {"uint", 4},   {"uint32", 4},
+                                                  {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+    const auto it = bytes.find(type);
+    return it == bytes.end() ? 0 : it->second;
+}
+
+struct PlyProperty {
+    std::string name;
+    std::string countType; ///< a list's; empty for a scalar
+    int countBytes = 0;    ///< 0: a scalar
+    int itemBytes = 0;
+};
+
+struct PlyElement {
+    std::string name;
+    std::uintmax_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+struct PlyLayout {
+    std::string format;
+    std::vector<PlyElement> elements;
+};
+
+/// The header's format and elements; the stream is left at the body. Nothing
+/// when the header is not one this check can follow (the header check and
+/// the reader name those).
+std::optional<PlyLayout> readPlyLayout(std::istream& in)
+{
+    PlyLayout layout;
+    std::string line;
+    while (std::getline(in, line)) {
+        std::istringstream words(line);
+        std::string keyword, a, b, c, d;
+        words >> keyword >> a >> b >> c >> d;
+        if (keyword == "end_header") return layout.elements.empty() ? std::nullopt : std::optional(layout);
+        if (keyword == "format") layout.format = a;
+        if (keyword == "element") {
+            PlyElement e{a, 0, {}};
+            const auto [end, error] = std::from_chars(b.data(), b.data() + b.size(), e.count);
+            if (end == b.data() || error != std::errc()) return std::nullopt;
+            layout.elements.push_back(std::move(e));
+        }
+        if (keyword != "property") continue;
+        PlyProperty p =
+            a == "list" ? PlyProperty{d, b, plyTypeBytes(b), plyTypeBytes(c)} : PlyProperty{b, "", 0, plyTypeBytes(a)};
+        if (layout.elements.empty() || p.itemBytes == 0 || (a == "list" && p.countBytes == 0)) return std::nullopt;
+        layout.elements.back().properties.push_back(std::move(p));
+    }
+    return std::nullopt;
+}
+
+/// A binary list count of `p.countType`, signed where the type is; nothing at the file's end.
+std::optional<long long> readBinaryCount(std::istream& in, const PlyProperty& p, bool bigEndian)
+{
+    unsigned char raw[4] = {};
+    if (!in.read(reinterpret_cast<char*>(raw), p.countBytes)) return std::nullopt;
+    unsigned long long value = 0;
+    for (int i = 0; i < p.countBytes; ++i) value = (value << 8) | raw[bigEndian ? i : p.countBytes - 1 - i];
+    const bool isSigned = p.countType == "char" || p.countType == "int8" || p.countType == "short" ||
+                          p.countType == "int16" || p.countType == "int" || p.countType == "int32";
+    const unsigned long long sign = 1ull << (8 * p.countBytes - 1);
+    if (isSigned && (value & sign)) return static_cast<long long>(value) - static_cast<long long>(sign << 1);
+    return static_cast<long long>(value);
+}
+
+/// An ASCII list count; nothing at the file's end or where it is no whole number (the reader names that).
+std::optional<long long> readAsciiCount(std::istream& in)
+{
+    std::string token;
+    if (!(in >> token)) return std::nullopt;
+    long long value = 0;
+    const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if (error != std::errc() || end != token.data() + token.size()) return std::nullopt;
+    return value;
+}
+
+// PLY lists: CGAL's reader sizes each list by the count the file gives before
+// reading its items, so a count of 543 million in a file of 600 bytes
+// allocated 2 GB, a negative one threw std::length_error (docs/fuzzing.md,
+// "Findings, fixed"). The body is walked first: every list's items must fit
+// in what is left of the file (a byte per item in ASCII, the item's size in
+// binary). A file that ends early is left to the reader, which names it.
+void checkPlyLists(const std::filesystem::path& file, std::uintmax_t size)
+{
+    std::ifstream in(file, std::ios::binary);
+    const std::optional<PlyLayout> layout = readPlyLayout(in);
+    if (!layout) return;
+    const bool ascii = layout->format == "ascii", bigEndian = layout->format == "binary_big_endian";
+    for (const PlyElement& e : layout->elements) {
+        const bool lists = std::any_of(e.properties.begin(), e.properties.end(),
+                                       [](const PlyProperty& p) { return p.countBytes > 0; });
+        if (!lists && !ascii) {
+            std::uintmax_t stride = 0;
+            for (const PlyProperty& p : e.properties) stride += static_cast<std::uintmax_t>(p.itemBytes);
+            in.seekg(static_cast<std::streamoff>(std::min(e.count * stride, size)), std::ios::cur);
+            continue;
+        }
+        for (std::uintmax_t item = 0; item < e.count; ++item)
+            for (const PlyProperty& p : e.properties) {
+                std::string token;
+                if (p.countBytes == 0) {
+                    if (!(ascii ? static_cast<bool>(in >> token) : static_cast<bool>(in.ignore(p.itemBytes)))) return;
+                    continue;
+                }
+                const std::optional<long long> count = ascii ? readAsciiCount(in) : readBinaryCount(in, p, bigEndian);
+                if (!count) return;
+                const std::streamoff at = in.tellg();
+                const std::uintmax_t left = at < 0 ? 0 : size - std::min<std::uintmax_t>(size, at);
+                const std::uintmax_t least = ascii ? 1 : static_cast<std::uintmax_t>(p.itemBytes);
+                if (*count < 0 || static_cast<std::uintmax_t>(*count) > left / least)
+                    throw InputError(file.string(), fmt::format("{} {}", printable(e.name), item + 1),
+                                     fmt::format("list '{}' holds {} items: {}", printable(p.name), *count,
+                                                 *count < 0 ? std::string("a negative number")
+                                                            : fmt::format("more than fit in the {} bytes left of "
+                                                                          "the file",
+                                                                          left)));
+                if (!ascii && !in.ignore(static_cast<std::streamsize>(*count) * p.itemBytes)) return;
+                for (long long k = 0; ascii && k < *count; ++k)
+                    if (!(in >> token)) return;
+            }
+    }
+}
+
 } // namespace
 
 std::string MeshCheck::problem() const
@@ -417,7 +547,10 @@ TriangleMesh readSoup(const std::filesystem::path& file)
     if (ec) throw InputError(name, "mesh", "cannot read the file: " + ec.message());
     if (size == 0) throw InputError(name, "mesh", "the file is empty");
     if (ext == ".stl") checkStlSize(file, size);
-    if (ext == ".ply") checkPlyHeader(file, size);
+    if (ext == ".ply") {
+        checkPlyHeader(file, size);
+        checkPlyLists(file, size);
+    }
 
     std::vector<Point> points;
     std::vector<Polygon> polygons;

@@ -273,6 +273,41 @@ TEST(MeshIo, PlyElementCountThatIsNegativeOrBeyondTheFileIsNamedAtItsLine)
     EXPECT_NE(std::string(e.what()).find("element 'vertex': count '4000000000'"), std::string::npos) << e.what();
 }
 
+TEST(MeshIo, PlyListLongerThanTheFileOrNegativeIsNamedAtItsItem)
+{
+    // A tetrahedron; its second face's list count is the case (docs/fuzzing.md,
+    // "Findings, fixed": CGAL's reader sized a vector with it).
+    using namespace std::string_literals;
+    hgtest::TempDir dir;
+    const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                              "property float z\nelement face 4\nproperty list char int vertex_indices\nend_header\n"
+                              "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n";
+    const std::string rest = "\n3 0 3 2\n3 1 2 3\n";
+    // The well-formed file loads: four faces, volume 1/6.
+    const TriangleMesh tetra = loadMesh(hgtest::writeFile(dir / "t.ply", ascii + "3 0 1 3" + rest));
+    EXPECT_EQ(tetra.triangles.size(), 4u);
+    EXPECT_NEAR(tetra.signedVolume(), 1.0 / 6.0, 1e-12);
+    InputError e = loadError(hgtest::writeFile(dir / "long.ply", ascii + "120 0 1 3" + rest));
+    EXPECT_EQ(e.field(), "face 2");
+    EXPECT_NE(std::string(e.what()).find("list 'vertex_indices' holds 120 items: more than fit in the"),
+              std::string::npos)
+        << e.what();
+    e = loadError(hgtest::writeFile(dir / "negative.ply", ascii + "-3 0 1 3" + rest));
+    EXPECT_EQ(e.field(), "face 2");
+    EXPECT_NE(std::string(e.what()).find("holds -3 items: a negative number"), std::string::npos) << e.what();
+    // Binary, little-endian: an int32 count of 2^31 - 1 after three faces.
+    std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                         "property float z\nelement face 4\nproperty list int32 int vertex_indices\nend_header\n";
+    binary += std::string(4 * 12, '\0');
+    for (int f = 0; f < 3; ++f) binary += "\x03\0\0\0"s + std::string(12, '\0');
+    binary += "\xff\xff\xff\x7f"s + std::string(12, '\0');
+    e = loadError(hgtest::writeFile(dir / "b.ply", binary));
+    EXPECT_EQ(e.field(), "face 4");
+    EXPECT_NE(std::string(e.what()).find("holds 2147483647 items: more than fit in the 12 bytes left"),
+              std::string::npos)
+        << e.what();
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

@@ -277,19 +277,21 @@ struct PlyLayout {
     std::vector<PlyElement> elements;
 };
 
-/// The header's format and elements; the stream is left at the body. Nothing
-/// when the header is not one this check can follow (the header check and
-/// the reader name those).
+/// The header's format and elements as CGAL's reader takes them; the stream
+/// is left at the body. Nothing when the header is not one this check can
+/// follow (a type CGAL skips; the header check and the reader name the rest).
 std::optional<PlyLayout> readPlyLayout(std::istream& in)
 {
     PlyLayout layout;
     std::string line;
-    while (std::getline(in, line)) {
+    // As CGAL's reader: the format on the second line only, any other `format` line ignored.
+    for (int number = 1; std::getline(in, line); ++number) {
         std::istringstream words(line);
         std::string keyword, a, b, c, d;
         words >> keyword >> a >> b >> c >> d;
+        if (number == 2) layout.format = a;
+        if (number <= 2) continue;
         if (keyword == "end_header") return layout.elements.empty() ? std::nullopt : std::optional(layout);
-        if (keyword == "format") layout.format = a;
         if (keyword == "element") {
             PlyElement e{a, 0, {}};
             const auto [end, error] = std::from_chars(b.data(), b.data() + b.size(), e.count);

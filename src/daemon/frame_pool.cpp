@@ -2,6 +2,7 @@
 
 #include "hullgauge/common/log.h"
 
+#include <atomic>
 #include <opencv2/core.hpp>
 
 namespace hg::daemon {
@@ -11,7 +12,7 @@ namespace {
 /// frame released on the image job's thread is seen free here with its pixels done.
 bool isFree(const cv::Mat& slot)
 {
-    return slot.empty() || CV_XADD(&slot.u->refcount, 0) == 1;
+    return slot.empty() || std::atomic_ref<int>(slot.u->refcount).load(std::memory_order_acquire) == 1;
 }
 
 } // namespace

@@ -279,7 +279,7 @@ struct PlyLayout {
 
 /// The header's format and elements as CGAL's reader takes them; the stream
 /// is left at the body. Nothing when the header is not one this check can
-/// follow (a type CGAL skips; the header check and the reader name the rest).
+/// follow (the header check and the reader name those).
 std::optional<PlyLayout> readPlyLayout(std::istream& in)
 {
     PlyLayout layout;
@@ -301,7 +301,9 @@ std::optional<PlyLayout> readPlyLayout(std::istream& in)
         if (keyword != "property") continue;
         PlyProperty p =
             a == "list" ? PlyProperty{d, b, plyTypeBytes(b), plyTypeBytes(c)} : PlyProperty{b, "", 0, plyTypeBytes(a)};
-        if (layout.elements.empty() || p.itemBytes == 0 || (a == "list" && p.countBytes == 0)) return std::nullopt;
+        if (layout.elements.empty()) return std::nullopt;
+        // A type PLY does not have: CGAL's reader leaves the property out of the element, and so does the walk.
+        if (p.itemBytes == 0 || (a == "list" && p.countBytes == 0)) continue;
         layout.elements.back().properties.push_back(std::move(p));
     }
     return std::nullopt;

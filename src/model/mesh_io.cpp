@@ -329,7 +329,8 @@ std::optional<long long> readAsciiCount(std::istream& in)
     std::string token;
     if (!(in >> token)) return std::nullopt;
     long long value = 0;
-    const auto [end, error] = std::from_chars(token.data(), token.data() + token.size(), value);
+    const std::size_t sign = !token.empty() && token[0] == '+' ? 1 : 0; // as `>>` reads it
+    const auto [end, error] = std::from_chars(token.data() + sign, token.data() + token.size(), value);
     if (error != std::errc() || end != token.data() + token.size()) return std::nullopt;
     return value;
 }
@@ -363,7 +364,12 @@ void checkPlyLists(const std::filesystem::path& file, std::uintmax_t size)
                     continue;
                 }
                 const std::optional<long long> count = ascii ? readAsciiCount(in) : readBinaryCount(in, p, bigEndian);
-                if (!count) return;
+                // CGAL's reader sizes the list with a count it failed to read, undefined (docs/fuzzing.md).
+                if (!count)
+                    throw InputError(file.string(), fmt::format("{} {}", printable(e.name), item + 1),
+                                     fmt::format("list '{}': no count where one is due (the file ends or holds "
+                                                 "something else there)",
+                                                 printable(p.name)));
                 const std::streamoff at = in.tellg();
                 const std::uintmax_t left = at < 0 ? 0 : size - std::min<std::uintmax_t>(size, at);
                 const std::uintmax_t least = ascii ? 1 : static_cast<std::uintmax_t>(p.itemBytes);

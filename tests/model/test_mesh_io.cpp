@@ -297,6 +297,10 @@ TEST(MeshIo, PlyListLongerThanTheFileOrNegativeIsNamedAtItsItem)
     EXPECT_NE(std::string(e.what()).find("holds -3 items: a negative number"), std::string::npos) << e.what();
     // A property of a type PLY does not have is left out by CGAL's reader and
     // by the check alike (a fuzzed header's `property redat y` had stopped the check).
+    // A list at the file's end: the reader would size it with a count it failed to read.
+    e = loadError(hgtest::writeFile(dir / "short.ply", ascii + "3 0 1 3\n3 0 3 2\n"));
+    EXPECT_EQ(e.field(), "face 4");
+    EXPECT_NE(std::string(e.what()).find("no count where one is due"), std::string::npos) << e.what();
     std::string unknown = ascii;
     unknown.insert(unknown.find("property list"), "property flot w\n");
     e = loadError(hgtest::writeFile(dir / "unknown.ply", unknown + "120 0 1 3" + rest));

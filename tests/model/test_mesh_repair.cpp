@@ -694,9 +694,10 @@ const std::uint8_t kObjDegeneratePolygon[] = {
     0x66, 0x20, 0x2d, 0x33, 0x20, 0x2d, 0x32, 0x20, 0x2d, 0x31, 0x0a,
 };
 
-// An OBJ whose polygon, not planar, crosses itself seen along its normal (found by
-// the fuzz runs: CGAL's triangulation of its projection met a null face).
-const std::uint8_t kObjCrossingPolygon[] = {
+// A garbled binary PLY whose surface is open when the shells are oriented (found
+// by the fuzz runs: CGAL's orientation requires a closed surface, its
+// precondition threw through the reader).
+const std::uint8_t kPlyOpenWhenOriented[] = {
     0x70, 0x6c, 0x79, 0x0a, 0x66, 0x6f, 0x72, 0x6d, 0x61, 0x74, 0x20, 0x62, 0x69, 0x6e, 0x61, 0x72, 0x79, 0x5f, 0x6c,
     0x69, 0x74, 0x74, 0x6c, 0x65, 0x5f, 0x65, 0x6e, 0x64, 0x69, 0x61, 0x6e, 0x20, 0x31, 0x2e, 0x30, 0x0a, 0x63, 0x6f,
     0x6d, 0x6d, 0x65, 0x6e, 0x74, 0x20, 0x73, 0x74, 0x65, 0x70, 0x70, 0x65, 0x64, 0x20, 0x62, 0x6c, 0x6f, 0x63, 0x6b,
@@ -731,10 +732,9 @@ const std::uint8_t kObjCrossingPolygon[] = {
     0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
 };
 
-// A garbled binary PLY whose surface is open when the shells are oriented (found
-// by the fuzz runs: CGAL's orientation requires a closed surface, its
-// precondition threw through the reader).
-const std::uint8_t kPlyRetriangulatedOutline[] = {
+// An OBJ whose polygon, not planar, crosses itself seen along its normal (found by
+// the fuzz runs: CGAL's triangulation of its projection met a null face).
+const std::uint8_t kObjCrossingPolygon[] = {
     0x23, 0x20, 0x73, 0x74, 0x65, 0x70, 0x70, 0x65, 0x64, 0x20, 0x62, 0x6c, 0x6f, 0x63, 0x6b, 0x0a, 0x76, 0x20, 0x2d,
     0x31, 0x35, 0x20, 0x2d, 0x32, 0x30, 0x20, 0x30, 0x29, 0x76, 0x20, 0x33, 0x30, 0x20, 0x2d, 0x32, 0x30, 0x20, 0x30,
     0x0a, 0x76, 0x20, 0x33, 0x30, 0x20, 0x2d, 0x32, 0x30, 0x20, 0x31, 0x35, 0x0a, 0x76, 0x20, 0x2d, 0x33, 0x30, 0x20,
@@ -805,9 +805,7 @@ const std::uint8_t kPlyNothingToOrient[] = {
 void expectReadOrNamed(const std::uint8_t* bytes, std::size_t size, const std::string& name)
 {
     hgtest::TempDir dir;
-    const auto file = dir / name;
-    std::ofstream(file, std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes), static_cast<std::streamsize>(size));
+    const auto file = hgtest::writeFile(dir / name, std::string(reinterpret_cast<const char*>(bytes), size));
     try {
         (void)importMesh(file);
     } catch (const InputError& e) {
@@ -837,15 +835,15 @@ TEST(MeshRepairFuzzed, APolygonCrossingItselfAlongItsNormalIsFanned)
 
 TEST(MeshRepairFuzzed, AnOpenSurfaceIsNotOrientedButNamedByTheCheck)
 {
-    expectReadOrNamed(kPlyRetriangulatedOutline, sizeof kPlyRetriangulatedOutline, "outline.ply");
+    expectReadOrNamed(kPlyOpenWhenOriented, sizeof kPlyOpenWhenOriented, "open-when-oriented.ply");
 }
 
 TEST(MeshRepairFuzzed, ANegativeListLengthIsRefusedNamingTheFile)
 {
     hgtest::TempDir dir;
-    const auto file = dir / "negative-list.ply";
-    std::ofstream(file, std::ios::binary)
-        .write(reinterpret_cast<const char*>(kPlyNegativeListLength), sizeof kPlyNegativeListLength);
+    const auto file =
+        hgtest::writeFile(dir / "negative-list.ply", std::string(reinterpret_cast<const char*>(kPlyNegativeListLength),
+                                                                 sizeof kPlyNegativeListLength));
     try {
         (void)importMesh(file);
         FAIL() << "a PLY with a negative list length was read";

@@ -267,18 +267,6 @@ Eigen::Matrix3d ConfigNode::asMatrix3() const
     return m;
 }
 
-Eigen::Matrix<double, 3, 4> ConfigNode::asMatrix34() const
-{
-    if (!node_.IsSequence() || node_.size() != 3) fail("expected a 3x4 matrix (three rows of four numbers)");
-    Eigen::Matrix<double, 3, 4> m;
-    auto rows = items();
-    for (int r = 0; r < 3; ++r) {
-        auto row = rows[r].asDoubles(4);
-        for (int c = 0; c < 4; ++c) m(r, c) = row[c];
-    }
-    return m;
-}
-
 void ConfigNode::allowOnlyKeys(std::initializer_list<std::string_view> allowed) const
 {
     for (const auto& key : keys()) {

@@ -192,11 +192,6 @@ Ray CameraModel::backProject(const Vec2& pixel) const
     return {centre_, (cameraFromPart_.R.transpose() * dirCam).normalized()};
 }
 
-Eigen::Matrix<double, 3, 4> CameraModel::projectionMatrix() const
-{
-    return intrinsics_.K * cameraFromPart_.matrix();
-}
-
 Vec2 CameraModel::millimetresPerPixelAt(double depthMm) const
 {
     return {depthMm / intrinsics_.K(0, 0), depthMm / intrinsics_.K(1, 1)};

@@ -199,24 +199,27 @@ std::string printable(const std::string& text)
     return out;
 }
 
-// PLY: CGAL's reader crashes or hangs instead of failing on three kinds of
+// PLY: CGAL's reader crashes or hangs instead of failing on four kinds of
 // header: a `property` line before any `element` line (it files the property
 // under the last element declared), a vertex coordinate x, y or z that is not a
-// float or double (it reads the coordinate as one or the other), and an
-// element count that is negative (read as 2^64 - n) or beyond the file (an
-// element without properties is then read for ever). The header is read first
-// so such a file is named at its line. Every item of an element takes at least
-// a byte, so a count above the file's size cannot be right.
+// float or double (it reads the coordinate as one or the other), an element
+// count that is negative (read as 2^64 - n) or beyond the file (an element
+// without properties is then read for ever), and a header without
+// `end_header`. The header is read first so such a file is named at its line.
+// Every item of an element takes at least a byte, so a count above the file's
+// size cannot be right.
 void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
 {
     std::ifstream in(file, std::ios::binary);
     std::string line;
     std::optional<std::string> element;
+    int number = 1;
     // Lines 1 and 2 are the signature and the format, which the reader checks itself.
-    for (int number = 1; std::getline(in, line); ++number) {
+    for (; std::getline(in, line); ++number) {
         std::istringstream words(line);
         std::string keyword, type, name;
         words >> keyword >> type >> name;
+        if (number == 1 && keyword != "ply") return; // not a PLY file: the reader says so
         if (number <= 2) continue;
         if (keyword == "end_header") return;
         if (keyword == "element") {
@@ -246,6 +249,11 @@ void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
                                          printable(name), list ? "a list of " : "", printable(type)),
                              number);
     }
+    // CGAL's reader takes a header that runs to the file's end as complete and
+    // then reads the body from nothing: its list counts are never read, and it
+    // sizes the lists with them (docs/fuzzing.md).
+    throw InputError(file.string(), "header", "no 'end_header' line: the header runs to the end of the file",
+                     number - 1);
 }
 
 /// Bytes of a PLY scalar type; 0 for a name PLY does not have.

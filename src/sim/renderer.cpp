@@ -331,11 +331,6 @@ SilhouetteRenderer::SilhouetteRenderer(std::vector<model::TriangleMesh> meshes) 
 {
 }
 
-void SilhouetteRenderer::addMesh(model::TriangleMesh mesh)
-{
-    meshes_.push_back(std::move(mesh));
-}
-
 cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const RenderOptions& options) const
 {
     options.validate();

@@ -273,6 +273,26 @@ TEST(MeshIo, PlyElementCountThatIsNegativeOrBeyondTheFileIsNamedAtItsLine)
     EXPECT_NE(std::string(e.what()).find("element 'vertex': count '4000000000'"), std::string::npos) << e.what();
 }
 
+// Found by the PLY harness (docs/fuzzing.md): a header without `end_header`
+// is complete to CGAL's reader, which then sizes each face's list with a count
+// it never read (a timeout of an open-ended run).
+TEST(MeshIo, PlyHeaderWithoutEndHeaderIsNamedAtItsLastLine)
+{
+    hgtest::TempDir dir;
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list int32 int vertex_indices\n";
+    const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    // The same file with its `end_header` reaches the reader (one triangle: not a volume).
+    EXPECT_EQ(loadError(hgtest::writeFile(dir / "fine.ply", header + "end_header\n" + body)).field(), "mesh");
+    // Without it the header runs over the body's four lines to line 12.
+    const InputError e = loadError(hgtest::writeFile(dir / "open.ply", header + body));
+    EXPECT_EQ(e.field(), "header");
+    EXPECT_EQ(e.line(), 12);
+    EXPECT_NE(std::string(e.what()).find("no 'end_header' line"), std::string::npos) << e.what();
+    // A file that is no PLY at all is left to the reader, which says so.
+    EXPECT_EQ(loadError(hgtest::writeFile(dir / "stl.ply", "solid x\nendsolid x\n")).field(), "mesh");
+}
+
 TEST(MeshIo, PlyListLongerThanTheFileOrNegativeIsNamedAtItsItem)
 {
     // A tetrahedron; its second face's list count is the case (docs/fuzzing.md,

@@ -63,8 +63,6 @@ class ConfigNode {
     Eigen::Vector3d asVector3() const;
     /// A 3x3 matrix written as three rows of three numbers.
     Eigen::Matrix3d asMatrix3() const;
-    /// A 3x4 matrix written as three rows of four numbers.
-    Eigen::Matrix<double, 3, 4> asMatrix34() const;
 
     /// Throws InputError if the map holds a key not in `allowed` (catches typos
     /// such as `tolerence_mm`, which would otherwise be silently ignored).

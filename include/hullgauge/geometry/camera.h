@@ -80,9 +80,6 @@ class CameraModel {
     /// The line of sight through a pixel, in the part frame.
     Ray backProject(const Vec2& pixel) const;
 
-    /// 3x4 projection matrix K [R | t] (ignores distortion).
-    Eigen::Matrix<double, 3, 4> projectionMatrix() const;
-
     /// Pixel footprint at depth z along the optical axis in mm per pixel
     /// (horizontal, vertical) — the quantity of eq. 4.4.4 (view range magnification).
     Vec2 millimetresPerPixelAt(double depthMm) const;

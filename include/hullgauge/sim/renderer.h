@@ -66,7 +66,6 @@ class SilhouetteRenderer {
     SilhouetteRenderer() = default;
     explicit SilhouetteRenderer(std::vector<model::TriangleMesh> meshes);
 
-    void addMesh(model::TriangleMesh mesh);
     const std::vector<model::TriangleMesh>& meshes() const { return meshes_; }
 
     /// CV_32FC1 image of camera.imageSize(): the fraction of each pixel's area

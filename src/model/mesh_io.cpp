@@ -31,6 +31,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "ply_check.h"
 
 namespace hg::model {
 namespace {
@@ -188,211 +189,6 @@ void checkStlSize(const std::filesystem::path& file, std::uintmax_t size)
             fmt::format("file ends after {} of 50 bytes (the header announces {} facets)", rest, announced));
     throw InputError(name, fmt::format("facet {}", complete + 1),
                      fmt::format("file ends after {} of the {} facets the header announces", complete, announced));
-}
-
-/// `text` as an error message can show it: bytes that are not printable ASCII as \xNN.
-std::string printable(const std::string& text)
-{
-    std::string out;
-    for (unsigned char c : text)
-        out += c >= 0x20 && c < 0x7f ? std::string(1, static_cast<char>(c)) : fmt::format("\\x{:02x}", c);
-    return out;
-}
-
-// PLY: CGAL's reader crashes or hangs instead of failing on four kinds of
-// header: a `property` line before any `element` line (it files the property
-// under the last element declared), a vertex coordinate x, y or z that is not a
-// float or double (it reads the coordinate as one or the other), an element
-// count that is negative (read as 2^64 - n) or beyond the file (an element
-// without properties is then read for ever), and a header without
-// `end_header`. The header is read first so such a file is named at its line.
-// Every item of an element takes at least a byte, so a count above the file's
-// size cannot be right.
-void checkPlyHeader(const std::filesystem::path& file, std::uintmax_t size)
-{
-    std::ifstream in(file, std::ios::binary);
-    std::string line;
-    std::optional<std::string> element;
-    int number = 1;
-    // Lines 1 and 2 are the signature and the format, which the reader checks itself.
-    for (; std::getline(in, line); ++number) {
-        std::istringstream words(line);
-        std::string keyword, type, name;
-        words >> keyword >> type >> name;
-        if (number == 1 && keyword != "ply") return; // not a PLY file: the reader says so
-        if (number <= 2) continue;
-        if (keyword == "end_header") return;
-        if (keyword == "element") {
-            element = type;
-            std::uintmax_t count = 0;
-            const auto [end, error] = std::from_chars(name.data(), name.data() + name.size(), count);
-            if (end == name.data() || error != std::errc() || count > size)
-                throw InputError(file.string(), "header",
-                                 fmt::format("element '{}': count '{}' is not a whole number of at most {} (the "
-                                             "file's size in bytes)",
-                                             printable(type), printable(name), size),
-                                 number);
-        }
-        if (keyword != "property") continue;
-        if (!element)
-            throw InputError(file.string(), "header",
-                             "'property' before any 'element' (a property belongs to the element declared above it)",
-                             number);
-        // `property list COUNT_TYPE ITEM_TYPE NAME`: the name is the fifth word, and a list is no coordinate.
-        const bool list = type == "list";
-        if (list) words >> type >> name;
-        const bool coordinate = name == "x" || name == "y" || name == "z";
-        const bool real = !list && (type == "float" || type == "float32" || type == "double" || type == "float64");
-        if ((*element == "vertex" || *element == "vertices") && coordinate && !real)
-            throw InputError(file.string(), "header",
-                             fmt::format("vertex coordinate '{}' is {}{} (a coordinate is a float or a double)",
-                                         printable(name), list ? "a list of " : "", printable(type)),
-                             number);
-    }
-    // CGAL's reader takes a header that runs to the file's end as complete and
-    // then reads the body from nothing: its list counts are never read, and it
-    // sizes the lists with them (docs/fuzzing.md).
-    throw InputError(file.string(), "header", "no 'end_header' line: the header runs to the end of the file",
-                     number - 1);
-}
-
-/// Bytes of a PLY scalar type; 0 for a name PLY does not have.
-int plyTypeBytes(const std::string& type)
-{
-    static const std::map<std::string, int> bytes{{"char", 1},  {"int8", 1},    {"uchar", 1},  {"uint8", 1},
-                                                  {"short", 2}, {"int16", 2},   {"ushort", 2}, {"uint16", 2},
-                                                  {"int", 4},   {"int32", 4},   {"uint", 4},   {"uint32", 4},
-                                                  {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
-    const auto it = bytes.find(type);
-    return it == bytes.end() ? 0 : it->second;
-}
-
-struct PlyProperty {
-    std::string name;
-    std::string countType; ///< a list's; empty for a scalar
-    int countBytes = 0;    ///< 0: a scalar
-    int itemBytes = 0;
-};
-
-struct PlyElement {
-    std::string name;
-    std::uintmax_t count = 0;
-    std::vector<PlyProperty> properties;
-};
-
-struct PlyLayout {
-    std::string format;
-    std::vector<PlyElement> elements;
-};
-
-/// The header's format and elements as CGAL's reader takes them; the stream
-/// is left at the body. Nothing when the header is not one this check can
-/// follow (the header check and the reader name those).
-std::optional<PlyLayout> readPlyLayout(std::istream& in)
-{
-    PlyLayout layout;
-    std::string line;
-    // As CGAL's reader: the format on the second line only, any other `format` line ignored.
-    for (int number = 1; std::getline(in, line); ++number) {
-        std::istringstream words(line);
-        std::string keyword, a, b, c, d;
-        words >> keyword >> a >> b >> c >> d;
-        if (number == 2) layout.format = a;
-        if (number <= 2) continue;
-        if (keyword == "end_header") return layout.elements.empty() ? std::nullopt : std::optional(layout);
-        if (keyword == "element") {
-            PlyElement e{a, 0, {}};
-            const auto [end, error] = std::from_chars(b.data(), b.data() + b.size(), e.count);
-            if (end == b.data() || error != std::errc()) return std::nullopt;
-            layout.elements.push_back(std::move(e));
-        }
-        if (keyword != "property") continue;
-        PlyProperty p =
-            a == "list" ? PlyProperty{d, b, plyTypeBytes(b), plyTypeBytes(c)} : PlyProperty{b, "", 0, plyTypeBytes(a)};
-        if (layout.elements.empty()) return std::nullopt;
-        // A type PLY does not have: CGAL's reader leaves the property out of the element, and so does the walk.
-        if (p.itemBytes == 0 || (a == "list" && p.countBytes == 0)) continue;
-        layout.elements.back().properties.push_back(std::move(p));
-    }
-    return std::nullopt;
-}
-
-/// A binary list count of `p.countType`, signed where the type is; nothing at the file's end.
-std::optional<long long> readBinaryCount(std::istream& in, const PlyProperty& p, bool bigEndian)
-{
-    unsigned char raw[4] = {};
-    if (!in.read(reinterpret_cast<char*>(raw), p.countBytes)) return std::nullopt;
-    unsigned long long value = 0;
-    for (int i = 0; i < p.countBytes; ++i) value = (value << 8) | raw[bigEndian ? i : p.countBytes - 1 - i];
-    const bool isSigned = p.countType == "char" || p.countType == "int8" || p.countType == "short" ||
-                          p.countType == "int16" || p.countType == "int" || p.countType == "int32";
-    const unsigned long long sign = 1ull << (8 * p.countBytes - 1);
-    if (isSigned && (value & sign)) return static_cast<long long>(value) - static_cast<long long>(sign << 1);
-    return static_cast<long long>(value);
-}
-
-/// An ASCII list count; nothing at the file's end or where it is no whole number (the reader names that).
-std::optional<long long> readAsciiCount(std::istream& in)
-{
-    std::string token;
-    if (!(in >> token)) return std::nullopt;
-    long long value = 0;
-    const std::size_t sign = !token.empty() && token[0] == '+' ? 1 : 0; // as `>>` reads it
-    const auto [end, error] = std::from_chars(token.data() + sign, token.data() + token.size(), value);
-    if (error != std::errc() || end != token.data() + token.size()) return std::nullopt;
-    return value;
-}
-
-// PLY lists: CGAL's reader sizes each list by the count the file gives before
-// reading its items, so a count of 543 million in a file of 600 bytes
-// allocated 2 GB, a negative one threw std::length_error (docs/fuzzing.md,
-// "Findings, fixed"). The body is walked first: every list's items must fit
-// in what is left of the file (a byte per item in ASCII, the item's size in
-// binary). A file that ends early is left to the reader, which names it.
-void checkPlyLists(const std::filesystem::path& file, std::uintmax_t size)
-{
-    std::ifstream in(file, std::ios::binary);
-    const std::optional<PlyLayout> layout = readPlyLayout(in);
-    if (!layout) return;
-    const bool ascii = layout->format == "ascii", bigEndian = layout->format == "binary_big_endian";
-    for (const PlyElement& e : layout->elements) {
-        const bool lists = std::any_of(e.properties.begin(), e.properties.end(),
-                                       [](const PlyProperty& p) { return p.countBytes > 0; });
-        if (!lists && !ascii) {
-            std::uintmax_t stride = 0;
-            for (const PlyProperty& p : e.properties) stride += static_cast<std::uintmax_t>(p.itemBytes);
-            in.seekg(static_cast<std::streamoff>(std::min(e.count * stride, size)), std::ios::cur);
-            continue;
-        }
-        for (std::uintmax_t item = 0; item < e.count; ++item)
-            for (const PlyProperty& p : e.properties) {
-                std::string token;
-                if (p.countBytes == 0) {
-                    if (!(ascii ? static_cast<bool>(in >> token) : static_cast<bool>(in.ignore(p.itemBytes)))) return;
-                    continue;
-                }
-                const std::optional<long long> count = ascii ? readAsciiCount(in) : readBinaryCount(in, p, bigEndian);
-                // CGAL's reader sizes the list with a count it failed to read, undefined (docs/fuzzing.md).
-                if (!count)
-                    throw InputError(file.string(), fmt::format("{} {}", printable(e.name), item + 1),
-                                     fmt::format("list '{}': no count where one is due (the file ends or holds "
-                                                 "something else there)",
-                                                 printable(p.name)));
-                const std::streamoff at = in.tellg();
-                const std::uintmax_t left = at < 0 ? 0 : size - std::min<std::uintmax_t>(size, at);
-                const std::uintmax_t least = ascii ? 1 : static_cast<std::uintmax_t>(p.itemBytes);
-                if (*count < 0 || static_cast<std::uintmax_t>(*count) > left / least)
-                    throw InputError(file.string(), fmt::format("{} {}", printable(e.name), item + 1),
-                                     fmt::format("list '{}' holds {} items: {}", printable(p.name), *count,
-                                                 *count < 0 ? std::string("a negative number")
-                                                            : fmt::format("more than fit in the {} bytes left of "
-                                                                          "the file",
-                                                                          left)));
-                if (!ascii && !in.ignore(static_cast<std::streamsize>(*count) * p.itemBytes)) return;
-                for (long long k = 0; ascii && k < *count; ++k)
-                    if (!(in >> token)) return;
-            }
-    }
 }
 
 } // namespace
@@ -566,8 +362,7 @@ TriangleMesh readSoup(const std::filesystem::path& file)
     if (size == 0) throw InputError(name, "mesh", "the file is empty");
     if (ext == ".stl") checkStlSize(file, size);
     if (ext == ".ply") {
-        checkPlyHeader(file, size);
-        checkPlyLists(file, size);
+        detail::checkPly(file, size);
     }
 
     std::vector<Point> points;

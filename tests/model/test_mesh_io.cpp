@@ -343,6 +343,71 @@ TEST(MeshIo, PlyListLongerThanTheFileOrNegativeIsNamedAtItsItem)
     EXPECT_EQ(e.field(), "face 4");
 }
 
+// Found by the PLY harness (docs/fuzzing.md): CGAL's reader reads an ASCII
+// value with `>>`, so it stops inside `2!6`, fails on a number its type
+// cannot hold and wraps `-1` into an unsigned count; once its stream has
+// failed, the next list count is one it never read (out of memory). Every
+// ASCII value must be a whole number of its type.
+TEST(MeshIo, PlyAsciiValueTheReaderCannotReadWholeIsNamedAtItsItem)
+{
+    hgtest::TempDir dir;
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 4\nproperty list uint int vertex_indices\nend_header\n";
+    const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n";
+    const auto load = [&](const std::string& name, const std::string& body) {
+        return hgtest::writeFile(dir / name, header + body);
+    };
+    // Written as exporters write numbers (a sign, an exponent, a leading dot) it loads: volume 1/6.
+    const TriangleMesh tetra = loadMesh(
+        load("t.ply", "+0 0.0 -0\n1e0 0 .0\n0 1 0\n0 0 1.000\n" + std::string("3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")));
+    EXPECT_NEAR(tetra.signedVolume(), 1.0 / 6.0, 1e-12);
+    InputError e = loadError(load("stop.ply", vertices + "3 0 2 1\n3 0 1 3\n3 0 3 2!6\n3 1 2 3\n"));
+    EXPECT_EQ(e.field(), "face 3");
+    EXPECT_NE(std::string(e.what()).find("property 'vertex_indices': '2!6' is not a number of type int"),
+              std::string::npos)
+        << e.what();
+    e = loadError(load("wide.ply", vertices + "3 0 2 1\n3 0 1 3000000000\n3 0 3 2\n3 1 2 3\n"));
+    EXPECT_EQ(e.field(), "face 2");
+    e = loadError(load("wrap.ply", vertices + "3 0 2 1\n-1 0 1 3\n3 0 3 2\n3 1 2 3\n"));
+    EXPECT_EQ(e.field(), "face 2");
+    EXPECT_NE(std::string(e.what()).find("no count where one is due ('-1' is not a whole number of type uint)"),
+              std::string::npos)
+        << e.what();
+    e = loadError(load("coordinate.ply", "0 0 0\n1 0 0\n0 1 nan\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"));
+    EXPECT_EQ(e.field(), "vertex 3");
+    EXPECT_NE(std::string(e.what()).find("property 'z': 'nan' is not a number of type float"), std::string::npos)
+        << e.what();
+}
+
+// A body that ends before the items its header announces is named at the
+// item where it ends, ASCII and binary: the reader would go on reading from
+// a failed stream (docs/fuzzing.md).
+TEST(MeshIo, PlyBodyThatEndsEarlyIsNamedAtItsItem)
+{
+    using namespace std::string_literals;
+    hgtest::TempDir dir;
+    const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                              "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n";
+    InputError e = loadError(hgtest::writeFile(dir / "a.ply", ascii + "0 0 0\n1 0 0\n0 1 0\n0 0\n"));
+    EXPECT_EQ(e.field(), "vertex 4");
+    EXPECT_NE(std::string(e.what()).find("the file ends at property 'z' (the header announces 4 of element "
+                                         "'vertex')"),
+              std::string::npos)
+        << e.what();
+    // Binary: 4 vertices of 12 bytes announced, 2 and a half there.
+    const std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 1\n"
+                               "property list uchar int vertex_indices\nend_header\n";
+    e = loadError(hgtest::writeFile(dir / "b.ply", binary + std::string(30, '\0')));
+    EXPECT_EQ(e.field(), "vertex 3");
+    // All vertices there, the face's three indices of 4 bytes cut after 8.
+    e = loadError(hgtest::writeFile(dir / "c.ply", binary + std::string(48, '\0') + "\x03"s + std::string(8, '\0')));
+    EXPECT_EQ(e.field(), "face 1");
+    EXPECT_NE(std::string(e.what()).find("list 'vertex_indices' holds 3 items: more than fit in the 8 bytes left"),
+              std::string::npos)
+        << e.what();
+}
+
 TEST(MeshCheckTest, PrimitivesAreClosedAndOutward)
 {
     for (const TriangleMesh& m : {makeBox(Vector3d::Zero(), Vector3d(1, 2, 3)), makeSphere(Vector3d(1, 1, 1), 2.0),

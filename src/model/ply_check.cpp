@@ -267,8 +267,13 @@ class PlyWalk {
         if (ascii_) {
             std::string token;
             if (!(in_ >> token)) missing("the file ends");
+            // A count of a char type is read through a short and then cut to its
+            // byte (300 as a uchar would be 44): only the byte's own range keeps
+            // the reader's items and the walk's the same.
             const auto v = asciiNumber(token, p.count);
-            if (!v) missing(fmt::format("'{}' is not a whole number of type {}", printable(token), p.count.name));
+            const long long low = p.count.min < 0 ? -128 : 0, high = p.count.min < 0 ? 127 : 255;
+            if (!v || (p.count.bytes == 1 && (*v < low || *v > high)))
+                missing(fmt::format("'{}' is not a whole number of type {}", printable(token), p.count.name));
             count = static_cast<long long>(*v);
         } else {
             const auto v = binaryCount(p);

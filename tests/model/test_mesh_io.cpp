@@ -373,6 +373,15 @@ TEST(MeshIo, PlyAsciiValueTheReaderCannotReadWholeIsNamedAtItsItem)
     EXPECT_NE(std::string(e.what()).find("no count where one is due ('-1' is not a whole number of type uint)"),
               std::string::npos)
         << e.what();
+    // The reader cuts a uchar count to its byte: 259 items written would be read as 3 and the next 256 as counts.
+    std::string uchar = header;
+    uchar.replace(uchar.find("list uint"), 9, "list uchar");
+    std::string items;
+    for (int k = 0; k < 259; ++k) items += " 0";
+    e = loadError(
+        hgtest::writeFile(dir / "byte.ply", uchar + vertices + "259" + items + "\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"));
+    EXPECT_EQ(e.field(), "face 1");
+    EXPECT_NE(std::string(e.what()).find("'259' is not a whole number of type uchar"), std::string::npos) << e.what();
     e = loadError(load("coordinate.ply", "0 0 0\n1 0 0\n0 1 nan\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"));
     EXPECT_EQ(e.field(), "vertex 3");
     EXPECT_NE(std::string(e.what()).find("property 'z': 'nan' is not a number of type float"), std::string::npos)

@@ -243,7 +243,14 @@ class PlyWalk {
         std::uintmax_t stride = 0;
         for (const PlyProperty& p : e.properties) stride += static_cast<std::uintmax_t>(p.item.bytes);
         if (stride == 0) return;
-        if (e.count > left() / stride) ends(e, left() / stride + 1, e.properties.front());
+        const std::uintmax_t room = left(), whole = room / stride;
+        if (e.count > whole) {
+            // The property the file ends in: the one whose bytes are not all there.
+            std::uintmax_t rest = room - whole * stride;
+            auto p = e.properties.begin();
+            for (; rest >= static_cast<std::uintmax_t>(p->item.bytes); ++p) rest -= p->item.bytes;
+            ends(e, whole + 1, *p);
+        }
         in_.seekg(static_cast<std::streamoff>(e.count * stride), std::ios::cur);
     }
 

@@ -233,7 +233,8 @@ class ManifestReader {
             geometry::RigidTransform pose;
             pose.R = rotation(j["R"], at + ".R");
             pose.t = vector3(j["t"], at + ".t");
-            // Magnitudes as the station file bounds them (docs/capture-manifest.md): a 1e308 is a typo, not a camera.
+            // Magnitudes as the station file bounds them (docs/config-reference.md, "Plausibility"): a 1e308
+            // is a typo, not a camera.
             if (pose.t.cwiseAbs().maxCoeff() > 1e5)
                 fail(at + ".t", "values must lie within ±1e5 mm (a station is not that large)");
             if (in.imageSize.width > 0) {

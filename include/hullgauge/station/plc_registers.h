@@ -41,7 +41,7 @@ inline constexpr std::uint16_t TriggerSeq = 0;
 inline constexpr std::uint16_t PartProgram = 1;
 inline constexpr std::uint16_t Serial = 2; ///< 2..9, 16 ASCII characters, high byte first
 inline constexpr std::uint16_t SerialWords = 8;
-inline constexpr std::uint16_t Command = 10; ///< extension: 1 = abort the cycle, 2 = reset fault
+inline constexpr std::uint16_t Command = 10; ///< extension: PlcCommand (1 abort, 2 reset fault, 3 reset counters)
 /// Extension: the purpose of the next cycles (CyclePurpose), latched with each trigger (docs/plc.md).
 inline constexpr std::uint16_t CyclePurpose = 11;
 inline constexpr std::uint16_t AckSeq = 100;

@@ -293,6 +293,21 @@ TEST(MeshIo, PlyHeaderWithoutEndHeaderIsNamedAtItsLastLine)
     EXPECT_EQ(loadError(hgtest::writeFile(dir / "stl.ply", "solid x\nendsolid x\n")).field(), "mesh");
 }
 
+TEST(MeshIo, PlyWhoseFirstLineIsNotPlyIsLeftToTheReader)
+{
+    hgtest::TempDir dir;
+    // A header of PLY lines under a first line that is not `ply`: the walk of the
+    // body would name the vertex's 'zero'; the reader refuses the file first.
+    const std::string header = "uin(t8ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n";
+    InputError e = loadError(hgtest::writeFile(dir / "a.ply", header + "0 0 zero\n1 0 0\n"));
+    EXPECT_EQ(e.field(), "mesh") << e.what();
+    // As a fuzzed file had it: an element of 33 billion items without properties.
+    e = loadError(hgtest::writeFile(dir / "b.ply", "uin(t8ply\nformat ascii 1.0\nelement vertex 33333333333\n"
+                                                   "end_header\n"));
+    EXPECT_EQ(e.field(), "mesh") << e.what();
+}
+
 TEST(MeshIo, PlyListLongerThanTheFileOrNegativeIsNamedAtItsItem)
 {
     // A tetrahedron; its second face's list count is the case (docs/fuzzing.md,

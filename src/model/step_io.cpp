@@ -39,8 +39,10 @@
 #include <STEPCAFControl_Reader.hxx>
 #include <STEPControl_Controller.hxx>
 #include <Standard_Failure.hxx>
+#include <StepGeom_CartesianPoint.hxx>
 #include <StepShape_Edge.hxx>
 #include <StepShape_OrientedEdge.hxx>
+#include <StepShape_VertexPoint.hxx>
 #include <TCollection_AsciiString.hxx>
 #include <TDF_Label.hxx>
 #include <TDF_LabelSequence.hxx>
@@ -247,6 +249,21 @@ void requireEdgesThatEnd(const std::string& name, const Handle(Interface_Interfa
     }
 }
 
+// The reader turns a vertex into a point by taking its geometry as a
+// cartesian point, without looking: a vertex whose point is of another kind
+// or missing (a fuzzed entity name the parser did not know) dereferenced the
+// null (docs/fuzzing.md, "Findings, fixed"). Such a file is refused naming
+// the vertex.
+void requireVerticesWithPoints(const std::string& name, const Handle(Interface_InterfaceModel) & model)
+{
+    for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {
+        const auto vertex = Handle(StepShape_VertexPoint)::DownCast(model->Value(i));
+        if (vertex.IsNull() || !Handle(StepGeom_CartesianPoint)::DownCast(vertex->VertexGeometry()).IsNull()) continue;
+        fail(name, fmt::format("not a consistent STEP file: entity {}: a vertex whose point is not a cartesian point",
+                               model->StringLabel(vertex)->ToCString()));
+    }
+}
+
 // The file parsed into the reader's session, what its ReadFile does, with the
 // checks above between the parse and the session's own checks over the model
 // (which call into the entities and are where the recursion above happened).
@@ -263,6 +280,7 @@ void loadModel(const std::string& name, STEPControl_Reader& reader)
     if (status != 0 || model.IsNull()) fail(name, "not a readable STEP file (the reader found a syntax error)");
     requireConsistentEntities(name, model);
     requireEdgesThatEnd(name, model);
+    requireVerticesWithPoints(name, model);
     session->SetModel(model);
     session->SetLoadedFile(name.c_str());
     session->InitTransferReader(4);

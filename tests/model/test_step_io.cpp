@@ -696,6 +696,26 @@ TEST(StepPart, AnOrientedEdgeThatIsItsOwnEdgeIsRefusedNamingIt)
         hg::InputError);
 }
 
+TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
+{
+    hgtest::TempDir dir;
+    std::ifstream in(hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // The vertex's point a point on its edge's line: a point, but not a cartesian one.
+    const std::string point = "#23 = CARTESIAN_POINT('',(0.,0.,0.));";
+    ASSERT_NE(text.find(point), std::string::npos);
+    text.replace(text.find(point), point.size(), "#23 = POINT_ON_CURVE('',#27,0.);");
+    hgtest::writeFile(dir / "vertex.step", text);
+    try {
+        (void)hg::model::StepModel::read(dir / "vertex.step");
+        FAIL() << "a vertex without a cartesian point was read";
+    } catch (const hg::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("entity #22: a vertex whose point is not a cartesian point"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre
 // from its origin, 10^12 weld tolerances, overflowed the weld's integer cell
 // hash (signed overflow, undefined behaviour; meaningful under the `asan`

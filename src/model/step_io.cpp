@@ -258,8 +258,11 @@ void requireVerticesWithPoints(const std::string& name, const Handle(Interface_I
 {
     for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {
         const auto vertex = Handle(StepShape_VertexPoint)::DownCast(model->Value(i));
-        if (vertex.IsNull() || !Handle(StepGeom_CartesianPoint)::DownCast(vertex->VertexGeometry()).IsNull()) continue;
-        fail(name, fmt::format("not a consistent STEP file: entity {}: a vertex whose point is not a cartesian point",
+        if (vertex.IsNull()) continue;
+        const auto point = Handle(StepGeom_CartesianPoint)::DownCast(vertex->VertexGeometry());
+        if (!point.IsNull() && point->NbCoordinates() == 3) continue;
+        fail(name, fmt::format("not a consistent STEP file: entity {}: a vertex whose point is not a cartesian point "
+                               "of three coordinates",
                                model->StringLabel(vertex)->ToCString()));
     }
 }

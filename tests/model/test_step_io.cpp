@@ -714,6 +714,16 @@ TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
                   std::string::npos)
             << e.what();
     }
+    // The fuzzed file, kept as a seed of the harness: its point's entity name
+    // garbled, which the parser reads as a cartesian point without its coordinates.
+    try {
+        (void)hg::model::StepModel::read(hgtest::sourceDir() / "tests/fuzz/corpus/step/vertex-point-garbled.step");
+        FAIL() << "the fuzzed vertex was read";
+    } catch (const hg::InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("entity #195: a vertex whose point is not a cartesian point of three"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre

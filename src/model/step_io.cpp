@@ -250,10 +250,10 @@ void requireEdgesThatEnd(const std::string& name, const Handle(Interface_Interfa
 }
 
 // The reader turns a vertex into a point by taking its geometry as a
-// cartesian point, without looking: a vertex whose point is of another kind
-// or missing (a fuzzed entity name the parser did not know) dereferenced the
-// null (docs/fuzzing.md, "Findings, fixed"). Such a file is refused naming
-// the vertex.
+// cartesian point of three coordinates, without looking: a vertex whose point
+// is of another kind, or a cartesian point without its coordinates (a fuzzed
+// entity name the parser read so), dereferenced the null (docs/fuzzing.md,
+// "Findings, fixed"). Such a file is refused naming the vertex.
 void requireVerticesWithPoints(const std::string& name, const Handle(Interface_InterfaceModel) & model)
 {
     for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {

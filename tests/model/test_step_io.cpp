@@ -29,6 +29,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hgtest/paths.h"
+#include "hgtest/station.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/part_program.h"
@@ -669,6 +670,27 @@ TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
     EXPECT_EQ(sphere.summary().solids, 1u);
 }
 
+/// The bored box seed with its first `from` replaced by `to`, written as `name` in `dir`.
+fs::path boreBoxWith(const hgtest::TempDir& dir, const std::string& name, const std::string& from,
+                     const std::string& to)
+{
+    std::ifstream in(hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return hgtest::writeFile(dir / name, hgtest::replaced(text, from, to));
+}
+
+/// What StepModel::read says refusing `file`; a failure of the test when it reads it.
+std::string readRefusal(const fs::path& file)
+{
+    try {
+        (void)hg::model::StepModel::read(file);
+    } catch (const hg::InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << file << " was read";
+    return "";
+}
+
 // Found by the STEP harness (docs/fuzzing.md): an oriented edge that is its
 // own edge (the fuzzed file's #346 named an entity the file lost, which
 // Open CASCADE's reader resolved to the oriented edge itself) sent the
@@ -677,19 +699,9 @@ TEST(StepPart, ReferenceToAnEntityTheFileDoesNotHoldIsRefusedNamingTheEntity)
 TEST(StepPart, AnOrientedEdgeThatIsItsOwnEdgeIsRefusedNamingIt)
 {
     hgtest::TempDir dir;
-    std::ifstream in(hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::string edge = "#20 = ORIENTED_EDGE('',*,*,#21,.F.);";
-    ASSERT_NE(text.find(edge), std::string::npos);
-    text.replace(text.find(edge), edge.size(), "#20 = ORIENTED_EDGE('',*,*,#20,.F.);");
-    hgtest::writeFile(dir / "loop.step", text);
-    try {
-        (void)hg::model::StepModel::read(dir / "loop.step");
-        FAIL() << "an oriented edge that is its own edge was read";
-    } catch (const hg::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("entity #20: an oriented edge whose edge is itself"), std::string::npos)
-            << e.what();
-    }
+    const std::string err = readRefusal(
+        boreBoxWith(dir, "loop.step", "#20 = ORIENTED_EDGE('',*,*,#21,.F.);", "#20 = ORIENTED_EDGE('',*,*,#20,.F.);"));
+    EXPECT_NE(err.find("entity #20: an oriented edge whose edge is itself"), std::string::npos) << err;
     // The fuzzed file itself, kept as a seed of the harness.
     EXPECT_THROW(
         hg::model::StepModel::read(hgtest::sourceDir() / "tests/fuzz/corpus/step/oriented-edge-its-own-edge.step"),
@@ -699,31 +711,15 @@ TEST(StepPart, AnOrientedEdgeThatIsItsOwnEdgeIsRefusedNamingIt)
 TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
 {
     hgtest::TempDir dir;
-    std::ifstream in(hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     // The vertex's point a point on its edge's line: a point, but not a cartesian one.
-    const std::string point = "#23 = CARTESIAN_POINT('',(0.,0.,0.));";
-    ASSERT_NE(text.find(point), std::string::npos);
-    text.replace(text.find(point), point.size(), "#23 = POINT_ON_CURVE('',#27,0.);");
-    hgtest::writeFile(dir / "vertex.step", text);
-    try {
-        (void)hg::model::StepModel::read(dir / "vertex.step");
-        FAIL() << "a vertex without a cartesian point was read";
-    } catch (const hg::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("entity #22: a vertex whose point is not a cartesian point"),
-                  std::string::npos)
-            << e.what();
-    }
+    std::string err = readRefusal(
+        boreBoxWith(dir, "vertex.step", "#23 = CARTESIAN_POINT('',(0.,0.,0.));", "#23 = POINT_ON_CURVE('',#27,0.);"));
+    EXPECT_NE(err.find("entity #22: a vertex whose point is not a cartesian point"), std::string::npos) << err;
     // The fuzzed file, kept as a seed of the harness: its point's entity name
     // garbled, which the parser reads as a cartesian point without its coordinates.
-    try {
-        (void)hg::model::StepModel::read(hgtest::sourceDir() / "tests/fuzz/corpus/step/vertex-point-garbled.step");
-        FAIL() << "the fuzzed vertex was read";
-    } catch (const hg::InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("entity #195: a vertex whose point is not a cartesian point of three"),
-                  std::string::npos)
-            << e.what();
-    }
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/vertex-point-garbled.step");
+    EXPECT_NE(err.find("entity #195: a vertex whose point is not a cartesian point of three"), std::string::npos)
+        << err;
 }
 
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre

@@ -11,7 +11,7 @@
 #include <limits>
 #include <mutex>
 #include <optional>
-#include <set>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -30,7 +30,10 @@
 #include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <IFSelect_WorkLibrary.hxx>
 #include <Interface_Check.hxx>
+#include <Interface_EntityIterator.hxx>
+#include <Interface_Graph.hxx>
 #include <Interface_InterfaceModel.hxx>
+#include <Interface_Protocol.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -106,20 +109,73 @@ void silenceOpenCascade()
     });
 }
 
-// A STEP exchange file ends with END-ISO-10303-21; (ISO 10303-21): a file
-// cut short in transfer is told apart from a damaged one before parsing.
-bool endsLikeStep(const std::filesystem::path& file)
+std::string fileText(const std::filesystem::path& file)
 {
     std::ifstream in(file, std::ios::binary);
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    const std::streamoff tail = std::min<std::streamoff>(size, 256);
-    std::string text(static_cast<std::size_t>(tail), '\0');
-    in.seekg(size - tail);
-    in.read(text.data(), tail);
-    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
-    const std::string end = "END-ISO-10303-21;";
-    return text.size() >= end.size() && text.compare(text.size() - end.size(), end.size(), end) == 0;
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A STEP exchange file ends with END-ISO-10303-21; (ISO 10303-21): a file
+// cut short in transfer is told apart from a damaged one before parsing.
+bool endsLikeStep(std::string_view text)
+{
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+    constexpr std::string_view end = "END-ISO-10303-21;";
+    return text.size() >= end.size() && text.substr(text.size() - end.size()) == end;
+}
+
+// The end of the string or comment opening at `i`, counting its line breaks
+// into `line` (ISO 10303-21: '' is a quote inside a string).
+std::size_t skipStringOrComment(std::string_view text, std::size_t i, std::size_t& line)
+{
+    std::size_t stop = text.size();
+    if (text[i] == '\'') {
+        for (std::size_t from = i + 1; from < text.size(); from = stop + 1) {
+            const std::size_t end = text.find('\'', from);
+            stop = end == std::string_view::npos ? text.size() : end + 1;
+            if (stop >= text.size() || text[stop] != '\'') break;
+        }
+    } else if (const std::size_t end = text.find("*/", i + 2); end != std::string_view::npos) {
+        stop = end + 2;
+    }
+    line += static_cast<std::size_t>(std::count(text.begin() + static_cast<std::ptrdiff_t>(i),
+                                                text.begin() + static_cast<std::ptrdiff_t>(stop), '\n'));
+    return stop;
+}
+
+// ISO 10303-21 names each entity instance once (`#12 = ...;`). Open
+// CASCADE's parser resolves the references of a file that names one twice in
+// a second pass over tables it leaves partly unset, and hung or crashed
+// there as what memory held had it (docs/fuzzing.md, "Findings, fixed"). Such
+// a file is refused before it is parsed, naming the instance and both lines.
+void requireUniqueInstanceNames(const std::string& name, std::string_view text)
+{
+    std::unordered_map<std::string_view, std::size_t> defined; // instance name -> its line
+    std::size_t line = 1;
+    int depth = 0; // parentheses: a name outside them, followed by '=', is an instance's
+    for (std::size_t i = 0; i < text.size();) {
+        const char c = text[i];
+        if (c == '\'' || (c == '/' && i + 1 < text.size() && text[i + 1] == '*')) {
+            i = skipStringOrComment(text, i, line);
+            continue;
+        }
+        ++i;
+        if (c == '\n') ++line;
+        depth += c == '(' ? 1 : c == ')' ? -1 : 0;
+        if (c == ';') depth = 0;
+        if (c != '#' || depth > 0) continue;
+        const std::size_t digits = i;
+        while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
+        std::string_view number = text.substr(digits, i - digits);
+        std::size_t after = i;
+        while (after < text.size() && (text[after] == ' ' || text[after] == '\t' || text[after] == '\r')) ++after;
+        if (number.empty() || after >= text.size() || text[after] != '=') continue;
+        while (number.size() > 1 && number.front() == '0') number.remove_prefix(1); // #012 is #12
+        const auto [first, isNew] = defined.emplace(number, line);
+        if (!isNew)
+            fail(name, fmt::format("not a consistent STEP file: entity #{} is defined twice (lines {} and {})", number,
+                                   first->second, line));
+    }
 }
 
 // "2 shells, 6 faces": what a file without a solid holds instead.
@@ -223,28 +279,74 @@ void requireConsistentEntities(const std::string& name, const Handle(Interface_I
                                failures > 1 ? fmt::format(" (and {} more failures)", failures - 1) : ""));
 }
 
+// The entities of a part's geometry and topology refer to one another as a
+// tree shared from below: a point is used by many vertices, but no entity is
+// (through others) part of itself. Open CASCADE follows the references
+// recursively when it translates them, so a cycle overflowed the stack: an
+// oriented edge that is its own edge (in the reader's own checks), a surface
+// curve that is its own 3D curve (StepToGeom::MakeCurve; docs/fuzzing.md,
+// "Findings, fixed"). A file with a cycle is refused before any of that,
+// naming the entities around it. Depth-first, without recursion: a chain of
+// references in a real file is as long as the file.
+void requireAcyclicReferences(const std::string& name, const Handle(Interface_InterfaceModel) & model,
+                              const Handle(Interface_Protocol) & protocol)
+{
+    const Interface_Graph graph(model, protocol, /*theModeStats=*/false);
+    const Standard_Integer count = model->NbEntities();
+    enum class Mark : std::uint8_t { unseen, open, done };
+    std::vector<Mark> mark(static_cast<std::size_t>(count) + 1, Mark::unseen);
+    struct Frame {
+        Standard_Integer entity;
+        Interface_EntityIterator shared;
+    };
+    for (Standard_Integer root = 1; root <= count; ++root) {
+        if (mark[static_cast<std::size_t>(root)] != Mark::unseen) continue;
+        std::vector<Frame> path{{root, graph.Shareds(model->Value(root))}};
+        mark[static_cast<std::size_t>(root)] = Mark::open;
+        while (!path.empty()) {
+            Interface_EntityIterator& next = path.back().shared;
+            if (!next.More()) {
+                mark[static_cast<std::size_t>(path.back().entity)] = Mark::done;
+                path.pop_back();
+                continue;
+            }
+            const Standard_Integer entity = graph.EntityNumber(next.Value());
+            next.Next();
+            if (entity <= 0 || entity > count) continue;
+            if (mark[static_cast<std::size_t>(entity)] == Mark::open) {
+                std::vector<std::string> cycle;
+                auto from = std::find_if(path.begin(), path.end(), [&](const Frame& f) { return f.entity == entity; });
+                for (; from != path.end(); ++from)
+                    cycle.emplace_back(model->StringLabel(model->Value(from->entity))->ToCString());
+                cycle.push_back(cycle.front());
+                if (cycle.size() > 8) { // a long cycle by its first four and last three
+                    cycle.erase(cycle.begin() + 4, cycle.end() - 3);
+                    cycle.insert(cycle.begin() + 4, "...");
+                }
+                fail(name, fmt::format("not a consistent STEP file: entity {} refers to itself ({})", cycle.front(),
+                                       fmt::join(cycle, " -> ")));
+            }
+            if (mark[static_cast<std::size_t>(entity)] == Mark::done) continue;
+            mark[static_cast<std::size_t>(entity)] = Mark::open;
+            path.push_back({entity, graph.Shareds(model->Value(entity))});
+        }
+    }
+}
+
 // An oriented edge names the edge it runs along, and Open CASCADE asks it for
-// its end vertices through that reference, recursively: an oriented edge that
-// is (through others) its own edge overflowed the stack in the reader's own
-// checks, one naming no edge dereferenced the null (docs/fuzzing.md,
-// "Findings, fixed"). Such a file is refused naming the oriented edge.
+// its end vertices through that reference: one naming no edge dereferenced
+// the null (docs/fuzzing.md, "Findings, fixed"). Such a file is refused
+// naming the oriented edge. The chain ends: requireAcyclicReferences ran.
 void requireEdgesThatEnd(const std::string& name, const Handle(Interface_InterfaceModel) & model)
 {
     for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {
         const auto oriented = Handle(StepShape_OrientedEdge)::DownCast(model->Value(i));
         if (oriented.IsNull()) continue;
-        std::set<const Standard_Transient*> seen{oriented.get()};
         Handle(StepShape_Edge) edge = oriented->EdgeElement();
-        while (!edge.IsNull() && edge->IsKind(STANDARD_TYPE(StepShape_OrientedEdge))) {
-            if (!seen.insert(edge.get()).second) {
-                edge.Nullify();
-                break;
-            }
+        while (!edge.IsNull() && edge->IsKind(STANDARD_TYPE(StepShape_OrientedEdge)))
             edge = Handle(StepShape_OrientedEdge)::DownCast(edge)->EdgeElement();
-        }
         if (edge.IsNull())
-            fail(name, fmt::format("not a consistent STEP file: entity {}: an oriented edge whose edge is itself or "
-                                   "missing",
+            fail(name, fmt::format("not a consistent STEP file: entity {}: an oriented edge without an edge",
                                    model->StringLabel(oriented)->ToCString()));
     }
 }
@@ -282,6 +384,7 @@ void loadModel(const std::string& name, STEPControl_Reader& reader)
     }
     if (status != 0 || model.IsNull()) fail(name, "not a readable STEP file (the reader found a syntax error)");
     requireConsistentEntities(name, model);
+    requireAcyclicReferences(name, model, session->Protocol());
     requireEdgesThatEnd(name, model);
     requireVerticesWithPoints(name, model);
     session->SetModel(model);
@@ -553,7 +656,9 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
     std::error_code ec;
     if (!std::filesystem::is_regular_file(file, ec)) fail(name, "no such file");
     if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
-    if (!endsLikeStep(file)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
+    const std::string text = fileText(file);
+    if (!endsLikeStep(text)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
+    requireUniqueInstanceNames(name, text);
     silenceOpenCascade();
     try {
         ProductTree tree = readTree(name);

@@ -701,11 +701,60 @@ TEST(StepPart, AnOrientedEdgeThatIsItsOwnEdgeIsRefusedNamingIt)
     hgtest::TempDir dir;
     const std::string err = readRefusal(
         boreBoxWith(dir, "loop.step", "#20 = ORIENTED_EDGE('',*,*,#21,.F.);", "#20 = ORIENTED_EDGE('',*,*,#20,.F.);"));
-    EXPECT_NE(err.find("entity #20: an oriented edge whose edge is itself"), std::string::npos) << err;
+    EXPECT_NE(err.find("entity #20 refers to itself (#20 -> #20)"), std::string::npos) << err;
     // The fuzzed file itself, kept as a seed of the harness.
     EXPECT_THROW(
         hg::model::StepModel::read(hgtest::sourceDir() / "tests/fuzz/corpus/step/oriented-edge-its-own-edge.step"),
         hg::InputError);
+}
+
+// Found by the STEP harness (docs/fuzzing.md): a surface curve whose 3D
+// curve was itself (#349 of the fuzzed file) overflowed the stack in Open
+// CASCADE's StepToGeom::MakeCurve during the transfer. Any cycle of
+// references is refused before the transfer, naming the entities around it.
+TEST(StepPart, AnEntityThatRefersToItselfIsRefusedNamingTheCycle)
+{
+    hgtest::TempDir dir;
+    const std::string own = "#26 = SURFACE_CURVE('',#27,(#31,#43),.PCURVE_S1.);";
+    std::string err =
+        readRefusal(boreBoxWith(dir, "own.step", own, "#26 = SURFACE_CURVE('',#26,(#31,#43),.PCURVE_S1.);"));
+    EXPECT_NE(err.find("entity #26 refers to itself (#26 -> #26)"), std::string::npos) << err;
+    // Through another: #26's 3D curve #27 made a surface curve whose 3D curve is #26.
+    err = readRefusal(
+        boreBoxWith(dir, "two.step", "#27 = LINE('',#28,#29);", "#27 = SURFACE_CURVE('',#26,(#31,#43),.PCURVE_S1.);"));
+    EXPECT_TRUE(err.find("(#26 -> #27 -> #26)") != std::string::npos ||
+                err.find("(#27 -> #26 -> #27)") != std::string::npos)
+        << err;
+    // The fuzzed file, kept as a seed of the harness.
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/surface-curve-its-own-curve.step");
+    EXPECT_NE(err.find("entity #349 refers to itself (#349 -> #349)"), std::string::npos) << err;
+}
+
+// Found by the STEP harness (docs/fuzzing.md): a fuzzed stepped block that
+// names 36 instances twice hung in Open CASCADE's parser (its second pass over
+// the references, on tables it leaves partly unset), and only as what memory
+// held had it. A name defined twice is refused before the parse, naming both
+// lines; a name in a string or a comment is no definition.
+TEST(StepPart, AnEntityDefinedTwiceIsRefusedNamingBothLines)
+{
+    hgtest::TempDir dir;
+    const std::string line27 = "#27 = LINE('',#28,#29);"; // line 39 of the file
+    std::string err = readRefusal(boreBoxWith(dir, "twice.step", line27, line27 + "\n" + line27));
+    EXPECT_NE(err.find("not a consistent STEP file: entity #27 is defined twice (lines 39 and 40)"), std::string::npos)
+        << err;
+    // Leading zeros name the same instance.
+    err = readRefusal(boreBoxWith(dir, "zeros.step", line27, line27 + "\n#0027 = LINE('',#28,#29);"));
+    EXPECT_NE(err.find("entity #27 is defined twice (lines 39 and 40)"), std::string::npos) << err;
+    // The name in a comment over two lines and in a string with a quote in it
+    // is no definition: the box is read, 40 x 30 x 20 mm less its bore of 6 mm.
+    const auto box = hg::model::StepModel::read(boreBoxWith(
+        dir, "quoted.step", line27, "/* #27 = LINE,\n #28 = x; */ #27 = LINE('#27 = it''s ''#28 = ('';',#28,#29);"));
+    const double exact = 40.0 * 30.0 * 20.0 - kPi * kBoreRadius * kBoreRadius * 20.0;
+    EXPECT_NEAR(box.summary().volumeMm3, exact, 1e-6 * exact);
+    // The fuzzed file, kept as a seed: its first repeated name at depth 0 is #22
+    // (its #21 repeats inside the parentheses of an entity the garbling left open).
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/instances-defined-twice.step");
+    EXPECT_NE(err.find("entity #22 is defined twice (lines 35 and 71)"), std::string::npos) << err;
 }
 
 TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)

@@ -43,6 +43,8 @@
 #include <STEPControl_Controller.hxx>
 #include <Standard_Failure.hxx>
 #include <StepGeom_CartesianPoint.hxx>
+#include <StepGeom_Pcurve.hxx>
+#include <StepRepr_DefinitionalRepresentation.hxx>
 #include <StepShape_Edge.hxx>
 #include <StepShape_OrientedEdge.hxx>
 #include <StepShape_VertexPoint.hxx>
@@ -369,6 +371,27 @@ void requireVerticesWithPoints(const std::string& name, const Handle(Interface_I
     }
 }
 
+// A curve in a face's parameters (a pcurve) is the first item of its
+// definitional representation, which the reader takes as a curve without
+// looking: an item of a type the reader does not know (a garbled entity
+// name) was translated as a null curve and dereferenced (docs/fuzzing.md,
+// "Findings, fixed"). Such a file is refused naming the pcurve.
+void requirePcurvesWithCurves(const std::string& name, const Handle(Interface_InterfaceModel) & model)
+{
+    for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {
+        const auto pcurve = Handle(StepGeom_Pcurve)::DownCast(model->Value(i));
+        if (pcurve.IsNull()) continue;
+        const Handle(StepRepr_DefinitionalRepresentation) definition = pcurve->ReferenceToCurve();
+        if (definition.IsNull()) continue; // the reader checks this one itself
+        Handle(StepRepr_RepresentationItem) first;
+        if (definition->NbItems() > 0) first = definition->ItemsValue(1);
+        if (!first.IsNull() && first->IsKind(STANDARD_TYPE(StepGeom_Curve))) continue;
+        fail(name, fmt::format("not a consistent STEP file: entity {}: a curve in a face's parameters whose "
+                               "representation does not begin with a curve",
+                               model->StringLabel(pcurve)->ToCString()));
+    }
+}
+
 // The file parsed into the reader's session, what its ReadFile does, with the
 // checks above between the parse and the session's own checks over the model
 // (which call into the entities and are where the recursion above happened).
@@ -387,6 +410,7 @@ void loadModel(const std::string& name, STEPControl_Reader& reader)
     requireAcyclicReferences(name, model, session->Protocol());
     requireEdgesThatEnd(name, model);
     requireVerticesWithPoints(name, model);
+    requirePcurvesWithCurves(name, model);
     session->SetModel(model);
     session->SetLoadedFile(name.c_str());
     session->InitTransferReader(4);

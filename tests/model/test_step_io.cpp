@@ -757,6 +757,23 @@ TEST(StepPart, AnEntityDefinedTwiceIsRefusedNamingBothLines)
     EXPECT_NE(err.find("entity #22 is defined twice (lines 35 and 71)"), std::string::npos) << err;
 }
 
+// Found by the STEP harness (docs/fuzzing.md): a pcurve whose definitional
+// representation's item had a garbled entity name was translated as a null
+// 2D curve and dereferenced in Open CASCADE's StepToGeom::MakeCurve2d.
+TEST(StepPart, APcurveWhoseRepresentationHoldsNoCurveIsRefusedNamingIt)
+{
+    hgtest::TempDir dir;
+    // #388 is the bore's pcurve on the cylinder, #389 its representation, #390 its line.
+    std::string err = readRefusal(boreBoxWith(dir, "point.step", "#389 = DEFINITIONAL_REPRESENTATION('',(#390),#394);",
+                                              "#389 = DEFINITIONAL_REPRESENTATION('',(#391),#394);"));
+    EXPECT_NE(err.find("entity #388: a curve in a face's parameters whose representation does not begin with a curve"),
+              std::string::npos)
+        << err;
+    // The fuzzed file, kept as a seed: #390's entity name garbled.
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/pcurve-item-garbled.step");
+    EXPECT_NE(err.find("entity #388: a curve in a face's parameters"), std::string::npos) << err;
+}
+
 TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
 {
     hgtest::TempDir dir;

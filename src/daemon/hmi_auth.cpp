@@ -100,13 +100,6 @@ void Sessions::close(const std::string& id)
     sessions_.erase(id);
 }
 
-std::size_t Sessions::live()
-{
-    std::lock_guard lock(mutex_);
-    expire();
-    return sessions_.size();
-}
-
 RateLimiter::RateLimiter(double perSecond, double burst, Clock& clock)
     : perSecond_(perSecond), burst_(burst), clock_(clock)
 {

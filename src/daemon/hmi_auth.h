@@ -36,7 +36,6 @@ class Sessions {
     /// The session's CSRF token when `id` is live (its idle time restarts), else nothing.
     std::optional<std::string> touch(const std::string& id);
     void close(const std::string& id);
-    std::size_t live();
 
     static constexpr std::size_t kMaxSessions = 64;
 

@@ -145,12 +145,42 @@ std::size_t skipStringOrComment(std::string_view text, std::size_t i, std::size_
     return stop;
 }
 
-// ISO 10303-21 names each entity instance once (`#12 = ...;`). Open
+// An instance's entity type after its `=`: a keyword (a letter, then
+// letters, digits and underscores; `!` first for a user-defined one) before
+// its parameters' `(`, or the `(` of a complex instance. Empty when it is one,
+// else the text found there (printable ASCII, the rest as '?').
+std::string entityTypeProblem(std::string_view text, std::size_t at)
+{
+    const auto blank = [&](std::size_t k) {
+        return k < text.size() && std::isspace(static_cast<unsigned char>(text[k]));
+    };
+    const auto keyword = [&](std::size_t k) {
+        return k < text.size() && (std::isalnum(static_cast<unsigned char>(text[k])) || text[k] == '_');
+    };
+    std::size_t k = at;
+    while (blank(k)) ++k;
+    const std::size_t start = k;
+    if (k < text.size() && text[k] == '(') return {};
+    if (k < text.size() && (std::isalpha(static_cast<unsigned char>(text[k])) || text[k] == '!')) {
+        for (++k; keyword(k);) ++k;
+        while (blank(k)) ++k;
+        if (k < text.size() && text[k] == '(') return {};
+    }
+    std::string found(text.substr(start, std::min<std::size_t>(16, text.size() - start)));
+    for (char& c : found)
+        if (!std::isprint(static_cast<unsigned char>(c))) c = '?';
+    return found.empty() ? "the end of the file" : "'" + found + "'";
+}
+
+// ISO 10303-21 names each entity instance once (`#12 = TYPE(...);`). Open
 // CASCADE's parser resolves the references of a file that names one twice in
 // a second pass over tables it leaves partly unset, and hung or crashed
-// there as what memory held had it (docs/fuzzing.md, "Findings, fixed"). Such
-// a file is refused before it is parsed, naming the instance and both lines.
-void requireUniqueInstanceNames(const std::string& name, std::string_view text)
+// there as what memory held had it; an instance whose type is no keyword
+// (a fuzzed `#21 = 14StepShape_EdgeEDGE_CURVE(...)`) it loaded as a null it
+// then dereferenced (docs/fuzzing.md, "Findings, fixed"). Such a file is
+// refused before it is parsed, naming the instance and its line (both lines
+// for a name defined twice).
+void requireWellFormedInstances(const std::string& name, std::string_view text)
 {
     std::unordered_map<std::string_view, std::size_t> defined; // instance name -> its line
     std::size_t line = 1;
@@ -177,6 +207,10 @@ void requireUniqueInstanceNames(const std::string& name, std::string_view text)
         if (!isNew)
             fail(name, fmt::format("not a consistent STEP file: entity #{} is defined twice (lines {} and {})", number,
                                    first->second, line));
+        if (const std::string problem = entityTypeProblem(text, after + 1); !problem.empty())
+            fail(name,
+                 fmt::format("not a consistent STEP file: entity #{} (line {}): no entity type after '=', found {}",
+                             number, line, problem));
     }
 }
 
@@ -682,7 +716,7 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
     if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
     const std::string text = fileText(file);
     if (!endsLikeStep(text)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
-    requireUniqueInstanceNames(name, text);
+    requireWellFormedInstances(name, text);
     silenceOpenCascade();
     try {
         ProductTree tree = readTree(name);

@@ -769,9 +769,30 @@ TEST(StepPart, APcurveWhoseRepresentationHoldsNoCurveIsRefusedNamingIt)
     EXPECT_NE(err.find("entity #388: a curve in a face's parameters whose representation does not begin with a curve"),
               std::string::npos)
         << err;
-    // The fuzzed file, kept as a seed: #390's entity name garbled.
+    // The fuzzed file, kept as a seed: its garbled name is no keyword, refused before the parse.
     err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/pcurve-item-garbled.step");
-    EXPECT_NE(err.find("entity #388: a curve in a face's parameters"), std::string::npos) << err;
+    EXPECT_NE(err.find("entity #390 (line 456): no entity type after '='"), std::string::npos) << err;
+}
+
+// Found by the STEP harness (docs/fuzzing.md): `#21 =
+// 14StepShape_EdgeEDGE_CURVE(...)`, an entity type that is no keyword, was
+// loaded by Open CASCADE's parser as a null it dereferenced while still
+// parsing. The text is checked first: a keyword or a complex instance's '('.
+TEST(StepPart, AnInstanceWhoseTypeIsNoKeywordIsRefusedNamingIt)
+{
+    hgtest::TempDir dir;
+    const std::string edge = "#21 = EDGE_CURVE('',#22,#24,#26,.T.);"; // line 33 of the file
+    std::string err = readRefusal(boreBoxWith(dir, "digits.step", edge, "#21 = 14EDGE_CURVE('',#22,#24,#26,.T.);"));
+    EXPECT_NE(err.find("entity #21 (line 33): no entity type after '=', found '14EDGE_CURVE('','"), std::string::npos)
+        << err;
+    // A keyword may stand apart from its parameters, on the next line too.
+    const auto box =
+        hg::model::StepModel::read(boreBoxWith(dir, "apart.step", edge, "#21 = EDGE_CURVE \n ('',#22,#24,#26,.T.);"));
+    const double exact = 40.0 * 30.0 * 20.0 - kPi * kBoreRadius * kBoreRadius * 20.0;
+    EXPECT_NEAR(box.summary().volumeMm3, exact, 1e-6 * exact);
+    // The fuzzed file, kept as a seed.
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/entity-type-not-a-keyword.step");
+    EXPECT_NE(err.find("no entity type after '=', found '14StepShape_Edge"), std::string::npos) << err;
 }
 
 TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
@@ -781,11 +802,14 @@ TEST(StepPart, AVertexWhosePointIsNotACartesianPointIsRefusedNamingIt)
     std::string err = readRefusal(
         boreBoxWith(dir, "vertex.step", "#23 = CARTESIAN_POINT('',(0.,0.,0.));", "#23 = POINT_ON_CURVE('',#27,0.);"));
     EXPECT_NE(err.find("entity #22: a vertex whose point is not a cartesian point"), std::string::npos) << err;
-    // The fuzzed file, kept as a seed of the harness: its point's entity name
-    // garbled, which the parser reads as a cartesian point without its coordinates.
+    // A cartesian point without its coordinates, as the parser read the fuzzed
+    // file's garbled point.
+    err = readRefusal(
+        boreBoxWith(dir, "empty.step", "#23 = CARTESIAN_POINT('',(0.,0.,0.));", "#23 = CARTESIAN_POINT('',());"));
+    EXPECT_NE(err.find("entity #22: a vertex whose point is not a cartesian point of three"), std::string::npos) << err;
+    // The fuzzed file, kept as a seed: its garbled name is no keyword, refused before the parse.
     err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/vertex-point-garbled.step");
-    EXPECT_NE(err.find("entity #195: a vertex whose point is not a cartesian point of three"), std::string::npos)
-        << err;
+    EXPECT_NE(err.find("entity #196 (line 232): no entity type after '='"), std::string::npos) << err;
 }
 
 // Found with the STEP harness (docs/fuzzing.md): a part placed a kilometre

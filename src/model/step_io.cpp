@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string_view>
 #include <unordered_map>
 #include <vector>
@@ -23,6 +25,7 @@
 #include <BRepGProp.hxx>
 #include <BRepLProp_SLProps.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
+#include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
@@ -68,8 +71,10 @@
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XSControl_WorkSession.hxx>
+#include <nlohmann/json.hpp>
 #include <spdlog/fmt/fmt.h>
 
+#include "hullgauge/common/child_process.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/model/mesh_io.h"
 
@@ -147,8 +152,8 @@ std::size_t skipStringOrComment(std::string_view text, std::size_t i, std::size_
 
 // An instance's entity type after its `=`: a keyword (a letter, then
 // letters, digits and underscores; `!` first for a user-defined one) before
-// its parameters' `(`, or the `(` of a complex instance. Empty when it is one,
-// else the text found there (printable ASCII, the rest as '?').
+// its parameters' `(`, for a complex instance after its own `(`. Empty when
+// it is one, else the text found there (printable ASCII, the rest as '?').
 std::string entityTypeProblem(std::string_view text, std::size_t at)
 {
     const auto blank = [&](std::size_t k) {
@@ -160,7 +165,8 @@ std::string entityTypeProblem(std::string_view text, std::size_t at)
     std::size_t k = at;
     while (blank(k)) ++k;
     const std::size_t start = k;
-    if (k < text.size() && text[k] == '(') return {};
+    if (k < text.size() && text[k] == '(') // a complex instance: its first part's keyword and '('
+        for (++k; blank(k);) ++k;
     if (k < text.size() && (std::isalpha(static_cast<unsigned char>(text[k])) || text[k] == '!')) {
         for (++k; keyword(k);) ++k;
         while (blank(k)) ++k;
@@ -675,6 +681,98 @@ TriangleMesh triangles(const std::string& name, const TopoDS_Shape& shape, const
     return mesh;
 }
 
+// The checks on the file's text, before Open CASCADE sees it.
+void requireStepText(const std::string& name, const std::filesystem::path& file)
+{
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) fail(name, "no such file");
+    if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
+    const std::string text = fileText(file);
+    if (!endsLikeStep(text)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
+    requireWellFormedInstances(name, text);
+}
+
+// Open CASCADE's translation of a large assembly takes seconds to a minute
+// on the line PC; five minutes is a reader that will not finish.
+constexpr std::chrono::seconds kStepReadDeadline{300};
+
+// A child that did not answer is a refusal naming how it ended.
+void requireFinished(const std::string& name, const ChildOutcome& outcome)
+{
+    switch (outcome.kind) {
+    case ChildOutcome::Kind::finished:
+        return;
+    case ChildOutcome::Kind::signalled:
+        fail(name, fmt::format("Open CASCADE's reader ended with {} on it: the file is damaged in a way no check "
+                               "before the reader names (docs/fuzzing.md)",
+                               describeSignal(outcome.signal)));
+    case ChildOutcome::Kind::timedOut:
+        fail(name, fmt::format("Open CASCADE's reader did not finish within {} s", kStepReadDeadline.count()));
+    case ChildOutcome::Kind::failed:
+        fail(name, fmt::format("the reader's process failed: {}", outcome.detail));
+    }
+    fail(name, "the reader's process failed");
+}
+
+nlohmann::json summaryJson(const StepSummary& summary)
+{
+    nlohmann::json tree = nlohmann::json::array();
+    for (const StepSolid& s : summary.tree)
+        tree.push_back({{"name", s.name},
+                        {"instance", s.instance},
+                        {"solids", s.solids},
+                        {"volume_mm3", s.volumeMm3},
+                        {"chosen", s.chosen}});
+    const Eigen::Vector3d& lo = summary.bounds.min();
+    const Eigen::Vector3d& hi = summary.bounds.max();
+    return {{"solids", summary.solids},
+            {"faces", summary.faces},
+            {"volume_mm3", summary.volumeMm3},
+            {"bounds", {lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z()}},
+            {"tree", tree},
+            {"chosen", summary.chosen}};
+}
+
+StepSummary summaryFrom(const nlohmann::json& j)
+{
+    StepSummary summary;
+    summary.solids = j.at("solids").get<std::size_t>();
+    summary.faces = j.at("faces").get<std::size_t>();
+    summary.volumeMm3 = j.at("volume_mm3").get<double>();
+    const auto b = j.at("bounds").get<std::vector<double>>();
+    if (b.size() != 6) throw nlohmann::json::other_error::create(501, "bounds: six numbers", &j);
+    summary.bounds = Eigen::AlignedBox3d(Eigen::Vector3d(b[0], b[1], b[2]), Eigen::Vector3d(b[3], b[4], b[5]));
+    for (const auto& s : j.at("tree"))
+        summary.tree.push_back({s.at("name").get<std::string>(), s.at("instance").get<std::string>(),
+                                s.at("solids").get<std::size_t>(), s.at("volume_mm3").get<double>(),
+                                s.at("chosen").get<bool>()});
+    summary.chosen = j.at("chosen").get<std::string>();
+    return summary;
+}
+
+// Open CASCADE's own BRep text of the shape (numbers asked for with 17 digits).
+std::string brepText(const TopoDS_Shape& shape)
+{
+    std::ostringstream out;
+    out.precision(17);
+    BRepTools::Write(shape, out);
+    return out.str();
+}
+
+TopoDS_Shape shapeFrom(const std::string& name, const std::string& text)
+{
+    std::istringstream in(text);
+    TopoDS_Shape shape;
+    BRep_Builder builder;
+    try {
+        BRepTools::Read(shape, in, builder);
+    } catch (const Standard_Failure& e) {
+        fail(name, fmt::format("the reader's process answered a shape that cannot be read: {}", e.GetMessageString()));
+    }
+    if (shape.IsNull()) fail(name, "the reader's process answered no shape");
+    return shape;
+}
+
 } // namespace
 
 std::string describe(const StepSolid& solid)
@@ -707,16 +805,11 @@ const StepTessellation& StepModel::tessellation() const
     return impl_->tessellation;
 }
 
-StepModel StepModel::read(const std::filesystem::path& file, const std::string& solid)
+StepModel StepModel::readInThisProcess(const std::filesystem::path& file, const std::string& solid)
 {
     auto impl = std::make_unique<Impl>();
     const std::string& name = impl->name = file.string();
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(file, ec)) fail(name, "no such file");
-    if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
-    const std::string text = fileText(file);
-    if (!endsLikeStep(text)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");
-    requireWellFormedInstances(name, text);
+    requireStepText(name, file);
     silenceOpenCascade();
     try {
         ProductTree tree = readTree(name);
@@ -739,6 +832,43 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
     } catch (const Standard_Failure& e) {
         fail(name, fmt::format("Open CASCADE could not read it: {}", e.GetMessageString()));
     }
+    return StepModel(std::move(impl));
+}
+
+// docs/part-program.md, "A process of its own": the text checks here, the
+// rest (Open CASCADE's parse and translation, the checks between them, the
+// union and the measures) in a child process, whose answer is the summary
+// and the part's shape in Open CASCADE's own BRep text, or the refusal.
+StepModel StepModel::read(const std::filesystem::path& file, const std::string& solid)
+{
+    const std::string name = file.string();
+    requireStepText(name, file); // a file refused on its text needs no process
+    const auto work = [&]() -> std::string {
+        nlohmann::json answer;
+        try {
+            const StepModel model = readInThisProcess(file, solid);
+            answer["summary"] = summaryJson(model.impl_->summary);
+            answer["brep"] = brepText(model.impl_->shape);
+        } catch (const InputError& e) {
+            answer["error"] = {{"field", e.field()}, {"problem", e.problem()}};
+        }
+        return answer.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+    };
+    const ChildOutcome outcome = runInChild(work, kStepReadDeadline);
+    requireFinished(name, outcome);
+    auto impl = std::make_unique<Impl>();
+    impl->name = name;
+    try {
+        const nlohmann::json answer = nlohmann::json::parse(outcome.output);
+        if (answer.contains("error"))
+            throw InputError(name, answer["error"].at("field").get<std::string>(),
+                             answer["error"].at("problem").get<std::string>());
+        impl->summary = summaryFrom(answer.at("summary"));
+        impl->shape = shapeFrom(name, answer.at("brep").get<std::string>());
+    } catch (const nlohmann::json::exception& e) {
+        fail(name, fmt::format("the reader's process answered what cannot be read: {}", e.what()));
+    }
+    TopExp::MapShapes(impl->shape, TopAbs_FACE, impl->faces);
     return StepModel(std::move(impl));
 }
 

@@ -1,4 +1,5 @@
-// The STEP reader (docs/fuzzing.md): StepModel::read on the input written to
+// The STEP reader (docs/fuzzing.md): StepModel::readInThisProcess (what
+// StepModel::read runs in its child process) on the input written to
 // `input.step`, then what the part program loader does with a STEP part
 // before it builds the solid (loadModel, src/model/part_program.cpp): the
 // default cube around the summary's bounds and the tessellation at that
@@ -19,7 +20,7 @@ constexpr double kAngularDeflectionRad = 0.1; // kStepAngularDeflectionRad of pa
 
 void loadStep(const std::filesystem::path& file)
 {
-    hg::model::StepModel model = hg::model::StepModel::read(file);
+    hg::model::StepModel model = hg::model::StepModel::readInThisProcess(file);
     const auto cube = hg::model::boundingCube(model.summary().bounds, kDepth, kAdjacencyDepth);
     (void)model.tessellate(cube->voxelSize() / 20.0, kAngularDeflectionRad);
 }

@@ -785,6 +785,16 @@ TEST(StepPart, AnInstanceWhoseTypeIsNoKeywordIsRefusedNamingIt)
     std::string err = readRefusal(boreBoxWith(dir, "digits.step", edge, "#21 = 14EDGE_CURVE('',#22,#24,#26,.T.);"));
     EXPECT_NE(err.find("entity #21 (line 33): no entity type after '=', found '14EDGE_CURVE('','"), std::string::npos)
         << err;
+    // A complex instance: the keyword of its first part after its own '('
+    // (the fuzzed `complex-instance-garbled.step`, among the seeds, had
+    // `#28 = ( NAME,0.,0.));`, which faulted inside the parser too).
+    err = readRefusal(boreBoxWith(dir, "complex.step", "#42 = ( GEOMETRIC_REPRESENTATION_CONTEXT(2) ",
+                                  "#42 = ( 2D GEOMETRIC_REPRESENTATION_CONTEXT(2) "));
+    EXPECT_NE(err.find("entity #42 (line 54): no entity type after '=', found '( 2D GEOMETRIC_R'"), std::string::npos)
+        << err;
+    EXPECT_THROW(hg::model::StepModel::readInThisProcess(hgtest::sourceDir() /
+                                                         "tests/fuzz/corpus/step/complex-instance-garbled.step"),
+                 hg::InputError);
     // A keyword may stand apart from its parameters, on the next line too.
     const auto box =
         hg::model::StepModel::read(boreBoxWith(dir, "apart.step", edge, "#21 = EDGE_CURVE \n ('',#22,#24,#26,.T.);"));
@@ -831,6 +841,28 @@ TEST(StepPart, PartAKilometreFromItsOriginIsWeldedIntoItsCorners)
         EXPECT_TRUE(v.x() == low.X() || v.x() == high.X()) << v.transpose();
         EXPECT_TRUE(v.y() == low.Y() || v.y() == high.Y()) << v.transpose();
         EXPECT_TRUE(v.z() == low.Z() || v.z() == high.Z()) << v.transpose();
+    }
+}
+
+// StepModel::read answers from its child process what the read in this
+// process finds: the same summary, and the same exact surface.
+TEST(StepPart, ReadInAProcessOfItsOwnIsTheReadInThisProcess)
+{
+    const fs::path file = hgtest::sourceDir() / "tests/fuzz/corpus/step/box-with-bore.step";
+    const auto here = hg::model::StepModel::readInThisProcess(file);
+    const auto apart = hg::model::StepModel::read(file);
+    EXPECT_EQ(apart.summary().solids, here.summary().solids);
+    EXPECT_EQ(apart.summary().faces, here.summary().faces);
+    EXPECT_EQ(apart.summary().volumeMm3, here.summary().volumeMm3);
+    EXPECT_TRUE(apart.summary().bounds.isApprox(here.summary().bounds, 0.0)) << "bounds differ";
+    ASSERT_EQ(apart.summary().tree.size(), here.summary().tree.size());
+    EXPECT_EQ(apart.summary().tree[0].name, here.summary().tree[0].name);
+    // A point on the bore's wall (radius 6 about (20, 15)) and one off a flat face.
+    for (const Vector3d& q : {Vector3d(20.0 + 5.0, 15.0, 10.0), Vector3d(-1.0, 10.0, 10.0)}) {
+        const auto a = apart.closestPoint(q, 0.01), h = here.closestPoint(q, 0.01);
+        EXPECT_LT((a.point - h.point).norm(), 1e-9) << q.transpose();
+        EXPECT_LT((a.normal - h.normal).norm(), 1e-9) << q.transpose();
+        EXPECT_NEAR(a.distance, h.distance, 1e-9);
     }
 }
 

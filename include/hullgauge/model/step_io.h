@@ -76,7 +76,14 @@ class StepModel {
     /// problem) for a file that is missing, truncated or unreadable, holds no
     /// solid, or whose solid is not closed, and InputError(file, "mesh_solid",
     /// problem) when no solid or several carry the name (listing the names).
+    /// Open CASCADE's parse and translation run in a process of their own
+    /// (docs/part-program.md, "A process of its own"): a fault of the
+    /// library on a damaged file, or a reader that does not finish within
+    /// five minutes, is an InputError naming it, never a fault of the caller.
     static StepModel read(const std::filesystem::path& file, const std::string& solid = {});
+    /// As read, all in this process: for the fuzz harness, which must see a
+    /// fault of the library where it happens (docs/fuzzing.md).
+    static StepModel readInThisProcess(const std::filesystem::path& file, const std::string& solid = {});
     ~StepModel();
     StepModel(StepModel&&) noexcept;
     StepModel& operator=(StepModel&&) noexcept;

@@ -132,15 +132,23 @@ bool endsLikeStep(std::string_view text)
 }
 
 // The end of the string or comment opening at `i`, counting its line breaks
-// into `line` (ISO 10303-21: '' is a quote inside a string).
+// into `line`. A string ends where Open CASCADE's lexer ends it, so that this
+// scan sees the instances its parser will: at a quote followed, after spaces
+// and line breaks, by ',' or ')'. A quote elsewhere, '' among them, is part
+// of the string (`'it's',` is read whole); in a well-formed file the rule
+// agrees with ISO 10303-21's doubled quote.
 std::size_t skipStringOrComment(std::string_view text, std::size_t i, std::size_t& line)
 {
     std::size_t stop = text.size();
     if (text[i] == '\'') {
-        for (std::size_t from = i + 1; from < text.size(); from = stop + 1) {
-            const std::size_t end = text.find('\'', from);
-            stop = end == std::string_view::npos ? text.size() : end + 1;
-            if (stop >= text.size() || text[stop] != '\'') break;
+        for (std::size_t quote = text.find('\'', i + 1); quote != std::string_view::npos;
+             quote = text.find('\'', quote + 1)) {
+            std::size_t k = quote + 1;
+            while (k < text.size() && (text[k] == ' ' || text[k] == '\n' || text[k] == '\r')) ++k;
+            if (k < text.size() && (text[k] == ',' || text[k] == ')')) {
+                stop = quote + 1;
+                break;
+            }
         }
     } else if (const std::size_t end = text.find("*/", i + 2); end != std::string_view::npos) {
         stop = end + 2;
@@ -183,9 +191,10 @@ std::string entityTypeProblem(std::string_view text, std::size_t at)
 // a second pass over tables it leaves partly unset, and hung or crashed
 // there as what memory held had it; an instance whose type is no keyword
 // (a fuzzed `#21 = 14StepShape_EdgeEDGE_CURVE(...)`) it loaded as a null it
-// then dereferenced (docs/fuzzing.md, "Findings, fixed"). Such a file is
-// refused before it is parsed, naming the instance and its line (both lines
-// for a name defined twice).
+// then dereferenced, and a name beyond an int wrapped into the negative
+// numbers it marks lists with (docs/fuzzing.md, "Findings, fixed"). Such a
+// file is refused before it is parsed, naming the instance and its line
+// (both lines for a name defined twice).
 void requireWellFormedInstances(const std::string& name, std::string_view text)
 {
     std::unordered_map<std::string_view, std::size_t> defined; // instance name -> its line
@@ -201,14 +210,19 @@ void requireWellFormedInstances(const std::string& name, std::string_view text)
         if (c == '\n') ++line;
         depth += c == '(' ? 1 : c == ')' ? -1 : 0;
         if (c == ';') depth = 0;
-        if (c != '#' || depth > 0) continue;
+        if (c != '#') continue;
         const std::size_t digits = i;
         while (i < text.size() && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
         std::string_view number = text.substr(digits, i - digits);
+        while (number.size() > 1 && number.front() == '0') number.remove_prefix(1); // #012 is #12
+        // The reader holds a name in an int; one beyond wraps into its markers for lists.
+        if (number.size() > 10 || (number.size() == 10 && number > "2147483647"))
+            fail(name, fmt::format("not a consistent STEP file: line {}: the entity name #{} is beyond 2147483647",
+                                   line, number));
+        if (depth > 0) continue;
         std::size_t after = i;
         while (after < text.size() && (text[after] == ' ' || text[after] == '\t' || text[after] == '\r')) ++after;
         if (number.empty() || after >= text.size() || text[after] != '=') continue;
-        while (number.size() > 1 && number.front() == '0') number.remove_prefix(1); // #012 is #12
         const auto [first, isNew] = defined.emplace(number, line);
         if (!isNew)
             fail(name, fmt::format("not a consistent STEP file: entity #{} is defined twice (lines {} and {})", number,

@@ -785,16 +785,22 @@ TEST(StepPart, AnInstanceWhoseTypeIsNoKeywordIsRefusedNamingIt)
     std::string err = readRefusal(boreBoxWith(dir, "digits.step", edge, "#21 = 14EDGE_CURVE('',#22,#24,#26,.T.);"));
     EXPECT_NE(err.find("entity #21 (line 33): no entity type after '=', found '14EDGE_CURVE('','"), std::string::npos)
         << err;
-    // A complex instance: the keyword of its first part after its own '('
-    // (the fuzzed `complex-instance-garbled.step`, among the seeds, had
-    // `#28 = ( NAME,0.,0.));`, which faulted inside the parser too).
+    // A name the reader's int cannot hold, defined or referred to: refused
+    // from 2^31 on, where it wrapped into the reader's markers for lists.
+    err = readRefusal(boreBoxWith(dir, "big.step", edge, "#2147483648 = EDGE_CURVE('',#22,#24,#26,.T.);"));
+    EXPECT_NE(err.find("line 33: the entity name #2147483648 is beyond 2147483647"), std::string::npos) << err;
+    err = readRefusal(boreBoxWith(dir, "bigref.step", edge, "#21 = EDGE_CURVE('',#0200000000266,#24,#26,.T.);"));
+    EXPECT_NE(err.find("line 33: the entity name #200000000266 is beyond 2147483647"), std::string::npos) << err;
+    err = readRefusal(boreBoxWith(dir, "maxref.step", edge, "#21 = EDGE_CURVE('',#2147483647,#24,#26,.T.);"));
+    EXPECT_EQ(err.find("beyond"), std::string::npos) << err; // the largest int: a dangling reference, not beyond
+    // A complex instance: the keyword of its first part after its own '('.
     err = readRefusal(boreBoxWith(dir, "complex.step", "#42 = ( GEOMETRIC_REPRESENTATION_CONTEXT(2) ",
                                   "#42 = ( 2D GEOMETRIC_REPRESENTATION_CONTEXT(2) "));
     EXPECT_NE(err.find("entity #42 (line 54): no entity type after '=', found '( 2D GEOMETRIC_R'"), std::string::npos)
         << err;
-    EXPECT_THROW(hg::model::StepModel::readInThisProcess(hgtest::sourceDir() /
-                                                         "tests/fuzz/corpus/step/complex-instance-garbled.step"),
-                 hg::InputError);
+    // The fuzzed file, kept as a seed: a name of 12 digits among its garbled lines.
+    err = readRefusal(hgtest::sourceDir() / "tests/fuzz/corpus/step/entity-name-beyond-int.step");
+    EXPECT_NE(err.find("the entity name #200000000266 is beyond 2147483647"), std::string::npos) << err;
     // A keyword may stand apart from its parameters, on the next line too.
     const auto box =
         hg::model::StepModel::read(boreBoxWith(dir, "apart.step", edge, "#21 = EDGE_CURVE \n ('',#22,#24,#26,.T.);"));

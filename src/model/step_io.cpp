@@ -821,9 +821,14 @@ const StepTessellation& StepModel::tessellation() const
 
 StepModel StepModel::readInThisProcess(const std::filesystem::path& file, const std::string& solid)
 {
+    requireStepText(file.string(), file);
+    return readCheckedText(file, solid);
+}
+
+StepModel StepModel::readCheckedText(const std::filesystem::path& file, const std::string& solid)
+{
     auto impl = std::make_unique<Impl>();
     const std::string& name = impl->name = file.string();
-    requireStepText(name, file);
     silenceOpenCascade();
     try {
         ProductTree tree = readTree(name);
@@ -860,7 +865,7 @@ StepModel StepModel::read(const std::filesystem::path& file, const std::string& 
     const auto work = [&]() -> std::string {
         nlohmann::json answer;
         try {
-            const StepModel model = readInThisProcess(file, solid);
+            const StepModel model = readCheckedText(file, solid); // the text was checked here
             answer["summary"] = summaryJson(model.impl_->summary);
             answer["brep"] = brepText(model.impl_->shape);
         } catch (const InputError& e) {

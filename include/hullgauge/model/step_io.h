@@ -104,6 +104,8 @@ class StepModel {
   private:
     struct Impl;
     explicit StepModel(std::unique_ptr<Impl> impl);
+    /// Open CASCADE's part of a read, on a file whose text was checked.
+    static StepModel readCheckedText(const std::filesystem::path& file, const std::string& solid);
     BRepPoint nearestPoint(const Eigen::Vector3d& point, double radius) const;
     std::unique_ptr<Impl> impl_;
 };

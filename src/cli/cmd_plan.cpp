@@ -11,9 +11,9 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/inspect/capability.h"
-#include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/plan/plan_report.h"
+#include "hullgauge/plan/program_plan.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -51,18 +51,6 @@ void writeText(const fs::path& file, const std::string& text)
     if (!f) throw FaultError("cannot write " + file.string());
 }
 
-// The capability check at the planned views (docs/inspection.md, "Capability").
-std::optional<std::vector<inspect::LandmarkCapability>>
-assessPlan(const model::PartProgram& program, const geometry::Station& station, const plan::ViewPlan& result)
-{
-    if (!result.feasible) return std::nullopt;
-    std::vector<geometry::CameraModel> cameras;
-    for (const plan::PlannedView& v : result.views) cameras.push_back(v.camera);
-    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
-    return inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge.get(),
-                                     cameras, station.imageQuality);
-}
-
 /// Prints the expected U of every landmark; false when one is refused and not forced.
 bool reportCapability(const std::vector<inspect::LandmarkCapability>& capability, const PlanArgs& args)
 {
@@ -91,20 +79,6 @@ int run(const PlanArgs& args)
         throw InputError(args.part, "landmarks[].best_views",
                          "best views are written for a different fixture type than the station's");
 
-    plan::PlanProblem problem;
-    problem.part = program.part;
-    problem.solid = program.solid.get();
-    problem.station = &station;
-    problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
-    // With the sub-voxel deviation the tolerance is decided to U, not to a
-    // voxel: the planner's tolerance rules (eq. 5.3.6-1, Rule 3) then ask the
-    // views to resolve ΔV, and the capability check judges the tolerance.
-    const double dv = program.octree.voxelSize();
-    for (const auto& lm : program.landmarks) {
-        const double tolerance = program.inspection.deviation ? std::max(lm.toleranceMm, dv) : lm.toleranceMm;
-        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, tolerance}, lm.bestViews});
-    }
-
     plan::PlanOptions options;
     options.grid.rotationStepDeg = args.rotationStep;
     options.grid.declinationStepDeg = args.declinationStep;
@@ -116,10 +90,12 @@ int run(const PlanArgs& args)
     if (args.floorRadius > 0.0) options.rules.floorRadiusMm = args.floorRadius;
     options.pareLayers = std::max(1, program.octree.adjacencyDepth);
 
-    std::cerr << "hullgauge plan: " << problem.landmarks.size() << " landmarks of " << program.part << "...\n";
-    const auto result = plan::planViews(problem, options);
+    std::cerr << "hullgauge plan: " << program.landmarks.size() << " landmarks of " << program.part << "...\n";
+    const plan::ProgramPlan planned = plan::planProgram(program, station, options);
+    const plan::ViewPlan& result = planned.plan;
+    const plan::PlanProblem problem = plan::planProblem(program, station);
     auto json = plan::planToJson(result, problem);
-    const auto capability = assessPlan(program, station, result);
+    const auto& capability = planned.capability;
     if (capability) {
         json["capability"] = nlohmann::json::array();
         for (const auto& c : *capability) json["capability"].push_back(inspect::toJson(c));

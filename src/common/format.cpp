@@ -1,5 +1,7 @@
 #include "hullgauge/common/format.h"
 
+#include <chrono>
+#include <ctime>
 #include <sstream>
 
 namespace hg {
@@ -10,6 +12,19 @@ std::string formatNumber(double v, int precision)
     s.precision(precision);
     s << v;
     return s.str();
+}
+
+std::string localTimestamp()
+{
+    const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    std::tm tm{};
+    localtime_r(&now, &tm);
+    char b[40];
+    std::strftime(b, sizeof b, "%Y-%m-%dT%H:%M:%S%z", &tm);
+    std::string text = b;
+    // strftime writes the offset as +hhmm; ISO 8601's extended form is +hh:mm.
+    if (text.size() >= 5) text.insert(text.size() - 2, ":");
+    return text;
 }
 
 } // namespace hg

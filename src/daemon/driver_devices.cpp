@@ -2,6 +2,7 @@
 
 #include "frame_pool.h"
 
+#include "hullgauge/commission/twin.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/drivers/simulation.h"
@@ -18,29 +19,11 @@ namespace {
 
 using drivers::LifecycleState;
 
-/// A unit vector of uniformly random direction (a normal sample, normalised).
-geometry::Vec3 randomDirection(std::mt19937_64& rng)
-{
-    std::normal_distribution<double> normal;
-    geometry::Vec3 v;
-    do v = geometry::Vec3(normal(rng), normal(rng), normal(rng));
-    while (v.norm() < 1e-9);
-    return v.normalized();
-}
-
-/// A seat drawn uniformly within the play (docs/daemon.md, "Seating"): the
-/// shift and the rotation vector each uniform in the ball of its play, the
-/// rotation about the nominal mesh's bounding-box centre c, then the shift:
-/// X ↦ R (X − c) + c + d.
+/// A seat drawn uniformly within the play (docs/daemon.md, "Seating"), as
+/// commissioning draws the twin's seats (commission/twin.h).
 SimulatedSeat drawSeat(std::mt19937_64& rng, const station::DaemonConfig::Seating& play, const geometry::Vec3& c)
 {
-    std::uniform_real_distribution<double> unit(0.0, 1.0);
-    // The cube root of a uniform variable: uniform in the volume of the ball.
-    const geometry::Vec3 d = randomDirection(rng) * (play.shiftMm * std::cbrt(unit(rng)));
-    const geometry::Vec3 axis = randomDirection(rng);
-    const double angle = geometry::degToRad(play.rotationDeg * std::cbrt(unit(rng)));
-    const geometry::Mat3 R = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
-    return {{R, c + d - R * c}, c};
+    return {commission::drawSeat(rng, play.shiftMm, play.rotationDeg, c), c};
 }
 
 drivers::StationIndication indication(LampPattern p)

@@ -121,10 +121,11 @@ CalibrationUncertainty parseCalibrationUncertainty(const ConfigNode& cam, const 
 
 ImageQuality parseImageQuality(const ConfigNode& node)
 {
-    node.allowOnlyKeys({"noise_grey", "contrast_grey"});
+    node.allowOnlyKeys({"noise_grey", "contrast_grey", "blur_sigma_px"});
     ImageQuality q;
     q.noiseGrey = node["noise_grey"].asDoubleIn(0.0, 65535.0);
     q.contrastGrey = node["contrast_grey"].asDoubleIn(0.0, 65535.0);
+    if (auto blur = node.optional("blur_sigma_px")) q.blurSigmaPx = blur->asDoubleIn(0.0, 50.0);
     if (!(q.contrastGrey > 0.0)) node["contrast_grey"].fail("the backlight's contrast must be positive");
     q.given = true;
     return q;

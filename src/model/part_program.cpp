@@ -471,12 +471,33 @@ CadModel loadCadModel(const std::filesystem::path& file, int depth, int adjacenc
     return model;
 }
 
+namespace {
+
+// docs/commissioning.md, "Release": the record commissioning writes.
+ReleaseRecord parseRelease(const ConfigNode& node)
+{
+    node.allowOnlyKeys({"version", "verification_sha256", "released_by", "released_at"});
+    ReleaseRecord r;
+    r.version = static_cast<int>(node["version"].asIntIn(1, 1000000));
+    r.verificationSha256 = node["verification_sha256"].asString();
+    const bool hex = r.verificationSha256.size() == 64 &&
+                     r.verificationSha256.find_first_not_of("0123456789abcdef") == std::string::npos;
+    if (!hex) node["verification_sha256"].fail("expected 64 lower-case hex digits (SHA-256)");
+    r.releasedBy = node["released_by"].asString();
+    if (r.releasedBy.empty()) node["released_by"].fail("who released the program is empty");
+    r.releasedAt = node["released_at"].asString();
+    if (r.releasedAt.empty()) node["released_at"].fail("when the program was released is empty");
+    return r;
+}
+
+} // namespace
+
 PartProgram loadPartProgram(const std::filesystem::path& file)
 {
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
     root.allowOnlyKeys({"part", "mesh", "mesh_solid", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters",
-                        "inspection", "alignment", "decision_rule"});
+                        "inspection", "alignment", "decision_rule", "release"});
 
     PartProgram program;
     program.file = file;
@@ -524,6 +545,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
         program.inspection.simpleDecision = simple;
     }
     if (auto n = root.optional("alignment")) program.alignment = parseAlignment(*n, index);
+    if (auto n = root.optional("release")) program.release = parseRelease(*n);
     return program;
 }
 

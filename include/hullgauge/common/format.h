@@ -9,4 +9,9 @@ namespace hg {
 
 std::string formatNumber(double v, int precision = 6);
 
+/// The wall clock now as local time in ISO 8601 with the zone's offset
+/// ("2026-12-06T13:05:12+01:00"): when a program was released
+/// (docs/commissioning.md, "Release").
+std::string localTimestamp();
+
 } // namespace hg

@@ -33,7 +33,10 @@ struct CalibrationUncertainty {
 struct ImageQuality {
     double noiseGrey = 2.0;      ///< standard deviation of a background pixel, grey levels
     double contrastGrey = 100.0; ///< background level − object level, grey levels
-    bool given = false;          ///< false: the defaults above
+    /// The optics' blur, Gaussian σ in pixels (`blur_sigma_px`, 0 when not
+    /// given): what the digital twin renders with (docs/commissioning.md).
+    double blurSigmaPx = 0.0;
+    bool given = false; ///< false: the defaults above
 };
 
 struct Station {

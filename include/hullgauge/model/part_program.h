@@ -114,6 +114,16 @@ struct AlignmentSettings {
     int correctPosesAfter = 2;
 };
 
+/// A released program's record (docs/commissioning.md, "Release"): which
+/// version it is, the digest of the verification report that proved it on
+/// the station's digital twin, who released it and when.
+struct ReleaseRecord {
+    int version = 0;
+    std::string verificationSha256; ///< 64 hex digits: SHA-256 of verification.json
+    std::string releasedBy;
+    std::string releasedAt; ///< ISO 8601 with the zone, as written
+};
+
 struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
@@ -135,6 +145,8 @@ struct PartProgram {
     AlignmentSettings alignment;
     /// Kind of fixture the best views are written for (rotation/declination or rail), when any are given.
     std::optional<geometry::FixtureType> bestViewFixture;
+    /// `release`: present in a program `hullgauge commission` released.
+    std::optional<ReleaseRecord> release;
 
     /// How far a landmark may lie from the mesh surface: max(0.01 mm, ΔV/4).
     /// Tessellation of curved CAD faces moves the mesh off the designer's

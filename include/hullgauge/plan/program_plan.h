@@ -1,0 +1,55 @@
+// A part program planned at a station: what `hullgauge plan` and
+// `hullgauge commission` both do (docs/planning.md, docs/commissioning.md) —
+// the planner's problem made from the program, the views planned, the
+// capability check at the planned views (docs/inspection.md, "Capability")
+// and the frame check: the whole part must stay inside every planned view's
+// frame at every seat the nest allows (the alignment limits), else the plan
+// refuses the lens.
+#pragma once
+
+#include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/capability.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/plan/planner.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace hg::plan {
+
+/// The planner's problem for a program at a station (pointers into both,
+/// which must outlive it). With the sub-voxel deviation a landmark's
+/// tolerance is decided to U, not to a voxel: the planner's tolerance rules
+/// (eq. 5.3.6-1, Rule 3) then ask the views to resolve ΔV.
+PlanProblem planProblem(const model::PartProgram& program, const geometry::Station& station);
+
+/// How far (pixels) the part's silhouette stays inside a frame: the smallest
+/// distance of a projected vertex of `mesh` from the sensor's edge (negative:
+/// the part is cut; -infinity: a vertex lies behind the camera).
+double frameMarginPx(const model::TriangleMesh& mesh, const geometry::CameraModel& camera);
+
+/// The frame check of one planned view.
+struct FrameCheck {
+    std::string view;
+    double nominalMarginPx = 0.0; ///< frameMarginPx of the part as drawn
+    /// The most a seat within the play moves a point of the part in the image:
+    /// (shift + rotation · the part's radius about its centre) · f / the nearest depth.
+    double seatAllowancePx = 0.0;
+    bool holdsPart() const { return nominalMarginPx - seatAllowancePx >= 1.0; }
+};
+
+struct ProgramPlan {
+    ViewPlan plan;
+    /// Expected U per landmark at the planned views; none when the plan is infeasible.
+    std::optional<std::vector<inspect::LandmarkCapability>> capability;
+    std::vector<FrameCheck> frames;
+};
+
+/// planViews on planProblem, then the capability and frame checks; a view
+/// that cannot hold the part makes the plan infeasible with a problem naming
+/// the view and the numbers.
+ProgramPlan planProgram(const model::PartProgram& program, const geometry::Station& station,
+                        const PlanOptions& options);
+
+} // namespace hg::plan

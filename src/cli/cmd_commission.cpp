@@ -1,0 +1,385 @@
+// hullgauge commission --cad M --station S --out DIR (--tolerance T | --program P.yaml) [--fix] ...
+// From a CAD model to a released part program the station has proven on its
+// own digital twin (docs/commissioning.md): landmarks suggested (or the
+// engineer's), the program checked and planned, then verified on the twin —
+// the nominal part at N random seats within the nest's play, seeded defects
+// at every landmark — and released with a version only when it passes. A
+// program that fails names each landmark's failing test and its fix; --fix
+// drops the landmarks that fail and verifies again.
+//
+// Exit status: 0 released, 1 verified but not released (the report says
+// why), 2 bad input or no plan, 3 a fault (a file that cannot be written).
+#include "command.h"
+#include "hullgauge/commission/report.h"
+#include "hullgauge/commission/verification.h"
+#include "hullgauge/common/digest.h"
+#include "hullgauge/common/durable_file.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
+#include "hullgauge/plan/landmark_suggest.h"
+#include "hullgauge/plan/plan_report.h"
+#include "hullgauge/plan/program_plan.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <pwd.h>
+#include <set>
+#include <unistd.h>
+
+namespace hg::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct CommissionArgs {
+    std::string cad;
+    std::string solid;
+    std::string station;
+    std::string program;
+    std::string out;
+    std::string part;
+    std::string releasedBy;
+    std::size_t count = 8;
+    double toleranceMm = 0.0;
+    int depth = 8;
+    int adjacencyDepth = 4;
+    std::size_t seats = 20;
+    std::vector<double> defectMultiples{1.0, 2.0, 3.0};
+    std::uint64_t seed = 1;
+    double seatShiftMm = -1.0;
+    double seatRotationDeg = -1.0;
+    bool fix = false;
+    int rounds = 3;
+};
+
+void say(const std::string& line)
+{
+    std::cerr << "hullgauge commission: " << line << '\n';
+}
+
+/// Wall time of the phases, as the progress callback marks them.
+class PhaseClock {
+  public:
+    void start(const std::string& phase) { started_[phase] = Clock::now(); }
+    void stop(const std::string& phase)
+    {
+        ms_[phase] += std::chrono::duration<double, std::milli>(Clock::now() - started_.at(phase)).count();
+    }
+    const std::map<std::string, double>& ms() const { return ms_; }
+
+  private:
+    std::map<std::string, Clock::time_point> started_;
+    std::map<std::string, double> ms_;
+};
+
+std::string whoAmI(const CommissionArgs& args)
+{
+    if (!args.releasedBy.empty()) return args.releasedBy;
+    if (const char* sudo = std::getenv("SUDO_USER"); sudo && *sudo) return sudo;
+    if (const passwd* pw = getpwuid(getuid()); pw && pw->pw_name) return pw->pw_name;
+    return "uid " + std::to_string(getuid());
+}
+
+/// The part's name: --part, else the CAD file's stem.
+std::string partName(const CommissionArgs& args)
+{
+    return args.part.empty() ? fs::path(args.cad).stem().string() : args.part;
+}
+
+/// The draft from suggested landmarks (docs/part-program.md, "Suggesting landmarks").
+YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& station, const std::string& meshName,
+                        PhaseClock& clock)
+{
+    clock.start("suggest");
+    const model::CadModel cad = model::loadCadModel(args.cad, args.depth, args.adjacencyDepth, args.solid);
+    plan::SuggestProblem problem;
+    problem.solid = cad.solid;
+    problem.brep = cad.brep.get();
+    problem.station = &station;
+    problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};
+    plan::SuggestOptions options;
+    options.count = args.count;
+    options.toleranceMm = args.toleranceMm;
+    const plan::Suggestion s = plan::suggestLandmarks(problem, options);
+    clock.stop("suggest");
+    for (const std::string& note : s.notes) say("note: " + note);
+    if (s.landmarks.empty())
+        throw InputError(args.cad, "landmarks",
+                         "no point of the part is inspectable at the station " + args.station + " with tolerance_mm " +
+                             formatNumber(args.toleranceMm) + (s.notes.empty() ? "" : ": " + s.notes.front()));
+    say(std::to_string(s.landmarks.size()) + " landmarks suggested");
+    YAML::Node draft = YAML::Load(plan::landmarksYaml(s, args.toleranceMm, {}));
+    YAML::Node program;
+    program["part"] = partName(args);
+    program["mesh"] = meshName;
+    if (!args.solid.empty()) program["mesh_solid"] = args.solid;
+    program["octree"]["depth"] = args.depth;
+    program["octree"]["adjacency_depth"] = args.adjacencyDepth;
+    program["landmarks"] = draft["landmarks"];
+    return program;
+}
+
+/// The engineer's program as the draft, its mesh named as copied into the output folder.
+YAML::Node engineerDraft(const CommissionArgs& args, const std::string& meshName)
+{
+    YAML::Node program = YAML::LoadFile(args.program);
+    program["mesh"] = meshName;
+    program.remove("release");
+    if (!args.part.empty()) program["part"] = args.part;
+    return program;
+}
+
+std::string emit(const YAML::Node& node, const std::string& header)
+{
+    YAML::Emitter out;
+    out << node;
+    return header + out.c_str() + "\n";
+}
+
+/// Drops the landmarks in `ids` from the draft, and the parameters built on them.
+void dropLandmarks(YAML::Node& draft, const std::set<std::string>& ids)
+{
+    YAML::Node kept(YAML::NodeType::Sequence);
+    for (const auto& lm : draft["landmarks"])
+        if (!ids.count(lm["id"].as<std::string>())) kept.push_back(lm);
+    draft["landmarks"] = kept;
+    if (!draft["parameters"]) return;
+    YAML::Node params(YAML::NodeType::Sequence);
+    for (const auto& p : draft["parameters"]) {
+        bool uses = false;
+        for (const auto& id : p["landmarks"]) uses = uses || ids.count(id.as<std::string>()) > 0;
+        if (!uses) params.push_back(p);
+    }
+    if (params.size() == 0)
+        draft.remove("parameters");
+    else
+        draft["parameters"] = params;
+}
+
+struct Round {
+    model::PartProgram program;
+    plan::ProgramPlan planned;
+    std::optional<commission::VerificationReport> report;
+};
+
+plan::PlanOptions planOptions(const model::PartProgram& program)
+{
+    plan::PlanOptions options;
+    options.pareLayers = std::max(1, program.octree.adjacencyDepth);
+    return options;
+}
+
+/// One round: the draft loaded as the daemon loads it, planned, verified.
+Round verifyDraft(const CommissionArgs& args, const geometry::Station& station, const fs::path& draftFile,
+                  PhaseClock& clock)
+{
+    clock.start("plan");
+    Round r{model::loadPartProgram(draftFile), {}, std::nullopt};
+    r.planned = plan::planProgram(r.program, station, planOptions(r.program));
+    clock.stop("plan");
+    if (!r.planned.plan.feasible) return r;
+    commission::VerificationProblem problem;
+    problem.program = &r.program;
+    problem.station = &station;
+    for (const plan::PlannedView& v : r.planned.plan.views) {
+        problem.poses.push_back(v.pose);
+        std::vector<std::string> ids;
+        for (std::size_t l : v.landmarks) ids.push_back(r.program.landmarks[l].id);
+        problem.viewLandmarks.push_back(ids);
+    }
+    problem.capability = *r.planned.capability;
+    if (station.document && station.document->has("segmentation"))
+        problem.segmentation = vision::parseSegmentation((*station.document)["segmentation"]);
+    commission::VerificationOptions options;
+    options.seats = args.seats;
+    options.defectMultiples = args.defectMultiples;
+    options.seed = args.seed;
+    options.seatShiftMm = args.seatShiftMm;
+    options.seatRotationDeg = args.seatRotationDeg;
+    const auto progress = [&](const std::string& phase, std::size_t done, std::size_t total) {
+        if (done == 0) clock.start(phase);
+        if (done == total) {
+            clock.stop(phase);
+            say(phase + ": " + std::to_string(total) + " cycles on the twin");
+        }
+        return true;
+    };
+    r.report = commission::verifyProgram(problem, options, commission::twinFrames(station, args.seed), progress);
+    return r;
+}
+
+/// The landmarks whose findings --fix can act on by dropping them.
+std::set<std::string> droppable(const commission::VerificationReport& report)
+{
+    std::set<std::string> ids;
+    for (const commission::Finding& f : report.findings)
+        if (std::find(f.fixes.begin(), f.fixes.end(), commission::Fix::DropLandmark) != f.fixes.end())
+            ids.insert(f.subject);
+    return ids;
+}
+
+void writePlan(const fs::path& out, const Round& r, const geometry::Station& station)
+{
+    const plan::PlanProblem problem = plan::planProblem(r.program, station);
+    nlohmann::json j = plan::planToJson(r.planned.plan, problem);
+    if (r.planned.capability) {
+        j["capability"] = nlohmann::json::array();
+        for (const auto& c : *r.planned.capability) j["capability"].push_back(inspect::toJson(c));
+    }
+    replaceFileDurably(out / "plan.json", j.dump(2) + "\n");
+    replaceFileDurably(out / "plan.md", plan::planMarkdown(r.planned.plan, problem));
+}
+
+/// Every released version whole in a folder of its own (releases/<part>.v<N>/):
+/// the program, its views, its model and the verification it rests on.
+void keepVersion(const fs::path& out, const std::string& part, int version, const std::string& program,
+                 const std::string& views, const model::PartProgram& draft)
+{
+    const fs::path folder = out / "releases" / (part + ".v" + std::to_string(version));
+    fs::create_directories(folder);
+    fs::copy_file(draft.meshFile, folder / draft.meshFile.filename(), fs::copy_options::overwrite_existing);
+    for (const char* file : {"verification.json", "verification.md", "plan.json"})
+        fs::copy_file(out / file, folder / file, fs::copy_options::overwrite_existing);
+    replaceFileDurably(folder / (part + "-views.yaml"), views);
+    replaceFileDurably(folder / (part + ".yaml"), program);
+}
+
+/// The release (docs/commissioning.md, "Release"): the program with its
+/// record and its views; every version kept under releases/.
+int release(const CommissionArgs& args, const fs::path& out, YAML::Node draft, const Round& r,
+            const geometry::Station& station, const std::string& reportJson)
+{
+    const std::string part = r.program.part;
+    const fs::path released = out / (part + ".yaml");
+    int version = 1;
+    if (fs::exists(released)) {
+        const model::PartProgram previous = model::loadPartProgram(released);
+        if (previous.release) version = previous.release->version + 1;
+    }
+    const std::string views = part + "-views.yaml";
+    const std::string posesText = plan::posesYaml(r.planned.plan, station.fixture.type);
+    draft["release"]["version"] = version;
+    draft["release"]["verification_sha256"] = sha256Hex(reportJson);
+    draft["release"]["released_by"] = whoAmI(args);
+    draft["release"]["released_at"] = localTimestamp();
+    const std::string text = emit(draft, "# Part program released by hullgauge commission (docs/commissioning.md).\n"
+                                         "# Its views: " +
+                                             views + "; its verification: verification.json.\n");
+    keepVersion(out, part, version, text, posesText, r.program);
+    replaceFileDurably(out / views, posesText);
+    replaceFileDurably(released, text);
+    say("released " + part + " version " + std::to_string(version) + ": " + released.string() + " (views " +
+        (out / views).string() + ")");
+    return 0;
+}
+
+int run(const CommissionArgs& args)
+{
+    const geometry::Station station = geometry::loadStation(args.station);
+    const fs::path out = args.out;
+    fs::create_directories(out);
+    const std::string meshName = fs::path(args.cad).filename().string();
+    if (fs::absolute(args.cad) != fs::absolute(out / meshName))
+        fs::copy_file(args.cad, out / meshName, fs::copy_options::overwrite_existing);
+    PhaseClock clock;
+    YAML::Node draft =
+        args.program.empty() ? suggestDraft(args, station, meshName, clock) : engineerDraft(args, meshName);
+    const fs::path draftFile = out / (partName(args) + ".draft.yaml");
+    for (int round = 1;; ++round) {
+        replaceFileDurably(draftFile, emit(draft, "# Draft part program of hullgauge commission (round " +
+                                                      std::to_string(round) + ").\n"));
+        Round r = verifyDraft(args, station, draftFile, clock);
+        writePlan(out, r, station);
+        if (!r.report) {
+            say("no plan for " + r.program.part + ":");
+            for (const std::string& p : r.planned.plan.problems) std::cerr << "  " << p << '\n';
+            return static_cast<int>(ExitStatus::BadInput);
+        }
+        r.report->phaseMs = clock.ms();
+        const std::string reportJson = commission::toJson(*r.report).dump(2) + "\n";
+        replaceFileDurably(out / "verification.json", reportJson);
+        replaceFileDurably(out / "verification.md", commission::toMarkdown(*r.report));
+        if (r.report->released) return release(args, out, draft, r, station, reportJson);
+        say(r.program.part + " is not released (" + (out / "verification.md").string() + "):");
+        for (const commission::Finding& f : r.report->findings)
+            std::cerr << "  " << f.subject << " (" << f.test << "): " << f.what << "; fix: " << f.fixText << '\n';
+        const std::set<std::string> drop = droppable(*r.report);
+        if (!args.fix || round >= args.rounds || drop.empty() || drop.size() >= r.program.landmarks.size())
+            return static_cast<int>(ExitStatus::PartFails);
+        std::string names;
+        for (const std::string& id : drop) names += (names.empty() ? "" : ", ") + id;
+        say("--fix: dropping " + names + " and verifying again");
+        dropLandmarks(draft, drop);
+    }
+}
+
+std::function<int()> factory(CLI::App& app)
+{
+    auto args = std::make_shared<CommissionArgs>();
+    auto* cmd = app.add_subcommand("commission", "from a CAD model to a part program released after the station "
+                                                 "proved it on its digital twin");
+    cmd->add_option("--cad", args->cad, "CAD model: STL, OBJ, PLY, OFF or STEP")->required()->check(CLI::ExistingFile);
+    cmd->add_option("--solid", args->solid, "the STEP file's solid that is the part (as mesh_solid)");
+    cmd->add_option("--station", args->station, "station description (YAML)")->required()->check(CLI::ExistingFile);
+    cmd->add_option("--out", args->out, "folder for the program, its views, plan and verification report")->required();
+    auto* program = cmd->add_option("--program", args->program,
+                                    "the engineer's part program (its landmarks) "
+                                    "instead of suggested ones")
+                        ->check(CLI::ExistingFile);
+    auto* tolerance = cmd->add_option("--tolerance", args->toleranceMm,
+                                      "the drawing's tolerance for the suggested "
+                                      "landmarks, mm")
+                          ->check(CLI::PositiveNumber);
+    program->excludes(tolerance);
+    tolerance->excludes(program);
+    cmd->add_option("--part", args->part, "the part's name (default: the CAD file's name)");
+    cmd->add_option("--count", args->count, "landmarks to suggest")->check(CLI::Range(1, 1000))->capture_default_str();
+    cmd->add_option("--depth", args->depth, "octree depth of a suggested program")
+        ->check(CLI::Range(1, 15))
+        ->capture_default_str();
+    cmd->add_option("--adjacency-depth", args->adjacencyDepth, "octree adjacency_depth of a suggested program")
+        ->check(CLI::Range(1, 64))
+        ->capture_default_str();
+    cmd->add_option("--seats", args->seats, "random seats of the nominal part on the twin")
+        ->check(CLI::Range(1, 10000))
+        ->capture_default_str();
+    cmd->add_option("--defects", args->defectMultiples,
+                    "multiples of the tolerance at which defects are seeded (added and removed) at every landmark; "
+                    "2 must be among them for a release")
+        ->delimiter(',')
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--seed", args->seed, "seed of the seats and the twin's noise")->capture_default_str();
+    cmd->add_option("--seat-shift", args->seatShiftMm, "the nest's play: shift, mm (default: alignment.max_shift_mm)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--seat-rotation", args->seatRotationDeg,
+                    "the nest's play: rotation, degrees (default: alignment.max_rotation_deg)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_flag("--fix", args->fix, "drop the landmarks that fail and verify again");
+    cmd->add_option("--rounds", args->rounds, "verification rounds with --fix")
+        ->check(CLI::Range(1, 20))
+        ->capture_default_str();
+    cmd->add_option("--released-by", args->releasedBy, "who releases the program (default: the user)");
+    return [args] {
+        if (args->program.empty() && args->toleranceMm <= 0.0)
+            throw InputError("", "--tolerance", "give the drawing's tolerance (--tolerance) or a --program");
+        if (std::find(args->defectMultiples.begin(), args->defectMultiples.end(), 2.0) == args->defectMultiples.end())
+            throw InputError("", "--defects",
+                             "the release multiple 2 must be among the defect multiples: a program is released only "
+                             "when a defect of 2 × tolerance is caught at every landmark");
+        return run(*args);
+    };
+}
+
+HG_REGISTER_COMMAND("commission", factory);
+
+} // namespace
+} // namespace hg::cli

@@ -1,0 +1,95 @@
+#include "hullgauge/plan/program_plan.h"
+
+#include "hullgauge/common/format.h"
+#include "hullgauge/inspect/part_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace hg::plan {
+namespace {
+
+/// The frame check of `camera` for the part seated anywhere within the
+/// alignment limits (the nest's play, docs/alignment.md).
+FrameCheck checkFrame(const std::string& id, const model::TriangleMesh& mesh, const geometry::CameraModel& camera,
+                      const model::AlignmentSettings& play)
+{
+    FrameCheck c;
+    c.view = id;
+    c.nominalMarginPx = frameMarginPx(mesh, camera);
+    const geometry::Vec3 centre = mesh.bounds().center();
+    double radius = 0.0;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const geometry::Vec3& v : mesh.vertices) {
+        radius = std::max(radius, (v - centre).norm());
+        nearest = std::min(nearest, camera.cameraFromPart().apply(v).z());
+    }
+    const double motionMm = play.maxShiftMm + geometry::degToRad(play.maxRotationDeg) * radius;
+    const auto& K = camera.intrinsics().K;
+    c.seatAllowancePx =
+        nearest > 0.0 ? motionMm * std::max(K(0, 0), K(1, 1)) / nearest : std::numeric_limits<double>::infinity();
+    return c;
+}
+
+std::string frameProblem(const FrameCheck& c, const model::AlignmentSettings& play)
+{
+    return "view " + c.view + " does not hold the whole part in its frame: the part as drawn lies " +
+           formatNumber(c.nominalMarginPx, 3) + " px inside the frame's edge and a seat within the play (" +
+           formatNumber(play.maxShiftMm) + " mm, " + formatNumber(play.maxRotationDeg) + "°) moves it up to " +
+           formatNumber(c.seatAllowancePx, 3) +
+           " px; a shorter lens or the camera farther from the part (or a smaller play: alignment limits)";
+}
+
+} // namespace
+
+PlanProblem planProblem(const model::PartProgram& program, const geometry::Station& station)
+{
+    PlanProblem problem;
+    problem.part = program.part;
+    problem.solid = program.solid.get();
+    problem.station = &station;
+    problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
+    const double dv = program.octree.voxelSize();
+    for (const auto& lm : program.landmarks) {
+        const double tolerance = program.inspection.deviation ? std::max(lm.toleranceMm, dv) : lm.toleranceMm;
+        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, tolerance}, lm.bestViews});
+    }
+    return problem;
+}
+
+double frameMarginPx(const model::TriangleMesh& mesh, const geometry::CameraModel& camera)
+{
+    const cv::Size size = camera.imageSize();
+    double margin = std::numeric_limits<double>::infinity();
+    for (const geometry::Vec3& v : mesh.vertices) {
+        const auto p = camera.project(v);
+        if (!p) return -std::numeric_limits<double>::infinity();
+        // Pixel centres run from 0 to size − 1; the sensor's edge lies half a pixel beyond.
+        margin = std::min({margin, p->x() + 0.5, size.width - 0.5 - p->x(), p->y() + 0.5, size.height - 0.5 - p->y()});
+    }
+    return margin;
+}
+
+ProgramPlan planProgram(const model::PartProgram& program, const geometry::Station& station, const PlanOptions& options)
+{
+    const PlanProblem problem = planProblem(program, station);
+    ProgramPlan out;
+    out.plan = planViews(problem, options);
+    for (const PlannedView& v : out.plan.views) {
+        out.frames.push_back(checkFrame(v.id, program.solid->mesh(), v.camera, program.alignment));
+        if (!out.frames.back().holdsPart()) {
+            out.plan.problems.push_back(frameProblem(out.frames.back(), program.alignment));
+            out.plan.feasible = false;
+        }
+    }
+    if (!out.plan.feasible) return out;
+    std::vector<geometry::CameraModel> cameras;
+    for (const PlannedView& v : out.plan.views) cameras.push_back(v.camera);
+    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
+    out.capability = inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program),
+                                               gauge.get(), cameras, station.imageQuality);
+    return out;
+}
+
+} // namespace hg::plan

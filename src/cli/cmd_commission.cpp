@@ -49,7 +49,7 @@ struct CommissionArgs {
     std::string releasedBy;
     std::size_t count = 8;
     double toleranceMm = 0.0;
-    int depth = 8;
+    int depth = 0; ///< 0: the finest the station resolves (plan::finestResolvedDepth)
     int adjacencyDepth = 4;
     std::size_t seats = 20;
     std::vector<double> defectMultiples{1.0, 2.0, 3.0};
@@ -99,7 +99,12 @@ YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& sta
                         PhaseClock& clock)
 {
     clock.start("suggest");
-    const model::CadModel cad = model::loadCadModel(args.cad, args.depth, args.adjacencyDepth, args.solid);
+    model::CadModel cad = model::loadCadModel(args.cad, std::max(args.depth, 8), args.adjacencyDepth, args.solid);
+    if (args.depth == 0) {
+        const int depth = plan::finestResolvedDepth(cad.solid->mesh(), station, args.adjacencyDepth);
+        say("octree depth " + std::to_string(depth) + ": the finest whose voxels the views resolve at the part");
+        cad = model::loadCadModel(args.cad, depth, args.adjacencyDepth, args.solid);
+    }
     plan::SuggestProblem problem;
     problem.solid = cad.solid;
     problem.brep = cad.brep.get();
@@ -121,7 +126,7 @@ YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& sta
     program["part"] = partName(args);
     program["mesh"] = meshName;
     if (!args.solid.empty()) program["mesh_solid"] = args.solid;
-    program["octree"]["depth"] = args.depth;
+    program["octree"]["depth"] = cad.octree.depth;
     program["octree"]["adjacency_depth"] = args.adjacencyDepth;
     program["landmarks"] = draft["landmarks"];
     return program;
@@ -342,9 +347,9 @@ std::function<int()> factory(CLI::App& app)
     tolerance->excludes(program);
     cmd->add_option("--part", args->part, "the part's name (default: the CAD file's name)");
     cmd->add_option("--count", args->count, "landmarks to suggest")->check(CLI::Range(1, 1000))->capture_default_str();
-    cmd->add_option("--depth", args->depth, "octree depth of a suggested program")
-        ->check(CLI::Range(1, 15))
-        ->capture_default_str();
+    cmd->add_option("--depth", args->depth,
+                    "octree depth of a suggested program (default: the finest whose voxels the station resolves)")
+        ->check(CLI::Range(1, 15));
     cmd->add_option("--adjacency-depth", args->adjacencyDepth, "octree adjacency_depth of a suggested program")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();

@@ -57,12 +57,26 @@ model::TriangleMesh seedDefect(const model::TriangleMesh& nominal, const Eigen::
     if (defect.kind == DefectKind::Added)
         return model::unionOf(nominal, defectBox(landmark, normal, defect, halfWidthMm));
     if (sightDirections.empty()) return model::difference(nominal, defectBox(landmark, normal, defect, halfWidthMm));
-    // Along each line of sight, as far as the part reaches from the landmark.
+    // Along each line of sight, as far as the part reaches from the landmark;
+    // lines of sight whose cut runs the same way (within 1°, either sense)
+    // give the same box and are cut once.
     const double length = nominal.bounds().diagonal().norm();
-    model::TriangleMesh made = nominal;
-    for (const Eigen::Vector3d& sight : sightDirections)
-        made = model::difference(made, defectBox(landmark, normal, defect, halfWidthMm, sight.normalized(), length));
-    return made;
+    const Eigen::Vector3d n = normal.normalized();
+    std::vector<Eigen::Vector3d> ways;
+    for (const Eigen::Vector3d& sight : sightDirections) {
+        Eigen::Vector3d t = sight - sight.dot(n) * n;
+        if (t.norm() < 1e-9) continue;
+        t.normalize();
+        const bool seen = std::any_of(ways.begin(), ways.end(), [&](const Eigen::Vector3d& w) {
+            return std::abs(w.dot(t)) > std::cos(1.0 * 3.14159265358979323846 / 180.0);
+        });
+        if (!seen) ways.push_back(t);
+    }
+    if (ways.empty()) return model::difference(nominal, defectBox(landmark, normal, defect, halfWidthMm));
+    std::vector<model::TriangleMesh> cuts;
+    for (const Eigen::Vector3d& way : ways)
+        cuts.push_back(defectBox(landmark, normal, defect, halfWidthMm, way, length));
+    return model::difference(nominal, cuts);
 }
 
 } // namespace hg::commission

@@ -34,7 +34,8 @@ json trialJson(const DefectTrial& t)
             {"status", inspect::toString(t.status)},
             {"deviation_mm", optionalNumber(t.deviationMm)},
             {"uncertainty_mm", optionalNumber(t.uncertaintyMm)},
-            {"caught", t.caught()}};
+            {"caught", t.caught()},
+            {"error", t.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.error)}};
 }
 
 json landmarkJson(const LandmarkVerification& v)
@@ -54,6 +55,12 @@ json landmarkJson(const LandmarkVerification& v)
             {"u_ratio",
              v.measuredUMaxMm && v.predictedUMm > 0.0 ? json(*v.measuredUMaxMm / v.predictedUMm) : json(nullptr)},
             {"deviation_max_abs_mm", optionalNumber(v.deviationMaxAbsMm)},
+            {"worst_u_budget", v.worstBudget ? json{{"edge_noise_mm", v.worstBudget->edgeNoise},
+                                                    {"method_mm", v.worstBudget->method},
+                                                    {"views_mm", v.worstBudget->views},
+                                                    {"alignment_mm", v.worstBudget->alignment},
+                                                    {"calibration_mm", v.worstBudget->calibration}}
+                                             : json(nullptr)},
             {"smallest_caught_multiple", optionalNumber(v.smallestCaughtMultiple)},
             {"defects", trials},
             {"passed", v.passed}};
@@ -103,7 +110,11 @@ void defectTable(std::ostringstream& md, const VerificationReport& r)
         for (const DefectTrial& t : v.defects)
             md << "| " << v.id << " | " << toString(t.defect.kind) << " " << num(t.multiple) << " × tol | "
                << num(t.defect.depthMm) << " | " << inspect::toString(t.status) << " | " << num(t.deviationMm) << " | "
-               << num(t.uncertaintyMm) << " | " << (t.caught() ? "yes" : "**no**") << " |\n";
+               << num(t.uncertaintyMm) << " | "
+               << (t.caught()        ? "yes"
+                   : t.error.empty() ? "**no**"
+                                     : "**not seeded**")
+               << " |\n";
 }
 
 void viewTable(std::ostringstream& md, const VerificationReport& r)

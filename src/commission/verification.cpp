@@ -13,6 +13,9 @@ namespace {
 
 using inspect::LandmarkStatus;
 
+/// The nest's play assumed, as a share of the alignment limits, when none is given.
+constexpr double kPlayOfLimits = 0.8;
+
 double median(std::vector<double> v)
 {
     if (v.empty()) return 0.0;
@@ -73,9 +76,12 @@ class Verifier {
     {
         report_.part = program_.part;
         report_.options = options;
-        report_.seatShiftMm = options.seatShiftMm >= 0.0 ? options.seatShiftMm : program_.alignment.maxShiftMm;
-        report_.seatRotationDeg =
-            options.seatRotationDeg >= 0.0 ? options.seatRotationDeg : program_.alignment.maxRotationDeg;
+        // The alignment limits are where a seat is refused; a nest's play lies
+        // inside them with room for the seat's measurement (docs/commissioning.md).
+        report_.seatShiftMm =
+            options.seatShiftMm >= 0.0 ? options.seatShiftMm : kPlayOfLimits * program_.alignment.maxShiftMm;
+        report_.seatRotationDeg = options.seatRotationDeg >= 0.0 ? options.seatRotationDeg
+                                                                 : kPlayOfLimits * program_.alignment.maxRotationDeg;
         report_.defectHalfWidthMm = options.defectHalfWidthMm > 0.0 ? options.defectHalfWidthMm
                                                                     : std::max(0.5, 4.0 * program_.octree.voxelSize());
         centre_ = program_.solid->mesh().bounds().center();
@@ -150,6 +156,7 @@ class Verifier {
         if (r->status == LandmarkStatus::Ok) ++v.acceptedSeats;
         if (r->deviation && r->deviation->measured) {
             const double u = r->deviation->uncertaintyMm;
+            if (!v.measuredUMaxMm || u > *v.measuredUMaxMm) v.worstBudget = r->deviation->budget;
             v.measuredUMaxMm = std::max(v.measuredUMaxMm.value_or(0.0), u);
             uByLandmark_[v.id].push_back(u);
             v.deviationMaxAbsMm = std::max(v.deviationMaxAbsMm.value_or(0.0), std::abs(r->deviation->deviationMm));
@@ -174,21 +181,32 @@ class Verifier {
                     DefectTrial t;
                     t.defect = {kind, defectDepth(lm, kind, multiple)};
                     t.multiple = multiple;
-                    const model::TriangleMesh asMade = seedDefect(nominal, lm.position, lm.normal, t.defect,
-                                                                  report_.defectHalfWidthMm, sightDirections(lm));
-                    const TwinCycle c = cycle(asMade, frames_(asMade));
-                    if (const inspect::LandmarkResult* r = findResult(c.result, lm.id)) {
-                        t.status = r->status;
-                        if (r->deviation && r->deviation->measured) {
-                            t.deviationMm = r->deviation->deviationMm;
-                            t.uncertaintyMm = r->deviation->uncertaintyMm;
-                        }
-                    }
+                    runTrial(t, lm, nominal);
                     report_.landmarks[i].defects.push_back(t);
                 }
             }
         }
         tick("defects", total, total);
+    }
+
+    void runTrial(DefectTrial& t, const model::Landmark& lm, const model::TriangleMesh& nominal)
+    {
+        model::TriangleMesh asMade;
+        try {
+            asMade =
+                seedDefect(nominal, lm.position, lm.normal, t.defect, report_.defectHalfWidthMm, sightDirections(lm));
+        } catch (const std::exception& e) {
+            t.error = e.what();
+            return;
+        }
+        const TwinCycle c = cycle(asMade, frames_(asMade));
+        if (const inspect::LandmarkResult* r = findResult(c.result, lm.id)) {
+            t.status = r->status;
+            if (r->deviation && r->deviation->measured) {
+                t.deviationMm = r->deviation->deviationMm;
+                t.uncertaintyMm = r->deviation->uncertaintyMm;
+            }
+        }
     }
 
     /// The lines of sight (camera centre to landmark) of the planned views that observe it.
@@ -272,6 +290,11 @@ void Verifier::concludeLandmark(LandmarkVerification& v)
         std::string what = "a defect of " + formatNumber(t.multiple) + " × tolerance (" +
                            formatNumber(t.defect.depthMm, 4) + " mm " + toString(t.defect.kind) + ") is accepted";
         if (t.deviationMm) what += ": deviation measured " + formatNumber(*t.deviationMm, 4) + " mm";
+        if (!t.error.empty())
+            what = "a defect of " + formatNumber(t.multiple) +
+                   " × tolerance could not be "
+                   "seeded in the CAD mesh (" +
+                   t.error + "): the landmark is not verified";
         addFinding(v.id, "defect", what, {Fix::MoveLandmark, Fix::ChangeDepth, Fix::DropLandmark},
                    "move it onto an outline a view sees square on, a finer octree depth, or drop it");
     }

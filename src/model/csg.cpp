@@ -82,6 +82,24 @@ TriangleMesh difference(const TriangleMesh& a, const TriangleMesh& b)
 {
     return boolean(a, b, Op::Difference);
 }
+TriangleMesh difference(const TriangleMesh& a, const std::vector<TriangleMesh>& cutters)
+{
+    // Exact from the first cut to the last: a result rounded to doubles
+    // between two cuts can cross itself by a rounding error.
+    ExactMesh m = toExact(a, "difference", "(the part)");
+    for (std::size_t i = 0; i < cutters.size(); ++i) {
+        ExactMesh cutter = toExact(cutters[i], "difference", ("(cutter " + std::to_string(i + 1) + ")").c_str());
+        ExactMesh result;
+        if (!PMP::corefine_and_compute_difference(m, cutter, result))
+            throw InputError("", "difference",
+                             "cutter " + std::to_string(i + 1) +
+                                 ": the result would not be a closed 2-manifold (operands touch "
+                                 "along an edge?)");
+        m = std::move(result);
+    }
+    return fromExact(m);
+}
+
 TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b)
 {
     return boolean(a, b, Op::Union);

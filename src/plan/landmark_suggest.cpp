@@ -727,6 +727,7 @@ PlanProblem planProblem(const SuggestProblem& problem, const SuggestOptions& opt
         lm.position = candidates[i].position;
         lm.normal = candidates[i].normal;
         lm.toleranceMm = tolerance;
+        if (options.toleranceMm < tolerance) lm.drawingToleranceMm = options.toleranceMm;
         plan.landmarks.push_back(lm);
     }
     return plan;

@@ -52,8 +52,10 @@ PlanProblem planProblem(const model::PartProgram& program, const geometry::Stati
     problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
     const double dv = program.octree.voxelSize();
     for (const auto& lm : program.landmarks) {
-        const double tolerance = program.inspection.deviation ? std::max(lm.toleranceMm, dv) : lm.toleranceMm;
-        problem.landmarks.push_back({{lm.id, lm.position, lm.normal, tolerance}, lm.bestViews});
+        const bool toVoxel = program.inspection.deviation && lm.toleranceMm < dv;
+        PlanLandmark l{{lm.id, lm.position, lm.normal, toVoxel ? dv : lm.toleranceMm}, lm.bestViews, std::nullopt};
+        if (toVoxel) l.drawingToleranceMm = lm.toleranceMm;
+        problem.landmarks.push_back(std::move(l));
     }
     return problem;
 }
@@ -69,6 +71,27 @@ double frameMarginPx(const model::TriangleMesh& mesh, const geometry::CameraMode
         margin = std::min({margin, p->x() + 0.5, size.width - 0.5 - p->x(), p->y() + 0.5, size.height - 0.5 - p->y()});
     }
     return margin;
+}
+
+int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station& station, int adjacencyDepth)
+{
+    const Eigen::AlignedBox3d bounds = mesh.bounds();
+    const geometry::Vec3 centre = bounds.center();
+    double radius = 0.0;
+    for (const geometry::Vec3& v : mesh.vertices) radius = std::max(radius, (v - centre).norm());
+    const geometry::CameraModel camera = station.cameraAt(homePose(station.fixture));
+    const double d = (camera.centre() - centre).norm() + radius;
+    const double theta = std::atan2(radius, d - radius);
+    const double f = std::min(station.camera.K(0, 0), station.camera.K(1, 1));
+    // Eq. 5.3.6-3 solved for the MED, as view_rules.h evaluates it.
+    const double med =
+        2.0 * std::sqrt(2.0) * d * std::cos(theta) / (2.0 * f * (std::cos(theta) - std::sin(theta)) + 1.0);
+    int best = 4;
+    for (int depth = 4; depth <= 15; ++depth) {
+        const auto spec = model::boundingCube(bounds, depth, adjacencyDepth);
+        if (spec && spec->voxelSize() >= 1.1 * med) best = depth;
+    }
+    return best;
 }
 
 ProgramPlan planProgram(const model::PartProgram& program, const geometry::Station& station, const PlanOptions& options)

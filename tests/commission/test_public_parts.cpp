@@ -122,7 +122,8 @@ TEST_P(PublicPartCommissioning, IsReleasedAndPassesJudgedOnIndependentFrames)
     problem.poses = releasedPoses(out / (part.name() + "-views.yaml"));
     // The landmarks each view observes, as the plan wrote them.
     std::ifstream planFile(out / "plan.json");
-    for (const auto& view : nlohmann::json::parse(planFile)["views"])
+    const nlohmann::json plan = nlohmann::json::parse(planFile);
+    for (const auto& view : plan["views"])
         problem.viewLandmarks.push_back(view["landmarks"].get<std::vector<std::string>>());
     ASSERT_EQ(problem.viewLandmarks.size(), problem.poses.size());
     std::vector<geometry::CameraModel> cameras;

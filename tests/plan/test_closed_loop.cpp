@@ -136,7 +136,7 @@ TEST(ClosedLoop, DefectListThroughThePlannedViews)
     problem.solid = plate.solid.get();
     problem.station = &station;
     problem.frame = plate.geometry.frame();
-    for (const auto& l : plate.landmarks) problem.landmarks.push_back({l, {}});
+    for (const auto& l : plate.landmarks) problem.landmarks.push_back({l, {}, std::nullopt});
     PlanOptions options;
     options.rules.floorRadiusMm = 5.0;
     const ViewPlan plan = planViews(problem, options);

@@ -56,7 +56,10 @@ struct DefectTrial {
     inspect::LandmarkStatus status = inspect::LandmarkStatus::NotInspected;
     std::optional<double> deviationMm;
     std::optional<double> uncertaintyMm;
-    bool caught() const { return status != inspect::LandmarkStatus::Ok; }
+    /// Why the defect could not be seeded (a boolean of the CAD mesh failed):
+    /// the trial is then not run and counts as not caught.
+    std::string error;
+    bool caught() const { return error.empty() && status != inspect::LandmarkStatus::Ok; }
 };
 
 struct LandmarkVerification {
@@ -69,6 +72,8 @@ struct LandmarkVerification {
     double predictedUMm = 0.0;
     std::optional<double> measuredUMaxMm; ///< largest U over the nominal seats
     std::optional<double> measuredUMedianMm;
+    /// The budget (standard uncertainties, mm) of the seat with the largest U.
+    std::optional<inspect::DeviationBudget> worstBudget;
     std::optional<double> deviationMaxAbsMm; ///< largest |deviation| of the nominal part
     std::vector<DefectTrial> defects;
     /// The smallest multiple of the tolerance from which every trial (added
@@ -90,7 +95,7 @@ struct VerificationOptions {
     std::vector<double> defectMultiples{1.0, 2.0, 3.0};
     /// The multiple that must be caught at every landmark for release.
     double releaseMultiple = 2.0;
-    /// Seats drawn within this play; < 0: the program's alignment limits.
+    /// Seats drawn within this play; < 0: 80 % of the program's alignment limits.
     double seatShiftMm = -1.0;
     double seatRotationDeg = -1.0;
     /// Measured U may be at most this times the predicted U.

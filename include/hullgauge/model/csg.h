@@ -6,12 +6,18 @@
 
 #include "hullgauge/model/mesh.h"
 
+#include <vector>
+
 namespace hg::model {
 
 /// a minus b. Both must be closed, outward-oriented 2-manifolds without
 /// self-intersections; the result is one as well (possibly empty). Failure
 /// (a non-manifold result) throws InputError naming the operation.
 TriangleMesh difference(const TriangleMesh& a, const TriangleMesh& b);
+
+/// a less every cutter in turn, exact from the first cut to the last (the
+/// intermediate results are never rounded), under the same conditions.
+TriangleMesh difference(const TriangleMesh& a, const std::vector<TriangleMesh>& cutters);
 
 /// a united with b, under the same conditions.
 TriangleMesh unionOf(const TriangleMesh& a, const TriangleMesh& b);

@@ -39,6 +39,17 @@ struct FrameCheck {
     bool holdsPart() const { return nominalMarginPx - seatAllowancePx >= 1.0; }
 };
 
+/// The finest octree depth whose voxels the station's views resolve at every
+/// point of the part (docs/commissioning.md, "The depth"): with the sub-voxel
+/// deviation a tolerance is decided to U, not to a voxel, and a voxel finer
+/// than a pixel's footprint is one no view discriminates (Rule 3, eq.
+/// 5.3.6-3, and the engine's eq. 4.4.4-19). ΔV of the default cube
+/// (model::boundingCube) is compared with eq. 5.3.6-3 at the part's far side
+/// (d = the fixture's camera distance + the part's radius) and the angle the
+/// part's radius makes at the camera; depths from 4 to 15 are tried, the
+/// finest that passes with 10 % to spare is returned (4 when none does).
+int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station& station, int adjacencyDepth);
+
 struct ProgramPlan {
     ViewPlan plan;
     /// Expected U per landmark at the planned views; none when the plan is infeasible.

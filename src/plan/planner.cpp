@@ -320,11 +320,21 @@ class Analyser {
         } else if (!w.anyPasses) {
             a.verdict = LandmarkVerdict::BelowStationMed;
             if (!std::isfinite(a.bestMedMm) || a.bestMedMm > lm.toleranceMm)
-                a.reason = "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
-                           " mm is below the finest discrimination this station reaches there (predicted MED " +
-                           fmt(a.bestMedMm) +
-                           " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
-                           "closer / use a longer lens.";
+                a.reason = lm.drawingToleranceMm
+                               ? "landmark " + lm.id + ": the voxel size ΔV = " + fmt(lm.toleranceMm) +
+                                     " mm is below the finest discrimination this station reaches there "
+                                     "(predicted MED " +
+                                     fmt(a.bestMedMm) + " mm, eq. 5.3.6-3; the tolerance " +
+                                     fmt(*lm.drawingToleranceMm) +
+                                     " mm is decided to U by the sub-voxel deviation, the views must resolve the "
+                                     "voxel); use a smaller octree.depth, or bring the camera closer / use a "
+                                     "longer lens."
+                               : "landmark " + lm.id + ": tolerance " + fmt(lm.toleranceMm) +
+                                     " mm is below the finest discrimination this station reaches there (predicted "
+                                     "MED " +
+                                     fmt(a.bestMedMm) +
+                                     " mm, eq. 5.3.6-3); loosen the tolerance, or bring the camera "
+                                     "closer / use a longer lens.";
             else
                 a.reason = "landmark " + lm.id + ": no view resolves the inspection voxel ΔV = " + fmt(dv) +
                            " mm there (best MED " + fmt(w.bestRangeMed) +

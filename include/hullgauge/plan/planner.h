@@ -39,6 +39,11 @@ namespace hg::plan {
 /// list, OR inside (eq. 5.3.2-1/2); empty: derive them.
 struct PlanLandmark : inspect::MapLandmark {
     std::vector<std::vector<FixturePose>> bestViews;
+    /// The drawing's tolerance when it is finer than the voxel size ΔV the
+    /// views must resolve: `toleranceMm` then holds ΔV, and the tolerance
+    /// itself is decided to U by the sub-voxel deviation (program_plan.h).
+    /// The verdicts then speak of the voxel size, not of the tolerance.
+    std::optional<double> drawingToleranceMm;
 };
 
 struct PlanProblem {

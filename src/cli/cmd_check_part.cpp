@@ -126,6 +126,8 @@ nlohmann::json repairJson(const model::PartProgram& program)
             {"self_intersections", r.selfIntersections},
             {"retriangulated_faces", r.retriangulatedFaces},
             {"autorefined_pairs", r.autorefinedPairs},
+            {"volume_as_read_mm3", r.volumeAsReadMm3},
+            {"volume_mm3", r.volumeMm3},
             {"repairs", r.items()}};
 }
 

@@ -128,6 +128,11 @@ YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& sta
     if (!args.solid.empty()) program["mesh_solid"] = args.solid;
     program["octree"]["depth"] = cad.octree.depth;
     program["octree"]["adjacency_depth"] = args.adjacencyDepth;
+    // The nest's play given: the alignment limits lie beyond it by the margin
+    // the seat's measurement needs (plan::kPlayOfLimits, docs/commissioning.md).
+    if (args.seatShiftMm > 0.0) program["alignment"]["max_shift_mm"] = args.seatShiftMm / plan::kPlayOfLimits;
+    if (args.seatRotationDeg > 0.0)
+        program["alignment"]["max_rotation_deg"] = args.seatRotationDeg / plan::kPlayOfLimits;
     program["landmarks"] = draft["landmarks"];
     return program;
 }
@@ -363,10 +368,13 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     cmd->add_option("--seed", args->seed, "seed of the seats and the twin's noise")->capture_default_str();
-    cmd->add_option("--seat-shift", args->seatShiftMm, "the nest's play: shift, mm (default: alignment.max_shift_mm)")
+    cmd->add_option("--seat-shift", args->seatShiftMm,
+                    "the nest's play: shift, mm (default: 80 % of alignment.max_shift_mm; a suggested program's "
+                    "limit is set to play / 0.8)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--seat-rotation", args->seatRotationDeg,
-                    "the nest's play: rotation, degrees (default: alignment.max_rotation_deg)")
+                    "the nest's play: rotation, degrees (default: 80 % of alignment.max_rotation_deg; a suggested "
+                    "program's limit is set to play / 0.8)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_flag("--fix", args->fix, "drop the landmarks that fail and verify again");
     cmd->add_option("--rounds", args->rounds, "verification rounds with --fix")

@@ -78,6 +78,24 @@ nlohmann::json request(const std::string& path, const nlohmann::json& req)
     return j;
 }
 
+/// " version N" of a part program's release (docs/commissioning.md, "Release"); empty without one.
+std::string versionText(const nlohmann::json& version)
+{
+    return version.is_number_integer() ? " version " + version.dump() : std::string();
+}
+
+/// The release of the program the daemon loaded, when it is the PLC's active one and
+/// ready: ", version N" or ", draft" (docs/daemon.md, "Maintenance socket").
+std::string loadedVersion(const nlohmann::json& s, const nlohmann::json& plc)
+{
+    const auto program = s.value("program", nlohmann::json());
+    if (!program.is_object() || program.value("number", -1) != plc.value("active_program", -2) ||
+        plc.value("program_state", std::string()) != "ready")
+        return {};
+    const auto version = versionText(program.value("version", nlohmann::json()));
+    return version.empty() ? ", draft" : "," + version;
+}
+
 void printStatus(const nlohmann::json& s)
 {
     const auto& seq = s["sequencer"];
@@ -96,7 +114,8 @@ void printStatus(const nlohmann::json& s)
     if (plc.contains("counters")) {
         const auto& n = plc["counters"];
         std::cout << "plc program:  " << plc["active_program"] << " " << plc["program_state"].get<std::string>()
-                  << ", result seq " << plc["result_seq"] << ", acquired " << plc["acq_done_seq"] << "\n"
+                  << loadedVersion(s, plc) << ", result seq " << plc["result_seq"] << ", acquired "
+                  << plc["acq_done_seq"] << "\n"
                   << "plc counters: triggers " << n["triggers"] << ", pass " << n["passes"] << ", fail " << n["fails"]
                   << ", faults " << n["faults"] << ", missed " << n["missed_triggers"] << "\n";
     }
@@ -131,7 +150,8 @@ void printStatus(const nlohmann::json& s)
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];
         std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"
-                  << c["serial"].get<std::string>() << "', program " << c["program"] << ", " << c["cycle_ms"]
+                  << c["serial"].get<std::string>() << "', program " << c["program"]
+                  << versionText(c.value("program_version", nlohmann::json())) << ", " << c["cycle_ms"]
                   << " ms, landmarks failed " << c["landmarks_failed"] << "/" << c["landmarks_total"] << "\n";
         // The measured seat (docs/alignment.md) and, on the simulated line, the true one.
         const auto seat = [](const nlohmann::json& a) {
@@ -232,9 +252,10 @@ std::function<int()> factory(CLI::App& app)
                 for (const auto& r : answer["results"])
                     std::cout << r["id"] << "  " << r["time"].get<std::string>() << "  "
                               << r["verdict"].get<std::string>() << "  serial '" << r["serial"].get<std::string>()
-                              << "'  program " << r["program"] << "  " << r["cycle_ms"] << " ms  failed "
-                              << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault " << r["fault_code"]
-                              << "  " << r.value("purpose", std::string("production")) << "\n";
+                              << "'  program " << r["program"]
+                              << versionText(r.value("program_version", nlohmann::json())) << "  " << r["cycle_ms"]
+                              << " ms  failed " << r["landmarks_failed"] << "/" << r["landmarks_total"] << "  fault "
+                              << r["fault_code"] << "  " << r.value("purpose", std::string("production")) << "\n";
             }
         } else if (trigger->parsed()) {
             request(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});

@@ -157,7 +157,9 @@ json toJson(const VerificationReport& r)
             {"views", views},
             {"findings", findings},
             {"phase_ms", r.phaseMs},
-            {"inspection_median_ms", r.inspectionMedianMs}};
+            {"inspection_median_ms", r.inspectionMedianMs},
+            {"cycle_time_s",
+             {{"planned", r.plannedCycleS}, {"twin_median", r.twinCycleMedianS}, {"twin_max", r.twinCycleMaxS}}}};
 }
 
 std::string toMarkdown(const VerificationReport& r)

@@ -2,6 +2,8 @@
 
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/part_map.h"
+#include "hullgauge/plan/cycle_time.h"
+#include "hullgauge/plan/program_plan.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +14,6 @@ namespace hg::commission {
 namespace {
 
 using inspect::LandmarkStatus;
-
-/// The nest's play assumed, as a share of the alignment limits, when none is given.
-constexpr double kPlayOfLimits = 0.8;
 
 double median(std::vector<double> v)
 {
@@ -79,9 +78,10 @@ class Verifier {
         // The alignment limits are where a seat is refused; a nest's play lies
         // inside them with room for the seat's measurement (docs/commissioning.md).
         report_.seatShiftMm =
-            options.seatShiftMm >= 0.0 ? options.seatShiftMm : kPlayOfLimits * program_.alignment.maxShiftMm;
-        report_.seatRotationDeg = options.seatRotationDeg >= 0.0 ? options.seatRotationDeg
-                                                                 : kPlayOfLimits * program_.alignment.maxRotationDeg;
+            options.seatShiftMm >= 0.0 ? options.seatShiftMm : plan::kPlayOfLimits * program_.alignment.maxShiftMm;
+        report_.seatRotationDeg = options.seatRotationDeg >= 0.0
+                                      ? options.seatRotationDeg
+                                      : plan::kPlayOfLimits * program_.alignment.maxRotationDeg;
         report_.defectHalfWidthMm = options.defectHalfWidthMm > 0.0 ? options.defectHalfWidthMm
                                                                     : std::max(0.5, 4.0 * program_.octree.voxelSize());
         centre_ = program_.solid->mesh().bounds().center();
@@ -109,6 +109,10 @@ class Verifier {
         defectCycles();
         conclude();
         report_.inspectionMedianMs = median(inspectionMs_);
+        report_.plannedCycleS =
+            plan::predictCycleTime(problem_.poses, motion_, plan::homePose(problem_.station->fixture)).totalS;
+        report_.twinCycleMedianS = median(cycleS_);
+        report_.twinCycleMaxS = cycleS_.empty() ? 0.0 : *std::max_element(cycleS_.begin(), cycleS_.end());
         return report_;
     }
 
@@ -125,6 +129,8 @@ class Verifier {
                                problem_.segmentation, seat, asMade, frames, frame_);
         frame_ += problem_.poses.size();
         inspectionMs_.push_back(c.result.reconstructionMs);
+        cycleS_.push_back(
+            plan::predictCycleTime(c.commanded, motion_, plan::homePose(problem_.station->fixture)).totalS);
         for (std::size_t k = 0; k < report_.views.size() && k < c.frameMarginPx.size(); ++k)
             report_.views[k].minFrameMarginPx = std::min(report_.views[k].minFrameMarginPx, c.frameMarginPx[k]);
         return c;
@@ -209,6 +215,13 @@ class Verifier {
         }
     }
 
+    const inspect::LandmarkCapability* capabilityOf(const std::string& id) const
+    {
+        for (const auto& c : problem_.capability)
+            if (c.id == id) return &c;
+        return nullptr;
+    }
+
     /// The lines of sight (camera centre to landmark) of the planned views that observe it.
     std::vector<geometry::Vec3> sightDirections(const model::Landmark& lm) const
     {
@@ -239,6 +252,8 @@ class Verifier {
     geometry::Vec3 centre_ = geometry::Vec3::Zero();
     std::size_t frame_ = 0;
     std::vector<double> inspectionMs_;
+    std::vector<double> cycleS_;
+    geometry::FixtureMotion motion_ = geometry::stationMotion(*problem_.station);
     std::map<std::string, std::vector<double>> uByLandmark_;
     VerificationReport report_;
 };
@@ -270,7 +285,14 @@ void Verifier::concludeLandmark(LandmarkVerification& v)
                        " within the nest's play",
                    {Fix::MoveLandmark, Fix::AddView, Fix::DropLandmark},
                    "move it onto an outline a planned view grazes, add a view that sees it, or drop it");
-    if (v.acceptedSeats < v.observableSeats) {
+    const inspect::LandmarkCapability* capability = capabilityOf(v.id);
+    if (capability && !capability->capable)
+        addFinding(v.id, "capability",
+                   "the station cannot prove its tolerance at every seat of the play: " +
+                       inspect::describe(*capability) + " (it is inspected as never ok)",
+                   {Fix::ChangeLens, Fix::WidenTolerance, Fix::DropLandmark},
+                   "a camera closer to the part or a longer lens (smaller U), a wider tolerance, or drop it");
+    else if (v.acceptedSeats < v.observableSeats) {
         const std::size_t uncertain = v.statuses.count("uncertain") ? v.statuses.at("uncertain") : 0;
         std::string what = "the nominal part is rejected at " + std::to_string(v.observableSeats - v.acceptedSeats) +
                            seats + " (false rejects)";

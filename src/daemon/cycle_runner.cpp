@@ -28,6 +28,13 @@ std::int64_t ns(std::chrono::milliseconds d)
     return std::chrono::nanoseconds(d).count();
 }
 
+/// A program's release as the status shows it with a cycle (docs/daemon.md): null for a draft.
+void putRelease(nlohmann::json& j, const std::optional<station::ProgramRelease>& release)
+{
+    j["program_version"] = release ? nlohmann::json(release->version) : nlohmann::json();
+    j["program_sha256"] = release ? nlohmann::json(release->verificationSha256) : nlohmann::json();
+}
+
 } // namespace
 
 /// One cycle's working state, from the trigger to the published record.
@@ -281,11 +288,34 @@ void CycleRunner::prepareProgram(std::uint16_t number)
         state = station::ProgramState::LoadFailed;
     }
     registers_.programPrepared(number, state);
-    if (state == station::ProgramState::Ready)
+    if (state == station::ProgramState::Ready) {
+        noteLoaded(number);
         log->info("part program {} ready", number);
-    else
+    } else {
         log->error("part program {}: {}: {}", number, station::toString(state),
                    error.empty() ? "the part program could not be loaded" : error);
+    }
+}
+
+// What `ctl status` shows of the program the inspection serves (docs/daemon.md).
+void CycleRunner::noteLoaded(std::uint16_t number)
+{
+    const auto info = inspector_.loaded(number);
+    nlohmann::json program = nullptr;
+    if (info) {
+        program = {{"number", info->number}, {"part", info->part}};
+        program["version"] = info->release ? nlohmann::json(info->release->version) : nlohmann::json();
+        program["verification_sha256"] =
+            info->release ? nlohmann::json(info->release->verificationSha256) : nlohmann::json();
+    }
+    std::lock_guard lock(mutex_);
+    program_ = std::move(program);
+}
+
+nlohmann::json CycleRunner::program() const
+{
+    std::lock_guard lock(mutex_);
+    return program_;
 }
 
 void CycleRunner::recover()
@@ -399,7 +429,10 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     if (cycle.program)
         registers_.programPrepared(r.program,
                                    error.empty() ? station::ProgramState::Ready : station::ProgramState::LoadFailed);
-    if (error.empty()) return action;
+    if (error.empty()) {
+        noteLoaded(r.program);
+        return action;
+    }
     log->error("{}", error);
     return feed(SequencerEvent::ProgramFailed);
 }
@@ -582,6 +615,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     auto& record = cycle.record;
     const auto& outcome = cycle.outcome;
     record.part = outcome.part;
+    record.programRelease = outcome.release;
     record.verdict = station::verdictOf(how, outcome.pass);
     // The seat is kept whatever the verdict: a part not seated is recorded with the pose that says so.
     if (outcome.ok && outcome.alignment) {
@@ -691,6 +725,7 @@ void CycleRunner::report(Cycle& cycle)
                       {"alignment", record.alignment},
                       {"timing_ms", timing},
                       {"payload_bytes", cycle.payloadBytes}};
+        putRelease(lastCycle_, record.programRelease);
         if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
     }
     hg::log::category("seq")->info(

@@ -79,6 +79,10 @@ class CycleRunner {
     bool healthy() const;
     /// State, current cycle and counters for the maintenance socket.
     nlohmann::json describe() const;
+    /// The part program the inspection last loaded for a changeover or a cycle:
+    /// number, part, version and verification_sha256 (null for a draft); null
+    /// before the first (docs/daemon.md, "Maintenance socket").
+    nlohmann::json program() const;
 
   private:
     struct Cycle;
@@ -93,6 +97,7 @@ class CycleRunner {
     void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
     void prepareProgram(std::uint16_t number);
+    void noteLoaded(std::uint16_t number);
     void runCalibration(CalibrationJob job);
     void runSnapshot(SnapshotJob job);
     bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);
@@ -123,12 +128,13 @@ class CycleRunner {
     FixtureCalibration calibration_;
     CameraSnapshot snapshot_;
 
-    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_
+    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_, program_
     std::shared_ptr<const station::DaemonConfig> config_;
     station::CaptureSequencer sequencer_;
     std::uint64_t cycles_ = 0;
     std::uint64_t faults_ = 0;
     nlohmann::json lastCycle_ = nullptr;
+    nlohmann::json program_ = nullptr; ///< program()
     /// Written by the last failed part's image job when it is done (ms; < 0 until then).
     std::shared_ptr<std::atomic<double>> lastImagesMs_;
 

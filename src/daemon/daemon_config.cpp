@@ -2,6 +2,7 @@
 
 #include "hmi_auth.h"
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
 
 #include <arpa/inet.h>
@@ -154,6 +155,7 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     ref.number = static_cast<std::uint16_t>(number);
     node.allowOnlyKeys({"part", "views", "force"});
     ref.partFile = existingFile(node["part"], base);
+    ref.partSha256 = sha256OfFile(ref.partFile);
     {
         // The part program's own loader checks it in full when the program is loaded;
         // here it must at least be a YAML map that names its part and landmarks.

@@ -40,6 +40,11 @@ struct PartProgramRef {
     std::filesystem::path partFile;           ///< part program YAML (docs/contracts.md §1), absolute
     std::filesystem::path viewsFile;          ///< view plan: a poses file (docs/contracts.md §5), absolute
     std::vector<geometry::FixturePose> views; ///< loaded and range-checked
+    /// SHA-256 of the part program file as this configuration validated it: a
+    /// reload that finds the file changed (a new release written over the old,
+    /// docs/commissioning.md) loads the program anew; one that refuses it keeps
+    /// the configuration, and so the program, it had (docs/daemon.md).
+    std::string partSha256;
     /// Run the program although the capability check finds a tolerance this
     /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
     bool force = false;

@@ -47,8 +47,26 @@ std::vector<std::string> capabilityCheck(const station::PartProgramRef& ref, con
     return unproven;
 }
 
+/// The program's release as the record names it (docs/commissioning.md, "Release"); none for a draft.
+std::optional<station::ProgramRelease> releaseOf(const model::PartProgram& program)
+{
+    if (!program.release) return std::nullopt;
+    return station::ProgramRelease{program.release->version, program.release->verificationSha256};
+}
+
+/// "version 3, verification 5f0c1a2b…" or "draft", for the journal.
+std::string describeRelease(const model::PartProgram& program)
+{
+    if (!program.release) return "draft";
+    return "version " + std::to_string(program.release->version) + ", verification " +
+           program.release->verificationSha256.substr(0, 8) + "…";
+}
+
 struct LoadedProgram {
     std::filesystem::path file;
+    /// The file's SHA-256 as the configuration it was loaded for validated it
+    /// (PartProgramRef::partSha256): a reload that changed it loads anew.
+    std::string configuredSha256;
     model::PartProgram program;
     std::unique_ptr<inspect::InspectionMap> map;
     std::unique_ptr<inspect::Inspector> inspector;
@@ -93,6 +111,13 @@ class EngineInspector : public Inspector {
         if (loadedAsConfigured(ref)) return true;
         idle();
         return load(ref, error) != nullptr;
+    }
+
+    std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
+    {
+        const auto it = loaded_.find(number);
+        if (it == loaded_.end()) return std::nullopt;
+        return LoadedProgramInfo{number, it->second.program.part, releaseOf(it->second.program)};
     }
 
     // A planned pose's region was found when the program was loaded; a pose
@@ -165,6 +190,7 @@ class EngineInspector : public Inspector {
             auto result = current_->inspector->inspect(std::move(prepared.views), prepared.ids);
             out.ok = true;
             out.part = result.part;
+            out.release = releaseOf(current_->program);
             out.pass = result.pass;
             out.traversalMs = result.totalMs;
             out.alignment = result.alignment;
@@ -208,12 +234,12 @@ class EngineInspector : public Inspector {
     bool loadedAsConfigured(const station::PartProgramRef& ref) const
     {
         auto it = loaded_.find(ref.number);
-        return it != loaded_.end() && it->second.file == ref.partFile;
+        return it != loaded_.end() && it->second.file == ref.partFile && it->second.configuredSha256 == ref.partSha256;
     }
 
     /// The program, loaded unless it is loaded from the same file already (a
-    /// reload may point the number at another file: rebuilt then); null with
-    /// `error` when it cannot be loaded.
+    /// reload may point the number at another file, or find a new version in
+    /// the same one: rebuilt then); null with `error` when it cannot be loaded.
     LoadedProgram* load(const station::PartProgramRef& ref, std::string& error)
     {
         if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
@@ -221,6 +247,7 @@ class EngineInspector : public Inspector {
             auto started = std::chrono::steady_clock::now();
             LoadedProgram p;
             p.file = ref.partFile;
+            p.configuredSha256 = ref.partSha256;
             p.program = model::loadPartProgram(ref.partFile);
             // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
             auto options = inspect::inspectionOptions(p.program.inspection);
@@ -236,9 +263,13 @@ class EngineInspector : public Inspector {
             p.poses = ref.views;
             for (const geometry::CameraModel& c : cameras)
                 p.regions.push_back(regions_ ? viewBounds(*p.inspector, c) : cv::Rect());
+            // The version loaded, and the one it replaces (a reload, docs/daemon.md).
+            const auto before = loaded_.find(ref.number);
             hg::log::category("inspect")->info(
-                "part program {} ({}) loaded in {:.0f} ms", ref.number, p.program.part,
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+                "part program {} ({}, {}) loaded in {:.0f} ms{}", ref.number, p.program.part,
+                describeRelease(p.program),
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count(),
+                before == loaded_.end() ? std::string() : "; it replaces " + describeRelease(before->second.program));
             return &loaded_.insert_or_assign(ref.number, std::move(p)).first->second;
         } catch (const std::exception& e) {
             error = e.what();

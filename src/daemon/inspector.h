@@ -11,6 +11,7 @@
 #include "hullgauge/vision/manifest.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <opencv2/core/mat.hpp>
 #include <optional>
@@ -48,6 +49,9 @@ struct InspectionOutcome {
     bool ok = false; ///< false: the inspection could not be computed (`error` says why)
     std::string error;
     std::string part; ///< the part program's name
+    /// The release of the program the part was judged with (docs/commissioning.md,
+    /// "Release"); absent for a draft program.
+    std::optional<station::ProgramRelease> release;
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
     /// An inspected part's views for its archive: either `views` (ready) or `evidence`,
@@ -65,6 +69,15 @@ struct InspectionOutcome {
     double traversalMs = 0.0;  ///< the goal-driven traversal after the last frame
 };
 
+/// A part program as the inspection loaded it: what `ctl status` shows of the
+/// program it serves (docs/daemon.md, "Maintenance socket").
+struct LoadedProgramInfo {
+    std::uint16_t number = 0;
+    std::string part; ///< the part program's name
+    /// Its release (docs/commissioning.md, "Release"); absent for a draft.
+    std::optional<station::ProgramRelease> release;
+};
+
 class Inspector {
   public:
     virtual ~Inspector() = default;
@@ -75,6 +88,9 @@ class Inspector {
     /// and plan now, if they are not loaded, so its first cycle need not; false
     /// with a reason when it cannot be loaded. Only between cycles.
     virtual bool prepare(const station::PartProgramRef& /*program*/, std::string& /*error*/) { return true; }
+    /// Program `number` as the last successful begin() or prepare() loaded
+    /// it (or found it loaded); nullopt when it is not loaded or not known.
+    virtual std::optional<LoadedProgramInfo> loaded(std::uint16_t /*number*/) const { return std::nullopt; }
     /// The window of the sensor view `index` taken at `pose` needs — the
     /// bounds of every pixel its inspection reads (docs/inspection.md,
     /// "Pixels in proportion to the goal") — which the camera is asked to send

@@ -212,6 +212,7 @@ json status(const MaintenanceContext& c, const json&)
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
             {"purpose", std::string(station::toString(c.registers.purpose()))},
+            {"program", c.runner.program()},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
 }
 

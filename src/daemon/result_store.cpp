@@ -16,7 +16,8 @@ namespace {
 // 2: alignment_json and simulation_json (the measured and the simulated seat).
 // 3: purpose (production, master, study: docs/study.md).
 // 4: cycle_id and published_unix_ms, the plant link's outbox (docs/mqtt.md).
-constexpr int kSchemaVersion = 4;
+// 5: program_version and program_sha256, the release the part was judged with (docs/commissioning.md).
+constexpr int kSchemaVersion = 5;
 
 constexpr const char* kSchema = R"(
 CREATE TABLE IF NOT EXISTS inspections (
@@ -40,7 +41,9 @@ CREATE TABLE IF NOT EXISTS inspections (
     simulation_json  TEXT    NOT NULL DEFAULT 'null',
     purpose          TEXT    NOT NULL DEFAULT 'production' CHECK (purpose IN ('production', 'master', 'study')),
     cycle_id         TEXT    NOT NULL DEFAULT '',
-    published_unix_ms INTEGER
+    published_unix_ms INTEGER,
+    program_version  INTEGER,
+    program_sha256   TEXT    NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
@@ -121,6 +124,11 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
             exec("ALTER TABLE inspections ADD COLUMN published_unix_ms INTEGER");
             exec("UPDATE inspections SET published_unix_ms = 0");
         }
+        // A version 1 to 4 database gains the program's release; its rows name none (a draft's NULL and '').
+        if (found >= 1 && found <= 4) {
+            exec("ALTER TABLE inspections ADD COLUMN program_version INTEGER");
+            exec("ALTER TABLE inspections ADD COLUMN program_sha256 TEXT NOT NULL DEFAULT ''");
+        }
         // The outbox: the rows still to publish, in id order, without scanning the published ones.
         exec("CREATE INDEX IF NOT EXISTS inspections_outbox ON inspections (id) WHERE published_unix_ms IS NULL");
         exec(("PRAGMA user_version=" + std::to_string(kSchemaVersion)).c_str());
@@ -152,8 +160,9 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     Statement insert(db_,
                      "INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
                      "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
-                     "landmarks_json, timing_json, images_dir, alignment_json, simulation_json, purpose, cycle_id) "
-                     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                     "landmarks_json, timing_json, images_dir, alignment_json, simulation_json, purpose, cycle_id, "
+                     "program_version, program_sha256) "
+                     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     auto text = [&](int i, const std::string& s) {
         sqlite3_bind_text(insert.stmt, i, s.c_str(), static_cast<int>(s.size()), SQLITE_TRANSIENT);
     };
@@ -176,6 +185,12 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     text(17, dumpJson(r.simulation));
     text(18, std::string(station::toString(r.purpose)));
     text(19, newCycleId());
+    // The program's release: NULL and '' for a draft (docs/daemon.md, "Result store").
+    if (r.programRelease)
+        sqlite3_bind_int(insert.stmt, 20, r.programRelease->version);
+    else
+        sqlite3_bind_null(insert.stmt, 20);
+    text(21, r.programRelease ? r.programRelease->verificationSha256 : std::string());
     // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
     if (sqlite3_step(insert.stmt) != SQLITE_DONE)
         throw FaultError("result store " + file_.string() + ": " + sqlite3_errmsg(db_));

@@ -1,4 +1,5 @@
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/geometry/fixture_motion.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -44,7 +45,7 @@ Intrinsics parseCamera(const ConfigNode& cam)
 {
     // `regions` is the daemon's (docs/daemon.md, "Regions per view").
     cam.allowOnlyKeys({"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration",
-                       "image_quality", "regions"});
+                       "image_quality", "regions", "grab_s"});
     Intrinsics in;
     auto sizeNode = cam["image_size"];
     auto size = sizeNode.items();
@@ -71,7 +72,7 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
 {
     fix.allowOnlyKeys({"type", "camera_from_fixture", "rotation_axis", "declination_axis", "rotation_range_deg",
                        "declination_range_deg", "rail_axis", "rail_range_mm", "rotation_axis_point",
-                       "declination_axis_point", "driver", "calibration"});
+                       "declination_axis_point", "driver", "calibration", "motion"});
     FixtureKinematics k;
     auto typeNode = fix["type"];
     auto type = typeNode.asString();
@@ -162,6 +163,10 @@ Station parseStation(const ConfigNode& root)
         s.depthOfFieldMm = r;
     }
     s.fixture = parseFixture(root["fixture"]);
+    // The motion model (`fixture.motion`, `camera.grab_s`, and the driver's
+    // simulator section it falls back to) is checked here, so a typo in it is
+    // named when the station is loaded; the planner reads it with stationMotion().
+    (void)parseFixtureMotion(root["fixture"], cam, s.fixture.type);
     s.calibration = parseCalibrationUncertainty(cam, root["fixture"]);
     if (auto n = cam.optional("image_quality")) s.imageQuality = parseImageQuality(*n);
     if (auto env = root.optional("environment")) {

@@ -629,6 +629,12 @@ std::vector<std::string> MeshRepairReport::items() const
             fmt::format("{} removed ({} by autorefinement)",
                         count(selfIntersections, "self-intersecting triangle pair", "self-intersecting triangle pairs"),
                         autorefinedPairs));
+    // Relative to the part: a move below a millionth is rounding, not a repair's.
+    if (!out.empty() && std::abs(volumeMm3 - volumeAsReadMm3) > 1e-6 * std::max(volumeMm3, 1.0))
+        out.push_back(fmt::format("volume {:.6g} mm³, {:+.4g} mm³ ({:+.3g} %) from the {:.6g} mm³ the surface bounded "
+                                  "as read",
+                                  volumeMm3, volumeMm3 - volumeAsReadMm3,
+                                  100.0 * (volumeMm3 - volumeAsReadMm3) / volumeAsReadMm3, volumeAsReadMm3));
     return out;
 }
 
@@ -679,9 +685,14 @@ TriangleMesh repairMesh(TriangleMesh m, const std::string& name, const MeshRepai
     requireClosedManifold(m, name, options.gapToleranceMm);
     if (!checkMesh(m).consistentlyOriented()) orientConsistently(m, report);
     removeDegenerateFaces(m, name, report);
+    const double asRead = std::abs(m.signedVolume());
     removeSelfIntersections(m, name, planeTol, report);
     orientShells(m, name, report);
     requireClosedManifold(m, name, 0.0);
+    if (!report.clean()) {
+        report.volumeAsReadMm3 = asRead;
+        report.volumeMm3 = m.signedVolume();
+    }
     return m;
 }
 

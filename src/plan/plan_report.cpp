@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <sstream>
 
 namespace hg::plan {
@@ -35,6 +36,86 @@ std::pair<std::vector<std::string>, double> observers(const ViewPlan& plan, std:
                 med = std::min(med, v.predictedMedMm[k]);
             }
     return {ids, med};
+}
+
+/// `fixture.motion`'s key names for an axis' speed and acceleration.
+std::pair<std::string, std::string> motionKeys(FixtureType type)
+{
+    const std::string unit = type == FixtureType::Rail ? "mm" : "deg";
+    return {"speed_" + unit + "_s", "acceleration_" + unit + "_s2"};
+}
+
+/// plan.json's `cycle_time` (docs/planning.md, "Cycle time").
+json cycleTimeJson(const ViewPlan& plan, FixtureType type)
+{
+    const auto& ct = plan.cycleTime;
+    const auto& c = ct.predicted;
+    json out;
+    out["predicted_s"] = c.totalS;
+    out["unordered_s"] = ct.unorderedS;
+    out["least_distance_s"] = ct.leastDistanceS;
+    out["repeat_s"] = ct.repeatS;
+    out["moves_s"] = c.movesS;
+    out["settles_s"] = c.settlesS;
+    out["grabs_s"] = c.grabsS;
+    out["inspection_s"] = c.inspectionS;
+    out["start"] = geometry::toJson(c.start, type);
+    const auto names = geometry::axisNames(type);
+    json moves = json::array();
+    for (const auto& m : c.moves) {
+        json j;
+        j["from"] = m.view == 0 ? std::string("start") : plan.views[m.view - 1].id;
+        j["to"] = plan.views[m.view].id;
+        j["distance"] = m.distance;
+        j["move_s"] = m.seconds;
+        for (std::size_t a = 0; a < m.axisSeconds.size() && a < names.size(); ++a)
+            j["axes_s"][names[a]] = m.axisSeconds[a];
+        moves.push_back(j);
+    }
+    out["moves"] = moves;
+    const auto [speedKey, accelerationKey] = motionKeys(type);
+    json model;
+    model["source"] = ct.motion.source;
+    for (const auto& a : ct.motion.axes)
+        model[a.name] = {{speedKey, a.speed}, {accelerationKey, a.acceleration}, {"settle_s", a.settleS}};
+    model["settle_s"] = ct.motion.settleS;
+    model["grab_s"] = ct.motion.grabS;
+    out["model"] = model;
+    return out;
+}
+
+/// The report's cycle-time section: the summary, the comparison and every move.
+void cycleTimeMarkdown(std::ostream& s, const ViewPlan& plan, FixtureType type)
+{
+    const auto& ct = plan.cycleTime;
+    const auto& c = ct.predicted;
+    const auto n = plan.views.size();
+    s << "\n## Cycle time (predicted)\n\n**" << num(c.totalS, 3) << " s**: moves " << num(c.movesS, 3) << " s, settle "
+      << num(c.settlesS, 3) << " s (" << n << " × " << num(ct.motion.settleS, 3) << "), grabs " << num(c.grabsS, 3)
+      << " s (" << n << " × " << num(ct.motion.grabS, 3) << "), inspection " << num(c.inspectionS, 3) << " s, from "
+      << poseText(c.start, type) << ". The views in the order chosen: " << num(ct.unorderedS, 3)
+      << " s; in the order of least travel distance: " << num(ct.leastDistanceS, 3)
+      << " s; the next part, from the last view: " << num(ct.repeatS, 3) << " s.\n\nMotion model (" << ct.motion.source
+      << "):";
+    const auto [speedKey, accelerationKey] = motionKeys(type);
+    const std::string unit = type == FixtureType::Rail ? "mm" : "°";
+    for (std::size_t a = 0; a < ct.motion.axes.size(); ++a) {
+        const auto& ax = ct.motion.axes[a];
+        s << (a ? ";" : "") << " " << ax.name << " " << num(ax.speed) << " " << unit << "/s, " << num(ax.acceleration)
+          << " " << unit << "/s², settle " << num(ax.settleS, 3) << " s";
+    }
+    s << ".\n\n| move | distance | ";
+    const auto names = geometry::axisNames(type);
+    for (const auto& name : names) s << name << " s | ";
+    s << "move s |\n|---|---|";
+    for (std::size_t a = 0; a < names.size(); ++a) s << "---|";
+    s << "---|\n";
+    for (const auto& m : c.moves) {
+        s << "| " << (m.view == 0 ? std::string("start") : plan.views[m.view - 1].id) << " → " << plan.views[m.view].id
+          << " | " << num(m.distance, 4) << " " << unit << " | ";
+        for (double t : m.axisSeconds) s << num(t, 3) << " | ";
+        s << num(m.seconds, 3) << " |\n";
+    }
 }
 
 } // namespace
@@ -125,6 +206,7 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
     }
     stats["seconds"] = plan.seconds;
     out["statistics"] = stats;
+    out["cycle_time"] = cycleTimeJson(plan, type);
     return out;
 }
 
@@ -168,6 +250,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
             s << (k ? ", " : "") << plan.landmarks[v.landmarks[k]].id << " (" << num(v.predictedMedMm[k], 3) << ")";
         s << " |\n";
     }
+    cycleTimeMarkdown(s, plan, type);
     s << "\n## Landmarks\n\n| landmark | verdict | tolerance mm | best MED mm | views | witnesses | unseen voids |\n"
          "|---|---|---|---|---|---|---|\n";
     for (std::size_t l = 0; l < plan.landmarks.size(); ++l) {

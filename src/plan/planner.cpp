@@ -686,14 +686,38 @@ std::vector<std::size_t> reduceViews(const std::vector<Requirement>& requirement
     return {chosen.begin(), chosen.end()};
 }
 
-/// The final views in travel order, each with every usable landmark it
-/// observes under Rules 1-4 and the predicted MED.
+/// The predicted cycle time of the chosen poses in `order` from the home
+/// pose, beside the order they were chosen in, the order of least travel
+/// distance, and the next part's cycle from the last view.
+PlanCycleTime planCycleTime(const std::vector<FixturePose>& chosenPoses, const std::vector<std::size_t>& order,
+                            const geometry::FixtureMotion& motion, const FixturePose& home)
+{
+    auto inOrder = [&](const std::vector<std::size_t>& o) {
+        std::vector<FixturePose> poses;
+        for (std::size_t i : o) poses.push_back(chosenPoses[i]);
+        return poses;
+    };
+    PlanCycleTime c;
+    c.motion = motion;
+    const auto ordered = inOrder(order);
+    c.predicted = predictCycleTime(ordered, motion, home);
+    c.unorderedS = predictCycleTime(chosenPoses, motion, home).totalS;
+    c.leastDistanceS = predictCycleTime(inOrder(orderForTravel(chosenPoses, motion.type, home)), motion, home).totalS;
+    c.repeatS = ordered.empty() ? 0.0 : predictCycleTime(ordered, motion, ordered.back()).totalS;
+    return c;
+}
+
+/// The final views in the order of least cycle time, each with every usable
+/// landmark it observes under Rules 1-4 and the predicted MED.
 void finalViews(const std::vector<std::size_t>& chosen, const std::vector<Analysed>& analysed, const PosePool& pool,
                 const ViewVariations& vv, const ViewRules& rules, const geometry::Station& station, ViewPlan& plan)
 {
     std::vector<FixturePose> chosenPoses;
     for (std::size_t p : chosen) chosenPoses.push_back(pool.poses[p]);
-    const auto order = orderForTravel(chosenPoses, station.fixture.type, homePose(station.fixture));
+    const auto motion = geometry::stationMotion(station);
+    const auto home = homePose(station.fixture);
+    const auto order = orderForTime(chosenPoses, motion, home);
+    plan.cycleTime = planCycleTime(chosenPoses, order, motion, home);
     for (std::size_t k = 0; k < order.size(); ++k) {
         const std::size_t p = chosen[order[k]];
         PlannedView view;

@@ -150,20 +150,25 @@ double travelDistance(const FixturePose& a, const FixturePose& b, FixtureType ty
     return std::max(std::abs(a.rotationDeg - b.rotationDeg), std::abs(a.declinationDeg - b.declinationDeg));
 }
 
-std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, FixtureType type,
-                                        const FixturePose& start)
+namespace {
+
+/// Least-cost path from node 0 (the start) through every other node of
+/// `cost` (symmetric, cost[i][j] the move between nodes i and j); returns
+/// the nodes after the start, each less one: the pose indices. Exact over
+/// all orders for up to 8 poses (at most 40320), nearest neighbour then 2-opt
+/// (reversing a stretch) until no improvement beyond.
+std::vector<std::size_t> shortestPath(const std::vector<std::vector<double>>& cost)
 {
-    const std::size_t n = poses.size();
+    const std::size_t n = cost.size() - 1;
     std::vector<std::size_t> order(n);
     std::iota(order.begin(), order.end(), 0);
     if (n < 2) return order;
     auto length = [&](const std::vector<std::size_t>& o) {
-        double sum = travelDistance(start, poses[o[0]], type);
-        for (std::size_t i = 1; i < o.size(); ++i) sum += travelDistance(poses[o[i - 1]], poses[o[i]], type);
+        double sum = cost[0][o[0] + 1];
+        for (std::size_t i = 1; i < o.size(); ++i) sum += cost[o[i - 1] + 1][o[i] + 1];
         return sum;
     };
     if (n <= 8) {
-        // Exhaustive: at most 40320 orders.
         auto best = order;
         double bestLength = length(order);
         while (std::next_permutation(order.begin(), order.end())) {
@@ -175,21 +180,20 @@ std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, F
         }
         return best;
     }
-    // Nearest neighbour from the start, then 2-opt (reversing a stretch) until no improvement.
     std::vector<bool> used(n, false);
     order.clear();
-    FixturePose at = start;
+    std::size_t at = 0; // node index
     for (std::size_t k = 0; k < n; ++k) {
         std::size_t best = n;
-        double bestD = std::numeric_limits<double>::infinity();
+        double bestCost = std::numeric_limits<double>::infinity();
         for (std::size_t i = 0; i < n; ++i)
-            if (!used[i] && travelDistance(at, poses[i], type) < bestD) {
-                bestD = travelDistance(at, poses[i], type);
+            if (!used[i] && cost[at][i + 1] < bestCost) {
+                bestCost = cost[at][i + 1];
                 best = i;
             }
         used[best] = true;
         order.push_back(best);
-        at = poses[best];
+        at = best + 1;
     }
     double current = length(order);
     for (bool improved = true; improved;) {
@@ -207,6 +211,35 @@ std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, F
             }
     }
     return order;
+}
+
+/// The cost of every move between the start (node 0) and the poses (nodes 1..n).
+template <typename Cost>
+std::vector<std::vector<double>> costMatrix(const std::vector<FixturePose>& poses, const FixturePose& start, Cost move)
+{
+    std::vector<FixturePose> nodes{start};
+    nodes.insert(nodes.end(), poses.begin(), poses.end());
+    std::vector<std::vector<double>> cost(nodes.size(), std::vector<double>(nodes.size(), 0.0));
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+        for (std::size_t j = 0; j < nodes.size(); ++j)
+            if (i != j) cost[i][j] = move(nodes[i], nodes[j]);
+    return cost;
+}
+
+} // namespace
+
+std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, FixtureType type,
+                                        const FixturePose& start)
+{
+    return shortestPath(costMatrix(
+        poses, start, [type](const FixturePose& a, const FixturePose& b) { return travelDistance(a, b, type); }));
+}
+
+std::vector<std::size_t> orderForTime(const std::vector<FixturePose>& poses, const geometry::FixtureMotion& motion,
+                                      const FixturePose& start)
+{
+    return shortestPath(costMatrix(
+        poses, start, [&motion](const FixturePose& a, const FixturePose& b) { return motion.moveSeconds(a, b); }));
 }
 
 FixturePose homePose(const FixtureKinematics& fixture)

@@ -1,5 +1,7 @@
 #include "hullgauge/plan/program_plan.h"
 
+#include "hullgauge/align/alignment.h"
+#include "hullgauge/align/pose_correction.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/part_map.h"
 
@@ -41,7 +43,68 @@ std::string frameProblem(const FrameCheck& c, const model::AlignmentSettings& pl
            " px; a shorter lens or the camera farther from the part (or a smaller play: alignment limits)";
 }
 
+/// The cameras of a cycle of the part seated so, as the daemon takes it
+/// (docs/alignment.md, "Poses corrected for the seat"): the first
+/// `correct_poses_after` views at their planned poses, the rest at the poses
+/// corrected for the seat; each sees the seated part.
+std::vector<geometry::CameraModel> seatedCameras(const model::PartProgram& program, const geometry::Station& station,
+                                                 const std::vector<geometry::FixturePose>& poses,
+                                                 const geometry::RigidTransform& seat)
+{
+    const std::size_t seatViews = program.alignment.method == model::AlignmentMethod::None
+                                      ? poses.size()
+                                      : static_cast<std::size_t>(program.alignment.correctPosesAfter);
+    const geometry::Vec3 reference = program.solid->mesh().bounds().center();
+    std::vector<geometry::CameraModel> cameras;
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+        const geometry::FixturePose pose =
+            k < seatViews ? poses[k] : align::correctPose(station.fixture, poses[k], seat, reference).pose;
+        cameras.push_back(align::seatedCamera(station.cameraAt(pose), seat));
+    }
+    return cameras;
+}
+
 } // namespace
+
+std::vector<geometry::RigidTransform> playSeats(const model::PartProgram& program)
+{
+    const geometry::Vec3 c = program.solid->mesh().bounds().center();
+    const double shift = kPlayOfLimits * program.alignment.maxShiftMm;
+    const double angle = kPlayOfLimits * program.alignment.maxRotationDeg;
+    std::vector<geometry::RigidTransform> shifts{geometry::RigidTransform::identity()}, turns{shifts};
+    for (int axis = 0; axis < 3; ++axis)
+        for (double sign : {-1.0, 1.0}) {
+            const geometry::Vec3 e = sign * geometry::Vec3::Unit(axis);
+            shifts.push_back(geometry::RigidTransform::translation(shift * e));
+            const geometry::RigidTransform turn = geometry::RigidTransform::rotation(e, angle);
+            turns.push_back({turn.R, c - turn.R * c});
+        }
+    // Every shift with every turn: a real seat is both at once.
+    std::vector<geometry::RigidTransform> seats;
+    for (const auto& s : shifts)
+        for (const auto& t : turns)
+            if (&s != &shifts.front() || &t != &turns.front()) seats.push_back(s * t);
+    return seats;
+}
+
+std::vector<inspect::LandmarkCapability> capabilityOverPlay(const model::PartProgram& program,
+                                                            const geometry::Station& station,
+                                                            const std::vector<geometry::FixturePose>& poses)
+{
+    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
+    const auto landmarks = inspect::mapLandmarks(program);
+    const double voxel = inspect::inspectionVoxelMm(program);
+    std::vector<geometry::CameraModel> cameras;
+    for (const geometry::FixturePose& pose : poses) cameras.push_back(station.cameraAt(pose));
+    auto worst = inspect::assessCapability(landmarks, voxel, gauge.get(), cameras, station.imageQuality);
+    for (const geometry::RigidTransform& seat : playSeats(program)) {
+        const auto at = inspect::assessCapability(landmarks, voxel, gauge.get(),
+                                                  seatedCameras(program, station, poses, seat), station.imageQuality);
+        for (std::size_t i = 0; i < at.size() && i < worst.size(); ++i)
+            if (at[i].expectedMm > worst[i].expectedMm) worst[i] = at[i];
+    }
+    return worst;
+}
 
 PlanProblem planProblem(const model::PartProgram& program, const geometry::Station& station)
 {
@@ -107,11 +170,9 @@ ProgramPlan planProgram(const model::PartProgram& program, const geometry::Stati
         }
     }
     if (!out.plan.feasible) return out;
-    std::vector<geometry::CameraModel> cameras;
-    for (const PlannedView& v : out.plan.views) cameras.push_back(v.camera);
-    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
-    out.capability = inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program),
-                                               gauge.get(), cameras, station.imageQuality);
+    std::vector<geometry::FixturePose> poses;
+    for (const PlannedView& v : out.plan.views) poses.push_back(v.pose);
+    out.capability = capabilityOverPlay(program, station, poses);
     return out;
 }
 

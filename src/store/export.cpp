@@ -142,10 +142,13 @@ std::int64_t startedMs(const json& row)
 
 // ---------------------------------------------------------------- CSV (RFC 4180)
 
-constexpr const char* kCsvColumns[] = {"result_id",    "time",         "serial",         "program",         "part",
-                                       "purpose",      "verdict",      "landmark",       "status",          "value_mm",
-                                       "value_source", "deviation_mm", "uncertainty_mm", "error_mm",        "lower_mm",
-                                       "upper_mm",     "decision",     "excluded",       "exclusion_reason"};
+// The release columns come last, so every earlier column keeps its place (docs/export.md).
+constexpr const char* kCsvColumns[] = {"result_id",      "time",     "serial",           "program",
+                                       "part",           "purpose",  "verdict",          "landmark",
+                                       "status",         "value_mm", "value_source",     "deviation_mm",
+                                       "uncertainty_mm", "error_mm", "lower_mm",         "upper_mm",
+                                       "decision",       "excluded", "exclusion_reason", "program_version",
+                                       "program_sha256"};
 
 /// A field quoted when it holds a comma, a quote, CR or LF; quotes doubled (RFC 4180, 2.6–2.7).
 std::string csvField(const std::string& text)
@@ -185,7 +188,12 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows)
                                              row.value("part", std::string()),
                                              row.value("purpose", std::string("production")),
                                              row.value("verdict", std::string())};
-        const std::vector<std::string> tail{reason.empty() ? "false" : "true", reason};
+        // The program's release the part was judged with: empty for a draft (docs/commissioning.md).
+        const json version = row.value("program_version", json());
+        const json digest = row.value("program_sha256", json());
+        const std::vector<std::string> tail{reason.empty() ? "false" : "true", reason,
+                                            version.is_number_integer() ? version.dump() : std::string(),
+                                            digest.is_string() ? digest.get<std::string>() : std::string()};
         const auto measurements = measurementsOf(row);
         // A cycle without landmarks (an aborted one, mostly) still has its row,
         // the ten landmark cells (landmark ... decision) empty.

@@ -41,7 +41,7 @@ std::set<std::string> columnsOf(sqlite3* db, const std::string& file)
 std::string selectList(const std::set<std::string>& columns)
 {
     // In rowJson's order, each with what a store without the column reads.
-    static constexpr std::array<std::pair<const char*, const char*>, 19> kColumns{{
+    static constexpr std::array<std::pair<const char*, const char*>, 21> kColumns{{
         {"id", "0"},
         {"started_utc", "''"},
         {"started_unix_ms", "0"},
@@ -61,6 +61,8 @@ std::string selectList(const std::set<std::string>& columns)
         {"alignment_json", "'null'"},
         {"simulation_json", "'null'"},
         {"purpose", "'production'"},
+        {"program_version", "NULL"},
+        {"program_sha256", "''"},
     }};
     std::string list;
     for (const auto& [column, fallback] : kColumns)
@@ -143,7 +145,9 @@ json rowJson(sqlite3_stmt* s, const std::string& file)
             {"images", text(s, 15)},
             {"alignment", parsed(s, 16, file, "alignment_json")},
             {"simulation", parsed(s, 17, file, "simulation_json")},
-            {"purpose", text(s, 18)}};
+            {"purpose", text(s, 18)},
+            {"program_version", sqlite3_column_type(s, 19) == SQLITE_NULL ? json() : json(sqlite3_column_int(s, 19))},
+            {"program_sha256", text(s, 20).empty() ? json() : json(text(s, 20))}};
 }
 
 } // namespace

@@ -8,6 +8,8 @@
 //   HG_FAKE_MOVE_FAIL      "timeout" | "fault" : every move fails so
 //   HG_FAKE_GRAB_FAIL      "timeout" | "bad"   : every grab fails so
 //   HG_FAKE_START_FAIL     "1": the devices never start
+//   HG_FAKE_RELEASE        a version number: the program is released as that
+//                          version (verification digest 64 × 'a'); else a draft
 // The fake camera has two simulated parts (`hullgauge ctl sim-part`):
 // "nominal" grabs bright frames, "dented" dark ones; the fake inspection
 // reports 20 landmarks and fails landmarks 3 and 17 (out_of_tolerance) when a
@@ -20,6 +22,7 @@
 #include <filesystem>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -85,12 +88,24 @@ class FakeDevices : public StationDevices, public SimulationControl {
     std::atomic<bool> dented_{false};
 };
 
+/// The release HG_FAKE_RELEASE names; none (a draft) without it.
+std::optional<hg::station::ProgramRelease> fakeRelease()
+{
+    const auto version = env("HG_FAKE_RELEASE");
+    if (version.empty()) return std::nullopt;
+    return hg::station::ProgramRelease{std::stoi(version), std::string(64, 'a')};
+}
+
 class FakeInspector : public Inspector {
   public:
     bool begin(const hg::station::PartProgramRef&, std::string&) override
     {
         frames_.clear();
         return true;
+    }
+    std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
+    {
+        return LoadedProgramInfo{number, "fake-block", fakeRelease()};
     }
     void addView(std::size_t, const hg::geometry::FixturePose&, cv::Mat image, cv::Point) override
     {
@@ -101,6 +116,7 @@ class FakeInspector : public Inspector {
         InspectionOutcome out;
         out.ok = !frames_.empty();
         out.part = "fake-block";
+        out.release = fakeRelease();
         bool dark = false;
         for (const auto& f : frames_) dark = dark || cv::mean(f)[0] < 150;
         out.pass = !dark;

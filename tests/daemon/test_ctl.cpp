@@ -64,6 +64,37 @@ TEST(Ctl, DrivesTheDaemonThroughItsMaintenanceSocket)
     EXPECT_NE(refused.err.find("unknown part program"), std::string::npos) << refused.err;
 }
 
+// The release of the program a result was judged with (docs/daemon.md): in the
+// results, the last cycle and the PLC's active program once it is loaded.
+TEST(Ctl, ShowsTheReleaseOfTheProgramTheResultsWereJudgedWith)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    hgdaemon::DaemonProcess daemon(hgdaemon::writeConfig(dir, port), {{"HG_FAKE_RELEASE", "3"}});
+    auto sock = (dir / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    // The PLC's cycle selects program 1 (PART_PROGRAM in its trigger block).
+    auto plc = hgdaemon::plcClient(port, "cycles 1 --bad-every 0");
+    ASSERT_EQ(plc.status, 0) << plc.err << daemon.logText();
+
+    auto results = hgtest::run(ctl("--socket " + sock + " results -n 1"));
+    ASSERT_EQ(results.status, 0) << results.err;
+    EXPECT_NE(results.out.find("  program 1 version 3  "), std::string::npos) << results.out;
+    auto rows = nlohmann::json::parse(hgtest::run(ctl("--socket " + sock + " --json results -n 1")).out);
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_EQ(rows[0]["program_version"], 3);
+    EXPECT_EQ(rows[0]["program_sha256"], std::string(64, 'a'));
+
+    auto status = hgtest::run(ctl("--socket " + sock + " status"));
+    ASSERT_EQ(status.status, 0) << status.err;
+    EXPECT_NE(status.out.find("plc program:  1 ready, version 3, "), std::string::npos) << status.out;
+    EXPECT_NE(status.out.find("', program 1 version 3, "), std::string::npos) << status.out;
+    auto answer = nlohmann::json::parse(hgtest::run(ctl("--socket " + sock + " --json status")).out);
+    EXPECT_EQ(answer["program"]["number"], 1);
+    EXPECT_EQ(answer["program"]["version"], 3);
+    EXPECT_EQ(answer["program"]["verification_sha256"], std::string(64, 'a'));
+}
+
 TEST(Ctl, NoDaemonIsAFaultNamingTheSocket)
 {
     auto r = hgtest::run(ctl("--socket /nonexistent/hg.sock status"));

@@ -1,14 +1,15 @@
 // The cycle runner in-process with scripted devices and a hand-moved clock:
 // retries, faults with their codes, aborts and fault resets from the PLC's
 // COMMAND register, and recovery when the sequencer says — asserted on the
-// PLC registers, the lamps, the stored records and the sequencer's state.
-// Waiting is polling under a deadline; time on the runner's clock passes only
-// when the test moves it (settle times pass at once).
+// PLC registers, the lamps, the stored records and the sequencer's state;
+// the program's release each record names, across reloads. Waiting is polling under a deadline; time on the runner's
+// clock passes only when the test moves it (settle times pass at once).
 #include "cycle_runner.h"
 #include "engine_inspector.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/mesh_io.h"
@@ -18,7 +19,9 @@
 
 #include <algorithm>
 #include <deque>
+#include <fstream>
 #include <gtest/gtest.h>
+#include <iterator>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
@@ -173,6 +176,7 @@ class PassingInspector : public Inspector {
         InspectionOutcome out;
         out.ok = true;
         out.part = "block";
+        out.release = release;
         out.alignment = alignment;
         out.seatingFault = seatingFault;
         out.pass = !seatingFault;
@@ -181,6 +185,10 @@ class PassingInspector : public Inspector {
         return out;
     }
     void cancel() override {}
+    std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
+    {
+        return LoadedProgramInfo{number, "block", release};
+    }
     std::size_t seatViews() const override { return seatAfter; }
     std::optional<align::AlignmentResult> provisionalSeat() override
     {
@@ -189,6 +197,8 @@ class PassingInspector : public Inspector {
     }
 
     std::optional<align::AlignmentResult> alignment;
+    /// The release of the program "loaded" (none: a draft).
+    std::optional<station::ProgramRelease> release;
     bool seatingFault = false;
     /// The seat of the first `seatAfter` views (0: the program does not correct poses).
     std::size_t seatAfter = 0;
@@ -740,6 +750,36 @@ TEST_F(CycleRunnerTest, ChangeoverPreparesTheProgramBetweenCyclesAndShowsItReady
     EXPECT_EQ(inspector.preparedPrograms(), (std::vector<std::uint16_t>{2, 4}));
 }
 
+// The record names the release of the program the part was judged with
+// (docs/daemon.md, "Result store"), and so does the status: the last cycle
+// and the program loaded; a draft's result names none.
+TEST_F(CycleRunnerTest, TheResultNamesTheReleaseOfTheProgramAndADraftsNone)
+{
+    const std::string digest(64, 'c');
+    inspector.release = station::ProgramRelease{4, digest};
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    auto record = lastRecord();
+    EXPECT_EQ(record["program_version"], 4);
+    EXPECT_EQ(record["program_sha256"], digest);
+    EXPECT_EQ(runner->describe()["last_cycle"]["program_version"], 4);
+    EXPECT_EQ(runner->describe()["last_cycle"]["program_sha256"], digest);
+    EXPECT_EQ(runner->program(),
+              (nlohmann::json{{"number", 1}, {"part", "block"}, {"version", 4}, {"verification_sha256", digest}}));
+
+    inspector.release.reset();
+    trigger(2);
+    ASSERT_TRUE(eventually([&] { return done(2); }));
+    record = lastRecord();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_TRUE(record["program_version"].is_null());
+    EXPECT_TRUE(record["program_sha256"].is_null());
+    EXPECT_TRUE(runner->describe()["last_cycle"]["program_version"].is_null());
+    EXPECT_TRUE(runner->program()["version"].is_null());
+    EXPECT_EQ(runner->program()["number"], 1);
+}
+
 TEST_F(CycleRunnerTest, AFaultResetOutsideAFaultChangesNothing)
 {
     startReady();
@@ -978,6 +1018,117 @@ TEST_F(CameraRegions, TheCameraSendsEachViewsBoundsAndTheVerdictsAreThoseOfWhole
 
 // docs/camera.md, "A camera that cannot": it sends whole frames; the
 // inspection, told so by each frame's origin and size, judges the same.
+// A new version of a part program goes in by a reload (docs/daemon.md,
+// "Configuration reference"): `hullgauge commission` writes the new release
+// over the old file, the reload validates the configuration as the daemon's
+// does (every part program loaded in full) and the next result names the new
+// version; a reload that refuses the new file leaves the version loaded
+// before serving. The daemon's engine inspector on a copy of the simulated
+// line (config/sim), its nominal part rendered at the poses commanded.
+TEST(ProgramReload, TheNextResultNamesTheNewVersionAndARefusedFileLeavesThePreviousServing)
+{
+    hgtest::TempDir dir;
+    fs::copy(hgtest::sourceDir() / "config" / "sim", dir.path() / "sim", fs::copy_options::recursive);
+    const fs::path daemonFile = dir.path() / "sim" / "hullgauged.yaml";
+    const fs::path programFile = dir.path() / "sim" / "stepped-block.yaml";
+    std::ifstream in(programFile);
+    std::string draft((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!draft.empty() && draft.back() != '\n') draft += '\n';
+    // The record of docs/commissioning.md, "Release".
+    const auto released = [&](int version, const std::string& digest) {
+        return draft + "release:\n  version: " + std::to_string(version) + "\n  verification_sha256: " + digest +
+               "\n  released_by: jdoe\n  released_at: 2026-12-06T13:05:12+01:00\n";
+    };
+    const std::string v1(64, '1');
+    const std::string v2(64, '2');
+    // The configuration as the daemon loads it at start and at every reload
+    // (daemon.cpp, loadConfig): every part program checked in full.
+    const auto loadConfig = [&] {
+        auto cfg = std::make_shared<station::DaemonConfig>(station::loadDaemonConfig(daemonFile));
+        for (const auto& [number, ref] : cfg->programs) checkEngineProgram(ref, cfg->station);
+        cfg->results.saveFailedImages = false;
+        return std::shared_ptr<const station::DaemonConfig>(std::move(cfg));
+    };
+    auto config = loadConfig();
+    const geometry::Station station = config->station;
+    const ConfigNode driver = (*station.document)["camera"]["driver"];
+    sim::RenderOptions options;
+    options.backgroundLevel = driver["background_level"].asDouble();
+    options.objectLevel = driver["object_level"].asDouble();
+    options.blurSigmaPx = driver["blur_sigma_px"].asDouble();
+    options.noiseSigma = driver["noise_sigma"].asDouble();
+    options.seed = 7;
+    const std::map<std::string, fs::path> meshes(config->simulatedParts.begin(), config->simulatedParts.end());
+    const sim::SilhouetteRenderer renderer({model::loadMesh(meshes.at("nominal"))});
+
+    ManualClock clock;
+    ScriptedDevices devices(clock);
+    devices.render = [&](const geometry::FixturePose& pose) {
+        return renderer.render(station.cameraAt(pose), options);
+    };
+    auto inspector = makeEngineInspector(*config);
+    ResultStore store(dir / "results.db");
+    PlcRegisters registers;
+    registers.setKnownPrograms({1});
+    CycleRunner runner(registers, devices, *inspector, store, config, clock);
+    runner.start([] {});
+    ASSERT_TRUE(eventually([&] { return registers.snapshot()[reg::Status] == 0; }, 60s));
+    std::uint16_t seq = 0;
+    const auto cycle = [&] {
+        std::array<std::uint16_t, 2> block{++seq, 1};
+        EXPECT_EQ(registers.write(reg::TriggerSeq, block), station::ModbusException::None);
+        EXPECT_TRUE(eventually([&] { return registers.snapshot()[reg::DoneSeq] == seq; }, 120s)) << seq;
+        return store.recent(1).at(0);
+    };
+    // SIGHUP as the main loop takes it (daemon.cpp, MainLoop::reload): a configuration
+    // that does not validate is refused and the running one stays.
+    const auto reload = [&] {
+        try {
+            auto fresh = loadConfig();
+            runner.setConfig(fresh);
+            registers.setKnownPrograms({1});
+            return true;
+        } catch (const InputError&) {
+            return false;
+        }
+    };
+
+    // The simulated line's program is a draft: its result names no release.
+    auto record = cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_TRUE(record["program_version"].is_null());
+    EXPECT_TRUE(record["program_sha256"].is_null());
+    EXPECT_TRUE(runner.program()["version"].is_null());
+
+    // Released as version 1 over the same file: the reload loads it anew.
+    hgtest::writeFile(programFile, released(1, v1));
+    ASSERT_TRUE(reload());
+    record = cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["program_version"], 1);
+    EXPECT_EQ(record["program_sha256"], v1);
+    EXPECT_EQ(runner.program()["version"], 1);
+
+    // Version 2 written over it with its digest cut short: refused, version 1 serves on.
+    hgtest::writeFile(programFile, released(2, std::string(63, '2')));
+    EXPECT_FALSE(reload());
+    record = cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["program_version"], 1);
+    EXPECT_EQ(record["program_sha256"], v1);
+
+    // Version 2 as released: the reload takes it, the next result names it.
+    hgtest::writeFile(programFile, released(2, v2));
+    ASSERT_TRUE(reload());
+    record = cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["program_version"], 2);
+    EXPECT_EQ(record["program_sha256"], v2);
+    EXPECT_EQ(runner.program()["version"], 2);
+    EXPECT_EQ(runner.program()["verification_sha256"], v2);
+    EXPECT_EQ(store.count(), 4);
+}
+
 TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)
 {
     const std::vector<std::string> parts = {"face-low"};

@@ -130,7 +130,7 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
     EXPECT_EQ(recent[1]["purpose"], "production");
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
 }
 
 TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
@@ -158,13 +158,13 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
         EXPECT_EQ(recent[1]["purpose"], "production");
         EXPECT_EQ(recent[1]["serial"], "OLD");
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
               "OLD|production\nSN-4|master\n");
     // Only the three purposes are stored, also in a migrated table.
     auto bad = hgtest::run("sqlite3 " + file.string() + " \"UPDATE inspections SET purpose = 'golden' WHERE id = 1\"");
     EXPECT_NE(bad.status, 0);
-    ResultStore again(file); // reopening a version 4 database changes nothing
+    ResultStore again(file); // reopening a version 5 database changes nothing
     EXPECT_EQ(again.count(), 2);
 }
 
@@ -274,7 +274,7 @@ TEST(ResultOutbox, RowsOfAVersionThreeStorePredateThePlantLink)
     store.commit(record(4, station::Verdict::Pass));
     ResultOutbox outbox(file);
     EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "4\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
                           " \"SELECT serial, published_unix_ms, cycle_id = '' FROM inspections ORDER BY id\"")
                   .out,
@@ -320,6 +320,78 @@ TEST(ResultStore, KeepsALandmarksAsymmetricLimitsForTheStudies)
     EXPECT_EQ(sql(dir / "results.db", "SELECT json_extract(landmarks_json, '$[0].limits_mm'), "
                                       "json_type(landmarks_json, '$[1].limits_mm') IS NULL FROM inspections"),
               "[-0.05,0.15]|1\n");
+}
+
+/// A release's verification digest: 64 hex digits.
+const std::string kDigest = "5f0c9d3e4b7a1c2d8e6f0a9b3c5d7e1f2a4b6c8d0e2f4a6b8c0d2e4f6a8b0c2d";
+
+TEST(ResultStore, KeepsTheReleaseOfTheProgramThePartWasJudgedWith)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        auto released = record(1, station::Verdict::Pass);
+        released.programRelease = station::ProgramRelease{3, kDigest};
+        store.commit(released);
+        store.commit(record(2, station::Verdict::Fail)); // a draft program: no release
+        auto recent = store.recent(2);
+        ASSERT_EQ(recent.size(), 2u);
+        EXPECT_TRUE(recent[0]["program_version"].is_null());
+        EXPECT_TRUE(recent[0]["program_sha256"].is_null());
+        EXPECT_EQ(recent[1]["program_version"], 3);
+        EXPECT_EQ(recent[1]["program_sha256"], kDigest);
+    }
+    // An independent reader: NULL and '' for the draft's result.
+    EXPECT_EQ(sql(file, "SELECT serial, program_version, program_sha256, program_version IS NULL FROM inspections "
+                        "ORDER BY id"),
+              "SN-1|3|" + kDigest + "|0\nSN-2|||1\n");
+}
+
+TEST(ResultStore, AVersionFourDatabaseGainsTheReleaseColumnsAndKeepsItsRows)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v4.db";
+    // The schema of version 4, as the daemon before the program's release wrote it: one published row.
+    hgtest::run("sqlite3 " + file.string() +
+                " \"CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_utc TEXT NOT NULL, "
+                "started_unix_ms INTEGER NOT NULL, trigger_seq INTEGER NOT NULL, manual INTEGER NOT NULL, serial TEXT "
+                "NOT NULL, program INTEGER NOT NULL, part TEXT NOT NULL, verdict TEXT NOT NULL CHECK (verdict IN "
+                "('pass', 'fail', 'aborted', 'error')), fault_code INTEGER NOT NULL, cycle_ms INTEGER NOT NULL, "
+                "landmarks_failed INTEGER NOT NULL, landmarks_total INTEGER NOT NULL, landmarks_json TEXT NOT NULL, "
+                "timing_json TEXT NOT NULL, images_dir TEXT NOT NULL DEFAULT '', alignment_json TEXT NOT NULL DEFAULT "
+                "'null', simulation_json TEXT NOT NULL DEFAULT 'null', purpose TEXT NOT NULL DEFAULT 'production' "
+                "CHECK (purpose IN ('production', 'master', 'study')), cycle_id TEXT NOT NULL DEFAULT '', "
+                "published_unix_ms INTEGER); "
+                "INSERT INTO inspections VALUES (1, 't', 0, 3, 0, 'OLD', 1, 'block', 'fail', 0, 10, 1, 1, "
+                "'[{\\\"id\\\": \\\"a\\\", \\\"status\\\": \\\"out_of_tolerance\\\"}]', '{}', '', 'null', 'null', "
+                "'master', 'c0ffee00-0000-4000-8000-000000000001', 42); PRAGMA user_version=4;\"");
+    ASSERT_EQ(sql(file, "SELECT count(*) FROM inspections"), "1\n");
+    {
+        ResultStore store(file);
+        auto r = record(4, station::Verdict::Pass);
+        r.programRelease = station::ProgramRelease{2, kDigest};
+        store.commit(r);
+        auto recent = store.recent(2);
+        ASSERT_EQ(recent.size(), 2u);
+        EXPECT_EQ(recent[0]["program_version"], 2);
+        // The old row is kept as it was, naming no release.
+        EXPECT_EQ(recent[1]["serial"], "OLD");
+        EXPECT_EQ(recent[1]["verdict"], "fail");
+        EXPECT_EQ(recent[1]["purpose"], "master");
+        EXPECT_EQ(recent[1]["landmarks"][0]["status"], "out_of_tolerance");
+        EXPECT_TRUE(recent[1]["program_version"].is_null());
+        EXPECT_TRUE(recent[1]["program_sha256"].is_null());
+    }
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
+    // Its outbox state too: published at 42 with its cycle id, not sent again.
+    EXPECT_EQ(sql(file, "SELECT id, cycle_id, published_unix_ms, program_version IS NULL, program_sha256 FROM "
+                        "inspections ORDER BY id LIMIT 1"),
+              "1|c0ffee00-0000-4000-8000-000000000001|42|1|\n");
+    ResultOutbox outbox(file);
+    EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
+    ResultStore again(file); // reopening a version 5 database changes nothing
+    EXPECT_EQ(again.count(), 2);
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)

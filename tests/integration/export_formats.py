@@ -269,7 +269,7 @@ def check_measurement(part, n, row, entry):
 
 COLUMNS = ["result_id", "time", "serial", "program", "part", "purpose", "verdict", "landmark", "status", "value_mm",
            "value_source", "deviation_mm", "uncertainty_mm", "error_mm", "lower_mm", "upper_mm", "decision",
-           "excluded", "exclusion_reason"]
+           "excluded", "exclusion_reason", "program_version", "program_sha256"]
 
 
 def check_csv(raw, rows):
@@ -291,6 +291,9 @@ def check_csv(raw, rows):
         check(got["time"] == iso, f"{name}: time {got['time']}, started {iso}")
         check(got["excluded"] == ("true" if excluded(r) else "false") and bool(got["exclusion_reason"]) == excluded(r),
               f"{name}: excluded {got['excluded']} ({got['exclusion_reason']})")
+        # A store of schema version 3 recorded no program release: the last two cells are empty.
+        check(got["program_version"] == "" and got["program_sha256"] == "",
+              f"{name}: release {got['program_version']!r} {got['program_sha256']!r}")
         if e is None:
             check(all(got[k] == "" for k in COLUMNS[7:17]), f"{name}: landmark cells of a cycle without landmarks")
             continue

@@ -132,6 +132,12 @@ TEST(MeshRepair, OverlappingBodiesAreAutorefinedIntoTheirUnion)
     EXPECT_TRUE(checkMesh(r.mesh).ok()) << checkMesh(r.mesh).problem();
     EXPECT_TRUE(r.mesh.bounds().isApprox(Eigen::AlignedBox3d(Vector3d(0, 0, 0), Vector3d(50, 30, 20))));
     EXPECT_NE(r.repair.repairs().find("self-intersecting triangle pairs removed"), std::string::npos);
+    // The report says by how much the volume moved: the 1000 mm³ the two
+    // shells shared were counted twice as read.
+    const double asRead = kBoxWithBoreVolume + 2000.0;
+    EXPECT_NEAR(r.repair.volumeAsReadMm3, asRead, kStlVolumeTolerance * asRead);
+    EXPECT_NEAR(r.repair.volumeMm3, expected, kStlVolumeTolerance * expected);
+    EXPECT_NE(r.repair.repairs().find("-1000 mm³"), std::string::npos) << r.repair.repairs();
     const std::string refusal = strictRefusal(dir, m, "overlap-strict.stl");
     EXPECT_NE(refusal.find(fmt::format("{} self-intersecting triangle pairs", r.repair.selfIntersections)),
               std::string::npos)

@@ -7,9 +7,14 @@
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/primitives.h"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <gtest/gtest.h>
+#include <iterator>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 namespace hg::plan {
 namespace {
@@ -82,6 +87,82 @@ TEST(PlanCommand, CubePlanIsWrittenAndConsistent)
     EXPECT_NE(report.find("**Feasible.**"), std::string::npos);
 }
 
+/// The move time of docs/fixture.md, written out here as the oracle: per axis
+/// d/v + v/a (trapezoid, d ≥ v²/a) or 2·sqrt(d/a) (triangle), the slowest axis ends the move.
+double handMoveSeconds(const nlohmann::json& a, const nlohmann::json& b)
+{
+    auto axis = [](double d, double v, double acc) {
+        return d >= v * v / acc ? d / v + v / acc : 2 * std::sqrt(d / acc);
+    };
+    const double rot = std::abs(b["rotation_deg"].get<double>() - a["rotation_deg"].get<double>());
+    const double decl = std::abs(b["declination_deg"].get<double>() - a["declination_deg"].get<double>());
+    return std::max(axis(rot, 360, 3600), axis(decl, 10, 20)); // settle 0 on both axes
+}
+
+TEST(PlanCommand, CycleTimeIsPredictedAndTheViewsAreInItsOrder)
+{
+    // A fast turntable and a slow tilt: the order of least travel distance is
+    // not, in general, the fastest; the views come in the fastest order.
+    hgtest::TempDir dir;
+    model::saveMesh(model::makeBox(Vector3d(-10, -10, 0), Vector3d(10, 10, 20)), dir / "part.stl");
+    hgtest::writeFile(dir / "station.yaml",
+                      hgtest::stationYaml({.imageSize = {2448, 2048},
+                                           .focalPx = 4000,
+                                           .cameraKeys = "  grab_s: 0.01\n",
+                                           .fixtureKeys = "  motion:\n"
+                                                          "    rotation: {speed_deg_s: 360, acceleration_deg_s2: 3600, "
+                                                          "settle_s: 0}\n"
+                                                          "    declination: {speed_deg_s: 10, acceleration_deg_s2: 20, "
+                                                          "settle_s: 0}\n"
+                                                          "    settle_s: 0.02\n",
+                                           .floorZMm = 0.0}));
+    hgtest::writeFile(dir / "part.yaml",
+                      partYaml(R"(  - {id: top, position: [1, 2, 20], normal: [0, 0, 1], tolerance_mm: 0.5}
+  - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: 0.5}
+  - {id: nx, position: [-10, -2, 11], normal: [-1, 0, 0], tolerance_mm: 0.5}
+  - {id: ny, position: [-1, -10, 12], normal: [0, -1, 0], tolerance_mm: 0.5}
+)"));
+    auto r = hgtest::run(plan(dir));
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::ifstream in(dir / "plan.json");
+    const auto j = nlohmann::json::parse(in);
+    const auto& views = j["views"];
+    const auto& ct = j["cycle_time"];
+    const std::size_t n = views.size();
+    ASSERT_GE(n, 2u);
+    ASSERT_LE(n, 7u);
+    ASSERT_EQ(ct["moves"].size(), n);
+    EXPECT_EQ(ct["model"]["source"], "fixture.motion");
+    // Every move and the sum, by hand from the poses, from home (0, 0).
+    const nlohmann::json home = {{"rotation_deg", 0.0}, {"declination_deg", 0.0}};
+    double moves = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        const auto& m = ct["moves"][k];
+        EXPECT_EQ(m["to"], views[k]["id"]);
+        const double hand = handMoveSeconds(k ? views[k - 1]["pose"] : home, views[k]["pose"]);
+        EXPECT_NEAR(m["move_s"].get<double>(), hand, 1e-9) << k;
+        moves += hand;
+    }
+    const double predicted = moves + static_cast<double>(n) * (0.02 + 0.01) + 0.001;
+    EXPECT_NEAR(ct["predicted_s"].get<double>(), predicted, 1e-9);
+    // No order of the same views is faster (all orders, by hand).
+    std::vector<std::size_t> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    double best = std::numeric_limits<double>::infinity();
+    do {
+        double t = 0;
+        for (std::size_t k = 0; k < n; ++k)
+            t += handMoveSeconds(k ? views[order[k - 1]]["pose"] : home, views[order[k]]["pose"]);
+        best = std::min(best, t);
+    } while (std::next_permutation(order.begin(), order.end()));
+    EXPECT_NEAR(moves, best, 1e-9);
+    EXPECT_LE(ct["predicted_s"].get<double>(), ct["unordered_s"].get<double>() + 1e-12);
+    EXPECT_LE(ct["predicted_s"].get<double>(), ct["least_distance_s"].get<double>() + 1e-12);
+    std::ifstream md(dir / "plan.md");
+    const std::string report((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+    EXPECT_NE(report.find("## Cycle time (predicted)"), std::string::npos);
+}
+
 TEST(PlanCommand, ConcavityExitsTwoWithTheReason)
 {
     hgtest::TempDir dir;
@@ -145,7 +226,9 @@ namespace {
 
 // The capability check at the planned views (docs/inspection.md,
 // "Capability"): with the sub-voxel deviation a tolerance below ΔV is
-// planned — the views must resolve ΔV — and judged to 4 U instead.
+// planned — the views must resolve ΔV — and judged to 4 U instead. The nest
+// is tight (alignment limits 0.05 mm, 0.05°): the views that graze the faces
+// see them on their outline at every seat of its play (program_plan.h).
 TEST(PlanCommand, ATolerancePlannedViewsCannotProveIsRefusedUnlessForced)
 {
     hgtest::TempDir dir;
@@ -154,6 +237,7 @@ TEST(PlanCommand, ATolerancePlannedViewsCannotProveIsRefusedUnlessForced)
     const std::string landmarks = R"(  - {id: px, position: [10, 1, 10], normal: [1, 0, 0], tolerance_mm: TOL}
   - {id: ny, position: [-1, -10, 12], normal: [0, -1, 0], tolerance_mm: 0.2}
 inspection: {deviation: true}
+alignment: {max_shift_mm: 0.05, max_rotation_deg: 0.05}
 )";
     const auto withTolerance = [&](const std::string& tol) {
         std::string l = landmarks;

@@ -36,8 +36,13 @@ json row(std::int64_t id, std::int64_t ms, const std::string& serial, json landm
             {"images", ""},
             {"alignment", nullptr},
             {"simulation", nullptr},
-            {"purpose", "production"}};
+            {"purpose", "production"},
+            {"program_version", nullptr},
+            {"program_sha256", nullptr}};
 }
+
+/// A release's verification digest: 64 hex digits.
+const std::string kDigest = "5f0c9d3e4b7a1c2d8e6f0a9b3c5d7e1f2a4b6c8d0e2f4a6b8c0d2e4f6a8b0c2d";
 
 std::string written(ExportFormat format, const std::vector<json>& rows, std::int64_t exported = kT0)
 {
@@ -88,6 +93,8 @@ TEST(ExportCsv, OneQuotedRowPerLandmarkWithCrlf)
     fail["program"] = 3;
     fail["part"] = "block";
     fail["verdict"] = "fail";
+    fail["program_version"] = 2; // judged with release 2 of the program; the aborted cycle with none
+    fail["program_sha256"] = kDigest;
     auto aborted = row(8, kT0 + 60'000, "M-1", json::array());
     aborted["program"] = 3;
     aborted["part"] = "block";
@@ -98,23 +105,32 @@ TEST(ExportCsv, OneQuotedRowPerLandmarkWithCrlf)
 
     const std::string expected =
         "result_id,time,serial,program,part,purpose,verdict,landmark,status,value_mm,value_source,deviation_mm,"
-        "uncertainty_mm,error_mm,lower_mm,upper_mm,decision,excluded,exclusion_reason\r\n"
+        "uncertainty_mm,error_mm,lower_mm,upper_mm,decision,excluded,exclusion_reason,program_version,program_"
+        "sha256\r\n"
         "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,a,ok,0.012,deviation_mm,0.012,0.004,"
-        "0.0625,-0.2,0.2,conforms,false,\r\n"
+        "0.0625,-0.2,0.2,conforms,false,,2," +
+        kDigest +
+        "\r\n"
         "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,b,out_of_tolerance,0.1875,error_mm,,,"
-        "0.1875,-0.05,0.15,,false,\r\n"
-        "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,c,not_found,,,,,0.0,-0.2,0.2,,false,"
+        "0.1875,-0.05,0.15,,false,,2," +
+        kDigest +
+        "\r\n"
+        "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,c,not_found,,,,,0.0,-0.2,0.2,,false,,"
+        "2," +
+        kDigest +
         "\r\n"
         "8,2026-05-28T20:27:40.000Z,M-1,3,block,master,aborted,,,,,,,,,,,true,\"verdict aborted, purpose master, "
-        "simulated, manual trigger\"\r\n";
+        "simulated, manual trigger\",,\r\n";
     EXPECT_EQ(written(ExportFormat::Csv, {fail, aborted}), expected);
 }
 
 TEST(ExportJson, TheRowsUnderFormatVersionAndTime)
 {
-    const std::vector<json> rows{
+    std::vector<json> rows{
         row(1, kT0, "S-1", json::array({{{"id", "a"}, {"status", "ok"}, {"error_mm", 0.0}, {"tolerance_mm", 0.1}}})),
         row(2, kT0 + 1000, "S\xC3\xBC", json::array())};
+    rows[1]["program_version"] = 3;
+    rows[1]["program_sha256"] = kDigest;
     const auto text = written(ExportFormat::Json, rows, kT0 + 123);
     ASSERT_FALSE(text.empty());
     EXPECT_EQ(text.back(), '\n');
@@ -125,7 +141,10 @@ TEST(ExportJson, TheRowsUnderFormatVersionAndTime)
     EXPECT_EQ(doc["exported"], "2026-05-28T20:26:40.123Z");
     ASSERT_EQ(doc["results"].size(), 2u);
     EXPECT_EQ(doc["results"][0], rows[0]);
-    EXPECT_EQ(doc["results"][1]["serial"], "S\xC3\xBC"); // UTF-8 kept
+    EXPECT_TRUE(doc["results"][0]["program_version"].is_null()); // a draft's result: no release
+    EXPECT_EQ(doc["results"][1]["serial"], "S\xC3\xBC");         // UTF-8 kept
+    EXPECT_EQ(doc["results"][1]["program_version"], 3);          // the release the part was judged with
+    EXPECT_EQ(doc["results"][1]["program_sha256"], kDigest);
 }
 
 /// Program 5 (bracket): a production pass, a production fail with landmark b

@@ -126,12 +126,38 @@ TEST(ResultReader, AVersionOneStoreReadsWithTheLaterColumnsDefaults)
     EXPECT_EQ(all[0].at("purpose"), "production");
     EXPECT_TRUE(all[0].at("alignment").is_null());
     EXPECT_TRUE(all[0].at("simulation").is_null());
+    EXPECT_TRUE(all[0].at("program_version").is_null()); // no release recorded before schema version 5
+    EXPECT_TRUE(all[0].at("program_sha256").is_null());
     ResultQuery master;
     master.purpose = "master";
     EXPECT_EQ(reader.count(master), 0); // before purposes existed every cycle was production
     ResultQuery production;
     production.purpose = "production";
     EXPECT_EQ(reader.count(production), 4);
+}
+
+// Schema version 5: the release of the program each part was judged with
+// (docs/daemon.md, "Result store"): NULL and '' for a draft's result.
+TEST(ResultReader, TheReleaseAPartWasJudgedWithAndNoneForADraft)
+{
+    hgtest::TempDir dir;
+    const std::string digest(64, 'a');
+    makeStore(dir / "v5.db",
+              v3Schema() + "ALTER TABLE inspections ADD COLUMN cycle_id TEXT NOT NULL DEFAULT '';"
+                           "ALTER TABLE inspections ADD COLUMN published_unix_ms INTEGER;"
+                           "ALTER TABLE inspections ADD COLUMN program_version INTEGER;"
+                           "ALTER TABLE inspections ADD COLUMN program_sha256 TEXT NOT NULL DEFAULT '';",
+              rows(2, true) + "UPDATE inspections SET program_version = 7, program_sha256 = '" + digest +
+                  "' WHERE id = 2;");
+    const ResultReader reader(dir / "v5.db");
+    const auto released = reader.byId(2);
+    ASSERT_TRUE(released);
+    EXPECT_EQ(released->at("program_version"), 7);
+    EXPECT_EQ(released->at("program_sha256"), digest);
+    const auto draft = reader.byId(1);
+    ASSERT_TRUE(draft);
+    EXPECT_TRUE(draft->at("program_version").is_null());
+    EXPECT_TRUE(draft->at("program_sha256").is_null());
 }
 
 TEST(ResultReader, NamesWhatIsWrongWithTheFile)

@@ -143,6 +143,12 @@ struct VerificationReport {
     std::map<std::string, double> phaseMs;
     /// The twin's inspection time per cycle (the traversal after the last frame), median, ms.
     double inspectionMedianMs = 0.0;
+    /// The plan's predicted cycle time from the home pose (docs/planning.md,
+    /// "Cycle time"), and the same model over the poses the twin's fixture
+    /// was actually sent to (corrected for each seat): median and largest, s.
+    double plannedCycleS = 0.0;
+    double twinCycleMedianS = 0.0;
+    double twinCycleMaxS = 0.0;
     double falseRejectRate() const
     {
         return nominalCycles == 0 ? 0.0 : 1.0 - static_cast<double>(nominalPassed) / nominalCycles;

@@ -41,6 +41,12 @@ struct MeshRepairReport {
     std::size_t selfIntersections = 0;   ///< self-intersecting triangle pairs found, all removed
     std::size_t retriangulatedFaces = 0; ///< planar faces folded over themselves, re-triangulated
     std::size_t autorefinedPairs = 0;    ///< of the pairs, those removed by autorefinement (crossing shells)
+    /// The volume the surface bounded as read (closed, its faces oriented
+    /// alike, before self-intersections were resolved and shells flipped:
+    /// two shells never united count the volume they share twice) and the
+    /// repaired solid's (mm³); 0 when the mesh was not repaired.
+    double volumeAsReadMm3 = 0.0;
+    double volumeMm3 = 0.0;
 
     /// True when nothing was repaired.
     bool clean() const;
@@ -48,7 +54,8 @@ struct MeshRepairReport {
     std::string defects() const;
     /// The repairs made, "2 duplicate faces removed, 1 shell flipped" (the warning).
     std::string repairs() const;
-    /// One entry per kind repaired, as in repairs().
+    /// One entry per kind repaired, as in repairs(), and last, when anything
+    /// was repaired and the volume moved, by how much.
     std::vector<std::string> items() const;
 };
 

@@ -16,12 +16,14 @@
 // grazing poses that pass Rules 1-4), their view variation lists over the
 // candidate poses, OR removal and AND combination by largest intersection, and
 // one final pose per group (minimum summed distance to its landmarks, median
-// orientation among ties, 5.4.4), ordered for least fixture travel.
+// orientation among ties, 5.4.4), ordered for the least cycle time of the
+// station's fixture (cycle_time.h).
 #pragma once
 
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/model/solid.h"
+#include "hullgauge/plan/cycle_time.h"
 #include "hullgauge/plan/pose_space.h"
 #include "hullgauge/plan/view_rules.h"
 
@@ -136,7 +138,10 @@ struct PlannedView {
 
 struct ViewPlan {
     std::vector<LandmarkAnalysis> landmarks;
-    std::vector<PlannedView> views; ///< in travel order
+    std::vector<PlannedView> views; ///< in travel order: the least predicted cycle time
+    /// The predicted cycle time of `views` from the home pose, and of the
+    /// orders it is compared with (docs/planning.md, "Cycle time").
+    PlanCycleTime cycleTime;
     bool feasible = false;
     /// Why the plan failed, one sentence each.
     std::vector<std::string> problems;

@@ -12,6 +12,7 @@
 #pragma once
 
 #include "hullgauge/geometry/fixture.h"
+#include "hullgauge/geometry/fixture_motion.h"
 
 #include <cstddef>
 #include <vector>
@@ -56,10 +57,17 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
 double travelDistance(const FixturePose& a, const FixturePose& b, FixtureType type);
 
 /// Order of `poses` (indices) that visits them all starting from `start` with
-/// the least total travel: exact for up to 8 poses, nearest neighbour then
-/// 2-opt improvement beyond.
+/// the least total travel distance (travelDistance): exact for up to 8 poses,
+/// nearest neighbour then 2-opt improvement beyond.
 std::vector<std::size_t> orderForTravel(const std::vector<FixturePose>& poses, FixtureType type,
                                         const FixturePose& start);
+
+/// As orderForTravel, for the least total travel time: each move costs
+/// `motion.moveSeconds` (the slowest axis' trapezoidal profile plus settle,
+/// fixture_motion.h), so a long move of a fast axis can beat a short one of
+/// a slow axis.
+std::vector<std::size_t> orderForTime(const std::vector<FixturePose>& poses, const geometry::FixtureMotion& motion,
+                                      const FixturePose& start);
 
 /// The pose the fixture sits at when homed: zero on every axis, clamped into the ranges.
 FixturePose homePose(const FixtureKinematics& fixture);

@@ -18,6 +18,28 @@
 
 namespace hg::plan {
 
+/// The nest's play assumed, as a share of the alignment limits, where none is
+/// given: the limits are where a seat is refused, and a nest whose play
+/// reached them would have every part at its edge refused half the time, as
+/// its seat is measured with noise (docs/commissioning.md, "The twin").
+inline constexpr double kPlayOfLimits = 0.8;
+
+/// Seats at the edge of the nest's play (kPlayOfLimits of the program's
+/// alignment limits): the part shifted by the play along ± each axis, turned
+/// by it about ± each axis through its bounding-box centre, and every shift
+/// with every turn (48 seats; the part as drawn is not among them).
+std::vector<geometry::RigidTransform> playSeats(const model::PartProgram& program);
+
+/// The capability check (docs/inspection.md, "Capability") of a program's
+/// views at these poses over the nest's play: per landmark the assessment
+/// with the largest expected U, over the part as drawn and every playSeats
+/// seat, each seen as the daemon's cycle sees it (the first
+/// `correct_poses_after` views at their poses, the rest corrected for the
+/// seat: docs/alignment.md).
+std::vector<inspect::LandmarkCapability> capabilityOverPlay(const model::PartProgram& program,
+                                                            const geometry::Station& station,
+                                                            const std::vector<geometry::FixturePose>& poses);
+
 /// The planner's problem for a program at a station (pointers into both,
 /// which must outlive it). With the sub-voxel deviation a landmark's
 /// tolerance is decided to U, not to a voxel: the planner's tolerance rules
@@ -52,7 +74,9 @@ int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station
 
 struct ProgramPlan {
     ViewPlan plan;
-    /// Expected U per landmark at the planned views; none when the plan is infeasible.
+    /// Expected U per landmark at the planned views, the largest over the part
+    /// as drawn and the playSeats (the outline a view sees, and so U, changes
+    /// with the seat); none when the plan is infeasible.
     std::optional<std::vector<inspect::LandmarkCapability>> capability;
     std::vector<FrameCheck> frames;
 };

@@ -33,6 +33,15 @@ struct LandmarkOutcome {
     bool ok() const { return status == "ok"; }
 };
 
+/// The release of a part program a part was judged with (docs/commissioning.md,
+/// "Release"): its version and the SHA-256 of the verification report it was
+/// released on. A draft program has none.
+struct ProgramRelease {
+    int version = 0;
+    std::string verificationSha256; ///< 64 lower-case hex digits
+    bool operator==(const ProgramRelease&) const = default;
+};
+
 enum class Verdict { Pass, Fail, Aborted, Error };
 std::string_view toString(Verdict v);
 
@@ -43,6 +52,9 @@ struct InspectionRecord {
     std::string serial;
     std::uint16_t program = 0;
     std::string part; ///< the part program's `part` name
+    /// The release of the part program the part was judged with; absent for a
+    /// draft program, and when no program judged the part (docs/daemon.md, "Result store").
+    std::optional<ProgramRelease> programRelease;
     /// What the cycle was for (CYCLE_PURPOSE at the trigger, docs/study.md).
     CyclePurpose purpose = CyclePurpose::Production;
     Verdict verdict = Verdict::Error;

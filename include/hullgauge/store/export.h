@@ -7,7 +7,7 @@
 //
 // A row is the object selectResults returns (docs/daemon.md, "Results"); the
 // writers read id, started_unix_ms, serial, program, part, verdict, purpose,
-// manual, simulation and landmarks. The value of a landmark is its
+// manual, simulation, landmarks and (CSV) program_version and program_sha256. The value of a landmark is its
 // `deviation_mm` when the row has one, else its `error_mm` (the middle of the
 // voxel bracket); a landmark `not_found`, `not_observable` or `not_inspected`
 // has none. Its tolerance zone is study::zoneOf's (limits_mm or ±tolerance_mm).

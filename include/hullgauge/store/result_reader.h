@@ -4,10 +4,12 @@
 // HMI's JSON API (docs/hmi.md). A row is the JSON object of docs/daemon.md
 // ("results"): id, time, started_unix_ms, trigger_seq, manual, serial, program,
 // part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total,
-// landmarks, timing, images, alignment, simulation, purpose.
+// landmarks, timing, images, alignment, simulation, purpose, program_version,
+// program_sha256 (the release the part was judged with; null for a draft).
 //
 // Stores of every schema version are read: a column an older version lacks
-// reads as its default (alignment and simulation null, purpose production).
+// reads as its default (alignment and simulation null, purpose production,
+// program_version and program_sha256 null).
 #pragma once
 
 #include <cstdint>

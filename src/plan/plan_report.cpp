@@ -163,7 +163,11 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         j["id"] = a.id;
         j["status"] = toString(a.verdict);
         j["inspectable"] = a.inspectable();
-        j["tolerance_mm"] = a.toleranceMm;
+        // The drawing's tolerance; where it is decided to U (finer than ΔV)
+        // the planner judged the views against the voxel size instead.
+        const auto& drawn = l < problem.landmarks.size() ? problem.landmarks[l].drawingToleranceMm : std::nullopt;
+        j["tolerance_mm"] = drawn.value_or(a.toleranceMm);
+        if (drawn) j["resolved_voxel_mm"] = a.toleranceMm;
         j["normal"] = geometry::toJson(a.normal);
         j["best_views"] = a.designerBestViews ? "designer" : "derived";
         j["observed_by"] = ids;
@@ -251,14 +255,18 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
         s << " |\n";
     }
     cycleTimeMarkdown(s, plan, type);
-    s << "\n## Landmarks\n\n| landmark | verdict | tolerance mm | best MED mm | views | witnesses | unseen voids |\n"
-         "|---|---|---|---|---|---|---|\n";
+    s << "\n## Landmarks\n\nThe views must resolve the tolerance, or the voxel size ΔV where the tolerance is finer "
+         "(it is then decided to U by the sub-voxel deviation).\n\n"
+         "| landmark | verdict | tolerance mm | views resolve mm | best MED mm | views | witnesses | unseen voids |\n"
+         "|---|---|---|---|---|---|---|---|\n";
     for (std::size_t l = 0; l < plan.landmarks.size(); ++l) {
         const auto& a = plan.landmarks[l];
         auto [ids, med] = observers(plan, l);
         std::string viewList;
         for (const auto& id : ids) viewList += (viewList.empty() ? "" : " ") + id;
-        s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(a.toleranceMm) << " | "
+        const auto& drawn = l < problem.landmarks.size() ? problem.landmarks[l].drawingToleranceMm : std::nullopt;
+        s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(drawn.value_or(a.toleranceMm)) << " | "
+          << num(a.toleranceMm) << (drawn ? " (ΔV)" : "") << " | "
           << (a.witnessPoses.empty() ? "-" : num(a.bestMedMm, 3)) << " | " << (viewList.empty() ? "-" : viewList)
           << " | " << a.witnessPoses.size() << " | " << a.unseenVoids.size() << " |\n";
     }

@@ -5,6 +5,7 @@
 // and 3 × the tolerance added and removed at every landmark. Counters give
 // the time of each phase (s) and the cycles run; the baseline in the same run
 // is one cycle of the nominal part on the twin.
+#include "hullgauge/commission/screen.h"
 #include "hullgauge/commission/verification.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/plan/landmark_suggest.h"
@@ -54,12 +55,13 @@ fs::path suggestedProgram(const geometry::Station& station, const fs::path& dir)
 {
     const int depth = plan::finestResolvedDepth(model::loadCadModel(kMesh, 8, 4).solid->mesh(), station, 4);
     const model::CadModel cad = model::loadCadModel(kMesh, depth, 4);
-    plan::SuggestProblem problem{
-        cad.solid, nullptr, &station, {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth}};
     plan::SuggestOptions options;
     options.count = 8;
     options.toleranceMm = 0.1;
-    const plan::Suggestion s = plan::suggestLandmarks(problem, options);
+    commission::ScreenOptions screen;
+    screen.toleranceMm = 0.1;
+    options.screen = commission::twinScreen(commission::draftProgram(cad, "nema17", {}), station, screen);
+    const plan::Suggestion s = plan::suggestLandmarks(plan::suggestProblem(cad, station), options);
     std::ofstream(dir / "p.yaml") << "part: nema17\nmesh: " << kMesh.string() << "\noctree: {depth: " << depth
                                   << ", adjacency_depth: 4}\n"
                                   << plan::landmarksYaml(s, 0.1, {});
@@ -77,15 +79,8 @@ void prepare(Prepared& p, const geometry::Station& station)
     plan::PlanOptions options;
     options.pareLayers = p.program.octree.adjacencyDepth;
     p.planned = plan::planProgram(p.program, station, options);
-    p.problem.program = &p.program;
-    p.problem.station = &station;
-    for (const plan::PlannedView& v : p.planned.plan.views) {
-        p.problem.poses.push_back(v.pose);
-        std::vector<std::string> ids;
-        for (std::size_t l : v.landmarks) ids.push_back(p.program.landmarks[l].id);
-        p.problem.viewLandmarks.push_back(ids);
-    }
-    p.problem.capability = p.planned.capability.value_or(std::vector<inspect::LandmarkCapability>{});
+    p.problem = commission::verificationProblem(
+        p.program, station, p.planned.plan, p.planned.capability.value_or(std::vector<inspect::LandmarkCapability>{}));
 }
 
 void BM_Commission(benchmark::State& state)

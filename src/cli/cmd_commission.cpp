@@ -5,12 +5,14 @@
 // the nominal part at N random seats within the nest's play, seeded defects
 // at every landmark — and released with a version only when it passes. A
 // program that fails names each landmark's failing test and its fix; --fix
-// drops the landmarks that fail and verifies again.
+// makes the fixes that can be made here (a second view, a finer octree depth,
+// dropping the landmark) and verifies again.
 //
 // Exit status: 0 released, 1 verified but not released (the report says
 // why), 2 bad input or no plan, 3 a fault (a file that cannot be written).
 #include "command.h"
 #include "hullgauge/commission/report.h"
+#include "hullgauge/commission/screen.h"
 #include "hullgauge/commission/verification.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/durable_file.h"
@@ -57,7 +59,7 @@ struct CommissionArgs {
     double seatShiftMm = -1.0;
     double seatRotationDeg = -1.0;
     bool fix = false;
-    int rounds = 3;
+    int rounds = 4;
 };
 
 void say(const std::string& line)
@@ -94,9 +96,42 @@ std::string partName(const CommissionArgs& args)
     return args.part.empty() ? fs::path(args.cad).stem().string() : args.part;
 }
 
+/// The alignment settings of a suggested program: the defaults, the limits
+/// beyond the nest's play given by the margin the seat's measurement needs
+/// (plan::kPlayOfLimits, docs/commissioning.md).
+model::AlignmentSettings suggestedAlignment(const CommissionArgs& args)
+{
+    model::AlignmentSettings alignment;
+    if (args.seatShiftMm > 0.0) alignment.maxShiftMm = args.seatShiftMm / plan::kPlayOfLimits;
+    if (args.seatRotationDeg > 0.0) alignment.maxRotationDeg = args.seatRotationDeg / plan::kPlayOfLimits;
+    return alignment;
+}
+
+/// The suggestion, its landmarks proven on a few seats of the twin, and the
+/// candidates it refused in suggestion.md.
+plan::Suggestion suggest(const CommissionArgs& args, const geometry::Station& station, const model::CadModel& cad,
+                         const fs::path& out)
+{
+    plan::SuggestOptions options;
+    options.count = args.count;
+    options.toleranceMm = args.toleranceMm;
+    options.alignment = suggestedAlignment(args);
+    options.plan.pareLayers = cad.octree.adjacencyDepth; // as the draft is planned (planOptions)
+    commission::ScreenOptions screen;
+    screen.seats = args.seats;
+    screen.toleranceMm = args.toleranceMm;
+    screen.seed = args.seed;
+    options.screen =
+        commission::twinScreen(commission::draftProgram(cad, partName(args), options.alignment), station, screen);
+    const plan::Suggestion s = plan::suggestLandmarks(plan::suggestProblem(cad, station), options);
+    replaceFileDurably(out / "suggestion.md", "# Candidates refused for " + partName(args) + "\n\n" +
+                                                  plan::refusedSummary(s) + ".\n\n" + plan::refusedMarkdown(s));
+    return s;
+}
+
 /// The draft from suggested landmarks (docs/part-program.md, "Suggesting landmarks").
 YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& station, const std::string& meshName,
-                        PhaseClock& clock)
+                        const fs::path& out, PhaseClock& clock)
 {
     clock.start("suggest");
     model::CadModel cad = model::loadCadModel(args.cad, std::max(args.depth, 8), args.adjacencyDepth, args.solid);
@@ -105,22 +140,15 @@ YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& sta
         say("octree depth " + std::to_string(depth) + ": the finest whose voxels the views resolve at the part");
         cad = model::loadCadModel(args.cad, depth, args.adjacencyDepth, args.solid);
     }
-    plan::SuggestProblem problem;
-    problem.solid = cad.solid;
-    problem.brep = cad.brep.get();
-    problem.station = &station;
-    problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};
-    plan::SuggestOptions options;
-    options.count = args.count;
-    options.toleranceMm = args.toleranceMm;
-    const plan::Suggestion s = plan::suggestLandmarks(problem, options);
+    const plan::Suggestion s = suggest(args, station, cad, out);
     clock.stop("suggest");
     for (const std::string& note : s.notes) say("note: " + note);
     if (s.landmarks.empty())
         throw InputError(args.cad, "landmarks",
                          "no point of the part is inspectable at the station " + args.station + " with tolerance_mm " +
                              formatNumber(args.toleranceMm) + (s.notes.empty() ? "" : ": " + s.notes.front()));
-    say(std::to_string(s.landmarks.size()) + " landmarks suggested");
+    say(std::to_string(s.landmarks.size()) + " landmarks suggested; candidates refused: " + plan::refusedSummary(s) +
+        " (" + (out / "suggestion.md").string() + ")");
     YAML::Node draft = YAML::Load(plan::landmarksYaml(s, args.toleranceMm, {}));
     YAML::Node program;
     program["part"] = partName(args);
@@ -128,11 +156,9 @@ YAML::Node suggestDraft(const CommissionArgs& args, const geometry::Station& sta
     if (!args.solid.empty()) program["mesh_solid"] = args.solid;
     program["octree"]["depth"] = cad.octree.depth;
     program["octree"]["adjacency_depth"] = args.adjacencyDepth;
-    // The nest's play given: the alignment limits lie beyond it by the margin
-    // the seat's measurement needs (plan::kPlayOfLimits, docs/commissioning.md).
-    if (args.seatShiftMm > 0.0) program["alignment"]["max_shift_mm"] = args.seatShiftMm / plan::kPlayOfLimits;
-    if (args.seatRotationDeg > 0.0)
-        program["alignment"]["max_rotation_deg"] = args.seatRotationDeg / plan::kPlayOfLimits;
+    const model::AlignmentSettings alignment = suggestedAlignment(args);
+    if (args.seatShiftMm > 0.0) program["alignment"]["max_shift_mm"] = alignment.maxShiftMm;
+    if (args.seatRotationDeg > 0.0) program["alignment"]["max_rotation_deg"] = alignment.maxRotationDeg;
     program["landmarks"] = draft["landmarks"];
     return program;
 }
@@ -196,18 +222,8 @@ Round verifyDraft(const CommissionArgs& args, const geometry::Station& station, 
     r.planned = plan::planProgram(r.program, station, planOptions(r.program));
     clock.stop("plan");
     if (!r.planned.plan.feasible) return r;
-    commission::VerificationProblem problem;
-    problem.program = &r.program;
-    problem.station = &station;
-    for (const plan::PlannedView& v : r.planned.plan.views) {
-        problem.poses.push_back(v.pose);
-        std::vector<std::string> ids;
-        for (std::size_t l : v.landmarks) ids.push_back(r.program.landmarks[l].id);
-        problem.viewLandmarks.push_back(ids);
-    }
-    problem.capability = *r.planned.capability;
-    if (station.document && station.document->has("segmentation"))
-        problem.segmentation = vision::parseSegmentation((*station.document)["segmentation"]);
+    const commission::VerificationProblem problem =
+        commission::verificationProblem(r.program, station, r.planned.plan, *r.planned.capability);
     commission::VerificationOptions options;
     options.seats = args.seats;
     options.defectMultiples = args.defectMultiples;
@@ -226,14 +242,134 @@ Round verifyDraft(const CommissionArgs& args, const geometry::Station& station, 
     return r;
 }
 
-/// The landmarks whose findings --fix can act on by dropping them.
-std::set<std::string> droppable(const commission::VerificationReport& report)
+/// The fixes --fix applies, in the order a finding names them; the others
+/// (a lens, a tolerance, a landmark moved) are the engineer's to make.
+bool automatic(commission::Fix fix)
 {
-    std::set<std::string> ids;
-    for (const commission::Finding& f : report.findings)
-        if (std::find(f.fixes.begin(), f.fixes.end(), commission::Fix::DropLandmark) != f.fixes.end())
-            ids.insert(f.subject);
-    return ids;
+    return fix == commission::Fix::AddView || fix == commission::Fix::ChangeDepth ||
+           fix == commission::Fix::DropLandmark;
+}
+
+/// A pose as a part program's best view writes it (docs/part-program.md).
+YAML::Node poseNode(const geometry::FixturePose& pose, geometry::FixtureType type)
+{
+    YAML::Node n(YAML::NodeType::Map);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    if (type == geometry::FixtureType::Rail) {
+        n["rail_mm"] = pose.railMm;
+    } else {
+        n["rotation_deg"] = pose.rotationDeg;
+        n["declination_deg"] = pose.declinationDeg;
+    }
+    return n;
+}
+
+/// The poses of the planned views that observe a landmark.
+YAML::Node observingPoses(const Round& r, std::size_t landmark, geometry::FixtureType type)
+{
+    YAML::Node poses(YAML::NodeType::Sequence);
+    for (const plan::PlannedView& v : r.planned.plan.views)
+        if (std::find(v.landmarks.begin(), v.landmarks.end(), landmark) != v.landmarks.end())
+            poses.push_back(poseNode(v.pose, type));
+    return poses;
+}
+
+/// A second view for a landmark: one of its witness poses that no planned
+/// view observing it has (as a best views entry, 5.3.1); empty when there is none.
+YAML::Node otherWitnesses(const Round& r, std::size_t landmark, geometry::FixtureType type)
+{
+    std::vector<geometry::FixturePose> seen;
+    for (const plan::PlannedView& v : r.planned.plan.views)
+        if (std::find(v.landmarks.begin(), v.landmarks.end(), landmark) != v.landmarks.end()) seen.push_back(v.pose);
+    YAML::Node others(YAML::NodeType::Sequence);
+    for (const geometry::FixturePose& p : r.planned.plan.landmarks[landmark].witnessPoses)
+        if (std::find(seen.begin(), seen.end(), p) == seen.end()) others.push_back(poseNode(p, type));
+    return others;
+}
+
+/// What --fix does to the draft after a round that was not released: per
+/// failing landmark the first fix its findings name that can be made and was
+/// not made to it before (docs/commissioning.md, "--fix").
+struct FixRound {
+    std::map<std::string, YAML::Node> addViews; ///< landmark → the poses its second view is one of
+    std::set<std::string> drop;
+    bool finerDepth = false;
+    std::vector<std::string> said;
+};
+
+/// What --fix has done so far: per landmark the fixes made, and the
+/// landmarks whose best views are the engineer's (never replaced).
+struct FixHistory {
+    std::map<std::string, std::set<commission::Fix>> made;
+    std::optional<std::set<std::string>> engineerViews;
+};
+
+FixRound chooseFixes(const CommissionArgs& args, const Round& r, const geometry::Station& station, FixHistory& history)
+{
+    if (!history.engineerViews) {
+        history.engineerViews.emplace();
+        for (const model::Landmark& l : r.program.landmarks)
+            if (!l.bestViews.empty()) history.engineerViews->insert(l.id);
+    }
+    auto& made = history.made;
+    FixRound out;
+    const int finest = plan::finestResolvedDepth(r.program.solid->mesh(), station, r.program.octree.adjacencyDepth);
+    std::set<std::string> handled;
+    for (const commission::Finding& f : r.report->findings) {
+        const auto at = std::find_if(r.program.landmarks.begin(), r.program.landmarks.end(),
+                                     [&](const model::Landmark& l) { return l.id == f.subject; });
+        if (at == r.program.landmarks.end() || handled.count(f.subject)) continue;
+        const auto index = static_cast<std::size_t>(at - r.program.landmarks.begin());
+        for (commission::Fix fix : f.fixes) {
+            if (!automatic(fix) || made[f.subject].count(fix)) continue;
+            if (fix == commission::Fix::AddView) {
+                if (history.engineerViews->count(f.subject)) continue; // the engineer's best views stay
+                YAML::Node others = otherWitnesses(r, index, station.fixture.type);
+                if (others.size() == 0) continue;
+                out.addViews[f.subject] = others;
+                out.said.push_back(f.subject + ": a second view (one of the " + std::to_string(others.size()) +
+                                   " other poses that see it)");
+            } else if (fix == commission::Fix::ChangeDepth) {
+                if (r.program.octree.depth >= finest || args.depth > 0) continue; // the engineer's --depth stays
+                out.finerDepth = true;
+                out.said.push_back(f.subject + ": octree depth " + std::to_string(r.program.octree.depth + 1));
+            } else {
+                out.drop.insert(f.subject);
+                out.said.push_back(f.subject + ": dropped");
+            }
+            made[f.subject].insert(fix);
+            handled.insert(f.subject);
+            break;
+        }
+    }
+    return out;
+}
+
+/// Applies the round's fixes to the draft; false when there is none to make
+/// or they would leave no landmark. A view is added without moving the
+/// others: every landmark without the engineer's best views is given each
+/// view that observes it now as a best view (5.3.1, eq. 5.3.2-1: AND over
+/// them), and a landmark given a second view also one of its other witnesses.
+bool applyFixes(YAML::Node& draft, const FixRound& fixes, const Round& r, const FixHistory& history,
+                geometry::FixtureType type)
+{
+    if (fixes.said.empty() || fixes.drop.size() >= r.program.landmarks.size()) return false;
+    for (std::size_t i = 0; i < r.program.landmarks.size() && !fixes.addViews.empty(); ++i) {
+        const model::Landmark& l = r.program.landmarks[i];
+        if (history.engineerViews->count(l.id)) continue;
+        YAML::Node views = observingPoses(r, i, type);
+        if (views.size() == 0) continue;
+        if (const auto it = fixes.addViews.find(l.id); it != fixes.addViews.end()) {
+            YAML::Node other(YAML::NodeType::Map);
+            other["any_of"] = it->second;
+            views.push_back(other);
+        }
+        for (auto lm : draft["landmarks"])
+            if (lm["id"].as<std::string>() == l.id) lm["best_views"] = views;
+    }
+    if (fixes.finerDepth) draft["octree"]["depth"] = draft["octree"]["depth"].as<int>() + 1;
+    if (!fixes.drop.empty()) dropLandmarks(draft, fixes.drop);
+    return true;
 }
 
 void writePlan(const fs::path& out, const Round& r, const geometry::Station& station)
@@ -301,8 +437,9 @@ int run(const CommissionArgs& args)
         fs::copy_file(args.cad, out / meshName, fs::copy_options::overwrite_existing);
     PhaseClock clock;
     YAML::Node draft =
-        args.program.empty() ? suggestDraft(args, station, meshName, clock) : engineerDraft(args, meshName);
+        args.program.empty() ? suggestDraft(args, station, meshName, out, clock) : engineerDraft(args, meshName);
     const fs::path draftFile = out / (partName(args) + ".draft.yaml");
+    FixHistory history;
     for (int round = 1;; ++round) {
         replaceFileDurably(draftFile, emit(draft, "# Draft part program of hullgauge commission (round " +
                                                       std::to_string(round) + ").\n"));
@@ -321,13 +458,14 @@ int run(const CommissionArgs& args)
         say(r.program.part + " is not released (" + (out / "verification.md").string() + "):");
         for (const commission::Finding& f : r.report->findings)
             std::cerr << "  " << f.subject << " (" << f.test << "): " << f.what << "; fix: " << f.fixText << '\n';
-        const std::set<std::string> drop = droppable(*r.report);
-        if (!args.fix || round >= args.rounds || drop.empty() || drop.size() >= r.program.landmarks.size())
+        if (!args.fix || round >= args.rounds) return static_cast<int>(ExitStatus::PartFails);
+        const FixRound fixes = chooseFixes(args, r, station, history);
+        if (!applyFixes(draft, fixes, r, history, station.fixture.type)) {
+            say("--fix: nothing left that it can fix (a lens, a tolerance or a landmark's place is the engineer's)");
             return static_cast<int>(ExitStatus::PartFails);
-        std::string names;
-        for (const std::string& id : drop) names += (names.empty() ? "" : ", ") + id;
-        say("--fix: dropping " + names + " and verifying again");
-        dropLandmarks(draft, drop);
+        }
+        for (const std::string& line : fixes.said) say("--fix: " + line);
+        say("--fix: verifying again");
     }
 }
 
@@ -376,7 +514,9 @@ std::function<int()> factory(CLI::App& app)
                     "the nest's play: rotation, degrees (default: 80 % of alignment.max_rotation_deg; a suggested "
                     "program's limit is set to play / 0.8)")
         ->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--fix", args->fix, "drop the landmarks that fail and verify again");
+    cmd->add_flag("--fix", args->fix,
+                  "apply the fix each failure names where it can be made here (a second view, a finer octree "
+                  "depth, dropping the landmark) and verify again");
     cmd->add_option("--rounds", args->rounds, "verification rounds with --fix")
         ->check(CLI::Range(1, 20))
         ->capture_default_str();

@@ -5,6 +5,8 @@
 // future work 6; docs/part-program.md, "Suggesting landmarks"). The method is
 // in include/hullgauge/plan/landmark_suggest.h.
 #include "command.h"
+#include "hullgauge/commission/screen.h"
+#include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/geometry/station.h"
@@ -35,6 +37,8 @@ struct SuggestArgs {
     int depth = 8;
     int adjacencyDepth = 3;
     double toleranceMm = 0.5;
+    std::size_t twinSeats = 20;
+    std::string refused;
 };
 
 std::string stationFile(const SuggestArgs& args)
@@ -64,7 +68,13 @@ std::vector<std::string> header(const SuggestArgs& args, const std::string& stat
         std::to_string(s.landmarks.size()) + " of " + std::to_string(inspectable) + " inspectable candidates (" +
             std::to_string(found) + " on the part: " + std::to_string(s.candidates[0]) + " face, " +
             std::to_string(s.candidates[1]) + " edge, " + std::to_string(s.candidates[2]) +
-            " hole), spread by farthest-point selection.",
+            " hole), spread by farthest-point selection" +
+            (args.twinSeats > 0 ? ", each proven at " + std::to_string(args.twinSeats) +
+                                      " seats of the nominal part on the station's digital twin"
+                                : std::string()) +
+            ".",
+        "Candidates refused, by rule: " + plan::refusedSummary(s) +
+            (args.refused.empty() ? " (--refused FILE lists each)." : " (each in " + args.refused + ")."),
     };
 }
 
@@ -74,17 +84,23 @@ int run(const SuggestArgs& args)
     const model::CadModel cad = model::loadCadModel(args.mesh, args.depth, args.adjacencyDepth, args.solid);
     const geometry::Station st = geometry::loadStation(station);
 
-    plan::SuggestProblem problem;
-    problem.solid = cad.solid;
-    problem.brep = cad.brep.get();
-    problem.station = &st;
-    problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};
     plan::SuggestOptions options;
     options.count = args.count;
     options.toleranceMm = args.toleranceMm;
+    options.plan.pareLayers = args.adjacencyDepth; // as `hullgauge plan` plans the program
+    if (args.twinSeats > 0) {
+        commission::ScreenOptions screen;
+        screen.seats = args.twinSeats;
+        screen.toleranceMm = args.toleranceMm;
+        options.screen = commission::twinScreen(
+            commission::draftProgram(cad, fs::path(args.mesh).stem().string(), options.alignment), st, screen);
+    }
 
     std::cerr << "hullgauge landmarks suggest: " << args.mesh << " at " << station << "...\n";
-    const plan::Suggestion s = plan::suggestLandmarks(problem, options);
+    const plan::Suggestion s = plan::suggestLandmarks(plan::suggestProblem(cad, st), options);
+    if (!args.refused.empty())
+        replaceFileDurably(args.refused, "# Candidates refused for " + args.mesh + "\n\n" + plan::refusedSummary(s) +
+                                             ".\n\n" + plan::refusedMarkdown(s));
     // A part program needs at least one landmark: an empty list is no suggestion.
     if (s.landmarks.empty())
         throw InputError(args.mesh, "landmarks",
@@ -134,6 +150,13 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::PositiveNumber)
         ->capture_default_str();
     sub->add_option("--out", args->out, "write the landmarks list here (default: stdout)");
+    sub->add_option("--twin-seats", args->twinSeats,
+                    "seats of the nominal part each suggestion is proven at on the station's digital twin "
+                    "(0: not on the twin)")
+        ->check(CLI::Range(0, 1000))
+        ->capture_default_str();
+    sub->add_option("--refused", args->refused,
+                    "write every refused candidate with the rule that removed it here (Markdown)");
     return [args] { return run(*args); };
 }
 

@@ -7,6 +7,7 @@
 #include "hullgauge/inspect/capability.h"
 #include "hullgauge/inspect/deviation.h"
 #include "hullgauge/model/step_io.h"
+#include "hullgauge/plan/program_plan.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -43,6 +44,8 @@ constexpr double kPi = std::numbers::pi;
 const double kCylinderNormalSin = std::sin(5.0 * kPi / 180.0);
 /// A bore runs at least 300° round its axis: no gap between its vertices' angles above 60°.
 constexpr double kCylinderMaxGapRad = 60.0 * kPi / 180.0;
+/// Axes tried for openings (openingAxes): a bound on the work for a freeform part.
+constexpr std::size_t kOpeningAxes = 64;
 /// Triangle centroids tried per face for its deepest point (the largest first).
 constexpr std::size_t kFacePointTrials = 256;
 /// Radius within which a STEP part's faces are averaged for the normal at a
@@ -328,14 +331,202 @@ std::string cylinderText(const Cylinder& c)
 }
 
 // ---------------------------------------------------------------------------
+// Openings: a hole that is not round — a slot, a D-shaped, double-D or
+// rectangular hole. Its wall is a ring of triangles square to one axis,
+// joined across smooth and re-entrant edges (a slot's ends meet its flats
+// smoothly; a D's flat meets its arc in an edge that is re-entrant for the
+// material), whose normals all point into the ring, running round the axis.
+
+struct Opening {
+    Vec3 axis = Vec3::UnitZ();  ///< unit, its largest component positive
+    Vec3 centre = Vec3::Zero(); ///< the wall's area centroid, at mid-length
+    Vec3 along = Vec3::UnitX(); ///< the ring's long direction, square to the axis
+    double lengthMm = 0.0;      ///< along the axis
+    std::string shape;          ///< "slot 20 × 6 mm", "D-shaped hole 10 × 8 mm", ...
+    std::vector<std::size_t> wall;
+};
+
+/// True when the union of the triangles' angular spans about `centre` leaves
+/// no gap wider than kCylinderMaxGapRad (as a bore must run 300° round).
+bool ringCloses(const TriangleMesh& mesh, const std::vector<std::size_t>& tris, const Eigen::Vector2d& centre,
+                const Vec3& u, const Vec3& v)
+{
+    std::vector<std::pair<double, double>> spans;
+    for (std::size_t t : tris) {
+        double first = 0.0, lo = 0.0, hi = 0.0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const Vec3& p = mesh.vertices[static_cast<std::size_t>(mesh.triangles[t][k])];
+            double a = std::atan2(p.dot(v) - centre.y(), p.dot(u) - centre.x());
+            if (k == 0) first = lo = hi = a;
+            a = first + std::remainder(a - first, 2.0 * kPi); // unwrapped next to the first vertex
+            lo = std::min(lo, a);
+            hi = std::max(hi, a);
+        }
+        if (lo < -kPi) lo += 2.0 * kPi, hi += 2.0 * kPi;
+        spans.emplace_back(lo, hi);
+        if (hi > kPi) spans.emplace_back(lo - 2.0 * kPi, hi - 2.0 * kPi);
+    }
+    std::sort(spans.begin(), spans.end());
+    double reach = -kPi, gap = 0.0;
+    for (const auto& [lo, hi] : spans) {
+        if (hi < -kPi) continue;
+        gap = std::max(gap, lo - reach);
+        reach = std::max(reach, hi);
+    }
+    return std::max(gap, kPi - reach) <= kCylinderMaxGapRad;
+}
+
+/// The opening's shape in words, from its flat walls (planar regions of at
+/// least 5 % of the wall's area) and its curved rest: a D has one flat, a
+/// slot two parallel flats joined by arcs off the centre, a double-D two flats
+/// and arcs about the centre, a rectangular hole four flats.
+std::string openingShape(const TriangleMesh& mesh, const Topology& topo, const std::vector<std::size_t>& wall,
+                         const std::vector<int>& planar, const Eigen::Vector2d& c, const Vec3& u, const Vec3& v,
+                         const Vec3& along)
+{
+    std::map<int, double> regionArea;
+    double area = 0.0;
+    for (std::size_t t : wall) {
+        regionArea[planar[t]] += topo.areas[t];
+        area += topo.areas[t];
+    }
+    std::size_t flats = 0;
+    double curvedMin = std::numeric_limits<double>::infinity(), curvedMax = 0.0;
+    double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    double hi[2] = {-lo[0], -lo[1]};
+    const Vec3 across = along.cross(u.cross(v)).normalized();
+    for (const auto& [region, a] : regionArea) flats += a >= 0.05 * area ? 1 : 0;
+    for (std::size_t t : wall)
+        for (int i : mesh.triangles[t]) {
+            const Vec3& p = mesh.vertices[static_cast<std::size_t>(i)];
+            lo[0] = std::min(lo[0], p.dot(along)), hi[0] = std::max(hi[0], p.dot(along));
+            lo[1] = std::min(lo[1], p.dot(across)), hi[1] = std::max(hi[1], p.dot(across));
+            if (regionArea[planar[t]] >= 0.05 * area) continue;
+            const double r = (Eigen::Vector2d(p.dot(u), p.dot(v)) - c).norm();
+            curvedMin = std::min(curvedMin, r), curvedMax = std::max(curvedMax, r);
+        }
+    const bool curved = curvedMax > 0.0;
+    const std::string size = " " + decimal(hi[0] - lo[0], 3) + " × " + decimal(hi[1] - lo[1], 3) + " mm";
+    if (flats == 1 && curved) return "D-shaped hole" + size;
+    if (flats == 2 && curved) return (curvedMax - curvedMin <= 0.02 * curvedMax ? "double-D hole" : "slot") + size;
+    if (flats == 4 && !curved) return "rectangular hole" + size;
+    return "opening with " + std::to_string(flats) + " flat walls" + size;
+}
+
+/// The opening whose wall is `wall` (triangles square to `axis`), if its
+/// normals all point into it and it runs round the axis.
+std::optional<Opening> fitOpening(const TriangleMesh& mesh, const Topology& topo, const std::vector<std::size_t>& wall,
+                                  const std::vector<int>& planar, Vec3 axis)
+{
+    Eigen::Index largest = 0;
+    axis.cwiseAbs().maxCoeff(&largest);
+    if (axis[largest] < 0.0) axis = -axis;
+    const Vec3 u = axis.unitOrthogonal();
+    const Vec3 v = axis.cross(u);
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    double area = 0.0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t t : wall) {
+        c += topo.areas[t] * Eigen::Vector2d(topo.centroids[t].dot(u), topo.centroids[t].dot(v));
+        area += topo.areas[t];
+        for (int i : mesh.triangles[t]) {
+            lo = std::min(lo, mesh.vertices[static_cast<std::size_t>(i)].dot(axis));
+            hi = std::max(hi, mesh.vertices[static_cast<std::size_t>(i)].dot(axis));
+        }
+    }
+    if (!(area > 0.0)) return std::nullopt;
+    c /= area;
+    Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();
+    for (std::size_t t : wall) {
+        const Eigen::Vector2d p(topo.centroids[t].dot(u), topo.centroids[t].dot(v));
+        const Eigen::Vector2d n(topo.normals[t].dot(u), topo.normals[t].dot(v));
+        if (n.dot(c - p) <= 1e-9 * std::sqrt(area)) return std::nullopt; // faces out of the ring
+        spread += topo.areas[t] * (p - c) * (p - c).transpose();
+    }
+    if (!ringCloses(mesh, wall, c, u, v)) return std::nullopt;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(spread);
+    const Eigen::Vector2d major = eig.eigenvectors().col(1);
+    Opening o;
+    o.axis = axis;
+    o.centre = c.x() * u + c.y() * v + 0.5 * (lo + hi) * axis;
+    o.along = (major.x() * u + major.y() * v).normalized();
+    o.lengthMm = hi - lo;
+    o.shape = openingShape(mesh, topo, wall, planar, c, u, v, o.along);
+    o.wall = wall;
+    return o;
+}
+
+/// Axes an opening may run along, at most kOpeningAxes, none within 1° of
+/// another: those of curved patches that are no cylinder (a slot's, a D's
+/// arc), then the fold lines of re-entrant sharp edges (a D's or a
+/// rectangular hole's corners).
+std::vector<Vec3> openingAxes(const TriangleMesh& mesh, const Topology& topo,
+                              const std::vector<std::vector<std::size_t>>& curvedPatches, double cosSharp)
+{
+    std::vector<Vec3> axes;
+    auto add = [&](const Vec3& a) {
+        if (axes.size() >= kOpeningAxes) return;
+        for (const Vec3& b : axes)
+            if (std::abs(a.dot(b)) > std::cos(kPi / 180.0)) return;
+        axes.push_back(a);
+    };
+    for (const auto& patch : curvedPatches)
+        if (const auto axis = cylinderAxis(topo, patch)) add(*axis);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const int u = topo.across[t][static_cast<std::size_t>(k)];
+            if (u < 0 || static_cast<std::size_t>(u) < t) continue;
+            if (!sharpEdge(topo, t, static_cast<std::size_t>(u), cosSharp) || convexEdge(mesh, topo, t, k)) continue;
+            add(topo.normals[t].cross(topo.normals[static_cast<std::size_t>(u)]).normalized());
+        }
+    return axes;
+}
+
+/// The openings of the part: for each axis, the rings of triangles square to
+/// it (no triangle of a cylinder), joined across every edge but a convex sharp
+/// one, that fitOpening takes; a triangle belongs to the first opening found.
+std::vector<Opening> findOpenings(const TriangleMesh& mesh, const Topology& topo, const std::vector<int>& planar,
+                                  const std::vector<bool>& inCylinder,
+                                  const std::vector<std::vector<std::size_t>>& curvedPatches, double cosSharp)
+{
+    std::vector<Opening> out;
+    std::vector<bool> taken = inCylinder;
+    for (const Vec3& axis : openingAxes(mesh, topo, curvedPatches, cosSharp)) {
+        auto square = [&](std::size_t t) {
+            return !taken[t] && !topo.normals[t].isZero() && std::abs(topo.normals[t].dot(axis)) < kCylinderNormalSin;
+        };
+        const std::vector<int> ring = components(topo, [&](std::size_t, std::size_t t, std::size_t u) {
+            if (!square(t) || !square(u)) return false;
+            const int k = static_cast<int>(
+                std::find(topo.across[t].begin(), topo.across[t].end(), static_cast<int>(u)) - topo.across[t].begin());
+            return !sharpEdge(topo, t, u, cosSharp) || !convexEdge(mesh, topo, t, k);
+        });
+        for (const auto& wall : members(ring)) {
+            if (wall.size() < 4 || !square(wall.front())) continue;
+            auto o = fitOpening(mesh, topo, wall, planar, axis);
+            if (!o) continue;
+            for (std::size_t t : wall) taken[t] = true;
+            out.push_back(std::move(*o));
+        }
+    }
+    return out;
+}
+
+// ---------------------------------------------------------------------------
 // Features: every triangle belongs to one — a plane face (a planar region of
-// a patch that is not a cylinder), a cylinder (its whole patch), or a curved
-// region of neither kind (which gives no points of its own).
+// a patch that is not a cylinder), a cylinder (its whole patch), an opening
+// (its whole wall), or a curved region of none of these kinds (which gives no
+// points of its own).
 
 struct Features {
     std::vector<int> of;                            ///< feature per triangle
     std::vector<std::vector<std::size_t>> members;  ///< triangles per feature
     std::vector<std::optional<Cylinder>> cylinders; ///< per feature
+    std::vector<std::optional<Opening>> openings;   ///< per feature
+    bool hole(int feature) const
+    {
+        const auto i = static_cast<std::size_t>(feature);
+        return openings[i] || (cylinders[i] && cylinders[i]->bore);
+    }
 };
 
 Features featuresOf(const TriangleMesh& mesh, const Topology& topo, const CandidateOptions& options)
@@ -350,22 +541,35 @@ Features featuresOf(const TriangleMesh& mesh, const Topology& topo, const Candid
     // A patch of more than one planar region may be a cylinder.
     const auto patches = members(patch);
     std::vector<std::optional<Cylinder>> patchCylinder(patches.size());
+    std::vector<std::vector<std::size_t>> curvedPatches;
+    std::vector<bool> inCylinder(topo.normals.size(), false);
     for (std::size_t p = 0; p < patches.size(); ++p) {
         const int first = planar[patches[p].front()];
         const bool curved =
             std::any_of(patches[p].begin(), patches[p].end(), [&](std::size_t t) { return planar[t] != first; });
         if (curved) patchCylinder[p] = fitCylinder(mesh, topo, patches[p], planar);
+        if (curved && !patchCylinder[p]) curvedPatches.push_back(patches[p]);
+        for (std::size_t t : patches[p]) inCylinder[t] = patchCylinder[p].has_value();
     }
+    std::vector<Opening> openings = findOpenings(mesh, topo, planar, inCylinder, curvedPatches, cosSharp);
+    std::vector<int> openingOf(topo.normals.size(), -1);
+    for (std::size_t o = 0; o < openings.size(); ++o)
+        for (std::size_t t : openings[o].wall) openingOf[t] = static_cast<int>(o);
     Features f;
     f.of.resize(topo.normals.size());
-    std::map<std::pair<int, int>, int> id; // (cylinder patch, -1) or (-1, planar region)
+    // Keyed (0, cylinder patch), (1, opening) or (2, planar region).
+    std::map<std::pair<int, int>, int> id;
     for (std::size_t t = 0; t < f.of.size(); ++t) {
         const auto p = static_cast<std::size_t>(patch[t]);
-        const auto key = patchCylinder[p] ? std::make_pair(patch[t], -1) : std::make_pair(-1, planar[t]);
+        const auto key = patchCylinder[p]    ? std::make_pair(0, patch[t])
+                         : openingOf[t] >= 0 ? std::make_pair(1, openingOf[t])
+                                             : std::make_pair(2, planar[t]);
         auto [it, fresh] = id.emplace(key, static_cast<int>(f.members.size()));
         if (fresh) {
             f.members.emplace_back();
             f.cylinders.push_back(patchCylinder[p]);
+            f.openings.push_back(key.first == 1 ? std::optional<Opening>(openings[static_cast<std::size_t>(key.second)])
+                                                : std::nullopt);
         }
         f.of[t] = it->second;
         f.members[static_cast<std::size_t>(it->second)].push_back(t);
@@ -442,7 +646,7 @@ void addFaces(const TriangleMesh& mesh, const Topology& topo, const Features& f,
               std::vector<LandmarkCandidate>& out)
 {
     for (std::size_t i = 0; i < f.members.size(); ++i) {
-        if (f.cylinders[i]) continue;
+        if (f.cylinders[i] || f.openings[i]) continue;
         Vec3 sum = Vec3::Zero();
         double area = 0.0;
         for (std::size_t t : f.members[i]) {
@@ -484,6 +688,57 @@ void addCylinders(const model::Solid& solid, const Features& f, std::vector<Land
             out.push_back({c.bore ? FeatureKind::Hole : FeatureKind::Face, sp.point, normal,
                            cylinderText(c) + ", " + decimal(c.lengthMm, 3) + " mm long: its " +
                                (c.bore ? "wall" : "outside") + " at mid-length"});
+        }
+    }
+}
+
+std::string openingText(const Opening& o)
+{
+    return o.shape + " through " + vecText(o.centre) + " along " + vecText(o.axis);
+}
+
+/// The nearest wall triangle a ray from the opening's centre (square to its
+/// axis, at mid-length) meets, and where: Möller–Trumbore against each.
+std::optional<std::pair<std::size_t, Vec3>> wallHit(const TriangleMesh& mesh, const Opening& o, const Vec3& d)
+{
+    std::optional<std::pair<std::size_t, Vec3>> best;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t t : o.wall) {
+        const auto& tri = mesh.triangles[t];
+        const Vec3& a = mesh.vertices[static_cast<std::size_t>(tri[0])];
+        const Vec3 e1 = mesh.vertices[static_cast<std::size_t>(tri[1])] - a;
+        const Vec3 e2 = mesh.vertices[static_cast<std::size_t>(tri[2])] - a;
+        const Vec3 p = d.cross(e2);
+        const double det = e1.dot(p);
+        if (std::abs(det) < 1e-15) continue;
+        const Vec3 s = o.centre - a;
+        const double b1 = s.dot(p) / det;
+        const Vec3 q = s.cross(e1);
+        const double b2 = d.dot(q) / det;
+        const double dist = e2.dot(q) / det;
+        const double eps = 1e-9;
+        if (b1 < -eps || b2 < -eps || b1 + b2 > 1.0 + eps || dist <= 0.0 || dist >= nearest) continue;
+        nearest = dist;
+        best = std::make_pair(t, Vec3(o.centre + dist * d));
+    }
+    return best;
+}
+
+/// Four points round an opening's wall at mid-length: where its long
+/// direction and the direction across it meet the wall on either side (a
+/// slot's ends and the middles of its flats, a D's flat and the arc opposite),
+/// the normal that of the wall there, into the opening.
+void addOpenings(const TriangleMesh& mesh, const Topology& topo, const Features& f, std::vector<LandmarkCandidate>& out)
+{
+    for (const auto& opening : f.openings) {
+        if (!opening) continue;
+        const Opening& o = *opening;
+        const Vec3 across = o.axis.cross(o.along).normalized();
+        for (const Vec3& d : {o.along, across, Vec3(-o.along), Vec3(-across)}) {
+            const auto hit = wallHit(mesh, o, d);
+            if (!hit) continue;
+            out.push_back({FeatureKind::Hole, hit->second, topo.normals[hit->first],
+                           openingText(o) + ", " + decimal(o.lengthMm, 3) + " mm long: its wall at mid-length"});
         }
     }
 }
@@ -608,10 +863,12 @@ std::pair<Vec3, Vec3> pointAlong(const Polyline& line, double s)
 
 std::string lineText(const Features& f, const std::pair<int, int>& pair, const Polyline& line)
 {
-    for (int feature : {pair.first, pair.second})
-        if (const auto& c = f.cylinders[static_cast<std::size_t>(feature)]; c && c->bore)
-            return "rim of the " + cylinderText(*c) + ", " + decimal(line.length(), 3) +
-                   " mm round: one of 4 points a quarter round apart";
+    for (int feature : {pair.first, pair.second}) {
+        const auto i = static_cast<std::size_t>(feature);
+        if (!f.hole(feature)) continue;
+        return "rim of the " + (f.openings[i] ? openingText(*f.openings[i]) : cylinderText(*f.cylinders[i])) + ", " +
+               decimal(line.length(), 3) + " mm round: one of 4 points a quarter round apart";
+    }
     return "convex edge, the faces' normals " + decimal(line.apartDeg, 1) + "° apart, " + decimal(line.length(), 3) +
            " mm " + (line.closed ? "round: one of 4 points a quarter round apart" : "long: its midpoint");
 }
@@ -620,10 +877,7 @@ void addLines(const TriangleMesh& mesh, const Topology& topo, const Features& f,
               std::vector<LandmarkCandidate>& out)
 {
     for (const auto& [pair, edges] : sharpConvexEdges(mesh, topo, f, options.sharpAngleDeg)) {
-        bool hole = false;
-        for (int feature : {pair.first, pair.second})
-            hole = hole || (f.cylinders[static_cast<std::size_t>(feature)] &&
-                            f.cylinders[static_cast<std::size_t>(feature)]->bore);
+        const bool hole = f.hole(pair.first) || f.hole(pair.second);
         for (const Polyline& line : walkLines(mesh, topo, edges)) {
             const double length = line.length();
             if (length < 2.0 * options.minClearanceMm) continue;
@@ -647,6 +901,7 @@ std::vector<LandmarkCandidate> findCandidates(const model::Solid& solid, const C
     std::vector<LandmarkCandidate> out;
     addFaces(mesh, topo, features, options, out);
     addCylinders(solid, features, out);
+    addOpenings(mesh, topo, features, out);
     addLines(mesh, topo, features, options, out);
     // On the mesh itself, whatever the rounding of the constructions above.
     for (auto& c : out) c.position = solid.closestPoint(c.position).point;
@@ -753,13 +1008,29 @@ std::vector<LandmarkAnalysis> judge(const SuggestProblem& problem, const Suggest
 }
 
 /// The chosen landmarks planned as `hullgauge plan` plans them, then the
-/// capability check at the planned views (zone ≥ 4 U, docs/inspection.md
-/// "Capability"): `refused` holds (index into chosen, why) of every landmark
-/// `plan` would refuse.
+/// capability check at the planned views over the nest's play (zone ≥ 4 U at
+/// every seat, seen on its outline at every seat: program_plan.h
+/// capabilityOverPlay), then the caller's screen: `refused` holds every
+/// landmark (index into chosen) `plan` or the screen would refuse, with the rule.
 struct PlanCheck {
     ViewPlan plan;
-    std::vector<std::pair<std::size_t, std::string>> refused;
+    std::vector<Refusal> refused;
 };
+
+std::vector<inspect::LandmarkCapability> capabilityOfChosen(const SuggestProblem& problem,
+                                                            const SuggestOptions& options,
+                                                            const std::vector<LandmarkCandidate>& chosen,
+                                                            const ViewPlan& plan)
+{
+    const inspect::DeviationGauge gauge(problem.solid, problem.station->calibration);
+    PlayProblem play{&problem.solid->mesh(), {}, problem.frame.voxelSize(), &gauge, options.alignment};
+    for (std::size_t i = 0; i < chosen.size(); ++i)
+        play.landmarks.push_back(
+            {"candidate-" + std::to_string(i + 1), chosen[i].position, chosen[i].normal, options.toleranceMm});
+    std::vector<geometry::FixturePose> poses;
+    for (const PlannedView& v : plan.views) poses.push_back(v.pose);
+    return capabilityOverPlay(play, *problem.station, poses);
+}
 
 PlanCheck planChosen(const SuggestProblem& problem, const SuggestOptions& options,
                      const std::vector<LandmarkCandidate>& chosen)
@@ -768,24 +1039,22 @@ PlanCheck planChosen(const SuggestProblem& problem, const SuggestOptions& option
     if (chosen.empty()) return check;
     check.plan = planViews(planProblem(problem, options, chosen), verdictOptions(options));
     std::vector<bool> observed(chosen.size(), false);
-    std::vector<geometry::CameraModel> cameras;
-    for (const PlannedView& v : check.plan.views) {
-        cameras.push_back(v.camera);
+    for (const PlannedView& v : check.plan.views)
         for (std::size_t l : v.landmarks) observed[l] = true;
+    for (std::size_t i = 0; i < chosen.size(); ++i) {
+        const LandmarkAnalysis& a = check.plan.landmarks[i];
+        if (!a.inspectable())
+            check.refused.push_back({i, toString(a.verdict), a.reason});
+        else if (!observed[i])
+            check.refused.push_back({i, "not_observed", "observed by no view planned with the others"});
     }
+    if (!check.plan.feasible || !check.refused.empty()) return check;
+    const auto capability = capabilityOfChosen(problem, options, chosen, check.plan);
     for (std::size_t i = 0; i < chosen.size(); ++i)
-        if (!check.plan.landmarks[i].inspectable() || !observed[i])
-            check.refused.emplace_back(i, check.plan.landmarks[i].inspectable() ? "observed by no planned view"
-                                                                                : check.plan.landmarks[i].reason);
-    std::vector<inspect::MapLandmark> landmarks;
-    for (std::size_t i = 0; i < chosen.size(); ++i)
-        landmarks.push_back(
-            {"candidate-" + std::to_string(i + 1), chosen[i].position, chosen[i].normal, options.toleranceMm});
-    const inspect::DeviationGauge gauge(problem.solid, problem.station->calibration);
-    const auto capability =
-        inspect::assessCapability(landmarks, problem.frame.voxelSize(), &gauge, cameras, problem.station->imageQuality);
-    for (std::size_t i = 0; i < chosen.size(); ++i)
-        if (!capability[i].capable && observed[i]) check.refused.emplace_back(i, inspect::describe(capability[i]));
+        if (!capability[i].capable)
+            check.refused.push_back(
+                {i, "capability", inspect::describe(capability[i]) + ", at the worst seat of the nest's play"});
+    if (check.refused.empty() && options.screen) check.refused = options.screen(chosen, check.plan, capability);
     return check;
 }
 
@@ -794,21 +1063,21 @@ struct Spread {
     std::vector<std::size_t> usable; ///< candidates (indices into all) the spread chose from
     std::vector<SpreadPick> picks;   ///< indices into usable
     ViewPlan plan;                   ///< of the picks, in their order
-    /// Per kind: candidates inspectable alone that `plan` refused with the others.
-    std::array<std::size_t, kFeatureKinds> refused{};
+    /// Candidates inspectable alone that `plan` or the screen refused with the others.
+    std::vector<RefusedCandidate> refused;
 };
 
 /// Farthest-point selection among the usable candidates, then planned as the
 /// part program will hold them: the planner's candidate poses depend on the
 /// other landmarks (a face square to the turntable axis adds its grazing
 /// declination for all of them, planner.h), and so does the capability check
-/// on the views planned for them all. A pick `plan` would refuse is left out
-/// and the spread made again, until `plan` takes every pick.
+/// on the views planned for them all. A pick `plan` or the screen would
+/// refuse is left out and the spread made again, until every pick passes.
 Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& options,
                       const std::vector<LandmarkCandidate>& all, std::vector<std::size_t> usable,
                       const std::array<std::size_t, kFeatureKinds>& minimum)
 {
-    std::array<std::size_t, kFeatureKinds> refusedSoFar{};
+    std::vector<RefusedCandidate> refusedSoFar;
     for (;;) {
         std::vector<Vec3> points;
         std::vector<FeatureKind> kinds;
@@ -823,12 +1092,12 @@ Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& optio
         s.plan = std::move(check.plan);
         if (check.refused.empty()) return s;
         std::vector<std::size_t> refused;
-        for (const auto& [k, why] : check.refused) {
-            const std::size_t i = usable[s.picks[k].index];
+        for (const Refusal& r : check.refused) {
+            const std::size_t i = usable[s.picks[r.index].index];
             refused.push_back(i);
-            ++refusedSoFar[kindIndex(all[i].kind)];
-            log::category("plan")->info("candidate {} ({} at {}) left out: planned with the others, {}", i + 1,
-                                        toString(all[i].kind), vecText(all[i].position), why);
+            refusedSoFar.push_back({all[i], r.rule, "planned with the others: " + r.why});
+            log::category("plan")->info("candidate {} ({} at {}) left out: planned with the others, {}: {}", i + 1,
+                                        toString(all[i].kind), vecText(all[i].position), r.rule, r.why);
         }
         std::erase_if(usable,
                       [&](std::size_t i) { return std::find(refused.begin(), refused.end(), i) != refused.end(); });
@@ -848,14 +1117,13 @@ std::string reasonFor(const SpreadPick& pick, const std::vector<std::string>& id
     return "farthest from the earlier suggestions: " + from;
 }
 
-void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable,
-              const std::array<std::size_t, kFeatureKinds>& refused)
+void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
 {
     if (inspectable < asked)
         s.notes.push_back("asked for " + std::to_string(asked) + " landmarks, but only " + std::to_string(inspectable) +
                           " of the " + std::to_string(s.candidates[0] + s.candidates[1] + s.candidates[2]) +
                           " candidates pass `hullgauge plan` at this station (weak convexity, Rules 1-4, the "
-                          "capability check): " +
+                          "capability check over the nest's play): " +
                           std::to_string(s.landmarks.size()) + " suggested");
     for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole})
         if (s.candidates[kindIndex(k)] > 0 && s.inspectable[kindIndex(k)] == 0)
@@ -866,12 +1134,15 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable,
     for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole}) {
         const bool suggested = std::any_of(s.landmarks.begin(), s.landmarks.end(),
                                            [&](const SuggestedLandmark& l) { return l.candidate.kind == k; });
-        if (!suggested && refused[kindIndex(k)] > 0)
-            s.notes.push_back(std::string("no ") + toString(k) + " is suggested: `hullgauge plan` refuses the " +
-                              std::to_string(refused[kindIndex(k)]) + " of the " +
-                              std::to_string(s.inspectable[kindIndex(k)]) + " inspectable " + toString(k) +
-                              " candidates tried with the others (the capability check, docs/inspection.md; the "
-                              "plan category's log names each)");
+        std::map<std::string, std::size_t> byRule;
+        for (const RefusedCandidate& r : s.refused)
+            if (r.candidate.kind == k && r.why.starts_with("planned with the others")) ++byRule[r.rule];
+        if (suggested || byRule.empty()) continue;
+        std::string rules;
+        for (const auto& [rule, n] : byRule) rules += (rules.empty() ? "" : ", ") + std::to_string(n) + " " + rule;
+        s.notes.push_back(std::string("no ") + toString(k) + " is suggested: the " +
+                          std::to_string(s.inspectable[kindIndex(k)]) + " inspectable " + toString(k) +
+                          " candidates tried with the others were refused (" + rules + ")");
     }
 }
 
@@ -894,6 +1165,7 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
         if (!verdicts[i].inspectable()) {
             log::category("plan")->debug("candidate {} ({} at {}) left out: {}", i + 1, toString(all[i].kind),
                                          vecText(all[i].position), verdicts[i].reason);
+            s.refused.push_back({all[i], toString(verdicts[i].verdict), verdicts[i].reason});
             continue;
         }
         ++s.inspectable[kindIndex(all[i].kind)];
@@ -923,8 +1195,39 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
         s.landmarks.push_back(std::move(lm));
     }
     s.plannedViews = spread.plan.views.size();
-    addNotes(s, options.count, spread.usable.size(), spread.refused);
+    s.refused.insert(s.refused.end(), spread.refused.begin(), spread.refused.end());
+    addNotes(s, options.count, spread.usable.size());
     return s;
+}
+
+SuggestProblem suggestProblem(const model::CadModel& cad, const geometry::Station& station)
+{
+    SuggestProblem problem;
+    problem.solid = cad.solid;
+    problem.brep = cad.brep.get();
+    problem.station = &station;
+    problem.frame = {cad.octree.cubeOrigin, cad.octree.cubeSize, cad.octree.depth};
+    return problem;
+}
+
+std::string refusedSummary(const Suggestion& suggestion)
+{
+    std::map<std::string, std::size_t> byRule;
+    for (const RefusedCandidate& r : suggestion.refused) ++byRule[r.rule];
+    std::string out;
+    for (const auto& [rule, n] : byRule) out += (out.empty() ? "" : ", ") + std::to_string(n) + " " + rule;
+    return out.empty() ? "none" : out;
+}
+
+std::string refusedMarkdown(const Suggestion& suggestion)
+{
+    std::ostringstream out;
+    out << "| # | kind | position (mm) | feature | rule | why |\n|---|---|---|---|---|---|\n";
+    std::size_t n = 0;
+    for (const RefusedCandidate& r : suggestion.refused)
+        out << "| " << ++n << " | " << toString(r.candidate.kind) << " | " << vecText(r.candidate.position) << " | "
+            << r.candidate.feature << " | " << r.rule << " | " << r.why << " |\n";
+    return out.str();
 }
 
 std::string landmarksYaml(const Suggestion& suggestion, double toleranceMm, const std::vector<std::string>& header)

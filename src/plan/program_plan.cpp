@@ -47,14 +47,16 @@ std::string frameProblem(const FrameCheck& c, const model::AlignmentSettings& pl
 /// (docs/alignment.md, "Poses corrected for the seat"): the first
 /// `correct_poses_after` views at their planned poses, the rest at the poses
 /// corrected for the seat; each sees the seated part.
-std::vector<geometry::CameraModel> seatedCameras(const model::PartProgram& program, const geometry::Station& station,
+std::vector<geometry::CameraModel> seatedCameras(const model::TriangleMesh& mesh,
+                                                 const model::AlignmentSettings& alignment,
+                                                 const geometry::Station& station,
                                                  const std::vector<geometry::FixturePose>& poses,
                                                  const geometry::RigidTransform& seat)
 {
-    const std::size_t seatViews = program.alignment.method == model::AlignmentMethod::None
+    const std::size_t seatViews = alignment.method == model::AlignmentMethod::None
                                       ? poses.size()
-                                      : static_cast<std::size_t>(program.alignment.correctPosesAfter);
-    const geometry::Vec3 reference = program.solid->mesh().bounds().center();
+                                      : static_cast<std::size_t>(alignment.correctPosesAfter);
+    const geometry::Vec3 reference = mesh.bounds().center();
     std::vector<geometry::CameraModel> cameras;
     for (std::size_t k = 0; k < poses.size(); ++k) {
         const geometry::FixturePose pose =
@@ -66,11 +68,12 @@ std::vector<geometry::CameraModel> seatedCameras(const model::PartProgram& progr
 
 } // namespace
 
-std::vector<geometry::RigidTransform> playSeats(const model::PartProgram& program)
+std::vector<geometry::RigidTransform> playSeats(const model::TriangleMesh& mesh,
+                                                const model::AlignmentSettings& alignment)
 {
-    const geometry::Vec3 c = program.solid->mesh().bounds().center();
-    const double shift = kPlayOfLimits * program.alignment.maxShiftMm;
-    const double angle = kPlayOfLimits * program.alignment.maxRotationDeg;
+    const geometry::Vec3 c = mesh.bounds().center();
+    const double shift = kPlayOfLimits * alignment.maxShiftMm;
+    const double angle = kPlayOfLimits * alignment.maxRotationDeg;
     std::vector<geometry::RigidTransform> shifts{geometry::RigidTransform::identity()}, turns{shifts};
     for (int axis = 0; axis < 3; ++axis)
         for (double sign : {-1.0, 1.0}) {
@@ -87,23 +90,32 @@ std::vector<geometry::RigidTransform> playSeats(const model::PartProgram& progra
     return seats;
 }
 
+std::vector<inspect::LandmarkCapability> capabilityOverPlay(const PlayProblem& problem,
+                                                            const geometry::Station& station,
+                                                            const std::vector<geometry::FixturePose>& poses)
+{
+    std::vector<geometry::CameraModel> cameras;
+    for (const geometry::FixturePose& pose : poses) cameras.push_back(station.cameraAt(pose));
+    auto worst =
+        inspect::assessCapability(problem.landmarks, problem.voxelMm, problem.gauge, cameras, station.imageQuality);
+    for (const geometry::RigidTransform& seat : playSeats(*problem.mesh, problem.alignment)) {
+        const auto at = inspect::assessCapability(problem.landmarks, problem.voxelMm, problem.gauge,
+                                                  seatedCameras(*problem.mesh, problem.alignment, station, poses, seat),
+                                                  station.imageQuality);
+        for (std::size_t i = 0; i < at.size() && i < worst.size(); ++i)
+            if (at[i].expectedMm > worst[i].expectedMm) worst[i] = at[i];
+    }
+    return worst;
+}
+
 std::vector<inspect::LandmarkCapability> capabilityOverPlay(const model::PartProgram& program,
                                                             const geometry::Station& station,
                                                             const std::vector<geometry::FixturePose>& poses)
 {
     const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
-    const auto landmarks = inspect::mapLandmarks(program);
-    const double voxel = inspect::inspectionVoxelMm(program);
-    std::vector<geometry::CameraModel> cameras;
-    for (const geometry::FixturePose& pose : poses) cameras.push_back(station.cameraAt(pose));
-    auto worst = inspect::assessCapability(landmarks, voxel, gauge.get(), cameras, station.imageQuality);
-    for (const geometry::RigidTransform& seat : playSeats(program)) {
-        const auto at = inspect::assessCapability(landmarks, voxel, gauge.get(),
-                                                  seatedCameras(program, station, poses, seat), station.imageQuality);
-        for (std::size_t i = 0; i < at.size() && i < worst.size(); ++i)
-            if (at[i].expectedMm > worst[i].expectedMm) worst[i] = at[i];
-    }
-    return worst;
+    const PlayProblem problem{&program.solid->mesh(), inspect::mapLandmarks(program),
+                              inspect::inspectionVoxelMm(program), gauge.get(), program.alignment};
+    return capabilityOverPlay(problem, station, poses);
 }
 
 PlanProblem planProblem(const model::PartProgram& program, const geometry::Station& station)

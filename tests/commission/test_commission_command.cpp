@@ -75,6 +75,35 @@ TEST(CommissionCommand, ReleasesTheProgramWithItsViewsAndRecordAndKeepsEveryVers
     }
 }
 
+// The simulated line's program with one more landmark whose tolerance no
+// station proves (±0.001 mm on the tall block's top): without --fix the
+// program is not released (exit 1) and the landmark is named with the test it
+// fails; with --fix the fixes it names for that test are a lens, a tolerance
+// (the engineer's) or dropping it, so it is dropped and the rest released.
+TEST(CommissionCommand, FixDropsALandmarkWhoseFixIsNotTheCommandsToMake)
+{
+    hgtest::TempDir dir;
+    std::string program = readText(sim("stepped-block.yaml"));
+    const std::string mesh = "mesh: stepped-block.stl";
+    ASSERT_NE(program.find(mesh), std::string::npos);
+    program.replace(program.find(mesh), mesh.size(), "mesh: " + sim("stepped-block.stl").string());
+    program.replace(program.find("landmarks:\n"), 11,
+                    "landmarks:\n  - {id: too-tight, position: [-10, 0, 30], tolerance_mm: 0.001}\n");
+    const fs::path file = hgtest::writeFile(dir / "tight.yaml", program);
+
+    const hgtest::RunResult plain = hgtest::run(commission(dir / "plain", "--program " + file.string()));
+    EXPECT_EQ(plain.status, 1) << plain.err;
+    EXPECT_NE(plain.err.find("too-tight (capability)"), std::string::npos) << plain.err;
+    EXPECT_FALSE(fs::exists(dir / "plain" / "stepped-block.yaml"));
+
+    const hgtest::RunResult fixed = hgtest::run(commission(dir / "fixed", "--program " + file.string() + " --fix"));
+    ASSERT_EQ(fixed.status, 0) << fixed.err;
+    EXPECT_NE(fixed.err.find("--fix: too-tight: dropped"), std::string::npos) << fixed.err;
+    const model::PartProgram released = model::loadPartProgram(dir / "fixed" / "stepped-block.yaml");
+    EXPECT_EQ(released.landmarks.size(), 10u);
+    EXPECT_EQ(released.findLandmark("too-tight"), nullptr);
+}
+
 TEST(CommissionCommand, RefusesWithoutATolerance)
 {
     hgtest::TempDir dir;

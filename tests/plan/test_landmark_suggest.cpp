@@ -212,6 +212,130 @@ TEST(LandmarkSuggest, BoreCandidatesLieOnItsWallAndRimsWithNormalsToTheAxis)
     EXPECT_EQ(rim, 8u);
 }
 
+// Plates [-30, 30] x [-10, 10] x [0, 30] with an opening through them along
+// y about the line x = 0, z = 18: a slot 20 mm along x, 6 mm across (its ends
+// half circles r = 3 about x = ±7, 16 facets each, a vertex at each end's
+// apex), and a D: the circle r = 5 less what lies beyond x = 3 (48 facets on
+// the arc, one flat).
+constexpr double kOpeningAxisZ = 18.0;
+
+model::TriangleMesh plateWith(const std::vector<Eigen::Vector2d>& outline)
+{
+    model::TriangleMesh cutter = model::makePrism(outline, -20, 20);
+    Eigen::Matrix3d toY; // z -> y, y -> -z: the prism's axis along y
+    toY << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+    cutter.transform(toY, Vector3d(0, 0, kOpeningAxisZ));
+    return model::difference(model::makeBox(Vector3d(-30, -10, 0), Vector3d(30, 10, 30)), cutter);
+}
+
+std::vector<Eigen::Vector2d> slotOutline()
+{
+    std::vector<Eigen::Vector2d> out;
+    for (int end : {1, -1})
+        for (int i = 0; i <= 16; ++i) {
+            const double a = (end > 0 ? -0.5 : 0.5) * kPi + i * kPi / 16;
+            out.emplace_back(end * 7.0 + 3.0 * std::cos(a), 3.0 * std::sin(a));
+        }
+    return out;
+}
+
+std::vector<Eigen::Vector2d> dOutline()
+{
+    const double from = std::acos(3.0 / 5.0);
+    std::vector<Eigen::Vector2d> out{{3.0, -4.0}};
+    for (int i = 0; i <= 48; ++i) {
+        const double a = from + i * (2.0 * kPi - 2.0 * from) / 48;
+        out.emplace_back(5.0 * std::cos(a), 5.0 * std::sin(a));
+    }
+    out.pop_back(); // (3, -4) again
+    return out;
+}
+
+/// The wall candidates (kind hole, at mid-length y = 0) and the rim ones.
+struct OpeningCandidates {
+    std::vector<LandmarkCandidate> wall, rim;
+};
+
+OpeningCandidates openingCandidates(const model::Solid& part)
+{
+    OpeningCandidates out;
+    for (const auto& c : findCandidates(part)) {
+        EXPECT_LE(part.closestPoint(c.position).distance, 1e-9);
+        if (c.kind == FeatureKind::Hole) (std::abs(c.position.y()) < 1e-9 ? out.wall : out.rim).push_back(c);
+    }
+    return out;
+}
+
+// The slot: four wall points — its apexes (±10, 0, 18), normals along ∓x
+// within half a facet's angle (180° / 16 / 2), and the middles of its flats
+// (0, 0, 18 ± 3), normals ∓z — and four on each rim (y = ±10).
+TEST(LandmarkSuggest, SlotCandidatesLieOnItsEndsAndFlatsWithNormalsIntoIt)
+{
+    const model::Solid part(plateWith(slotOutline()));
+    const OpeningCandidates c = openingCandidates(part);
+    ASSERT_EQ(c.wall.size(), 4u);
+    EXPECT_EQ(c.rim.size(), 8u);
+    std::set<std::pair<int, int>> seen;
+    for (const auto& w : c.wall) {
+        EXPECT_NE(w.feature.find("slot 20 × 6 mm"), std::string::npos) << w.feature;
+        // The wall's centroid, where the rays start, lies within microns of
+        // the slot's centre: CGAL's cut leaves slivers along the wall.
+        const double x = w.position.x(), dz = w.position.z() - kOpeningAxisZ;
+        if (std::abs(dz) < 1.0) {
+            EXPECT_NEAR(std::abs(x), 10.0, 1e-5);
+            EXPECT_LT(degreesBetween(w.normal, Vector3d(-x, 0, 0)), 180.0 / 16 / 2 + 1e-6) << w.feature;
+        } else {
+            EXPECT_NEAR(x, 0.0, 1e-5);
+            EXPECT_NEAR(std::abs(dz), 3.0, 1e-9);
+            EXPECT_LT(degreesBetween(w.normal, Vector3d(0, 0, -dz)), 1e-6) << w.feature;
+        }
+        seen.emplace(static_cast<int>(std::round(x)), static_cast<int>(std::round(dz)));
+    }
+    EXPECT_EQ(seen, (std::set<std::pair<int, int>>{{-10, 0}, {10, 0}, {0, -3}, {0, 3}}));
+    for (const auto& r : c.rim) EXPECT_NEAR(std::abs(r.position.y()), 10.0, 1e-9) << r.feature;
+}
+
+// The D: four wall points on its outline (the flat x = 3, |z - 18| ≤ 4, normal
+// -x; or the arc, between the 48-gon's inscribed radius and 5, normal to the
+// axis within half a facet's angle), one of them on the flat; four on each rim.
+TEST(LandmarkSuggest, DShapedHoleCandidatesLieOnItsFlatAndArc)
+{
+    const model::Solid part(plateWith(dOutline()));
+    const OpeningCandidates c = openingCandidates(part);
+    ASSERT_EQ(c.wall.size(), 4u);
+    EXPECT_EQ(c.rim.size(), 8u);
+    const double facet = (2.0 * kPi - 2.0 * std::acos(0.6)) / 48;
+    std::size_t onFlat = 0;
+    for (const auto& w : c.wall) {
+        EXPECT_NE(w.feature.find("D-shaped hole"), std::string::npos) << w.feature;
+        const Vector3d radial(w.position.x(), 0, w.position.z() - kOpeningAxisZ);
+        if (std::abs(w.position.x() - 3.0) < 1e-9) {
+            ++onFlat;
+            EXPECT_LE(std::abs(radial.z()), 4.0 + 1e-9);
+            EXPECT_LT(degreesBetween(w.normal, Vector3d(-1, 0, 0)), 1e-6);
+        } else {
+            EXPECT_LE(radial.norm(), 5.0 + 1e-9);
+            EXPECT_GE(radial.norm(), 5.0 * std::cos(facet / 2) - 1e-9);
+            EXPECT_LT(degreesBetween(w.normal, -radial), facet / 2 * 180.0 / kPi + 1e-6) << w.feature;
+        }
+    }
+    EXPECT_EQ(onFlat, 1u);
+}
+
+// At the simulated station (the camera looks along y at rotation 0, through
+// the slot against the backlight) the slotted plate's suggestion holds a
+// landmark on the slot.
+TEST(LandmarkSuggest, SlottedPlateGetsItsSlot)
+{
+    const auto part = std::make_shared<const model::Solid>(plateWith(slotOutline()));
+    const auto station = simStation();
+    const Suggestion s = suggestLandmarks(problemFor(part, station), {});
+    std::size_t onSlot = 0;
+    for (const auto& lm : s.landmarks)
+        if (lm.candidate.kind == FeatureKind::Hole && lm.candidate.feature.find("slot") != std::string::npos) ++onSlot;
+    EXPECT_GE(onSlot, 1u);
+}
+
 // The box [-20, 20] x [-15, 15] x [0, 20] at the simulated station, 4
 // landmarks (at least one face and one edge). Inspectable: the top and the
 // four side face centres, the four top and four vertical edge midpoints (13
@@ -314,6 +438,69 @@ TEST(LandmarkSuggest, MoreThanThereAreGivesAllWithANote)
     EXPECT_NE(s.notes.front().find("asked for 50 landmarks, but only 13"), std::string::npos) << s.notes.front();
     const std::string yaml = landmarksYaml(s, 0.5, {"header"});
     EXPECT_NE(yaml.find("# Note: asked for 50"), std::string::npos);
+}
+
+// The box's candidates no reachable pose inspects — its bottom face and
+// bottom edges, on the floor plane z = 0 — are kept as refused, each with the
+// planner's verdict as its rule and a reason.
+TEST(LandmarkSuggest, RefusedCandidatesNameTheRuleThatRemovedThem)
+{
+    const auto box = std::make_shared<const model::Solid>(model::makeBox(Vector3d(-20, -15, 0), Vector3d(20, 15, 20)));
+    const auto station = simStation();
+    SuggestOptions options;
+    options.count = 50;
+    const Suggestion s = suggestLandmarks(problemFor(box, station), options);
+    ASSERT_EQ(s.refused.size(), 5u);
+    std::set<std::string> verdicts;
+    for (LandmarkVerdict v :
+         {LandmarkVerdict::NoVoidNeighbour, LandmarkVerdict::Concavity, LandmarkVerdict::OutOfFixtureRange,
+          LandmarkVerdict::OutsideDepthOfField, LandmarkVerdict::BelowStationMed, LandmarkVerdict::VoxelTooCoarse})
+        verdicts.insert(toString(v));
+    for (const RefusedCandidate& r : s.refused) {
+        EXPECT_NEAR(r.candidate.position.z(), 0.0, 1e-9) << r.candidate.feature;
+        EXPECT_TRUE(verdicts.count(r.rule)) << r.rule;
+        EXPECT_FALSE(r.why.empty());
+    }
+    EXPECT_NE(refusedMarkdown(s).find("| " + s.refused.front().rule + " |"), std::string::npos);
+}
+
+// A screen (on the twin, in the commands) that refuses the box's top centre,
+// the hand-worked spread's face (BoxSuggestionIsTheHandWorkedSpread): the
+// spread is made again without it, a side face taking the face's slot, and
+// the top centre is kept as refused under the screen's rule.
+TEST(LandmarkSuggest, AScreenedOutPickIsLeftOutAndTheSpreadMadeAgain)
+{
+    const auto box = std::make_shared<const model::Solid>(model::makeBox(Vector3d(-20, -15, 0), Vector3d(20, 15, 20)));
+    const auto station = simStation();
+    const Vector3d topCentre(0, 0, 20);
+    SuggestOptions options;
+    options.count = 4;
+    std::size_t calls = 0;
+    options.screen = [&](const std::vector<LandmarkCandidate>& chosen, const ViewPlan& plan,
+                         const std::vector<inspect::LandmarkCapability>& capability) {
+        ++calls;
+        EXPECT_EQ(plan.landmarks.size(), chosen.size());
+        EXPECT_EQ(capability.size(), chosen.size());
+        std::vector<Refusal> out;
+        for (std::size_t i = 0; i < chosen.size(); ++i)
+            if ((chosen[i].position - topCentre).norm() < 1e-9) out.push_back({i, "screened", "refused by the test"});
+        return out;
+    };
+    const Suggestion s = suggestLandmarks(problemFor(box, station), options);
+    EXPECT_EQ(calls, 2u);
+    ASSERT_EQ(s.landmarks.size(), 4u);
+    std::size_t faces = 0;
+    for (const auto& lm : s.landmarks) {
+        EXPECT_GT((lm.candidate.position - topCentre).norm(), 1e-6) << lm.id;
+        if (lm.candidate.kind == FeatureKind::Face) {
+            ++faces;
+            EXPECT_LT(lm.candidate.position.z(), 20.0 - 1e-9) << lm.id; // a side face's centre
+        }
+    }
+    EXPECT_EQ(faces, 1u);
+    ASSERT_FALSE(s.refused.empty());
+    EXPECT_EQ(s.refused.back().rule, "screened");
+    EXPECT_LT((s.refused.back().candidate.position - topCentre).norm(), 1e-9);
 }
 
 // The fragment spliced into a copy of the simulated line's part program loads

@@ -23,7 +23,15 @@
 //    of each facet, along its normal) meet that axis, that runs at least 300°
 //    round it and whose normals point to it.
 //    Four points round its wall at mid-length, and the feature lines where it
-//    meets a face (its rims, as edges above) are holes too.
+//    meets a face (its rims, as edges above) are holes too;
+//  * hole — an opening that is not round (a slot, a D-shaped, double-D or
+//    rectangular hole): a ring of triangles square to one axis (the axis of
+//    a curved patch that is no cylinder, or the fold line of a re-entrant
+//    edge), joined across smooth and re-entrant edges, whose normals all
+//    point into the ring and whose angular spans about its centre run at
+//    least 300° round. Four points on its wall at mid-length, where its long
+//    direction and the direction across it meet the wall (a slot's ends and
+//    the middles of its flats), and its rims.
 // The normal is the face's, the bisector of the two faces on an edge (what
 // the part program's loader derives there, docs/part-program.md "Normals from
 // the mesh"), the radial direction towards the axis in a bore.
@@ -34,18 +42,25 @@
 // inspectable ones `count` are chosen by farthest-point selection
 // (spreadSelect) with a minimum share of faces, of edges and of holes when the
 // part has inspectable ones. The chosen set is planned as `hullgauge plan`
-// plans it (planViews, then the capability check at the planned views:
-// docs/inspection.md "Capability"); a landmark plan would refuse is left out
-// and the spread made again.
+// plans it (planViews, then the capability check at the planned views over
+// the nest's play, program_plan.h capabilityOverPlay: capable at every
+// seat), then screened by the caller (`hullgauge
+// landmarks suggest` and `hullgauge commission` take it through seats on the
+// station's digital twin, docs/commissioning.md); a landmark refused is left
+// out and the spread made again. Every candidate left out is kept with the
+// rule that removed it.
 #pragma once
 
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/capability.h"
 #include "hullgauge/inspect/voxel_frame.h"
+#include "hullgauge/model/part_program.h"
 #include "hullgauge/model/solid.h"
 #include "hullgauge/plan/planner.h"
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -110,6 +125,22 @@ struct SpreadPick {
 std::vector<SpreadPick> spreadSelect(const std::vector<Vec3>& points, const std::vector<FeatureKind>& kinds,
                                      std::size_t count, const std::array<std::size_t, kFeatureKinds>& minimum = {});
 
+/// A chosen landmark refused (index into the chosen), the rule that refused
+/// it — a planner verdict (toString(LandmarkVerdict)), "not_observed",
+/// "capability" (over the nest's play), or the screen's own — and why, with the numbers.
+struct Refusal {
+    std::size_t index = 0;
+    std::string rule;
+    std::string why;
+};
+
+/// A further test of the chosen landmarks at the views planned for them, with
+/// their capability over the play (e.g. on the station's digital twin): the
+/// landmarks it refuses.
+using SuggestScreen =
+    std::function<std::vector<Refusal>(const std::vector<LandmarkCandidate>& chosen, const ViewPlan& plan,
+                                       const std::vector<inspect::LandmarkCapability>& capability)>;
+
 struct SuggestOptions {
     std::size_t count = 8;
     /// The tolerance the suggested landmarks are judged with (Rule 3) and
@@ -125,6 +156,11 @@ struct SuggestOptions {
     CandidateOptions candidates;
     /// The planner's options (pose grid, band, rule sampling) as `hullgauge plan` uses them.
     PlanOptions plan;
+    /// The alignment settings of the program the landmarks go into: the nest's
+    /// play is plan::kPlayOfLimits of its limits (program_plan.h).
+    model::AlignmentSettings alignment;
+    /// Applied to the chosen landmarks once `plan` takes them all; none: no further test.
+    SuggestScreen screen;
 };
 
 /// What the suggestion works on: the part (a STEP part's B-rep, when given, is
@@ -147,6 +183,13 @@ struct SuggestedLandmark {
     double bestMedMm = 0.0;
 };
 
+/// A candidate the suggestion left out, the rule that removed it and why.
+struct RefusedCandidate {
+    LandmarkCandidate candidate;
+    std::string rule;
+    std::string why;
+};
+
 struct Suggestion {
     std::vector<SuggestedLandmark> landmarks;             ///< in the order chosen
     std::array<std::size_t, kFeatureKinds> candidates{};  ///< found on the part, per kind
@@ -155,7 +198,13 @@ struct Suggestion {
     std::size_t plannedViews = 0;
     /// Remarks for the engineer: fewer suggestions than asked for, a kind the station cannot inspect.
     std::vector<std::string> notes;
+    /// Every candidate left out: alone (a planner verdict), then with the others.
+    std::vector<RefusedCandidate> refused;
 };
+
+/// The suggestion's problem for a CAD model read on its own (loadCadModel):
+/// its solid, its B-rep and its octree's frame (pointers into both).
+SuggestProblem suggestProblem(const model::CadModel& cad, const geometry::Station& station);
 
 /// Candidates, the planner's verdict on each, and the spread (the header's steps).
 Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions& options = {});
@@ -165,5 +214,11 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
 /// kind, its feature, why it was chosen) above its entry
 /// `- {id: ..., position: [...], normal: [...], tolerance_mm: ...}`.
 std::string landmarksYaml(const Suggestion& suggestion, double toleranceMm, const std::vector<std::string>& header);
+
+/// The refused candidates per rule, e.g. "12 concavity, 3 capability".
+std::string refusedSummary(const Suggestion& suggestion);
+
+/// The refused candidates as a Markdown table (kind, position, feature, rule, why).
+std::string refusedMarkdown(const Suggestion& suggestion);
 
 } // namespace hg::plan

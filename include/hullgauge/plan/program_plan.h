@@ -24,18 +24,37 @@ namespace hg::plan {
 /// its seat is measured with noise (docs/commissioning.md, "The twin").
 inline constexpr double kPlayOfLimits = 0.8;
 
-/// Seats at the edge of the nest's play (kPlayOfLimits of the program's
-/// alignment limits): the part shifted by the play along ± each axis, turned
-/// by it about ± each axis through its bounding-box centre, and every shift
-/// with every turn (48 seats; the part as drawn is not among them).
-std::vector<geometry::RigidTransform> playSeats(const model::PartProgram& program);
+/// Seats at the edge of the nest's play (kPlayOfLimits of the alignment
+/// limits): the part shifted by the play along ± each axis, turned by it
+/// about ± each axis through its bounding-box centre, and every shift with
+/// every turn (48 seats; the part as drawn is not among them).
+std::vector<geometry::RigidTransform> playSeats(const model::TriangleMesh& mesh,
+                                                const model::AlignmentSettings& alignment);
 
-/// The capability check (docs/inspection.md, "Capability") of a program's
-/// views at these poses over the nest's play: per landmark the assessment
-/// with the largest expected U, over the part as drawn and every playSeats
-/// seat, each seen as the daemon's cycle sees it (the first
-/// `correct_poses_after` views at their poses, the rest corrected for the
-/// seat: docs/alignment.md).
+/// What the capability over the play is judged on: the part, its landmarks as
+/// the inspection map holds them, ΔV at the inspection level, the deviation
+/// gauge (null without the sub-voxel deviation) and the alignment settings
+/// (the limits the play is a share of, the views the seat is measured on).
+struct PlayProblem {
+    const model::TriangleMesh* mesh = nullptr;
+    std::vector<inspect::MapLandmark> landmarks;
+    double voxelMm = 0.0;
+    const inspect::DeviationGauge* gauge = nullptr;
+    model::AlignmentSettings alignment;
+};
+
+/// The capability check (docs/inspection.md, "Capability") of the views at
+/// these poses over the nest's play: per landmark the assessment with the
+/// largest expected U, over the part as drawn and every playSeats seat, each
+/// seen as the daemon's cycle sees it (the first `correct_poses_after` views
+/// at their poses, the rest corrected for the seat: docs/alignment.md). A
+/// seat at which no view sees the landmark on its outline is decided on the
+/// voxel bracket (`bracket`), whose U is the larger.
+std::vector<inspect::LandmarkCapability> capabilityOverPlay(const PlayProblem& problem,
+                                                            const geometry::Station& station,
+                                                            const std::vector<geometry::FixturePose>& poses);
+
+/// The same for a part program's landmarks, gauge and alignment settings.
 std::vector<inspect::LandmarkCapability> capabilityOverPlay(const model::PartProgram& program,
                                                             const geometry::Station& station,
                                                             const std::vector<geometry::FixturePose>& poses);

@@ -372,16 +372,10 @@ bool applyFixes(YAML::Node& draft, const FixRound& fixes, const Round& r, const 
     return true;
 }
 
-void writePlan(const fs::path& out, const Round& r, const geometry::Station& station)
+void writePlan(const fs::path& out, const Round& r)
 {
-    const plan::PlanProblem problem = plan::planProblem(r.program, station);
-    nlohmann::json j = plan::planToJson(r.planned.plan, problem);
-    if (r.planned.capability) {
-        j["capability"] = nlohmann::json::array();
-        for (const auto& c : *r.planned.capability) j["capability"].push_back(inspect::toJson(c));
-    }
-    replaceFileDurably(out / "plan.json", j.dump(2) + "\n");
-    replaceFileDurably(out / "plan.md", plan::planMarkdown(r.planned.plan, problem));
+    replaceFileDurably(out / "plan.json", plan::toJson(r.planned).dump(2) + "\n");
+    replaceFileDurably(out / "plan.md", plan::planMarkdown(r.planned.plan, r.planned.problem));
 }
 
 /// Every released version whole in a folder of its own (releases/<part>.v<N>/):
@@ -444,7 +438,7 @@ int run(const CommissionArgs& args)
         replaceFileDurably(draftFile, emit(draft, "# Draft part program of hullgauge commission (round " +
                                                       std::to_string(round) + ").\n"));
         Round r = verifyDraft(args, station, draftFile, clock);
-        writePlan(out, r, station);
+        writePlan(out, r);
         if (!r.report) {
             say("no plan for " + r.program.part + ":");
             for (const std::string& p : r.planned.plan.problems) std::cerr << "  " << p << '\n';

@@ -93,13 +93,9 @@ int run(const PlanArgs& args)
     std::cerr << "hullgauge plan: " << program.landmarks.size() << " landmarks of " << program.part << "...\n";
     const plan::ProgramPlan planned = plan::planProgram(program, station, options);
     const plan::ViewPlan& result = planned.plan;
-    const plan::PlanProblem problem = plan::planProblem(program, station);
-    auto json = plan::planToJson(result, problem);
+    const plan::PlanProblem& problem = planned.problem;
+    const auto json = plan::toJson(planned);
     const auto& capability = planned.capability;
-    if (capability) {
-        json["capability"] = nlohmann::json::array();
-        for (const auto& c : *capability) json["capability"].push_back(inspect::toJson(c));
-    }
 
     if (args.out.empty()) {
         std::cout << json.dump(2) << '\n';

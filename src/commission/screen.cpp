@@ -55,31 +55,43 @@ plan::SuggestScreen twinScreen(const model::PartProgram& base, const geometry::S
                                const ScreenOptions& options, FrameSourceFactory frames)
 {
     if (!frames) frames = twinFrames(station, options.seed);
-    return [base, &station, options, frames](const std::vector<plan::LandmarkCandidate>& chosen, const plan::ViewPlan& plan,
-                                     const std::vector<inspect::LandmarkCapability>&) {
+    return [base, &station, options, frames](const std::vector<plan::LandmarkCandidate>& chosen, const plan::ViewPlan&,
+                                             const std::vector<inspect::LandmarkCapability>&) {
         model::PartProgram program = base;
         std::map<std::string, std::size_t> indexOf;
         for (std::size_t i = 0; i < chosen.size(); ++i) {
+            // As the landmarks list writes it and the loader reads it back.
+            const plan::LandmarkCandidate written = plan::asWritten(chosen[i]);
             model::Landmark lm;
             lm.id = "candidate-" + std::to_string(i + 1);
-            lm.position = chosen[i].position;
-            lm.normal = chosen[i].normal;
+            lm.position = written.position;
+            lm.normal = written.normal;
             lm.toleranceMm = options.toleranceMm;
             program.landmarks.push_back(lm);
             indexOf[lm.id] = i;
+        }
+        // Planned and predicted as commissioning plans the program it is
+        // written into (the planner breaks ties between mirror poses on the
+        // last digit), so that the screen and the verification judge the same views.
+        plan::PlanOptions planOptions;
+        planOptions.pareLayers = std::max(1, program.octree.adjacencyDepth);
+        const plan::ProgramPlan planned = plan::planProgram(program, station, planOptions);
+        if (!planned.plan.feasible || !planned.capability) {
+            // A landmark the program's own plan refuses goes; a plan refused
+            // for the lens is the commissioning's to report.
+            std::vector<plan::Refusal> refused;
+            for (std::size_t i = 0; i < chosen.size(); ++i)
+                if (!planned.plan.landmarks[i].inspectable())
+                    refused.push_back(
+                        {i, toString(planned.plan.landmarks[i].verdict), planned.plan.landmarks[i].reason});
+            return refused;
         }
         VerificationOptions verify;
         verify.seats = options.seats;
         verify.defectMultiples = {};
         verify.seed = options.seed;
-        // The prediction as commissioning makes it for the program (its
-        // gauge, its inspection voxel), so that the screen and the
-        // verification compare the twin with the same U.
-        std::vector<geometry::FixturePose> poses;
-        for (const plan::PlannedView& v : plan.views) poses.push_back(v.pose);
-        const auto predicted = plan::capabilityOverPlay(program, station, poses);
-        const VerificationReport report = verifyProgram(verificationProblem(program, station, plan, predicted),
-                                                        verify, frames);
+        const VerificationReport report =
+            verifyProgram(verificationProblem(program, station, planned.plan, *planned.capability), verify, frames);
         std::vector<plan::Refusal> refused;
         std::set<std::size_t> seen;
         for (const Finding& f : report.findings) {

@@ -1210,6 +1210,17 @@ SuggestProblem suggestProblem(const model::CadModel& cad, const geometry::Statio
     return problem;
 }
 
+LandmarkCandidate asWritten(const LandmarkCandidate& candidate)
+{
+    // decimal(v, 6) prints v to 6 decimals and the loader reads the decimal
+    // back as the double nearest to it: n / 10⁶ correctly rounded, as here.
+    auto written = [](const Vec3& v) { return Vec3((v * 1e6).array().round().matrix() / 1e6); };
+    LandmarkCandidate c = candidate;
+    c.position = written(candidate.position);
+    c.normal = written(candidate.normal).normalized();
+    return c;
+}
+
 std::string refusedSummary(const Suggestion& suggestion)
 {
     std::map<std::string, std::size_t> byRule;

@@ -4,6 +4,7 @@
 #include "hullgauge/align/pose_correction.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/part_map.h"
+#include "hullgauge/plan/plan_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -171,9 +172,9 @@ int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station
 
 ProgramPlan planProgram(const model::PartProgram& program, const geometry::Station& station, const PlanOptions& options)
 {
-    const PlanProblem problem = planProblem(program, station);
     ProgramPlan out;
-    out.plan = planViews(problem, options);
+    out.problem = planProblem(program, station);
+    out.plan = planViews(out.problem, options);
     for (const PlannedView& v : out.plan.views) {
         out.frames.push_back(checkFrame(v.id, program.solid->mesh(), v.camera, program.alignment));
         if (!out.frames.back().holdsPart()) {
@@ -186,6 +187,16 @@ ProgramPlan planProgram(const model::PartProgram& program, const geometry::Stati
     for (const PlannedView& v : out.plan.views) poses.push_back(v.pose);
     out.capability = capabilityOverPlay(program, station, poses);
     return out;
+}
+
+nlohmann::json toJson(const ProgramPlan& planned)
+{
+    nlohmann::json j = planToJson(planned.plan, planned.problem);
+    if (planned.capability) {
+        j["capability"] = nlohmann::json::array();
+        for (const auto& c : *planned.capability) j["capability"].push_back(inspect::toJson(c));
+    }
+    return j;
 }
 
 } // namespace hg::plan

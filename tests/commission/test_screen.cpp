@@ -34,7 +34,9 @@ std::vector<plan::Refusal> screened(const Block& b, const std::vector<plan::Land
     const double dv = b.cad.octree.voxelSize();
     for (std::size_t i = 0; i < chosen.size(); ++i)
         problem.landmarks.push_back(
-            {{"candidate-" + std::to_string(i + 1), chosen[i].position, chosen[i].normal, std::max(dv, 0.4)}, {}, std::nullopt});
+            {{"candidate-" + std::to_string(i + 1), chosen[i].position, chosen[i].normal, std::max(dv, 0.4)},
+             {},
+             std::nullopt});
     plan::PlanOptions options;
     options.pareLayers = 4;
     const plan::ViewPlan plan = plan::planViews(problem, options);
@@ -49,8 +51,7 @@ std::vector<plan::Refusal> screened(const Block& b, const std::vector<plan::Land
     for (const auto& v : plan.views) poses.push_back(v.pose);
     ScreenOptions screen;
     screen.toleranceMm = 0.4;
-    return twinScreen(base, b.station, screen, frames)(chosen, plan,
-                                                      plan::capabilityOverPlay(play, b.station, poses));
+    return twinScreen(base, b.station, screen, frames)(chosen, plan, plan::capabilityOverPlay(play, b.station, poses));
 }
 
 const plan::LandmarkCandidate kTallTop{plan::FeatureKind::Face, {-15, 0, 30}, {0, 0, 1}, "tall block's top"};

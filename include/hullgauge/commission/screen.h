@@ -2,8 +2,9 @@
 // proposed (docs/commissioning.md, "Suggestions proven on the twin"): the
 // landmarks the suggestion chose (plan/landmark_suggest.h), planned and
 // capable over the nest's play, are put in the program they are suggested
-// for and taken through a few seats of the nominal part on the twin
-// (verification.h, without seeded defects). A landmark that is not observed
+// for as its `landmarks:` list writes them, planned as commissioning plans
+// that program (plan::planProgram) and taken through seats of the nominal
+// part on the twin (verification.h, without seeded defects). A landmark that is not observed
 // at a seat, that rejects the good part, or whose measured U exceeds 1.25 ×
 // its prediction is refused under the rule "twin_<test>" with the twin's
 // numbers, and the suggestion spreads again without it.
@@ -35,9 +36,9 @@ VerificationProblem verificationProblem(const model::PartProgram& program, const
                                         const std::vector<inspect::LandmarkCapability>& capability);
 
 struct ScreenOptions {
-    std::size_t seats = 4;      ///< nominal seats on the twin, drawn within the play
-    double toleranceMm = 0.5;   ///< the suggested landmarks' tolerance
-    std::uint64_t seed = 1;     ///< of the seats and the twin's noise
+    std::size_t seats = 4;    ///< nominal seats on the twin, drawn within the play
+    double toleranceMm = 0.5; ///< the suggested landmarks' tolerance
+    std::uint64_t seed = 1;   ///< of the seats and the twin's noise
 };
 
 /// The screen of the header for `base`'s part at `station` (`base` is

@@ -215,6 +215,11 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
 /// `- {id: ..., position: [...], normal: [...], tolerance_mm: ...}`.
 std::string landmarksYaml(const Suggestion& suggestion, double toleranceMm, const std::vector<std::string>& header);
 
+/// A candidate as the `landmarks:` list writes it (6 decimals) and the part
+/// program's loader reads it back (the normal then of unit length): what a
+/// program made from the suggestion holds.
+LandmarkCandidate asWritten(const LandmarkCandidate& candidate);
+
 /// The refused candidates per rule, e.g. "12 concavity, 3 capability".
 std::string refusedSummary(const Suggestion& suggestion);
 

@@ -92,6 +92,7 @@ struct FrameCheck {
 int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station& station, int adjacencyDepth);
 
 struct ProgramPlan {
+    PlanProblem problem; ///< what was planned (planProblem of the program)
     ViewPlan plan;
     /// Expected U per landmark at the planned views, the largest over the part
     /// as drawn and the playSeats (the outline a view sees, and so U, changes
@@ -105,5 +106,9 @@ struct ProgramPlan {
 /// the view and the numbers.
 ProgramPlan planProgram(const model::PartProgram& program, const geometry::Station& station,
                         const PlanOptions& options);
+
+/// plan.json (docs/planning.md): planToJson of the plan, and `capability`
+/// (the assessment per landmark over the play) when the plan is feasible.
+nlohmann::json toJson(const ProgramPlan& planned);
 
 } // namespace hg::plan

@@ -137,7 +137,7 @@ nlohmann::json CycleRunner::describe() const
     }
     if (sequencer_.state() == SequencerState::Fault) {
         j["fault_code"] = static_cast<int>(sequencer_.faultCode());
-        j["fault"] = std::string(station::describe(sequencer_.faultCode()));
+        j["fault"] = station::describe(sequencer_.faultCode(), sequencer_.retries());
     }
     return j;
 }

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <utility>
 
 namespace hg::station {
@@ -94,19 +95,23 @@ std::string_view toString(FaultCode c)
     return "unknown";
 }
 
-std::string_view describe(FaultCode c)
+std::string describe(FaultCode c, int retries)
 {
+    // A step that failed after its retries says how many the cycle had (docs/plc.md, "Fault codes").
+    const std::string afterRetries = retries <= 0   ? " (without a retry)"
+                                     : retries == 1 ? " (after one retry)"
+                                                    : " (after " + std::to_string(retries) + " retries)";
     switch (c) {
     case FaultCode::None:
         return "no fault";
     case FaultCode::CameraTimeout:
-        return "no frame from the camera within the grab timeout (after one retry)";
+        return "no frame from the camera within the grab timeout" + afterRetries;
     case FaultCode::CameraBadFrame:
-        return "the camera delivered incomplete frames (after one retry)";
+        return "the camera delivered incomplete frames" + afterRetries;
     case FaultCode::CameraError:
         return "the camera could not grab";
     case FaultCode::FixtureTimeout:
-        return "the fixture did not reach position within the move timeout (after one retry)";
+        return "the fixture did not reach position within the move timeout" + afterRetries;
     case FaultCode::FixtureFault:
         return "the fixture drive reports a fault that a reset did not clear";
     case FaultCode::FixtureCommunication:

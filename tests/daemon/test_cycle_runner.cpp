@@ -501,6 +501,26 @@ TEST_F(CycleRunnerTest, GrabTimesOutTwiceFaultsWithItsCodeThenRecovers)
     EXPECT_EQ(devices.grabCount(), 3);
 }
 
+// The operator's fault text (ctl status) says how many retries the cycle had.
+TEST_F(CycleRunnerTest, TheFaultSaysHowManyRetriesTheCycleHad)
+{
+    auto cfg = std::make_shared<station::DaemonConfig>(*config);
+    cfg->sequencer.retries = 2;
+    config = cfg;
+    for (int k = 0; k < 3; ++k) devices.moves.push_back([] { return fails(StatusCode::Timeout); });
+    devices.recoveries.push_back([] { return fails(StatusCode::CommunicationError); });
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::FaultCode), 20); // fixture-timeout
+    EXPECT_EQ(devices.moveRetries(), (std::vector<bool>{false, true, true}));
+    ASSERT_TRUE(eventually([&] { return devices.recoverTimes().size() == 1; }));
+    EXPECT_EQ(runner->state(), SequencerState::Fault);
+    auto status = runner->describe();
+    EXPECT_EQ(status["fault_code"], 20);
+    EXPECT_EQ(status["fault"], "the fixture did not reach position within the move timeout (after 2 retries)");
+}
+
 TEST_F(CycleRunnerTest, AbortMidCycleEndsItAsAbortedByThePlc)
 {
     // The PLC writes COMMAND = 1 while the fixture moves to view 1.

@@ -1,4 +1,4 @@
-// The capture sequencer's state machine: normal cycles, the one retry, faults
+// The capture sequencer's state machine: normal cycles, the retries, faults
 // with their codes, aborts, recovery, and the transition table.
 #include "hullgauge/station/sequencer.h"
 
@@ -119,6 +119,20 @@ TEST(Sequencer, NoRetriesConfiguredFaultsAtOnce)
     (void)s.trigger(1);
     EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
     EXPECT_EQ(s.faultCode(), FaultCode::FixtureTimeout);
+}
+
+// The operator's sentence names the retries the faulted cycle had.
+TEST(Sequencer, FaultDescriptionsSayHowManyRetries)
+{
+    EXPECT_EQ(describe(FaultCode::CameraTimeout, 0),
+              "no frame from the camera within the grab timeout (without a retry)");
+    EXPECT_EQ(describe(FaultCode::CameraTimeout, 1),
+              "no frame from the camera within the grab timeout (after one retry)");
+    EXPECT_EQ(describe(FaultCode::CameraBadFrame, 2), "the camera delivered incomplete frames (after 2 retries)");
+    EXPECT_EQ(describe(FaultCode::FixtureTimeout, 5),
+              "the fixture did not reach position within the move timeout (after 5 retries)");
+    // Codes whose sentence names no retry do not change with the count.
+    EXPECT_EQ(describe(FaultCode::ProgramLoad, 3), describe(FaultCode::ProgramLoad, 0));
 }
 
 TEST(Sequencer, AbortStopsMotionAndEndsInDone)

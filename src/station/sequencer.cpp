@@ -139,8 +139,13 @@ std::string describe(FaultCode c, int retries)
 }
 
 CaptureSequencer::CaptureSequencer(int retries, std::chrono::milliseconds recoveryRetry, TransitionCheck allowed)
-    : retries_(retries < 0 ? 0 : retries), recoveryRetry_(recoveryRetry), allowed_(allowed)
+    : retries_(retries < 0 ? 0 : retries), nextRetries_(retries_), recoveryRetry_(recoveryRetry), allowed_(allowed)
 {
+}
+
+void CaptureSequencer::setRetries(int retries)
+{
+    nextRetries_ = retries < 0 ? 0 : retries;
 }
 
 SequencerAction CaptureSequencer::go(SequencerState to, SequencerAction action)
@@ -172,6 +177,7 @@ SequencerAction CaptureSequencer::recoverAfter(std::chrono::milliseconds delay)
 SequencerAction CaptureSequencer::trigger(std::size_t viewCount)
 {
     if (state_ != S::Ready && state_ != S::Done) return {};
+    retries_ = nextRetries_;
     viewCount_ = viewCount;
     view_ = 0;
     attempt_ = 1;

@@ -121,6 +121,32 @@ TEST(Sequencer, NoRetriesConfiguredFaultsAtOnce)
     EXPECT_EQ(s.faultCode(), FaultCode::FixtureTimeout);
 }
 
+// A reload's `sequencer.retries` (docs/daemon.md): taken by the next trigger; the running cycle keeps its count.
+TEST(Sequencer, RetriesSetBetweenCyclesApplyFromTheNextTrigger)
+{
+    auto s = readySequencer(1);
+    (void)s.trigger(1);
+    s.setRetries(0); // mid-cycle: this cycle still has its retry
+    EXPECT_EQ(s.retries(), 1);
+    EXPECT_TRUE(s.onEvent(E::MoveTimeout).retry);
+    EXPECT_EQ(s.onEvent(E::InPosition).kind, A::Settle);
+    EXPECT_EQ(s.onEvent(E::Settled).kind, A::Grab);
+    EXPECT_EQ(s.onEvent(E::FrameOk).kind, A::Finish);
+    EXPECT_EQ(s.onEvent(E::Processed).kind, A::Publish);
+
+    (void)s.trigger(1);
+    EXPECT_EQ(s.retries(), 0);
+    EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
+    EXPECT_EQ(s.faultCode(), FaultCode::FixtureTimeout);
+    (void)s.onEvent(E::Recovered);
+
+    s.setRetries(3);
+    (void)s.trigger(1);
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(s.onEvent(E::MoveTimeout).retry) << "retry " << k + 1;
+    EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
+    EXPECT_EQ(s.retries(), 3);
+}
+
 // The operator's sentence names the retries the faulted cycle had.
 TEST(Sequencer, FaultDescriptionsSayHowManyRetries)
 {

@@ -137,6 +137,9 @@ class CaptureSequencer {
     explicit CaptureSequencer(int retries = 1, std::chrono::milliseconds recoveryRetry = std::chrono::seconds(2),
                               TransitionCheck allowed = transitionAllowed);
 
+    /// The retries of the cycles triggered from now on (a reloaded
+    /// `sequencer.retries`, docs/daemon.md); a cycle under way keeps the count it started with.
+    void setRetries(int retries);
     /// The extra attempts of a failed step in the current (or last) cycle.
     int retries() const { return retries_; }
 
@@ -172,7 +175,8 @@ class CaptureSequencer {
     /// `toFault`: the devices need recovery before the next cycle (else Done).
     SequencerAction endCycle(CycleOutcome outcome, FaultCode code, bool stopMotion, bool toFault);
 
-    int retries_;
+    int retries_;     ///< of the current (or last) cycle
+    int nextRetries_; ///< taken by the next trigger
     std::chrono::milliseconds recoveryRetry_;
     TransitionCheck allowed_;
     std::pair<SequencerState, SequencerState> refused_{SequencerState::Starting, SequencerState::Starting};

@@ -137,7 +137,7 @@ nlohmann::json CycleRunner::describe() const
     }
     if (sequencer_.state() == SequencerState::Fault) {
         j["fault_code"] = static_cast<int>(sequencer_.faultCode());
-        j["fault"] = std::string(station::describe(sequencer_.faultCode()));
+        j["fault"] = station::describe(sequencer_.faultCode(), sequencer_.retries());
     }
     return j;
 }
@@ -419,7 +419,11 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     auto it = cycle.cfg->programs.find(r.program);
     cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
     if (cycle.program) cycle.poses = cycle.program->views;
-    auto action = transition([&] { return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1); });
+    auto action = transition([&] {
+        // The cycle's configuration gives its retries: a reload's count applies from the next cycle (docs/daemon.md).
+        sequencer_.setRetries(cycle.cfg->sequencer.retries);
+        return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1);
+    });
     std::string error;
     if (!cycle.program)
         error = "part program " + std::to_string(r.program) + " is no longer configured";

@@ -16,9 +16,11 @@
 #include <cstdlib>
 #include <iostream>
 #include <poll.h>
+#include <set>
 #include <signal.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
+#include <utility>
 #include <vector>
 
 namespace hg::daemon {
@@ -34,13 +36,23 @@ std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
     return numbers;
 }
 
-// Settings the running daemon cannot change without restarting its servers or drivers.
+/// The networks `plc.allowed_clients` lets in, whatever order the file lists them in.
+std::set<std::pair<std::uint32_t, int>> allowedNetworks(const station::PlcConfig& plc)
+{
+    std::set<std::pair<std::uint32_t, int>> networks;
+    for (const auto& net : plc.allowedClients) networks.emplace(net.address, net.prefix);
+    return networks;
+}
+
+// Settings the running daemon cannot change without restarting its servers or
+// drivers (docs/daemon.md lists them). A list is compared by what it holds: one
+// address replacing another leaves the count as it was.
 std::vector<std::string> needsRestart(const station::DaemonConfig& a, const station::DaemonConfig& b)
 {
     std::vector<std::string> keys;
     if (a.stationFile != b.stationFile) keys.push_back("station");
     if (a.plc.bindAddress != b.plc.bindAddress || a.plc.port != b.plc.port || a.plc.unitId != b.plc.unitId ||
-        a.plc.allowedClients.size() != b.plc.allowedClients.size())
+        allowedNetworks(a.plc) != allowedNetworks(b.plc))
         keys.push_back("plc");
     if (a.results.database != b.results.database) keys.push_back("results.database");
     if (a.maintenance.socket != b.maintenance.socket) keys.push_back("maintenance.socket");

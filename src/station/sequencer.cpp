@@ -2,6 +2,7 @@
 
 #include <array>
 #include <optional>
+#include <string>
 #include <utility>
 
 namespace hg::station {
@@ -94,19 +95,23 @@ std::string_view toString(FaultCode c)
     return "unknown";
 }
 
-std::string_view describe(FaultCode c)
+std::string describe(FaultCode c, int retries)
 {
+    // A step that failed after its retries says how many the cycle had (docs/plc.md, "Fault codes").
+    const std::string afterRetries = retries <= 0   ? " (without a retry)"
+                                     : retries == 1 ? " (after one retry)"
+                                                    : " (after " + std::to_string(retries) + " retries)";
     switch (c) {
     case FaultCode::None:
         return "no fault";
     case FaultCode::CameraTimeout:
-        return "no frame from the camera within the grab timeout (after one retry)";
+        return "no frame from the camera within the grab timeout" + afterRetries;
     case FaultCode::CameraBadFrame:
-        return "the camera delivered incomplete frames (after one retry)";
+        return "the camera delivered incomplete frames" + afterRetries;
     case FaultCode::CameraError:
         return "the camera could not grab";
     case FaultCode::FixtureTimeout:
-        return "the fixture did not reach position within the move timeout (after one retry)";
+        return "the fixture did not reach position within the move timeout" + afterRetries;
     case FaultCode::FixtureFault:
         return "the fixture drive reports a fault that a reset did not clear";
     case FaultCode::FixtureCommunication:
@@ -134,8 +139,13 @@ std::string_view describe(FaultCode c)
 }
 
 CaptureSequencer::CaptureSequencer(int retries, std::chrono::milliseconds recoveryRetry, TransitionCheck allowed)
-    : retries_(retries < 0 ? 0 : retries), recoveryRetry_(recoveryRetry), allowed_(allowed)
+    : retries_(retries < 0 ? 0 : retries), nextRetries_(retries_), recoveryRetry_(recoveryRetry), allowed_(allowed)
 {
+}
+
+void CaptureSequencer::setRetries(int retries)
+{
+    nextRetries_ = retries < 0 ? 0 : retries;
 }
 
 SequencerAction CaptureSequencer::go(SequencerState to, SequencerAction action)
@@ -167,6 +177,7 @@ SequencerAction CaptureSequencer::recoverAfter(std::chrono::milliseconds delay)
 SequencerAction CaptureSequencer::trigger(std::size_t viewCount)
 {
     if (state_ != S::Ready && state_ != S::Done) return {};
+    retries_ = nextRetries_;
     viewCount_ = viewCount;
     view_ = 0;
     attempt_ = 1;

@@ -501,6 +501,70 @@ TEST_F(CycleRunnerTest, GrabTimesOutTwiceFaultsWithItsCodeThenRecovers)
     EXPECT_EQ(devices.grabCount(), 3);
 }
 
+// `sequencer.retries` from a reload (docs/daemon.md): the next cycle takes it,
+// the running one keeps the count it started with.
+TEST_F(CycleRunnerTest, RetriesFromAReloadApplyFromTheNextCycle)
+{
+    const auto withRetries = [&](int retries) {
+        auto cfg = std::make_shared<station::DaemonConfig>(*config);
+        cfg->sequencer.retries = retries;
+        return std::shared_ptr<const station::DaemonConfig>(std::move(cfg));
+    };
+    startReady(); // sequencer.retries 1
+    runner->setConfig(withRetries(2));
+    // View 0's grab times out twice; the third attempt, the second retry, passes.
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::Result), 1);
+    EXPECT_EQ(at(reg::FaultCode), 0);
+    EXPECT_EQ(devices.grabCount(), 5);
+
+    // A reload to no retries while a cycle runs: that cycle still retries twice.
+    devices.grabs.push_back([&] {
+        runner->setConfig(withRetries(0));
+        return fails(StatusCode::Timeout);
+    });
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    trigger(2);
+    ASSERT_TRUE(eventually([&] { return done(2); }));
+    EXPECT_EQ(at(reg::Result), 1);
+    EXPECT_EQ(devices.grabCount(), 10);
+
+    // The next cycle has none: its first timeout faults it. The recovery fails, so
+    // the station stays in fault (the next attempt is due on the runner's clock).
+    devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
+    devices.recoveries.push_back([] { return fails(StatusCode::CommunicationError); });
+    trigger(3);
+    ASSERT_TRUE(eventually([&] { return done(3); }));
+    EXPECT_EQ(at(reg::Result), 3);
+    EXPECT_EQ(at(reg::FaultCode), 10); // camera-timeout
+    EXPECT_EQ(devices.grabCount(), 11);
+    ASSERT_TRUE(eventually([&] { return devices.recoverTimes().size() == 1; }));
+    EXPECT_EQ(runner->describe()["fault"], "no frame from the camera within the grab timeout (without a retry)");
+}
+
+// The operator's fault text (ctl status) says how many retries the cycle had.
+TEST_F(CycleRunnerTest, TheFaultSaysHowManyRetriesTheCycleHad)
+{
+    auto cfg = std::make_shared<station::DaemonConfig>(*config);
+    cfg->sequencer.retries = 2;
+    config = cfg;
+    for (int k = 0; k < 3; ++k) devices.moves.push_back([] { return fails(StatusCode::Timeout); });
+    devices.recoveries.push_back([] { return fails(StatusCode::CommunicationError); });
+    startReady();
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::FaultCode), 20); // fixture-timeout
+    EXPECT_EQ(devices.moveRetries(), (std::vector<bool>{false, true, true}));
+    ASSERT_TRUE(eventually([&] { return devices.recoverTimes().size() == 1; }));
+    EXPECT_EQ(runner->state(), SequencerState::Fault);
+    auto status = runner->describe();
+    EXPECT_EQ(status["fault_code"], 20);
+    EXPECT_EQ(status["fault"], "the fixture did not reach position within the move timeout (after 2 retries)");
+}
+
 TEST_F(CycleRunnerTest, AbortMidCycleEndsItAsAbortedByThePlc)
 {
     // The PLC writes COMMAND = 1 while the fixture moves to view 1.

@@ -354,6 +354,45 @@ TEST(DaemonProcess, SighupWithABadConfigurationKeepsTheRunningOne)
     EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
 }
 
+std::size_t occurrences(const std::string& text, const std::string& what)
+{
+    std::size_t n = 0;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+    return n;
+}
+
+// The PLC's allow-list needs a restart (docs/daemon.md): a reload that changes
+// it says so, also when one address replaces another and the count stays.
+TEST(DaemonProcess, SighupReplacingAnAllowedClientSaysItNeedsARestart)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    auto config = hgdaemon::writeConfig(dir, port);
+    auto text = hgtest::run("cat " + config.string()).out;
+    const std::string plcEnd = "heartbeat_period_s: 0.2}";
+    text.replace(text.find(plcEnd), plcEnd.size(), "heartbeat_period_s: 0.2, allowed_clients: [127.0.0.1, 10.0.0.1]}");
+    hgtest::writeFile(config, text);
+    DaemonProcess daemon(config);
+    ASSERT_TRUE(hgdaemon::waitForState(dir / "hg.sock", "ready", 10s)) << daemon.logText();
+    const std::string restart = "reload: 'plc' changed";
+
+    // The same networks in another order: nothing to restart for.
+    text.replace(text.find("[127.0.0.1, 10.0.0.1]"), std::string("[127.0.0.1, 10.0.0.1]").size(),
+                 "[10.0.0.1, 127.0.0.1]");
+    hgtest::writeFile(config, text);
+    daemon.signal(SIGHUP);
+    ASSERT_TRUE(eventually([&] { return occurrences(daemon.logText(), "configuration reloaded") == 1; }))
+        << daemon.logText();
+    EXPECT_EQ(occurrences(daemon.logText(), restart), 0u) << daemon.logText();
+
+    text.replace(text.find("10.0.0.1"), std::string("10.0.0.1").size(), "10.0.0.2");
+    hgtest::writeFile(config, text);
+    daemon.signal(SIGHUP);
+    ASSERT_TRUE(eventually([&] { return occurrences(daemon.logText(), "configuration reloaded") == 2; }))
+        << daemon.logText();
+    EXPECT_EQ(occurrences(daemon.logText(), restart), 1u) << daemon.logText();
+}
+
 TEST(DaemonProcess, KillNineMidCycleLosesNoReportedResult)
 {
     hgtest::TempDir dir;

@@ -1,4 +1,4 @@
-// The capture sequencer's state machine: normal cycles, the one retry, faults
+// The capture sequencer's state machine: normal cycles, the retries, faults
 // with their codes, aborts, recovery, and the transition table.
 #include "hullgauge/station/sequencer.h"
 
@@ -119,6 +119,46 @@ TEST(Sequencer, NoRetriesConfiguredFaultsAtOnce)
     (void)s.trigger(1);
     EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
     EXPECT_EQ(s.faultCode(), FaultCode::FixtureTimeout);
+}
+
+// A reload's `sequencer.retries` (docs/daemon.md): taken by the next trigger; the running cycle keeps its count.
+TEST(Sequencer, RetriesSetBetweenCyclesApplyFromTheNextTrigger)
+{
+    auto s = readySequencer(1);
+    (void)s.trigger(1);
+    s.setRetries(0); // mid-cycle: this cycle still has its retry
+    EXPECT_EQ(s.retries(), 1);
+    EXPECT_TRUE(s.onEvent(E::MoveTimeout).retry);
+    EXPECT_EQ(s.onEvent(E::InPosition).kind, A::Settle);
+    EXPECT_EQ(s.onEvent(E::Settled).kind, A::Grab);
+    EXPECT_EQ(s.onEvent(E::FrameOk).kind, A::Finish);
+    EXPECT_EQ(s.onEvent(E::Processed).kind, A::Publish);
+
+    (void)s.trigger(1);
+    EXPECT_EQ(s.retries(), 0);
+    EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
+    EXPECT_EQ(s.faultCode(), FaultCode::FixtureTimeout);
+    (void)s.onEvent(E::Recovered);
+
+    s.setRetries(3);
+    (void)s.trigger(1);
+    for (int k = 0; k < 3; ++k) EXPECT_TRUE(s.onEvent(E::MoveTimeout).retry) << "retry " << k + 1;
+    EXPECT_EQ(s.onEvent(E::MoveTimeout).kind, A::Publish);
+    EXPECT_EQ(s.retries(), 3);
+}
+
+// The operator's sentence names the retries the faulted cycle had.
+TEST(Sequencer, FaultDescriptionsSayHowManyRetries)
+{
+    EXPECT_EQ(describe(FaultCode::CameraTimeout, 0),
+              "no frame from the camera within the grab timeout (without a retry)");
+    EXPECT_EQ(describe(FaultCode::CameraTimeout, 1),
+              "no frame from the camera within the grab timeout (after one retry)");
+    EXPECT_EQ(describe(FaultCode::CameraBadFrame, 2), "the camera delivered incomplete frames (after 2 retries)");
+    EXPECT_EQ(describe(FaultCode::FixtureTimeout, 5),
+              "the fixture did not reach position within the move timeout (after 5 retries)");
+    // Codes whose sentence names no retry do not change with the count.
+    EXPECT_EQ(describe(FaultCode::ProgramLoad, 3), describe(FaultCode::ProgramLoad, 0));
 }
 
 TEST(Sequencer, AbortStopsMotionAndEndsInDone)

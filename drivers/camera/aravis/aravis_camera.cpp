@@ -43,6 +43,7 @@
 #include <sys/socket.h>
 #include <thread>
 #include <unistd.h>
+#include <utility>
 
 namespace hg::drivers {
 namespace {
@@ -395,11 +396,19 @@ class AravisCamera final : public Camera {
         ArvCamera* camera = link->camera;
         CameraInfo info;
         info.backend = "aravis";
+        // GLib forbids passing a set GError on: each read is checked before the
+        // next, and the first that fails ends them (a device that stopped answering
+        // would otherwise cost every read its GVCP timeout).
         GError* error = nullptr;
-        auto text = [&](const char* s) { return std::string(s ? s : ""); };
-        info.vendor = text(arv_camera_get_vendor_name(camera, &error));
-        info.model = text(arv_camera_get_model_name(camera, &error));
-        info.serial = text(arv_camera_get_device_serial_number(camera, &error));
+        using Read = const char* (*)(ArvCamera*, GError**);
+        const std::pair<Read, std::string*> strings[] = {{arv_camera_get_vendor_name, &info.vendor},
+                                                         {arv_camera_get_model_name, &info.model},
+                                                         {arv_camera_get_device_serial_number, &info.serial}};
+        for (const auto& [read, out] : strings) {
+            const char* value = read(camera, &error);
+            if (error) return Status::failure("camera " + config_.id() + ": " + takeError(error));
+            *out = value ? value : "";
+        }
         arv_camera_get_sensor_size(camera, &info.sensorWidth, &info.sensorHeight, &error);
         if (error) return Status::failure("camera " + config_.id() + ": " + takeError(error));
         info.address = config_.address.empty() ? deviceAddress(*link) : config_.address;

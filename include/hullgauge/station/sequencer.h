@@ -3,7 +3,7 @@
 // Pure logic: it consumes events (what the devices and the pipeline reported)
 // and answers the next action; the daemon's cycle runner performs the actions
 // against the drivers and feeds their outcomes back. So every path — timeouts,
-// the one retry, aborts, faults — is decided here and unit-tested without
+// the retries, aborts, faults — is decided here and unit-tested without
 // hardware.
 //
 //   Starting --devices active--> Ready --trigger--> Moving(0)
@@ -11,7 +11,7 @@
 //   Grabbing(k) --frame ok--> Moving(k+1), or Processing after the last view
 //   Processing --processed--> Done --trigger--> Moving(0)
 //   Processing --not seated--> Done (result error, part-not-seated: re-seat, trigger again)
-//   Moving/Grabbing --device failure--> same state once more (retry), then Fault
+//   Moving/Grabbing --device failure--> same state again (up to `retries` times), then Fault
 //   busy --program or inspection error--> Done (result error; devices are fine)
 //   Moving/Settling/Grabbing --abort--> Done (result aborted)
 //   Fault --recovered--> Ready;  any --devices failed--> Fault
@@ -73,10 +73,10 @@ enum class SequencerEvent {
 /// 1x camera, 2x fixture, 3x part program / inspection, 4x daemon.
 enum class FaultCode : std::uint16_t {
     None = 0,
-    CameraTimeout = 10,        ///< no frame within grab_timeout_s, after the retry
-    CameraBadFrame = 11,       ///< incomplete frames (lost packets), after the retry
+    CameraTimeout = 10,        ///< no frame within grab_timeout_s, after the retries
+    CameraBadFrame = 11,       ///< incomplete frames (lost packets), after the retries
     CameraError = 12,          ///< the camera could not grab (state, device lost)
-    FixtureTimeout = 20,       ///< not in position within move_timeout_s, after the retry
+    FixtureTimeout = 20,       ///< not in position within move_timeout_s, after the retries
     FixtureFault = 21,         ///< the drive latched a fault, still there after reset and retry
     FixtureCommunication = 22, ///< the fixture does not answer
     FixtureRefused = 23,       ///< pose out of range or fixture not homed, after re-homing
@@ -93,8 +93,9 @@ enum class FaultCode : std::uint16_t {
 std::string_view toString(SequencerState s);
 std::string_view toString(SequencerEvent e);
 std::string_view toString(FaultCode c);
-/// A sentence for operators ("fixture not in position within the move timeout").
-std::string_view describe(FaultCode c);
+/// A sentence for operators ("the fixture did not reach position within the move
+/// timeout (after 2 retries)"); `retries`: the extra attempts the faulted cycle had.
+std::string describe(FaultCode c, int retries);
 
 /// The transition table: may the sequencer go from `from` to `to`?
 bool transitionAllowed(SequencerState from, SequencerState to);
@@ -136,6 +137,12 @@ class CaptureSequencer {
     explicit CaptureSequencer(int retries = 1, std::chrono::milliseconds recoveryRetry = std::chrono::seconds(2),
                               TransitionCheck allowed = transitionAllowed);
 
+    /// The retries of the cycles triggered from now on (a reloaded
+    /// `sequencer.retries`, docs/daemon.md); a cycle under way keeps the count it started with.
+    void setRetries(int retries);
+    /// The extra attempts of a failed step in the current (or last) cycle.
+    int retries() const { return retries_; }
+
     SequencerState state() const { return state_; }
     /// Current view (0-based) while busy.
     std::size_t view() const { return view_; }
@@ -168,7 +175,8 @@ class CaptureSequencer {
     /// `toFault`: the devices need recovery before the next cycle (else Done).
     SequencerAction endCycle(CycleOutcome outcome, FaultCode code, bool stopMotion, bool toFault);
 
-    int retries_;
+    int retries_;     ///< of the current (or last) cycle
+    int nextRetries_; ///< taken by the next trigger
     std::chrono::milliseconds recoveryRetry_;
     TransitionCheck allowed_;
     std::pair<SequencerState, SequencerState> refused_{SequencerState::Starting, SequencerState::Starting};

@@ -10,9 +10,11 @@
 #include <algorithm>
 #include <chrono>
 #include <functional>
+#include <glib.h>
 #include <gtest/gtest.h>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -349,6 +351,57 @@ TEST_F(AravisGige, DeactivatingWhileTheCameraIsLostIsBounded)
     auto f = cam->grab(2000ms);
     ASSERT_TRUE(f.ok()) << f.message;
     EXPECT_GE(matchingImage(f.image), 0);
+}
+
+/// GLib's messages (g_log, every domain without a handler of its own) while
+/// alive. A call given a GError* that is already set says so there: Aravis'
+/// guard "error == NULL || *error == NULL" or GLib's "GError set over the top".
+class GLibMessages {
+  public:
+    GLibMessages() : previous_(g_log_set_default_handler(&GLibMessages::record, this)) {}
+    ~GLibMessages() { g_log_set_default_handler(previous_, nullptr); }
+    GLibMessages(const GLibMessages&) = delete;
+    GLibMessages& operator=(const GLibMessages&) = delete;
+
+    /// The messages that report a GError passed in already set.
+    std::vector<std::string> reusedErrors() const
+    {
+        std::lock_guard lock(mutex_);
+        std::vector<std::string> out;
+        for (const auto& m : messages_)
+            if (m.find("*error == NULL") != std::string::npos || m.find("over the top") != std::string::npos)
+                out.push_back(m);
+        return out;
+    }
+
+  private:
+    static void record(const gchar* domain, GLogLevelFlags, const gchar* message, gpointer self)
+    {
+        auto* messages = static_cast<GLibMessages*>(self);
+        std::lock_guard lock(messages->mutex_);
+        messages->messages_.push_back(std::string(domain ? domain : "") + ": " + (message ? message : ""));
+    }
+    GLogFunc previous_;
+    mutable std::mutex mutex_;
+    std::vector<std::string> messages_;
+};
+
+// GLib's rule for GError (each call that may set one is given a NULL GError*,
+// checked and cleared before the next): a camera that stopped answering fails
+// the first read of its identity, and the reads after it are not made with
+// that error still set.
+TEST_F(AravisGige, InfoOfACameraThatStoppedAnsweringFailsWithoutReusingItsError)
+{
+    startSim();
+    auto cam = makeCamera("");
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->info().ok());
+    GLibMessages messages;
+    sim_.kill();
+    auto info = cam->info();
+    EXPECT_FALSE(info.ok());
+    EXPECT_NE(info.message().find("camera 127.0.0.1"), std::string::npos) << info.message();
+    EXPECT_EQ(messages.reusedErrors(), std::vector<std::string>{});
 }
 
 TEST_F(AravisGige, UnreachableCameraFailsAtConfigureNamingTheKey)

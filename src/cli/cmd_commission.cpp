@@ -12,7 +12,7 @@
 // why), 2 bad input or no plan, 3 a fault (a file that cannot be written).
 #include "command.h"
 #include "hullgauge/commission/report.h"
-#include "hullgauge/commission/screen.h"
+#include "hullgauge/commission/screen.h" // verificationProblem
 #include "hullgauge/commission/verification.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/durable_file.h"
@@ -107,8 +107,10 @@ model::AlignmentSettings suggestedAlignment(const CommissionArgs& args)
     return alignment;
 }
 
-/// The suggestion, its landmarks proven on a few seats of the twin, and the
-/// candidates it refused in suggestion.md.
+/// The suggestion (capable over the nest's play), and the candidates it
+/// refused in suggestion.md. Its landmarks are not screened on the twin here
+/// (as `landmarks suggest` screens them): the verification that follows is
+/// the twin's judgement, and --fix acts on it.
 plan::Suggestion suggest(const CommissionArgs& args, const geometry::Station& station, const model::CadModel& cad,
                          const fs::path& out)
 {
@@ -117,12 +119,6 @@ plan::Suggestion suggest(const CommissionArgs& args, const geometry::Station& st
     options.toleranceMm = args.toleranceMm;
     options.alignment = suggestedAlignment(args);
     options.plan.pareLayers = cad.octree.adjacencyDepth; // as the draft is planned (planOptions)
-    commission::ScreenOptions screen;
-    screen.seats = args.seats;
-    screen.toleranceMm = args.toleranceMm;
-    screen.seed = args.seed;
-    options.screen =
-        commission::twinScreen(commission::draftProgram(cad, partName(args), options.alignment), station, screen);
     const plan::Suggestion s = plan::suggestLandmarks(plan::suggestProblem(cad, station), options);
     replaceFileDurably(out / "suggestion.md", "# Candidates refused for " + partName(args) + "\n\n" +
                                                   plan::refusedSummary(s) + ".\n\n" + plan::refusedMarkdown(s));

@@ -37,7 +37,7 @@ struct SuggestArgs {
     int depth = 8;
     int adjacencyDepth = 3;
     double toleranceMm = 0.5;
-    std::size_t twinSeats = 20;
+    std::size_t twinSeats = 8;
     std::string refused;
 };
 

@@ -50,6 +50,7 @@ std::vector<plan::Refusal> screened(const Block& b, const std::vector<plan::Land
     std::vector<geometry::FixturePose> poses;
     for (const auto& v : plan.views) poses.push_back(v.pose);
     ScreenOptions screen;
+    screen.seats = 4;
     screen.toleranceMm = 0.4;
     return twinScreen(base, b.station, screen, frames)(chosen, plan, plan::capabilityOverPlay(play, b.station, poses));
 }

@@ -36,7 +36,11 @@ VerificationProblem verificationProblem(const model::PartProgram& program, const
                                         const std::vector<inspect::LandmarkCapability>& capability);
 
 struct ScreenOptions {
-    std::size_t seats = 4;    ///< nominal seats on the twin, drawn within the play
+    std::size_t seats = 8; ///< nominal seats on the twin, drawn within the play
+    /// U measured may be at most this times the predicted U: a guard band
+    /// under the release's 1.25 ×, as U measured varies with the seat and the
+    /// noise and a suggestion has no verification after it.
+    double uncertaintyRatio = 1.15;
     double toleranceMm = 0.5; ///< the suggested landmarks' tolerance
     std::uint64_t seed = 1;   ///< of the seats and the twin's noise
 };

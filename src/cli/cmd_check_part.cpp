@@ -14,8 +14,7 @@
 #include "command.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/geometry/station.h"
-#include "hullgauge/inspect/capability.h"
-#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/model/step_io.h"
@@ -32,7 +31,10 @@ struct CheckArgs {
     bool json = false;
 };
 
-/// The expected U per landmark at the station's views; nullopt without --station.
+/// The expected U per landmark at the station's views, as the daemon judges
+/// the program there when it loads it (inspect::assessProgram); nullopt
+/// without --station. Printed, not enforced: the check names what the
+/// daemon would refuse (docs/inspection.md, "Capability").
 std::optional<std::vector<inspect::LandmarkCapability>> capabilityAt(const model::PartProgram& program,
                                                                      const CheckArgs& args)
 {
@@ -41,9 +43,7 @@ std::optional<std::vector<inspect::LandmarkCapability>> capabilityAt(const model
     std::vector<geometry::CameraModel> cameras;
     for (const geometry::FixturePose& pose : geometry::loadPoses(args.views, &station.fixture))
         cameras.push_back(station.cameraAt(pose));
-    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
-    return inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge.get(),
-                                     cameras, station.imageQuality);
+    return inspect::assessProgram(program, station.calibration, cameras, station.imageQuality);
 }
 
 /// "tolerance ±0.05 mm" or "limits [-0.02, 0.08] mm".

@@ -17,9 +17,8 @@
 #include "command.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
-#include "hullgauge/inspect/capability.h"
-#include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
+#include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/vision/manifest.h"
 
 namespace hg::cli {
@@ -78,58 +77,24 @@ std::string seatingFaultMessage(const std::optional<align::AlignmentResult>& mea
            formatNumber(limits.maxRotationDeg) + "°); nothing inspected, re-seat the part";
 }
 
-// The capability check at the manifest's cameras (docs/inspection.md,
-// "Capability"): a landmark whose tolerance zone is narrower than 4 U is
-// refused (exit 2) unless --force, which inspects it as never ok.
-std::vector<std::string> unprovenLandmarks(const inspect::InspectionMap& map, const inspect::InspectionOptions& options,
-                                           const inspect::DeviationGauge* gauge,
-                                           const vision::CaptureManifest& manifest, const InspectArgs& args)
+// The manifest's cameras, as the capability check judges the views it holds.
+std::vector<geometry::CameraModel> manifestCameras(const vision::CaptureManifest& manifest)
 {
-    const int level = options.level < 0 ? map.geometry().depth : options.level;
     std::vector<geometry::CameraModel> cameras;
     for (const vision::ManifestView& v : manifest.views) cameras.push_back(v.camera);
-    const auto assessment = inspect::assessCapability(map.landmarks(), map.frame().voxelSize(level), gauge, cameras,
-                                                      manifest.imageQuality.value_or(geometry::ImageQuality{}));
-    std::vector<std::string> unproven;
-    std::string refused;
-    for (const inspect::LandmarkCapability& c : assessment) {
-        if (c.capable || std::find(args.mask.begin(), args.mask.end(), c.id) != args.mask.end()) continue;
-        unproven.push_back(c.id);
-        refused += "  " + inspect::describe(c) + "\n";
-    }
-    if (unproven.empty()) return unproven;
-    if (!args.force)
-        throw InputError(args.part.empty() ? args.map : args.part, "landmarks",
-                         "the station cannot decide these tolerances (give --force to inspect them anyway; they "
-                         "can then only be uncertain or out of tolerance):\n" +
-                             refused);
-    std::cerr << "hullgauge inspect: --force: inspecting landmarks this station cannot prove (never ok):\n" << refused;
-    return unproven;
+    return cameras;
 }
 
-int run(const InspectArgs& args)
+// The capability check at the manifest's views (docs/inspection.md,
+// "Capability"): a landmark whose tolerance zone is narrower than 4 U is
+// refused (exit 2) unless --force, which inspects it as never ok.
+inspect::CapabilityCheck capabilityCheck(std::vector<inspect::LandmarkCapability> assessment, const InspectArgs& args)
 {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
-    std::optional<inspect::InspectionMap> map;
-    inspect::InspectionOptions options;
-    std::shared_ptr<const align::Aligner> aligner;
-    model::AlignmentSettings alignment;
-    std::shared_ptr<const inspect::DeviationGauge> gauge;
-    const vision::CaptureManifest manifest = vision::readManifest(args.views);
-    if (!args.map.empty()) {
-        map = inspect::InspectionMap::load(args.map);
-        options = inspect::inspectionOptions(withFlags({}, args));
-    } else {
-        model::PartProgram program = model::loadPartProgram(args.part);
-        program.alignment = alignment = withFlag(program.alignment, args);
-        options = inspect::inspectionOptions(withFlags(program.inspection, args));
-        map = inspect::buildInspectionMap(program, options);
-        aligner = inspect::makeAligner(program);
-        // The budget's calibration term is the station's, which the manifest carries (docs/inspection.md).
-        gauge = inspect::makeDeviationGauge(program, manifest.calibration);
-    }
-    options.maskedLandmarks = args.mask;
+    return {std::move(assessment), args.force, "--force"};
+}
+
+std::vector<inspect::CapturedView> readViews(const vision::CaptureManifest& manifest, const InspectArgs& args)
+{
     std::vector<inspect::CapturedView> views;
     for (std::size_t i = 0; i < manifest.views.size(); ++i) {
         const vision::ManifestView& mv = manifest.views[i];
@@ -141,18 +106,56 @@ int run(const InspectArgs& args)
                          mv.origin.value_or(cv::Point(0, 0))});
     }
     if (views.empty()) throw InputError(args.views, "views", "no views");
+    return views;
+}
 
-    const std::string source = args.map.empty() ? args.part : args.map;
-    std::optional<inspect::Inspector> inspector;
-    try {
-        options.unprovenLandmarks = unprovenLandmarks(*map, options, gauge.get(), manifest, args);
-        inspector.emplace(*map, options, aligner, gauge);
-    } catch (const std::invalid_argument& e) {
-        throw InputError(source, "inspection options", e.what());
+// The inspector: with --part the one the daemon configures for the program
+// (inspect::makeProgramInspector), the flags replacing their keys; with
+// --map the map as built, the flags over the defaults, no seat and no gauge
+// (a map carries no CAD solid: its landmarks are judged on the voxel bracket).
+inspect::ProgramInspector configure(const vision::CaptureManifest& manifest, const InspectArgs& args,
+                                    model::AlignmentSettings& alignment)
+{
+    const geometry::ImageQuality quality = manifest.imageQuality.value_or(geometry::ImageQuality{});
+    if (!args.part.empty()) {
+        model::PartProgram program = model::loadPartProgram(args.part);
+        program.alignment = alignment = withFlag(program.alignment, args);
+        program.inspection = withFlags(program.inspection, args);
+        // The budget's calibration term is the station's, which the manifest carries (docs/inspection.md).
+        auto assessment = inspect::assessProgram(program, manifest.calibration, manifestCameras(manifest), quality);
+        return inspect::makeProgramInspector(
+            program, {manifest.calibration, capabilityCheck(std::move(assessment), args)}, args.mask);
     }
+    inspect::ProgramInspector p;
+    p.map = std::make_unique<const inspect::InspectionMap>(inspect::InspectionMap::load(args.map));
+    const model::InspectionSettings settings = withFlags({}, args);
+    const int level = settings.level < 0 ? p.map->geometry().depth : settings.level;
+    auto assessment = inspect::assessCapability(p.map->landmarks(), p.map->frame().voxelSize(level), nullptr,
+                                                manifestCameras(manifest), quality);
+    p.setup = inspect::setUpInspection(settings, capabilityCheck(std::move(assessment), args), args.mask, args.map);
+    p.inspector = std::make_unique<inspect::Inspector>(*p.map, p.setup.options);
+    return p;
+}
+
+int run(const InspectArgs& args)
+{
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    const vision::CaptureManifest manifest = vision::readManifest(args.views);
+    const std::vector<inspect::CapturedView> views = readViews(manifest, args);
+    model::AlignmentSettings alignment;
+    inspect::ProgramInspector p;
+    try {
+        p = configure(manifest, args, alignment);
+    } catch (const std::invalid_argument& e) {
+        throw InputError(args.map.empty() ? args.part : args.map, "inspection options", e.what());
+    }
+    if (!p.setup.forced.empty())
+        std::cerr << "hullgauge inspect: --force: inspecting landmarks this station cannot prove (never ok): "
+                  << inspect::describe(p.setup.forced) << "\n";
     inspect::InspectionResult result;
     try {
-        result = inspector->inspect(views, manifest.segmentation);
+        result = p.inspector->inspect(views, manifest.segmentation);
     } catch (const std::invalid_argument& e) {
         throw InputError(args.views, "views", e.what());
     }

@@ -1,7 +1,7 @@
 #include "hullgauge/commission/verification.h"
 
 #include "hullgauge/common/format.h"
-#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/plan/cycle_time.h"
 #include "hullgauge/plan/program_plan.h"
 
@@ -23,28 +23,14 @@ double median(std::vector<double> v)
     return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/// The inspector the daemon builds for the program (engine_inspector.cpp):
-/// the program's map, options, aligner and gauge at the station's calibration;
-/// landmarks the capability check refused are inspected as never ok.
-struct ProgramInspector {
-    inspect::InspectionMap map;
-    std::unique_ptr<inspect::Inspector> inspector;
-    std::size_t seatViews = 0;
-};
-
-ProgramInspector makeInspector(const VerificationProblem& problem)
+/// The inspector the daemon configures for the program (inspect::makeProgramInspector),
+/// at the station's calibration. The landmarks the capability check over the play
+/// cannot prove are inspected as never ok rather than refused: verification reports
+/// them as its `capability` finding, which refuses the release (docs/commissioning.md).
+inspect::ProgramInspector makeInspector(const VerificationProblem& problem)
 {
-    const model::PartProgram& program = *problem.program;
-    inspect::InspectionOptions options = inspect::inspectionOptions(program.inspection);
-    for (const auto& c : problem.capability)
-        if (!c.capable) options.unprovenLandmarks.push_back(c.id);
-    ProgramInspector p{inspect::buildInspectionMap(program, options), nullptr, 0};
-    p.inspector =
-        std::make_unique<inspect::Inspector>(p.map, options, inspect::makeAligner(program),
-                                             inspect::makeDeviationGauge(program, problem.station->calibration));
-    if (program.alignment.method != model::AlignmentMethod::None)
-        p.seatViews = std::min(problem.poses.size(), static_cast<std::size_t>(program.alignment.correctPosesAfter));
-    return p;
+    return inspect::makeProgramInspector(
+        *problem.program, {problem.station->calibration, inspect::CapabilityCheck{problem.capability, true, ""}});
 }
 
 const inspect::LandmarkResult* findResult(const inspect::InspectionResult& r, const std::string& id)
@@ -125,7 +111,7 @@ class Verifier {
     TwinCycle cycle(const model::TriangleMesh& asMade, const FrameSource& frames)
     {
         const geometry::RigidTransform seat = drawSeat(rng_, report_.seatShiftMm, report_.seatRotationDeg, centre_);
-        TwinCycle c = runCycle(*inspector_.inspector, *problem_.station, problem_.poses, inspector_.seatViews,
+        TwinCycle c = runCycle(*inspector_.inspector, *problem_.station, problem_.poses, inspector_.setup.seatViews,
                                problem_.segmentation, seat, asMade, frames, frame_);
         frame_ += problem_.poses.size();
         inspectionMs_.push_back(c.result.reconstructionMs);
@@ -247,7 +233,7 @@ class Verifier {
     VerificationOptions options_;
     FrameSourceFactory frames_;
     Progress progress_;
-    ProgramInspector inspector_;
+    inspect::ProgramInspector inspector_;
     std::mt19937_64 rng_;
     geometry::Vec3 centre_ = geometry::Vec3::Zero();
     std::size_t frame_ = 0;

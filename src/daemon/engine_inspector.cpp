@@ -2,9 +2,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
-#include "hullgauge/inspect/capability.h"
-#include "hullgauge/inspect/inspector.h"
-#include "hullgauge/inspect/part_map.h"
+#include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/vision/segmentation.h"
 #include "view_pipeline.h"
@@ -22,29 +20,25 @@ std::vector<geometry::CameraModel> plannedCameras(const station::PartProgramRef&
     return cameras;
 }
 
-// The capability check when a program is loaded (docs/inspection.md,
-// "Capability"): a tolerance this station cannot prove at the planned views
-// refuses the program (FAULT 30 at a trigger; at start, --check and reload the
-// configuration) unless its entry says `force`; returns the forced landmarks.
-std::vector<std::string> capabilityCheck(const station::PartProgramRef& ref, const model::PartProgram& program,
-                                         const geometry::Station& station, const inspect::DeviationGauge* gauge)
+// What of the station a program is loaded with: its calibration, and the
+// capability check at the program's planned views (docs/inspection.md,
+// "Capability"): a tolerance this station cannot prove there refuses the
+// program (FAULT 30 at a trigger; at start, --check and reload the
+// configuration) unless its entry says `force`.
+inspect::InspectionStation stationFor(const station::PartProgramRef& ref, const model::PartProgram& program,
+                                      const geometry::Station& station)
 {
-    const auto assessment =
-        inspect::assessCapability(inspect::mapLandmarks(program), inspect::inspectionVoxelMm(program), gauge,
-                                  plannedCameras(ref, station), station.imageQuality);
-    std::vector<std::string> unproven;
-    std::string refused;
-    for (const inspect::LandmarkCapability& c : assessment)
-        if (!c.capable) {
-            unproven.push_back(c.id);
-            refused += (refused.empty() ? "" : "; ") + inspect::describe(c);
-        }
-    if (unproven.empty()) return unproven;
-    if (!ref.force)
-        throw InputError(ref.partFile.string(), "landmarks",
-                         refused + " (programs." + std::to_string(ref.number) + ".force: true runs it anyway)");
-    hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, refused);
-    return unproven;
+    return {station.calibration,
+            inspect::CapabilityCheck{inspect::assessProgram(program, station.calibration, plannedCameras(ref, station),
+                                                            station.imageQuality),
+                                     ref.force, "programs." + std::to_string(ref.number) + ".force: true"}};
+}
+
+/// The journal's warning for the landmarks a forced program inspects as never ok.
+void reportForced(const station::PartProgramRef& ref, const inspect::InspectionSetup& setup)
+{
+    if (!setup.forced.empty())
+        hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, inspect::describe(setup.forced));
 }
 
 /// The program's release as the record names it (docs/commissioning.md, "Release"); none for a draft.
@@ -68,8 +62,8 @@ struct LoadedProgram {
     /// (PartProgramRef::partSha256): a reload that changed it loads anew.
     std::string configuredSha256;
     model::PartProgram program;
-    std::unique_ptr<inspect::InspectionMap> map;
-    std::unique_ptr<inspect::Inspector> inspector;
+    /// Its map, options, aligner, gauge and seat views (inspect::makeProgramInspector).
+    inspect::ProgramInspector inspection;
     /// The planned poses and, per planned view, the bounds of what its
     /// inspection reads: the region the camera sends (empty with
     /// `camera.regions: false`; docs/daemon.md, "Regions per view").
@@ -97,7 +91,7 @@ class EngineInspector : public Inspector {
         idle();
         current_ = load(ref, error);
         if (!current_) return false;
-        const inspect::Inspector* inspector = current_->inspector.get();
+        const inspect::Inspector* inspector = current_->inspection.inspector.get();
         pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
             return inspector->prepareView(view, settings);
         });
@@ -127,7 +121,7 @@ class EngineInspector : public Inspector {
     {
         if (!regions_ || !current_) return {};
         if (index < current_->poses.size() && current_->poses[index] == pose) return current_->regions[index];
-        return viewBounds(*current_->inspector, station_.cameraAt(pose));
+        return viewBounds(*current_->inspection.inspector, station_.cameraAt(pose));
     }
 
     // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
@@ -148,11 +142,7 @@ class EngineInspector : public Inspector {
         pipeline_.submit(std::move(view));
     }
 
-    std::size_t seatViews() const override
-    {
-        if (!current_ || current_->program.alignment.method == model::AlignmentMethod::None) return 0;
-        return static_cast<std::size_t>(current_->program.alignment.correctPosesAfter);
-    }
+    std::size_t seatViews() const override { return current_ ? current_->inspection.setup.seatViews : 0; }
 
     // On the runner's thread, between a grab and the next move: waits for the
     // first views' preparation (started as each frame came in) and solves.
@@ -163,7 +153,7 @@ class EngineInspector : public Inspector {
         auto views = pipeline_.firstPrepared(count);
         if (!views) return std::nullopt;
         try {
-            return current_->inspector->measureSeat(*views);
+            return current_->inspection.inspector->measureSeat(*views);
         } catch (const std::exception& e) {
             hg::log::category("inspect")->warn("the seat of the first {} views could not be measured: {}", count,
                                                e.what());
@@ -187,7 +177,7 @@ class EngineInspector : public Inspector {
                 return out;
             }
             // Only the traversal is left once the last frame is in (dissertation 3.3.8).
-            auto result = current_->inspector->inspect(std::move(prepared.views), prepared.ids);
+            auto result = current_->inspection.inspector->inspect(std::move(prepared.views), prepared.ids);
             out.ok = true;
             out.part = result.part;
             out.release = releaseOf(current_->program);
@@ -249,20 +239,16 @@ class EngineInspector : public Inspector {
             p.file = ref.partFile;
             p.configuredSha256 = ref.partSha256;
             p.program = model::loadPartProgram(ref.partFile);
-            // The map and options `hullgauge inspect --part` uses (docs/inspection.md).
-            auto options = inspect::inspectionOptions(p.program.inspection);
-            p.map = std::make_unique<inspect::InspectionMap>(inspect::buildInspectionMap(p.program, options));
-            // The program's `alignment` section: the seat is measured before the traversal (docs/alignment.md).
-            const auto gauge = inspect::makeDeviationGauge(p.program, station_.calibration);
-            options.unprovenLandmarks = capabilityCheck(ref, p.program, station_, gauge.get());
-            p.inspector = std::make_unique<inspect::Inspector>(*p.map, options, inspect::makeAligner(p.program), gauge);
+            // The inspector `hullgauge inspect --part` configures (docs/inspection.md).
+            p.inspection = inspect::makeProgramInspector(p.program, stationFor(ref, p.program, station_));
+            reportForced(ref, p.inspection.setup);
             // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
             const std::vector<geometry::CameraModel> cameras = plannedCameras(ref, station_);
-            p.inspector->prepareOutlines(cameras);
+            p.inspection.inspector->prepareOutlines(cameras);
             // The region the camera sends per planned view (docs/daemon.md, "Regions per view").
             p.poses = ref.views;
             for (const geometry::CameraModel& c : cameras)
-                p.regions.push_back(regions_ ? viewBounds(*p.inspector, c) : cv::Rect());
+                p.regions.push_back(regions_ ? viewBounds(*p.inspection.inspector, c) : cv::Rect());
             // The version loaded, and the one it replaces (a reload, docs/daemon.md).
             const auto before = loaded_.find(ref.number);
             hg::log::category("inspect")->info(
@@ -327,10 +313,7 @@ std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& conf
 void checkEngineProgram(const station::PartProgramRef& ref, const geometry::Station& station)
 {
     const model::PartProgram program = model::loadPartProgram(ref.partFile);
-    (void)inspect::inspectionOptions(program.inspection);
-    (void)inspect::makeAligner(program);
-    const auto gauge = inspect::makeDeviationGauge(program, station.calibration);
-    (void)capabilityCheck(ref, program, station, gauge.get());
+    reportForced(ref, inspect::setUpInspection(program, stationFor(ref, program, station)));
 }
 
 } // namespace hg::daemon

@@ -40,6 +40,13 @@ std::string describe(const LandmarkCapability& c)
            ": this station cannot prove it (test uncertainty ratio 4:1)";
 }
 
+std::string describe(const std::vector<LandmarkCapability>& capabilities)
+{
+    std::string text;
+    for (const LandmarkCapability& c : capabilities) text += (text.empty() ? "" : "; ") + describe(c);
+    return text;
+}
+
 nlohmann::json toJson(const LandmarkCapability& c)
 {
     return {{"id", c.id},

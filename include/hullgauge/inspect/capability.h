@@ -51,6 +51,8 @@ std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>&
 /// tolerance zone 0.01 mm is narrower than 4 U = 4 × 0.0071 mm (sub-voxel
 /// deviation, 3 views): this station cannot prove it".
 std::string describe(const LandmarkCapability& capability);
+/// Each one described, joined by "; ": one line for an error or the journal.
+std::string describe(const std::vector<LandmarkCapability>& capabilities);
 
 nlohmann::json toJson(const LandmarkCapability& capability);
 

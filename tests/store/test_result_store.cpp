@@ -4,6 +4,7 @@
 #include "hgtest/paths.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/store/result_outbox.h"
+#include "hullgauge/store/result_reader.h"
 #include "hullgauge/store/result_store.h"
 
 #include <gtest/gtest.h>
@@ -406,6 +407,61 @@ TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
 TEST(ResultStore, UnwritableLocationIsAFault)
 {
     EXPECT_THROW(ResultStore{"/proc/hullgauge/results.db"}, FaultError);
+}
+
+TEST(ResultStore, AVersionOneStoreOpensAndMigratesToTheSchemaOfANewStore)
+{
+    hgtest::TempDir dir;
+    const auto old = dir / "v1.db";
+    // The oldest layout, written by hand as the first daemon wrote it: two rows, one of them failed.
+    ASSERT_EQ(hgtest::run("sqlite3 " + old.string() +
+                          " \"CREATE TABLE inspections (id INTEGER PRIMARY KEY AUTOINCREMENT, started_utc TEXT NOT "
+                          "NULL, started_unix_ms INTEGER NOT NULL, trigger_seq INTEGER NOT NULL, manual INTEGER NOT "
+                          "NULL, serial TEXT NOT NULL, program INTEGER NOT NULL, part TEXT NOT NULL, verdict TEXT NOT "
+                          "NULL, fault_code INTEGER NOT NULL, cycle_ms INTEGER NOT NULL, landmarks_failed INTEGER NOT "
+                          "NULL, landmarks_total INTEGER NOT NULL, landmarks_json TEXT NOT NULL, timing_json TEXT NOT "
+                          "NULL, images_dir TEXT NOT NULL DEFAULT ''); "
+                          "INSERT INTO inspections VALUES (1, 't1', 1000, 3, 0, 'OLD-1', 1, 'block', 'pass', 0, 10, 0, "
+                          "1, '[]', '{}', '/img/1'); "
+                          "INSERT INTO inspections VALUES (2, 't2', 2000, 4, 1, 'OLD-2', 2, 'block', 'fail', 0, 11, 1, "
+                          "1, '[]', '{\\\"move\\\": 5}', ''); PRAGMA user_version=1;\"")
+                  .status,
+              0);
+    // A reader opens it read-only and leaves it as it is: its rows read the defaults of later versions.
+    ResultQuery all;
+    all.newestFirst = false;
+    const auto before = ResultReader(old).select(all);
+    ASSERT_EQ(before.size(), 2u);
+    EXPECT_EQ(sql(old, "PRAGMA user_version"), "1\n");
+
+    // The writer opens it: version 5, the rows kept, and they read as the reader read them before.
+    {
+        ResultStore store(old);
+        EXPECT_EQ(store.count(), 2);
+    }
+    EXPECT_EQ(sql(old, "PRAGMA user_version"), "5\n");
+    EXPECT_EQ(ResultReader(old).select(all), before);
+    EXPECT_EQ(before[1]["serial"], "OLD-2");
+    EXPECT_EQ(before[1]["timing"]["move"], 5);
+    EXPECT_TRUE(before[1]["alignment"].is_null());
+    EXPECT_EQ(before[1]["purpose"], "production");
+    EXPECT_TRUE(before[1]["program_version"].is_null());
+
+    // Column for column and index for index, the migrated table is the one a new store creates.
+    const auto fresh = dir / "new.db";
+    {
+        ResultStore created(fresh);
+    }
+    for (const char* query :
+         {"PRAGMA table_info(inspections)", "SELECT name, sql FROM sqlite_master WHERE type = 'index' ORDER BY name"})
+        EXPECT_EQ(sql(old, query), sql(fresh, query)) << query;
+    EXPECT_EQ(sql(old, "SELECT count(*) FROM sqlite_master WHERE type = 'index'"), "3\n");
+
+    // The outbox opens it too: the old rows predate the plant link, a new result waits.
+    ResultStore store(old);
+    EXPECT_EQ(store.commit(record(5, station::Verdict::Pass)), 3);
+    ResultOutbox outbox(old);
+    EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{3}));
 }
 
 } // namespace

@@ -60,8 +60,8 @@ struct CycleRunner::Cycle {
     std::string imagesDir;
 };
 
-CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
-                         std::shared_ptr<const station::DaemonConfig> config, Clock& clock)
+CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector,
+                         store::ResultStore& store, std::shared_ptr<const station::DaemonConfig> config, Clock& clock)
     : registers_(registers), devices_(devices), inspector_(inspector), store_(store), clock_(clock),
       config_(std::move(config)), sequencer_(config_->sequencer.retries)
 {

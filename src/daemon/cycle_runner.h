@@ -18,10 +18,10 @@
 #include "devices.h"
 #include "fixture_calibration.h"
 #include "hullgauge/station/sequencer.h"
+#include "hullgauge/store/result_store.h"
 #include "image_writer.h"
 #include "inspector.h"
 #include "plc_registers.h"
-#include "result_store.h"
 
 #include <atomic>
 #include <cstdint>
@@ -36,7 +36,7 @@ namespace hg::daemon {
 
 class CycleRunner {
   public:
-    CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, ResultStore& store,
+    CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, store::ResultStore& store,
                 std::shared_ptr<const station::DaemonConfig> config, Clock& clock = Clock::steady());
     ~CycleRunner();
     CycleRunner(const CycleRunner&) = delete;
@@ -123,7 +123,7 @@ class CycleRunner {
     StationDevices& devices_;
     SimulationControl* simulation_ = nullptr;
     Inspector& inspector_;
-    ResultStore& store_;
+    store::ResultStore& store_;
     Clock& clock_;
     FixtureCalibration calibration_;
     CameraSnapshot snapshot_;

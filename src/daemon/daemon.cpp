@@ -9,7 +9,6 @@
 #include "mqtt_publisher.h"
 #include "notify.h"
 #include "plc_server.h"
-#include "result_store.h"
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -245,7 +244,7 @@ void MainLoop::reload()
 void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
                 const ProgramCheck& checkProgram, Notifier& notifier, int sigFd)
 {
-    ResultStore store(config->results.database);
+    store::ResultStore store(config->results.database);
     PlcRegisters registers;
     registers.setKnownPrograms(programNumbers(*config));
     StationHardware hardware = makeDevices(*config);

@@ -6,8 +6,8 @@
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/store/result_store.h"
 #include "plc_server.h"
-#include "result_store.h"
 
 #include <algorithm>
 #include <cerrno>

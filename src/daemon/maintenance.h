@@ -19,12 +19,15 @@
 #include <string>
 #include <vector>
 
+namespace hg::store {
+class ResultStore;
+}
+
 namespace hg::daemon {
 
 class CycleRunner;
 class PlcRegisters;
 class PlcServer;
-class ResultStore;
 class StationDevices;
 class SimulationControl;
 
@@ -78,7 +81,7 @@ struct MaintenanceContext {
     PlcRegisters& registers;
     const PlcServer& plc;
     CycleRunner& runner;
-    ResultStore& store;
+    store::ResultStore& store;
     StationDevices& devices;
     /// The simulated line's part switch; null on real hardware.
     SimulationControl* simulation;

@@ -14,6 +14,11 @@
 #include <optional>
 
 namespace hg::daemon {
+
+using store::OutboxEntry;
+using store::ResultCounters;
+using store::ResultOutbox;
+
 namespace {
 
 using nlohmann::json;

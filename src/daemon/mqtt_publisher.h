@@ -11,7 +11,7 @@
 #pragma once
 
 #include "daemon_config.h"
-#include "result_store.h"
+#include "hullgauge/store/result_outbox.h"
 
 #include <atomic>
 #include <condition_variable>
@@ -25,9 +25,10 @@
 namespace hg::daemon {
 
 /// The payloads (docs/mqtt.md, "Topics"; docs/schemas/mqtt-*.schema.json).
-nlohmann::json resultMessage(const OutboxEntry& entry, const std::string& stationId);
+nlohmann::json resultMessage(const store::OutboxEntry& entry, const std::string& stationId);
 nlohmann::json stateMessage(const std::string& stationId, const std::string& state, std::int64_t unixMs);
-nlohmann::json countersMessage(const std::string& stationId, const ResultCounters& counters, std::int64_t unixMs);
+nlohmann::json countersMessage(const std::string& stationId, const store::ResultCounters& counters,
+                               std::int64_t unixMs);
 
 class MqttPublisher {
   public:
@@ -48,8 +49,8 @@ class MqttPublisher {
 
   private:
     void run();
-    void serve(ResultOutbox& outbox);
-    void waitBeforeRetry(ResultOutbox* outbox);
+    void serve(store::ResultOutbox& outbox);
+    void waitBeforeRetry(store::ResultOutbox* outbox);
     bool stopping();
     void setStatus(bool connected, const std::string& error);
 
@@ -61,7 +62,7 @@ class MqttPublisher {
     std::condition_variable wake_;
     bool stopping_ = false;
     std::chrono::milliseconds retry_; ///< the next wait before a connection attempt (publisher thread)
-    ResultCounters counters_;         ///< the store's counts (publisher thread) ...
+    store::ResultCounters counters_;  ///< the store's counts (publisher thread) ...
     std::int64_t counted_ = 0;        ///< ... of the results up to this id
 
     mutable std::mutex statusMutex_;

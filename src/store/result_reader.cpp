@@ -1,37 +1,23 @@
 #include "hullgauge/store/result_reader.h"
 
 #include "hullgauge/common/error.h"
+#include "result_rows.h"
 
 #include <array>
 #include <cstdio>
 #include <ctime>
 #include <set>
-#include <sqlite3.h>
 
 namespace hg::store {
 namespace {
 
 using nlohmann::json;
 
-/// A prepared statement, finalized when it goes out of scope.
-struct Statement {
-    sqlite3_stmt* stmt = nullptr;
-    Statement(sqlite3* db, const std::string& file, const std::string& sql)
-    {
-        if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK)
-            throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
-    }
-    ~Statement() { sqlite3_finalize(stmt); }
-    Statement(const Statement&) = delete;
-    Statement& operator=(const Statement&) = delete;
-};
-
-std::set<std::string> columnsOf(sqlite3* db, const std::string& file)
+std::set<std::string> columnsOf(const sqlite::Connection& db, const std::string& file)
 {
-    Statement info(db, file, "PRAGMA table_info(inspections)");
+    auto info = db.prepare("PRAGMA table_info(inspections)");
     std::set<std::string> columns;
-    while (sqlite3_step(info.stmt) == SQLITE_ROW)
-        columns.insert(reinterpret_cast<const char*>(sqlite3_column_text(info.stmt, 1)));
+    while (info.step()) columns.insert(info.text(1));
     if (columns.empty()) throw InputError(file, "", "holds no inspections table: not a result store");
     return columns;
 }
@@ -103,51 +89,43 @@ std::string whereClause(const ResultQuery& q, const std::set<std::string>& colum
     return sql;
 }
 
-void bindText(Statement& s, const std::vector<std::string>& params)
+void bindText(sqlite::Statement& s, const std::vector<std::string>& params)
 {
-    for (std::size_t i = 0; i < params.size(); ++i)
-        sqlite3_bind_text(s.stmt, static_cast<int>(i + 1), params[i].c_str(), -1, SQLITE_TRANSIENT);
-}
-
-std::string text(sqlite3_stmt* s, int i)
-{
-    const auto* p = sqlite3_column_text(s, i);
-    return p ? reinterpret_cast<const char*>(p) : "";
+    for (std::size_t i = 0; i < params.size(); ++i) s.bind(static_cast<int>(i + 1), params[i]);
 }
 
 /// A stored JSON column; a value that does not parse is a damaged row, named.
-json parsed(sqlite3_stmt* s, int i, const std::string& file, const char* column)
+json parsed(const sqlite::Statement& s, int i, const std::string& file, const char* column)
 {
-    auto value = json::parse(text(s, i), nullptr, false);
+    auto value = json::parse(s.text(i), nullptr, false);
     if (value.is_discarded())
-        throw InputError(file, "inspection " + std::to_string(sqlite3_column_int64(s, 0)) + "." + column,
-                         "not valid JSON");
+        throw InputError(file, "inspection " + std::to_string(s.int64(0)) + "." + column, "not valid JSON");
     return value;
 }
 
-json rowJson(sqlite3_stmt* s, const std::string& file)
+json rowJson(const sqlite::Statement& s, const std::string& file)
 {
-    return {{"id", sqlite3_column_int64(s, 0)},
-            {"time", text(s, 1)},
-            {"started_unix_ms", sqlite3_column_int64(s, 2)},
-            {"trigger_seq", sqlite3_column_int(s, 3)},
-            {"manual", sqlite3_column_int(s, 4) != 0},
-            {"serial", text(s, 5)},
-            {"program", sqlite3_column_int(s, 6)},
-            {"part", text(s, 7)},
-            {"verdict", text(s, 8)},
-            {"fault_code", sqlite3_column_int(s, 9)},
-            {"cycle_ms", sqlite3_column_int64(s, 10)},
-            {"landmarks_failed", sqlite3_column_int(s, 11)},
-            {"landmarks_total", sqlite3_column_int(s, 12)},
+    return {{"id", s.int64(0)},
+            {"time", s.text(1)},
+            {"started_unix_ms", s.int64(2)},
+            {"trigger_seq", s.integer(3)},
+            {"manual", s.integer(4) != 0},
+            {"serial", s.text(5)},
+            {"program", s.integer(6)},
+            {"part", s.text(7)},
+            {"verdict", s.text(8)},
+            {"fault_code", s.integer(9)},
+            {"cycle_ms", s.int64(10)},
+            {"landmarks_failed", s.integer(11)},
+            {"landmarks_total", s.integer(12)},
             {"landmarks", parsed(s, 13, file, "landmarks_json")},
             {"timing", parsed(s, 14, file, "timing_json")},
-            {"images", text(s, 15)},
+            {"images", s.text(15)},
             {"alignment", parsed(s, 16, file, "alignment_json")},
             {"simulation", parsed(s, 17, file, "simulation_json")},
-            {"purpose", text(s, 18)},
-            {"program_version", sqlite3_column_type(s, 19) == SQLITE_NULL ? json() : json(sqlite3_column_int(s, 19))},
-            {"program_sha256", text(s, 20).empty() ? json() : json(text(s, 20))}};
+            {"purpose", s.text(18)},
+            {"program_version", s.isNull(19) ? json() : json(s.integer(19))},
+            {"program_sha256", s.text(20).empty() ? json() : json(s.text(20))}};
 }
 
 } // namespace
@@ -192,49 +170,40 @@ std::string formatUtc(std::int64_t unixMs)
     return out;
 }
 
-std::vector<json> selectResults(sqlite3* db, const std::string& file, const ResultQuery& query)
+std::vector<json> selectResults(const sqlite::Connection& db, const std::string& file, const ResultQuery& query)
 {
     const auto columns = columnsOf(db, file);
     std::vector<std::string> params;
     std::string sql = "SELECT " + selectList(columns) + " FROM inspections" + whereClause(query, columns, params) +
                       (query.newestFirst ? " ORDER BY id DESC" : " ORDER BY id ASC");
     if (query.limit > 0) sql += " LIMIT " + std::to_string(query.limit);
-    Statement select(db, file, sql);
+    auto select = db.prepare(sql);
     bindText(select, params);
     std::vector<json> rows;
-    int rc;
-    while ((rc = sqlite3_step(select.stmt)) == SQLITE_ROW) rows.push_back(rowJson(select.stmt, file));
-    if (rc != SQLITE_DONE) throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
+    while (select.step()) rows.push_back(rowJson(select, file));
     return rows;
 }
 
-std::int64_t countResults(sqlite3* db, const std::string& file, const ResultQuery& query)
+std::int64_t countResults(const sqlite::Connection& db, const std::string& file, const ResultQuery& query)
 {
     const auto columns = columnsOf(db, file);
     std::vector<std::string> params;
-    Statement count(db, file, "SELECT COUNT(*) FROM inspections" + whereClause(query, columns, params));
+    auto count = db.prepare("SELECT COUNT(*) FROM inspections" + whereClause(query, columns, params));
     bindText(count, params);
-    if (sqlite3_step(count.stmt) != SQLITE_ROW) throw FaultError("result store " + file + ": " + sqlite3_errmsg(db));
-    return sqlite3_column_int64(count.stmt, 0);
+    if (!count.step()) db.fail();
+    return count.int64(0);
 }
 
 ResultReader::ResultReader(const std::filesystem::path& file) : file_(file)
 {
     if (!std::filesystem::is_regular_file(file)) throw InputError(file.string(), "", "no database at " + file.string());
-    const auto uri = "file:" + std::filesystem::absolute(file).string() + "?mode=ro";
-    if (sqlite3_open_v2(uri.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr) != SQLITE_OK) {
-        const std::string why = db_ ? sqlite3_errmsg(db_) : "out of memory";
-        sqlite3_close(db_);
-        db_ = nullptr;
-        throw InputError(file.string(), "", why);
+    try {
+        // Read-only: a reader never migrates an older store, it reads its columns' defaults (selectList).
+        db_ = sqlite::open(file, sqlite::Access::Read, "result store " + file.string());
+    } catch (const sqlite::Error& e) {
+        // The file is the user's (--store, docs/export.md): one SQLite cannot open is bad input.
+        throw InputError(file.string(), "", e.reason());
     }
-    // The daemon holds the write lock for one INSERT at a time: wait for it.
-    sqlite3_busy_timeout(db_, 2000);
-}
-
-ResultReader::~ResultReader()
-{
-    if (db_) sqlite3_close(db_);
 }
 
 std::vector<json> ResultReader::select(const ResultQuery& query) const

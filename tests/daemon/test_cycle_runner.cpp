@@ -311,7 +311,7 @@ class CycleRunnerTest : public ::testing::Test {
     ManualClock clock;
     ScriptedDevices devices;
     PassingInspector inspector;
-    ResultStore store;
+    store::ResultStore store;
     PlcRegisters registers;
     std::shared_ptr<const station::DaemonConfig> config;
     std::unique_ptr<CycleRunner> runner;
@@ -992,7 +992,7 @@ class CameraRegions : public ::testing::Test {
             return renderer->render(align::seatedCamera(cfg->station.cameraAt(pose), seat()), options);
         };
         auto inspector = makeEngineInspector(*cfg);
-        ResultStore store(dir / "results.db");
+        store::ResultStore store(dir / "results.db");
         PlcRegisters registers;
         registers.setKnownPrograms({1});
         Run out;
@@ -1131,7 +1131,7 @@ TEST(ProgramReload, TheNextResultNamesTheNewVersionAndARefusedFileLeavesThePrevi
         return renderer.render(station.cameraAt(pose), options);
     };
     auto inspector = makeEngineInspector(*config);
-    ResultStore store(dir / "results.db");
+    store::ResultStore store(dir / "results.db");
     PlcRegisters registers;
     registers.setKnownPrograms({1});
     CycleRunner runner(registers, devices, *inspector, store, config, clock);

@@ -7,9 +7,9 @@
 #include "hgtest/station.h"
 #include "hmi_auth.h"
 #include "hmi_server.h"
+#include "hullgauge/store/result_store.h"
 #include "image_archive.h"
 #include "manual_clock.h"
-#include "result_store.h"
 
 #include <arpa/inet.h>
 #include <crypt.h>
@@ -109,7 +109,7 @@ class HmiServerTest : public ::testing::Test {
         cfg->http.passwordHash = hashOf("line-7 secret");
         cfg->http.burst = 1000;
         {
-            ResultStore store(cfg->results.database);
+            store::ResultStore store(cfg->results.database);
             ImageArchive archive(cfg->results.imageDir, {});
             ViewEvidence v{cv::Mat(12, 16, CV_8UC1, cv::Scalar(200)), {}, {}};
             const auto folder = archive.save(1'764'000'001'000, "A-1", {v, v}, true);
@@ -196,7 +196,7 @@ TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)
 {
     {
         // Cycles the SPC must leave out: a master part, a maintenance-triggered one, an aborted one.
-        ResultStore store(config->results.database);
+        store::ResultStore store(config->results.database);
         auto master = record(5, station::Verdict::Fail, "M-5");
         master.purpose = station::CyclePurpose::Master;
         auto manual = record(6, station::Verdict::Fail, "H-6");

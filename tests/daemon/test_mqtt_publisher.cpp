@@ -11,7 +11,7 @@ namespace {
 
 TEST(MqttPayloads, TheResultIsTheStoredRowWithStationAndCycleId)
 {
-    OutboxEntry entry;
+    store::OutboxEntry entry;
     entry.id = 12;
     entry.cycleId = "0b6f3c9e-5d0a-4f8e-9a43-8d1c2e7f6a10";
     entry.row = {{"id", 12},
@@ -40,7 +40,7 @@ TEST(MqttPayloads, StateIsOnlineUnlessOfflineAndTheWillHasNoTime)
 
 TEST(MqttPayloads, CountersCarryEveryVerdict)
 {
-    const auto message = countersMessage("g", ResultCounters{9, 5, 2, 1, 1}, 0);
+    const auto message = countersMessage("g", store::ResultCounters{9, 5, 2, 1, 1}, 0);
     EXPECT_EQ(message["cycles"], 9);
     EXPECT_EQ(message["passes"], 5);
     EXPECT_EQ(message["fails"], 2);

@@ -9,7 +9,7 @@
 #include "command_mailbox.h"
 #include "fuzz_support.h"
 #include "hmi_server.h"
-#include "result_store.h"
+#include "hullgauge/store/result_store.h"
 
 #include <arpa/inet.h>
 #include <atomic>
@@ -42,7 +42,7 @@ struct Hmi {
         cfg->results.database = folder / "results.db";
         cfg->results.imageDir = folder / "images";
         {
-            hg::daemon::ResultStore store(cfg->results.database);
+            hg::store::ResultStore store(cfg->results.database);
         }
         cfg->http.enabled = true;
         cfg->http.port = 0;

@@ -1,4 +1,4 @@
-// The exports of docs/export.md on rows built here in the shape selectResults
+// The exports of docs/export.md on rows built here in the shape ResultReader::select
 // returns (docs/daemon.md, "Results"), each format against its text written out
 // by hand from the format's definition: RFC 4180 for CSV, the Q-DAS ASCII
 // transfer format's K-field lines for AQDEF.

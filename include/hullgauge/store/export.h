@@ -2,10 +2,10 @@
 // formats plants load into their SPC systems: AQDEF (the Q-DAS ASCII transfer
 // format, one .dfq file), CSV (RFC 4180, one row per landmark measurement) and
 // JSON (the stored rows). Formatting on values only: the caller selects the
-// rows (selectResults, oldest first) and writes the file — `hullgauge export`
-// atomically, the web HMI as a download (docs/hmi.md).
+// rows (ResultReader::select, oldest first) and writes the file — `hullgauge
+// export` atomically, the web HMI as a download (docs/hmi.md).
 //
-// A row is the object selectResults returns (docs/daemon.md, "Results"); the
+// A row is the object ResultReader::select returns (docs/daemon.md, "Results"); the
 // writers read id, started_unix_ms, serial, program, part, verdict, purpose,
 // manual, simulation, landmarks and (CSV) program_version and program_sha256. The value of a landmark is its
 // `deviation_mm` when the row has one, else its `error_mm` (the middle of the

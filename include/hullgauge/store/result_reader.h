@@ -12,14 +12,14 @@
 // program_version and program_sha256 null).
 #pragma once
 
+#include "hullgauge/store/sqlite.h"
+
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-struct sqlite3;
 
 namespace hg::store {
 
@@ -49,12 +49,6 @@ std::int64_t parseUtc(const std::string& text, const std::string& field);
 /// (ISO 8601, UTC, milliseconds).
 std::string formatUtc(std::int64_t unixMs);
 
-/// The rows of `query` from an open database (the daemon's own connection or
-/// a reader's); `file` names the database in errors. Throws hg::FaultError
-/// when SQLite fails and hg::InputError when the file is not a result store.
-std::vector<nlohmann::json> selectResults(sqlite3* db, const std::string& file, const ResultQuery& query);
-std::int64_t countResults(sqlite3* db, const std::string& file, const ResultQuery& query);
-
 /// A result store opened read-only (SQLite's WAL lets it read while the
 /// daemon commits). Not thread-safe: one reader per thread.
 class ResultReader {
@@ -62,10 +56,11 @@ class ResultReader {
     /// Throws hg::InputError naming the file when there is no database there
     /// or it cannot be opened read-only.
     explicit ResultReader(const std::filesystem::path& file);
-    ~ResultReader();
     ResultReader(const ResultReader&) = delete;
     ResultReader& operator=(const ResultReader&) = delete;
 
+    /// The rows of `query`. Throws hg::FaultError when SQLite fails and
+    /// hg::InputError when the file is not a result store or a row is damaged.
     std::vector<nlohmann::json> select(const ResultQuery& query) const;
     std::int64_t count(const ResultQuery& query) const;
     /// The row with this id, if any.
@@ -74,7 +69,7 @@ class ResultReader {
 
   private:
     std::filesystem::path file_;
-    sqlite3* db_ = nullptr;
+    sqlite::Connection db_;
 };
 
 } // namespace hg::store

@@ -1,0 +1,99 @@
+#include "hullgauge/store/result_store.h"
+
+#include "hullgauge/common/json.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/store/result_reader.h"
+#include "result_rows.h"
+#include "schema.h"
+
+#include <array>
+#include <random>
+
+namespace hg::store {
+
+std::string newCycleId()
+{
+    // A random (version 4) UUID: unique across stations and across a store that was replaced,
+    // so the plant's receiver can drop the duplicates of a redelivery by it (docs/mqtt.md).
+    // std::random_device reads the kernel's random source (getrandom) on Linux.
+    std::random_device random;
+    std::array<std::uint8_t, 16> b{};
+    for (std::size_t i = 0; i < b.size(); i += 4) {
+        const auto r = random();
+        for (std::size_t k = 0; k < 4; ++k) b[i + k] = static_cast<std::uint8_t>(r >> (8 * k));
+    }
+    b[6] = static_cast<std::uint8_t>((b[6] & 0x0F) | 0x40);
+    b[8] = static_cast<std::uint8_t>((b[8] & 0x3F) | 0x80);
+    std::string id;
+    static constexpr char kHex[] = "0123456789abcdef";
+    for (std::size_t i = 0; i < b.size(); ++i) {
+        if (i == 4 || i == 6 || i == 8 || i == 10) id += '-';
+        id += kHex[b[i] >> 4];
+        id += kHex[b[i] & 0x0F];
+    }
+    return id;
+}
+
+ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
+{
+    std::error_code ec;
+    if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
+    db_ = sqlite::open(file, sqlite::Access::Create, "result store " + file.string());
+    db_.exec("PRAGMA journal_mode=WAL");
+    db_.exec("PRAGMA synchronous=FULL");
+    createOrMigrate(db_);
+    hg::log::category("store")->info("result store {} ({} records)", file.string(), count());
+}
+
+std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::string& imagesDir)
+{
+    auto insert =
+        db_.prepare("INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
+                    "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
+                    "landmarks_json, timing_json, images_dir, alignment_json, simulation_json, purpose, cycle_id, "
+                    "program_version, program_sha256) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    insert.bind(1, formatUtc(r.startedUnixMs))
+        .bind(2, r.startedUnixMs)
+        .bind(3, r.triggerSeq)
+        .bind(4, r.manual ? 1 : 0)
+        .bind(5, r.serial)
+        .bind(6, r.program)
+        .bind(7, r.part)
+        .bind(8, std::string(station::toString(r.verdict)))
+        .bind(9, static_cast<int>(r.faultCode))
+        .bind(10, r.cycleMs)
+        .bind(11, static_cast<std::int64_t>(r.landmarksFailed()))
+        .bind(12, static_cast<std::int64_t>(r.landmarks.size()))
+        .bind(13, dumpJson(r.landmarksJson()))
+        .bind(14, dumpJson(r.timingMs))
+        .bind(15, imagesDir)
+        .bind(16, dumpJson(r.alignment))
+        .bind(17, dumpJson(r.simulation))
+        .bind(18, std::string(station::toString(r.purpose)))
+        .bind(19, newCycleId());
+    // The program's release: NULL and '' for a draft (docs/daemon.md, "Result store").
+    if (r.programRelease)
+        insert.bind(20, r.programRelease->version);
+    else
+        insert.bindNull(20);
+    insert.bind(21, r.programRelease ? r.programRelease->verificationSha256 : std::string());
+    // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
+    insert.step();
+    return db_.lastInsertRowId();
+}
+
+nlohmann::json ResultStore::recent(int limit) const
+{
+    ResultQuery query;
+    query.limit = limit;
+    return selectResults(db_, file_.string(), query);
+}
+
+std::int64_t ResultStore::count() const
+{
+    auto query = db_.prepare("SELECT COUNT(*) FROM inspections");
+    return query.step() ? query.int64(0) : 0;
+}
+
+} // namespace hg::store

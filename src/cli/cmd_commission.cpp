@@ -319,6 +319,9 @@ FixRound chooseFixes(const CommissionArgs& args, const Round& r, const geometry:
         for (commission::Fix fix : f.fixes) {
             if (!automatic(fix) || made[f.subject].count(fix)) continue;
             if (fix == commission::Fix::AddView) {
+                // A second view brings back a landmark lost at some seats; the
+                // view square on that a prediction asks for is the engineer's to choose.
+                if (f.test != "observable") continue;
                 if (history.engineerViews->count(f.subject)) continue; // the engineer's best views stay
                 YAML::Node others = otherWitnesses(r, index, station.fixture.type);
                 if (others.size() == 0) continue;

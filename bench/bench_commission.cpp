@@ -55,12 +55,11 @@ fs::path suggestedProgram(const geometry::Station& station, const fs::path& dir)
 {
     const int depth = plan::finestResolvedDepth(model::loadCadModel(kMesh, 8, 4).solid->mesh(), station, 4);
     const model::CadModel cad = model::loadCadModel(kMesh, depth, 4);
+    // As `hullgauge commission` suggests: capable over the nest's play, planned as the draft is.
     plan::SuggestOptions options;
     options.count = 8;
     options.toleranceMm = 0.1;
-    commission::ScreenOptions screen;
-    screen.toleranceMm = 0.1;
-    options.screen = commission::twinScreen(commission::draftProgram(cad, "nema17", {}), station, screen);
+    options.plan.pareLayers = cad.octree.adjacencyDepth;
     const plan::Suggestion s = plan::suggestLandmarks(plan::suggestProblem(cad, station), options);
     std::ofstream(dir / "p.yaml") << "part: nema17\nmesh: " << kMesh.string() << "\noctree: {depth: " << depth
                                   << ", adjacency_depth: 4}\n"

@@ -277,9 +277,6 @@ TEST_F(EngineParity, TheSubVoxelDeviationIsTheOfflineToolsToo)
             ++measured;
             const bool lowered = part == "face-low" && (l.id == "step-top" || l.id == "step-top-back");
             EXPECT_NEAR(*l.deviationMm, lowered ? -0.7 : 0.0, std::max(*l.uncertaintyMm, 0.02)) << l.id;
-            if (std::getenv("HG_DEBUG_DEV"))
-                std::cerr << "DEV " << part << " " << l.id << " " << *l.deviationMm << " U " << *l.uncertaintyMm
-                          << "\n";
             EXPECT_EQ(l.decision, lowered ? "nonconforms" : "conforms") << l.id;
         }
         EXPECT_GE(measured, 6) << "most landmarks lie on some view's outline";

@@ -1,14 +1,14 @@
 #include "daemon.h"
 
 #include "command_mailbox.h"
-#include "cycle_runner.h"
-#include "hmi_server.h"
+#include "cycle/cycle_runner.h"
+#include "hmi/hmi_server.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
-#include "mqtt_publisher.h"
 #include "notify.h"
-#include "plc_server.h"
+#include "plant/mqtt_publisher.h"
+#include "plant/plc_server.h"
 
 #include <CLI/CLI.hpp>
 #include <chrono>

@@ -11,9 +11,9 @@
 // the maintenance socket.
 #pragma once
 
+#include "cycle/devices.h"
+#include "cycle/inspector.h"
 #include "daemon_config.h"
-#include "devices.h"
-#include "inspector.h"
 
 #include <functional>
 #include <memory>

@@ -1,6 +1,6 @@
 #include "daemon_config.h"
 
-#include "hmi_auth.h"
+#include "hmi/hmi_auth.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"

@@ -13,7 +13,7 @@
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/vision/segmentation.h"
-#include "mqtt_config.h"
+#include "plant/mqtt_config.h"
 
 #include <chrono>
 #include <cstdint>

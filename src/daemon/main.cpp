@@ -1,8 +1,8 @@
 // hullgauged: the station daemon (docs/daemon.md): the drivers chosen by the
 // station file and the core's goal-driven inspection.
+#include "cycle/driver_devices.h"
+#include "cycle/engine_inspector.h"
 #include "daemon.h"
-#include "driver_devices.h"
-#include "engine_inspector.h"
 
 #include <malloc.h>
 

@@ -1,13 +1,13 @@
 #include "maintenance.h"
 
-#include "cycle_runner.h"
+#include "cycle/cycle_runner.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/store/result_store.h"
-#include "plc_server.h"
+#include "plant/plc_server.h"
 
 #include <algorithm>
 #include <cerrno>

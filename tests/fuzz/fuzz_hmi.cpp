@@ -8,7 +8,7 @@
 // the fuzzer. An answer that never comes is a hang (libFuzzer's -timeout).
 #include "command_mailbox.h"
 #include "fuzz_support.h"
-#include "hmi_server.h"
+#include "hmi/hmi_server.h"
 #include "hullgauge/store/result_store.h"
 
 #include <arpa/inet.h>

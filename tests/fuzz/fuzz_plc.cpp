@@ -4,8 +4,8 @@
 // map that lives across inputs (as a daemon's does across requests). The reply
 // must be a well-formed frame for the request it answers.
 #include "fuzz_support.h"
-#include "plc_registers.h"
-#include "plc_server.h"
+#include "plant/plc_registers.h"
+#include "plant/plc_server.h"
 
 #include <cstdlib>
 

@@ -1,6 +1,6 @@
 // The PLC's view of the station: the holding-register map of docs/contracts.md §6 and
 // its rules, independent of the Modbus transport and of threads. A pure value:
-// the daemon's PlcRegisters (src/daemon/plc_registers.h) holds one under a
+// the daemon's PlcRegisters (src/daemon/plant/plc_registers.h) holds one under a
 // lock, so a read of any block of registers sees one consistent state: RESULT,
 // FAULT_CODE, the landmark counts, CYCLE_MS, LANDMARK_OK_BITS and DONE_SEQ of a
 // cycle are written together by publishResult(), and a PLC that reads

@@ -1,0 +1,769 @@
+#include "cycle/cycle_runner.h"
+
+#include "cycle/image_archive.h"
+#include "hullgauge/align/alignment.h"
+#include "hullgauge/align/pose_correction.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/geometry/json.h"
+#include "hullgauge/station/cycle_rules.h"
+
+#include <cmath>
+
+namespace hg::daemon {
+namespace {
+
+using station::SequencerAction;
+using station::SequencerEvent;
+using station::SequencerState;
+using Kind = SequencerAction::Kind;
+
+std::int64_t wallMs()
+{
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+std::int64_t ns(std::chrono::milliseconds d)
+{
+    return std::chrono::nanoseconds(d).count();
+}
+
+/// A program's release as the status shows it with a cycle (docs/daemon.md): null for a draft.
+void putRelease(nlohmann::json& j, const std::optional<station::ProgramRelease>& release)
+{
+    j["program_version"] = release ? nlohmann::json(release->version) : nlohmann::json();
+    j["program_sha256"] = release ? nlohmann::json(release->verificationSha256) : nlohmann::json();
+}
+
+} // namespace
+
+/// One cycle's working state, from the trigger to the published record.
+struct CycleRunner::Cycle {
+    std::shared_ptr<const station::DaemonConfig> cfg; ///< the configuration the cycle keeps to its end
+    const station::PartProgramRef* program = nullptr;
+    /// The poses commanded: the plan's, those after the first seatViews() corrected for the seat they measured.
+    std::vector<geometry::FixturePose> poses;
+    bool posesChecked = false;      ///< the correction was decided (done, or why not)
+    nlohmann::json poseCorrection;  ///< what it did, for the record (null: not tried)
+    std::vector<bool> rangeLimited; ///< per view: a range of the fixture stopped its correction short
+    station::InspectionRecord record;
+    Clock::time_point started;
+    std::optional<Clock::time_point> lastFrameAt; ///< when the last good frame was in (the latency)
+    double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0, commitMs = 0, publishMs = 0;
+    /// The camera's time applying the views' regions (within grabMs), and the bytes it sent.
+    double regionMs = 0;
+    std::size_t payloadBytes = 0;
+    double lastFrameToPublishMs = -1;
+    InspectionOutcome outcome;
+    bool interruptFed = false; ///< the abort or the shutdown was fed to the sequencer
+    bool saveImages = false;
+    std::string imagesDir;
+};
+
+CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector,
+                         store::ResultStore& store, std::shared_ptr<const station::DaemonConfig> config, Clock& clock)
+    : registers_(registers), devices_(devices), inspector_(inspector), store_(store), clock_(clock),
+      config_(std::move(config)), sequencer_(config_->sequencer.retries)
+{
+}
+
+CycleRunner::~CycleRunner()
+{
+    stop();
+}
+
+void CycleRunner::start(std::function<void()> onDevicesActive)
+{
+    onDevicesActive_ = std::move(onDevicesActive);
+    lastLoopNs_ = clock_.nowNs();
+    thread_ = std::thread([this] { run(); });
+}
+
+void CycleRunner::stop()
+{
+    if (!thread_.joinable()) return;
+    stopRequestedNs_ = clock_.nowNs();
+    stopRequested_ = true;
+    thread_.join();
+}
+
+void CycleRunner::setConfig(std::shared_ptr<const station::DaemonConfig> config)
+{
+    std::lock_guard lock(mutex_);
+    config_ = std::move(config);
+}
+
+station::SequencerState CycleRunner::state() const
+{
+    std::lock_guard lock(mutex_);
+    return sequencer_.state();
+}
+
+bool CycleRunner::healthy() const
+{
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+    }
+    const auto now = clock_.nowNs();
+    const auto cycleStart = cycleStartNs_.load();
+    if (cycleStart != 0 && now - cycleStart > ns(cfg->watchdog.maxCycle)) return false;
+    // A calibration step (move, settle, grab) is bounded by its timeouts.
+    if (auto step = calibration_.stepStartNs(); step != 0) {
+        const auto& s = cfg->sequencer;
+        return now - step <= ns(s.moveTimeout + s.settle + s.grabTimeout + std::chrono::seconds(5));
+    }
+    // Outside a cycle the thread turns at least every 200 ms; inside one each step is bounded by its timeout.
+    return cycleStart != 0 || now - lastLoopNs_.load() <= ns(std::chrono::seconds(5));
+}
+
+nlohmann::json CycleRunner::describe() const
+{
+    std::lock_guard lock(mutex_);
+    // Between the sequencer's end of cycle and the published result (commit, PLC registers) the
+    // operator sees "processing": "done" promises a result that is already stored.
+    auto shown = sequencer_.state();
+    if (cycleStartNs_.load() != 0 && !station::isBusy(shown)) shown = SequencerState::Processing;
+    auto last = lastCycle_;
+    if (lastImagesMs_ && lastImagesMs_->load() >= 0) last["timing_ms"]["images"] = lastImagesMs_->load();
+    nlohmann::json j{{"state", std::string(station::toString(shown))},
+                     {"cycles", cycles_},
+                     {"faults", faults_},
+                     {"last_cycle", last}};
+    if (station::isBusy(sequencer_.state())) {
+        j["view"] = sequencer_.view();
+        j["views"] = sequencer_.viewCount();
+    }
+    if (sequencer_.state() == SequencerState::Fault) {
+        j["fault_code"] = static_cast<int>(sequencer_.faultCode());
+        j["fault"] = station::describe(sequencer_.faultCode(), sequencer_.retries());
+    }
+    return j;
+}
+
+bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
+{
+    return calibration_.request(std::move(job), state(), why);
+}
+
+// ---- the sequencer, the commands, the lamps ---------------------------------
+
+SequencerAction CycleRunner::transition(const std::function<SequencerAction()>& step)
+{
+    auto log = hg::log::category("seq");
+    std::lock_guard lock(mutex_);
+    const auto before = sequencer_.state();
+    const auto refusedBefore = sequencer_.refusedTransition();
+    auto action = step();
+    if (sequencer_.state() != before)
+        log->debug("{} -> {}", station::toString(before), station::toString(sequencer_.state()));
+    if (auto refused = sequencer_.refusedTransition(); refused != refusedBefore)
+        log->error("the sequencer refused {} -> {}: internal fault", station::toString(refused.first),
+                   station::toString(refused.second));
+    return action;
+}
+
+SequencerAction CycleRunner::feed(SequencerEvent event)
+{
+    return transition([&] { return sequencer_.onEvent(event); });
+}
+
+bool CycleRunner::abort()
+{
+    // Checked as PlcRegisters checks the PLC's abort: one sent while idle would abort the next part.
+    if (!registers_.running()) {
+        hg::log::category("seq")->info("abort dropped: no cycle or calibration runs");
+        return false;
+    }
+    abortRequested_ = true;
+    return true;
+}
+
+// The one place the PLC's commands are taken: an abort acts on the running
+// cycle; a fault reset waits for the station to be between cycles.
+void CycleRunner::takeCommands()
+{
+    const auto commands = registers_.takeCommands();
+    if (commands.abort) abortRequested_ = true;
+    if (commands.resetFault) resetRequested_ = true;
+}
+
+void CycleRunner::schedule(const SequencerAction& action)
+{
+    if (action.kind == Kind::Recover) recoverAt_ = clock_.now() + action.delay;
+}
+
+void CycleRunner::showState(station::Verdict lastVerdict)
+{
+    const auto s = state();
+    devices_.showLamps(station::lampPattern(s, lastVerdict));
+    registers_.setStatus(station::plcStatus(s));
+}
+
+// ---- between cycles ---------------------------------------------------------
+
+void CycleRunner::run()
+{
+    startDevices();
+    while (!stopRequested_) serveBetweenCycles();
+    devices_.showLamps(LampPattern::Off);
+    devices_.shutdown();
+    hg::log::category("seq")->info("devices shut down");
+}
+
+void CycleRunner::startDevices()
+{
+    auto log = hg::log::category("seq");
+    auto started = devices_.start();
+    if (!started.ok()) {
+        log->error("devices failed to start: {}", started.message());
+        schedule(feed(SequencerEvent::DevicesFailed));
+        showState();
+        return;
+    }
+    feed(SequencerEvent::DevicesActive);
+    showState();
+    log->info("devices active; ready");
+    if (auto ready = std::exchange(onDevicesActive_, nullptr)) ready();
+}
+
+void CycleRunner::serveBetweenCycles()
+{
+    lastLoopNs_ = clock_.nowNs();
+    takeCommands();
+    // An abort outside a cycle has nothing to abort (a queued calibration clears it when it starts).
+    if (!calibration_.queued()) abortRequested_ = false;
+    auto recoverIfDue = [this] {
+        if (!recoverAt_ || clock_.now() < *recoverAt_) return;
+        recoverAt_.reset();
+        recover();
+    };
+    recoverIfDue();
+    // A fault reset (also one written during the cycle that just ended) retries at once.
+    if (std::exchange(resetRequested_, false)) {
+        schedule(feed(SequencerEvent::FaultReset));
+        recoverIfDue();
+    }
+    const bool maintenanceQueued = calibration_.queued() || snapshot_.queued();
+    auto wait = std::chrono::milliseconds(maintenanceQueued ? 0 : 200);
+    if (recoverAt_)
+        wait = std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(*recoverAt_ - clock_.now()),
+                          std::chrono::milliseconds(0), wait);
+    // Triggers first: a queued calibration or snapshot starts only when none is
+    // pending, and a changeover written meanwhile is prepared after the cycle (docs/plc.md).
+    if (auto trigger = registers_.waitTrigger(wait)) return runCycle(*trigger);
+    if (auto program = registers_.takeChangeover()) return prepareProgram(*program);
+    if (!maintenanceQueued) return;
+    if (auto shot = snapshot_.take()) {
+        if (state() == SequencerState::Fault)
+            return snapshot_.refuse("the station went into fault before the snapshot was grabbed");
+        return runSnapshot(std::move(*shot));
+    }
+    auto job = calibration_.take();
+    if (!job) return;
+    if (state() == SequencerState::Fault)
+        return calibration_.refuse("the station went into fault before the calibration started");
+    runCalibration(std::move(*job));
+}
+
+// The recipe changeover (docs/plc.md): between cycles, so it never delays or
+// disturbs one; a trigger accepted meanwhile starts when the program is loaded.
+void CycleRunner::prepareProgram(std::uint16_t number)
+{
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+    }
+    auto log = hg::log::category("seq");
+    const auto it = cfg->programs.find(number);
+    std::string error;
+    station::ProgramState state = station::ProgramState::Ready;
+    if (it == cfg->programs.end()) {
+        // Between a reload's new configuration and its program list: the list's recheck follows.
+        state = station::ProgramState::UnknownProgram;
+        error = "not configured";
+    } else if (!inspector_.prepare(it->second, error)) {
+        state = station::ProgramState::LoadFailed;
+    }
+    registers_.programPrepared(number, state);
+    if (state == station::ProgramState::Ready) {
+        noteLoaded(number);
+        log->info("part program {} ready", number);
+    } else {
+        log->error("part program {}: {}: {}", number, station::toString(state),
+                   error.empty() ? "the part program could not be loaded" : error);
+    }
+}
+
+// What `ctl status` shows of the program the inspection serves (docs/daemon.md).
+void CycleRunner::noteLoaded(std::uint16_t number)
+{
+    const auto info = inspector_.loaded(number);
+    nlohmann::json program = nullptr;
+    if (info) {
+        program = {{"number", info->number}, {"part", info->part}};
+        program["version"] = info->release ? nlohmann::json(info->release->version) : nlohmann::json();
+        program["verification_sha256"] =
+            info->release ? nlohmann::json(info->release->verificationSha256) : nlohmann::json();
+    }
+    std::lock_guard lock(mutex_);
+    program_ = std::move(program);
+}
+
+nlohmann::json CycleRunner::program() const
+{
+    std::lock_guard lock(mutex_);
+    return program_;
+}
+
+void CycleRunner::recover()
+{
+    auto log = hg::log::category("seq");
+    auto r = devices_.recover();
+    if (!r.ok()) {
+        log->warn("recovery failed: {}", r.message());
+        schedule(feed(SequencerEvent::RecoveryFailed));
+        return;
+    }
+    feed(SequencerEvent::Recovered);
+    showState();
+    log->info("recovered; ready");
+    if (auto ready = std::exchange(onDevicesActive_, nullptr)) ready();
+}
+
+// Work on the devices between cycles (a calibration, a snapshot): STATUS 5
+// refuses triggers, the amber lamp shows the station busy, the sequencer sits
+// in its maintenance state `calibrating`. False when a trigger was accepted in
+// the meantime (its cycle runs first; the caller queues the work again).
+bool CycleRunner::runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work)
+{
+    if (!registers_.enterMaintenance()) return false;
+    feed(SequencerEvent::CalibrationStart);
+    devices_.showLamps(LampPattern::Busy);
+    abortRequested_ = false;
+    std::shared_ptr<const station::DaemonConfig> cfg;
+    {
+        std::lock_guard lock(mutex_);
+        cfg = config_;
+    }
+    const bool done = work(*cfg);
+    abortRequested_ = false;
+    feed(SequencerEvent::CalibrationEnd);
+    showState();
+    if (done) return true;
+    // A failed step may have left the drive faulted or the camera stopped: bring
+    // the station back the way a cycle fault does before production resumes.
+    if (auto r = devices_.recover(); !r.ok()) {
+        schedule(feed(SequencerEvent::DevicesFailed));
+        showState();
+    }
+    return true;
+}
+
+// The live fixture calibration (docs/calibration.md).
+void CycleRunner::runCalibration(CalibrationJob job)
+{
+    const bool ran = runMaintenance([&](const station::DaemonConfig& cfg) {
+        return calibration_.run(job, devices_, cfg, clock_,
+                                [this] { return abortRequested_.load() || stopRequested_.load(); });
+    });
+    if (!ran) calibration_.requeue(std::move(job));
+}
+
+// A camera frame on demand with its silhouette (docs/hmi.md, "Maintenance").
+void CycleRunner::runSnapshot(SnapshotJob job)
+{
+    const bool ran =
+        runMaintenance([&](const station::DaemonConfig& cfg) { return snapshot_.run(job, devices_, cfg, clock_); });
+    if (!ran) snapshot_.requeue(std::move(job));
+}
+
+// ---- a cycle ----------------------------------------------------------------
+
+void CycleRunner::runCycle(const station::TriggerRequest& trigger)
+{
+    Cycle cycle;
+    cycle.started = clock_.now();
+    cycleStartNs_ = clock_.nowNs();
+    {
+        std::lock_guard lock(mutex_);
+        cycle.cfg = config_;
+    }
+    cycle.record.startedUnixMs = wallMs();
+    cycle.record.triggerSeq = trigger.seq;
+    cycle.record.manual = trigger.manual;
+    cycle.record.serial = trigger.serial;
+    cycle.record.program = trigger.program;
+    cycle.record.purpose = trigger.purpose;
+    auto action = beginCycle(cycle);
+    while (action.kind != Kind::Publish) {
+        auto next = interruption(cycle);
+        action = next ? *next : perform(cycle, action);
+    }
+    endCycle(cycle, action.stopMotion);
+}
+
+SequencerAction CycleRunner::beginCycle(Cycle& cycle)
+{
+    auto log = hg::log::category("seq");
+    const auto& r = cycle.record;
+    log->info("cycle {}{}: program {}, serial '{}'{}", r.manual ? "manual" : "seq ",
+              r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial,
+              r.purpose == station::CyclePurpose::Production ? std::string()
+                                                             : ", " + std::string(station::toString(r.purpose)));
+    devices_.showLamps(LampPattern::Busy);
+    // The simulated line puts a new part in the nest, seated within its play.
+    if (simulation_) simulation_->newPart();
+    auto it = cycle.cfg->programs.find(r.program);
+    cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
+    if (cycle.program) cycle.poses = cycle.program->views;
+    auto action = transition([&] {
+        // The cycle's configuration gives its retries: a reload's count applies from the next cycle (docs/daemon.md).
+        sequencer_.setRetries(cycle.cfg->sequencer.retries);
+        return sequencer_.trigger(cycle.program ? cycle.program->views.size() : 1);
+    });
+    std::string error;
+    if (!cycle.program)
+        error = "part program " + std::to_string(r.program) + " is no longer configured";
+    else if (!inspector_.begin(*cycle.program, error) && error.empty())
+        error = "the part program could not be loaded";
+    // The cycle loaded the program the changeover selected: PROGRAM_STATE says how that went.
+    if (cycle.program)
+        registers_.programPrepared(r.program,
+                                   error.empty() ? station::ProgramState::Ready : station::ProgramState::LoadFailed);
+    if (error.empty()) {
+        noteLoaded(r.program);
+        return action;
+    }
+    log->error("{}", error);
+    return feed(SequencerEvent::ProgramFailed);
+}
+
+// The PLC's abort acts at once; SIGTERM gives the cycle the grace period to finish.
+std::optional<SequencerAction> CycleRunner::interruption(Cycle& cycle)
+{
+    takeCommands();
+    if (cycle.interruptFed) return std::nullopt;
+    const bool abort = abortRequested_;
+    const bool graceOver =
+        stopRequested_ && clock_.nowNs() - stopRequestedNs_.load() >= ns(cycle.cfg->sequencer.shutdownGrace);
+    if (!abort && !graceOver) return std::nullopt;
+    cycle.interruptFed = true;
+    const auto event = abort ? SequencerEvent::Abort : SequencerEvent::Shutdown;
+    hg::log::category("seq")->warn("{} during {}", station::toString(event), station::toString(state()));
+    auto next = feed(event);
+    if (next.kind == Kind::None) return std::nullopt; // processing: let it finish
+    return next;
+}
+
+SequencerAction CycleRunner::perform(Cycle& cycle, const SequencerAction& action)
+{
+    switch (action.kind) {
+    case Kind::MoveTo:
+        return move(cycle, action);
+    case Kind::Settle:
+        return settle(cycle, action);
+    case Kind::Grab:
+        return grab(cycle, action);
+    case Kind::Finish:
+        return finishInspection(cycle);
+    default:
+        break;
+    }
+    // Nothing to perform: an event was ignored in a state that has no action. Cannot happen
+    // with a consistent table; end the cycle as an internal error rather than spin.
+    hg::log::category("seq")->error("sequencer stalled in {}", station::toString(state()));
+    auto next = feed(SequencerEvent::DevicesFailed);
+    return next.kind == Kind::Publish ? next : SequencerAction{Kind::Publish, action.view, false, true};
+}
+
+SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
+{
+    // The first views have measured the seat: the rest are taken where they see the seated part as planned.
+    if (!cycle.posesChecked && action.view > 0 && action.view == inspector_.seatViews()) correctPoses(cycle);
+    askRegion(cycle, action.view);
+    const auto start = clock_.now();
+    auto r = devices_.moveTo(cycle.poses[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
+    cycle.moveMs += clock_.msSince(start);
+    if (!r.ok()) hg::log::category("seq")->warn("view {}: move failed: {}", action.view, r.message());
+    return feed(station::moveEvent(r.code()));
+}
+
+// Between the grab of view k-1 and the move to view k = seatViews(): the seat
+// of the first k views (their preparation ran while the fixture moved) turns
+// the remaining planned poses so the camera sees the seated part from the
+// planned directions (docs/alignment.md, "Poses corrected for the seat").
+void CycleRunner::correctPoses(Cycle& cycle)
+{
+    cycle.posesChecked = true;
+    const auto started = std::chrono::steady_clock::now();
+    const std::size_t first = inspector_.seatViews();
+    const auto seat = inspector_.provisionalSeat();
+    auto& j = cycle.poseCorrection;
+    j = {{"after_views", first}};
+    auto log = hg::log::category("seq");
+    if (!seat || !seat->measured || !seat->withinLimits) {
+        j["applied"] = false;
+        j["reason"] = !seat ? "the first views could not be prepared"
+                            : (seat->message.empty() ? "the seat is beyond the limits" : seat->message);
+        log->info("poses as planned: the seat of the first {} views: {}", first, j["reason"].get<std::string>());
+    } else {
+        j["applied"] = true;
+        j["seat"] = {{"shift_mm", seat->shiftMm},
+                     {"rotation_deg", seat->rotationDeg},
+                     {"residual_px", seat->residualPx},
+                     {"inliers", seat->inliers},
+                     {"samples", seat->samples}};
+        j["seat_transform"] = align::seatJson(seat->seat, seat->referencePoint);
+        const auto& fixture = cycle.cfg->station.fixture;
+        cycle.rangeLimited.assign(cycle.poses.size(), false);
+        for (std::size_t k = first; k < cycle.poses.size(); ++k) {
+            const auto c = align::correctPose(fixture, cycle.poses[k], seat->seat, seat->referencePoint);
+            cycle.poses[k] = c.pose;
+            cycle.rangeLimited[k] = c.limited;
+        }
+        log->debug("poses {}..{} corrected for the seat of the first {} views (shift {:.3f} mm, rotation {:.3f}°)",
+                   first, cycle.poses.size() - 1, first, seat->shiftMm, seat->rotationDeg);
+    }
+    j["ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+}
+
+SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
+{
+    const auto start = clock_.now();
+    clock_.sleepUntil(start + cycle.cfg->sequencer.settle, [this] {
+        takeCommands();
+        return abortRequested_ || stopRequested_;
+    });
+    cycle.settleMs += clock_.msSince(start);
+    return feed(SequencerEvent::Settled);
+}
+
+// The camera is asked for the view's region as the fixture starts to move
+// there, so a camera that applies it in the background does so during the
+// motion (docs/camera.md, "Regions per grab"; docs/daemon.md, "Regions per
+// view"). A camera that cannot sends whole frames: each frame says what it covers.
+void CycleRunner::askRegion(Cycle& cycle, std::size_t view)
+{
+    const cv::Rect region = inspector_.region(view, cycle.poses[view]);
+    if (auto r = devices_.setRegion(region); !r.ok())
+        hg::log::category("seq")->warn("view {}: region [{}, {}, {}, {}] not set ({}): whole frames", view, region.x,
+                                       region.y, region.width, region.height, r.message());
+}
+
+SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
+{
+    // A retried grab follows a recovery, which may have put the camera back on whole frames.
+    if (action.retry) askRegion(cycle, action.view);
+    const auto start = clock_.now();
+    GrabbedFrame frame;
+    auto r = devices_.grab(cycle.cfg->sequencer.grabTimeout, frame);
+    cycle.grabMs += clock_.msSince(start);
+    cycle.regionMs += frame.regionChangeMs;
+    cycle.payloadBytes += frame.payloadBytes;
+    if (r.ok()) {
+        cycle.lastFrameAt = clock_.now();
+        // The last frame is in: the PLC may unload the part before the verdict (ACQ_DONE_SEQ, docs/plc.md).
+        if (action.view + 1 == cycle.poses.size() && !cycle.record.manual)
+            registers_.acquisitionDone(cycle.record.triggerSeq);
+        inspector_.addView(action.view, cycle.poses[action.view], std::move(frame.image), frame.origin);
+    } else {
+        hg::log::category("seq")->warn("view {}: grab failed: {}", action.view, r.message());
+    }
+    return feed(station::grabEvent(r.code()));
+}
+
+SequencerAction CycleRunner::finishInspection(Cycle& cycle)
+{
+    const auto start = clock_.now();
+    cycle.outcome = inspector_.finish();
+    cycle.finishMs += clock_.msSince(start);
+    const auto& outcome = cycle.outcome;
+    if (!outcome.ok) {
+        hg::log::category("seq")->error("inspection failed: {}", outcome.error);
+        return feed(SequencerEvent::ProcessingFailed);
+    }
+    if (outcome.seatingFault) {
+        // Not a station fault: the PLC re-seats the part and triggers again (FAULT_CODE 32, docs/plc.md).
+        const auto& a = outcome.alignment;
+        hg::log::category("seq")->warn("part not seated: shift {:.3f} mm, rotation {:.3f}°{}{}", a ? a->shiftMm : 0.0,
+                                       a ? a->rotationDeg : 0.0, a && !a->message.empty() ? ": " : "",
+                                       a ? a->message : std::string());
+        return feed(SequencerEvent::NotSeated);
+    }
+    return feed(SequencerEvent::Processed);
+}
+
+void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
+{
+    if (stopMotion) devices_.stopMotion();
+    recordOutcome(cycle);
+    commitAndPublish(cycle);
+    report(cycle);
+    if (cycle.saveImages) archivePart(cycle);
+    // A cycle that left the station in fault: the sequencer says recover (at once).
+    if (!stopRequested_) schedule(sequencer_.afterPublish());
+}
+
+void CycleRunner::recordOutcome(Cycle& cycle)
+{
+    station::CycleOutcome how;
+    {
+        std::lock_guard lock(mutex_);
+        how = sequencer_.outcome();
+        cycle.record.faultCode = sequencer_.faultCode();
+    }
+    if (how != station::CycleOutcome::Inspected) inspector_.cancel();
+    auto& record = cycle.record;
+    const auto& outcome = cycle.outcome;
+    record.part = outcome.part;
+    record.programRelease = outcome.release;
+    record.verdict = station::verdictOf(how, outcome.pass);
+    // The seat is kept whatever the verdict: a part not seated is recorded with the pose that says so.
+    if (outcome.ok && outcome.alignment) {
+        record.alignment = align::toJson(*outcome.alignment);
+        if (!cycle.poseCorrection.is_null()) record.alignment["pose_correction"] = poseCorrectionJson(cycle);
+    }
+    if (simulation_) {
+        record.simulation = {{"part", simulation_->part()}};
+        if (auto seat = simulation_->trueSeat()) record.simulation["seat"] = align::seatJson(seat->seat, seat->centre);
+    }
+    if (how == station::CycleOutcome::Inspected) record.landmarks = outcome.landmarks;
+    record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
+    // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
+    // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.
+    record.timingMs = {{"move", cycle.moveMs},
+                       {"settle", cycle.settleMs},
+                       {"grab", cycle.grabMs},
+                       {"region", cycle.regionMs},
+                       {"prepare", outcome.prepareMs},
+                       {"traversal", outcome.traversalMs},
+                       {"processing", outcome.processingMs},
+                       {"wait_for_verdict", cycle.finishMs}};
+    if (!cycle.poseCorrection.is_null()) record.timingMs["correct_poses"] = cycle.poseCorrection["ms"];
+    // A failed part's images are written after the result is shown: the record names their
+    // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
+    cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) && (!outcome.views.empty() || outcome.evidence);
+    if (cycle.saveImages)
+        cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
+                              .folderFor(record.startedUnixMs, record.serial)
+                              .string();
+}
+
+// Per view the planned and the commanded pose and how far off the planned
+// direction the camera saw the part as finally measured (docs/alignment.md).
+nlohmann::json CycleRunner::poseCorrectionJson(const Cycle& cycle) const
+{
+    nlohmann::json j = cycle.poseCorrection;
+    const auto& fixture = cycle.cfg->station.fixture;
+    const auto& a = *cycle.outcome.alignment;
+    j["views"] = nlohmann::json::array();
+    for (std::size_t k = 0; k < cycle.poses.size(); ++k) {
+        const auto& planned = cycle.program->views[k];
+        const auto& commanded = cycle.poses[k];
+        j["views"].push_back(
+            {{"view", k},
+             {"planned", geometry::toJson(planned, fixture.type)},
+             {"commanded", geometry::toJson(commanded, fixture.type)},
+             {"corrected", !(planned == commanded)},
+             {"limited", k < cycle.rangeLimited.size() && cycle.rangeLimited[k]},
+             {"sight_error_deg", align::sightErrorDeg(fixture, planned, commanded, a.seat, a.referencePoint)}});
+    }
+    return j;
+}
+
+void CycleRunner::commitAndPublish(Cycle& cycle)
+{
+    auto& record = cycle.record;
+    // The record is durable before the PLC can see DONE_SEQ (docs/contracts.md §6).
+    const auto commitStart = clock_.now();
+    try {
+        store_.commit(record, cycle.imagesDir);
+    } catch (const std::exception& e) {
+        hg::log::category("seq")->error("{}", e.what());
+        record.verdict = station::Verdict::Error;
+        record.faultCode = station::FaultCode::ResultStore;
+    }
+    cycle.commitMs = clock_.msSince(commitStart);
+    // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
+    const auto after = state();
+    devices_.showLamps(station::lampPattern(after, record.verdict, record.faultCode));
+    const auto publishStart = clock_.now();
+    registers_.publishResult(record.toPublished(station::plcStatus(after)));
+    const auto published = clock_.now();
+    cycle.publishMs = std::chrono::duration<double, std::milli>(published - publishStart).count();
+    // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
+    if (cycle.lastFrameAt)
+        cycle.lastFrameToPublishMs = std::chrono::duration<double, std::milli>(published - *cycle.lastFrameAt).count();
+    // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
+    lastLoopNs_ = clock_.nowNs();
+    cycleStartNs_ = 0;
+}
+
+void CycleRunner::report(Cycle& cycle)
+{
+    const auto& record = cycle.record;
+    auto timing = record.timingMs;
+    timing["commit"] = cycle.commitMs;
+    timing["publish"] = cycle.publishMs;
+    if (cycle.lastFrameToPublishMs >= 0) timing["last_frame_to_publish"] = cycle.lastFrameToPublishMs;
+    abortRequested_ = false;
+    {
+        std::lock_guard lock(mutex_);
+        ++cycles_;
+        if (record.verdict == station::Verdict::Error) ++faults_;
+        lastImagesMs_ = cycle.saveImages ? std::make_shared<std::atomic<double>>(-1.0) : nullptr;
+        lastCycle_ = {{"trigger_seq", record.triggerSeq},
+                      {"serial", record.serial},
+                      {"program", record.program},
+                      {"verdict", std::string(station::toString(record.verdict))},
+                      {"fault_code", static_cast<int>(record.faultCode)},
+                      {"cycle_ms", record.cycleMs},
+                      {"landmarks_failed", record.landmarksFailed()},
+                      {"landmarks_total", record.landmarks.size()},
+                      {"manual", record.manual},
+                      {"purpose", std::string(station::toString(record.purpose))},
+                      {"images_dir", cycle.imagesDir},
+                      {"alignment", record.alignment},
+                      {"timing_ms", timing},
+                      {"payload_bytes", cycle.payloadBytes}};
+        putRelease(lastCycle_, record.programRelease);
+        if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
+    }
+    hg::log::category("seq")->info(
+        "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
+        "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
+        station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.moveMs,
+        cycle.settleMs, cycle.grabMs, cycle.outcome.prepareMs, cycle.finishMs, cycle.commitMs,
+        std::max(cycle.lastFrameToPublishMs, 0.0));
+}
+
+// On the writer's thread: the runner is free for the next trigger meanwhile. The job
+// touches only what it was given and reports its time through its own counter.
+void CycleRunner::archivePart(Cycle& cycle)
+{
+    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention);
+    auto& outcome = cycle.outcome;
+    auto evidence =
+        outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
+    images_.post([archive, evidence = std::move(evidence), startedUnixMs = cycle.record.startedUnixMs,
+                  serial = cycle.record.serial, dir = cycle.imagesDir, done = lastImagesMs_,
+                  failed = cycle.record.verdict == station::Verdict::Fail]() mutable {
+        auto log = hg::log::category("store");
+        const auto start = std::chrono::steady_clock::now();
+        try {
+            if (archive.save(startedUnixMs, serial, evidence(), failed).empty())
+                log->error("the archive of part '{}' could not be written to {}", serial, dir);
+            archive.enforceRetention();
+        } catch (const std::exception& e) {
+            log->error("the archive of part '{}': {}", serial, e.what());
+        }
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        log->debug("images of '{}' written in {:.0f} ms", serial, ms);
+        done->store(ms);
+    });
+}
+
+} // namespace hg::daemon

@@ -1,0 +1,155 @@
+// Runs inspection cycles: takes accepted triggers from the register map,
+// performs the CaptureSequencer's actions against the devices and the
+// inspection pipeline, commits each record to the result store and only then
+// publishes it to the PLC, and sets the lamps (the rules of
+// hullgauge/station/cycle_rules.h). One thread of its own.
+//
+// The PLC's commands (docs/plc.md, COMMAND) are taken in one place,
+// takeCommands(), before every step of a cycle and every turn between cycles:
+// an abort ends the running cycle; a fault reset written during a cycle is
+// kept and applied once the cycle has ended (when the station is then in
+// fault). Recovery runs when the sequencer's Recover action says, on the
+// runner's clock (injected; the tests move it by hand).
+#pragma once
+
+#include "clock.h"
+#include "cycle/camera_snapshot.h"
+#include "cycle/devices.h"
+#include "cycle/fixture_calibration.h"
+#include "cycle/image_writer.h"
+#include "cycle/inspector.h"
+#include "daemon_config.h"
+#include "hullgauge/station/sequencer.h"
+#include "hullgauge/store/result_store.h"
+#include "plant/plc_registers.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <thread>
+
+namespace hg::daemon {
+
+class CycleRunner {
+  public:
+    CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspector& inspector, store::ResultStore& store,
+                std::shared_ptr<const station::DaemonConfig> config, Clock& clock = Clock::steady());
+    ~CycleRunner();
+    CycleRunner(const CycleRunner&) = delete;
+    CycleRunner& operator=(const CycleRunner&) = delete;
+
+    /// The simulated line's control (before start()): a new part is seated in
+    /// the nest at the start of every cycle, and the record keeps the part
+    /// shown and its true seat (docs/daemon.md, "Seating"). Null on real hardware.
+    void setSimulation(SimulationControl* simulation) { simulation_ = simulation; }
+
+    /// Starts the thread: it starts the devices, then serves triggers.
+    /// `onDevicesActive` is called once, from that thread, when the devices
+    /// first became active (the daemon sends READY=1 there).
+    void start(std::function<void()> onDevicesActive);
+    /// SIGTERM: a running cycle gets `shutdown_grace_s` to finish, is then
+    /// aborted and recorded; the devices are shut down; the thread ends.
+    void stop();
+
+    /// A new configuration for the next cycle (SIGHUP); the running cycle keeps its own.
+    void setConfig(std::shared_ptr<const station::DaemonConfig> config);
+    /// Abort the running cycle or calibration (maintenance socket; the PLC uses
+    /// COMMAND); false, and nothing latched, when none runs (docs/plc.md).
+    bool abort();
+
+    /// Queues a calibration; it runs between cycles, on the runner thread, when
+    /// the station is ready (production is paused meanwhile: PLC STATUS 5,
+    /// triggers refused as not ready). False with `why` when one is queued or
+    /// running, or the station is faulted or starting.
+    bool requestCalibration(CalibrationJob job, std::string& why);
+    /// The last calibration (FixtureCalibration::status).
+    nlohmann::json calibration() const { return calibration_.status(); }
+    /// Queues a camera snapshot (docs/hmi.md, "Maintenance"): like a
+    /// calibration, between cycles with production paused for the grab.
+    bool requestSnapshot(SnapshotJob job, std::string& why) { return snapshot_.request(std::move(job), state(), why); }
+    /// The last snapshot: its status and its overlay (CameraSnapshot).
+    const CameraSnapshot& snapshot() const { return snapshot_; }
+
+    station::SequencerState state() const;
+    /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
+    bool healthy() const;
+    /// State, current cycle and counters for the maintenance socket.
+    nlohmann::json describe() const;
+    /// The part program the inspection last loaded for a changeover or a cycle:
+    /// number, part, version and verification_sha256 (null for a draft); null
+    /// before the first (docs/daemon.md, "Maintenance socket").
+    nlohmann::json program() const;
+
+  private:
+    struct Cycle;
+
+    void run();
+    void startDevices();
+    void serveBetweenCycles();
+    void takeCommands();
+    station::SequencerAction feed(station::SequencerEvent event);
+    station::SequencerAction transition(const std::function<station::SequencerAction()>& step);
+    void schedule(const station::SequencerAction& action);
+    void showState(station::Verdict lastVerdict = station::Verdict::Error);
+    void recover();
+    void prepareProgram(std::uint16_t number);
+    void noteLoaded(std::uint16_t number);
+    void runCalibration(CalibrationJob job);
+    void runSnapshot(SnapshotJob job);
+    bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);
+
+    void runCycle(const station::TriggerRequest& trigger);
+    station::SequencerAction beginCycle(Cycle& cycle);
+    std::optional<station::SequencerAction> interruption(Cycle& cycle);
+    station::SequencerAction perform(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction move(Cycle& cycle, const station::SequencerAction& action);
+    void correctPoses(Cycle& cycle);
+    station::SequencerAction settle(Cycle& cycle, const station::SequencerAction& action);
+    void askRegion(Cycle& cycle, std::size_t view);
+    station::SequencerAction grab(Cycle& cycle, const station::SequencerAction& action);
+    station::SequencerAction finishInspection(Cycle& cycle);
+    void endCycle(Cycle& cycle, bool stopMotion);
+    void recordOutcome(Cycle& cycle);
+    nlohmann::json poseCorrectionJson(const Cycle& cycle) const;
+    void commitAndPublish(Cycle& cycle);
+    void report(Cycle& cycle);
+    void archivePart(Cycle& cycle);
+
+    PlcRegisters& registers_;
+    StationDevices& devices_;
+    SimulationControl* simulation_ = nullptr;
+    Inspector& inspector_;
+    store::ResultStore& store_;
+    Clock& clock_;
+    FixtureCalibration calibration_;
+    CameraSnapshot snapshot_;
+
+    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_, program_
+    std::shared_ptr<const station::DaemonConfig> config_;
+    station::CaptureSequencer sequencer_;
+    std::uint64_t cycles_ = 0;
+    std::uint64_t faults_ = 0;
+    nlohmann::json lastCycle_ = nullptr;
+    nlohmann::json program_ = nullptr; ///< program()
+    /// Written by the last failed part's image job when it is done (ms; < 0 until then).
+    std::shared_ptr<std::atomic<double>> lastImagesMs_;
+
+    // Runner thread only.
+    bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
+    std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
+
+    std::thread thread_;
+    std::function<void()> onDevicesActive_;
+    std::atomic<bool> stopRequested_{false};
+    std::atomic<std::int64_t> stopRequestedNs_{0};
+    std::atomic<bool> abortRequested_{false};
+    std::atomic<std::int64_t> lastLoopNs_{0};
+    std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
+    ImageWriter images_;
+};
+
+} // namespace hg::daemon

@@ -1,0 +1,319 @@
+#include "cycle/engine_inspector.h"
+
+#include "cycle/view_pipeline.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/inspect/program_inspector.h"
+#include "hullgauge/model/part_program.h"
+#include "hullgauge/vision/segmentation.h"
+
+#include <chrono>
+#include <map>
+
+namespace hg::daemon {
+namespace {
+
+std::vector<geometry::CameraModel> plannedCameras(const station::PartProgramRef& ref, const geometry::Station& station)
+{
+    std::vector<geometry::CameraModel> cameras;
+    for (const geometry::FixturePose& pose : ref.views) cameras.push_back(station.cameraAt(pose));
+    return cameras;
+}
+
+// What of the station a program is loaded with: its calibration, and the
+// capability check at the program's planned views (docs/inspection.md,
+// "Capability"): a tolerance this station cannot prove there refuses the
+// program (FAULT 30 at a trigger; at start, --check and reload the
+// configuration) unless its entry says `force`.
+inspect::InspectionStation stationFor(const station::PartProgramRef& ref, const model::PartProgram& program,
+                                      const geometry::Station& station)
+{
+    return {station.calibration,
+            inspect::CapabilityCheck{inspect::assessProgram(program, station.calibration, plannedCameras(ref, station),
+                                                            station.imageQuality),
+                                     ref.force, "programs." + std::to_string(ref.number) + ".force: true"}};
+}
+
+/// The journal's warning for the landmarks a forced program inspects as never ok.
+void reportForced(const station::PartProgramRef& ref, const inspect::InspectionSetup& setup)
+{
+    if (!setup.forced.empty())
+        hg::log::category("inspect")->warn("part program {}: forced: {}", ref.number, inspect::describe(setup.forced));
+}
+
+/// The program's release as the record names it (docs/commissioning.md, "Release"); none for a draft.
+std::optional<station::ProgramRelease> releaseOf(const model::PartProgram& program)
+{
+    if (!program.release) return std::nullopt;
+    return station::ProgramRelease{program.release->version, program.release->verificationSha256};
+}
+
+/// "version 3, verification 5f0c1a2b…" or "draft", for the journal.
+std::string describeRelease(const model::PartProgram& program)
+{
+    if (!program.release) return "draft";
+    return "version " + std::to_string(program.release->version) + ", verification " +
+           program.release->verificationSha256.substr(0, 8) + "…";
+}
+
+struct LoadedProgram {
+    std::filesystem::path file;
+    /// The file's SHA-256 as the configuration it was loaded for validated it
+    /// (PartProgramRef::partSha256): a reload that changed it loads anew.
+    std::string configuredSha256;
+    model::PartProgram program;
+    /// Its map, options, aligner, gauge and seat views (inspect::makeProgramInspector).
+    inspect::ProgramInspector inspection;
+    /// The planned poses and, per planned view, the bounds of what its
+    /// inspection reads: the region the camera sends (empty with
+    /// `camera.regions: false`; docs/daemon.md, "Regions per view").
+    std::vector<geometry::FixturePose> poses;
+    std::vector<cv::Rect> regions;
+};
+
+/// The bounds of every pixel the inspection reads through `camera`; empty
+/// when it reads none (the camera then sends whole frames).
+cv::Rect viewBounds(const inspect::Inspector& inspector, const geometry::CameraModel& camera)
+{
+    return inspector.regions(camera).bounds;
+}
+
+class EngineInspector : public Inspector {
+  public:
+    explicit EngineInspector(const station::DaemonConfig& config)
+        : station_(config.station), segmentation_(config.segmentation), regions_(config.cameraRegions)
+    {
+    }
+
+    bool begin(const station::PartProgramRef& ref, std::string& error) override
+    {
+        // The worker must be idle, and forget the last program's inspector, before a reload may replace it.
+        idle();
+        current_ = load(ref, error);
+        if (!current_) return false;
+        const inspect::Inspector* inspector = current_->inspection.inspector.get();
+        pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
+            return inspector->prepareView(view, settings);
+        });
+        return true;
+    }
+
+    // Between cycles (the runner's thread): the pipeline is idle, so a program
+    // loaded anew may replace the one the last cycle used.
+    bool prepare(const station::PartProgramRef& ref, std::string& error) override
+    {
+        if (loadedAsConfigured(ref)) return true;
+        idle();
+        return load(ref, error) != nullptr;
+    }
+
+    std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
+    {
+        const auto it = loaded_.find(number);
+        if (it == loaded_.end()) return std::nullopt;
+        return LoadedProgramInfo{number, it->second.program.part, releaseOf(it->second.program)};
+    }
+
+    // A planned pose's region was found when the program was loaded; a pose
+    // corrected for the seat gets the region of the camera it is taken with,
+    // the one its inspection reads through (docs/daemon.md, "Regions per view").
+    cv::Rect region(std::size_t index, const geometry::FixturePose& pose) override
+    {
+        if (!regions_ || !current_) return {};
+        if (index < current_->poses.size() && current_->poses[index] == pose) return current_->regions[index];
+        return viewBounds(*current_->inspection.inspector, station_.cameraAt(pose));
+    }
+
+    // Hands the frame to the pipeline's worker and returns: the fixture moves on while it is segmented.
+    void addView(std::size_t index, const geometry::FixturePose& pose, cv::Mat image, cv::Point origin) override
+    {
+        inspect::CapturedView view{"v" + std::to_string(index), station_.cameraAt(pose), std::move(image), origin};
+        // Kept (shared pixels) for the archive, with the camera and pose as inspected.
+        ViewEvidence kept;
+        kept.image = view.frame;
+        kept.capture = vision::ManifestView{
+            view.id, {}, view.camera, false, vision::ManifestFixturePose{station_.fixture.type, pose}};
+        // A region of the sensor: the manifest says where (docs/contracts.md §3).
+        if (view.frame.size() != view.camera.imageSize()) kept.capture->origin = origin;
+        kept.segmentation = segmentation_;
+        kept.calibration = station_.calibration;
+        kept.imageQuality = station_.imageQuality;
+        views_.push_back(std::move(kept));
+        pipeline_.submit(std::move(view));
+    }
+
+    std::size_t seatViews() const override { return current_ ? current_->inspection.setup.seatViews : 0; }
+
+    // On the runner's thread, between a grab and the next move: waits for the
+    // first views' preparation (started as each frame came in) and solves.
+    std::optional<align::AlignmentResult> provisionalSeat() override
+    {
+        const std::size_t count = seatViews();
+        if (count == 0) return std::nullopt;
+        auto views = pipeline_.firstPrepared(count);
+        if (!views) return std::nullopt;
+        try {
+            return current_->inspection.inspector->measureSeat(*views);
+        } catch (const std::exception& e) {
+            hg::log::category("inspect")->warn("the seat of the first {} views could not be measured: {}", count,
+                                               e.what());
+            return std::nullopt;
+        }
+    }
+
+    InspectionOutcome finish() override
+    {
+        InspectionOutcome out;
+        if (!current_) {
+            out.error = "no part program loaded";
+            return out;
+        }
+        try {
+            auto prepared = pipeline_.wait();
+            out.prepareMs = prepared.prepareMs;
+            if (!prepared.error.empty()) {
+                out.error = prepared.error;
+                views_.clear();
+                return out;
+            }
+            // Only the traversal is left once the last frame is in (dissertation 3.3.8).
+            auto result = current_->inspection.inspector->inspect(std::move(prepared.views), prepared.ids);
+            out.ok = true;
+            out.part = result.part;
+            out.release = releaseOf(current_->program);
+            out.pass = result.pass;
+            out.traversalMs = result.totalMs;
+            out.alignment = result.alignment;
+            out.seatingFault = result.seatingFault;
+            out.processingMs = prepared.prepareMs + result.totalMs;
+            for (const auto& l : result.landmarks) {
+                station::LandmarkOutcome o{
+                    l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
+                if (l.deviation && l.deviation->measured) {
+                    o.deviationMm = l.deviation->deviationMm;
+                    o.uncertaintyMm = l.deviation->uncertaintyMm;
+                }
+                if (l.decision) o.decision = inspect::toString(*l.decision);
+                o.limitsMm = l.limitsMm;
+                out.landmarks.push_back(std::move(o));
+            }
+            out.evidence = evidence(result);
+        } catch (const std::exception& e) {
+            out.error = e.what();
+        } catch (...) {
+            out.error = "the inspection failed";
+        }
+        views_.clear();
+        return out;
+    }
+
+    void cancel() override
+    {
+        pipeline_.cancel();
+        views_.clear();
+    }
+
+  private:
+    void idle()
+    {
+        pipeline_.begin(nullptr);
+        views_.clear();
+        current_ = nullptr;
+    }
+
+    bool loadedAsConfigured(const station::PartProgramRef& ref) const
+    {
+        auto it = loaded_.find(ref.number);
+        return it != loaded_.end() && it->second.file == ref.partFile && it->second.configuredSha256 == ref.partSha256;
+    }
+
+    /// The program, loaded unless it is loaded from the same file already (a
+    /// reload may point the number at another file, or find a new version in
+    /// the same one: rebuilt then); null with `error` when it cannot be loaded.
+    LoadedProgram* load(const station::PartProgramRef& ref, std::string& error)
+    {
+        if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
+        try {
+            auto started = std::chrono::steady_clock::now();
+            LoadedProgram p;
+            p.file = ref.partFile;
+            p.configuredSha256 = ref.partSha256;
+            p.program = model::loadPartProgram(ref.partFile);
+            // The inspector `hullgauge inspect --part` configures (docs/inspection.md).
+            p.inspection = inspect::makeProgramInspector(p.program, stationFor(ref, p.program, station_));
+            reportForced(ref, p.inspection.setup);
+            // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
+            const std::vector<geometry::CameraModel> cameras = plannedCameras(ref, station_);
+            p.inspection.inspector->prepareOutlines(cameras);
+            // The region the camera sends per planned view (docs/daemon.md, "Regions per view").
+            p.poses = ref.views;
+            for (const geometry::CameraModel& c : cameras)
+                p.regions.push_back(regions_ ? viewBounds(*p.inspection.inspector, c) : cv::Rect());
+            // The version loaded, and the one it replaces (a reload, docs/daemon.md).
+            const auto before = loaded_.find(ref.number);
+            hg::log::category("inspect")->info(
+                "part program {} ({}, {}) loaded in {:.0f} ms{}", ref.number, p.program.part,
+                describeRelease(p.program),
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count(),
+                before == loaded_.end() ? std::string() : "; it replaces " + describeRelease(before->second.program));
+            return &loaded_.insert_or_assign(ref.number, std::move(p)).first->second;
+        } catch (const std::exception& e) {
+            error = e.what();
+        } catch (...) {
+            // Whatever the program's load throws is the program's fault (FAULT 30), never the daemon's end.
+            error = "the part program could not be loaded";
+        }
+        return nullptr;
+    }
+
+    // The part's archive (docs/daemon.md): frames, cameras, silhouettes and landmark
+    // projections. The projections are taken now (they need the program); the
+    // whole-frame segmentation for the outline is left to the returned function,
+    // which the cycle runs after the result is shown, if it archives the part.
+    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result)
+    {
+        std::map<std::string, std::string> status;
+        for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
+        std::vector<ViewEvidence> views = std::move(views_);
+        // The archive's manifest keeps the nominal cameras (`hullgauge inspect` aligns again from
+        // them); the landmarks are drawn where the seated part shows them.
+        const geometry::RigidTransform seat =
+            result.alignment ? result.alignment->seat : geometry::RigidTransform::identity();
+        for (auto& e : views) {
+            const geometry::CameraModel seated = align::seatedCamera(e.capture->camera, seat);
+            // Drawn on the archived image: a region's pixels are the sensor's less its origin.
+            const cv::Point origin = e.capture->origin.value_or(cv::Point(0, 0));
+            for (const auto& l : current_->program.landmarks)
+                if (auto px = seated.project(l.position))
+                    e.landmarks.push_back({cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id, status[l.id]});
+        }
+        return [views = std::move(views)]() mutable {
+            for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);
+            return views;
+        };
+    }
+
+    geometry::Station station_;
+    vision::SegmentationSettings segmentation_;
+    bool regions_ = true; ///< `camera.regions`: the camera sends each view's bounds
+    std::map<std::uint16_t, LoadedProgram> loaded_;
+    LoadedProgram* current_ = nullptr;
+    std::vector<ViewEvidence> views_;
+    // Declared last: destroyed first, so its worker has stopped before the programs it prepares with go.
+    ViewPipeline pipeline_;
+};
+
+} // namespace
+
+std::unique_ptr<Inspector> makeEngineInspector(const station::DaemonConfig& config)
+{
+    return std::make_unique<EngineInspector>(config);
+}
+
+void checkEngineProgram(const station::PartProgramRef& ref, const geometry::Station& station)
+{
+    const model::PartProgram program = model::loadPartProgram(ref.partFile);
+    reportForced(ref, inspect::setUpInspection(program, stationFor(ref, program, station)));
+}
+
+} // namespace hg::daemon

@@ -1,0 +1,180 @@
+#include "cycle/image_archive.h"
+
+#include "hullgauge/common/durable_file.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace hg::daemon {
+namespace fs = std::filesystem;
+namespace {
+
+/// A folder being written is named so: hidden, skipped and, once stale, removed by the retention.
+constexpr std::string_view kPartialPrefix = ".partial-";
+
+bool isPartial(const fs::path& dir)
+{
+    return dir.filename().string().rfind(kPartialPrefix, 0) == 0;
+}
+
+/// `image` as a lossless PNG in `file` (8 or 16 bit as the Mat holds it).
+void writePng(const fs::path& file, const cv::Mat& image)
+{
+    std::vector<uchar> bytes;
+    if (!cv::imencode(".png", image, bytes)) throw FaultError("cannot encode " + file.string());
+    writeFileDurably(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
+/// Every file of an archived part into `dir` (docs/daemon.md, "Archived parts").
+void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
+{
+    const bool capture = std::all_of(views.begin(), views.end(), [](const ViewEvidence& v) { return v.capture; });
+    vision::CaptureManifest manifest;
+    manifest.segmentation = views.front().segmentation;
+    manifest.calibration = views.front().calibration;
+    if (views.front().imageQuality.given) manifest.imageQuality = views.front().imageQuality;
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        writePng(dir / ("view_" + std::to_string(k) + ".png"), annotate(views[k]));
+        if (!capture) continue;
+        vision::ManifestView view = *views[k].capture;
+        view.image = dir / (view.id + ".png");
+        writePng(view.image, views[k].image);
+        manifest.views.push_back(std::move(view));
+    }
+    if (capture) writeFileDurably(dir / "manifest.json", vision::manifestJson(manifest, dir));
+    syncFolder(dir);
+}
+
+} // namespace
+
+bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict)
+{
+    if (verdict == station::Verdict::Fail) return results.archiveAll || results.saveFailedImages;
+    return verdict == station::Verdict::Pass && results.archiveAll;
+}
+
+cv::Scalar statusColour(const std::string& status)
+{
+    if (status == "ok") return {0, 200, 0};
+    if (status == "out_of_tolerance") return {0, 0, 255};
+    if (status == "overflow") return {255, 0, 255};
+    if (status == "not_found") return {0, 140, 255};
+    return {160, 160, 160};
+}
+
+cv::Mat annotate(const ViewEvidence& view)
+{
+    cv::Mat grey;
+    if (view.image.depth() == CV_16U) {
+        double maxValue = 0;
+        cv::minMaxLoc(view.image, nullptr, &maxValue);
+        view.image.convertTo(grey, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
+    } else {
+        grey = view.image;
+    }
+    cv::Mat out;
+    if (grey.channels() == 1)
+        cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);
+    else
+        out = grey.clone();
+    const int thickness = std::max(1, out.cols / 800);
+    if (!view.silhouette.empty()) {
+        std::vector<std::vector<cv::Point>> contours;
+        cv::Mat mask = view.silhouette != 0;
+        cv::findContours(mask, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
+        cv::drawContours(out, contours, -1, cv::Scalar(255, 160, 0), thickness); // silhouette outline: blue
+    }
+    const int radius = std::max(4, out.cols / 150);
+    for (const auto& mark : view.landmarks) {
+        cv::Point p(cvRound(mark.pixel.x), cvRound(mark.pixel.y));
+        auto colour = statusColour(mark.status);
+        cv::circle(out, p, radius, colour, thickness + 1);
+        cv::putText(out, mark.id, p + cv::Point(radius + 2, -radius), cv::FONT_HERSHEY_SIMPLEX, 0.4 * thickness + 0.2,
+                    colour, thickness);
+    }
+    return out;
+}
+
+ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention)
+    : root_(std::move(root)), retention_(retention)
+{
+}
+
+fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& serial) const
+{
+    std::string safe;
+    for (char c : serial) safe.push_back(std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_');
+    return root_ / (std::to_string(startedUnixMs) + (safe.empty() ? "" : "_" + safe));
+}
+
+fs::path ImageArchive::save(std::int64_t startedUnixMs, const std::string& serial,
+                            const std::vector<ViewEvidence>& views, bool failed)
+{
+    if (views.empty()) return {};
+    const fs::path dir = folderFor(startedUnixMs, serial);
+    // Written whole into a hidden folder, then renamed: a reader never sees half an archive.
+    const fs::path partial = root_ / (std::string(kPartialPrefix) + dir.filename().string());
+    std::error_code ec;
+    try {
+        fs::remove_all(partial);
+        fs::create_directories(partial);
+        writeArchive(partial, views);
+        if (failed) std::ofstream(partial / kFailedMarker).put('\n');
+        fs::rename(partial, dir);
+        syncFolder(root_);
+    } catch (const std::exception& e) {
+        hg::log::category("store")->error("cannot write the archive {}: {}", dir.string(), e.what());
+        fs::remove_all(partial, ec);
+        return {};
+    }
+    return dir;
+}
+
+std::size_t ImageArchive::enforceRetention()
+{
+    struct Entry {
+        fs::path dir;
+        fs::file_time_type time;
+        std::uintmax_t bytes = 0;
+        bool failed = false;
+    };
+    std::vector<Entry> entries;
+    std::vector<fs::path> stale;
+    std::error_code ec;
+    for (const auto& d : fs::directory_iterator(root_, ec)) {
+        if (!d.is_directory()) continue;
+        // Saves and the retention run on one thread: a partial folder here was cut short by a crash.
+        if (isPartial(d.path())) {
+            stale.push_back(d.path());
+            continue;
+        }
+        Entry e{d.path(), d.last_write_time(ec), 0, fs::exists(d.path() / kFailedMarker, ec)};
+        for (const auto& f : fs::recursive_directory_iterator(d.path(), ec))
+            if (f.is_regular_file()) e.bytes += f.file_size(ec);
+        entries.push_back(std::move(e));
+    }
+    for (const auto& dir : stale) fs::remove_all(dir, ec);
+    // Newest first; walk and keep while every limit holds.
+    std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.time > b.time; });
+    const auto cutoff = fs::file_time_type::clock::now() - retention_.maxAge;
+    std::uintmax_t total = 0;
+    std::size_t removed = 0, failedSeen = 0;
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+        total += entries[i].bytes;
+        // The newest keep_failed rejects stay whatever the other limits say.
+        if (entries[i].failed && ++failedSeen <= retention_.keepFailed) continue;
+        bool keep = i < retention_.maxCount && entries[i].time >= cutoff && total <= retention_.maxBytes;
+        if (keep) continue;
+        fs::remove_all(entries[i].dir, ec);
+        if (!ec) ++removed;
+    }
+    if (removed) hg::log::category("store")->info("image retention removed {} folders", removed);
+    return removed;
+}
+
+} // namespace hg::daemon

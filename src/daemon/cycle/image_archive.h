@@ -1,0 +1,63 @@
+// The parts' archive (docs/daemon.md, "Archived parts"): one folder per
+// archived inspection holding, per view, the frame as grabbed and a PNG with
+// the silhouette outline and the landmarks drawn in their status colours, and a
+// capture manifest (docs/contracts.md §3) with the cameras and the segmentation the
+// daemon inspected with, so `hullgauge inspect --part P --views
+// <folder>/manifest.json` reproduces its landmark results. A folder is written
+// whole or not at all (a hidden partial folder renamed when complete), and the
+// archive is kept within the retention limits (count, age, bytes; oldest
+// removed first).
+#pragma once
+
+#include "cycle/inspector.h"
+#include "daemon_config.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <opencv2/core/types.hpp>
+#include <string>
+#include <vector>
+
+namespace hg::daemon {
+
+/// BGR colour of a landmark status: ok green, out_of_tolerance red, overflow
+/// magenta, not_found orange, not_observable grey.
+cv::Scalar statusColour(const std::string& status);
+
+/// The annotated picture of one view (BGR, the frame scaled to 8 bit).
+cv::Mat annotate(const ViewEvidence& view);
+
+/// Whether a part with `verdict` is archived: every inspected part with
+/// `archive_all`, else a failed one with `save_failed_images`.
+bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict);
+
+class ImageArchive {
+  public:
+    /// The file that marks a failed part's folder (its verdict, for the retention).
+    static constexpr const char* kFailedMarker = "FAILED";
+
+    ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
+
+    /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
+    /// (serial characters other than letters, digits and '-' become '_').
+    std::filesystem::path folderFor(std::int64_t startedUnixMs, const std::string& serial) const;
+    /// Writes `views` into folderFor(startedUnixMs, serial): view_<k>.png (annotated),
+    /// and when every view carries its capture, <id>.png (the frame, lossless) and
+    /// manifest.json; a failed part's folder also holds the marker file FAILED. Returns the folder, or an empty path
+    /// when there was nothing to write or the folder could not be written whole (logged; nothing is left). Never
+    /// throws.
+    std::filesystem::path save(std::int64_t startedUnixMs, const std::string& serial,
+                               const std::vector<ViewEvidence>& views, bool failed = false);
+    /// Removes the oldest folders beyond max_count, older than max_age_days,
+    /// or beyond max_bytes in total (raw frames, pictures and manifests all
+    /// count), and any partial folder a crash left — but never the folders of
+    /// the newest keep_failed failed parts.
+    /// Returns how many archived folders were removed.
+    std::size_t enforceRetention();
+
+  private:
+    std::filesystem::path root_;
+    station::RetentionConfig retention_;
+};
+
+} // namespace hg::daemon

@@ -1,0 +1,155 @@
+#include "cycle/view_pipeline.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+namespace hg::daemon {
+
+ViewPipeline::ViewPipeline(std::size_t capacity) : capacity_(capacity)
+{
+    if (capacity_ == 0) throw std::invalid_argument("ViewPipeline: capacity must be at least 1");
+    worker_ = std::thread([this] { work(); });
+}
+
+ViewPipeline::~ViewPipeline()
+{
+    {
+        std::unique_lock lock(mutex_);
+        dropLocked(lock);
+        stop_ = true;
+    }
+    changed_.notify_all();
+    worker_.join();
+}
+
+void ViewPipeline::dropLocked(std::unique_lock<std::mutex>& lock)
+{
+    queue_.clear();
+    ++cycle_;
+    changed_.notify_all(); // a submit() waiting for room has room now
+    changed_.wait(lock, [this] { return !busy_; });
+    slots_.clear();
+}
+
+void ViewPipeline::begin(PrepareFn prepare)
+{
+    std::unique_lock lock(mutex_);
+    dropLocked(lock);
+    prepare_ = std::move(prepare);
+}
+
+void ViewPipeline::submit(inspect::CapturedView view)
+{
+    const auto submitted = Clock::now();
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [this] { return queue_.size() < capacity_; });
+    Slot slot;
+    slot.id = view.id;
+    slot.timing.id = view.id;
+    slot.timing.submitted = submitted;
+    slots_.push_back(std::move(slot));
+    queue_.push_back({cycle_, slots_.size() - 1, std::move(view)});
+    changed_.notify_all();
+}
+
+ViewPipeline::Prepared ViewPipeline::wait()
+{
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [this] {
+        if (!queue_.empty() || busy_) return false;
+        for (const auto& s : slots_)
+            if (!s.done) return false;
+        return true;
+    });
+    Prepared out;
+    for (auto& s : slots_) {
+        out.timings.push_back(s.timing);
+        out.prepareMs += std::chrono::duration<double, std::milli>(s.timing.finished - s.timing.started).count();
+        if (!s.error.empty()) {
+            if (out.error.empty()) out.error = s.error;
+            continue;
+        }
+        out.views.push_back(std::move(*s.view));
+        out.ids.push_back(s.id);
+    }
+    slots_.clear();
+    ++cycle_;
+    return out;
+}
+
+std::optional<std::vector<inspect::SilhouetteView>> ViewPipeline::firstPrepared(std::size_t count)
+{
+    std::unique_lock lock(mutex_);
+    if (slots_.size() < count) return std::nullopt;
+    const std::uint64_t cycle = cycle_;
+    changed_.wait(lock, [&] {
+        return cycle_ != cycle || std::all_of(slots_.begin(), slots_.begin() + static_cast<std::ptrdiff_t>(count),
+                                              [](const Slot& s) { return s.done; });
+    });
+    if (cycle_ != cycle) return std::nullopt;
+    std::vector<inspect::SilhouetteView> out;
+    for (std::size_t k = 0; k < count; ++k) {
+        const Slot& s = slots_[k];
+        if (!s.error.empty() || !s.view) return std::nullopt;
+        out.push_back({s.view->camera, {}, s.view->grey, s.view->threshold, s.view->objectIsDark, s.view->alignment});
+        out.back().origin = s.view->origin; // a region of the sensor: where its grey levels lie
+    }
+    return out;
+}
+
+std::size_t ViewPipeline::queued()
+{
+    std::lock_guard lock(mutex_);
+    return queue_.size();
+}
+
+void ViewPipeline::cancel()
+{
+    std::unique_lock lock(mutex_);
+    dropLocked(lock);
+}
+
+void ViewPipeline::work()
+{
+    std::unique_lock lock(mutex_);
+    while (true) {
+        changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+        if (stop_) return;
+        Job job = std::move(queue_.front());
+        queue_.pop_front();
+        busy_ = true;
+        PrepareFn prepare = prepare_;
+        const auto started = Clock::now();
+        changed_.notify_all(); // room in the queue
+        lock.unlock();
+
+        std::optional<inspect::SilhouetteView> prepared;
+        std::string error;
+        try {
+            if (!prepare) throw std::logic_error("no preparation set for the cycle");
+            prepared = prepare(job.view);
+        } catch (const std::exception& e) {
+            // prepareView's own messages name the view; anything else gets the name here.
+            error = e.what();
+            if (error.rfind("view '" + job.view.id + "'", 0) != 0) error = "view '" + job.view.id + "': " + error;
+        }
+        const auto finished = Clock::now();
+        // The frame is the caller's (it keeps it for the failed-part images); drop our reference outside the lock.
+        job.view.frame.release();
+
+        lock.lock();
+        busy_ = false;
+        if (job.cycle == cycle_ && job.slot < slots_.size()) {
+            Slot& slot = slots_[job.slot];
+            slot.view = std::move(prepared);
+            slot.error = std::move(error);
+            slot.timing.started = started;
+            slot.timing.finished = finished;
+            slot.done = true;
+        }
+        changed_.notify_all();
+    }
+}
+
+} // namespace hg::daemon

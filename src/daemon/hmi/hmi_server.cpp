@@ -1,0 +1,563 @@
+#include "hmi/hmi_server.h"
+
+#include "hullgauge/calib/station_file.h"
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
+#include "hullgauge/common/log.h"
+#include "hullgauge/geometry/json.h"
+#include "hullgauge/store/export.h"
+#include "hullgauge/store/result_reader.h"
+#include "hullgauge/study/spc.h"
+
+#include <algorithm>
+#include <charconv>
+#include <fstream>
+#include <httplib.h>
+#include <regex>
+#include <sstream>
+#include <sys/socket.h>
+#include <sys/statvfs.h>
+
+namespace hg::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+/// A request the API refuses: its HTTP status and what was wrong.
+struct HttpError : std::runtime_error {
+    int status;
+    HttpError(int s, const std::string& what) : std::runtime_error(what), status(s) {}
+};
+
+constexpr const char* kJson = "application/json";
+
+void sendJson(httplib::Response& res, const json& body, int status = 200)
+{
+    res.status = status;
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(dumpJson(body), kJson);
+}
+
+void sendError(httplib::Response& res, int status, const std::string& message)
+{
+    sendJson(res, {{"error", message}}, status);
+}
+
+/// Runs `handler`, turning a refused request into its 4xx and any other failure into 500 (logged).
+template <class Handler> httplib::Server::Handler api(Handler handler)
+{
+    return [handler](const httplib::Request& req, httplib::Response& res) {
+        try {
+            handler(req, res);
+        } catch (const HttpError& e) {
+            sendError(res, e.status, e.what());
+        } catch (const InputError& e) {
+            sendError(res, 400, e.what());
+        } catch (const std::exception& e) {
+            hg::log::category("hmi")->error("{} {}: {}", req.method, req.path, e.what());
+            sendError(res, 500, e.what());
+        }
+    };
+}
+
+/// A query parameter as a whole number in [lo, hi]; nothing when absent.
+std::optional<std::int64_t> intParam(const httplib::Request& req, const char* name, std::int64_t lo, std::int64_t hi)
+{
+    if (!req.has_param(name)) return std::nullopt;
+    const auto text = req.get_param_value(name);
+    std::int64_t value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || end != text.data() + text.size() || value < lo || value > hi)
+        throw HttpError(400, std::string(name) + ": '" + text + "' is not a whole number in " + std::to_string(lo) +
+                                 ".." + std::to_string(hi));
+    return value;
+}
+
+std::string oneOf(const httplib::Request& req, const char* name, const std::vector<std::string>& allowed,
+                  const std::string& fallback)
+{
+    if (!req.has_param(name)) return fallback;
+    auto value = req.get_param_value(name);
+    if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        throw HttpError(400, std::string(name) + ": '" + value + "' is not one of " + list);
+    }
+    return value;
+}
+
+/// The selection of /api/results and the exports (docs/hmi.md, "JSON API").
+store::ResultQuery resultQuery(const httplib::Request& req)
+{
+    store::ResultQuery q;
+    if (auto p = intParam(req, "program", 1, 65535)) q.program = static_cast<int>(*p);
+    if (req.has_param("serial")) q.serialContains = req.get_param_value("serial");
+    if (q.serialContains.size() > 64) throw HttpError(400, "serial: longer than 64 characters");
+    const auto verdict = oneOf(req, "verdict", {"any", "pass", "fail", "aborted", "error"}, "any");
+    if (verdict != "any") q.verdicts = {verdict};
+    const auto purpose = oneOf(req, "purpose", {"any", "production", "master", "study"}, "any");
+    if (purpose != "any") q.purpose = purpose;
+    if (req.has_param("since")) q.sinceMs = store::parseUtc(req.get_param_value("since"), "since");
+    if (req.has_param("until")) q.untilMs = store::parseUtc(req.get_param_value("until"), "until");
+    q.beforeId = intParam(req, "before", 1, std::numeric_limits<std::int64_t>::max());
+    q.limit = static_cast<int>(intParam(req, "limit", 1, 500).value_or(50));
+    return q;
+}
+
+/// The SPC page's data (docs/hmi.md, "JSON API"; docs/spc.md): the program's
+/// PLC-triggered production cycles that ended pass or fail — master, study,
+/// maintenance-triggered, aborted and error cycles never count — the newest
+/// `limit` of them, oldest first; one landmark's charts, or every landmark's.
+json spcSeries(const fs::path& database, const httplib::Request& req)
+{
+    if (!req.has_param("program")) throw HttpError(400, "program: missing (the part program's number)");
+    store::ResultQuery q;
+    q.program = static_cast<int>(*intParam(req, "program", 1, 65535));
+    q.purpose = "production";
+    q.manual = false;
+    q.verdicts = {"pass", "fail"};
+    q.limit = static_cast<int>(intParam(req, "limit", 2, 5000).value_or(500));
+    study::SpcOptions options;
+    options.baseline = static_cast<std::size_t>(intParam(req, "baseline", 2, 5000).value_or(25));
+    options.rules = study::parseRuleSet(oneOf(req, "rules", {"nelson", "western_electric"}, "nelson"));
+    const auto landmark = req.has_param("landmark") ? req.get_param_value("landmark") : std::string();
+
+    auto rows = store::ResultReader(database).select(q);
+    std::reverse(rows.begin(), rows.end());
+    std::vector<study::StudyRecord> records;
+    for (auto& row : rows)
+        records.push_back({row.at("id").get<std::int64_t>(), row.value("serial", ""), std::move(row["landmarks"])});
+    json ids = json::array();
+    json charts = json::array();
+    for (const auto& series : study::collectSeries(records)) {
+        ids.push_back(series.id);
+        if (landmark.empty() || series.id == landmark) charts.push_back(study::toJson(study::spcOf(series, options)));
+    }
+    if (!landmark.empty() && charts.empty())
+        throw HttpError(404, "program " + std::to_string(*q.program) + " has no landmark '" + landmark +
+                                 "' in its production cycles");
+    return {{"program", *q.program}, {"cycles", records.size()}, {"landmark_ids", ids}, {"landmarks", charts}};
+}
+
+/// A download holds at most this many cycles; `hullgauge export` has no limit.
+constexpr std::int64_t kMaxExportCycles = 20000;
+
+/// The results page's downloads (docs/export.md): the selection of /api/results
+/// without its paging, oldest first, in one of the export formats.
+void sendExport(const fs::path& database, const httplib::Request& req, httplib::Response& res)
+{
+    const auto format = store::parseExportFormat(oneOf(req, "format", {"csv", "aqdef", "json"}, "csv"));
+    auto q = resultQuery(req);
+    q.limit = 0;
+    q.newestFirst = false;
+    const store::ResultReader reader(database);
+    const auto cycles = reader.count(q);
+    if (cycles > kMaxExportCycles)
+        throw HttpError(400, "the selection holds " + std::to_string(cycles) + " cycles, a download at most " +
+                                 std::to_string(kMaxExportCycles) +
+                                 ": narrow it (since/until, program) or use hullgauge export");
+    std::ostringstream out;
+    store::writeExport(out, format, reader.select(q));
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("Content-Disposition",
+                   "attachment; filename=\"hullgauge-results." + std::string(store::fileExtension(format)) + "\"");
+    res.set_content(out.str(), std::string(store::contentType(format)));
+}
+
+/// A row of the results list: the stored row without its bulky parts, with the failed landmarks named.
+json summary(const json& row)
+{
+    json failed = json::array();
+    for (const auto& l : row.at("landmarks"))
+        if (l.value("status", "") != "ok") failed.push_back(l.value("id", ""));
+    json s = row;
+    for (const char* bulky : {"landmarks", "timing", "alignment", "simulation"}) s.erase(bulky);
+    s["failed_landmarks"] = std::move(failed);
+    s["has_images"] = !row.at("images").get<std::string>().empty();
+    s.erase("images");
+    return s;
+}
+
+/// The annotated pictures of an archived part (view_<k>.png), when its folder
+/// lies inside the configured image folder; never a path the row could name outside it.
+std::vector<std::string> imagesOf(const json& row, const fs::path& imageRoot, fs::path& folder)
+{
+    std::vector<std::string> names;
+    const auto stored = row.at("images").get<std::string>();
+    if (stored.empty()) return names;
+    std::error_code ec;
+    folder = fs::weakly_canonical(stored, ec);
+    const auto root = fs::weakly_canonical(imageRoot, ec);
+    const auto rel = folder.lexically_relative(root);
+    if (ec || rel.empty() || *rel.begin() == ".." || !fs::is_directory(folder, ec)) return names;
+    static const std::regex kView(R"(view_[0-9]{1,3}\.png)");
+    for (const auto& entry : fs::directory_iterator(folder, ec))
+        if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), kView))
+            names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+        return a.size() != b.size() ? a.size() < b.size() : a < b;
+    });
+    return names;
+}
+
+/// The stored row with the id of a request path (digits, matched by the route); 404 when there is none.
+std::optional<json> storedResult(const station::DaemonConfig& cfg, const std::string& id)
+{
+    const store::ResultReader reader(cfg.results.database);
+    auto row = reader.byId(std::stoll(id));
+    if (!row) throw HttpError(404, "no result " + id);
+    return row;
+}
+
+std::optional<std::string> readFile(const fs::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return std::nullopt;
+    std::ostringstream out;
+    out << in.rdbuf();
+    return out.str();
+}
+
+const char* contentType(const fs::path& file)
+{
+    const auto ext = file.extension().string();
+    if (ext == ".html") return "text/html; charset=utf-8";
+    if (ext == ".js") return "text/javascript; charset=utf-8";
+    if (ext == ".css") return "text/css; charset=utf-8";
+    if (ext == ".svg") return "image/svg+xml";
+    if (ext == ".png") return "image/png";
+    return "application/octet-stream";
+}
+
+void sendFile(httplib::Response& res, const fs::path& file)
+{
+    auto body = readFile(file);
+    if (!body) return sendError(res, 404, "not found");
+    res.set_header("Cache-Control", "no-cache");
+    res.set_content(std::move(*body), contentType(file));
+}
+
+/// The station's calibrations, newest first (calib::calibrationHistory): the
+/// station file's records and each backup's, with the file's name.
+json calibrationHistory(const fs::path& stationFile)
+{
+    json history = json::array();
+    for (const auto& c : calib::calibrationHistory(stationFile, 50)) {
+        json entry{{"file", c.file.filename().string()}, {"camera", c.camera}, {"fixture", c.fixture}};
+        if (!c.error.empty()) entry["error"] = c.error;
+        history.push_back(std::move(entry));
+    }
+    return history;
+}
+
+/// The client's own session: the cookie `hg_session`.
+std::string sessionCookie(const httplib::Request& req)
+{
+    const auto cookies = req.get_header_value("Cookie");
+    static const std::regex kSession(R"((?:^|;\s*)hg_session=([0-9a-f]{64})(?:;|$))");
+    std::smatch m;
+    return std::regex_search(cookies, m, kSession) ? m[1].str() : std::string();
+}
+
+} // namespace
+
+HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock,
+                     SnapshotSource snapshots)
+    : config_(std::move(config)), mailbox_(mailbox), clock_(clock), snapshots_(std::move(snapshots)),
+      sessions_(config_->http.sessionIdle, clock),
+      limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
+      // Guessing the password: five tries at once, then one every 12 s per address.
+      signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<httplib::Server>())
+{
+    const auto& http = config_->http;
+    const int threads = http.threads;
+    server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+    server_->set_payload_max_length(http.maxRequestBytes);
+    server_->set_read_timeout(5, 0);
+    server_->set_write_timeout(5, 0);
+    // cpp-httplib gives a connection its thread for as long as the connection
+    // lives; a line view polling four times a second would keep one forever and
+    // `threads` screens would starve every other. So every answer closes its
+    // connection: a thread is taken only while a request is read and answered.
+    server_->set_keep_alive_max_count(1);
+    server_->set_socket_options([this](int fd) {
+        int one = 1;
+        setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+        listenFd_ = fd;
+    });
+    server_->set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+        return guard(req, res) ? httplib::Server::HandlerResponse::Unhandled
+                               : httplib::Server::HandlerResponse::Handled;
+    });
+    server_->set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+        res.set_header("X-Content-Type-Options", "nosniff");
+        res.set_header("X-Frame-Options", "DENY");
+        res.set_header("Referrer-Policy", "no-referrer");
+        res.set_header("Content-Security-Policy",
+                       "default-src 'self'; img-src 'self' data:; frame-ancestors 'none'; form-action 'self'");
+    });
+    server_->set_error_handler([](const httplib::Request&, httplib::Response& res) {
+        // cpp-httplib's own refusals (413 too large, 414 URI too long, 400 malformed, 404) get a JSON body too.
+        if (res.body.empty()) sendError(res, res.status, "HTTP " + std::to_string(res.status));
+    });
+    routePages();
+    routeApi();
+    routeMaintenance();
+    port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
+                           : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
+    if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
+    // cpp-httplib listens with a backlog of 5; many screens connecting at once need more.
+    if (listenFd_ >= 0) ::listen(listenFd_, 1024);
+    thread_ = std::thread([this] { server_->listen_after_bind(); });
+    hg::log::category("hmi")->info("web HMI on http://{}:{}/", http.bindAddress, port_);
+}
+
+HmiServer::~HmiServer()
+{
+    stop();
+}
+
+void HmiServer::stop()
+{
+    if (server_) server_->stop();
+    if (thread_.joinable()) thread_.join();
+}
+
+void HmiServer::setConfig(std::shared_ptr<const station::DaemonConfig> config)
+{
+    std::lock_guard lock(configMutex_);
+    config_ = std::move(config);
+}
+
+std::shared_ptr<const station::DaemonConfig> HmiServer::config() const
+{
+    std::lock_guard lock(configMutex_);
+    return config_;
+}
+
+// Before routing: methods, the rate limit and the cross-site rules of docs/hmi.md ("Security").
+bool HmiServer::guard(const httplib::Request& req, httplib::Response& res)
+{
+    if (req.method != "GET" && req.method != "HEAD" && req.method != "POST") {
+        sendError(res, 405, "method " + req.method + " not allowed");
+        return false;
+    }
+    if (!limiter_.allow(req.remote_addr)) {
+        res.set_header("Retry-After", "1");
+        sendError(res, 429, "too many requests from " + req.remote_addr);
+        return false;
+    }
+    if (req.method != "POST") return true;
+    // A state change comes from our own pages only: JSON (no HTML form can send it
+    // cross-site without a preflight we never grant) from our own origin.
+    if (req.get_header_value("Content-Type").rfind(kJson, 0) != 0) {
+        sendError(res, 415, "a POST carries application/json");
+        return false;
+    }
+    const auto origin = req.get_header_value("Origin");
+    if (!origin.empty() && origin != "http://" + req.get_header_value("Host")) {
+        sendError(res, 403, "cross-origin request refused (Origin " + origin + ")");
+        return false;
+    }
+    const auto site = req.get_header_value("Sec-Fetch-Site");
+    if (!site.empty() && site != "same-origin" && site != "none") {
+        sendError(res, 403, "cross-site request refused (Sec-Fetch-Site " + site + ")");
+        return false;
+    }
+    return true;
+}
+
+void HmiServer::routePages()
+{
+    // The pages: one HTML file each, their scripts and styles beside them.
+    static const std::map<std::string, std::string> kPages{{"/", "line.html"},
+                                                           {"/results", "results.html"},
+                                                           {"/result", "result.html"},
+                                                           {"/spc", "spc.html"},
+                                                           {"/maintenance", "maintenance.html"}};
+    for (const auto& [path, file] : kPages)
+        server_->Get(path, [this, file = file](const httplib::Request&, httplib::Response& res) {
+            sendFile(res, config()->http.assets / file);
+        });
+    server_->Get(R"(/assets/([a-z0-9][a-z0-9_-]*\.(?:js|css|svg|png)))",
+                 [this](const httplib::Request& req, httplib::Response& res) {
+                     sendFile(res, config()->http.assets / req.matches[1].str());
+                 });
+    // Chart.js from Debian's libjs-chart.js (UMD build: window.Chart), never from a CDN.
+    server_->Get("/lib/chart.js", [this](const httplib::Request&, httplib::Response& res) {
+        sendFile(res, config()->http.javascript / "chart.js" / "chart.min.js");
+    });
+}
+
+void HmiServer::routeApi()
+{
+    server_->Get("/api/status",
+                 api([this](const httplib::Request&, httplib::Response& res) { sendJson(res, status()); }));
+    server_->Get("/api/results", api([this](const httplib::Request& req, httplib::Response& res) {
+                     const auto q = resultQuery(req);
+                     const store::ResultReader reader(config()->results.database);
+                     json rows = json::array();
+                     for (const auto& row : reader.select(q)) rows.push_back(summary(row));
+                     json body{{"results", rows}};
+                     if (static_cast<int>(rows.size()) == q.limit) body["next_before"] = rows.back().at("id");
+                     sendJson(res, body);
+                 }));
+    server_->Get(R"(/api/results/([0-9]{1,18}))", api([this](const httplib::Request& req, httplib::Response& res) {
+                     const auto cfg = config();
+                     auto row = storedResult(*cfg, req.matches[1].str());
+                     fs::path folder;
+                     (*row)["image_files"] = imagesOf(*row, cfg->results.imageDir, folder);
+                     row->erase("images");
+                     sendJson(res, *row);
+                 }));
+    server_->Get(R"(/api/results/([0-9]{1,18})/images/(view_[0-9]{1,3}\.png))",
+                 api([this](const httplib::Request& req, httplib::Response& res) {
+                     const auto cfg = config();
+                     const auto row = storedResult(*cfg, req.matches[1].str());
+                     fs::path folder;
+                     const auto names = imagesOf(*row, cfg->results.imageDir, folder);
+                     const auto name = req.matches[2].str();
+                     if (std::find(names.begin(), names.end(), name) == names.end())
+                         throw HttpError(404, "result " + req.matches[1].str() + " has no image " + name);
+                     sendFile(res, folder / name);
+                 }));
+    server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendJson(res, spcSeries(config()->results.database, req));
+                 }));
+    server_->Get("/api/export", api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendExport(config()->results.database, req, res);
+                 }));
+    server_->Get("/api/programs", api([this](const httplib::Request&, httplib::Response& res) {
+                     json programs = json::array();
+                     const auto cfg = config();
+                     for (const auto& [number, ref] : cfg->programs) {
+                         json views = json::array();
+                         for (const auto& v : ref.views)
+                             views.push_back(geometry::toJson(v, cfg->station.fixture.type));
+                         programs.push_back({{"number", number},
+                                             {"part", ref.partFile.string()},
+                                             {"views_file", ref.viewsFile.string()},
+                                             {"views", views},
+                                             {"force", ref.force}});
+                     }
+                     sendJson(res, {{"programs", programs}});
+                 }));
+    server_->Get("/api/calibration", api([this](const httplib::Request&, httplib::Response& res) {
+                     auto answer = mailbox_.call({{"command", "calibration"}}, std::chrono::milliseconds(2000));
+                     if (!answer) throw HttpError(503, "the daemon did not answer in time");
+                     // The history is read here, on the web thread, not by the main loop.
+                     (*answer)["history"] = calibrationHistory(config()->stationFile);
+                     sendJson(res, *answer);
+                 }));
+    server_->Get("/api/snapshot", api([this](const httplib::Request&, httplib::Response& res) {
+                     auto answer = mailbox_.call({{"command", "snapshot"}}, std::chrono::milliseconds(2000));
+                     if (!answer) throw HttpError(503, "the daemon did not answer in time");
+                     sendJson(res, *answer);
+                 }));
+    server_->Get("/api/snapshot.png", api([this](const httplib::Request&, httplib::Response& res) {
+                     const auto png = snapshots_ ? snapshots_() : nullptr;
+                     if (!png) throw HttpError(404, "no camera snapshot yet");
+                     res.set_header("Cache-Control", "no-store");
+                     res.set_content(reinterpret_cast<const char*>(png->data()), png->size(), "image/png");
+                 }));
+}
+
+// Sign-in and the maintenance actions: the maintenance socket's commands a
+// signed-in engineer may send (docs/hmi.md, "Maintenance").
+void HmiServer::routeMaintenance()
+{
+    server_->Post("/api/login", api([this](const httplib::Request& req, httplib::Response& res) {
+                      const auto& hash = config()->http.passwordHash;
+                      if (hash.empty()) throw HttpError(403, "maintenance over HTTP is not configured");
+                      if (!signIns_.allow(req.remote_addr)) throw HttpError(429, "too many sign-in attempts");
+                      const auto body = json::parse(req.body, nullptr, false);
+                      if (!body.is_object() || !body.contains("password") || !body["password"].is_string())
+                          throw HttpError(400, "expected {\"password\": \"...\"}");
+                      if (!verifyPassword(body["password"].get<std::string>(), hash))
+                          throw HttpError(401, "wrong password");
+                      const auto session = sessions_.open();
+                      res.set_header("Set-Cookie", "hg_session=" + session.id + "; Path=/; HttpOnly; SameSite=Strict");
+                      hg::log::category("hmi")->info("maintenance sign-in from {}", req.remote_addr);
+                      sendJson(res, {{"csrf", session.csrf}});
+                  }));
+    server_->Post("/api/logout", api([this](const httplib::Request& req, httplib::Response& res) {
+                      sessions_.close(sessionCookie(req));
+                      res.set_header("Set-Cookie", "hg_session=; Path=/; HttpOnly; SameSite=Strict; Max-Age=0");
+                      sendJson(res, {{"ok", true}});
+                  }));
+    server_->Get("/api/session", api([this](const httplib::Request& req, httplib::Response& res) {
+                     const auto csrf = sessions_.touch(sessionCookie(req));
+                     json body{{"signed_in", csrf.has_value()}, {"configured", !config()->http.passwordHash.empty()}};
+                     if (csrf) body["csrf"] = *csrf;
+                     sendJson(res, body);
+                 }));
+    server_->Post(
+        "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
+            const auto csrf = sessions_.touch(sessionCookie(req));
+            if (!csrf) throw HttpError(401, "sign in first");
+            if (req.get_header_value("X-CSRF-Token") != *csrf) throw HttpError(403, "CSRF token missing");
+            auto body = json::parse(req.body, nullptr, false);
+            if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
+                throw HttpError(400, "expected {\"command\": \"...\", ...}");
+            static const std::set<std::string> kAllowed{"trigger", "abort", "purpose", "sim-part", "snapshot"};
+            const auto command = body["command"].get<std::string>();
+            if (!kAllowed.count(command)) throw HttpError(400, "command '" + command + "' is not offered");
+            hg::log::category("hmi")->info("maintenance '{}' from {}", command, req.remote_addr);
+            auto answer = mailbox_.call(std::move(body), std::chrono::milliseconds(2000));
+            if (!answer) throw HttpError(503, "the daemon did not answer in time");
+            sendJson(res, *answer, answer->value("ok", false) ? 200 : 409);
+        }));
+}
+
+// The line view's data: the daemon's status (at most ten asks a second of the
+// main loop however many pages poll), the newest result and the disk.
+json HmiServer::status()
+{
+    std::lock_guard lock(cacheMutex_);
+    const auto now = clock_.now();
+    if (statusCache_.is_null() || now - statusAt_ > std::chrono::milliseconds(100)) {
+        auto answer = mailbox_.call({{"command", "status"}}, std::chrono::milliseconds(2000));
+        if (!answer) throw HttpError(503, "the daemon did not answer in time");
+        const auto cfg = config();
+        const store::ResultReader reader(cfg->results.database);
+        store::ResultQuery newest;
+        newest.limit = 1;
+        const auto rows = reader.select(newest);
+        (*answer)["last_result"] = rows.empty() ? json() : summary(rows.front());
+        (*answer)["disk"] = disk(*cfg);
+        answer->erase("pid");
+        answer->erase("config");
+        statusCache_ = std::move(*answer);
+        statusAt_ = now;
+    }
+    return statusCache_;
+}
+
+// How full the archive and its disk are (docs/hmi.md); walked at most every 10 s.
+json HmiServer::disk(const station::DaemonConfig& cfg)
+{
+    const auto now = clock_.now();
+    if (!diskCache_.is_null() && now - diskAt_ < std::chrono::seconds(10)) return diskCache_;
+    std::uint64_t bytes = 0, folders = 0;
+    std::error_code ec;
+    for (auto it = fs::recursive_directory_iterator(cfg.results.imageDir, ec); !ec && it != fs::end(it);
+         it.increment(ec)) {
+        if (it.depth() == 0 && it->is_directory(ec)) ++folders;
+        if (it->is_regular_file(ec)) bytes += it->file_size(ec);
+    }
+    struct statvfs fsStats {};
+    json d{{"archive_bytes", bytes},
+           {"archive_folders", folders},
+           {"max_bytes", cfg.results.retention.maxBytes},
+           {"max_count", cfg.results.retention.maxCount}};
+    if (statvfs(cfg.results.imageDir.c_str(), &fsStats) == 0) {
+        d["filesystem_bytes"] = static_cast<std::uint64_t>(fsStats.f_blocks) * fsStats.f_frsize;
+        d["filesystem_free_bytes"] = static_cast<std::uint64_t>(fsStats.f_bavail) * fsStats.f_frsize;
+    }
+    diskCache_ = d;
+    diskAt_ = now;
+    return d;
+}
+
+} // namespace hg::daemon

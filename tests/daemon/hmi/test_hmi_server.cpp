@@ -1,0 +1,470 @@
+// The web HMI's server over real HTTP on 127.0.0.1 (cpp-httplib's client and
+// raw sockets as peers): the JSON API against a result store written by the
+// daemon's own writer, and the security rules of docs/hmi.md ("Security").
+// The daemon's main loop is played by a thread that answers the mailbox.
+#include "command_mailbox.h"
+#include "cycle/image_archive.h"
+#include "hgtest/paths.h"
+#include "hgtest/station.h"
+#include "hmi/hmi_auth.h"
+#include "hmi/hmi_server.h"
+#include "hullgauge/store/result_store.h"
+#include "manual_clock.h"
+
+#include <arpa/inet.h>
+#include <crypt.h>
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <opencv2/imgcodecs.hpp>
+#include <poll.h>
+#include <sys/socket.h>
+#include <thread>
+#include <unistd.h>
+
+namespace hg::daemon {
+namespace {
+
+using nlohmann::json;
+using namespace std::chrono_literals;
+
+/// crypt(3) SHA-512 hash of `password` with a fixed salt (the server never sees the password in a file).
+std::string hashOf(const std::string& password)
+{
+    crypt_data data{};
+    return crypt_r(password.c_str(), "$6$hmitestsalt$", &data);
+}
+
+station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict, const std::string& serial)
+{
+    station::InspectionRecord r;
+    r.startedUnixMs = 1'764'000'000'000 + seq * 1000;
+    r.triggerSeq = seq;
+    r.serial = serial;
+    r.program = 1;
+    r.part = "block";
+    r.verdict = verdict;
+    r.cycleMs = 900 + seq;
+    const bool bad = verdict == station::Verdict::Fail;
+    r.landmarks = {
+        {"c1", "ok", 0.0, 0.125, 0.0625, 0.2},
+        {"c2", bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0, bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2}};
+    return r;
+}
+
+/// The daemon's main loop as far as the HMI sees it: answers the mailbox
+/// with a status and records every maintenance command it was handed.
+class FakeLoop {
+  public:
+    explicit FakeLoop(CommandMailbox& mailbox) : mailbox_(mailbox), thread_([this] { run(); }) {}
+    ~FakeLoop()
+    {
+        stop_ = true;
+        thread_.join();
+    }
+    std::vector<json> commands()
+    {
+        std::lock_guard lock(mutex_);
+        return commands_;
+    }
+
+  private:
+    void run()
+    {
+        while (!stop_) {
+            pollfd fd{mailbox_.fd(), POLLIN, 0};
+            if (poll(&fd, 1, 20) > 0) mailbox_.serve([this](const json& request) { return answer(request); });
+        }
+    }
+    json answer(const json& request)
+    {
+        std::lock_guard lock(mutex_);
+        commands_.push_back(request);
+        if (request.at("command") == "status")
+            return {{"ok", true},
+                    {"pid", 1},
+                    {"sequencer", {{"state", "ready"}, {"cycles", 3}, {"faults", 0}}},
+                    {"plc", {{"status", 1}, {"done_seq", 3}}},
+                    {"lamps", {{"green", "on"}, {"amber", "off"}, {"red", "off"}}}};
+        return {{"ok", true}, {"did", request.at("command")}};
+    }
+
+    CommandMailbox& mailbox_;
+    std::atomic<bool> stop_{false};
+    std::mutex mutex_;
+    std::vector<json> commands_;
+    std::thread thread_;
+};
+
+class HmiServerTest : public ::testing::Test {
+  protected:
+    void SetUp() override
+    {
+        auto cfg = std::make_shared<station::DaemonConfig>();
+        cfg->results.database = dir / "results.db";
+        cfg->results.imageDir = dir / "images";
+        cfg->http.enabled = true;
+        cfg->http.port = 0;
+        cfg->http.assets = hgtest::sourceDir() / "share" / "hmi";
+        cfg->http.passwordHash = hashOf("line-7 secret");
+        cfg->http.burst = 1000;
+        {
+            store::ResultStore store(cfg->results.database);
+            ImageArchive archive(cfg->results.imageDir, {});
+            ViewEvidence v{cv::Mat(12, 16, CV_8UC1, cv::Scalar(200)), {}, {}};
+            const auto folder = archive.save(1'764'000'001'000, "A-1", {v, v}, true);
+            store.commit(record(1, station::Verdict::Fail, "A-1"), folder.string());
+            store.commit(record(2, station::Verdict::Pass, "B,\"2\""));
+            store.commit(record(3, station::Verdict::Pass, "A-3"));
+            // A row naming a folder outside the archive must never be served from.
+            store.commit(record(4, station::Verdict::Fail, "X"), "/etc");
+        }
+        config = cfg;
+    }
+    void start(std::function<void(station::DaemonConfig&)> tweak = {}, HmiServer::SnapshotSource snapshots = {})
+    {
+        auto cfg = std::make_shared<station::DaemonConfig>(*config);
+        if (tweak) tweak(*cfg);
+        server = std::make_unique<HmiServer>(cfg, mailbox, clock, std::move(snapshots));
+        loop = std::make_unique<FakeLoop>(mailbox);
+        client = std::make_unique<httplib::Client>("127.0.0.1", server->port());
+        client->set_read_timeout(10, 0);
+    }
+    json getJson(const std::string& path, int expectStatus = 200)
+    {
+        auto res = client->Get(path.c_str());
+        EXPECT_TRUE(res) << path;
+        if (!res) return {};
+        EXPECT_EQ(res->status, expectStatus) << path << ": " << res->body;
+        return json::parse(res->body, nullptr, false);
+    }
+    /// Signs in; returns the session cookie and the CSRF token.
+    std::pair<std::string, std::string> signIn()
+    {
+        auto res = client->Post("/api/login", R"({"password": "line-7 secret"})", "application/json");
+        EXPECT_TRUE(res && res->status == 200) << (res ? res->body : "no answer");
+        const auto cookie = res->get_header_value("Set-Cookie");
+        EXPECT_NE(cookie.find("HttpOnly"), std::string::npos) << cookie;
+        EXPECT_NE(cookie.find("SameSite=Strict"), std::string::npos) << cookie;
+        return {cookie.substr(0, cookie.find(';')), json::parse(res->body).at("csrf").get<std::string>()};
+    }
+
+    hgtest::TempDir dir;
+    std::shared_ptr<const station::DaemonConfig> config;
+    ManualClock clock;
+    CommandMailbox mailbox;
+    std::unique_ptr<HmiServer> server;
+    std::unique_ptr<FakeLoop> loop;
+    std::unique_ptr<httplib::Client> client;
+};
+
+TEST_F(HmiServerTest, TheApiAnswersFromTheStoreAndTheMainLoop)
+{
+    start();
+    const auto status = getJson("/api/status");
+    EXPECT_EQ(status["sequencer"]["state"], "ready");
+    EXPECT_EQ(status["last_result"]["id"], 4);
+    EXPECT_FALSE(status.contains("pid")); // nothing of the process for the network
+    EXPECT_EQ(status["disk"]["archive_folders"], 1);
+
+    const auto fails = getJson("/api/results?verdict=fail");
+    ASSERT_EQ(fails["results"].size(), 2u);
+    EXPECT_EQ(fails["results"][0]["serial"], "X");
+    EXPECT_EQ(fails["results"][1]["failed_landmarks"], json::array({"c2"}));
+
+    const auto search = getJson("/api/results?serial=A-");
+    ASSERT_EQ(search["results"].size(), 2u);
+    EXPECT_EQ(search["results"][0]["serial"], "A-3");
+
+    const auto page = getJson("/api/results?limit=2");
+    EXPECT_EQ(page["next_before"], 3);
+    const auto next = getJson("/api/results?limit=2&before=3");
+    EXPECT_EQ(next["results"][0]["id"], 2);
+    EXPECT_EQ(next["results"][0]["serial"], "B,\"2\"");
+
+    const auto one = getJson("/api/results/1");
+    EXPECT_EQ(one["landmarks"][1]["status"], "out_of_tolerance");
+    EXPECT_EQ(one["image_files"], json::array({"view_0.png", "view_1.png"}));
+    auto png = client->Get("/api/results/1/images/view_1.png");
+    ASSERT_TRUE(png);
+    EXPECT_EQ(png->status, 200);
+    EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(png->body.substr(1, 3), "PNG");
+}
+
+TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)
+{
+    {
+        // Cycles the SPC must leave out: a master part, a maintenance-triggered one, an aborted one.
+        store::ResultStore store(config->results.database);
+        auto master = record(5, station::Verdict::Fail, "M-5");
+        master.purpose = station::CyclePurpose::Master;
+        auto manual = record(6, station::Verdict::Fail, "H-6");
+        manual.manual = true;
+        store.commit(master);
+        store.commit(manual);
+        store.commit(record(7, station::Verdict::Aborted, "Z-7"));
+    }
+    start();
+    const auto body = getJson("/api/spc?program=1&landmark=c2");
+    EXPECT_EQ(body["cycles"], 4);
+    EXPECT_EQ(body["landmark_ids"], json::array({"c1", "c2"}));
+    ASSERT_EQ(body["landmarks"].size(), 1u);
+    const auto& c2 = body["landmarks"][0];
+    // The bracket middles of c2 in rows 1..4 (fail, pass, pass, fail), oldest first.
+    const std::vector<double> expected{0.5625, 0.0625, 0.0625, 0.5625};
+    ASSERT_EQ(c2["points"].size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_DOUBLE_EQ(c2["points"][i]["value_mm"], expected[i]);
+    // Baseline = all 4 values: CL 0.3125, MR̄ = (0.5 + 0 + 0.5) / 3, σ = MR̄ / 1.128.
+    const double sigma = (1.0 / 3.0) / 1.128;
+    EXPECT_NEAR(c2["i_chart"]["centre_mm"].get<double>(), 0.3125, 1e-12);
+    EXPECT_NEAR(c2["i_chart"]["ucl_mm"].get<double>(), 0.3125 + 3 * sigma, 1e-9);
+    EXPECT_EQ(c2["baseline"]["used"], 4);
+    EXPECT_TRUE(c2["baseline"]["short"].get<bool>());
+    EXPECT_EQ(c2["yield"]["within"], 2); // 0.5625 is beyond the ±0.2 zone
+
+    EXPECT_EQ(getJson("/api/spc?program=1")["landmarks"].size(), 2u);
+    EXPECT_EQ(getJson("/api/spc?program=2")["landmark_ids"], json::array());
+    EXPECT_NE(getJson("/api/spc", 400)["error"].get<std::string>().find("program"), std::string::npos);
+    EXPECT_NE(getJson("/api/spc?program=1&landmark=c9", 404)["error"].get<std::string>().find("c9"), std::string::npos);
+    EXPECT_NE(getJson("/api/spc?program=1&rules=shewhart", 400)["error"].get<std::string>().find("shewhart"),
+              std::string::npos);
+}
+
+TEST_F(HmiServerTest, TheResultsPageDownloadsItsSelection)
+{
+    start();
+    auto csv = client->Get("/api/export?format=csv&verdict=pass");
+    ASSERT_TRUE(csv);
+    EXPECT_EQ(csv->status, 200) << csv->body;
+    EXPECT_EQ(csv->get_header_value("Content-Type").rfind("text/csv", 0), 0u);
+    EXPECT_EQ(csv->get_header_value("Content-Disposition"), "attachment; filename=\"hullgauge-results.csv\"");
+    // RFC 4180: a header and one CRLF-ended row per landmark of the two passed cycles; the serial
+    // with a comma and quotes quoted, its quotes doubled.
+    std::size_t lines = 0;
+    for (std::size_t at = csv->body.find("\r\n"); at != std::string::npos; at = csv->body.find("\r\n", at + 2)) ++lines;
+    EXPECT_EQ(lines, 1u + 2u * 2u) << csv->body;
+    EXPECT_NE(csv->body.find("\"B,\"\"2\"\"\""), std::string::npos) << csv->body;
+    EXPECT_EQ(csv->body.find("A-1"), std::string::npos) << "a failed cycle in a selection of passes";
+
+    auto dfq = client->Get("/api/export?format=aqdef&program=1");
+    ASSERT_TRUE(dfq);
+    EXPECT_EQ(dfq->status, 200) << dfq->body;
+    EXPECT_EQ(dfq->get_header_value("Content-Disposition"), "attachment; filename=\"hullgauge-results.dfq\"");
+    EXPECT_EQ(dfq->body.rfind("K0100 2", 0), 0u) << dfq->body.substr(0, 80);
+
+    EXPECT_NE(getJson("/api/export?format=xml", 400)["error"].get<std::string>().find("xml"), std::string::npos);
+    EXPECT_NE(getJson("/api/export?format=csv&since=yesterday", 400)["error"].get<std::string>().find("since"),
+              std::string::npos);
+}
+
+TEST_F(HmiServerTest, BadRequestsAreAnsweredWith4xxNamingTheProblem)
+{
+    start();
+    EXPECT_NE(getJson("/api/results?program=abc", 400)["error"].get<std::string>().find("program"), std::string::npos);
+    EXPECT_NE(getJson("/api/results?since=2026-02-30", 400)["error"].get<std::string>().find("since"),
+              std::string::npos);
+    EXPECT_NE(getJson("/api/results?verdict=maybe", 400)["error"].get<std::string>().find("verdict"),
+              std::string::npos);
+    getJson("/api/results?limit=100000", 400);
+    // A parameter that is not UTF-8 is named in the answer, its bad byte replaced (U+FFFD).
+    EXPECT_NE(getJson("/api/results?verdict=%F8", 400)["error"].get<std::string>().find("\xEF\xBF\xBD"),
+              std::string::npos);
+    getJson("/api/results/99", 404);
+    getJson("/api/results/1/images/view_9.png", 404);
+    // The row whose folder lies outside the archive has no images to serve.
+    EXPECT_TRUE(getJson("/api/results/4")["image_files"].empty());
+    getJson("/api/results/4/images/view_1.png", 404);
+    auto traversal = client->Get("/assets/..%2f..%2fetc%2fpasswd");
+    ASSERT_TRUE(traversal);
+    EXPECT_EQ(traversal->status, 404);
+    auto del = client->Delete("/api/results/1");
+    ASSERT_TRUE(del);
+    EXPECT_EQ(del->status, 405);
+    auto longUri = client->Get(("/api/results?serial=" + std::string(10000, 'a')).c_str());
+    ASSERT_TRUE(longUri);
+    EXPECT_EQ(longUri->status, 414);
+}
+
+/// Sends `raw` on a fresh connection and returns the status line of the answer.
+std::string rawRequest(int port, const std::string& raw)
+{
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    timeval timeout{10, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+        close(fd);
+        return "no connection";
+    }
+    [[maybe_unused]] auto sent = send(fd, raw.data(), raw.size(), MSG_NOSIGNAL);
+    char buf[256] = {};
+    const auto n = recv(fd, buf, sizeof buf - 1, 0);
+    close(fd);
+    const std::string answer(buf, n > 0 ? static_cast<std::size_t>(n) : 0);
+    return answer.substr(0, answer.find("\r\n"));
+}
+
+TEST_F(HmiServerTest, MalformedAndOversizedRequestsAreRefusedAndTheServerServesOn)
+{
+    start([](station::DaemonConfig& c) { c.http.maxRequestBytes = 4096; });
+    EXPECT_EQ(rawRequest(server->port(), "GARBAGE\r\n\r\n").substr(0, 12), "HTTP/1.1 400");
+    EXPECT_EQ(
+        rawRequest(server->port(), "GET /api/status HTTP/1.1\r\nHost: x\r\n" + std::string(9000, 'h') + "\r\n\r\n")
+            .substr(0, 9),
+        "HTTP/1.1 ");
+    auto big = client->Post("/api/login", std::string(8192, '{'), "application/json");
+    ASSERT_TRUE(big);
+    EXPECT_EQ(big->status, 413);
+    EXPECT_EQ(getJson("/api/status")["sequencer"]["state"], "ready");
+}
+
+TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
+{
+    start();
+    const std::string body = R"({"command": "purpose", "purpose": "master"})";
+    auto anonymous = client->Post("/api/maintenance", body, "application/json");
+    ASSERT_TRUE(anonymous);
+    EXPECT_EQ(anonymous->status, 401);
+    auto wrong = client->Post("/api/login", R"({"password": "guess"})", "application/json");
+    ASSERT_TRUE(wrong);
+    EXPECT_EQ(wrong->status, 401);
+
+    const auto [cookie, csrf] = signIn();
+    auto noToken = client->Post("/api/maintenance", {{"Cookie", cookie}}, body, "application/json");
+    ASSERT_TRUE(noToken);
+    EXPECT_EQ(noToken->status, 403);
+    auto form = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "text/plain");
+    ASSERT_TRUE(form);
+    EXPECT_EQ(form->status, 415);
+    auto crossSite = client->Post("/api/maintenance",
+                                  {{"Cookie", cookie}, {"X-CSRF-Token", csrf}, {"Origin", "http://evil.example"}}, body,
+                                  "application/json");
+    ASSERT_TRUE(crossSite);
+    EXPECT_EQ(crossSite->status, 403);
+    auto notOffered = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}},
+                                   R"({"command": "calibrate"})", "application/json");
+    ASSERT_TRUE(notOffered);
+    EXPECT_EQ(notOffered->status, 400);
+    for (const auto& c : loop->commands()) EXPECT_NE(c.at("command"), "purpose") << "refused requests reached the loop";
+
+    auto ok = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
+    ASSERT_TRUE(ok);
+    EXPECT_EQ(ok->status, 200) << ok->body;
+    const auto seen = loop->commands();
+    ASSERT_FALSE(seen.empty());
+    EXPECT_EQ(seen.back(), json::parse(body));
+
+    // The session ends when it has been idle too long.
+    clock.advance(std::chrono::duration_cast<std::chrono::milliseconds>(config->http.sessionIdle) + 1s);
+    auto stale =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
+    ASSERT_TRUE(stale);
+    EXPECT_EQ(stale->status, 401);
+}
+
+// The maintenance page's camera frame (docs/hmi.md, "Maintenance"): asked for
+// by a signed-in engineer through the loop, shown to whoever reads the page.
+TEST_F(HmiServerTest, TheCameraSnapshotIsAskedForSignedInAndServedAsPng)
+{
+    std::shared_ptr<const std::vector<unsigned char>> png;
+    start({}, [&png] { return png; });
+    auto none = client->Get("/api/snapshot.png");
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->status, 404);
+
+    const std::string body = R"({"command": "snapshot", "grab": true, "rotation_deg": 30})";
+    auto anonymous = client->Post("/api/maintenance", body, "application/json");
+    ASSERT_TRUE(anonymous);
+    EXPECT_EQ(anonymous->status, 401);
+    const auto [cookie, csrf] = signIn();
+    auto asked =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
+    ASSERT_TRUE(asked);
+    EXPECT_EQ(asked->status, 200) << asked->body;
+    EXPECT_EQ(loop->commands().back(), json::parse(body));
+    EXPECT_EQ(getJson("/api/snapshot").at("did"), "snapshot");
+
+    std::vector<unsigned char> encoded;
+    cv::imencode(".png", cv::Mat(6, 9, CV_8UC3, cv::Scalar(1, 2, 3)), encoded);
+    png = std::make_shared<const std::vector<unsigned char>>(encoded);
+    auto shown = client->Get("/api/snapshot.png");
+    ASSERT_TRUE(shown);
+    EXPECT_EQ(shown->status, 200);
+    EXPECT_EQ(shown->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(shown->get_header_value("Cache-Control"), "no-store");
+    EXPECT_EQ(shown->body, std::string(encoded.begin(), encoded.end()));
+}
+
+// The calibration status from the loop, the history read from the station
+// file and its backups on the web thread.
+TEST_F(HmiServerTest, TheCalibrationHistoryListsTheStationFileAndItsBackups)
+{
+    hgtest::writeFile(dir / "station.yaml",
+                      "camera: {calibration: {method: rail, rms_px: 0.12, date: 20261203T080000Z}}\n");
+    hgtest::writeFile(dir / "station.yaml.bak-20261201T070000Z",
+                      "camera: {calibration: {method: rail, rms_px: 0.3}}\n");
+    start([&](station::DaemonConfig& c) { c.stationFile = dir / "station.yaml"; });
+    const auto answer = getJson("/api/calibration");
+    EXPECT_EQ(answer.at("did"), "calibration");
+    const auto& history = answer.at("history");
+    ASSERT_EQ(history.size(), 2u);
+    EXPECT_EQ(history[0].at("file"), "station.yaml");
+    EXPECT_DOUBLE_EQ(history[0].at("camera").at("rms_px").get<double>(), 0.12);
+    EXPECT_EQ(history[1].at("file"), "station.yaml.bak-20261201T070000Z");
+    EXPECT_DOUBLE_EQ(history[1].at("camera").at("rms_px").get<double>(), 0.3);
+    EXPECT_TRUE(history[1].at("fixture").is_null());
+}
+
+TEST_F(HmiServerTest, AClientBeyondItsRateIsToldToWaitAndServedAgainLater)
+{
+    start([](station::DaemonConfig& c) {
+        c.http.burst = 5;
+        c.http.requestsPerSecond = 2;
+    });
+    for (int i = 0; i < 5; ++i) getJson("/api/results?limit=1");
+    auto refused = client->Get("/api/results?limit=1");
+    ASSERT_TRUE(refused);
+    EXPECT_EQ(refused->status, 429);
+    EXPECT_EQ(refused->get_header_value("Retry-After"), "1");
+    clock.advance(1000ms); // two tokens back
+    getJson("/api/results?limit=1");
+    getJson("/api/results?limit=1");
+    auto again = client->Get("/api/results?limit=1");
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->status, 429);
+}
+
+TEST_F(HmiServerTest, SignInAttemptsAreLimitedPerAddress)
+{
+    start();
+    int refused = 0;
+    for (int i = 0; i < 6; ++i) {
+        auto res = client->Post("/api/login", R"({"password": "guess"})", "application/json");
+        ASSERT_TRUE(res);
+        if (res->status == 429) ++refused;
+    }
+    EXPECT_EQ(refused, 1); // five at once, the sixth waits 12 s
+    clock.advance(12s);
+    auto res = client->Post("/api/login", R"({"password": "line-7 secret"})", "application/json");
+    ASSERT_TRUE(res);
+    EXPECT_EQ(res->status, 200);
+}
+
+TEST(HmiAuth, PasswordsAreCheckedAgainstCryptHashesOnly)
+{
+    const auto hash = hashOf("s3cret");
+    EXPECT_TRUE(validPasswordHash(hash));
+    EXPECT_TRUE(verifyPassword("s3cret", hash));
+    EXPECT_FALSE(verifyPassword("s3cret ", hash));
+    EXPECT_FALSE(verifyPassword("", hash));
+    EXPECT_FALSE(validPasswordHash("s3cret"));        // a plain password is no hash
+    EXPECT_FALSE(validPasswordHash("$6$"));           // nor a prefix alone
+    EXPECT_FALSE(verifyPassword("s3cret", "s3cret")); // and never compared as one
+}
+
+} // namespace
+} // namespace hg::daemon

@@ -485,7 +485,7 @@ std::function<int()> factory(CLI::App& app)
     cmd->add_option("--count", args->count, "landmarks to suggest")->check(CLI::Range(1, 1000))->capture_default_str();
     cmd->add_option("--depth", args->depth,
                     "octree depth of a suggested program (default: the finest whose voxels the station resolves)")
-        ->check(CLI::Range(1, 15));
+        ->check(CLI::Range(1, model::kMaxOctreeDepth));
     cmd->add_option("--adjacency-depth", args->adjacencyDepth, "octree adjacency_depth of a suggested program")
         ->check(CLI::Range(1, 64))
         ->capture_default_str();

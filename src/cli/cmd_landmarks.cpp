@@ -141,7 +141,7 @@ std::function<int()> factory(CLI::App& app)
                     std::string("station the landmarks must be inspectable at (default: ") + kInstalledStation + ")");
     sub->add_option("--count", args->count, "landmarks to suggest")->check(CLI::Range(1, 10000))->capture_default_str();
     sub->add_option("--depth", args->depth, "octree depth the landmarks are judged at (ΔV)")
-        ->check(CLI::Range(1, 20))
+        ->check(CLI::Range(1, model::kMaxOctreeDepth))
         ->capture_default_str();
     sub->add_option("--adjacency-depth", args->adjacencyDepth, "octree adjacency_depth (type-four layers)")
         ->check(CLI::Range(1, 64))

@@ -100,7 +100,17 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)
 {
     auto fileName = std::make_shared<const std::string>(name);
     try {
-        YAML::Node root = YAML::Load(text);
+        // Every document is read: a second one (after `---`) was once silently
+        // ignored, and with it whatever the engineer wrote there.
+        const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+        for (std::size_t k = 1; k < documents.size(); ++k)
+            if (documents[k] && !documents[k].IsNull())
+                throw InputError(name, "",
+                                 "a second YAML document begins here; a configuration file is one document (remove "
+                                 "the '---' line or the text after it)",
+                                 documents[k].Mark().is_null() ? std::nullopt
+                                                               : std::optional<int>(documents[k].Mark().line + 1));
+        YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
         if (!root || root.IsNull()) throw InputError(name, "", "file is empty");
         long budget = 1000000;
         rejectDuplicateKeys(root, name, "", budget);

@@ -4,6 +4,7 @@
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 
 #include <arpa/inet.h>
 #include <cmath>
@@ -32,8 +33,7 @@ fs::path resolve(const ConfigNode& node, const fs::path& base)
 fs::path existingFile(const ConfigNode& node, const fs::path& base)
 {
     auto p = resolve(node, base);
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) node.fail("no such file: " + p.string());
+    if (auto problem = notARegularFile(p); !problem.empty()) node.fail(problem + ": " + p.string());
     return p;
 }
 

@@ -216,23 +216,60 @@ json status(const MaintenanceContext& c, const json&)
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
 }
 
+/// A whole-number field of a request within [lo, hi], `fallback` when it is
+/// absent (docs/daemon.md, "Maintenance socket"): a fraction (1.9), a string, a
+/// float written as 1e8 or a number out of range is refused naming the key,
+/// never rounded, truncated or clamped into a different request.
+Result<std::int64_t> wholeNumber(const json& request, const char* key, std::int64_t lo, std::int64_t hi,
+                                 std::optional<std::int64_t> fallback)
+{
+    if (!request.contains(key)) {
+        if (fallback) return *fallback;
+        return Status::failure(StatusCode::NotAllowed, fmt::format("{}: missing (a whole number {}..{})", key, lo, hi));
+    }
+    const json& v = request[key];
+    if (!v.is_number_integer())
+        return Status::failure(StatusCode::NotAllowed,
+                               fmt::format("{}: {} is not a whole number {}..{}", key, v.dump(), lo, hi));
+    // Unsigned past int64's range stays out of range rather than wrapping negative.
+    const bool huge = v.is_number_unsigned() && v.get<std::uint64_t>() > std::uint64_t(hi);
+    const std::int64_t n = huge ? hi : v.get<std::int64_t>();
+    if (huge || n < lo || n > hi)
+        return Status::failure(StatusCode::NotAllowed, fmt::format("{}: {} is outside {}..{}", key, v.dump(), lo, hi));
+    return n;
+}
+
+json refusal(const Status& status)
+{
+    return {{"ok", false}, {"error", status.message()}};
+}
+
 json results(const MaintenanceContext& c, const json& request)
 {
-    const int limit = request.value("limit", 10);
-    return {{"ok", true}, {"results", c.store.recent(std::clamp(limit, 1, 1000))}};
+    const auto limit = wholeNumber(request, "limit", 1, 1000, 10);
+    if (!limit) return refusal(limit.status());
+    return {{"ok", true}, {"results", c.store.recent(static_cast<int>(limit.value()))}};
 }
 
 json trigger(const MaintenanceContext& c, const json& request)
 {
-    const auto program = request.value("program", 0);
-    if (program < 1 || program > 65535) return {{"ok", false}, {"error", "program must be 1..65535"}};
+    const auto program = wholeNumber(request, "program", 1, 65535, std::nullopt);
+    if (!program) return refusal(program.status());
+    if (request.contains("serial") && !request["serial"].is_string())
+        return {{"ok", false}, {"error", "serial: " + request["serial"].dump() + " is not a string"}};
     const auto serial = request.value("serial", std::string());
+    // A manual serial fits the PLC's SERIAL registers too: it names the part's
+    // record and its image folder, which a 300-character serial once broke.
+    if (serial.size() > station::kSerialChars)
+        return {{"ok", false},
+                {"error", fmt::format("serial: {} characters; a serial has at most {} (the PLC's SERIAL registers)",
+                                      serial.size(), station::kSerialChars)}};
     // The PLC's rule for its SERIAL registers; a NUL is padding there, never part of a serial.
     for (std::size_t i = 0; i < serial.size(); ++i)
         if (const auto byte = static_cast<unsigned char>(serial[i]); byte == 0 || !station::validSerialByte(byte))
             return {{"ok", false},
                     {"error", fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte)}};
-    const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program), serial);
+    const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program.value()), serial);
     if (reason == station::RejectReason::None) return {{"ok", true}};
     static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
     return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};

@@ -7,6 +7,9 @@
 
 #include "hullgauge/common/error.h"
 
+static_assert(hg::inspect::kMaxDepth == hg::model::kMaxOctreeDepth,
+              "a program's octree.depth is checked at loading against the map's deepest level");
+
 namespace hg::inspect {
 
 namespace {

@@ -30,7 +30,9 @@
 #include <spdlog/fmt/fmt.h>
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "hullgauge/common/log.h"
+#include "mesh_limits.h"
 #include "ply_check.h"
 
 namespace hg::model {
@@ -345,7 +347,7 @@ void readPolygonSoup(const std::filesystem::path& file, const std::string& ext, 
 
 /// The file's facets as a triangle soup, points written more than once (STL
 /// stores each vertex once per facet) merged.
-TriangleMesh readSoup(const std::filesystem::path& file)
+TriangleMesh readSoup(const std::filesystem::path& file, const MeshRepairOptions& limits)
 {
     const std::string name = file.string();
     const std::string ext = lowerExtension(file);
@@ -356,10 +358,11 @@ TriangleMesh readSoup(const std::filesystem::path& file)
     if (ext != ".stl" && ext != ".obj" && ext != ".ply" && ext != ".off")
         throw InputError(name, "mesh", "unknown mesh format '" + ext + "' (expected .stl, .obj, .ply or .off)");
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "mesh", "no such file");
+    if (auto problem = notARegularFile(file); !problem.empty()) throw InputError(name, "mesh", problem);
     const std::uintmax_t size = std::filesystem::file_size(file, ec);
     if (ec) throw InputError(name, "mesh", "cannot read the file: " + ec.message());
     if (size == 0) throw InputError(name, "mesh", "the file is empty");
+    detail::checkAnnouncedSize(file, ext, size, limits);
     if (ext == ".stl") checkStlSize(file, size);
     if (ext == ".ply") {
         detail::checkPly(file, size);
@@ -398,7 +401,7 @@ ImportedMesh importMesh(const std::filesystem::path& file, const MeshRepairOptio
 {
     const std::string name = file.string();
     ImportedMesh out;
-    out.mesh = repairMesh(readSoup(file), name, options, out.repair);
+    out.mesh = repairMesh(readSoup(file, options), name, options, out.repair);
     if (options.mode == MeshRepairMode::Strict && !out.repair.clean())
         throw InputError(name, "mesh", "needs repair (mesh_repair: strict): " + out.repair.defects());
     if (!out.repair.clean()) log::category("model")->warn("{}: mesh repaired: {}", name, out.repair.repairs());

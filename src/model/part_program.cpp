@@ -33,7 +33,7 @@ OctreeSpec parseOctree(const ConfigNode& node, const Eigen::AlignedBox3d& bounds
 {
     node.allowOnlyKeys({"cube_origin", "cube_size", "depth", "adjacency_depth"});
     OctreeSpec spec;
-    spec.depth = static_cast<int>(node["depth"].asIntIn(1, 20));
+    spec.depth = static_cast<int>(node["depth"].asIntIn(1, kMaxOctreeDepth));
     spec.adjacencyDepth = static_cast<int>(node["adjacency_depth"].asIntIn(1, 1 << 20));
     const auto origin = node.optional("cube_origin");
     const auto size = node.optional("cube_size");

@@ -331,4 +331,17 @@ void checkPly(const std::filesystem::path& file, std::uintmax_t size)
     for (const PlyElement& e : layout->elements) walk.walk(e);
 }
 
+std::optional<std::uintmax_t> plyAnnouncedFaces(const std::filesystem::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    std::string first;
+    if (!std::getline(in, first) || first.rfind("ply", 0) != 0) return std::nullopt;
+    in.seekg(0);
+    const std::optional<PlyLayout> layout = readPlyLayout(in);
+    if (!layout) return std::nullopt;
+    for (const PlyElement& e : layout->elements)
+        if (e.name == "face" || e.name == "faces") return e.count;
+    return std::nullopt;
+}
+
 } // namespace hg::model::detail

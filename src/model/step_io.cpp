@@ -76,6 +76,7 @@
 
 #include "hullgauge/common/child_process.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "hullgauge/model/mesh_io.h"
 
 namespace hg::model {
@@ -699,7 +700,7 @@ TriangleMesh triangles(const std::string& name, const TopoDS_Shape& shape, const
 void requireStepText(const std::string& name, const std::filesystem::path& file)
 {
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(file, ec)) fail(name, "no such file");
+    if (auto problem = notARegularFile(file); !problem.empty()) fail(name, problem);
     if (std::filesystem::file_size(file, ec) == 0) fail(name, "the file is empty");
     const std::string text = fileText(file);
     if (!endsLikeStep(text)) fail(name, "the file ends before END-ISO-10303-21; (truncated or not a STEP file)");

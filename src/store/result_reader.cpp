@@ -1,6 +1,7 @@
 #include "hullgauge/store/result_reader.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "result_rows.h"
 
 #include <array>
@@ -196,7 +197,8 @@ std::int64_t countResults(const sqlite::Connection& db, const std::string& file,
 
 ResultReader::ResultReader(const std::filesystem::path& file) : file_(file)
 {
-    if (!std::filesystem::is_regular_file(file)) throw InputError(file.string(), "", "no database at " + file.string());
+    if (auto problem = notARegularFile(file); !problem.empty())
+        throw InputError(file.string(), "", "no database at " + file.string() + ": " + problem);
     try {
         // Read-only: a reader never migrates an older store, it reads its columns' defaults (selectList).
         db_ = sqlite::open(file, sqlite::Access::Read, "result store " + file.string());

@@ -1,6 +1,7 @@
 #include "hullgauge/vision/manifest.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 
@@ -476,8 +477,10 @@ cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
     const std::string name = manifest.file.string();
     const std::string field = "views[" + std::to_string(index) + "].image";
     std::error_code ec;
-    if (!fs::is_regular_file(v.image, ec))
-        throw InputError(name, field, "no such image file '" + v.image.string() + "'");
+    if (auto problem = notARegularFile(v.image); !problem.empty())
+        throw InputError(name, field,
+                         problem == "no such file" ? "no such image file '" + v.image.string() + "'"
+                                                   : "image file '" + v.image.string() + "' is " + problem);
     if (auto size = pngSize(v.image); size && size->first * size->second > kMaxImagePixels)
         throw InputError(name, field,
                          fmt::format("image '{}' claims {}x{} pixels, past the {} a frame may hold", v.image.string(),

@@ -86,6 +86,17 @@ TEST(ConfigNode, AliasBombIsRefusedNotWalkedForever)
     EXPECT_NE(e.problem().find("too large"), std::string::npos) << e.problem();
 }
 
+// A second document after `---` was once silently ignored, with whatever the
+// engineer wrote there; it is refused at its line. An empty one is no text lost.
+TEST(ConfigNode, ASecondDocumentIsRefusedAtItsLine)
+{
+    const hg::InputError e = parseError("part: block\noctree: {depth: 6}\n---\nlandmarks: []\n");
+    EXPECT_EQ(e.line(), std::optional<int>(4));
+    EXPECT_NE(e.problem().find("a second YAML document begins here"), std::string::npos) << e.problem();
+    EXPECT_EQ(hg::ConfigNode::parse("part: block\n---\n", "p.yaml")["part"].asString(), "block");
+    EXPECT_EQ(hg::ConfigNode::parse("part: block\n...\n", "p.yaml")["part"].asString(), "block");
+}
+
 TEST(ConfigNode, DeviceNodesAndFoldersAreRefusedWithoutReading)
 {
     // /dev/zero once grew a reader without bound; it is not a configuration file.

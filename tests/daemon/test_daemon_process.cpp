@@ -130,6 +130,47 @@ TEST(DaemonProcess, TriggersRefusedWhileBusyOrForUnknownProgramsAreCounted)
               "M1|1|pass\nSN000000|0|pass\n");
 }
 
+// Numbers from the socket are read as they are written: a fraction, a float, a
+// string or a value outside the documented range is refused naming the key —
+// "program": 1.9 once ran program 1, "limit": 1e8 answered every row — and a
+// manual serial longer than the PLC's 16 characters (once a 300-character one
+// broke the part's image folder) is refused before any cycle starts.
+TEST(DaemonProcess, LooseNumbersAndOverlongSerialsAreRefusedNamingTheKey)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    const auto sock = dir / "hg.sock";
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    using nlohmann::json;
+    const std::pair<json, std::string> refused[] = {
+        {{{"command", "trigger"}, {"program", 1.9}}, "program: 1.9 is not a whole number 1..65535"},
+        {{{"command", "trigger"}, {"program", "1"}}, "program: \"1\" is not a whole number 1..65535"},
+        {{{"command", "trigger"}, {"program", 0}}, "program: 0 is outside 1..65535"},
+        {{{"command", "trigger"}}, "program: missing (a whole number 1..65535)"},
+        {{{"command", "trigger"}, {"program", 1}, {"serial", 7}}, "serial: 7 is not a string"},
+        {{{"command", "trigger"}, {"program", 1}, {"serial", std::string(17, 'S')}},
+         "serial: 17 characters; a serial has at most 16 (the PLC's SERIAL registers)"},
+        {{{"command", "results"}, {"limit", 0}}, "limit: 0 is outside 1..1000"},
+        {{{"command", "results"}, {"limit", -1}}, "limit: -1 is outside 1..1000"},
+        {{{"command", "results"}, {"limit", 1e8}}, "limit: 100000000.0 is not a whole number 1..1000"},
+        {{{"command", "results"}, {"limit", 18446744073709551615ull}},
+         "limit: 18446744073709551615 is outside 1..1000"},
+    };
+    for (const auto& [request, error] : refused) {
+        const json answer = hgdaemon::maintenance(sock, request);
+        EXPECT_EQ(answer["ok"], false) << request.dump();
+        EXPECT_EQ(answer.value("error", ""), error) << request.dump();
+    }
+    EXPECT_EQ(sql(dir / "results.db", "SELECT count(*) FROM inspections"), "0\n");
+    // Sixteen characters are the PLC's own: taken.
+    const json taken =
+        hgdaemon::maintenance(sock, {{"command", "trigger"}, {"program", 1}, {"serial", std::string(16, 'S')}});
+    ASSERT_TRUE(taken["ok"].get<bool>()) << taken.dump();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "done", 10s));
+    EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "results"}, {"limit", 1000}})["results"].size(), 1u);
+}
+
 TEST(DaemonProcess, CyclePurposeFromThePlcOrTheSocketIsLatchedAtTheTriggerAndStored)
 {
     hgtest::TempDir dir;

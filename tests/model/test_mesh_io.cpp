@@ -4,6 +4,8 @@
 #include <fstream>
 #include <string>
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include "hgtest/log_capture.h"
@@ -204,6 +206,83 @@ TEST(MeshIo, BadFilesAreNamed)
     EXPECT_NE(std::string(loadError(dir / "missing.obj").what()).find("no such file"), std::string::npos);
     EXPECT_NE(std::string(loadError(hgtest::writeFile(dir / "p.step", "ISO-10303-21;")).what()).find("STEP"),
               std::string::npos);
+}
+
+// A path that names no regular file says what it names: a folder, a FIFO (a
+// reader would block on it), a link to /dev/zero (a reader would never end).
+TEST(MeshIo, PathsThatAreNoFileSayWhatTheyAre)
+{
+    hgtest::TempDir dir;
+    fs::create_directory(dir / "folder.stl");
+    ASSERT_EQ(::mkfifo((dir / "pipe.stl").c_str(), 0600), 0);
+    fs::create_symlink("/dev/zero", dir / "zero.stl");
+    fs::create_symlink(dir / "gone.stl", dir / "dangling.stl");
+    const std::pair<const char*, const char*> cases[] = {
+        {"folder.stl", "a folder, not a file"},
+        {"pipe.stl", "a FIFO (named pipe), not a regular file"},
+        {"zero.stl", "a character device, not a regular file"},
+        {"dangling.stl", "a broken symbolic link (its target does not exist)"},
+        {"missing.stl", "no such file"},
+    };
+    for (const auto& [name, problem] : cases) {
+        const InputError e = loadError(dir / name);
+        EXPECT_EQ(e.problem(), problem) << name;
+        EXPECT_EQ(e.field(), "mesh") << name;
+    }
+}
+
+// A 60-byte OFF file announcing 50 million faces once made the reader reserve
+// 1.25 GB: the header's counts are checked against the limit and against what
+// the file's bytes can hold (6 per vertex, 8 per face) before anything is read.
+TEST(MeshIo, OffHeaderCountsAreCheckedBeforeTheBodyIsRead)
+{
+    hgtest::TempDir dir;
+    const InputError huge = loadError(hgtest::writeFile(dir / "huge.off", "OFF\n4 50000000 0\n0 0 0\n1 0 0\n0 1 0\n"));
+    EXPECT_EQ(huge.field(), "mesh");
+    EXPECT_NE(huge.problem().find("announces 50000000 faces, more than the 4000000"), std::string::npos)
+        << huge.problem();
+    // Under the limit but past the file: 4 vertices and 1000 faces need 6·4 + 8·1000 − 1 = 8023 bytes.
+    const InputError past = loadError(hgtest::writeFile(dir / "past.off", "# a comment\nOFF\n4 1000 0\n0 0 0\n"));
+    EXPECT_EQ(past.field(), "header");
+    EXPECT_EQ(past.line(), std::optional<int>(3));
+    EXPECT_EQ(past.problem(), "4 vertices and 1000 faces take at least 8023 bytes; the file has 31");
+    const InputError word = loadError(hgtest::writeFile(dir / "word.off", "OFF\n4 many 0\n"));
+    EXPECT_EQ(word.problem(), "the face count 'many' is not a whole number");
+    EXPECT_EQ(word.line(), std::optional<int>(2));
+}
+
+// A binary STL of 2 GB (sparse: no block of it is written) is refused by its
+// size and its header's count before a facet is read, naming the limit.
+TEST(MeshIo, AMeshPastTheSizeLimitsIsRefusedNamingTheLimit)
+{
+    hgtest::TempDir dir;
+    const fs::path big = dir / "big.stl";
+    {
+        std::string head(84, '\0');
+        const std::uint32_t facets = 40'000'000;
+        for (int i = 0; i < 4; ++i) head[80 + i] = static_cast<char>((facets >> (8 * i)) & 0xff);
+        std::ofstream(big, std::ios::binary) << head;
+    }
+    fs::resize_file(big, 84 + 50ull * 40'000'000);
+    const InputError bytes = loadError(big);
+    EXPECT_NE(bytes.problem().find("more than the 1024 MiB a mesh file may have"), std::string::npos)
+        << bytes.problem();
+    // The count alone, under a larger file limit.
+    MeshRepairOptions limits;
+    limits.maxFileBytes = std::uint64_t(4) << 30;
+    try {
+        (void)importMesh(big, limits);
+        ADD_FAILURE() << "a 40 000 000-facet STL was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.problem()).find("announces 40000000 facets, more than the 4000000"), std::string::npos)
+            << e.problem();
+    }
+    // The same counts in a PLY header.
+    const InputError ply = loadError(hgtest::writeFile(
+        dir / "big.ply",
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float "
+        "y\nproperty float z\nelement face 5000000\nproperty list uchar int vertex_indices\nend_header\n"));
+    EXPECT_NE(ply.problem().find("announces 5000000 faces"), std::string::npos) << ply.problem();
 }
 
 // Found by the PLY harness (docs/fuzzing.md): a property line before any

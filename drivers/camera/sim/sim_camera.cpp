@@ -23,6 +23,7 @@
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/geometry/station.h"
@@ -102,7 +103,7 @@ geometry::Station loadTruthStation(const ConfigNode& node, const geometry::Stati
 {
     std::filesystem::path file = node.asString();
     if (file.is_relative()) file = std::filesystem::path(node.file()).parent_path() / file;
-    if (!std::filesystem::exists(file)) node.fail("no such file: " + file.string());
+    if (auto problem = notARegularFile(file); !problem.empty()) node.fail(problem + ": " + file.string());
     geometry::Station truth = geometry::loadStation(file);
     if (truth.camera.imageSize != nominal.camera.imageSize)
         node.fail("the camera of " + file.string() + " has another image size than camera.image_size");

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,12 @@ struct MeshRepairOptions {
     /// Vertices on open edges closer than this to another vertex on an open
     /// edge are merged (a gap the export left between two faces), mm.
     double gapToleranceMm = 0.02;
+    /// The largest mesh a file may announce, checked before its body is read
+    /// (docs/part-program.md, "Mesh size limits"): a reload must not take the
+    /// line PC's memory, nor its watchdog's seconds, on a wrong file.
+    std::uint64_t maxTriangles = 4'000'000;
+    /// The largest mesh file, any format (ASCII STL and OBJ announce no count).
+    std::uint64_t maxFileBytes = std::uint64_t(1) << 30;
 };
 
 /// What the repair did, per kind; every count zero for a mesh that needed none.

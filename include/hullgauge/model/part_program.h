@@ -22,10 +22,15 @@ namespace hg::model {
 
 class StepModel; // hullgauge/model/step_io.h
 
+/// The deepest octree the inspection map represents: its voxel keys hold the
+/// level in 4 bits (include/hullgauge/inspect/voxel_frame.h), so a program is
+/// refused a deeper one when it is loaded.
+constexpr int kMaxOctreeDepth = 15;
+
 struct OctreeSpec {
     Eigen::Vector3d cubeOrigin = Eigen::Vector3d::Zero(); // low corner of the reconstruction cube, mm
     double cubeSize = 0.0;                                // edge of the cube, mm
-    int depth = 0;                                        // octree levels below the cube, 1..20
+    int depth = 0;                                        // octree levels below the cube, 1..kMaxOctreeDepth
     int adjacencyDepth = 1;                               // layers of type-four nodes (3.3.2)
     bool cubeFromMesh = false;                            // true when cube_origin/cube_size were derived from the mesh
 

@@ -264,6 +264,8 @@ std::string decodeSerial(std::span<const std::uint16_t, reg::SerialWords> words)
 /// SERIAL carries printable ASCII; NUL pads a short serial (the rule of every
 /// serial, the PLC's and the maintenance socket's manual trigger).
 bool validSerialByte(unsigned byte);
+/// A serial's most characters: the SERIAL registers' (a manual trigger's serial is held to it too).
+inline constexpr std::size_t kSerialChars = 2 * reg::SerialWords;
 /// The inverse of decodeSerial (pads with NULs; longer strings are cut at 16).
 std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& serial);
 

@@ -21,6 +21,10 @@
 #include <string>
 #include <vector>
 
+namespace hg::drivers {
+class SimFixtureControl; // hullgauge/drivers/simulation.h
+}
+
 namespace hg::daemon {
 
 /// Operator lamp patterns (docs/contracts.md §6), chosen by station::lampPattern.
@@ -88,6 +92,9 @@ class SimulationControl {
     virtual void newPart() {}
     /// The seat of the part in the nest; nullopt without `simulation.seating`.
     virtual std::optional<SimulatedSeat> trueSeat() const { return std::nullopt; }
+    /// The simulated fixture's fault switches (docs/fixture.md); null when the
+    /// fixture is a real drive or the separate Modbus simulator.
+    virtual drivers::SimFixtureControl* fixtureFaults() { return nullptr; }
 };
 
 /// What the daemon's device factory returns: the production port and, on the

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <random>
 
 namespace hg::daemon {
@@ -50,11 +51,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
             seating_ = *config.simulatedSeating;
             seatRng_.seed(seating_->seed);
         }
-        environment.poseSource = [this]() -> std::optional<geometry::FixturePose> {
-            drivers::FixtureStatus status;
-            if (!fixture_->status(status).ok() || status.busy || status.fault) return std::nullopt;
-            return status.position;
-        };
+        environment.poseSource = [this] { return heldPose(); };
         environment.simulation = &sim_;
         camera_ = drivers::makeCamera(doc, std::move(environment));
         if (!sim_.camera && seating_) {
@@ -101,7 +98,10 @@ class DriverDevices : public StationDevices, public SimulationControl {
             if (auto r = homeIfNeeded(); !r.ok()) return r;
         }
         if (auto r = fixture_->moveTo(pose); !r.ok()) return r;
-        return fixture_->waitInPosition(timeout);
+        const Status arrived = fixture_->waitInPosition(timeout);
+        std::lock_guard lock(heldPoseMutex_);
+        heldPose_ = arrived.ok() ? std::optional(pose) : std::nullopt;
+        return arrived;
     }
 
     void stopMotion() override
@@ -155,6 +155,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
     std::vector<std::string> parts() const override { return sim_.camera->partNames(); }
     std::string part() const override { return sim_.camera->part(); }
     bool selectPart(const std::string& name) override { return sim_.camera->setPart(name).ok(); }
+    drivers::SimFixtureControl* fixtureFaults() override { return sim_.fixture; }
 
     void newPart() override
     {
@@ -206,6 +207,24 @@ class DriverDevices : public StationDevices, public SimulationControl {
         hg::log::category("daemon")->debug("frame pool: {} slots of {}x{}", slots, roi.width, roi.height);
     }
 
+    /// Where the fixture holds the part, for the simulated camera. A drive that
+    /// stops answering or latches a fault does not move the part: the frame
+    /// shows it where the drive last reported it or arrived, and the fault is
+    /// the next move's (FAULT 21/22, docs/plc.md), as on a real line, where the
+    /// camera knows nothing of the drive; once the simulated grab failed first
+    /// and reported FAULT 10.
+    std::optional<geometry::FixturePose> heldPose()
+    {
+        drivers::FixtureStatus status;
+        const bool answered = fixture_->status(status).ok();
+        std::lock_guard lock(heldPoseMutex_);
+        if (answered) {
+            if (status.busy && !status.fault) return std::nullopt; // moving: no sharp frame of it
+            heldPose_ = status.position;
+        }
+        return heldPose_;
+    }
+
     Status homeIfNeeded()
     {
         drivers::FixtureStatus status;
@@ -216,6 +235,8 @@ class DriverDevices : public StationDevices, public SimulationControl {
     }
 
     drivers::SimulationControls sim_; ///< the twins' controls, where a driver is simulated
+    std::mutex heldPoseMutex_;        ///< the camera's grab asks from the runner or its own thread
+    std::optional<geometry::FixturePose> heldPose_;
     // The simulated nest (runner thread only): its play, the draws, the part in it.
     std::optional<station::DaemonConfig::Seating> seating_;
     std::mt19937_64 seatRng_;

@@ -1,6 +1,7 @@
 #include "plant/mqtt_config.h"
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/file_kind.h"
 
 #include <cstdlib>
 #include <fstream>
@@ -16,8 +17,7 @@ fs::path existingFile(const ConfigNode& node, const fs::path& base)
     const auto text = node.asString();
     if (text.empty()) node.fail("expected a path");
     const fs::path p = fs::path(text).is_absolute() ? fs::path(text) : (base / text).lexically_normal();
-    std::error_code ec;
-    if (!fs::is_regular_file(p, ec)) node.fail("no such file: " + p.string());
+    if (auto problem = notARegularFile(p); !problem.empty()) node.fail(problem + ": " + p.string());
     return p;
 }
 

@@ -7,12 +7,12 @@
 #include <cmath>
 #include <deque>
 #include <map>
-#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "contour.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/geometry/json.h"
 #include "seat_solver.h"
@@ -180,11 +180,14 @@ Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<mo
                  model::AlignmentSettings settings)
     : impl_(std::make_unique<Impl>())
 {
-    if (!solid) throw std::invalid_argument("alignment needs the CAD solid");
+    // Broken preconditions, not bad input: the part program's loader checks these values and names their
+    // lines, and a caller that loaded them reports them as its input (docs/style.md point 4).
+    if (!solid) throw ArgumentError("solid: none given (alignment needs the CAD solid)");
     if (!(settings.maxShiftMm > 0.0) || !std::isfinite(settings.maxShiftMm))
-        throw std::invalid_argument("max_shift_mm must be a positive number");
+        throw ArgumentError("max_shift_mm must be a positive number, found " + formatNumber(settings.maxShiftMm));
     if (!(settings.maxRotationDeg > 0.0) || !std::isfinite(settings.maxRotationDeg))
-        throw std::invalid_argument("max_rotation_deg must be a positive number");
+        throw ArgumentError("max_rotation_deg must be a positive number, found " +
+                            formatNumber(settings.maxRotationDeg));
     const model::TriangleMesh& mesh = solid->mesh();
     impl_->reference = mesh.bounds().center();
     double lever = 0.0;
@@ -192,14 +195,13 @@ Aligner::Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<mo
     impl_->lever = std::max(lever, 1e-3);
     std::vector<int> faceDatum(mesh.triangles.size(), -1);
     if (settings.method == model::AlignmentMethod::Datums) {
-        if (settings.datums.empty()) throw std::invalid_argument("method datums needs at least one datum");
+        if (settings.datums.empty()) throw ArgumentError("method datums needs at least one datum, found none");
         // Every edge's faces, built once for all datums.
         const FacesByEdge byEdge = facesByEdge(mesh);
         for (std::size_t k = 0; k < settings.datums.size(); ++k) {
             const auto it = std::find_if(landmarks.begin(), landmarks.end(),
                                          [&](const model::Landmark& l) { return l.id == settings.datums[k]; });
-            if (it == landmarks.end())
-                throw std::invalid_argument("datum '" + settings.datums[k] + "' is not a landmark");
+            if (it == landmarks.end()) throw ArgumentError("datum '" + settings.datums[k] + "' is not a landmark");
             DatumPlane plane;
             for (int f : growDatumFace(mesh, byEdge, solid->closestPoint(it->position).triangle, plane))
                 if (faceDatum[static_cast<std::size_t>(f)] < 0)
@@ -458,17 +460,17 @@ void checkViews(const std::vector<AlignmentView>& views)
     for (std::size_t v = 0; v < views.size(); ++v) {
         const AlignmentView& view = views[v];
         const std::string name = "alignment view " + std::to_string(v);
-        if (view.grey.empty()) throw std::invalid_argument(name + ": no frame");
+        if (view.grey.empty()) throw ArgumentError(name + ": no frame");
         if (view.grey.type() != CV_8UC1 && view.grey.type() != CV_16UC1)
-            throw std::invalid_argument(name + ": the frame must be 8- or 16-bit grey");
+            throw ArgumentError(name + ": the frame must be 8- or 16-bit grey, found " +
+                                cv::typeToString(view.grey.type()));
         const cv::Rect sensor(cv::Point(0, 0), view.camera.imageSize());
         const cv::Rect delivered(view.origin, view.grey.size());
         if ((delivered & sensor) != delivered)
-            throw std::invalid_argument(name + ": frame " + std::to_string(view.grey.cols) + "x" +
-                                        std::to_string(view.grey.rows) + " at sensor (" +
-                                        std::to_string(view.origin.x) + ", " + std::to_string(view.origin.y) +
-                                        ") leaves the camera's " + std::to_string(sensor.width) + "x" +
-                                        std::to_string(sensor.height) + " sensor");
+            throw ArgumentError(name + ": frame " + std::to_string(view.grey.cols) + "x" +
+                                std::to_string(view.grey.rows) + " at sensor (" + std::to_string(view.origin.x) + ", " +
+                                std::to_string(view.origin.y) + ") leaves the camera's " +
+                                std::to_string(sensor.width) + "x" + std::to_string(sensor.height) + " sensor");
     }
 }
 
@@ -494,7 +496,8 @@ AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
     checkViews(views);
     if (prepared.size() != views.size() ||
         std::any_of(prepared.begin(), prepared.end(), [](const auto& p) { return !p; }))
-        throw std::invalid_argument("alignment: every view must be prepared");
+        throw ArgumentError("prepared: " + std::to_string(prepared.size()) + " preparations for " +
+                            std::to_string(views.size()) + " views (every view must be prepared)");
     const Impl& m = *impl_;
     AlignmentResult out;
     out.method = m.settings.method;

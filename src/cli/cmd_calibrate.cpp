@@ -77,7 +77,7 @@ geometry::Intrinsics readCamera(const fs::path& file)
     if (auto d = cam.optional("dist")) in.dist = d->asDoubles();
     try {
         in.validate();
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
         cam.fail(e.what());
     }
     return in;

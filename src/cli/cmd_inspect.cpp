@@ -147,7 +147,8 @@ int run(const InspectArgs& args)
     inspect::ProgramInspector p;
     try {
         p = configure(manifest, args, alignment);
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
+        // Options the map cannot serve came from these files and flags: bad input (docs/style.md point 4).
         throw InputError(args.map.empty() ? args.part : args.map, "inspection options", e.what());
     }
     if (!p.setup.forced.empty())
@@ -156,7 +157,7 @@ int run(const InspectArgs& args)
     inspect::InspectionResult result;
     try {
         result = p.inspector->inspect(views, manifest.segmentation);
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
         throw InputError(args.views, "views", e.what());
     }
     result.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

@@ -59,6 +59,8 @@ int main(int argc, char** argv)
         std::cerr << "hullgauge: " << e.what() << '\n';
         return static_cast<int>(hg::ExitStatus::Fault);
     } catch (const std::exception& e) {
+        // An ArgumentError that reaches here is a broken precondition no command turned into bad input: an
+        // internal error, as anything else unexpected (docs/style.md point 4).
         std::cerr << "hullgauge: internal error: " << e.what() << '\n';
         return static_cast<int>(hg::ExitStatus::Fault);
     }

@@ -6,7 +6,6 @@
 #include <fstream>
 #include <iterator>
 #include <openssl/evp.h>
-#include <stdexcept>
 
 namespace hg {
 
@@ -14,8 +13,9 @@ std::string sha256Hex(std::string_view bytes)
 {
     std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
     unsigned int length = 0;
+    // Any bytes have a digest: a failure is the library's, a fault (docs/style.md point 4).
     if (EVP_Digest(bytes.data(), bytes.size(), digest.data(), &length, EVP_sha256(), nullptr) != 1)
-        throw std::runtime_error("OpenSSL's SHA-256 failed");
+        throw FaultError("OpenSSL's SHA-256 failed on " + std::to_string(bytes.size()) + " bytes");
     static constexpr char kHex[] = "0123456789abcdef";
     std::string hex;
     for (unsigned int i = 0; i < length; ++i) {

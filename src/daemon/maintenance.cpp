@@ -315,8 +315,8 @@ json calibrate(const MaintenanceContext& c, const json& request)
     if (config.station.fixture.type != geometry::FixtureType::RotationDeclination)
         return {{"ok", false}, {"error", "calibrate solves rotation/declination fixtures"}};
     job.out = request.value("out", config.stationFile.string());
-    std::string why;
-    if (!c.runner.requestCalibration(std::move(job), why)) return {{"ok", false}, {"error", why}};
+    if (const Status queued = c.runner.requestCalibration(std::move(job)); !queued.ok())
+        return {{"ok", false}, {"error", queued.message()}};
     return {{"ok", true}, {"calibration", c.runner.calibration()}};
 }
 
@@ -350,8 +350,8 @@ json snapshot(const MaintenanceContext& c, const json& request)
         return {
             {"ok", false},
             {"error", "snapshot: " + geometry::toString(*job.pose, fixture.type) + " is outside the fixture's ranges"}};
-    std::string why;
-    if (!c.runner.requestSnapshot(std::move(job), why)) return {{"ok", false}, {"error", "snapshot: " + why}};
+    if (const Status queued = c.runner.requestSnapshot(std::move(job)); !queued.ok())
+        return {{"ok", false}, {"error", "snapshot: " + queued.message()}};
     return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
 }
 

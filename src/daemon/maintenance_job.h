@@ -5,6 +5,7 @@
 // own fields) is read from other threads while the runner thread runs it.
 #pragma once
 
+#include "hullgauge/common/status.h"
 #include "hullgauge/station/sequencer.h"
 
 #include <mutex>
@@ -19,24 +20,22 @@ template <class Job> class MaintenanceJob {
     /// `what` names the job in refusals ("a calibration").
     explicit MaintenanceJob(std::string what) : what_(std::move(what)) {}
 
-    /// Queues `job` with its first status fields. False with `why` when one is
-    /// queued or running, or the station (in `state`) is faulted or starting.
-    bool request(Job job, station::SequencerState state, nlohmann::json status, std::string& why)
+    /// Queues `job` with its first status fields. A NotAllowed failure saying
+    /// why when one is queued or running, or the station (in `state`) is
+    /// faulted or starting: the maintenance socket's caller gets the reason,
+    /// nothing throws (docs/style.md point 4).
+    Status request(Job job, station::SequencerState state, nlohmann::json status)
     {
         using S = station::SequencerState;
         std::lock_guard lock(mutex_);
-        if (job_ || running_) {
-            why = what_ + " is already queued or running";
-            return false;
-        }
-        if (state == S::Fault || state == S::Starting || state == S::Calibrating) {
-            why = std::string("the station is not ready (") + std::string(station::toString(state)) + ")";
-            return false;
-        }
+        if (job_ || running_) return Status::failure(StatusCode::NotAllowed, what_ + " is already queued or running");
+        if (state == S::Fault || state == S::Starting || state == S::Calibrating)
+            return Status::failure(StatusCode::NotAllowed, std::string("the station is not ready (") +
+                                                               std::string(station::toString(state)) + ")");
         status_ = std::move(status);
         status_["state"] = "queued";
         job_ = std::move(job);
-        return true;
+        return Status::success();
     }
 
     bool queued() const

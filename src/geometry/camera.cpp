@@ -1,7 +1,9 @@
 #include "hullgauge/geometry/camera.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
+
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
 #include <Eigen/LU>
@@ -17,11 +19,13 @@ bool Intrinsics::hasDistortion() const
     return false;
 }
 
+// The messages start with the key they concern ("K: ", "dist: ", "image_size: "): the station file's loader
+// names that key's line with the rest of the message (docs/style.md point 4).
 void Intrinsics::validate() const
 {
-    if (!(K(0, 0) > 0) || !(K(1, 1) > 0)) throw std::invalid_argument("K: fx and fy must be positive");
+    if (!(K(0, 0) > 0) || !(K(1, 1) > 0)) throw ArgumentError("K: fx and fy must be positive");
     if (K(1, 0) != 0 || K(2, 0) != 0 || K(2, 1) != 0 || K(2, 2) != 1)
-        throw std::invalid_argument("K: must be upper triangular with K[2][2] = 1");
+        throw ArgumentError("K: must be upper triangular with K[2][2] = 1");
     switch (dist.size()) {
     case 0:
     case 4:
@@ -30,24 +34,25 @@ void Intrinsics::validate() const
     case 12:
         break;
     case 14:
-        throw std::invalid_argument("dist: the 14-coefficient tilted-sensor model is not supported");
+        throw ArgumentError("dist: the 14-coefficient tilted-sensor model is not supported");
     default:
-        throw std::invalid_argument("dist: expected 4, 5, 8 or 12 OpenCV coefficients, found " +
-                                    std::to_string(dist.size()));
+        throw ArgumentError("dist: expected 4, 5, 8 or 12 OpenCV coefficients, found " + std::to_string(dist.size()));
     }
-    if (imageSize.width <= 0 || imageSize.height <= 0) throw std::invalid_argument("image_size: must be positive");
+    if (imageSize.width <= 0 || imageSize.height <= 0)
+        throw ArgumentError("image_size: must be positive, found " + std::to_string(imageSize.width) + "x" +
+                            std::to_string(imageSize.height));
     // Plausibility, so that a typo (or a fuzzer's 1e308) is named here rather
     // than overflowing a projection far downstream: focal lengths below 10^7 px,
     // the principal point within ten image sizes of the image, coefficients
     // within 10^6.
     if (K(0, 0) > 1e7 || K(1, 1) > 1e7 || std::abs(K(0, 1)) > 1e7)
-        throw std::invalid_argument("K: fx, fy and the skew must be below 1e7 px");
+        throw ArgumentError("K: fx, fy and the skew must be below 1e7 px");
     const double w = imageSize.width, h = imageSize.height;
     if (std::abs(K(0, 2) - w / 2) > 10 * w || std::abs(K(1, 2) - h / 2) > 10 * h)
-        throw std::invalid_argument("K: the principal point (cx, cy) lies more than ten image sizes from the image");
+        throw ArgumentError("K: the principal point (cx, cy) lies more than ten image sizes from the image");
     for (double d : dist)
         if (!std::isfinite(d) || std::abs(d) > 1e6)
-            throw std::invalid_argument("dist: coefficients must lie within ±1e6");
+            throw ArgumentError("dist: coefficients must lie within ±1e6, found " + formatNumber(d));
 }
 
 CameraModel::CameraModel(Intrinsics intrinsics, RigidTransform cameraFromPart)
@@ -66,7 +71,8 @@ CameraModel CameraModel::fromProjectionMatrix(const Eigen::Matrix<double, 3, 4>&
     cv::cv2eigen(Kcv, K);
     cv::cv2eigen(Rcv, R);
     cv::cv2eigen(Ccv, Ch);
-    if (std::abs(Ch(3)) < 1e-15) throw std::invalid_argument("P: camera centre at infinity (affine camera)");
+    if (std::abs(Ch(3)) < 1e-15)
+        throw ArgumentError("P: camera centre at infinity (affine camera, w = " + formatNumber(Ch(3)) + ")");
     // RQ leaves the signs of K's diagonal free: make fx, fy > 0 by moving the
     // sign into R (K R is unchanged), then scale K so that K[2][2] = 1.
     for (int i = 0; i < 3; ++i)
@@ -75,7 +81,8 @@ CameraModel CameraModel::fromProjectionMatrix(const Eigen::Matrix<double, 3, 4>&
             R.row(i) *= -1.0;
         }
     K /= K(2, 2);
-    if (R.determinant() < 0) throw std::invalid_argument("P: left-handed camera (det R < 0)");
+    if (R.determinant() < 0)
+        throw ArgumentError("P: left-handed camera (det R = " + formatNumber(R.determinant()) + " < 0)");
     Vec3 C = Ch.head<3>() / Ch(3);
     Intrinsics in;
     in.K = K;
@@ -97,7 +104,7 @@ CameraModel CameraModel::fromDissertation(double fOverDph, double fOverDpv, doub
         // the top so the model stays a proper rotation: row = (H-1) - n.
         R.row(1) *= -1.0;
         nc = (imageSize.height - 1) - nc;
-        if (!isRotation(R, 1e-6)) throw std::invalid_argument("camera axes h, v, a must be orthonormal");
+        if (!isRotation(R, 1e-6)) throw ArgumentError("camera axes h, v, a must be orthonormal");
     }
     Intrinsics in;
     in.K << fOverDph, 0, mc, 0, fOverDpv, nc, 0, 0, 1;

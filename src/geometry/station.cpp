@@ -58,7 +58,9 @@ Intrinsics parseCamera(const ConfigNode& cam)
     }
     try {
         in.validate();
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
+        // Intrinsics::validate names the key first: the value read from that key is bad input (docs/style.md
+        // point 4).
         std::string what = e.what();
         (what.rfind("dist", 0) == 0 ? cam["dist"]
          : what.rfind("K", 0) == 0  ? kNode

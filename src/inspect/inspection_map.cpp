@@ -4,10 +4,10 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <stdexcept>
 #include <unordered_map>
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 
 namespace hg::inspect {
 namespace {
@@ -173,13 +173,16 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
 InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, std::vector<MapLandmark> landmarks,
                                    std::vector<MapParameter> parameters, const ExpectationOracle& oracle)
 {
-    if (!(g.cubeSize > 0.0)) throw std::invalid_argument("octree cube size must be positive");
+    if (!(g.cubeSize > 0.0))
+        throw ArgumentError("octree cube size must be positive, found " + formatNumber(g.cubeSize));
     if (g.depth < 0 || g.depth > kMaxDepth)
-        throw std::invalid_argument("octree depth must be within 0.." + std::to_string(kMaxDepth));
+        throw ArgumentError("octree depth must be within 0.." + std::to_string(kMaxDepth) + ", found " +
+                            std::to_string(g.depth));
     if (g.coarsestLevel < 0 || g.coarsestLevel > g.depth)
-        throw std::invalid_argument("coarsest inspection level must be within 0..depth");
+        throw ArgumentError("coarsest inspection level must be within 0..depth (0.." + std::to_string(g.depth) +
+                            "), found " + std::to_string(g.coarsestLevel));
     if (g.adjacencyDepth < 1 || g.adjacencyDepth > 64)
-        throw std::invalid_argument("adjacency depth must be within 1..64");
+        throw ArgumentError("adjacency depth must be within 1..64, found " + std::to_string(g.adjacencyDepth));
 
     InspectionMap map;
     map.partName_ = std::move(partName);
@@ -187,9 +190,8 @@ InspectionMap InspectionMap::build(std::string partName, const MapGeometry& g, s
     map.frame_ = g.frame();
     const Eigen::AlignedBox3d cube(g.cubeOrigin, g.cubeOrigin + Eigen::Vector3d::Constant(g.cubeSize));
     for (MapLandmark& lm : landmarks) {
-        if (!cube.contains(lm.position))
-            throw std::invalid_argument("landmark '" + lm.id + "' lies outside the octree cube");
-        if (!(lm.normal.norm() > 0.0)) throw std::invalid_argument("landmark '" + lm.id + "' has a zero normal");
+        if (!cube.contains(lm.position)) throw ArgumentError("landmark '" + lm.id + "' lies outside the octree cube");
+        if (!(lm.normal.norm() > 0.0)) throw ArgumentError("landmark '" + lm.id + "' has a zero normal");
         lm.normal.normalize();
     }
 

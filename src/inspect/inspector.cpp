@@ -4,9 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <unordered_set>
 
+#include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 
@@ -131,16 +131,16 @@ Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::s
     const MapGeometry& g = map.geometry();
     level_ = options_.level < 0 ? g.depth : options_.level;
     if (level_ < g.coarsestLevel || level_ > g.depth)
-        throw std::invalid_argument("inspection level " + std::to_string(level_) + " is not in the map (levels " +
-                                    std::to_string(g.coarsestLevel) + ".." + std::to_string(g.depth) + ")");
+        throw ArgumentError("inspection level " + std::to_string(level_) + " is not in the map (levels " +
+                            std::to_string(g.coarsestLevel) + ".." + std::to_string(g.depth) + ")");
     adjacency_ = options_.adjacency < 0 ? g.adjacencyDepth : options_.adjacency;
     if (adjacency_ < 1 || adjacency_ > g.adjacencyDepth)
-        throw std::invalid_argument("adjacency " + std::to_string(adjacency_) + " must be within 1.." +
-                                    std::to_string(g.adjacencyDepth));
+        throw ArgumentError("adjacency " + std::to_string(adjacency_) + " must be within 1.." +
+                            std::to_string(g.adjacencyDepth));
     active_.assign(map.landmarks().size(), 1);
     for (const std::string& id : options_.maskedLandmarks) {
         const auto idx = map.landmarkIndex(id);
-        if (!idx) throw std::invalid_argument("masked landmark '" + id + "' is not in the map");
+        if (!idx) throw ArgumentError("masked landmark '" + id + "' is not in the map");
         active_[*idx] = 0;
     }
     normalLines_.resize(map.landmarks().size());
@@ -187,10 +187,10 @@ cv::Rect deliveredPixels(const CapturedView& v)
     const cv::Size sensor = v.camera.imageSize();
     const cv::Rect delivered(v.origin, v.frame.size());
     if (v.frame.empty() || (delivered & cv::Rect(cv::Point(0, 0), sensor)) != delivered)
-        throw std::invalid_argument("view '" + v.id + "': frame " + std::to_string(v.frame.cols) + "x" +
-                                    std::to_string(v.frame.rows) + " at sensor (" + std::to_string(v.origin.x) + ", " +
-                                    std::to_string(v.origin.y) + ") does not lie on the camera's " +
-                                    std::to_string(sensor.width) + "x" + std::to_string(sensor.height) + " sensor");
+        throw ArgumentError("view '" + v.id + "': frame " + std::to_string(v.frame.cols) + "x" +
+                            std::to_string(v.frame.rows) + " at sensor (" + std::to_string(v.origin.x) + ", " +
+                            std::to_string(v.origin.y) + ") does not lie on the camera's " +
+                            std::to_string(sensor.width) + "x" + std::to_string(sensor.height) + " sensor");
     return delivered;
 }
 

@@ -126,7 +126,8 @@ InspectionMap buildInspectionMap(const model::PartProgram& program, int levels)
     try {
         return InspectionMap::build(program.part, g, std::move(landmarks), std::move(parameters),
                                     cadLabels(program.solid));
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
+        // The geometry and landmarks came from the part program: its fault, named there (docs/style.md point 4).
         throw InputError(program.file.string(), "octree", e.what());
     }
 }
@@ -148,7 +149,7 @@ std::shared_ptr<const align::Aligner> makeAligner(const model::PartProgram& prog
     if (program.alignment.method == model::AlignmentMethod::None) return nullptr;
     try {
         return std::make_shared<const align::Aligner>(program.solid, program.landmarks, program.alignment);
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
         throw InputError(program.file.string(), "alignment", e.what());
     }
 }

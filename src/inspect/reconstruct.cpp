@@ -1,6 +1,9 @@
 #include "hullgauge/inspect/reconstruct.h"
 
-#include <stdexcept>
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
+
+#include <string>
 
 namespace hg::inspect {
 
@@ -13,8 +16,10 @@ double HullReconstruction::volumeMm3() const
 HullReconstruction reconstructHull(const std::vector<SilhouetteView>& views, const VoxelFrame& frame,
                                    VoxelTestMethod method)
 {
-    if (!(frame.cubeSize > 0.0)) throw std::invalid_argument("cube size must be positive");
-    if (frame.depth < 0 || frame.depth > 20) throw std::invalid_argument("depth must be within 0..20");
+    if (!(frame.cubeSize > 0.0))
+        throw ArgumentError("frame.cubeSize must be positive, found " + formatNumber(frame.cubeSize));
+    if (frame.depth < 0 || frame.depth > 20)
+        throw ArgumentError("frame.depth must be within 0..20, found " + std::to_string(frame.depth));
     const int depth = frame.depth;
     HullReconstruction r;
     r.frame = frame;

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
+#include "hullgauge/common/error.h"
 #include "hullgauge/inspect/deviation.h"
 
 namespace hg::inspect {
@@ -108,10 +108,11 @@ ViewRegions viewRegions(const InspectionMap& map, const geometry::CameraModel& c
     const int level = query.level < 0 ? g.depth : query.level;
     const int adjacency = query.adjacency < 0 ? g.adjacencyDepth : query.adjacency;
     if (level < g.coarsestLevel || level > g.depth)
-        throw std::invalid_argument("regions of interest: level " + std::to_string(level) + " is not in the map");
+        throw ArgumentError("regions of interest: level " + std::to_string(level) + " is not in the map (levels " +
+                            std::to_string(g.coarsestLevel) + ".." + std::to_string(g.depth) + ")");
     if (adjacency < 0 || adjacency > g.adjacencyDepth)
-        throw std::invalid_argument("regions of interest: adjacency " + std::to_string(adjacency) +
-                                    " is not within 0.." + std::to_string(g.adjacencyDepth));
+        throw ArgumentError("regions of interest: adjacency " + std::to_string(adjacency) + " is not within 0.." +
+                            std::to_string(g.adjacencyDepth));
     const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
     const double marginPx = query.edges ? marginPixels(map, camera, query.marginMm) : 0.0;
     std::vector<cv::Rect> voxels, edges;

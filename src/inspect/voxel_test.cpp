@@ -1,9 +1,10 @@
 #include "hullgauge/inspect/voxel_test.h"
 
+#include "hullgauge/common/error.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
 namespace hg::inspect {
@@ -205,9 +206,13 @@ bool SilhouetteIndex::Region::background(int frameRow, int frameCol) const
 void SilhouetteIndex::addRegion(const cv::Rect& rect, const cv::Mat& silhouette)
 {
     if (silhouette.type() != CV_8UC1 || silhouette.rows != rect.height || silhouette.cols != rect.width)
-        throw std::invalid_argument("silhouette region must be CV_8UC1 of the region's size");
+        throw ArgumentError("silhouette region must be CV_8UC1 of the region's size " + std::to_string(rect.width) +
+                            "x" + std::to_string(rect.height) + ", found " + cv::typeToString(silhouette.type()) + " " +
+                            std::to_string(silhouette.cols) + "x" + std::to_string(silhouette.rows));
     if ((rect & cv::Rect(0, 0, frameSize_.width, frameSize_.height)) != rect)
-        throw std::invalid_argument("silhouette region outside the frame");
+        throw ArgumentError("silhouette region " + std::to_string(rect.width) + "x" + std::to_string(rect.height) +
+                            "+" + std::to_string(rect.x) + "+" + std::to_string(rect.y) + " is outside the " +
+                            std::to_string(frameSize_.width) + "x" + std::to_string(frameSize_.height) + " frame");
     Region reg;
     reg.rect = rect;
     reg.stride = rect.width + 1;
@@ -258,8 +263,8 @@ double backgroundArea(const std::vector<Vec2>& polygon, const SilhouetteIndex::R
 {
     // Two row clips add at most two vertices to the convex polygon.
     if (polygon.size() + 2 > static_cast<std::size_t>(Poly::kMax))
-        throw std::invalid_argument("backgroundArea: polygon has more than " + std::to_string(Poly::kMax - 2) +
-                                    " vertices");
+        throw ArgumentError("backgroundArea: polygon has more than " + std::to_string(Poly::kMax - 2) +
+                            " vertices, found " + std::to_string(polygon.size()));
     Poly local;
     for (const Vec2& v : polygon) local.push(Vec2(v.x() + 0.5 - region.rect.x, v.y() + 0.5 - region.rect.y));
     return localBackgroundArea(local, region, stopAt);

@@ -1,7 +1,10 @@
 #include "hullgauge/model/primitives.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
+
 #include <cmath>
-#include <stdexcept>
+#include <string>
 
 namespace hg::model {
 namespace {
@@ -24,7 +27,9 @@ TriangleMesh makeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi)
 
 TriangleMesh makeSphere(const Eigen::Vector3d& c, double r, int segments, int rings)
 {
-    if (segments < 3 || rings < 2) throw std::invalid_argument("makeSphere: need segments >= 3 and rings >= 2");
+    if (segments < 3 || rings < 2)
+        throw ArgumentError("makeSphere: need segments >= 3 and rings >= 2, found segments " +
+                            std::to_string(segments) + ", rings " + std::to_string(rings));
     TriangleMesh m;
     m.vertices.push_back(c + Eigen::Vector3d(0, 0, r)); // north pole
     for (int i = 1; i < rings; ++i) {
@@ -61,7 +66,9 @@ TriangleMesh makeCylinder(const Eigen::Vector3d& base, double radius, double hei
 TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, double z1)
 {
     const int n = static_cast<int>(outline.size());
-    if (n < 3 || !(z1 > z0)) throw std::invalid_argument("makePrism: need >= 3 outline points and z1 > z0");
+    if (n < 3 || !(z1 > z0))
+        throw ArgumentError("makePrism: need >= 3 outline points and z1 > z0, found " + std::to_string(n) +
+                            " points, z0 " + formatNumber(z0) + ", z1 " + formatNumber(z1));
     TriangleMesh m;
     for (const auto& p : outline) m.vertices.emplace_back(p.x(), p.y(), z0);
     for (const auto& p : outline) m.vertices.emplace_back(p.x(), p.y(), z1);
@@ -94,7 +101,9 @@ TriangleMesh makePrism(const std::vector<Eigen::Vector2d>& outline, double z0, d
             clipped = true;
             break;
         }
-        if (!clipped) throw std::invalid_argument("makePrism: outline is not a simple counter-clockwise polygon");
+        if (!clipped)
+            throw ArgumentError("makePrism: outline: its " + std::to_string(n) +
+                                " points are not a simple counter-clockwise polygon");
     }
     cap.push_back({idx[0], idx[1], idx[2]});
     for (const auto& t : cap) {

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <stdexcept>
 #include <vector>
 
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
@@ -17,6 +16,8 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "inside_volume.h"
 
 namespace hg::model {
@@ -106,16 +107,18 @@ struct Solid::Impl {
 
 Solid::Solid(TriangleMesh mesh) : impl_(std::make_unique<Impl>())
 {
-    if (mesh.empty()) throw std::invalid_argument("Solid: empty mesh");
+    if (mesh.empty()) throw ArgumentError("Solid: mesh: has no triangles");
     impl_->mesh = std::move(mesh);
     auto& sm = impl_->surface;
     for (const auto& v : impl_->mesh.vertices) sm.add_vertex(toPoint(v));
-    for (const auto& t : impl_->mesh.triangles) {
+    for (std::size_t i = 0; i < impl_->mesh.triangles.size(); ++i) {
+        const auto& t = impl_->mesh.triangles[i];
         auto f = sm.add_face(SurfaceMesh::Vertex_index(t[0]), SurfaceMesh::Vertex_index(t[1]),
                              SurfaceMesh::Vertex_index(t[2]));
         // Face i must be triangle i; add_face refuses non-manifold input.
-        if (f == SurfaceMesh::null_face() || static_cast<std::size_t>(f) + 1 != sm.number_of_faces())
-            throw std::invalid_argument("Solid: the mesh is not a closed, oriented 2-manifold (see checkMesh)");
+        if (f == SurfaceMesh::null_face() || static_cast<std::size_t>(f) != i)
+            throw ArgumentError("Solid: mesh: not a closed, oriented 2-manifold at triangle " + std::to_string(i) +
+                                " (see checkMesh)");
     }
     impl_->tree.insert(faces(sm).first, faces(sm).second, sm);
     // Build the tree and the distance-query search structure now: both are
@@ -160,7 +163,8 @@ InsideFraction Solid::insideFraction(const Eigen::AlignedBox3d& box, double /*to
     // any tolerance a caller can ask for.
     InsideFraction f;
     const double boxVolume = box.volume();
-    if (!(boxVolume > 0.0)) throw std::invalid_argument("Solid::insideFraction: empty box");
+    if (!(boxVolume > 0.0))
+        throw ArgumentError("Solid::insideFraction: box: empty (volume " + formatNumber(boxVolume) + ")");
     const Eigen::Vector3d lo = box.min(), hi = box.max();
     // Triangles meeting the box, or the corner line {x = hi.x, y = hi.y, z <= hi.z}.
     const double below = std::min(lo.z(), impl_->mesh.bounds().min().z()) - 1.0;
@@ -243,7 +247,7 @@ Eigen::Vector3d Solid::surfaceNormal(const Eigen::Vector3d& surfacePoint, double
 std::optional<RayHit> Solid::firstHit(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const
 {
     const double len = direction.norm();
-    if (!(len > 0.0)) throw std::invalid_argument("Solid::firstHit: zero direction");
+    if (!(len > 0.0)) throw ArgumentError("Solid::firstHit: direction: zero vector (length " + formatNumber(len) + ")");
     const Eigen::Vector3d d = direction / len;
     const K::Ray_3 ray(toPoint(origin), K::Vector_3(d.x(), d.y(), d.z()));
     using Hit = Tree::Intersection_and_primitive_id<K::Ray_3>::Type;

@@ -2,6 +2,7 @@
 // the header, the contract in docs/part-program.md "Suggesting landmarks").
 #include "hullgauge/plan/landmark_suggest.h"
 
+#include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/inspect/capability.h"
@@ -17,7 +18,6 @@
 #include <map>
 #include <numbers>
 #include <sstream>
-#include <stdexcept>
 #include <unordered_map>
 
 namespace hg::plan {
@@ -911,7 +911,9 @@ std::vector<LandmarkCandidate> findCandidates(const model::Solid& solid, const C
 std::vector<SpreadPick> spreadSelect(const std::vector<Vec3>& points, const std::vector<FeatureKind>& kinds,
                                      std::size_t count, const std::array<std::size_t, kFeatureKinds>& minimum)
 {
-    if (kinds.size() != points.size()) throw std::invalid_argument("spreadSelect: one kind per point");
+    if (kinds.size() != points.size())
+        throw ArgumentError("spreadSelect: kinds: one kind per point, found " + std::to_string(kinds.size()) +
+                            " kinds for " + std::to_string(points.size()) + " points");
     const std::size_t n = points.size();
     count = std::min(count, n);
     std::array<std::size_t, kFeatureKinds> available{}, need{}, chosen{};
@@ -1150,7 +1152,10 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
 
 Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions& options)
 {
-    if (!problem.solid || !problem.station) throw std::invalid_argument("suggestLandmarks: solid and station needed");
+    if (!problem.solid || !problem.station)
+        throw ArgumentError(std::string("suggestLandmarks: solid and station needed, found ") +
+                            (problem.solid ? "a solid" : "no solid") + " and " +
+                            (problem.station ? "a station" : "no station"));
     CandidateOptions candidateOptions = options.candidates;
     // A face point's voxel and its neighbour stay on the face: two voxels from its boundary.
     candidateOptions.minClearanceMm = std::max(candidateOptions.minClearanceMm, 2.0 * problem.frame.voxelSize());

@@ -1,6 +1,7 @@
 #include "hullgauge/plan/planner.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/plan/view_pattern.h"
 
@@ -11,7 +12,6 @@
 #include <map>
 #include <set>
 #include <sstream>
-#include <stdexcept>
 #include <tuple>
 
 namespace hg::plan {
@@ -491,8 +491,12 @@ class Analyser {
 
 void validate(const PlanProblem& problem)
 {
-    if (!problem.solid || !problem.station) throw std::invalid_argument("plan: solid and station are required");
-    if (!(problem.frame.cubeSize > 0.0)) throw std::invalid_argument("plan: voxel size must be positive");
+    if (!problem.solid || !problem.station)
+        throw ArgumentError(std::string("plan: solid and station are required, found ") +
+                            (problem.solid ? "a solid" : "no solid") + " and " +
+                            (problem.station ? "a station" : "no station"));
+    if (!(problem.frame.cubeSize > 0.0))
+        throw ArgumentError("plan: frame.cubeSize must be positive, found " + formatNumber(problem.frame.cubeSize));
 }
 
 /// Final pose of a group (5.4.4, fig. 5.19): the pose of its variation list
@@ -510,7 +514,7 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
         sums.emplace_back(s, p);
         best = std::min(best, s);
     }
-    if (sums.empty()) throw std::logic_error("plan: a view group without poses");
+    if (sums.empty()) throw ArgumentError("plan: finalPose: variation: empty (a view group without poses)");
     std::vector<int> ties;
     for (const auto& [s, p] : sums)
         if (s <= best * (1.0 + 1e-3) + 1e-9) ties.push_back(p);

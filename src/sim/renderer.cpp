@@ -1,5 +1,7 @@
 #include "hullgauge/sim/renderer.h"
 
+#include "hullgauge/common/error.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 
 #include <spdlog/fmt/fmt.h>
@@ -10,7 +12,6 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <optional>
-#include <stdexcept>
 #include <string>
 
 namespace hg::sim {
@@ -316,15 +317,18 @@ class DistortedProjector {
 
 void RenderOptions::validate() const
 {
-    auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
-    if (subScanlines < 4 || subScanlines > 256) fail("subScanlines must be within [4, 256]");
-    if (!(maxEdgeSagPx > 0.0) || !std::isfinite(maxEdgeSagPx)) fail("maxEdgeSagPx must be positive");
-    if (!(nearPlaneMm > 0.0) || !std::isfinite(nearPlaneMm)) fail("nearPlaneMm must be positive");
-    if (!(backgroundLevel >= 0.0 && backgroundLevel <= 1.0)) fail("backgroundLevel must be within [0, 1]");
-    if (!(objectLevel >= 0.0 && objectLevel <= 1.0)) fail("objectLevel must be within [0, 1]");
-    if (bitDepth != 8 && bitDepth != 16) fail("bitDepth must be 8 or 16");
-    if (!(blurSigmaPx >= 0.0) || !std::isfinite(blurSigmaPx)) fail("blurSigmaPx must be >= 0");
-    if (!(noiseSigma >= 0.0) || !std::isfinite(noiseSigma)) fail("noiseSigma must be >= 0");
+    // The option's name, what it must be, and the value it has.
+    auto fail = [](const std::string& option, const std::string& must, double value) {
+        throw ArgumentError(option + " must be " + must + ", found " + formatNumber(value));
+    };
+    if (subScanlines < 4 || subScanlines > 256) fail("subScanlines", "within [4, 256]", subScanlines);
+    if (!(maxEdgeSagPx > 0.0) || !std::isfinite(maxEdgeSagPx)) fail("maxEdgeSagPx", "positive", maxEdgeSagPx);
+    if (!(nearPlaneMm > 0.0) || !std::isfinite(nearPlaneMm)) fail("nearPlaneMm", "positive", nearPlaneMm);
+    if (!(backgroundLevel >= 0.0 && backgroundLevel <= 1.0)) fail("backgroundLevel", "within [0, 1]", backgroundLevel);
+    if (!(objectLevel >= 0.0 && objectLevel <= 1.0)) fail("objectLevel", "within [0, 1]", objectLevel);
+    if (bitDepth != 8 && bitDepth != 16) fail("bitDepth", "8 or 16", bitDepth);
+    if (!(blurSigmaPx >= 0.0) || !std::isfinite(blurSigmaPx)) fail("blurSigmaPx", ">= 0", blurSigmaPx);
+    if (!(noiseSigma >= 0.0) || !std::isfinite(noiseSigma)) fail("noiseSigma", ">= 0", noiseSigma);
 }
 
 SilhouetteRenderer::SilhouetteRenderer(std::vector<model::TriangleMesh> meshes) : meshes_(std::move(meshes))
@@ -335,7 +339,8 @@ cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const 
 {
     options.validate();
     const cv::Size size = camera.imageSize();
-    if (size.width <= 0 || size.height <= 0) throw std::invalid_argument("camera has no image size");
+    if (size.width <= 0 || size.height <= 0)
+        throw ArgumentError(fmt::format("camera: no image size, found {}x{}", size.width, size.height));
     const int sub = options.subScanlines;
     const double near = options.nearPlaneMm;
     const auto& pose = camera.cameraFromPart();
@@ -405,9 +410,8 @@ cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const Re
 {
     const cv::Rect sensor(cv::Point(0, 0), camera.imageSize());
     if (window.empty() || (window & sensor) != window)
-        throw std::invalid_argument(fmt::format("render window {}x{}+{}+{} is not within the {}x{} sensor",
-                                                window.width, window.height, window.x, window.y, sensor.width,
-                                                sensor.height));
+        throw ArgumentError(fmt::format("render window {}x{}+{}+{} is not within the {}x{} sensor", window.width,
+                                        window.height, window.x, window.y, sensor.width, sensor.height));
     // OpenCV's Gaussian kernel for a float image reaches 4σ from its centre.
     const int margin = options.blurSigmaPx > 0.0 ? static_cast<int>(std::ceil(4.0 * options.blurSigmaPx)) + 1 : 0;
     const cv::Rect padded =
@@ -424,7 +428,8 @@ cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const Re
 cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options)
 {
     options.validate();
-    if (coverage.type() != CV_32FC1) throw std::invalid_argument("coverage image must be CV_32FC1");
+    if (coverage.type() != CV_32FC1)
+        throw ArgumentError("coverage image must be CV_32FC1, found " + cv::typeToString(coverage.type()));
     const double full = options.bitDepth == 8 ? 255.0 : 65535.0;
     const double background = options.backgroundLevel * full;
     const double object = options.objectLevel * full;
@@ -448,7 +453,8 @@ cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options)
 
 CoverageStats measureCoverage(const cv::Mat& coverage)
 {
-    if (coverage.type() != CV_32FC1) throw std::invalid_argument("coverage image must be CV_32FC1");
+    if (coverage.type() != CV_32FC1)
+        throw ArgumentError("coverage image must be CV_32FC1, found " + cv::typeToString(coverage.type()));
     CoverageStats stats;
     stats.areaPx = cv::sum(coverage)[0];
     cv::Mat mask = coverage > 0.0f;

@@ -222,7 +222,7 @@ class ManifestReader {
                 fail(at + ".P", "the left 3x3 block is singular: not a perspective camera");
             try {
                 v.camera = geometry::CameraModel::fromProjectionMatrix(P, in.imageSize);
-            } catch (const std::invalid_argument& e) {
+            } catch (const ArgumentError& e) {
                 fail(at + ".P", e.what());
             }
             v.fromProjectionMatrix = true;
@@ -241,7 +241,7 @@ class ManifestReader {
             if (in.imageSize.width > 0) {
                 try {
                     in.validate();
-                } catch (const std::invalid_argument& e) {
+                } catch (const ArgumentError& e) {
                     fail(at, e.what());
                 }
             } else if (in.K.cwiseAbs().maxCoeff() > 1e7) {
@@ -264,7 +264,7 @@ class ManifestReader {
             const std::string name = string(j["method"], at + ".method");
             try {
                 s.method = parseSegmentationMethod(name);
-            } catch (const std::invalid_argument&) {
+            } catch (const ArgumentError&) {
                 fail(at + ".method", "expected otsu, fixed or mask, found '" + name + "'");
             }
         }
@@ -472,7 +472,9 @@ std::optional<std::pair<std::uint64_t, std::uint64_t>> pngSize(const fs::path& f
 
 cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
 {
-    if (index >= manifest.views.size()) throw std::out_of_range("readViewImage: no view " + std::to_string(index));
+    if (index >= manifest.views.size())
+        throw ArgumentError("readViewImage: index: no view " + std::to_string(index) + " (the manifest has " +
+                            std::to_string(manifest.views.size()) + ")");
     const ManifestView& v = manifest.views[index];
     const std::string name = manifest.file.string();
     const std::string field = "views[" + std::to_string(index) + "].image";
@@ -495,7 +497,7 @@ cv::Mat readViewImage(const CaptureManifest& manifest, std::size_t index)
     cv::Mat grey;
     try {
         grey = toGrey(frame);
-    } catch (const std::invalid_argument& e) {
+    } catch (const ArgumentError& e) {
         throw InputError(name, field, "'" + v.image.string() + "': " + e.what());
     }
     const cv::Size expected = v.camera.imageSize();

@@ -3,13 +3,14 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
-#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
 
 namespace hg::vision {
@@ -56,7 +57,8 @@ SegmentationMethod parseSegmentationMethod(const std::string& name)
     if (name == "otsu") return SegmentationMethod::Otsu;
     if (name == "fixed") return SegmentationMethod::Fixed;
     if (name == "mask") return SegmentationMethod::Mask;
-    throw std::invalid_argument("unknown segmentation method '" + name + "' (expected otsu, fixed or mask)");
+    // The caller knows where the name came from and reports it there (docs/style.md point 4).
+    throw ArgumentError("unknown segmentation method '" + name + "' (expected otsu, fixed or mask)");
 }
 
 std::string toString(SegmentationMethod method)
@@ -79,7 +81,7 @@ SegmentationSettings parseSegmentation(const ConfigNode& node)
     if (auto n = node.optional("method")) {
         try {
             s.method = parseSegmentationMethod(n->asString());
-        } catch (const std::invalid_argument&) {
+        } catch (const ArgumentError&) {
             n->fail("expected otsu, fixed or mask, found '" + n->asString() + "'");
         }
     }
@@ -100,9 +102,9 @@ SegmentationSettings stationSegmentation(const geometry::Station& station)
 
 cv::Mat toGrey(const cv::Mat& frame)
 {
-    if (frame.empty()) throw std::invalid_argument("empty frame");
+    if (frame.empty()) throw ArgumentError("frame: empty");
     if (frame.depth() != CV_8U && frame.depth() != CV_16U)
-        throw std::invalid_argument("frame must be 8- or 16-bit unsigned");
+        throw ArgumentError("frame must be 8- or 16-bit unsigned, found " + cv::typeToString(frame.type()));
     switch (frame.channels()) {
     case 1:
         return frame;
@@ -117,7 +119,7 @@ cv::Mat toGrey(const cv::Mat& frame)
         return g;
     }
     default:
-        throw std::invalid_argument("frame must have 1, 3 or 4 channels");
+        throw ArgumentError("frame must have 1, 3 or 4 channels, found " + std::to_string(frame.channels()));
     }
 }
 
@@ -178,7 +180,9 @@ std::optional<std::pair<double, double>> classMeans(const std::vector<double>& h
 
 double computeThreshold(const cv::Mat& grey, const SegmentationSettings& settings)
 {
-    if (grey.channels() != 1) throw std::invalid_argument("computeThreshold needs a single-channel frame");
+    if (grey.channels() != 1)
+        throw ArgumentError("computeThreshold needs a single-channel frame, found " + std::to_string(grey.channels()) +
+                            " channels");
     switch (settings.method) {
     case SegmentationMethod::Fixed:
         return settings.threshold;
@@ -195,7 +199,9 @@ double computeThreshold(const cv::Mat& grey, const SegmentationSettings& setting
 
 double computeThreshold(const cv::Mat& grey, const std::vector<cv::Rect>& regions, const SegmentationSettings& settings)
 {
-    if (grey.channels() != 1) throw std::invalid_argument("computeThreshold needs a single-channel frame");
+    if (grey.channels() != 1)
+        throw ArgumentError("computeThreshold needs a single-channel frame, found " + std::to_string(grey.channels()) +
+                            " channels");
     if (settings.method != SegmentationMethod::Otsu) return computeThreshold(grey, settings);
     Histogram h(grey);
     const cv::Rect frame(0, 0, grey.cols, grey.rows);
@@ -215,7 +221,9 @@ double computeThreshold(const cv::Mat& grey, const std::vector<cv::Rect>& region
 
 cv::Mat segmentRegion(const cv::Mat& grey, const cv::Rect& roi, double threshold, const SegmentationSettings& settings)
 {
-    if (grey.channels() != 1) throw std::invalid_argument("segmentRegion needs a single-channel frame");
+    if (grey.channels() != 1)
+        throw ArgumentError("segmentRegion needs a single-channel frame, found " + std::to_string(grey.channels()) +
+                            " channels");
     const cv::Rect r = roi & cv::Rect(0, 0, grey.cols, grey.rows);
     cv::Mat out(r.height, r.width, CV_8U);
     if (r.empty()) return out;

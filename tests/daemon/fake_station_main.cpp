@@ -98,10 +98,10 @@ std::optional<hg::station::ProgramRelease> fakeRelease()
 
 class FakeInspector : public Inspector {
   public:
-    bool begin(const hg::station::PartProgramRef&, std::string&) override
+    hg::Status begin(const hg::station::PartProgramRef&) override
     {
         frames_.clear();
-        return true;
+        return hg::Status::success();
     }
     std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
     {

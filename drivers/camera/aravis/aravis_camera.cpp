@@ -88,34 +88,34 @@ struct AravisConfig {
 };
 
 /// The local address the kernel would send from to reach `device` (IPv4): a
-/// connected UDP socket's own address. No packet is sent. Empty on failure,
-/// with the reason in `why`.
-std::string interfaceAddressFor(const std::string& device, std::string& why)
+/// connected UDP socket's own address. No packet is sent. A failure with the
+/// reason otherwise (the driver boundary does not throw, docs/style.md point 4).
+Result<std::string> interfaceAddressFor(const std::string& device)
 {
     sockaddr_in peer{};
     peer.sin_family = AF_INET;
     peer.sin_port = htons(kGvcpPort);
-    if (::inet_pton(AF_INET, device.c_str(), &peer.sin_addr) != 1) {
-        why = "'" + device + "' is not an IPv4 address";
-        return {};
-    }
+    if (::inet_pton(AF_INET, device.c_str(), &peer.sin_addr) != 1)
+        return Status::failure("'" + device + "' is not an IPv4 address");
     const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) {
-        why = std::string("socket: ") + std::strerror(errno);
-        return {};
-    }
+    if (fd < 0) return Status::failure(std::string("socket: ") + std::strerror(errno));
     sockaddr_in local{};
     socklen_t length = sizeof local;
+    Status failed;
     std::string out;
     if (::connect(fd, reinterpret_cast<const sockaddr*>(&peer), sizeof peer) != 0)
-        why = std::string("no route to ") + device + ": " + std::strerror(errno);
+        failed = Status::failure(std::string("no route to ") + device + ": " + std::strerror(errno));
     else if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &length) != 0)
-        why = std::string("getsockname: ") + std::strerror(errno);
+        failed = Status::failure(std::string("getsockname: ") + std::strerror(errno));
     else {
         char text[INET_ADDRSTRLEN] = {};
-        if (::inet_ntop(AF_INET, &local.sin_addr, text, sizeof text)) out = text;
+        if (::inet_ntop(AF_INET, &local.sin_addr, text, sizeof text))
+            out = text;
+        else
+            failed = Status::failure(std::string("inet_ntop: ") + std::strerror(errno));
     }
     ::close(fd);
+    if (!failed.ok()) return failed;
     return out;
 }
 
@@ -523,9 +523,9 @@ class AravisCamera final : public Camera {
         const std::string id = config_.id();
         const std::string key = configPath() + (config_.address.empty() ? ".serial" : ".address");
         if (!config_.address.empty()) {
-            std::string why;
-            const std::string local = interfaceAddressFor(config_.address, why);
-            if (local.empty()) return Status::failure(key + ": cannot reach '" + id + "': " + why);
+            const Result<std::string> route = interfaceAddressFor(config_.address);
+            if (!route.ok()) return Status::failure(key + ": cannot reach '" + id + "': " + route.message());
+            const std::string& local = route.value();
             GInetAddress* interfaceAddress = g_inet_address_new_from_string(local.c_str());
             GInetAddress* deviceAddress = g_inet_address_new_from_string(config_.address.c_str());
             ArvDevice* device = arv_gv_device_new(interfaceAddress, deviceAddress, &error);

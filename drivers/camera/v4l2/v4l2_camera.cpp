@@ -198,11 +198,11 @@ class V4l2Camera final : public Camera {
         v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
         xioctl(fd_, VIDIOC_STREAMOFF, &type);
         pool_->streamedOff();
-        std::string why;
-        auto region = cropTo(aligned, why);
-        if (!region) {
-            cropTo(configured_, why);
-            fallBackToWholeFrames(where + "region " + toString(aligned) + " refused: " + why);
+        if (const Result<Roi> region = cropTo(aligned); !region.ok()) {
+            // Back to the configured crop, which the buffers hold; a failure there is said too.
+            const Result<Roi> restored = cropTo(configured_);
+            fallBackToWholeFrames(where + "region " + toString(aligned) + " refused: " + region.message() +
+                                  (restored.ok() ? "" : "; the configured crop not restored: " + restored.message()));
         }
         pool_->queueIdle();
         if (xioctl(fd_, VIDIOC_STREAMON, &type) == -1)
@@ -215,9 +215,9 @@ class V4l2Camera final : public Camera {
     {
         if (region_ != configured_) {
             // The last activation ended on another region: the buffers are sized from the configured one.
-            std::string why;
-            if (!cropTo(configured_, why))
-                return Status::failure("v4l2 " + config_.device + ": cannot restore the configured crop: " + why);
+            if (const Result<Roi> restored = cropTo(configured_); !restored.ok())
+                return Status::failure("v4l2 " + config_.device +
+                                       ": cannot restore the configured crop: " + restored.message());
         }
         v4l2_requestbuffers req{};
         req.count = static_cast<std::uint32_t>(config_.bufferCount);
@@ -384,43 +384,37 @@ class V4l2Camera final : public Camera {
 
     /// Sets the crop (stream stopped) to a rectangle containing `want`
     /// (V4L2_SEL_FLAG_GE) and takes the format it implies. The region
-    /// delivered, or std::nullopt with `why`.
-    std::optional<Roi> cropTo(const Roi& want, std::string& why)
+    /// delivered, or a failure saying why (the driver boundary does not
+    /// throw, docs/style.md point 4).
+    Result<Roi> cropTo(const Roi& want)
     {
         v4l2_selection sel{};
         sel.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
         sel.target = V4L2_SEL_TGT_CROP;
         sel.flags = V4L2_SEL_FLAG_GE;
         sel.r = {want.x, want.y, static_cast<std::uint32_t>(want.width), static_cast<std::uint32_t>(want.height)};
-        if (xioctl(fd_, VIDIOC_S_SELECTION, &sel) == -1) {
-            why = "VIDIOC_S_SELECTION: " + errnoText(errno);
-            return std::nullopt;
-        }
+        if (xioctl(fd_, VIDIOC_S_SELECTION, &sel) == -1)
+            return Status::failure(StatusCode::IoError, "VIDIOC_S_SELECTION: " + errnoText(errno));
         const Roi chosen{sel.r.left, sel.r.top, static_cast<int>(sel.r.width), static_cast<int>(sel.r.height)};
         auto region = v4l2::acceptedCrop(want, chosen, configured_);
-        if (!region) {
-            why = "the device cropped to " + toString(chosen);
-            return std::nullopt;
-        }
+        if (!region) return Status::failure(StatusCode::NotAllowed, "the device cropped to " + toString(chosen));
         v4l2_format fmt{};
         fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-        if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1) {
-            why = "VIDIOC_G_FMT: " + errnoText(errno);
-            return std::nullopt;
-        }
+        if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1)
+            return Status::failure(StatusCode::IoError, "VIDIOC_G_FMT: " + errnoText(errno));
         const bool fits = !pool_ || std::all_of(pool_->slots.begin(), pool_->slots.end(),
                                                 [&](const auto& slot) { return slot.length >= fmt.fmt.pix.sizeimage; });
         if (static_cast<int>(fmt.fmt.pix.width) != region->width ||
-            static_cast<int>(fmt.fmt.pix.height) != region->height || !fits) {
-            why = "the image became " + std::to_string(fmt.fmt.pix.width) + "x" + std::to_string(fmt.fmt.pix.height) +
-                  " (" + std::to_string(fmt.fmt.pix.sizeimage) + " bytes) for the crop " + toString(*region);
-            return std::nullopt;
-        }
+            static_cast<int>(fmt.fmt.pix.height) != region->height || !fits)
+            return Status::failure(StatusCode::NotAllowed, "the image became " + std::to_string(fmt.fmt.pix.width) +
+                                                               "x" + std::to_string(fmt.fmt.pix.height) + " (" +
+                                                               std::to_string(fmt.fmt.pix.sizeimage) +
+                                                               " bytes) for the crop " + toString(*region));
         width_ = region->width;
         height_ = region->height;
         bytesPerLine_ = fmt.fmt.pix.bytesperline;
         region_ = *region;
-        return region;
+        return *region;
     }
 
     /// The control whose name (as VIDIOC_QUERYCTRL reports it) is `name`.

@@ -102,7 +102,7 @@ struct ViewEdges;
 class Aligner {
   public:
     /// `landmarks` name the datums of `method: datums`. Throws
-    /// std::invalid_argument for an unknown datum or bad limits.
+    /// ArgumentError for an unknown datum or bad limits.
     Aligner(std::shared_ptr<const model::Solid> solid, const std::vector<model::Landmark>& landmarks,
             model::AlignmentSettings settings);
     ~Aligner();
@@ -110,7 +110,7 @@ class Aligner {
     Aligner& operator=(const Aligner&) = delete;
 
     /// Measures the seat from the views (each with its nominal camera).
-    /// Throws std::invalid_argument when a frame does not match its camera.
+    /// Throws ArgumentError when a frame does not match its camera.
     AlignmentResult align(const std::vector<AlignmentView>& views) const;
     /// The per-view half of align (docs/daemon.md, "The pipeline"); const and
     /// free of shared state: safe from several threads.

@@ -62,7 +62,7 @@ struct TwinCycle {
 /// The part's cycle (the header's steps): `planned` poses in travel order,
 /// `seatViews` of them before the correction (0: no alignment, nothing
 /// corrected), `seat` the part's true seat, `asMade` the mesh whose frame
-/// margins are measured. Throws std::invalid_argument when a frame does not
+/// margins are measured. Throws ArgumentError when a frame does not
 /// match its camera.
 TwinCycle runCycle(const inspect::Inspector& inspector, const geometry::Station& station,
                    const std::vector<geometry::FixturePose>& planned, std::size_t seatViews,

@@ -1,10 +1,14 @@
-// Error types shared by every module.
+// Error types shared by every module; which one a failure is follows
+// docs/style.md point 4.
 //
 // Loading-time problems (a file, a configuration key, a command-line value) are
 // InputError: they name the file, the field and, where the format has lines, the
 // line, and map to exit status 2 (docs/contracts.md §5). Hardware and runtime faults are
-// FaultError (exit status 3). The capture loop never throws across a driver
-// boundary; it returns status values instead (docs/style.md point 4).
+// FaultError (exit status 3). A caller that breaks a public function's documented
+// precondition gets an ArgumentError; a loader that passes a value it read on to
+// such a function turns that into an InputError naming the field. The capture
+// loop never throws across a driver boundary; it returns status values instead
+// (status.h).
 #pragma once
 
 #include <optional>
@@ -36,6 +40,17 @@ class InputError : public std::runtime_error {
 class FaultError : public std::runtime_error {
   public:
     using std::runtime_error::runtime_error;
+};
+
+/// A value the function's contract excludes: the caller broke a documented
+/// precondition (a render window outside the image, a camera with a
+/// non-positive focal length, an aligner without datums). The message names
+/// the argument and the value. An std::invalid_argument, so a caller may catch
+/// it as one; it is neither bad input (the function does not know the file)
+/// nor a fault of the station.
+class ArgumentError : public std::invalid_argument {
+  public:
+    using std::invalid_argument::invalid_argument;
 };
 
 /// Exit statuses of every hullgauge program (docs/contracts.md §5).

@@ -29,7 +29,7 @@ struct Intrinsics {
     cv::Size imageSize;
 
     bool hasDistortion() const;
-    /// Throws std::invalid_argument with the reason when K or dist cannot be used.
+    /// Throws ArgumentError with the reason when K or dist cannot be used.
     void validate() const;
 };
 

@@ -119,7 +119,7 @@ class InspectionMap {
   public:
     /// Builds the map (3.5.1): path nodes to every landmark, type-three nodes at
     /// each inspection level, type-four networks out to adjacencyDepth, labels
-    /// from `oracle`. Throws std::invalid_argument for an impossible geometry
+    /// from `oracle`. Throws ArgumentError for an impossible geometry
     /// or a landmark outside the cube.
     static InspectionMap build(std::string partName, const MapGeometry& geometry, std::vector<MapLandmark> landmarks,
                                std::vector<MapParameter> parameters, const LabelOracle& oracle);

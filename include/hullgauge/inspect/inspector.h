@@ -159,7 +159,7 @@ struct CapturedView {
 
 class Inspector {
   public:
-    /// Validates `options` against the map; throws std::invalid_argument.
+    /// Validates `options` against the map; throws ArgumentError.
     /// With an aligner every inspection from frames first measures the seat
     /// and inspects through the seated cameras (docs/alignment.md); the
     /// regions of interest then carry the aligner's margin.
@@ -171,7 +171,7 @@ class Inspector {
 
     /// Segments only the regions the map's voxels project to, then inspects.
     /// Each frame, placed at its origin, must lie on its camera's sensor
-    /// (std::invalid_argument naming the view); pixels of the sensor the frame
+    /// (ArgumentError naming the view); pixels of the sensor the frame
     /// does not hold are unknown, never read (docs/inspection.md, "Frames
     /// that are regions").
     InspectionResult inspect(const std::vector<CapturedView>& views,
@@ -179,7 +179,7 @@ class Inspector {
     /// Segments one view's regions of interest into its silhouette index: the
     /// per-view half of `inspect`, so a caller can prepare view k while the
     /// fixture moves to view k+1 (docs/daemon.md, "The pipeline"). Const and free of shared
-    /// state: safe to call from several threads. Throws std::invalid_argument
+    /// state: safe to call from several threads. Throws ArgumentError
     /// naming the view when the frame leaves its camera's sensor.
     SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;
     /// Inspects prepared silhouettes (ids name the views in the result): aligns

@@ -112,7 +112,7 @@ InspectionSetup setUpInspection(const model::PartProgram& program, const Inspect
 
 /// setUpInspection, then the map and the inspector over it. Throws
 /// hg::InputError as setUpInspection and buildInspectionMap do, and
-/// std::invalid_argument when the options do not fit the map (Inspector).
+/// hg::ArgumentError when the options do not fit the map (Inspector).
 ProgramInspector makeProgramInspector(const model::PartProgram& program, const InspectionStation& station,
                                       const std::vector<std::string>& masked = {});
 

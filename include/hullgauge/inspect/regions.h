@@ -62,7 +62,7 @@ std::optional<cv::Rect> footprintRect(const geometry::CameraModel& camera, const
 /// none overlap (rectangles that only touch stay apart).
 std::vector<cv::Rect> mergeOverlapping(const std::vector<cv::Rect>& rects);
 
-/// The regions of one view. Throws std::invalid_argument for a level or
+/// The regions of one view. Throws ArgumentError for a level or
 /// adjacency the map does not have.
 ViewRegions viewRegions(const InspectionMap& map, const geometry::CameraModel& camera, const RegionQuery& query);
 

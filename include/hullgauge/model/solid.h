@@ -44,7 +44,7 @@ struct RayHit {
 class Solid {
   public:
     /// `mesh` must be closed and outward oriented (see mesh_io.h checkMesh);
-    /// a mesh that is not a 2-manifold throws std::invalid_argument.
+    /// a mesh that is not a 2-manifold throws ArgumentError.
     explicit Solid(TriangleMesh mesh);
     ~Solid();
     Solid(Solid&&) noexcept;

@@ -55,7 +55,7 @@ struct RenderOptions {
     /// Seed of the noise generator (cv::RNG); equal seeds give equal images.
     std::uint64_t seed = 0;
 
-    /// Throws std::invalid_argument naming the offending option.
+    /// Throws ArgumentError naming the offending option and its value.
     void validate() const;
 };
 
@@ -82,7 +82,7 @@ class SilhouetteRenderer {
     /// of its kernel's reach around the window (or the sensor's edge), so the
     /// pixels are the whole image's; the noise is drawn for the window alone
     /// (same σ, same seed). Memory and time go with the window, not the sensor.
-    /// Throws std::invalid_argument when the window is empty or leaves the sensor.
+    /// Throws ArgumentError when the window is empty or leaves the sensor.
     cv::Mat render(const geometry::CameraModel& camera, const RenderOptions& options, const cv::Rect& window) const;
 
   private:

@@ -46,7 +46,7 @@ struct SegmentationSettings {
     int otsuStride = 16;
 };
 
-/// "otsu", "fixed", "mask"; throws std::invalid_argument for anything else.
+/// "otsu", "fixed", "mask"; throws ArgumentError for anything else.
 SegmentationMethod parseSegmentationMethod(const std::string& name);
 std::string toString(SegmentationMethod method);
 
@@ -66,7 +66,7 @@ SegmentationSettings parseSegmentation(const ConfigNode& node);
 SegmentationSettings stationSegmentation(const geometry::Station& station);
 
 /// A single-channel frame of the same depth (8 or 16 bit); colour frames are
-/// converted by luminance. Throws std::invalid_argument for other depths.
+/// converted by luminance. Throws ArgumentError for other depths.
 cv::Mat toGrey(const cv::Mat& frame);
 
 /// The object/background threshold of a grey frame: Otsu over a strided

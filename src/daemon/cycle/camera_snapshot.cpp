@@ -67,13 +67,13 @@ cv::Mat snapshotOverlay(const cv::Mat& grey, const cv::Mat& mask)
     return colour;
 }
 
-bool CameraSnapshot::request(SnapshotJob job, station::SequencerState state, std::string& why)
+Status CameraSnapshot::request(SnapshotJob job, station::SequencerState state)
 {
     nlohmann::json status{{"pose_requested", job.pose.has_value()}};
     // The last frame's figures stay in the status until the next is grabbed.
     if (const auto last = queue_.status(); last.is_object() && last.contains("id")) status.update(last);
     status.erase("error");
-    return queue_.request(std::move(job), state, std::move(status), why);
+    return queue_.request(std::move(job), state, std::move(status));
 }
 
 std::shared_ptr<const std::vector<unsigned char>> CameraSnapshot::png() const

@@ -42,8 +42,8 @@ SnapshotFigures snapshotFigures(const cv::Mat& grey, const cv::Mat& mask, double
 
 class CameraSnapshot {
   public:
-    /// Queues `job`; false with `why` when one is queued or running or the station is not ready.
-    bool request(SnapshotJob job, station::SequencerState state, std::string& why);
+    /// Queues `job`; a failure saying why when one is queued or running or the station is not ready.
+    Status request(SnapshotJob job, station::SequencerState state);
     bool queued() const { return queue_.queued(); }
     std::optional<SnapshotJob> take() { return queue_.take(); }
     void requeue(SnapshotJob job) { queue_.requeue(std::move(job)); }

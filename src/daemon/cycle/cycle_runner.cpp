@@ -142,9 +142,9 @@ nlohmann::json CycleRunner::describe() const
     return j;
 }
 
-bool CycleRunner::requestCalibration(CalibrationJob job, std::string& why)
+Status CycleRunner::requestCalibration(CalibrationJob job)
 {
-    return calibration_.request(std::move(job), state(), why);
+    return calibration_.request(std::move(job), state());
 }
 
 // ---- the sequencer, the commands, the lamps ---------------------------------
@@ -284,8 +284,9 @@ void CycleRunner::prepareProgram(std::uint16_t number)
         // Between a reload's new configuration and its program list: the list's recheck follows.
         state = station::ProgramState::UnknownProgram;
         error = "not configured";
-    } else if (!inspector_.prepare(it->second, error)) {
+    } else if (const Status loaded = inspector_.prepare(it->second); !loaded.ok()) {
         state = station::ProgramState::LoadFailed;
+        error = loaded.message();
     }
     registers_.programPrepared(number, state);
     if (state == station::ProgramState::Ready) {
@@ -427,8 +428,8 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     std::string error;
     if (!cycle.program)
         error = "part program " + std::to_string(r.program) + " is no longer configured";
-    else if (!inspector_.begin(*cycle.program, error) && error.empty())
-        error = "the part program could not be loaded";
+    else if (const Status loaded = inspector_.begin(*cycle.program); !loaded.ok())
+        error = loaded.message().empty() ? "the part program could not be loaded" : loaded.message();
     // The cycle loaded the program the changeover selected: PROGRAM_STATE says how that went.
     if (cycle.program)
         registers_.programPrepared(r.program,

@@ -63,14 +63,14 @@ class CycleRunner {
 
     /// Queues a calibration; it runs between cycles, on the runner thread, when
     /// the station is ready (production is paused meanwhile: PLC STATUS 5,
-    /// triggers refused as not ready). False with `why` when one is queued or
-    /// running, or the station is faulted or starting.
-    bool requestCalibration(CalibrationJob job, std::string& why);
+    /// triggers refused as not ready). A failure saying why when one is queued
+    /// or running, or the station is faulted or starting.
+    Status requestCalibration(CalibrationJob job);
     /// The last calibration (FixtureCalibration::status).
     nlohmann::json calibration() const { return calibration_.status(); }
     /// Queues a camera snapshot (docs/hmi.md, "Maintenance"): like a
     /// calibration, between cycles with production paused for the grab.
-    bool requestSnapshot(SnapshotJob job, std::string& why) { return snapshot_.request(std::move(job), state(), why); }
+    Status requestSnapshot(SnapshotJob job) { return snapshot_.request(std::move(job), state()); }
     /// The last snapshot: its status and its overlay (CameraSnapshot).
     const CameraSnapshot& snapshot() const { return snapshot_; }
 

@@ -85,26 +85,27 @@ class EngineInspector : public Inspector {
     {
     }
 
-    bool begin(const station::PartProgramRef& ref, std::string& error) override
+    Status begin(const station::PartProgramRef& ref) override
     {
         // The worker must be idle, and forget the last program's inspector, before a reload may replace it.
         idle();
-        current_ = load(ref, error);
-        if (!current_) return false;
+        const Result<LoadedProgram*> program = load(ref);
+        current_ = program.ok() ? program.value() : nullptr;
+        if (!current_) return program.status();
         const inspect::Inspector* inspector = current_->inspection.inspector.get();
         pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
             return inspector->prepareView(view, settings);
         });
-        return true;
+        return Status::success();
     }
 
     // Between cycles (the runner's thread): the pipeline is idle, so a program
     // loaded anew may replace the one the last cycle used.
-    bool prepare(const station::PartProgramRef& ref, std::string& error) override
+    Status prepare(const station::PartProgramRef& ref) override
     {
-        if (loadedAsConfigured(ref)) return true;
+        if (loadedAsConfigured(ref)) return Status::success();
         idle();
-        return load(ref, error) != nullptr;
+        return load(ref).status();
     }
 
     std::optional<LoadedProgramInfo> loaded(std::uint16_t number) const override
@@ -229,8 +230,8 @@ class EngineInspector : public Inspector {
 
     /// The program, loaded unless it is loaded from the same file already (a
     /// reload may point the number at another file, or find a new version in
-    /// the same one: rebuilt then); null with `error` when it cannot be loaded.
-    LoadedProgram* load(const station::PartProgramRef& ref, std::string& error)
+    /// the same one: rebuilt then); a failure with the reason when it cannot be loaded.
+    Result<LoadedProgram*> load(const station::PartProgramRef& ref)
     {
         if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
         try {
@@ -258,12 +259,11 @@ class EngineInspector : public Inspector {
                 before == loaded_.end() ? std::string() : "; it replaces " + describeRelease(before->second.program));
             return &loaded_.insert_or_assign(ref.number, std::move(p)).first->second;
         } catch (const std::exception& e) {
-            error = e.what();
+            return Status::failure(e.what());
         } catch (...) {
             // Whatever the program's load throws is the program's fault (FAULT 30), never the daemon's end.
-            error = "the part program could not be loaded";
+            return Status::failure("the part program could not be loaded");
         }
-        return nullptr;
     }
 
     // The part's archive (docs/daemon.md): frames, cameras, silhouettes and landmark

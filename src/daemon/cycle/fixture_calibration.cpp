@@ -5,11 +5,11 @@
 
 namespace hg::daemon {
 
-bool FixtureCalibration::request(CalibrationJob job, station::SequencerState state, std::string& why)
+Status FixtureCalibration::request(CalibrationJob job, station::SequencerState state)
 {
     nlohmann::json status{
         {"poses", job.poses.size()}, {"out", job.out.string()}, {"progress", nlohmann::json::array()}};
-    return queue_.request(std::move(job), state, std::move(status), why);
+    return queue_.request(std::move(job), state, std::move(status));
 }
 
 // The station file is written with a backup only when the axes were solved;

@@ -33,9 +33,9 @@ struct CalibrationJob {
 
 class FixtureCalibration {
   public:
-    /// Queues `job`. False with `why` when one is queued or running, or the
-    /// station (in `state`) is faulted, starting or in maintenance.
-    bool request(CalibrationJob job, station::SequencerState state, std::string& why);
+    /// Queues `job`. A failure saying why when one is queued or running, or
+    /// the station (in `state`) is faulted, starting or in maintenance.
+    Status request(CalibrationJob job, station::SequencerState state);
     bool queued() const { return queue_.queued(); }
     /// Takes the queued job (none when none is queued).
     std::optional<CalibrationJob> take() { return queue_.take(); }

@@ -1,12 +1,12 @@
 #include "cycle/image_writer.h"
 
-#include <stdexcept>
+#include "hullgauge/common/error.h"
 
 namespace hg::daemon {
 
 ImageWriter::ImageWriter(std::size_t capacity) : capacity_(capacity)
 {
-    if (capacity_ == 0) throw std::invalid_argument("ImageWriter: capacity must be at least 1");
+    if (capacity_ == 0) throw ArgumentError("ImageWriter: capacity must be at least 1, found 0");
     worker_ = std::thread([this] { work(); });
 }
 

@@ -6,6 +6,7 @@
 
 #include "daemon_config.h"
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
 #include "hullgauge/vision/manifest.h"
@@ -81,13 +82,14 @@ struct LoadedProgramInfo {
 class Inspector {
   public:
     virtual ~Inspector() = default;
-    /// Loads (or reuses) the program's inspection map and plan; false with a
-    /// reason when it cannot be loaded.
-    virtual bool begin(const station::PartProgramRef& program, std::string& error) = 0;
+    /// Loads (or reuses) the program's inspection map and plan; a failure
+    /// with the reason when it cannot be loaded. Never throws: the cycle runs
+    /// on (docs/style.md point 4).
+    virtual Status begin(const station::PartProgramRef& program) = 0;
     /// The recipe changeover (docs/plc.md): loads the program's inspection map
-    /// and plan now, if they are not loaded, so its first cycle need not; false
-    /// with a reason when it cannot be loaded. Only between cycles.
-    virtual bool prepare(const station::PartProgramRef& /*program*/, std::string& /*error*/) { return true; }
+    /// and plan now, if they are not loaded, so its first cycle need not; a
+    /// failure with the reason when it cannot be loaded. Only between cycles.
+    virtual Status prepare(const station::PartProgramRef& /*program*/) { return Status::success(); }
     /// Program `number` as the last successful begin() or prepare() loaded
     /// it (or found it loaded); nullopt when it is not loaded or not known.
     virtual std::optional<LoadedProgramInfo> loaded(std::uint16_t /*number*/) const { return std::nullopt; }

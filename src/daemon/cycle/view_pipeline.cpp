@@ -1,14 +1,15 @@
 #include "cycle/view_pipeline.h"
 
+#include "hullgauge/common/error.h"
+
 #include <algorithm>
-#include <stdexcept>
 #include <utility>
 
 namespace hg::daemon {
 
 ViewPipeline::ViewPipeline(std::size_t capacity) : capacity_(capacity)
 {
-    if (capacity_ == 0) throw std::invalid_argument("ViewPipeline: capacity must be at least 1");
+    if (capacity_ == 0) throw ArgumentError("ViewPipeline: capacity must be at least 1, found 0");
     worker_ = std::thread([this] { work(); });
 }
 
@@ -126,13 +127,16 @@ void ViewPipeline::work()
 
         std::optional<inspect::SilhouetteView> prepared;
         std::string error;
-        try {
-            if (!prepare) throw std::logic_error("no preparation set for the cycle");
-            prepared = prepare(job.view);
-        } catch (const std::exception& e) {
-            // prepareView's own messages name the view; anything else gets the name here.
-            error = e.what();
-            if (error.rfind("view '" + job.view.id + "'", 0) != 0) error = "view '" + job.view.id + "': " + error;
+        if (!prepare) {
+            error = "view '" + job.view.id + "': no preparation set for the cycle";
+        } else {
+            try {
+                prepared = prepare(job.view);
+            } catch (const std::exception& e) {
+                // prepareView's own messages name the view; anything else gets the name here.
+                error = e.what();
+                if (error.rfind("view '" + job.view.id + "'", 0) != 0) error = "view '" + job.view.id + "': " + error;
+            }
         }
         const auto finished = Clock::now();
         // The frame is the caller's (it keeps it for the failed-part images); drop our reference outside the lock.

@@ -57,5 +57,24 @@ TEST(CameraSnapshot, OverlayOutlinesTheSilhouetteInRedAndTintsItsInside)
     EXPECT_EQ(at(30, 16), cv::Vec3b(200, 200, 200));
 }
 
+// A refused request says why, as a status: the maintenance socket answers with its message.
+TEST(CameraSnapshot, ARefusedRequestSaysWhy)
+{
+    CameraSnapshot snapshot;
+    const Status notReady = snapshot.request({}, station::SequencerState::Fault);
+    EXPECT_FALSE(notReady.ok());
+    EXPECT_EQ(notReady.code(), StatusCode::NotAllowed);
+    EXPECT_EQ(notReady.message(), "the station is not ready (fault)");
+    EXPECT_FALSE(snapshot.queued());
+
+    const Status queued = snapshot.request({}, station::SequencerState::Ready);
+    EXPECT_TRUE(queued.ok()) << queued.message();
+    EXPECT_TRUE(snapshot.queued());
+    const Status again = snapshot.request({}, station::SequencerState::Ready);
+    EXPECT_FALSE(again.ok());
+    EXPECT_EQ(again.code(), StatusCode::NotAllowed);
+    EXPECT_EQ(again.message(), "a camera snapshot is already queued or running");
+}
+
 } // namespace
 } // namespace hg::daemon

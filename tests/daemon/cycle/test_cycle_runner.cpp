@@ -158,16 +158,15 @@ class ScriptedDevices : public StationDevices {
 /// measured and call it a seating fault (set before the trigger).
 class PassingInspector : public Inspector {
   public:
-    bool begin(const station::PartProgramRef&, std::string&) override { return true; }
+    Status begin(const station::PartProgramRef&) override { return Status::success(); }
     /// The changeover's load: recorded; fails for the programs in `unloadable`.
-    bool prepare(const station::PartProgramRef& program, std::string& error) override
+    Status prepare(const station::PartProgramRef& program) override
     {
         if (onPrepare) onPrepare(program.number);
         std::lock_guard lock(mutex);
         prepared.push_back(program.number);
-        if (!unloadable.contains(program.number)) return true;
-        error = "scripted load failure";
-        return false;
+        if (!unloadable.contains(program.number)) return Status::success();
+        return Status::failure("scripted load failure");
     }
     void addView(std::size_t, const geometry::FixturePose&, cv::Mat, cv::Point) override {}
     InspectionOutcome finish() override
@@ -870,8 +869,8 @@ TEST_F(CycleRunnerTest, ASnapshotIsGrabbedAtItsPoseWithTheSilhouetteItShows)
     devices.frame(cv::Rect(10, 12, 20, 10)).setTo(cv::Scalar(20));
     startReady();
     EXPECT_EQ(runner->snapshot().png(), nullptr);
-    std::string why;
-    ASSERT_TRUE(runner->requestSnapshot({geometry::FixturePose{30, 10, 0}}, why)) << why;
+    Status queued = runner->requestSnapshot({geometry::FixturePose{30, 10, 0}});
+    ASSERT_TRUE(queued.ok()) << queued.message();
     ASSERT_TRUE(eventually([&] { return runner->snapshot().status().value("state", "") == "done"; }));
     const auto s = runner->snapshot().status();
     EXPECT_EQ(s.at("id"), 1);
@@ -899,7 +898,8 @@ TEST_F(CycleRunnerTest, ASnapshotIsGrabbedAtItsPoseWithTheSilhouetteItShows)
     ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
     EXPECT_EQ(runner->state(), SequencerState::Ready);
     // A second one without a pose: the fixture stays, the id counts up.
-    ASSERT_TRUE(runner->requestSnapshot({}, why)) << why;
+    queued = runner->requestSnapshot({});
+    ASSERT_TRUE(queued.ok()) << queued.message();
     ASSERT_TRUE(eventually([&] {
         const auto st = runner->snapshot().status();
         return st.value("state", "") == "done" && st.value("id", 0) == 2;
@@ -912,8 +912,8 @@ TEST_F(CycleRunnerTest, ASnapshotWhoseGrabFailsSaysWhyAndTheStationRecovers)
 {
     devices.grabs.push_back([] { return fails(StatusCode::Timeout); });
     startReady();
-    std::string why;
-    ASSERT_TRUE(runner->requestSnapshot({}, why)) << why;
+    const Status queued = runner->requestSnapshot({});
+    ASSERT_TRUE(queued.ok()) << queued.message();
     ASSERT_TRUE(eventually([&] { return runner->snapshot().status().value("state", "") == "failed"; }));
     EXPECT_NE(runner->snapshot().status().value("error", "").find("camera:"), std::string::npos);
     EXPECT_EQ(runner->snapshot().png(), nullptr);
@@ -930,8 +930,9 @@ TEST_F(CycleRunnerTest, ASnapshotIsRefusedWhileTheStationIsFaulted)
     devices.startStatus = fails(StatusCode::IoError);
     start();
     ASSERT_TRUE(eventually([&] { return at(reg::Status) == 3; }));
-    std::string why;
-    EXPECT_FALSE(runner->requestSnapshot({}, why));
+    const Status refused = runner->requestSnapshot({});
+    const std::string& why = refused.message();
+    EXPECT_FALSE(refused.ok());
     EXPECT_NE(why.find("not ready (fault)"), std::string::npos) << why;
 }
 

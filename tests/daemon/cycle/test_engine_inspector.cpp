@@ -67,8 +67,8 @@ std::vector<cv::Mat> frames(const DaemonConfig& config, const std::string& part,
 InspectionOutcome inspect(hg::daemon::Inspector& inspector, const DaemonConfig& config,
                           const std::vector<cv::Mat>& images)
 {
-    std::string error;
-    EXPECT_TRUE(inspector.begin(config.programs.at(1), error)) << error;
+    const hg::Status begun = inspector.begin(config.programs.at(1));
+    EXPECT_TRUE(begun.ok()) << begun.message();
     const auto& poses = config.programs.at(1).views;
     for (std::size_t k = 0; k < images.size(); ++k) inspector.addView(k, poses[k], images[k], {});
     return inspector.finish();
@@ -312,8 +312,9 @@ TEST_F(EngineParity, AToleranceTheStationCannotProveIsRefusedAtLoadUnlessForced)
 
     auto config = hg::station::loadDaemonConfig(line);
     EXPECT_EQ(config.station.calibration.intrinsicsStdDev[2], 0.3);
-    std::string error;
-    EXPECT_FALSE(hg::daemon::makeEngineInspector(config)->begin(config.programs.at(1), error));
+    const hg::Status begun = hg::daemon::makeEngineInspector(config)->begin(config.programs.at(1));
+    const std::string& error = begun.message();
+    EXPECT_FALSE(begun.ok());
     EXPECT_NE(error.find("landmark tall-top: tolerance zone 0.01 mm is narrower than 4 U"), std::string::npos) << error;
     EXPECT_NE(error.find("programs.1.force: true"), std::string::npos) << error;
 
@@ -399,8 +400,8 @@ TEST_F(EngineParity, TheFirstTwoViewsSeatCorrectsThePosesOfTheRest)
     auto inspector = hg::daemon::makeEngineInspector(*config_);
     for (const std::string part : {"nominal", "face-low"}) {
         SCOPED_TRACE(part);
-        std::string error;
-        ASSERT_TRUE(inspector->begin(config_->programs.at(1), error)) << error;
+        const hg::Status begun = inspector->begin(config_->programs.at(1));
+        ASSERT_TRUE(begun.ok()) << begun.message();
         ASSERT_EQ(inspector->seatViews(), 2u); // the default alignment.correct_poses_after
         const auto first = frames(*config_, part, seat, {planned[0], planned[1]});
         for (std::size_t k = 0; k < 2; ++k) inspector->addView(k, planned[k], first[k], {});
@@ -504,8 +505,8 @@ TEST_F(EngineParity, AnArchiveOfRegionFramesReproducesTheDaemonsLandmarks)
     for (const std::string part : {"nominal", "face-low"}) {
         SCOPED_TRACE(part);
         const auto images = frames(*config_, part);
-        std::string error;
-        ASSERT_TRUE(inspector->begin(config_->programs.at(1), error)) << error;
+        const hg::Status begun = inspector->begin(config_->programs.at(1));
+        ASSERT_TRUE(begun.ok()) << begun.message();
         std::vector<cv::Rect> cuts;
         for (std::size_t k = 0; k < images.size(); ++k) {
             const cv::Rect cut = inspector->region(k, poses[k]);

@@ -270,8 +270,8 @@ class EnginePipeline : public ::testing::Test {
     static hg::daemon::InspectionOutcome inspect(hg::daemon::Inspector& inspector, const std::vector<cv::Mat>& images,
                                                  const std::vector<cv::Point>& origins = {})
     {
-        std::string error;
-        EXPECT_TRUE(inspector.begin(config_->programs.at(1), error)) << error;
+        const hg::Status begun = inspector.begin(config_->programs.at(1));
+        EXPECT_TRUE(begun.ok()) << begun.message();
         const auto& poses = config_->programs.at(1).views;
         for (std::size_t k = 0; k < images.size(); ++k)
             inspector.addView(k, poses[k], images[k], k < origins.size() ? origins[k] : cv::Point());
@@ -341,8 +341,7 @@ TEST_F(EnginePipeline, AFrameLeavingTheSensorIsAnOutcomeErrorNamingTheView)
         << outcome.error;
 
     // An aborted cycle leaves nothing behind for the next one.
-    std::string error;
-    ASSERT_TRUE(inspector->begin(config_->programs.at(1), error));
+    ASSERT_TRUE(inspector->begin(config_->programs.at(1)).ok());
     inspector->addView(0, config_->programs.at(1).views[0], images[0], {});
     inspector->cancel();
     auto again = inspect(*inspector, frames("nominal"));

@@ -12,13 +12,13 @@
 // runner's clock (injected; the tests move it by hand).
 #pragma once
 
-#include "clock.h"
 #include "cycle/camera_snapshot.h"
 #include "cycle/devices.h"
 #include "cycle/fixture_calibration.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/result_store.h"
 #include "plant/plc_registers.h"

@@ -162,12 +162,7 @@ Lamps::~Lamps()
 
 void Lamps::shutdown()
 {
-    {
-        std::lock_guard lock(mutex());
-        stopBlinker_ = true;
-    }
-    wake_.notify_all();
-    if (blinker_.joinable()) blinker_.join();
+    blinker_.stop();
 }
 
 LampState Lamps::commanded(Lamp lamp) const
@@ -186,10 +181,8 @@ HookResult Lamps::onConfigure()
 HookResult Lamps::onActivate()
 {
     if (Status s = writeLocked(/*always=*/true); !s) return HookResult::error(s);
-    if (ownTimer_ && !blinker_.joinable()) {
-        stopBlinker_ = false;
-        blinker_ = std::thread([this] { blinkLoop(); });
-    }
+    if (ownTimer_ && !blinker_.running())
+        blinker_.start([this](std::stop_token stop) { blinkLoop(stop); }, wakeOn(mutex(), wake_));
     return Status::success();
 }
 
@@ -276,20 +269,20 @@ Status Lamps::applyLocked()
     return Status::success();
 }
 
-void Lamps::blinkLoop()
+void Lamps::blinkLoop(std::stop_token stop)
 {
     std::unique_lock lock(mutex());
     const auto half = config_.blinkPeriod / 2;
-    while (!stopBlinker_) {
+    while (!stop.stop_requested()) {
         if (!blinking()) {
-            wake_.wait(lock, [&] { return stopBlinker_ || blinking(); });
+            wake_.wait(lock, [&] { return stop.stop_requested() || blinking(); });
             continue;
         }
         // Wake at the next half-period boundary of the phase, so the period does
         // not drift with the time the writes take; a new command moves the phase.
         const auto origin = phaseStart_;
         const auto next = origin + ((clock_() - origin) / half + 1) * half;
-        wake_.wait_until(lock, next, [&] { return stopBlinker_ || phaseStart_ != origin || !blinking(); });
+        wake_.wait_until(lock, next, [&] { return stop.stop_requested() || phaseStart_ != origin || !blinking(); });
         if (blinking()) (void)applyLocked();
     }
 }

@@ -28,6 +28,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/common/worker.h"
 
 #include <algorithm>
 #include <arpa/inet.h>
@@ -41,7 +42,6 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <sys/socket.h>
-#include <thread>
 #include <unistd.h>
 #include <utility>
 
@@ -292,12 +292,11 @@ class AravisCamera final : public Camera {
             reportChange_ = false;
             link_ = std::move(link);
             health_ = Health::Streaming;
-            stopping_ = false;
             triggerPending_ = false;
             consecutiveTimeouts_ = 0;
             controlLost_ = false;
         }
-        worker_ = std::thread([this] { linkWorker(); });
+        worker_.start([this](std::stop_token stop) { linkWorker(stop); }, wakeOn(mutex_, wakeup_));
         return Status::success();
     }
 
@@ -571,14 +570,9 @@ class AravisCamera final : public Camera {
     /// attempt in progress) and returns whether the device was answering.
     bool stopWorker()
     {
-        {
-            std::lock_guard lock(mutex_);
-            stopping_ = true;
-        }
-        wakeup_.notify_all();
-        if (worker_.joinable()) {
+        if (worker_.running()) {
             const auto t0 = Clock::now();
-            worker_.join();
+            worker_.stop();
             logger()->debug("camera {}: link worker stopped in {} ms", config_.id(),
                             std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
         }
@@ -628,12 +622,12 @@ class AravisCamera final : public Camera {
     // --- link worker ---------------------------------------------------------
 
     /// The worker's loop: triggers, probes and reconnections, each a blocking
-    /// GVCP exchange that must not hold up grab(). Ends when stopping_ is set,
-    /// after the exchange in progress (bounded by Aravis' GVCP timeouts).
-    void linkWorker()
+    /// GVCP exchange that must not hold up grab(). Ends when the stop is
+    /// requested, after the exchange in progress (bounded by Aravis' GVCP timeouts).
+    void linkWorker(std::stop_token stop)
     {
         std::unique_lock lock(mutex_);
-        while (!stopping_) {
+        while (!stop.stop_requested()) {
             if (controlLost_.exchange(false) && health_ == Health::Streaming) {
                 health_ = Health::Suspect;
                 reason_ = "control of the device was lost (heartbeat)";
@@ -1181,13 +1175,11 @@ class AravisCamera final : public Camera {
     }
 
     AravisConfig config_;
-    std::thread worker_;
     std::mutex mutex_; // guards everything below except controlLost_
     std::condition_variable wakeup_;
     std::shared_ptr<Link> link_;
     Health health_ = Health::Streaming;
-    std::string reason_; ///< why the link is suspect or lost
-    bool stopping_ = false;
+    std::string reason_;   ///< why the link is suspect or lost
     bool closing_ = false; ///< the worker is closing the connection that stopped answering
     bool triggerPending_ = false;
     std::uint64_t triggersRequested_ = 0;
@@ -1207,6 +1199,8 @@ class AravisCamera final : public Camera {
     Roi deviceRegion_;            ///< the region the device holds: frames of another one are stale
     double regionChangeMs_ = 0.0; ///< how long the last change took, for the next grab
     bool reportChange_ = false;
+
+    Worker worker_; ///< linkWorker() while active; last, so it ends before what it uses
 };
 
 } // namespace

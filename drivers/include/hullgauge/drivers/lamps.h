@@ -27,11 +27,12 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <string_view>
-#include <thread>
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/worker.h"
 #include "hullgauge/drivers/lifecycle.h"
 
 namespace hg::drivers {
@@ -136,7 +137,7 @@ class Lamps : public Device {
     /// `always`, only when a line changes.
     Status writeLocked(bool always);
     Status applyLocked();
-    void blinkLoop();
+    void blinkLoop(std::stop_token stop);
 
     LampsConfig config_;
     LampClock clock_;
@@ -146,8 +147,7 @@ class Lamps : public Device {
     std::array<bool, 3> written_{};
     /// Start of a lit half period of the blinking lamps (the phase origin).
     std::chrono::steady_clock::time_point phaseStart_;
-    bool stopBlinker_ = false;
-    std::thread blinker_;
+    Worker blinker_; ///< blinkLoop(); last, so it ends before what it uses
 };
 
 struct SimulationControls;

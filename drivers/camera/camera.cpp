@@ -179,8 +179,8 @@ Frame Frame::over(cv::Mat view, std::uint64_t frameId, std::chrono::nanoseconds 
 // ---------------------------------------------------------------------------
 // Camera: state checks around the hooks (libcamera's isAccessAllowed pattern).
 
-Camera::Camera(std::string configPath, CameraSettings settings)
-    : Device("camera"), configPath_(std::move(configPath)), settings_(std::move(settings))
+Camera::Camera(std::string configPath, CameraSettings settings, Clock& clock)
+    : Device("camera", clock), configPath_(std::move(configPath)), settings_(std::move(settings))
 {
 }
 
@@ -281,20 +281,22 @@ CameraSettings parseCameraSettings(const ConfigNode& driver)
     return s;
 }
 
-using CameraFactory = std::unique_ptr<Camera> (*)(const ConfigNode& root, CameraEnvironment& environment);
+using CameraFactory = std::unique_ptr<Camera> (*)(const ConfigNode& root, CameraEnvironment& environment, Clock& clock);
 
 /// The camera backends (docs/camera.md); the simulated twin is always built.
 constexpr Backend<CameraFactory> kCameraBackends[] = {
-    {"aravis", [](const ConfigNode& root, CameraEnvironment&) { return makeAravisCamera(root["camera"]["driver"]); }},
-    {"v4l2", [](const ConfigNode& root, CameraEnvironment&) { return makeV4l2Camera(root["camera"]["driver"]); }},
+    {"aravis", [](const ConfigNode& root, CameraEnvironment&,
+                  Clock& clock) { return makeAravisCamera(root["camera"]["driver"], clock); }},
+    {"v4l2", [](const ConfigNode& root, CameraEnvironment&,
+                Clock& clock) { return makeV4l2Camera(root["camera"]["driver"], clock); }},
     {"sim", makeSimCamera},
 };
 
-std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment)
+std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment, Clock& clock)
 {
     ConfigNode driver = root["camera"]["driver"];
     require(driver.isMap(), driver, "expected a map with at least 'backend'");
-    return chooseBackend(kCameraBackends, driver["backend"], "camera")(root, environment);
+    return chooseBackend(kCameraBackends, driver["backend"], "camera")(root, environment, clock);
 }
 
 } // namespace hg::drivers

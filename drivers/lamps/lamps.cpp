@@ -27,12 +27,12 @@ bool isUnsignedInteger(const std::string& s)
     return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-using LampsFactory = std::unique_ptr<Lamps> (*)(LampsConfig config, SimulationControls* simulation, LampClock clock);
+using LampsFactory = std::unique_ptr<Lamps> (*)(LampsConfig config, SimulationControls* simulation, Clock& clock);
 
 /// The lamp backends (docs/lamps.md); the simulated twin is always built.
 constexpr Backend<LampsFactory> kLampBackends[] = {
-    {"gpiod", [](LampsConfig config, SimulationControls*,
-                 LampClock clock) { return makeGpiodLamps(std::move(config), std::move(clock)); }},
+    {"gpiod",
+     [](LampsConfig config, SimulationControls*, Clock& clock) { return makeGpiodLamps(std::move(config), clock); }},
     {"sim", makeSimulatedLamps},
 };
 
@@ -149,10 +149,8 @@ std::array<LampState, 3> lampStatesFor(StationIndication indication)
     return table[static_cast<std::size_t>(indication)];
 }
 
-Lamps::Lamps(LampsConfig config, LampClock clock)
-    : Device("lamps"), config_(std::move(config)), clock_(std::move(clock)), ownTimer_(!clock_)
+Lamps::Lamps(LampsConfig config, Clock& clock) : Device("lamps", clock), config_(std::move(config))
 {
-    if (!clock_) clock_ = [] { return std::chrono::steady_clock::now(); };
 }
 
 Lamps::~Lamps()
@@ -162,12 +160,7 @@ Lamps::~Lamps()
 
 void Lamps::shutdown()
 {
-    {
-        std::lock_guard lock(mutex());
-        stopBlinker_ = true;
-    }
-    wake_.notify_all();
-    if (blinker_.joinable()) blinker_.join();
+    blinker_.stop();
 }
 
 LampState Lamps::commanded(Lamp lamp) const
@@ -186,10 +179,7 @@ HookResult Lamps::onConfigure()
 HookResult Lamps::onActivate()
 {
     if (Status s = writeLocked(/*always=*/true); !s) return HookResult::error(s);
-    if (ownTimer_ && !blinker_.joinable()) {
-        stopBlinker_ = false;
-        blinker_ = std::thread([this] { blinkLoop(); });
-    }
+    if (!blinker_.running()) blinker_.start([this](std::stop_token stop) { blinkLoop(stop); }, wakeOn(mutex(), wake_));
     return Status::success();
 }
 
@@ -213,7 +203,7 @@ void Lamps::command(const std::array<LampState, 3>& states)
     // A lamp that starts blinking while none blinked starts lit, so the
     // operator sees the change at once; any change keeps the phase the
     // blinking lamps show and restarts its half period.
-    const auto now = clock_();
+    const auto now = clock().now();
     const auto half = config_.blinkPeriod / 2;
     const bool dark = anyBlinking(commanded_) && ((now - phaseStart_) / half) % 2 == 1;
     phaseStart_ = dark ? now - half : now;
@@ -258,7 +248,7 @@ bool Lamps::blinking() const
 
 Status Lamps::writeLocked(bool always)
 {
-    const bool litPhase = ((clock_() - phaseStart_) / (config_.blinkPeriod / 2)) % 2 == 0;
+    const bool litPhase = ((clock().now() - phaseStart_) / (config_.blinkPeriod / 2)) % 2 == 0;
     std::array<bool, 3> lit{};
     for (std::size_t i = 0; i < lit.size(); ++i)
         lit[i] = commanded_[i] == LampState::On || (commanded_[i] == LampState::Blinking && litPhase);
@@ -276,29 +266,30 @@ Status Lamps::applyLocked()
     return Status::success();
 }
 
-void Lamps::blinkLoop()
+void Lamps::blinkLoop(std::stop_token stop)
 {
     std::unique_lock lock(mutex());
     const auto half = config_.blinkPeriod / 2;
-    while (!stopBlinker_) {
+    while (!stop.stop_requested()) {
         if (!blinking()) {
-            wake_.wait(lock, [&] { return stopBlinker_ || blinking(); });
+            wake_.wait(lock, [&] { return stop.stop_requested() || blinking(); });
             continue;
         }
         // Wake at the next half-period boundary of the phase, so the period does
         // not drift with the time the writes take; a new command moves the phase.
         const auto origin = phaseStart_;
-        const auto next = origin + ((clock_() - origin) / half + 1) * half;
-        wake_.wait_until(lock, next, [&] { return stopBlinker_ || phaseStart_ != origin || !blinking(); });
+        const auto next = origin + ((clock().now() - origin) / half + 1) * half;
+        clock().waitUntil(lock, wake_, next,
+                          [&] { return stop.stop_requested() || phaseStart_ != origin || !blinking(); });
         if (blinking()) (void)applyLocked();
     }
 }
 
-std::unique_ptr<Lamps> makeLamps(const ConfigNode& section, SimulationControls* simulation, LampClock clock)
+std::unique_ptr<Lamps> makeLamps(const ConfigNode& section, SimulationControls* simulation, Clock& clock)
 {
     LampsConfig config = LampsConfig::parse(section);
     auto make = chooseBackend(kLampBackends, section["backend"], "lamp");
-    return make(std::move(config), simulation, std::move(clock));
+    return make(std::move(config), simulation, clock);
 }
 
 } // namespace hg::drivers

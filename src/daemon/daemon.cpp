@@ -257,7 +257,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     CommandMailbox mailbox;
     std::unique_ptr<HmiServer> hmi;
     if (config->http.enabled)
-        hmi = std::make_unique<HmiServer>(config, mailbox, daemon::Clock::steady(),
+        hmi = std::make_unique<HmiServer>(config, mailbox, hg::Clock::steady(),
                                           [&runner] { return runner.snapshot().png(); });
     loop.setHmi(hmi.get());
     // The plant link reads the outbox on its own thread and connection (docs/mqtt.md).

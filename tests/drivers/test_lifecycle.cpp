@@ -28,7 +28,7 @@ enum class Answer { Success, Failure, Error };
 /// A device whose hooks answer as told and record that they ran.
 class ScriptedDevice : public Device {
   public:
-    ScriptedDevice() : Device("scripted") {}
+    ScriptedDevice() : Device("scripted", hg::Clock::steady()) {}
     Answer answer = Answer::Success;
     std::vector<std::string> calls;
 

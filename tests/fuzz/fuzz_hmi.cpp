@@ -21,10 +21,16 @@
 
 namespace {
 
-class FastClock : public hg::daemon::Clock {
+class FastClock : public hg::Clock {
   public:
     time_point now() const override { return time_point(std::chrono::seconds(++seconds_)); }
+    wall_time wallNow() const override { return wall_time(std::chrono::seconds(seconds_.load())); }
     void sleepUntil(time_point, const std::function<bool()>&) override {}
+    bool waitUntil(std::unique_lock<std::mutex>&, std::condition_variable&, time_point,
+                   const std::function<bool()>& ready) override
+    {
+        return ready();
+    }
 
   private:
     mutable std::atomic<std::int64_t> seconds_{1'000'000};

@@ -28,6 +28,7 @@
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/common/worker.h"
 
 #include <algorithm>
 #include <arpa/inet.h>
@@ -41,14 +42,12 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <sys/socket.h>
-#include <thread>
 #include <unistd.h>
 #include <utility>
 
 namespace hg::drivers {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
 std::shared_ptr<spdlog::logger> logger()
@@ -224,15 +223,21 @@ bool isTimeout(const GError* error)
     return error && g_error_matches(error, ARV_DEVICE_ERROR, ARV_DEVICE_ERROR_TIMEOUT);
 }
 
-long long msUntil(Clock::time_point t)
+long long msUntil(const Clock& clock, Clock::time_point t)
 {
-    return std::max<long long>(0, std::chrono::duration_cast<milliseconds>(t - Clock::now()).count());
+    return std::max<long long>(0, std::chrono::duration_cast<milliseconds>(t - clock.now()).count());
+}
+
+/// Whole milliseconds of a stopwatch, for the log.
+long long wholeMs(const Stopwatch& watch)
+{
+    return static_cast<long long>(watch.ms());
 }
 
 class AravisCamera final : public Camera {
   public:
-    AravisCamera(std::string configPath, CameraSettings settings, AravisConfig config)
-        : Camera(std::move(configPath), std::move(settings)), config_(std::move(config))
+    AravisCamera(std::string configPath, CameraSettings settings, AravisConfig config, Clock& clock)
+        : Camera(std::move(configPath), std::move(settings), clock), config_(std::move(config))
     {
     }
 
@@ -292,12 +297,11 @@ class AravisCamera final : public Camera {
             reportChange_ = false;
             link_ = std::move(link);
             health_ = Health::Streaming;
-            stopping_ = false;
             triggerPending_ = false;
             consecutiveTimeouts_ = 0;
             controlLost_ = false;
         }
-        worker_ = std::thread([this] { linkWorker(); });
+        worker_.start([this](std::stop_token stop) { linkWorker(stop); }, wakeOn(mutex_, wakeup_));
         return Status::success();
     }
 
@@ -305,10 +309,9 @@ class AravisCamera final : public Camera {
     {
         const bool healthy = stopWorker();
         auto link = currentLink();
-        const auto t0 = Clock::now();
+        const Stopwatch watch(clock());
         if (link) stopStream(*link, /*talkToDevice=*/healthy);
-        logger()->debug("camera {}: stream stopped in {} ms{}", config_.id(),
-                        std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count(),
+        logger()->debug("camera {}: stream stopped in {} ms{}", config_.id(), wholeMs(watch),
                         healthy ? "" : " (device not answering: not told)");
         return Status::success();
     }
@@ -321,7 +324,10 @@ class AravisCamera final : public Camera {
 
     Frame doGrab(milliseconds timeout) override
     {
-        const auto deadline = Clock::now() + timeout;
+        // The timeout bounds the caller's real wait for frames that come over the wire (Aravis'
+        // stream waits in real time): the steady clock's, whatever clock the driver was given;
+        // the link worker's schedule is on the driver's (docs/drivers.md, "Clock").
+        const auto deadline = Clock::steady().now() + timeout;
         GrabTicket ticket = awaitLink(timeout, deadline);
         if (!ticket.link) return std::move(ticket.refusal);
         Link& link = *ticket.link;
@@ -484,7 +490,7 @@ class AravisCamera final : public Camera {
                               id + ": lost (" + reason_ + "); " +
                                   (link_ || closing_ ? std::string("closing the old connection, then reconnecting")
                                                      : "reconnecting in the background, next attempt in " +
-                                                           std::to_string(msUntil(nextAttempt_)) + " ms"));
+                                                           std::to_string(msUntil(clock(), nextAttempt_)) + " ms"));
         } else if (wantedRegion_ != deviceRegion_) {
             t.refusal = Frame::failed(FrameStatus::Timeout, id + ": region " + toString(wantedRegion_) +
                                                                 " not applied within " +
@@ -503,14 +509,14 @@ class AravisCamera final : public Camera {
     ArvBuffer* popFrameOf(Link& link, const Roi& region, Clock::time_point deadline)
     {
         for (;;) {
-            ArvBuffer* buffer =
-                arv_stream_timeout_pop_buffer(link.stream, static_cast<guint64>(msUntil(deadline)) * 1000);
+            ArvBuffer* buffer = arv_stream_timeout_pop_buffer(
+                link.stream, static_cast<guint64>(msUntil(Clock::steady(), deadline)) * 1000);
             if (!buffer || arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS || regionOf(buffer) == region)
                 return buffer;
             logger()->trace("camera {}: dropped frame {} of region {} (now {})", config_.id(),
                             arv_buffer_get_frame_id(buffer), toString(regionOf(buffer)), toString(region));
             arv_stream_push_buffer(link.stream, buffer);
-            if (Clock::now() >= deadline) return nullptr;
+            if (Clock::steady().now() >= deadline) return nullptr;
         }
     }
 
@@ -571,16 +577,10 @@ class AravisCamera final : public Camera {
     /// attempt in progress) and returns whether the device was answering.
     bool stopWorker()
     {
-        {
-            std::lock_guard lock(mutex_);
-            stopping_ = true;
-        }
-        wakeup_.notify_all();
-        if (worker_.joinable()) {
-            const auto t0 = Clock::now();
-            worker_.join();
-            logger()->debug("camera {}: link worker stopped in {} ms", config_.id(),
-                            std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
+        if (worker_.running()) {
+            const Stopwatch watch(clock());
+            worker_.stop();
+            logger()->debug("camera {}: link worker stopped in {} ms", config_.id(), wholeMs(watch));
         }
         std::lock_guard lock(mutex_);
         return health_ == Health::Streaming;
@@ -597,11 +597,10 @@ class AravisCamera final : public Camera {
             healthy = health_ == Health::Streaming;
         }
         if (!link) return;
-        const auto t0 = Clock::now();
+        const Stopwatch watch(clock());
         stopStream(*link, /*talkToDevice=*/healthy);
         link.reset();
-        logger()->debug("camera {}: closed in {} ms", config_.id(),
-                        std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count());
+        logger()->debug("camera {}: closed in {} ms", config_.id(), wholeMs(watch));
     }
 
     static std::string safe(const char* s) { return s ? s : ""; }
@@ -628,12 +627,12 @@ class AravisCamera final : public Camera {
     // --- link worker ---------------------------------------------------------
 
     /// The worker's loop: triggers, probes and reconnections, each a blocking
-    /// GVCP exchange that must not hold up grab(). Ends when stopping_ is set,
-    /// after the exchange in progress (bounded by Aravis' GVCP timeouts).
-    void linkWorker()
+    /// GVCP exchange that must not hold up grab(). Ends when the stop is
+    /// requested, after the exchange in progress (bounded by Aravis' GVCP timeouts).
+    void linkWorker(std::stop_token stop)
     {
         std::unique_lock lock(mutex_);
-        while (!stopping_) {
+        while (!stop.stop_requested()) {
             if (controlLost_.exchange(false) && health_ == Health::Streaming) {
                 health_ = Health::Suspect;
                 reason_ = "control of the device was lost (heartbeat)";
@@ -656,8 +655,9 @@ class AravisCamera final : public Camera {
             case Health::Lost:
                 if (link_)
                     closeDeadLink(lock);
-                else if (Clock::now() < nextAttempt_)
-                    wakeup_.wait_until(lock, nextAttempt_);
+                else if (clock().now() < nextAttempt_)
+                    // The back-off, on the driver's clock: only the stop ends it early.
+                    clock().waitUntil(lock, wakeup_, nextAttempt_, [&] { return stop.stop_requested(); });
                 else
                     reconnect(lock);
                 break;
@@ -699,7 +699,7 @@ class AravisCamera final : public Camera {
         health_ = Health::Lost;
         reason_ = "not answering: " + why;
         backoff_ = config_.reconnectMin;
-        nextAttempt_ = Clock::now() + backoff_;
+        nextAttempt_ = clock().now() + backoff_;
     }
 
     void probe(std::unique_lock<std::mutex>& lock)
@@ -734,7 +734,7 @@ class AravisCamera final : public Camera {
         lock.lock();
         if (!s) {
             backoff_ = std::min(backoff_ * 2, config_.reconnectMax);
-            nextAttempt_ = Clock::now() + backoff_;
+            nextAttempt_ = clock().now() + backoff_;
             reason_ = "reconnect failed: " + s.message();
             logger()->warn("camera {}: reconnect failed ({}); next attempt in {} ms", config_.id(), s.message(),
                            backoff_.count());
@@ -768,9 +768,9 @@ class AravisCamera final : public Camera {
         link_.reset();
         closing_ = true;
         lock.unlock();
-        const auto t0 = Clock::now();
+        const Stopwatch watch(clock());
         dead.reset();
-        const auto took = std::chrono::duration_cast<milliseconds>(Clock::now() - t0).count();
+        const auto took = wholeMs(watch);
         lock.lock();
         closing_ = false;
         logger()->debug("camera {}: closed the connection that stopped answering in {} ms", config_.id(), took);
@@ -787,9 +787,9 @@ class AravisCamera final : public Camera {
         const Roi from = deviceRegion_;
         auto link = link_;
         lock.unlock();
-        const auto t0 = Clock::now();
+        const Stopwatch watch(clock());
         Status s = changeRegion(*link, from, want);
-        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        const double ms = watch.ms();
         link.reset();
         lock.lock();
         if (s.code() == StatusCode::Timeout) {
@@ -1181,13 +1181,11 @@ class AravisCamera final : public Camera {
     }
 
     AravisConfig config_;
-    std::thread worker_;
     std::mutex mutex_; // guards everything below except controlLost_
     std::condition_variable wakeup_;
     std::shared_ptr<Link> link_;
     Health health_ = Health::Streaming;
-    std::string reason_; ///< why the link is suspect or lost
-    bool stopping_ = false;
+    std::string reason_;   ///< why the link is suspect or lost
     bool closing_ = false; ///< the worker is closing the connection that stopped answering
     bool triggerPending_ = false;
     std::uint64_t triggersRequested_ = 0;
@@ -1207,11 +1205,13 @@ class AravisCamera final : public Camera {
     Roi deviceRegion_;            ///< the region the device holds: frames of another one are stale
     double regionChangeMs_ = 0.0; ///< how long the last change took, for the next grab
     bool reportChange_ = false;
+
+    Worker worker_; ///< linkWorker() while active; last, so it ends before what it uses
 };
 
 } // namespace
 
-std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver)
+std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver, Clock& clock)
 {
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "address", "serial",
                           "buffer_count", "packet_size", "socket_buffer_bytes", "packet_socket", "packet_timeout_ms",
@@ -1251,7 +1251,7 @@ std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver)
         require(n->isMap(), *n, "expected a map of GenICam feature names to values");
         for (const auto& key : n->keys()) c.features.emplace_back(key, (*n)[key].asString());
     }
-    return std::make_unique<AravisCamera>(driver.path(), parseCameraSettings(driver), std::move(c));
+    return std::make_unique<AravisCamera>(driver.path(), parseCameraSettings(driver), std::move(c), clock);
 }
 
 } // namespace hg::drivers

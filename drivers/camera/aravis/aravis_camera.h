@@ -9,6 +9,6 @@ namespace hg::drivers {
 
 /// Parses and validates the aravis keys of `camera.driver` (see docs/camera.md);
 /// opens nothing. Throws hg::InputError naming the key.
-std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver);
+std::unique_ptr<Camera> makeAravisCamera(const ConfigNode& driver, Clock& clock);
 
 } // namespace hg::drivers

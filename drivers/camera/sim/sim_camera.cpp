@@ -39,7 +39,6 @@
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <sstream>
-#include <thread>
 
 namespace hg::drivers {
 namespace {
@@ -158,9 +157,9 @@ struct SlotPool {
 class SimCameraImpl final : public Camera, public SimCameraControl {
   public:
     SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, geometry::Station station,
-                  CameraEnvironment& environment)
-        : Camera(std::move(configPath), std::move(settings)), config_(std::move(config)), station_(std::move(station)),
-          poseSource_(std::move(environment.poseSource)), fault_(config_.fault)
+                  CameraEnvironment& environment, Clock& clock)
+        : Camera(std::move(configPath), std::move(settings), clock), config_(std::move(config)),
+          station_(std::move(station)), poseSource_(std::move(environment.poseSource)), fault_(config_.fault)
     {
         for (auto& [name, mesh] : environment.parts)
             renderers_.emplace_back(name, std::make_shared<const sim::SilhouetteRenderer>(
@@ -273,8 +272,8 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
             if (fault_ == SimulatedCameraFault::Dropped) fault_ = SimulatedCameraFault::None;
         }
         if (fault == SimulatedCameraFault::Timeout || fault == SimulatedCameraFault::Dropped) {
-            // A silent camera costs the caller its whole timeout, as a real one does.
-            std::this_thread::sleep_for(timeout);
+            // A silent camera costs the caller its whole timeout, as a real one does (on the driver's clock).
+            clock().sleepUntil(clock().now() + timeout, [] { return false; });
             if (fault == SimulatedCameraFault::Dropped) ++frameCount_;
             return Frame::failed(FrameStatus::Timeout, "sim camera: no frame within " +
                                                            std::to_string(timeout.count()) + " ms (fault switch " +
@@ -296,8 +295,8 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         auto pool = pool_;
         const std::size_t index = *slot;
         Frame frame = Frame::over(
-            out, id, std::chrono::steady_clock::now().time_since_epoch(),
-            incomplete ? FrameStatus::Incomplete : FrameStatus::Ok, [pool, index] { pool->give(index); },
+            out, id, clock().now().time_since_epoch(), incomplete ? FrameStatus::Incomplete : FrameStatus::Ok,
+            [pool, index] { pool->give(index); },
             incomplete ? "sim camera: packets missing (fault switch incomplete)" : "");
         frame.region = Roi{region.x, region.y, region.width, region.height};
         frame.payloadBytes = out.total() * out.elemSize();
@@ -463,7 +462,7 @@ std::string_view toString(SimulatedCameraFault fault)
     return kFaultNames[static_cast<std::size_t>(fault)];
 }
 
-std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment)
+std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment, Clock& clock)
 {
     const ConfigNode driver = root["camera"]["driver"];
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
@@ -504,7 +503,7 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
         if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
     }
     auto camera = std::make_unique<SimCameraImpl>(driver.path(), parseCameraSettings(driver), std::move(c),
-                                                  std::move(station), environment);
+                                                  std::move(station), environment, clock);
     if (environment.simulation) environment.simulation->camera = camera.get();
     return camera;
 }

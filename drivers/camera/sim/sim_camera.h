@@ -12,6 +12,6 @@ namespace hg::drivers {
 /// `root`; renders `environment.parts` at `environment.poseSource` and
 /// publishes itself in `environment.simulation`. Throws hg::InputError naming
 /// the key (e.g. camera.driver.part not among the parts).
-std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment);
+std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment, Clock& clock);
 
 } // namespace hg::drivers

@@ -34,7 +34,6 @@
 namespace hg::drivers {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
 
 std::string errnoText(int e)
@@ -128,8 +127,8 @@ struct MappedPool {
 
 class V4l2Camera final : public Camera {
   public:
-    V4l2Camera(std::string configPath, CameraSettings settings, V4l2Config config)
-        : Camera(std::move(configPath), std::move(settings)), config_(std::move(config))
+    V4l2Camera(std::string configPath, CameraSettings settings, V4l2Config config, Clock& clock)
+        : Camera(std::move(configPath), std::move(settings), clock), config_(std::move(config))
     {
     }
     ~V4l2Camera() override
@@ -194,7 +193,7 @@ class V4l2Camera final : public Camera {
             return configured_;
         }
         if (aligned == region_) return region_;
-        const auto t0 = Clock::now();
+        const Stopwatch watch(clock());
         v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
         xioctl(fd_, VIDIOC_STREAMOFF, &type);
         pool_->streamedOff();
@@ -207,7 +206,7 @@ class V4l2Camera final : public Camera {
         pool_->queueIdle();
         if (xioctl(fd_, VIDIOC_STREAMON, &type) == -1)
             return fail(Status::failure(StatusCode::IoError, where + "cannot restart streaming: " + errnoText(errno)));
-        regionChangeMs_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        regionChangeMs_ = watch.ms();
         return region_;
     }
 
@@ -264,11 +263,14 @@ class V4l2Camera final : public Camera {
         // Frames completed before this call are stale: requeue them.
         v4l2_buffer b{};
         while (dequeue(b)) pool_->requeue(b.index);
-        const auto deadline = Clock::now() + timeout;
+        // poll() waits in real time for the device: the timeout is the steady clock's, whatever
+        // clock the driver was given (docs/drivers.md, "Clock").
+        const Clock& steady = Clock::steady();
+        const auto deadline = steady.now() + timeout;
         for (;;) {
             // poll() counts whole milliseconds: round up and re-check the
             // deadline, so a timeout is reported only once it has fully passed.
-            const auto now = Clock::now();
+            const auto now = steady.now();
             if (now >= deadline) break;
             const auto left = std::chrono::ceil<milliseconds>(deadline - now).count();
             pollfd p{fd_, POLLIN, 0};
@@ -591,7 +593,7 @@ class V4l2Camera final : public Camera {
 
 } // namespace
 
-std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
+std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver, Clock& clock)
 {
     driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "device",
                           "device_format", "buffer_count", "features"});
@@ -615,7 +617,7 @@ std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver)
             n->fail("'" + name + "' cannot deliver " + std::string(toString(s.pixelFormat)) + "; expected " + fits);
     }
     if (s.gainDb) driver["gain_db"].fail("V4L2 gain has no unit; set the device's gain control under 'features'");
-    return std::make_unique<V4l2Camera>(driver.path(), s, std::move(c));
+    return std::make_unique<V4l2Camera>(driver.path(), s, std::move(c), clock);
 }
 
 } // namespace hg::drivers

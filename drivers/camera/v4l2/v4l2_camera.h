@@ -9,6 +9,6 @@ namespace hg::drivers {
 
 /// Parses and validates the v4l2 keys of `camera.driver` (see docs/camera.md);
 /// opens nothing. Throws hg::InputError naming the key.
-std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver);
+std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver, Clock& clock);
 
 } // namespace hg::drivers

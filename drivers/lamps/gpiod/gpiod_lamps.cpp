@@ -24,7 +24,7 @@ std::string errnoText(int err)
 
 class GpiodLamps final : public Lamps {
   public:
-    GpiodLamps(LampsConfig config, LampClock clock) : Lamps(std::move(config), std::move(clock)) {}
+    GpiodLamps(LampsConfig config, Clock& clock) : Lamps(std::move(config), clock) {}
     ~GpiodLamps() override
     {
         shutdown();
@@ -117,9 +117,9 @@ class GpiodLamps final : public Lamps {
 
 } // namespace
 
-std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config, LampClock clock)
+std::unique_ptr<Lamps> makeGpiodLamps(LampsConfig config, Clock& clock)
 {
-    return std::make_unique<GpiodLamps>(std::move(config), std::move(clock));
+    return std::make_unique<GpiodLamps>(std::move(config), clock);
 }
 
 } // namespace hg::drivers

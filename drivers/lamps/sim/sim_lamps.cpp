@@ -11,7 +11,7 @@ namespace {
 
 class SimLamps final : public Lamps, public SimLampsControl {
   public:
-    SimLamps(LampsConfig config, LampClock clock) : Lamps(std::move(config), std::move(clock)) {}
+    SimLamps(LampsConfig config, Clock& clock) : Lamps(std::move(config), clock) {}
     ~SimLamps() override { shutdown(); }
 
     std::string_view backend() const override { return "sim"; }
@@ -77,9 +77,9 @@ class SimLamps final : public Lamps, public SimLampsControl {
 
 } // namespace
 
-std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config, SimulationControls* simulation, LampClock clock)
+std::unique_ptr<Lamps> makeSimulatedLamps(LampsConfig config, SimulationControls* simulation, Clock& clock)
 {
-    auto lamps = std::make_unique<SimLamps>(std::move(config), std::move(clock));
+    auto lamps = std::make_unique<SimLamps>(std::move(config), clock);
     if (simulation) simulation->lamps = lamps.get();
     return lamps;
 }

@@ -6,9 +6,9 @@
 // calibration: PLC STATUS 5), kept in memory as one PNG until the next.
 #pragma once
 
-#include "clock.h"
 #include "cycle/devices.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 #include "maintenance_job.h"
 
 #include <memory>

@@ -76,15 +76,15 @@ void CycleRunner::start(std::function<void()> onDevicesActive)
 {
     onDevicesActive_ = std::move(onDevicesActive);
     lastLoopNs_ = clock_.nowNs();
-    thread_ = std::thread([this] { run(); });
+    worker_.start([this](std::stop_token stop) { run(stop); });
 }
 
 void CycleRunner::stop()
 {
-    if (!thread_.joinable()) return;
+    if (!worker_.running()) return;
+    // Before the stop turns, so that the runner never sees the stop without its time.
     stopRequestedNs_ = clock_.nowNs();
-    stopRequested_ = true;
-    thread_.join();
+    worker_.stop();
 }
 
 void CycleRunner::setConfig(std::shared_ptr<const station::DaemonConfig> config)
@@ -203,10 +203,11 @@ void CycleRunner::showState(station::Verdict lastVerdict)
 
 // ---- between cycles ---------------------------------------------------------
 
-void CycleRunner::run()
+void CycleRunner::run(std::stop_token stop)
 {
+    stop_ = stop;
     startDevices();
-    while (!stopRequested_) serveBetweenCycles();
+    while (!stop_.stop_requested()) serveBetweenCycles();
     devices_.showLamps(LampPattern::Off);
     devices_.shutdown();
     hg::log::category("seq")->info("devices shut down");
@@ -368,7 +369,7 @@ void CycleRunner::runCalibration(CalibrationJob job)
 {
     const bool ran = runMaintenance([&](const station::DaemonConfig& cfg) {
         return calibration_.run(job, devices_, cfg, clock_,
-                                [this] { return abortRequested_.load() || stopRequested_.load(); });
+                                [this] { return abortRequested_.load() || stop_.stop_requested(); });
     });
     if (!ran) calibration_.requeue(std::move(job));
 }
@@ -449,7 +450,7 @@ std::optional<SequencerAction> CycleRunner::interruption(Cycle& cycle)
     if (cycle.interruptFed) return std::nullopt;
     const bool abort = abortRequested_;
     const bool graceOver =
-        stopRequested_ && clock_.nowNs() - stopRequestedNs_.load() >= ns(cycle.cfg->sequencer.shutdownGrace);
+        stop_.stop_requested() && clock_.nowNs() - stopRequestedNs_.load() >= ns(cycle.cfg->sequencer.shutdownGrace);
     if (!abort && !graceOver) return std::nullopt;
     cycle.interruptFed = true;
     const auto event = abort ? SequencerEvent::Abort : SequencerEvent::Shutdown;
@@ -536,7 +537,7 @@ SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
     const auto start = clock_.now();
     clock_.sleepUntil(start + cycle.cfg->sequencer.settle, [this] {
         takeCommands();
-        return abortRequested_ || stopRequested_;
+        return abortRequested_ || stop_.stop_requested();
     });
     cycle.settleMs += clock_.msSince(start);
     return feed(SequencerEvent::Settled);
@@ -605,7 +606,7 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
     report(cycle);
     if (cycle.saveImages) archivePart(cycle);
     // A cycle that left the station in fault: the sequencer says recover (at once).
-    if (!stopRequested_) schedule(sequencer_.afterPublish());
+    if (!stop_.stop_requested()) schedule(sequencer_.afterPublish());
 }
 
 void CycleRunner::recordOutcome(Cycle& cycle)

@@ -12,13 +12,14 @@
 // runner's clock (injected; the tests move it by hand).
 #pragma once
 
-#include "clock.h"
 #include "cycle/camera_snapshot.h"
 #include "cycle/devices.h"
 #include "cycle/fixture_calibration.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
+#include "hullgauge/common/worker.h"
 #include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/result_store.h"
 #include "plant/plc_registers.h"
@@ -30,7 +31,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <thread>
+#include <stop_token>
 
 namespace hg::daemon {
 
@@ -87,7 +88,7 @@ class CycleRunner {
   private:
     struct Cycle;
 
-    void run();
+    void run(std::stop_token stop);
     void startDevices();
     void serveBetweenCycles();
     void takeCommands();
@@ -142,14 +143,14 @@ class CycleRunner {
     bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
     std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
 
-    std::thread thread_;
+    std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;
-    std::atomic<bool> stopRequested_{false};
     std::atomic<std::int64_t> stopRequestedNs_{0};
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
     std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
     ImageWriter images_;
+    Worker worker_; ///< run(); last, so it ends before what it uses
 };
 
 } // namespace hg::daemon

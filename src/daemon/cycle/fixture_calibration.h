@@ -6,10 +6,10 @@
 // STATUS around it.
 #pragma once
 
-#include "clock.h"
 #include "cycle/devices.h"
 #include "daemon_config.h"
 #include "hullgauge/calib/fixture_sequence.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/station/sequencer.h"
 #include "maintenance_job.h"
 

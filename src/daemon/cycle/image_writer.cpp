@@ -7,18 +7,13 @@ namespace hg::daemon {
 ImageWriter::ImageWriter(std::size_t capacity) : capacity_(capacity)
 {
     if (capacity_ == 0) throw ArgumentError("ImageWriter: capacity must be at least 1, found 0");
-    worker_ = std::thread([this] { work(); });
+    worker_.start([this](std::stop_token stop) { work(stop); }, wakeOn(mutex_, changed_));
 }
 
 ImageWriter::~ImageWriter()
 {
     drain();
-    {
-        std::lock_guard lock(mutex_);
-        stop_ = true;
-    }
-    changed_.notify_all();
-    worker_.join();
+    worker_.stop();
 }
 
 void ImageWriter::post(std::function<void()> job)
@@ -35,12 +30,12 @@ void ImageWriter::drain()
     changed_.wait(lock, [this] { return queue_.empty() && !busy_; });
 }
 
-void ImageWriter::work()
+void ImageWriter::work(std::stop_token stop)
 {
     std::unique_lock lock(mutex_);
     while (true) {
-        changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-        if (queue_.empty()) return; // stop_, and nothing left to write
+        changed_.wait(lock, [&] { return stop.stop_requested() || !queue_.empty(); });
+        if (queue_.empty()) return; // the stop, and nothing left to write
         auto job = std::move(queue_.front());
         queue_.pop_front();
         busy_ = true;

@@ -10,12 +10,14 @@
 // images can be written.
 #pragma once
 
+#include "hullgauge/common/worker.h"
+
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
 #include <functional>
 #include <mutex>
-#include <thread>
+#include <stop_token>
 
 namespace hg::daemon {
 
@@ -33,15 +35,14 @@ class ImageWriter {
     void drain();
 
   private:
-    void work();
+    void work(std::stop_token stop);
 
     const std::size_t capacity_;
     std::mutex mutex_;
     std::condition_variable changed_;
     std::deque<std::function<void()>> queue_;
     bool busy_ = false;
-    bool stop_ = false;
-    std::thread worker_;
+    Worker worker_; ///< work(); last, so it ends before what it uses
 };
 
 } // namespace hg::daemon

@@ -10,7 +10,7 @@ namespace hg::daemon {
 ViewPipeline::ViewPipeline(std::size_t capacity) : capacity_(capacity)
 {
     if (capacity_ == 0) throw ArgumentError("ViewPipeline: capacity must be at least 1, found 0");
-    worker_ = std::thread([this] { work(); });
+    worker_.start([this](std::stop_token stop) { work(stop); }, wakeOn(mutex_, changed_));
 }
 
 ViewPipeline::~ViewPipeline()
@@ -18,10 +18,8 @@ ViewPipeline::~ViewPipeline()
     {
         std::unique_lock lock(mutex_);
         dropLocked(lock);
-        stop_ = true;
     }
-    changed_.notify_all();
-    worker_.join();
+    worker_.stop();
 }
 
 void ViewPipeline::dropLocked(std::unique_lock<std::mutex>& lock)
@@ -111,12 +109,12 @@ void ViewPipeline::cancel()
     dropLocked(lock);
 }
 
-void ViewPipeline::work()
+void ViewPipeline::work(std::stop_token stop)
 {
     std::unique_lock lock(mutex_);
     while (true) {
-        changed_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-        if (stop_) return;
+        changed_.wait(lock, [&] { return stop.stop_requested() || !queue_.empty(); });
+        if (stop.stop_requested()) return;
         Job job = std::move(queue_.front());
         queue_.pop_front();
         busy_ = true;

@@ -17,6 +17,7 @@
 // beside that thread (prepareView is const and free of shared state).
 #pragma once
 
+#include "hullgauge/common/worker.h"
 #include "hullgauge/inspect/inspector.h"
 
 #include <chrono>
@@ -27,8 +28,8 @@
 #include <functional>
 #include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace hg::daemon {
@@ -100,7 +101,7 @@ class ViewPipeline {
         ViewTiming timing;
     };
 
-    void work();
+    void work(std::stop_token stop);
     void dropLocked(std::unique_lock<std::mutex>& lock);
 
     const std::size_t capacity_;
@@ -111,8 +112,7 @@ class ViewPipeline {
     PrepareFn prepare_;
     std::uint64_t cycle_ = 0; ///< increases on begin() and cancel(): stale results are discarded
     bool busy_ = false;       ///< the worker is preparing a view (outside the lock)
-    bool stop_ = false;
-    std::thread worker_;
+    Worker worker_;           ///< work(); last, so it ends before what it uses
 };
 
 } // namespace hg::daemon

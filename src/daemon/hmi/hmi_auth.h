@@ -5,7 +5,7 @@
 // answers 401/403/429 itself; the clock is injected so the tests move it.
 #pragma once
 
-#include "clock.h"
+#include "hullgauge/common/clock.h"
 
 #include <cstddef>
 #include <map>

@@ -309,7 +309,8 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
     // cpp-httplib listens with a backlog of 5; many screens connecting at once need more.
     if (listenFd_ >= 0) ::listen(listenFd_, 1024);
-    thread_ = std::thread([this] { server_->listen_after_bind(); });
+    // cpp-httplib's loop does not know the stop token: its own stop() ends it.
+    worker_.start([this](std::stop_token) { server_->listen_after_bind(); }, [this] { server_->stop(); });
     hg::log::category("hmi")->info("web HMI on http://{}:{}/", http.bindAddress, port_);
 }
 
@@ -320,8 +321,7 @@ HmiServer::~HmiServer()
 
 void HmiServer::stop()
 {
-    if (server_) server_->stop();
-    if (thread_.joinable()) thread_.join();
+    worker_.stop();
 }
 
 void HmiServer::setConfig(std::shared_ptr<const station::DaemonConfig> config)

@@ -16,13 +16,13 @@
 #include "command_mailbox.h"
 #include "daemon_config.h"
 #include "hmi/hmi_auth.h"
+#include "hullgauge/common/worker.h"
 
 #include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <thread>
 
 namespace httplib {
 class Server;
@@ -70,7 +70,6 @@ class HmiServer {
     RateLimiter limiter_;
     RateLimiter signIns_;
     std::unique_ptr<httplib::Server> server_;
-    std::thread thread_;
     int port_ = 0;
     int listenFd_ = -1;
 
@@ -79,6 +78,8 @@ class HmiServer {
     Clock::time_point statusAt_{};
     nlohmann::json diskCache_;
     Clock::time_point diskAt_{};
+
+    Worker worker_; ///< cpp-httplib's accept loop; last, so it ends before what its handlers use
 };
 
 } // namespace hg::daemon

@@ -238,7 +238,7 @@ MqttPublisher::MqttPublisher(station::MqttConfig config, std::filesystem::path d
     : config_(std::move(config)), database_(std::move(database)), state_(std::move(state)), retry_(config_.retryMin)
 {
     mosquitto_lib_init();
-    thread_ = std::thread([this] { run(); });
+    worker_.start([this](std::stop_token stop) { run(stop); }, wakeOn(mutex_, wake_));
 }
 
 MqttPublisher::~MqttPublisher()
@@ -249,12 +249,7 @@ MqttPublisher::~MqttPublisher()
 
 void MqttPublisher::stop()
 {
-    {
-        std::lock_guard lock(mutex_);
-        stopping_ = true;
-    }
-    wake_.notify_all();
-    if (thread_.joinable()) thread_.join();
+    worker_.stop();
 }
 
 json MqttPublisher::status() const
@@ -275,39 +270,35 @@ void MqttPublisher::setStatus(bool connected, const std::string& error)
     if (!error.empty()) lastError_ = error;
 }
 
-void MqttPublisher::run()
+void MqttPublisher::run(std::stop_token stop)
 {
     logger()->info("plant link to {} as '{}' (client id '{}', QoS {}): publishing on hullgauge/{}/#", config_.url,
                    config_.stationId, config_.clientId, config_.qos, config_.stationId);
     std::unique_ptr<ResultOutbox> outbox;
-    for (;;) {
-        {
-            std::lock_guard lock(mutex_);
-            if (stopping_) return;
-        }
+    while (!stop.stop_requested()) {
         try {
             if (!outbox) outbox = std::make_unique<ResultOutbox>(database_);
-            serve(*outbox);
+            serve(*outbox, stop);
         } catch (const std::exception& e) {
             // A store that cannot be read now may be readable at the next attempt; the cycles go on.
             logger()->error("plant link: {}", e.what());
             setStatus(false, e.what());
             outbox.reset();
         }
-        waitBeforeRetry(outbox.get());
+        waitBeforeRetry(outbox.get(), stop);
     }
 }
 
-void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox)
+void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox, std::stop_token stop)
 {
     std::unique_lock lock(mutex_);
-    if (stopping_) return;
+    if (stop.stop_requested()) return;
     logger()->info("plant link: next attempt in {:.1f} s", retry_.count() / 1000.0);
     const auto until = SteadyClock::now() + retry_;
     // In slices, so `ctl status` sees the results that wait pile up while the broker is away.
-    while (!stopping_ && SteadyClock::now() < until) {
+    while (!stop.stop_requested() && SteadyClock::now() < until) {
         wake_.wait_until(lock, std::min(until, SteadyClock::now() + std::chrono::milliseconds(500)),
-                         [this] { return stopping_; });
+                         [&] { return stop.stop_requested(); });
         try {
             if (outbox) pending_ = outbox->pendingCount();
         } catch (const FaultError&) {
@@ -317,14 +308,8 @@ void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox)
     retry_ = std::min(retry_ * 2, config_.retryMax);
 }
 
-bool MqttPublisher::stopping()
-{
-    std::lock_guard lock(mutex_);
-    return stopping_;
-}
-
 // One session, from the connection attempt to its loss or the daemon's stop.
-void MqttPublisher::serve(ResultOutbox& outbox)
+void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
 {
     Session session(config_);
     // Counted once in full, then only the new results (the ids above the last one counted).
@@ -334,7 +319,7 @@ void MqttPublisher::serve(ResultOutbox& outbox)
     bool connected = false;
     auto countedPendingAt = SteadyClock::now();
     bool ok = session.start();
-    while (ok && !stopping()) {
+    while (ok && !stop.stop_requested()) {
         const int rc = mosquitto_loop(session.client, kLoopMs, 1);
         if (!session.failure.empty()) break;
         if (rc != MOSQ_ERR_SUCCESS) {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/common/worker.h"
 #include "hullgauge/store/result_outbox.h"
 
 #include <atomic>
@@ -20,7 +21,6 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 
 namespace hg::daemon {
 
@@ -48,19 +48,17 @@ class MqttPublisher {
     nlohmann::json status() const;
 
   private:
-    void run();
-    void serve(store::ResultOutbox& outbox);
-    void waitBeforeRetry(store::ResultOutbox* outbox);
-    bool stopping();
+    void run(std::stop_token stop);
+    void serve(store::ResultOutbox& outbox, std::stop_token stop);
+    void waitBeforeRetry(store::ResultOutbox* outbox, std::stop_token stop);
     void setStatus(bool connected, const std::string& error);
 
     const station::MqttConfig config_;
     const std::filesystem::path database_;
     StateSource state_;
 
-    std::mutex mutex_; // guards stopping_ and the waits
+    std::mutex mutex_; // the waits between attempts, which the stop ends
     std::condition_variable wake_;
-    bool stopping_ = false;
     std::chrono::milliseconds retry_; ///< the next wait before a connection attempt (publisher thread)
     store::ResultCounters counters_;  ///< the store's counts (publisher thread) ...
     std::int64_t counted_ = 0;        ///< ... of the results up to this id
@@ -70,7 +68,7 @@ class MqttPublisher {
     std::string lastError_;
     std::atomic<std::int64_t> pending_{0};
 
-    std::thread thread_;
+    Worker worker_; ///< run(); last, so it ends before what it uses
 };
 
 } // namespace hg::daemon

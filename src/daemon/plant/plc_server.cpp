@@ -16,6 +16,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <thread>
 #include <unistd.h>
 
 #ifndef HULLGAUGE_VERSION
@@ -139,22 +140,22 @@ void PlcServer::start()
     }
     impl_->wakeRead = pipeFds[0];
     impl_->wakeWrite = pipeFds[1];
-    running_ = true;
     lastLoopNs_ = nowNs();
     log->info("Modbus TCP server on {}:{}, unit id {}, {} allowed client networks", config_.bindAddress, port_,
               config_.unitId,
               config_.allowedClients.empty() ? std::string("any") : std::to_string(config_.allowedClients.size()));
-    thread_ = std::thread([this] { serve(); });
+    // The stop ends the poll through the wake-up pipe.
+    worker_.start([this](std::stop_token stop) { serve(stop); },
+                  [fd = impl_->wakeWrite] {
+                      char c = 1;
+                      (void)!write(fd, &c, 1);
+                  });
 }
 
 void PlcServer::stop()
 {
     if (!impl_) return;
-    if (running_.exchange(false) && impl_->wakeWrite >= 0) {
-        char c = 1;
-        (void)!write(impl_->wakeWrite, &c, 1);
-    }
-    if (thread_.joinable()) thread_.join();
+    worker_.stop();
     for (const auto& c : impl_->clients) ::close(c.fd);
     if (impl_->listenFd >= 0) ::close(impl_->listenFd);
     if (impl_->wakeRead >= 0) ::close(impl_->wakeRead);
@@ -179,11 +180,11 @@ bool PlcServer::allowed(std::uint32_t hostOrderAddress) const
     return false;
 }
 
-void PlcServer::serve()
+void PlcServer::serve(std::stop_token stop)
 {
     auto log = hg::log::category("plc");
     std::vector<pollfd> fds;
-    while (running_) {
+    while (!stop.stop_requested()) {
         lastLoopNs_ = nowNs();
         fds.assign({{impl_->wakeRead, POLLIN, 0}, {impl_->listenFd, POLLIN, 0}});
         for (const auto& c : impl_->clients) fds.push_back({c.fd, POLLIN, 0});

@@ -20,6 +20,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/common/worker.h"
 #include "plant/plc_registers.h"
 
 #include <atomic>
@@ -27,7 +28,6 @@
 #include <cstdint>
 #include <functional>
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace hg::daemon {
@@ -81,7 +81,7 @@ class PlcServer {
 
   private:
     struct Connection;
-    void serve();
+    void serve(std::stop_token stop);
     void accept();
     bool allowed(std::uint32_t hostOrderAddress) const;
     /// Reads what `c` sent and answers every complete request; false when it must be closed.
@@ -97,9 +97,8 @@ class PlcServer {
     struct Impl;
     Impl* impl_ = nullptr;
     int port_ = 0;
-    std::thread thread_;
-    std::atomic<bool> running_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
+    Worker worker_; ///< serve(); last, so it ends before what it uses
 };
 
 } // namespace hg::daemon

@@ -6,6 +6,7 @@
 // clock passes only when the test moves it (settle times pass at once).
 #include "cycle/cycle_runner.h"
 #include "cycle/engine_inspector.h"
+#include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hullgauge/align/alignment.h"
@@ -15,7 +16,6 @@
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/sim/renderer.h"
-#include "manual_clock.h"
 
 #include <algorithm>
 #include <deque>
@@ -28,6 +28,8 @@
 
 namespace hg::daemon {
 namespace {
+
+using hgtest::ManualClock;
 
 using namespace std::chrono_literals;
 using station::LampPattern;

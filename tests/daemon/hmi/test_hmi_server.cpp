@@ -4,12 +4,12 @@
 // The daemon's main loop is played by a thread that answers the mailbox.
 #include "command_mailbox.h"
 #include "cycle/image_archive.h"
+#include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hmi/hmi_auth.h"
 #include "hmi/hmi_server.h"
 #include "hullgauge/store/result_store.h"
-#include "manual_clock.h"
 
 #include <arpa/inet.h>
 #include <crypt.h>
@@ -24,6 +24,8 @@
 
 namespace hg::daemon {
 namespace {
+
+using hgtest::ManualClock;
 
 using nlohmann::json;
 using namespace std::chrono_literals;

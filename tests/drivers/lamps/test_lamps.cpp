@@ -3,6 +3,7 @@
 #include <chrono>
 #include <thread>
 
+#include "hgtest/manual_clock.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/drivers/simulation.h"
@@ -26,12 +27,13 @@ const char* kSim = R"(lamps:
   red: {offset: 7, active_low: true}
 )";
 
-/// The simulated lamps on a clock the test steps (no timer thread): the
-/// blink pattern is checked against hand-computed instants.
+/// The simulated lamps on a clock the test moves by hand: the timer thread
+/// waits on it and tick() applies the phase at its now, so the blink pattern
+/// is checked against hand-computed instants.
 struct SteppedLamps {
-    std::chrono::steady_clock::time_point now{std::chrono::hours(1)};
+    hgtest::ManualClock clock{hgtest::ManualClock::Sleeps::WaitForTheHand};
     SimulationControls controls;
-    std::unique_ptr<Lamps> lamps = makeLamps(section(kSim), &controls, [this] { return now; });
+    std::unique_ptr<Lamps> lamps = makeLamps(section(kSim), &controls, clock);
     SimLampsControl& sim = *controls.lamps;
 
     SteppedLamps()
@@ -42,7 +44,7 @@ struct SteppedLamps {
     /// Advances the clock by `dt` and lets the driver step the blink.
     void after(std::chrono::milliseconds dt)
     {
-        now += dt;
+        clock.advance(dt);
         EXPECT_TRUE(lamps->tick().ok());
     }
 };

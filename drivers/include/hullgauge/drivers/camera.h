@@ -201,7 +201,7 @@ class Camera : public Device {
     Result<CameraInfo> info();
 
   protected:
-    Camera(std::string configPath, CameraSettings settings);
+    Camera(std::string configPath, CameraSettings settings, Clock& clock);
 
     // Lifecycle hooks (Device): onConfigure opens the device and applies
     // settings(); onActivate allocates the pool and starts streaming;
@@ -256,8 +256,10 @@ struct CameraEnvironment {
 
 /// Builds the camera named by `camera.driver.backend` from the backend table
 /// (aravis | v4l2 | sim; docs/camera.md). `root` is the whole station
-/// document. Only parses and validates: throws hg::InputError naming the key
-/// (unknown backend -> camera.driver.backend).
-std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment = {});
+/// document; `clock` the one the driver times and waits on (docs/drivers.md).
+/// Only parses and validates: throws hg::InputError naming the key (unknown
+/// backend -> camera.driver.backend).
+std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment environment = {},
+                                   Clock& clock = Clock::steady());
 
 } // namespace hg::drivers

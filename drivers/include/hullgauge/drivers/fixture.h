@@ -71,7 +71,7 @@ class Fixture : public Device {
 
   protected:
     /// `driver` is the `fixture.driver` section; its common keys are read here.
-    Fixture(const ConfigNode& driver, const geometry::FixtureKinematics& kinematics);
+    Fixture(const ConfigNode& driver, const geometry::FixtureKinematics& kinematics, Clock& clock);
 
     virtual Status doHome() = 0;
     virtual Status doMoveTo(const geometry::FixturePose& pose) = 0;
@@ -106,10 +106,12 @@ struct SimulationControls;
 /// validates only (lifecycle `init`): unknown backends, bad register maps and
 /// bad settings throw hg::InputError naming file, line and key. The simulated
 /// twin publishes its controls in `simulation` (simulation.h) when given.
+/// `clock` is the one the driver times and waits on (docs/drivers.md).
 std::unique_ptr<Fixture> makeFixture(const ConfigNode& driver, const geometry::FixtureKinematics& kinematics,
-                                     SimulationControls* simulation = nullptr);
+                                     SimulationControls* simulation = nullptr, Clock& clock = Clock::steady());
 /// As above, from a loaded station: its `fixture.driver` section (required)
 /// and its fixture kinematics.
-std::unique_ptr<Fixture> makeFixture(const geometry::Station& station, SimulationControls* simulation = nullptr);
+std::unique_ptr<Fixture> makeFixture(const geometry::Station& station, SimulationControls* simulation = nullptr,
+                                     Clock& clock = Clock::steady());
 
 } // namespace hg::drivers

@@ -12,9 +12,11 @@
 //
 // Blinking: every blinking lamp is lit for the first half of `blink_period_s`
 // and dark for the second, all in the same phase (red and amber blink
-// together), on the driver's clock. A timer thread owned by the driver steps
-// the phase (tick()) while it is Active and some lamp blinks; a driver built
-// with an injected clock has no thread and its caller steps it.
+// together), on the driver's clock (Device::clock(): the steady one unless a
+// test injects its own). A timer thread owned by the driver steps the phase
+// (tick()) while it is Active and some lamp blinks, waiting on that clock; a
+// caller may step it too (tick() applies the phase at the clock's now, so a
+// test that moves the clock by hand sees the same lines either way).
 //
 // The cyclic calls (set, show, tick) never throw; they return an hg::Status.
 // A driver may be used from several threads.
@@ -27,11 +29,12 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <stop_token>
 #include <string>
 #include <string_view>
-#include <thread>
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/worker.h"
 #include "hullgauge/drivers/lifecycle.h"
 
 namespace hg::drivers {
@@ -86,9 +89,6 @@ struct LampsConfig {
 /// The lamp states that show `indication` (indexed by Lamp).
 std::array<LampState, 3> lampStatesFor(StationIndication indication);
 
-/// The blink timer's clock: the steady clock unless a test injects one.
-using LampClock = std::function<std::chrono::steady_clock::time_point()>;
-
 class Lamps : public Device {
   public:
     ~Lamps() override;
@@ -101,7 +101,7 @@ class Lamps : public Device {
     LampState commanded(Lamp lamp) const;
     /// Drives the blinking lamps to their phase at the clock's now (a write
     /// only when a line changes). The timer thread calls it at every half
-    /// period; with an injected clock the caller does. Nothing while not Active.
+    /// period; a caller may too. Nothing while not Active.
     Status tick();
 
     const LampsConfig& config() const { return config_; }
@@ -109,8 +109,8 @@ class Lamps : public Device {
     virtual std::string_view backend() const = 0;
 
   protected:
-    /// Without `clock` the driver runs its own blink timer on the steady clock.
-    Lamps(LampsConfig config, LampClock clock);
+    /// The blink timer runs on `clock`.
+    Lamps(LampsConfig config, Clock& clock);
 
     /// Opens the chip and requests the lines as outputs, all dark.
     virtual Status openLines() = 0;
@@ -136,18 +136,15 @@ class Lamps : public Device {
     /// `always`, only when a line changes.
     Status writeLocked(bool always);
     Status applyLocked();
-    void blinkLoop();
+    void blinkLoop(std::stop_token stop);
 
     LampsConfig config_;
-    LampClock clock_;
-    bool ownTimer_;
     std::condition_variable wake_;
     std::array<LampState, 3> commanded_{LampState::Off, LampState::Off, LampState::Off};
     std::array<bool, 3> written_{};
     /// Start of a lit half period of the blinking lamps (the phase origin).
-    std::chrono::steady_clock::time_point phaseStart_;
-    bool stopBlinker_ = false;
-    std::thread blinker_;
+    Clock::time_point phaseStart_;
+    Worker blinker_; ///< blinkLoop(); last, so it ends before what it uses
 };
 
 struct SimulationControls;
@@ -156,9 +153,9 @@ struct SimulationControls;
 /// or `sim`) from the station's `lamps` section. Parses and validates only
 /// (lifecycle `init`): unknown backends and bad line descriptions throw
 /// hg::InputError naming file, line and key. The simulated twin publishes its
-/// controls in `simulation` when given; `clock` replaces the blink timer
-/// (tests step it with tick()).
+/// controls in `simulation` when given; `clock` is the one the blink timer
+/// waits on (docs/drivers.md).
 std::unique_ptr<Lamps> makeLamps(const ConfigNode& section, SimulationControls* simulation = nullptr,
-                                 LampClock clock = {});
+                                 Clock& clock = Clock::steady());
 
 } // namespace hg::drivers

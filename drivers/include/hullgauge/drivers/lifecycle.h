@@ -20,6 +20,7 @@
 #include <string>
 #include <string_view>
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/status.h"
 
 namespace hg::drivers {
@@ -97,9 +98,12 @@ class Device {
 
     /// The device kind ("camera", "fixture", "lamps"): message prefix and log category.
     const std::string& kind() const { return kind_; }
+    /// The clock the driver times and waits on: the one its factory was given
+    /// (docs/drivers.md), the steady clock unless a test injects its own.
+    Clock& clock() const { return clock_; }
 
   protected:
-    explicit Device(std::string kind) : kind_(std::move(kind)) {}
+    Device(std::string kind, Clock& clock) : kind_(std::move(kind)), clock_(clock) {}
 
     virtual HookResult onConfigure() = 0;
     virtual HookResult onActivate() = 0;
@@ -122,6 +126,7 @@ class Device {
     Status notAllowed(std::string_view call, const std::string& needs) const;
 
     std::string kind_;
+    Clock& clock_;
     mutable std::mutex mutex_;
     std::atomic<LifecycleState> state_{LifecycleState::Unconfigured};
 };

@@ -16,12 +16,18 @@ std::string notARegularFile(const std::filesystem::path& path)
         return fs::is_symlink(link) ? "a broken symbolic link (its target does not exist)" : "no such file";
     }
     switch (target.type()) {
-    case fs::file_type::directory: return "a folder, not a file";
-    case fs::file_type::character: return "a character device, not a regular file";
-    case fs::file_type::block: return "a block device, not a regular file";
-    case fs::file_type::fifo: return "a FIFO (named pipe), not a regular file";
-    case fs::file_type::socket: return "a socket, not a regular file";
-    default: break;
+    case fs::file_type::directory:
+        return "a folder, not a file";
+    case fs::file_type::character:
+        return "a character device, not a regular file";
+    case fs::file_type::block:
+        return "a block device, not a regular file";
+    case fs::file_type::fifo:
+        return "a FIFO (named pipe), not a regular file";
+    case fs::file_type::socket:
+        return "a socket, not a regular file";
+    default:
+        break;
     }
     return ec ? "cannot be read: " + ec.message() : "not a regular file";
 }

@@ -6,11 +6,14 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/file_kind.h"
 
+#include <algorithm>
 #include <arpa/inet.h>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <ifaddrs.h>
 #include <limits>
+#include <unistd.h>
 
 namespace hg::station {
 namespace {
@@ -101,7 +104,8 @@ std::string credentialHash(const ConfigNode& node)
 void parseHmi(const ConfigNode& node, const fs::path& base, HmiConfig& http)
 {
     node.allowOnlyKeys({"bind", "port", "assets", "javascript", "password_hash", "password_hash_credential",
-                        "max_request_bytes", "requests_per_s", "burst", "threads", "session_idle_s"});
+                        "max_request_bytes", "requests_per_s", "burst", "threads", "session_idle_s", "allowed_hosts",
+                        "request_timeout_s", "max_pending_requests"});
     http.enabled = true;
     if (auto n = node.optional("bind")) {
         http.bindAddress = n->asString();
@@ -126,6 +130,19 @@ void parseHmi(const ConfigNode& node, const fs::path& base, HmiConfig& http)
     if (auto n = node.optional("threads")) http.threads = static_cast<int>(n->asIntIn(1, 64));
     if (auto n = node.optional("session_idle_s"))
         http.sessionIdle = std::chrono::seconds(n->asIntIn(60, 7 * 24 * 3600));
+    if (auto n = node.optional("request_timeout_s")) http.requestTimeout = seconds(*n, 0.5, 60.0);
+    if (auto n = node.optional("max_pending_requests"))
+        http.maxPendingRequests = static_cast<std::size_t>(n->asIntIn(4, 4096));
+    if (auto n = node.optional("allowed_hosts")) {
+        for (const ConfigNode& item : n->items()) {
+            std::string name = item.asString();
+            std::transform(name.begin(), name.end(), name.begin(),
+                           [](unsigned char c) { return char(std::tolower(c)); });
+            if (name.empty() || name.find_first_of(" /") != std::string::npos || name.find("://") != std::string::npos)
+                item.fail("expected a host name or address without scheme or port, such as line-7.plant.example");
+            http.allowedHosts.push_back(std::move(name));
+        }
+    }
 }
 
 void parseSequencer(const ConfigNode& node, SequencerConfig& seq)
@@ -282,6 +299,38 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         if (auto s = n->optional("seating")) cfg.simulatedSeating = parseSeating(*s);
     }
     return cfg;
+}
+
+// The names a browser on the line reaches the station by. Bound to one
+// address, that address and the loopback names; bound to all of them, also
+// the PC's host name and every address of its interfaces, so the default
+// serves the plant network and still refuses a name that is none of the
+// station's (DNS rebinding, docs/hmi.md "Bounded").
+std::vector<std::string> allowedHostsFor(const HmiConfig& http)
+{
+    if (!http.allowedHosts.empty()) return http.allowedHosts;
+    std::vector<std::string> names{"localhost", "127.0.0.1", "::1"};
+    const auto add = [&](std::string name) {
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        if (!name.empty() && std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    };
+    add(http.bindAddress);
+    if (http.bindAddress != "0.0.0.0") return names;
+    char host[256] = {};
+    if (::gethostname(host, sizeof host - 1) == 0) add(host);
+    ifaddrs* list = nullptr;
+    if (::getifaddrs(&list) != 0) return names;
+    for (const ifaddrs* i = list; i; i = i->ifa_next) {
+        if (!i->ifa_addr || (i->ifa_addr->sa_family != AF_INET && i->ifa_addr->sa_family != AF_INET6)) continue;
+        char text[INET6_ADDRSTRLEN] = {};
+        const void* addr =
+            i->ifa_addr->sa_family == AF_INET
+                ? static_cast<const void*>(&reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr)
+                : static_cast<const void*>(&reinterpret_cast<const sockaddr_in6*>(i->ifa_addr)->sin6_addr);
+        if (::inet_ntop(i->ifa_addr->sa_family, addr, text, sizeof text)) add(text);
+    }
+    ::freeifaddrs(list);
+    return names;
 }
 
 } // namespace hg::station

@@ -117,7 +117,16 @@ struct HmiConfig {
     int burst = 200;                 ///< per client address, at once
     int threads = 4;
     std::chrono::seconds sessionIdle{1800};
+    /// Host names a request may give in Host and Origin (docs/hmi.md, "Bounded"),
+    /// lower-case; empty in the file: the bind address, localhost and, bound to
+    /// 0.0.0.0, the PC's host name and its interfaces' addresses (allowedHostsFor).
+    std::vector<std::string> allowedHosts;
+    std::chrono::milliseconds requestTimeout{5000}; ///< the whole request, head and body
+    std::size_t maxPendingRequests = 64;            ///< requests being received at once
 };
+
+/// `http.allowed_hosts` as given, or its default for `bindAddress`.
+std::vector<std::string> allowedHostsFor(const HmiConfig& http);
 
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer

@@ -106,7 +106,8 @@ void checkAnnouncedSize(const std::filesystem::path& file, const std::string& ex
                                      "size limit, docs/part-program.md)",
                                      double(size) / (1 << 20), double(limits.maxFileBytes) / (1 << 20)));
     if (ext == ".stl") {
-        if (auto n = stlAnnouncedFacets(file, size); n && *n > limits.maxTriangles) refuseCount(name, *n, "facets", limits);
+        if (auto n = stlAnnouncedFacets(file, size); n && *n > limits.maxTriangles)
+            refuseCount(name, *n, "facets", limits);
     } else if (ext == ".ply") {
         if (auto n = plyAnnouncedFaces(file); n && *n > limits.maxTriangles) refuseCount(name, *n, "faces", limits);
     } else if (ext == ".off") {

@@ -11,12 +11,15 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <fstream>
 #include <httplib.h>
+#include <poll.h>
 #include <regex>
 #include <sstream>
 #include <sys/socket.h>
 #include <sys/statvfs.h>
+#include <unistd.h>
 
 namespace hg::daemon {
 namespace {
@@ -260,7 +263,66 @@ std::string sessionCookie(const httplib::Request& req)
     return std::regex_search(cookies, m, kSession) ? m[1].str() : std::string();
 }
 
+/// A request the gate passed, as cpp-httplib reads it: its bytes from memory,
+/// the answer to the client's socket under the write timeout.
+class GatedStream : public httplib::Stream {
+  public:
+    explicit GatedStream(const GatedRequest& request) : r_(request) {}
+    bool is_readable() const override { return pos_ < r_.bytes.size(); }
+    bool is_writable() const override
+    {
+        pollfd p{r_.fd, POLLOUT, 0};
+        return ::poll(&p, 1, 5000) == 1 && (p.revents & POLLOUT);
+    }
+    ssize_t read(char* ptr, size_t size) override
+    {
+        const std::size_t n = std::min(size, r_.bytes.size() - pos_);
+        std::memcpy(ptr, r_.bytes.data() + pos_, n);
+        pos_ += n;
+        return static_cast<ssize_t>(n);
+    }
+    ssize_t write(const char* ptr, size_t size) override
+    {
+        std::size_t sent = 0;
+        while (sent < size) {
+            if (!is_writable()) return -1; // the client stopped reading for the write timeout (5 s)
+            const ssize_t n = ::send(r_.fd, ptr + sent, size - sent, MSG_NOSIGNAL);
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) return -1;
+            sent += static_cast<std::size_t>(n);
+        }
+        return static_cast<ssize_t>(size);
+    }
+    void get_remote_ip_and_port(std::string& ip, int& port) const override
+    {
+        ip = r_.peerIp;
+        port = r_.peerPort;
+    }
+    void get_local_ip_and_port(std::string& ip, int& port) const override
+    {
+        ip.clear();
+        port = 0;
+    }
+    socket_t socket() const override { return r_.fd; }
+
+  private:
+    const GatedRequest& r_;
+    std::size_t pos_ = 0;
+};
+
 } // namespace
+
+/// cpp-httplib's server answering requests the gate read (GateListener): its
+/// routing and handlers as they are, its own accept loop never run.
+class GatedHttpServer : public httplib::Server {
+  public:
+    void answer(const GatedRequest& request)
+    {
+        GatedStream stream(request);
+        bool closed = false;
+        (void)process_request(stream, true, closed, [](httplib::Request&) {});
+    }
+};
 
 HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock,
                      SnapshotSource snapshots)
@@ -268,18 +330,12 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
       sessions_(config_->http.sessionIdle, clock),
       limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
       // Guessing the password: five tries at once, then one every 12 s per address.
-      signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<httplib::Server>())
+      signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<GatedHttpServer>())
 {
     const auto& http = config_->http;
-    const int threads = http.threads;
-    server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
     server_->set_payload_max_length(http.maxRequestBytes);
-    server_->set_read_timeout(5, 0);
-    server_->set_write_timeout(5, 0);
-    // cpp-httplib gives a connection its thread for as long as the connection
-    // lives; a line view polling four times a second would keep one forever and
-    // `threads` screens would starve every other. So every answer closes its
-    // connection: a thread is taken only while a request is read and answered.
+    // Every answer closes its connection: a line view polling four times a
+    // second would otherwise keep a thread, and `threads` screens starve every other.
     server_->set_keep_alive_max_count(1);
     server_->set_socket_options([this](int fd) {
         int one = 1;
@@ -309,8 +365,22 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
     // cpp-httplib listens with a backlog of 5; many screens connecting at once need more.
     if (listenFd_ >= 0) ::listen(listenFd_, 1024);
-    // cpp-httplib's loop does not know the stop token: its own stop() ends it.
-    worker_.start([this](std::stop_token) { server_->listen_after_bind(); }, [this] { server_->stop(); });
+    // The gate reads every request whole, under one deadline; `threads` only answer (docs/hmi.md, "Bounded").
+    pool_ = std::make_unique<httplib::ThreadPool>(static_cast<std::size_t>(http.threads));
+    GateListener::Options gate;
+    gate.limits.maxBodyBytes = http.maxRequestBytes;
+    gate.limits.allowedHosts = station::allowedHostsFor(http);
+    gate.requestTimeout = http.requestTimeout;
+    gate.maxPending = http.maxPendingRequests;
+    gate_ = std::make_unique<GateListener>(
+        listenFd_, gate,
+        [this](GatedRequest request) {
+            pool_->enqueue([this, request = std::move(request)] {
+                server_->answer(request);
+                ::close(request.fd);
+            });
+        },
+        clock_);
     hg::log::category("hmi")->info("web HMI on http://{}:{}/", http.bindAddress, port_);
 }
 
@@ -321,7 +391,12 @@ HmiServer::~HmiServer()
 
 void HmiServer::stop()
 {
-    worker_.stop();
+    // The gate first (no new request is handed on), then the answers in flight, then the socket.
+    if (gate_) gate_->stop();
+    if (pool_) pool_->shutdown();
+    pool_.reset();
+    if (listenFd_ >= 0) ::close(listenFd_);
+    listenFd_ = -1;
 }
 
 void HmiServer::setConfig(std::shared_ptr<const station::DaemonConfig> config)

@@ -15,6 +15,7 @@
 
 #include "command_mailbox.h"
 #include "daemon_config.h"
+#include "hmi/gate_listener.h"
 #include "hmi/hmi_auth.h"
 #include "hullgauge/common/worker.h"
 
@@ -26,11 +27,14 @@
 
 namespace httplib {
 class Server;
+class ThreadPool;
 struct Request;
 struct Response;
 } // namespace httplib
 
 namespace hg::daemon {
+
+class GatedHttpServer; // hmi_server.cpp: cpp-httplib answering the gate's requests
 
 class HmiServer {
   public:
@@ -69,7 +73,7 @@ class HmiServer {
     Sessions sessions_;
     RateLimiter limiter_;
     RateLimiter signIns_;
-    std::unique_ptr<httplib::Server> server_;
+    std::unique_ptr<GatedHttpServer> server_;
     int port_ = 0;
     int listenFd_ = -1;
 
@@ -79,7 +83,8 @@ class HmiServer {
     nlohmann::json diskCache_;
     Clock::time_point diskAt_{};
 
-    Worker worker_; ///< cpp-httplib's accept loop; last, so it ends before what its handlers use
+    std::unique_ptr<httplib::ThreadPool> pool_; ///< answers the requests the gate passed
+    std::unique_ptr<GateListener> gate_;        ///< the accept loop; last, so it ends before what its handlers use
 };
 
 } // namespace hg::daemon

@@ -54,7 +54,9 @@ std::string hostOf(std::string_view authority)
 
 } // namespace
 
-RequestGate::RequestGate(GateLimits limits) : limits_(std::move(limits)) {}
+RequestGate::RequestGate(GateLimits limits) : limits_(std::move(limits))
+{
+}
 
 RequestGate::State RequestGate::feed(std::string_view bytes)
 {
@@ -139,8 +141,8 @@ RequestGate::State RequestGate::checkHead(std::string_view head)
             if (host) return refuse(400, "two Host headers");
             host = std::string(value);
             if (!hostAllowed(hostOf(*host)))
-                return refuse(421,
-                              fmt::format("Host '{}' is not a name this station answers to (http.allowed_hosts)", *host));
+                return refuse(
+                    421, fmt::format("Host '{}' is not a name this station answers to (http.allowed_hosts)", *host));
         } else if (key == "content-length") {
             if (contentLength && *contentLength != value) return refuse(400, "two different Content-Length headers");
             contentLength = std::string(value);
@@ -156,7 +158,8 @@ RequestGate::State RequestGate::checkHead(std::string_view head)
             continue;
         } else if (key == "origin" && value != "null") {
             const auto scheme = value.find("://");
-            const std::string origin = scheme == std::string_view::npos ? std::string() : hostOf(value.substr(scheme + 3));
+            const std::string origin =
+                scheme == std::string_view::npos ? std::string() : hostOf(value.substr(scheme + 3));
             if (origin.empty() || !hostAllowed(origin))
                 return refuse(403, fmt::format("Origin '{}' is not an allowed host (http.allowed_hosts)", value));
         }

@@ -62,10 +62,10 @@ class RequestGate {
 
     GateLimits limits_;
     State state_ = State::Reading;
-    std::string in_;            ///< bytes received and not yet consumed
-    std::string head_;          ///< the head as the library will read it, without its blank line
-    std::string body_;          ///< the body, decoded
-    std::uint64_t length_ = 0;  ///< Content-Length, when not chunked
+    std::string in_;           ///< bytes received and not yet consumed
+    std::string head_;         ///< the head as the library will read it, without its blank line
+    std::string body_;         ///< the body, decoded
+    std::uint64_t length_ = 0; ///< Content-Length, when not chunked
     bool chunked_ = false;
     bool inTrailers_ = false;
     bool chunksDone_ = false;

@@ -30,7 +30,8 @@ TEST(RequestGate, ARequestTrickledByteByByteIsCompleteAtItsLastByteOnly)
 {
     const std::string request = "POST /api/login HTTP/1.1\r\nHost: 127.0.0.1:8080\r\nContent-Length: 5\r\n\r\nhello";
     RequestGate gate(limits());
-    for (std::size_t i = 0; i + 1 < request.size(); ++i) ASSERT_EQ(gate.feed(request.substr(i, 1)), State::Reading) << i;
+    for (std::size_t i = 0; i + 1 < request.size(); ++i)
+        ASSERT_EQ(gate.feed(request.substr(i, 1)), State::Reading) << i;
     ASSERT_EQ(gate.feed(request.substr(request.size() - 1)), State::Complete);
     EXPECT_EQ(gate.request(), request);
 }
@@ -82,8 +83,8 @@ TEST(RequestGate, HostAndOriginMustBeAllowedNames)
         fed("POST /api/login HTTP/1.1\r\nHost: a.example\r\nOrigin: http://a.example\r\nContent-Length: 0\r\n\r\n");
     EXPECT_EQ(rebound.status(), 421);
     EXPECT_EQ(rebound.reason(), "Host 'a.example' is not a name this station answers to (http.allowed_hosts)");
-    const RequestGate origin =
-        fed("POST /api/login HTTP/1.1\r\nHost: localhost\r\nOrigin: http://evil.example:80\r\nContent-Length: 0\r\n\r\n");
+    const RequestGate origin = fed(
+        "POST /api/login HTTP/1.1\r\nHost: localhost\r\nOrigin: http://evil.example:80\r\nContent-Length: 0\r\n\r\n");
     EXPECT_EQ(origin.status(), 403);
     EXPECT_EQ(fed("GET / HTTP/1.1\r\n\r\n").reason(), "no Host header");
     EXPECT_EQ(fed("GET / HTTP/1.1\r\nHost: LINE-7.plant.example:8080\r\n"
@@ -103,9 +104,9 @@ TEST(RequestGate, ContentLengthIsABoundedByteCountRefusedBeforeTheBody)
     EXPECT_EQ(big.reason(), "the body of 100000000 bytes is larger than the 65536 allowed (http.max_request_bytes)");
     EXPECT_EQ(fed("POST / HTTP/1.1\r\nHost: localhost\r\nContent-Length: 5\r\nContent-Length: 6\r\n\r\n").status(),
               400);
-    EXPECT_EQ(fed("POST / HTTP/1.1\r\nHost: localhost\r\nContent-Length: 5\r\nTransfer-Encoding: chunked\r\n\r\n")
-                  .reason(),
-              "both Content-Length and Transfer-Encoding");
+    EXPECT_EQ(
+        fed("POST / HTTP/1.1\r\nHost: localhost\r\nContent-Length: 5\r\nTransfer-Encoding: chunked\r\n\r\n").reason(),
+        "both Content-Length and Transfer-Encoding");
 }
 
 TEST(RequestGate, AChunkedBodyIsDecodedAndGivenItsLength)

@@ -40,16 +40,26 @@ constexpr std::chrono::seconds kDrainTime{2};
 std::string_view reasonPhrase(int status)
 {
     switch (status) {
-    case 400: return "Bad Request";
-    case 403: return "Forbidden";
-    case 405: return "Method Not Allowed";
-    case 408: return "Request Timeout";
-    case 413: return "Content Too Large";
-    case 417: return "Expectation Failed";
-    case 421: return "Misdirected Request";
-    case 431: return "Request Header Fields Too Large";
-    case 501: return "Not Implemented";
-    default: return "Error";
+    case 400:
+        return "Bad Request";
+    case 403:
+        return "Forbidden";
+    case 405:
+        return "Method Not Allowed";
+    case 408:
+        return "Request Timeout";
+    case 413:
+        return "Content Too Large";
+    case 417:
+        return "Expectation Failed";
+    case 421:
+        return "Misdirected Request";
+    case 431:
+        return "Request Header Fields Too Large";
+    case 501:
+        return "Not Implemented";
+    default:
+        return "Error";
     }
 }
 
@@ -177,8 +187,8 @@ void GateListener::run(std::stop_token stop)
                 }
                 close(0);
             }
-            auto p = std::make_unique<Pending>(Pending{fd, RequestGate(options_.limits),
-                                                       clock_.now() + options_.requestTimeout, {}, 0});
+            auto p = std::make_unique<Pending>(
+                Pending{fd, RequestGate(options_.limits), clock_.now() + options_.requestTimeout, {}, 0});
             peerOf(fd, p->ip, p->port);
             pending.push_back(std::move(p));
         }

@@ -739,7 +739,7 @@ void CycleRunner::report(Cycle& cycle)
 // touches only what it was given and reports its time through its own counter.
 void CycleRunner::archivePart(Cycle& cycle)
 {
-    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention);
+    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
     auto& outcome = cycle.outcome;
     auto evidence =
         outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "contour.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/geometry/json.h"
@@ -19,8 +20,6 @@
 
 namespace hg::align {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 constexpr int kMaxSamplesPerView = 160;
 constexpr int kMinInliers = 12;
@@ -492,7 +491,7 @@ AlignmentResult Aligner::align(const std::vector<AlignmentView>& views) const
 AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
                                const std::vector<std::shared_ptr<const ViewEdges>>& prepared) const
 {
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     checkViews(views);
     if (prepared.size() != views.size() ||
         std::any_of(prepared.begin(), prepared.end(), [](const auto& p) { return !p; }))
@@ -537,7 +536,7 @@ AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
                       formatNumber(m.settings.maxShiftMm) + "), rotation " + formatNumber(out.rotationDeg, 3) +
                       "° (max_rotation_deg " + formatNumber(m.settings.maxRotationDeg) + ")";
     }
-    out.ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    out.ms = watch.ms();
     return out;
 }
 

@@ -7,6 +7,7 @@
 #include <ctime>
 #include <fstream>
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
@@ -46,7 +47,7 @@ YAML::Node section(YAML::Node parent, const char* key)
 
 std::string timestamp()
 {
-    std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    std::time_t now = std::chrono::system_clock::to_time_t(Clock::steady().wallNow());
     std::tm tm{};
     gmtime_r(&now, &tm);
     char b[32];

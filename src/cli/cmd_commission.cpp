@@ -14,6 +14,7 @@
 #include "hullgauge/commission/report.h"
 #include "hullgauge/commission/screen.h" // verificationProblem
 #include "hullgauge/commission/verification.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
@@ -39,7 +40,6 @@ namespace hg::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 struct CommissionArgs {
     std::string cad;
@@ -70,15 +70,12 @@ void say(const std::string& line)
 /// Wall time of the phases, as the progress callback marks them.
 class PhaseClock {
   public:
-    void start(const std::string& phase) { started_[phase] = Clock::now(); }
-    void stop(const std::string& phase)
-    {
-        ms_[phase] += std::chrono::duration<double, std::milli>(Clock::now() - started_.at(phase)).count();
-    }
+    void start(const std::string& phase) { started_.insert_or_assign(phase, Stopwatch()); }
+    void stop(const std::string& phase) { ms_[phase] += started_.at(phase).ms(); }
     const std::map<std::string, double>& ms() const { return ms_; }
 
   private:
-    std::map<std::string, Clock::time_point> started_;
+    std::map<std::string, Stopwatch> started_;
     std::map<std::string, double> ms_;
 };
 

@@ -2,6 +2,7 @@
 // (docs/contracts.md §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
 // default. One JSON request per connection, one JSON answer (docs/daemon.md).
 #include "command.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 
@@ -176,7 +177,9 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
     request(path, req);
     std::cerr << "calibration queued" << std::endl;
     if (o.noWait) return 0;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.waitS);
+    Clock& clock = Clock::steady();
+    const auto deadline =
+        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
     std::size_t shown = 0;
     while (true) {
         auto c = request(path, {{"command", "calibration"}})["calibration"];
@@ -192,9 +195,9 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
             return 0;
         }
         if (state == "failed") throw FaultError(c.value("error", std::string("calibration failed")));
-        if (std::chrono::steady_clock::now() > deadline)
+        if (clock.now() > deadline)
             throw FaultError("calibration still " + state + " after --wait-timeout; follow it with ctl status");
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
     }
 }
 

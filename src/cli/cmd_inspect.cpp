@@ -15,6 +15,7 @@
 #include <string>
 
 #include "command.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/part_map.h"
@@ -139,8 +140,7 @@ inspect::ProgramInspector configure(const vision::CaptureManifest& manifest, con
 
 int run(const InspectArgs& args)
 {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     const vision::CaptureManifest manifest = vision::readManifest(args.views);
     const std::vector<inspect::CapturedView> views = readViews(manifest, args);
     model::AlignmentSettings alignment;
@@ -160,7 +160,7 @@ int run(const InspectArgs& args)
     } catch (const ArgumentError& e) {
         throw InputError(args.views, "views", e.what());
     }
-    result.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    result.totalMs = watch.ms();
 
     const std::string text = inspect::toJson(result).dump(2) + "\n";
     if (args.out.empty()) {

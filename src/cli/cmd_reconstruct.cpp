@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/inspect/reconstruct.h"
 #include "hullgauge/vision/manifest.h"
@@ -31,7 +32,7 @@ struct ReconstructArgs {
 
 int run(const ReconstructArgs& args)
 {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch watch;
     if (args.cube.size() != 4) throw InputError("", "--cube", "expected X Y Z SIZE");
     if (!(args.cube[3] > 0.0)) throw InputError("", "--cube", "SIZE must be positive");
     const vision::CaptureManifest manifest = vision::readManifest(args.views);
@@ -67,7 +68,7 @@ int run(const ReconstructArgs& args)
         ply << c.x() << ' ' << c.y() << ' ' << c.z() << ' ' << b.sizes().x() << '\n';
     }
     if (!ply) throw FaultError("cannot write " + args.out);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double ms = watch.ms();
     const nlohmann::json stats{{"object_voxels", hull.objectVoxels},
                                {"volume_mm3", hull.volumeMm3()},
                                {"undecided_voxels", hull.undecidedVoxels},

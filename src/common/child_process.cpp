@@ -1,5 +1,6 @@
 // docs/part-program.md, "A process of its own".
 #include "hullgauge/common/child_process.h"
+#include "hullgauge/common/clock.h"
 
 #include <cerrno>
 #include <csignal>
@@ -41,12 +42,11 @@ namespace {
 }
 
 // The parent's side: reads the pipe to its end or to the deadline.
-bool readUntilEnd(int in, std::chrono::steady_clock::time_point deadline, std::string& output)
+bool readUntilEnd(int in, Clock::time_point deadline, std::string& output)
 {
     char buffer[65536];
     for (;;) {
-        const auto left =
-            std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::steady().now());
         if (left.count() <= 0) return false;
         pollfd fd{in, POLLIN, 0};
         const int ready = ::poll(&fd, 1, static_cast<int>(std::min<long long>(left.count(), 60'000)));
@@ -76,7 +76,8 @@ ChildOutcome runInChild(const std::function<std::string()>& work, std::chrono::m
         outcome.detail = fmt::format("no pipe: {}", std::strerror(errno));
         return outcome;
     }
-    const auto until = std::chrono::steady_clock::now() + deadline;
+    // poll() waits on the child in real time: the steady clock's deadline.
+    const auto until = Clock::steady().now() + deadline;
     const pid_t pid = ::fork();
     if (pid < 0) {
         outcome.detail = fmt::format("no child process: {}", std::strerror(errno));

@@ -1,4 +1,5 @@
 #include "hullgauge/common/format.h"
+#include "hullgauge/common/clock.h"
 
 #include <chrono>
 #include <ctime>
@@ -16,7 +17,12 @@ std::string formatNumber(double v, int precision)
 
 std::string localTimestamp()
 {
-    const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+    return localTimestamp(Clock::steady());
+}
+
+std::string localTimestamp(const Clock& clock)
+{
+    const std::time_t now = std::chrono::system_clock::to_time_t(clock.wallNow());
     std::tm tm{};
     localtime_r(&now, &tm);
     char b[40];

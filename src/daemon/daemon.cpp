@@ -25,7 +25,6 @@
 namespace hg::daemon {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using ConfigPtr = std::shared_ptr<const station::DaemonConfig>;
 
 std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
@@ -77,12 +76,6 @@ ConfigPtr loadConfig(const std::filesystem::path& file, const ProgramCheck& chec
     return config;
 }
 
-std::int64_t ageNs(std::int64_t thenNs)
-{
-    auto now = std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-    return now - thenNs;
-}
-
 struct Options {
     std::string configFile = "/etc/hullgauge/hullgauged.yaml";
     std::string logSpec;
@@ -120,9 +113,9 @@ int blockSignals()
 class MainLoop {
   public:
     MainLoop(ConfigPtr config, ProgramCheck checkProgram, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner,
-             Notifier& notifier, int sigFd)
+             Notifier& notifier, int sigFd, Clock& clock)
         : config_(std::move(config)), checkProgram_(std::move(checkProgram)), registers_(registers), plc_(plc),
-          runner_(runner), notifier_(notifier), sigFd_(sigFd)
+          runner_(runner), notifier_(notifier), sigFd_(sigFd), clock_(clock)
     {
     }
     const ConfigPtr& config() const { return config_; }
@@ -145,6 +138,7 @@ class MainLoop {
     CycleRunner& runner_;
     Notifier& notifier_;
     int sigFd_;
+    Clock& clock_; ///< the PLC server's and the runner's: the watchdog compares their times with it
     HmiServer* hmi_ = nullptr;
     bool wasHealthy_ = true;
 };
@@ -156,10 +150,10 @@ void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
     auto watchdogPeriod = std::chrono::milliseconds(1000);
     if (auto wd = notifier_.watchdogInterval())
         watchdogPeriod = std::chrono::duration_cast<std::chrono::milliseconds>(*wd / 2);
-    auto nextBeat = Clock::now();
-    auto nextPing = Clock::now();
+    auto nextBeat = clock_.now();
+    auto nextPing = clock_.now();
     for (;;) {
-        auto now = Clock::now();
+        auto now = clock_.now();
         if (now >= nextBeat) {
             registers_.beat();
             nextBeat = now + heartbeat;
@@ -173,7 +167,7 @@ void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
         notifier_.status(ok ? state : "unhealthy: " + state);
 
         auto wake = std::min(nextBeat, notifier_.watchdogInterval() ? nextPing : nextBeat);
-        auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - Clock::now()).count();
+        auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - clock_.now()).count();
         // Waiting maintenance clients are polled too, and closed past their time even when silent.
         auto clients = maintenance.pollFds();
         std::vector<pollfd> fds{{sigFd_, POLLIN, 0}, {mailbox.fd(), POLLIN, 0}};
@@ -190,7 +184,8 @@ void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
 bool MainLoop::healthy()
 {
     const bool healthy =
-        ageNs(plc_.lastLoopNs()) < std::chrono::nanoseconds(std::chrono::seconds(3)).count() && runner_.healthy();
+        clock_.nowNs() - plc_.lastLoopNs() < std::chrono::nanoseconds(std::chrono::seconds(3)).count() &&
+        runner_.healthy();
     if (healthy != wasHealthy_) {
         if (healthy)
             hg::log::category("daemon")->info("healthy again; watchdog pings resume");
@@ -244,35 +239,39 @@ void MainLoop::reload()
 void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const InspectorFactory& makeInspector,
                 const ProgramCheck& checkProgram, Notifier& notifier, int sigFd)
 {
+    // One clock for every part (docs/daemon.md, "Threads and the clock").
+    Clock& clock = Clock::steady();
     store::ResultStore store(config->results.database);
     PlcRegisters registers;
     registers.setKnownPrograms(programNumbers(*config));
-    StationHardware hardware = makeDevices(*config);
+    StationHardware hardware = makeDevices(*config, clock);
     auto inspector = makeInspector(*config);
-    PlcServer plc(registers, config->plc);
+    PlcServer plc(registers, config->plc, clock);
     plc.start();
-    CycleRunner runner(registers, *hardware.devices, *inspector, store, config);
+    CycleRunner runner(registers, *hardware.devices, *inspector, store, config, clock);
     runner.setSimulation(hardware.simulation);
-    MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd);
+    MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd, clock);
     CommandMailbox mailbox;
     std::unique_ptr<HmiServer> hmi;
     if (config->http.enabled)
-        hmi = std::make_unique<HmiServer>(config, mailbox, hg::Clock::steady(),
-                                          [&runner] { return runner.snapshot().png(); });
+        hmi = std::make_unique<HmiServer>(config, mailbox, clock, [&runner] { return runner.snapshot().png(); });
     loop.setHmi(hmi.get());
     // The plant link reads the outbox on its own thread and connection (docs/mqtt.md).
     std::unique_ptr<MqttPublisher> mqtt;
     if (config->mqtt.enabled)
-        mqtt = std::make_unique<MqttPublisher>(config->mqtt, config->results.database, [&runner] {
-            // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
-            const auto state = runner.state();
-            return station::isBusy(state) ? std::string("busy") : std::string(station::toString(state));
-        });
+        mqtt = std::make_unique<MqttPublisher>(
+            config->mqtt, config->results.database,
+            [&runner] {
+                // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
+                const auto state = runner.state();
+                return station::isBusy(state) ? std::string("busy") : std::string(station::toString(state));
+            },
+            clock);
     MaintenanceContext context{
         registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};
     if (mqtt) context.mqttStatus = [&mqtt] { return mqtt->status(); };
     const auto commands = maintenanceCommands(context);
-    MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands);
+    MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands, clock);
     notifier.status("starting devices");
     runner.start([&] { notifier.ready("ready; PLC on port " + std::to_string(plc.port())); });
     loop.serve(maintenance, mailbox, commands);

@@ -14,13 +14,15 @@
 #include "cycle/devices.h"
 #include "cycle/inspector.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 
 #include <functional>
 #include <memory>
 
 namespace hg::daemon {
 
-using DevicesFactory = std::function<StationHardware(const station::DaemonConfig&)>;
+/// The devices, timing and waiting on the daemon's clock.
+using DevicesFactory = std::function<StationHardware(const station::DaemonConfig&, Clock&)>;
 using InspectorFactory = std::function<std::unique_ptr<Inspector>(const station::DaemonConfig&)>;
 
 /// Loads a part program in full, as a trigger would, and throws InputError

@@ -23,8 +23,9 @@
 
 namespace hg::daemon {
 
-MaintenanceServer::MaintenanceServer(std::filesystem::path path, const std::string& group, Handler handler)
-    : path_(std::move(path)), handler_(std::move(handler))
+MaintenanceServer::MaintenanceServer(std::filesystem::path path, const std::string& group, Handler handler,
+                                     Clock& clock)
+    : path_(std::move(path)), handler_(std::move(handler)), clock_(clock)
 {
     auto fail = [&](const std::string& what) {
         std::string why = std::strerror(errno);
@@ -84,7 +85,7 @@ void MaintenanceServer::serve(const std::vector<pollfd>& polled)
     std::vector<bool> done(clients_.size(), false);
     for (std::size_t i = 1; i < polled.size() && i - 1 < clients_.size(); ++i)
         if (polled[i].revents & (POLLIN | POLLHUP | POLLERR)) done[i - 1] = readFrom(clients_[i - 1]);
-    const auto now = std::chrono::steady_clock::now();
+    const auto now = clock_.now();
     for (std::size_t i = clients_.size(); i-- > 0;) {
         if (!done[i] && now - clients_[i].since < kRequestTimeout) continue;
         close(clients_[i].fd);
@@ -103,7 +104,7 @@ void MaintenanceServer::acceptAll()
             close(clients_.front().fd);
             clients_.erase(clients_.begin());
         }
-        clients_.push_back({fd, std::chrono::steady_clock::now(), {}});
+        clients_.push_back({fd, clock_.now(), {}});
     }
 }
 

@@ -9,6 +9,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 
 #include <chrono>
 #include <filesystem>
@@ -35,8 +36,10 @@ class MaintenanceServer {
   public:
     using Handler = std::function<nlohmann::json(const nlohmann::json& request)>;
 
-    /// Creates the socket (removing a stale one); throws hg::FaultError naming the path.
-    MaintenanceServer(std::filesystem::path path, const std::string& group, Handler handler);
+    /// Creates the socket (removing a stale one); throws hg::FaultError naming
+    /// the path. `clock` times the clients' request timeout.
+    MaintenanceServer(std::filesystem::path path, const std::string& group, Handler handler,
+                      Clock& clock = Clock::steady());
     ~MaintenanceServer();
     MaintenanceServer(const MaintenanceServer&) = delete;
     MaintenanceServer& operator=(const MaintenanceServer&) = delete;
@@ -55,7 +58,7 @@ class MaintenanceServer {
   private:
     struct Client {
         int fd;
-        std::chrono::steady_clock::time_point since;
+        Clock::time_point since;
         std::string request;
     };
     void acceptAll();
@@ -65,6 +68,7 @@ class MaintenanceServer {
 
     std::filesystem::path path_;
     Handler handler_;
+    Clock& clock_;
     int fd_ = -1;
     std::vector<Client> clients_;
 };

@@ -1,19 +1,17 @@
 #include "hullgauge/inspect/inspector.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <unordered_set>
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 
 namespace hg::inspect {
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 /// "±0.05 mm", or "[-0.02, 0.08] mm" for asymmetric limits.
 std::string limitsText(const MapLandmark& lm)
@@ -28,11 +26,6 @@ bool sameCamera(const geometry::CameraModel& a, const geometry::CameraModel& b)
     const auto &ia = a.intrinsics(), &ib = b.intrinsics();
     return ia.K == ib.K && ia.dist == ib.dist && ia.imageSize == ib.imageSize &&
            a.cameraFromPart().R == b.cameraFromPart().R && a.cameraFromPart().t == b.cameraFromPart().t;
-}
-
-double msSince(Clock::time_point t0)
-{
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
 int chebyshev(const Eigen::Vector3i& a, const Eigen::Vector3i& b)
@@ -242,7 +235,7 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
 InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
                                     const vision::SegmentationSettings& segmentation) const
 {
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     std::vector<SilhouetteView> silhouettes;
     std::vector<std::string> ids;
     silhouettes.reserve(views.size());
@@ -250,19 +243,19 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
         silhouettes.push_back(prepareView(v, segmentation));
         ids.push_back(v.id);
     }
-    const double segMs = msSince(t0);
+    const double segMs = watch.ms();
     InspectionResult r = inspect(std::move(silhouettes), ids);
     r.segmentationMs = segMs;
-    r.totalMs = msSince(t0);
+    r.totalMs = watch.ms();
     return r;
 }
 
 InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const
 {
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     InspectionResult seatFault;
     if (aligner_ && !seat(views, seatFault)) {
-        seatFault.totalMs = msSince(t0);
+        seatFault.totalMs = watch.ms();
         return seatFault;
     }
     VoxelTester tester(&views, options_.method);
@@ -270,7 +263,7 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     r.alignment = std::move(seatFault.alignment);
     if (gauge_) measureDeviations(r, views, viewIds);
     markUnproven(r);
-    r.totalMs = msSince(t0);
+    r.totalMs = watch.ms();
     return r;
 }
 
@@ -390,9 +383,9 @@ bool Inspector::seat(std::vector<SilhouetteView>& views, InspectionResult& resul
 
 InspectionResult Inspector::inspectWith(const VoxelOracle& oracle) const
 {
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     InspectionResult r = run(oracle, nullptr, nullptr);
-    r.totalMs = msSince(t0);
+    r.totalMs = watch.ms();
     return r;
 }
 
@@ -673,7 +666,7 @@ LandmarkResult inspectLandmark(const InspectionMap& map, const MapLandmark& lm, 
 InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<SilhouetteView>* views,
                                 const std::vector<std::string>* viewIds) const
 {
-    const auto t0 = Clock::now();
+    const Stopwatch watch;
     const InspectionMap& map = *map_;
     const double dv = map.frame().voxelSize(level_);
     Memo memo(map, oracle);
@@ -712,7 +705,7 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
     for (const ParameterResult& pr : result.parameters)
         if (pr.status != "ok") result.pass = false;
     result.voxelsReconstructed = memo.total();
-    result.reconstructionMs = msSince(t0);
+    result.reconstructionMs = watch.ms();
     log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}",
                                     result.landmarks.size(), level_, result.voxelsReconstructed,
                                     result.pass ? "pass" : "fail");

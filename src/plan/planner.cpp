@@ -1,5 +1,6 @@
 #include "hullgauge/plan/planner.h"
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
@@ -40,8 +41,6 @@ const char* toString(LandmarkVerdict verdict)
 }
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
 
 std::string fmt(double v, int precision = 3)
 {
@@ -777,7 +776,7 @@ std::vector<LandmarkAnalysis> analyseLandmarks(const PlanProblem& problem, const
 ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
 {
     validate(problem);
-    const auto start = Clock::now();
+    const Stopwatch watch;
     auto logger = log::category("plan");
     Analyser analyser(problem, options);
 
@@ -801,7 +800,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
 
     for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));
     plan.feasible = plan.problems.empty();
-    plan.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    plan.seconds = watch.seconds();
     logger->info("plan: {} landmarks, {} candidate poses, {} views in {:.3f} s", plan.landmarks.size(),
                  plan.candidatePoses, plan.views.size(), plan.seconds);
     return plan;

@@ -1,6 +1,7 @@
 // The exports of docs/export.md: every field written and its meaning there.
 #include "hullgauge/store/export.h"
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/json.h"
 #include "hullgauge/store/result_reader.h"
@@ -455,8 +456,7 @@ void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>
 
 void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>& rows)
 {
-    const auto now = std::chrono::time_point_cast<std::chrono::milliseconds>(std::chrono::system_clock::now());
-    writeExport(out, format, rows, now.time_since_epoch().count());
+    writeExport(out, format, rows, Clock::steady().wallMs());
 }
 
 } // namespace hg::store

@@ -146,7 +146,7 @@ int main(int argc, char** argv)
 {
     return runDaemon(
         argc, argv,
-        [](const hg::station::DaemonConfig&) {
+        [](const hg::station::DaemonConfig&, hg::Clock&) {
             auto devices = std::make_unique<FakeDevices>();
             SimulationControl* simulation = devices.get();
             return StationHardware{std::move(devices), simulation};

@@ -9,9 +9,12 @@ namespace hg {
 
 std::string formatNumber(double v, int precision = 6);
 
-/// The wall clock now as local time in ISO 8601 with the zone's offset
-/// ("2026-12-06T13:05:12+01:00"): when a program was released
-/// (docs/commissioning.md, "Release").
+class Clock;
+
+/// The wall time of `clock` (the steady clock's by default) now as local time
+/// in ISO 8601 with the zone's offset ("2026-12-06T13:05:12+01:00"): when a
+/// program was released (docs/commissioning.md, "Release").
 std::string localTimestamp();
+std::string localTimestamp(const Clock& clock);
 
 } // namespace hg

@@ -115,9 +115,7 @@ bool CameraSnapshot::run(const SnapshotJob& job, StationDevices& devices, const 
             std::lock_guard lock(pngMutex_);
             png_ = std::move(png);
         }
-        const auto nowMs =
-            std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-                .count();
+        const auto nowMs = clock.wallMs();
         queue_.update({{"state", "done"},
                        {"id", ++frames_},
                        {"time", store::formatUtc(nowMs)},

@@ -17,12 +17,6 @@ using station::SequencerEvent;
 using station::SequencerState;
 using Kind = SequencerAction::Kind;
 
-std::int64_t wallMs()
-{
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
-
 std::int64_t ns(std::chrono::milliseconds d)
 {
     return std::chrono::nanoseconds(d).count();
@@ -393,7 +387,7 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
         std::lock_guard lock(mutex_);
         cycle.cfg = config_;
     }
-    cycle.record.startedUnixMs = wallMs();
+    cycle.record.startedUnixMs = clock_.wallMs();
     cycle.record.triggerSeq = trigger.seq;
     cycle.record.manual = trigger.manual;
     cycle.record.serial = trigger.serial;
@@ -500,7 +494,7 @@ SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
 void CycleRunner::correctPoses(Cycle& cycle)
 {
     cycle.posesChecked = true;
-    const auto started = std::chrono::steady_clock::now();
+    const Stopwatch watch(clock_);
     const std::size_t first = inspector_.seatViews();
     const auto seat = inspector_.provisionalSeat();
     auto& j = cycle.poseCorrection;
@@ -529,7 +523,7 @@ void CycleRunner::correctPoses(Cycle& cycle)
         log->debug("poses {}..{} corrected for the seat of the first {} views (shift {:.3f} mm, rotation {:.3f}°)",
                    first, cycle.poses.size() - 1, first, seat->shiftMm, seat->rotationDeg);
     }
-    j["ms"] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+    j["ms"] = watch.ms();
 }
 
 SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
@@ -746,15 +740,15 @@ void CycleRunner::report(Cycle& cycle)
 // touches only what it was given and reports its time through its own counter.
 void CycleRunner::archivePart(Cycle& cycle)
 {
-    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention);
+    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
     auto& outcome = cycle.outcome;
     auto evidence =
         outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };
     images_.post([archive, evidence = std::move(evidence), startedUnixMs = cycle.record.startedUnixMs,
                   serial = cycle.record.serial, dir = cycle.imagesDir, done = lastImagesMs_,
-                  failed = cycle.record.verdict == station::Verdict::Fail]() mutable {
+                  failed = cycle.record.verdict == station::Verdict::Fail, &clock = clock_]() mutable {
         auto log = hg::log::category("store");
-        const auto start = std::chrono::steady_clock::now();
+        const Stopwatch watch(clock);
         try {
             if (archive.save(startedUnixMs, serial, evidence(), failed).empty())
                 log->error("the archive of part '{}' could not be written to {}", serial, dir);
@@ -762,7 +756,7 @@ void CycleRunner::archivePart(Cycle& cycle)
         } catch (const std::exception& e) {
             log->error("the archive of part '{}': {}", serial, e.what());
         }
-        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        const double ms = watch.ms();
         log->debug("images of '{}' written in {:.0f} ms", serial, ms);
         done->store(ms);
     });

@@ -36,11 +36,11 @@ drivers::StationIndication indication(LampPattern p)
 
 class DriverDevices : public StationDevices, public SimulationControl {
   public:
-    explicit DriverDevices(const station::DaemonConfig& config)
+    DriverDevices(const station::DaemonConfig& config, Clock& clock)
     {
         const auto& doc = *config.station.document;
-        fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture, &sim_);
-        lamps_ = drivers::makeLamps(doc[config.lampsSection], &sim_);
+        fixture_ = drivers::makeFixture(doc["fixture"]["driver"], config.station.fixture, &sim_, clock);
+        lamps_ = drivers::makeLamps(doc[config.lampsSection], &sim_, clock);
         // The simulated line: the camera renders the selected part at the fixture's actual pose.
         drivers::CameraEnvironment environment;
         for (const auto& [name, file] : config.simulatedParts) {
@@ -53,7 +53,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
         }
         environment.poseSource = [this] { return heldPose(); };
         environment.simulation = &sim_;
-        camera_ = drivers::makeCamera(doc, std::move(environment));
+        camera_ = drivers::makeCamera(doc, std::move(environment), clock);
         if (!sim_.camera && seating_) {
             // Only the simulated camera renders a seat; a real camera sees the part as it lies.
             hg::log::category("daemon")->warn("simulation.seating ignored: the camera is not the simulated one");
@@ -251,10 +251,10 @@ class DriverDevices : public StationDevices, public SimulationControl {
 
 } // namespace
 
-StationHardware makeDriverDevices(const station::DaemonConfig& config)
+StationHardware makeDriverDevices(const station::DaemonConfig& config, Clock& clock)
 {
     if (!config.station.document) throw InputError(config.stationFile.string(), "", "station document missing");
-    auto devices = std::make_unique<DriverDevices>(config);
+    auto devices = std::make_unique<DriverDevices>(config, clock);
     SimulationControl* simulation = devices->simulation();
     return {std::move(devices), simulation};
 }

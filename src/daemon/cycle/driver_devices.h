@@ -4,13 +4,15 @@
 
 #include "cycle/devices.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 
 #include <memory>
 
 namespace hg::daemon {
 
 /// Builds the drivers from their backend tables (parsing only; throws
-/// hg::InputError naming the key); with the simulated camera, its part switch.
-StationHardware makeDriverDevices(const station::DaemonConfig& config);
+/// hg::InputError naming the key), on `clock` (docs/drivers.md, "Clock");
+/// with the simulated camera, its part switch.
+StationHardware makeDriverDevices(const station::DaemonConfig& config, Clock& clock = Clock::steady());
 
 } // namespace hg::daemon

@@ -1,6 +1,7 @@
 #include "cycle/engine_inspector.h"
 
 #include "cycle/view_pipeline.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/inspect/program_inspector.h"
@@ -235,7 +236,7 @@ class EngineInspector : public Inspector {
     {
         if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
         try {
-            auto started = std::chrono::steady_clock::now();
+            const Stopwatch watch;
             LoadedProgram p;
             p.file = ref.partFile;
             p.configuredSha256 = ref.partSha256;
@@ -254,8 +255,7 @@ class EngineInspector : public Inspector {
             const auto before = loaded_.find(ref.number);
             hg::log::category("inspect")->info(
                 "part program {} ({}, {}) loaded in {:.0f} ms{}", ref.number, p.program.part,
-                describeRelease(p.program),
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count(),
+                describeRelease(p.program), watch.ms(),
                 before == loaded_.end() ? std::string() : "; it replaces " + describeRelease(before->second.program));
             return &loaded_.insert_or_assign(ref.number, std::move(p)).first->second;
         } catch (const std::exception& e) {

@@ -100,8 +100,8 @@ cv::Mat annotate(const ViewEvidence& view)
     return out;
 }
 
-ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention)
-    : root_(std::move(root)), retention_(retention)
+ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention, const Clock& clock)
+    : root_(std::move(root)), retention_(retention), clock_(&clock)
 {
 }
 
@@ -161,7 +161,7 @@ std::size_t ImageArchive::enforceRetention()
     for (const auto& dir : stale) fs::remove_all(dir, ec);
     // Newest first; walk and keep while every limit holds.
     std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.time > b.time; });
-    const auto cutoff = fs::file_time_type::clock::now() - retention_.maxAge;
+    const auto cutoff = std::chrono::file_clock::from_sys(clock_->wallNow()) - retention_.maxAge;
     std::uintmax_t total = 0;
     std::size_t removed = 0, failedSeen = 0;
     for (std::size_t i = 0; i < entries.size(); ++i) {

@@ -11,6 +11,7 @@
 
 #include "cycle/inspector.h"
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 
 #include <cstdint>
 #include <filesystem>
@@ -36,7 +37,8 @@ class ImageArchive {
     /// The file that marks a failed part's folder (its verdict, for the retention).
     static constexpr const char* kFailedMarker = "FAILED";
 
-    ImageArchive(std::filesystem::path root, station::RetentionConfig retention);
+    /// `clock`'s wall time is the now the retention's `max_age_days` counts back from.
+    ImageArchive(std::filesystem::path root, station::RetentionConfig retention, const Clock& clock = Clock::steady());
 
     /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
     /// (serial characters other than letters, digits and '-' become '_').
@@ -58,6 +60,7 @@ class ImageArchive {
   private:
     std::filesystem::path root_;
     station::RetentionConfig retention_;
+    const Clock* clock_;
 };
 
 } // namespace hg::daemon

@@ -7,7 +7,7 @@
 
 namespace hg::daemon {
 
-ViewPipeline::ViewPipeline(std::size_t capacity) : capacity_(capacity)
+ViewPipeline::ViewPipeline(std::size_t capacity, Clock& clock) : capacity_(capacity), clock_(clock)
 {
     if (capacity_ == 0) throw ArgumentError("ViewPipeline: capacity must be at least 1, found 0");
     worker_.start([this](std::stop_token stop) { work(stop); }, wakeOn(mutex_, changed_));
@@ -40,7 +40,7 @@ void ViewPipeline::begin(PrepareFn prepare)
 
 void ViewPipeline::submit(inspect::CapturedView view)
 {
-    const auto submitted = Clock::now();
+    const auto submitted = clock_.now();
     std::unique_lock lock(mutex_);
     changed_.wait(lock, [this] { return queue_.size() < capacity_; });
     Slot slot;
@@ -119,7 +119,7 @@ void ViewPipeline::work(std::stop_token stop)
         queue_.pop_front();
         busy_ = true;
         PrepareFn prepare = prepare_;
-        const auto started = Clock::now();
+        const auto started = clock_.now();
         changed_.notify_all(); // room in the queue
         lock.unlock();
 
@@ -136,7 +136,7 @@ void ViewPipeline::work(std::stop_token stop)
                 if (error.rfind("view '" + job.view.id + "'", 0) != 0) error = "view '" + job.view.id + "': " + error;
             }
         }
-        const auto finished = Clock::now();
+        const auto finished = clock_.now();
         // The frame is the caller's (it keeps it for the failed-part images); drop our reference outside the lock.
         job.view.frame.release();
 

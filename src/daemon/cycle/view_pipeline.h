@@ -17,6 +17,7 @@
 // beside that thread (prepareView is const and free of shared state).
 #pragma once
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
 #include "hullgauge/inspect/inspector.h"
 
@@ -36,7 +37,6 @@ namespace hg::daemon {
 
 class ViewPipeline {
   public:
-    using Clock = std::chrono::steady_clock;
     using PrepareFn = std::function<inspect::SilhouetteView(const inspect::CapturedView&)>;
 
     /// When a view went through the pipeline (for the latency breakdown and the tests).
@@ -58,8 +58,9 @@ class ViewPipeline {
         std::vector<ViewTiming> timings;
     };
 
-    /// Starts the worker. `capacity` >= 1: views that may wait unprepared.
-    explicit ViewPipeline(std::size_t capacity = 4);
+    /// Starts the worker. `capacity` >= 1: views that may wait unprepared;
+    /// `clock` times the views (ViewTiming).
+    explicit ViewPipeline(std::size_t capacity = 4, Clock& clock = Clock::steady());
     /// Drops queued views, lets the one in preparation end, joins the worker.
     ~ViewPipeline();
     ViewPipeline(const ViewPipeline&) = delete;
@@ -105,6 +106,7 @@ class ViewPipeline {
     void dropLocked(std::unique_lock<std::mutex>& lock);
 
     const std::size_t capacity_;
+    Clock& clock_;
     std::mutex mutex_;
     std::condition_variable changed_; ///< queue, slots or busy_ changed
     std::deque<Job> queue_;

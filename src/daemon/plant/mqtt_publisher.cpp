@@ -22,18 +22,11 @@ using store::ResultOutbox;
 namespace {
 
 using nlohmann::json;
-using SteadyClock = std::chrono::steady_clock;
 
 /// Results read from the outbox at a time (bounded memory: at most this many rows and `max_inflight` sent).
 constexpr int kBatch = 50;
 /// The wait for the broker's socket in one turn of the loop: also how soon a new result is seen.
 constexpr int kLoopMs = 20;
-
-std::int64_t unixMsNow()
-{
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
 
 std::shared_ptr<spdlog::logger> logger()
 {
@@ -86,6 +79,7 @@ namespace {
 /// mosquitto_loop calls them).
 struct Session {
     const station::MqttConfig& config;
+    const Clock& clock; ///< the publisher's: the time stamps and the goodbye's bound
     mosquitto* client = nullptr;
     bool connected = false;
     std::string failure;                        ///< why the session ended, when it did
@@ -96,7 +90,7 @@ struct Session {
     std::string lastState;                      ///< the state last published
     std::optional<ResultCounters> lastCounters; ///< the counters last published
 
-    explicit Session(const station::MqttConfig& cfg) : config(cfg) {}
+    Session(const station::MqttConfig& cfg, const Clock& c) : config(cfg), clock(c) {}
     ~Session()
     {
         if (client) mosquitto_destroy(client);
@@ -172,7 +166,7 @@ bool Session::publish(const std::string& topic, const json& payload, bool retain
 void markAcknowledged(ResultOutbox& outbox, Session& session)
 {
     if (session.acknowledged.empty()) return;
-    outbox.markPublished(session.acknowledged, unixMsNow());
+    outbox.markPublished(session.acknowledged, session.clock.wallMs());
     session.acknowledged.clear();
 }
 
@@ -182,11 +176,13 @@ bool publishLatest(Session& session, const std::string& state, const ResultCount
 {
     const auto& cfg = session.config;
     if (state != session.lastState) {
-        if (!session.publish(cfg.topic("state"), stateMessage(cfg.stationId, state, unixMsNow()), true)) return false;
+        if (!session.publish(cfg.topic("state"), stateMessage(cfg.stationId, state, session.clock.wallMs()), true))
+            return false;
         session.lastState = state;
     }
     if (session.lastCounters != counters) {
-        if (!session.publish(cfg.topic("counters"), countersMessage(cfg.stationId, counters, unixMsNow()), true))
+        if (!session.publish(cfg.topic("counters"), countersMessage(cfg.stationId, counters, session.clock.wallMs()),
+                             true))
             return false;
         session.lastCounters = counters;
     }
@@ -220,10 +216,11 @@ void sayGoodbye(Session& session, ResultOutbox& outbox)
 {
     const auto& cfg = session.config;
     int mid = 0;
-    if (session.publish(cfg.topic("state"), stateMessage(cfg.stationId, "offline", unixMsNow()), true, &mid)) {
+    if (session.publish(cfg.topic("state"), stateMessage(cfg.stationId, "offline", session.clock.wallMs()), true,
+                        &mid)) {
         session.inflight.emplace(mid, 0);
-        const auto until = SteadyClock::now() + std::chrono::seconds(1);
-        while (session.inflight.count(mid) && SteadyClock::now() < until)
+        const auto until = session.clock.now() + std::chrono::seconds(1);
+        while (session.inflight.count(mid) && session.clock.now() < until)
             if (mosquitto_loop(session.client, kLoopMs, 1) != MOSQ_ERR_SUCCESS) break;
     }
     std::erase(session.acknowledged, 0);
@@ -234,8 +231,10 @@ void sayGoodbye(Session& session, ResultOutbox& outbox)
 
 } // namespace
 
-MqttPublisher::MqttPublisher(station::MqttConfig config, std::filesystem::path database, StateSource state)
-    : config_(std::move(config)), database_(std::move(database)), state_(std::move(state)), retry_(config_.retryMin)
+MqttPublisher::MqttPublisher(station::MqttConfig config, std::filesystem::path database, StateSource state,
+                             Clock& clock)
+    : config_(std::move(config)), database_(std::move(database)), state_(std::move(state)), clock_(clock),
+      retry_(config_.retryMin)
 {
     mosquitto_lib_init();
     worker_.start([this](std::stop_token stop) { run(stop); }, wakeOn(mutex_, wake_));
@@ -294,10 +293,11 @@ void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox, std::stop_token stop)
     std::unique_lock lock(mutex_);
     if (stop.stop_requested()) return;
     logger()->info("plant link: next attempt in {:.1f} s", retry_.count() / 1000.0);
-    const auto until = SteadyClock::now() + retry_;
-    // In slices, so `ctl status` sees the results that wait pile up while the broker is away.
-    while (!stop.stop_requested() && SteadyClock::now() < until) {
-        wake_.wait_until(lock, std::min(until, SteadyClock::now() + std::chrono::milliseconds(500)),
+    // On the publisher's clock (a test moves it by hand), in slices, so `ctl status` sees the
+    // results that wait pile up while the broker is away.
+    const auto until = clock_.now() + retry_;
+    while (!stop.stop_requested() && clock_.now() < until) {
+        clock_.waitUntil(lock, wake_, std::min(until, clock_.now() + std::chrono::milliseconds(500)),
                          [&] { return stop.stop_requested(); });
         try {
             if (outbox) pending_ = outbox->pendingCount();
@@ -311,13 +311,14 @@ void MqttPublisher::waitBeforeRetry(ResultOutbox* outbox, std::stop_token stop)
 // One session, from the connection attempt to its loss or the daemon's stop.
 void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
 {
-    Session session(config_);
+    Session session(config_, clock_);
     // Counted once in full, then only the new results (the ids above the last one counted).
     counters_ += outbox.countAfter(counted_, counted_);
     pending_ = outbox.pendingCount();
-    const auto answerBy = SteadyClock::now() + std::chrono::seconds(std::max(10, config_.keepaliveS));
+    const auto answerBy = clock_.now() + std::chrono::seconds(std::max(10, config_.keepaliveS));
     bool connected = false;
-    auto countedPendingAt = SteadyClock::now();
+    auto countedPendingAt = clock_.now();
+    ++attempts_;
     bool ok = session.start();
     while (ok && !stop.stop_requested()) {
         const int rc = mosquitto_loop(session.client, kLoopMs, 1);
@@ -328,7 +329,7 @@ void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
             break;
         }
         if (!session.connected) {
-            if (SteadyClock::now() > answerBy)
+            if (clock_.now() > answerBy)
                 session.failure = "no answer from " + config_.url + " within " +
                                   std::to_string(std::max(10, config_.keepaliveS)) + " s (a TLS or proxy problem?)";
             ok = session.failure.empty();
@@ -344,9 +345,9 @@ void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
         counters_ += outbox.countAfter(counted_, counted_);
         ok = publishLatest(session, state_(), counters_) && sendWaiting(session, outbox);
         // For `ctl status`: counted twice a second, not at every turn (a long backlog costs a scan).
-        if (SteadyClock::now() - countedPendingAt > std::chrono::milliseconds(500)) {
+        if (clock_.now() - countedPendingAt > std::chrono::milliseconds(500)) {
             pending_ = outbox.pendingCount();
-            countedPendingAt = SteadyClock::now();
+            countedPendingAt = clock_.now();
         }
     }
     if (session.connected && session.failure.empty()) sayGoodbye(session, outbox);

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
 #include "hullgauge/store/result_outbox.h"
 
@@ -36,8 +37,10 @@ class MqttPublisher {
     /// called from the publisher's thread.
     using StateSource = std::function<std::string()>;
 
-    /// Starts the thread. `database` is the result store the daemon opened.
-    MqttPublisher(station::MqttConfig config, std::filesystem::path database, StateSource state);
+    /// Starts the thread. `database` is the result store the daemon opened;
+    /// `clock` times the reconnection back-off, the timeouts and the time stamps.
+    MqttPublisher(station::MqttConfig config, std::filesystem::path database, StateSource state,
+                  Clock& clock = Clock::steady());
     ~MqttPublisher();
     MqttPublisher(const MqttPublisher&) = delete;
     MqttPublisher& operator=(const MqttPublisher&) = delete;
@@ -46,6 +49,9 @@ class MqttPublisher {
     void stop();
     /// For `ctl status`: connected, results waiting, the last error.
     nlohmann::json status() const;
+    /// Connection attempts since the start: one at once, then one after every
+    /// back-off (docs/mqtt.md, "Failures").
+    std::int64_t connectionAttempts() const { return attempts_.load(); }
 
   private:
     void run(std::stop_token stop);
@@ -56,6 +62,7 @@ class MqttPublisher {
     const station::MqttConfig config_;
     const std::filesystem::path database_;
     StateSource state_;
+    Clock& clock_;
 
     std::mutex mutex_; // the waits between attempts, which the stop ends
     std::condition_variable wake_;
@@ -67,6 +74,7 @@ class MqttPublisher {
     bool connected_ = false;
     std::string lastError_;
     std::atomic<std::int64_t> pending_{0};
+    std::atomic<std::int64_t> attempts_{0};
 
     Worker worker_; ///< run(); last, so it ends before what it uses
 };

@@ -27,18 +27,12 @@ namespace hg::daemon {
 namespace {
 
 using station::ModbusException;
-using Clock = std::chrono::steady_clock;
 
 constexpr int kHeader = 7;          // MBAP header: transaction (2), protocol (2), length (2), unit (1)
 constexpr int kMaxMbapLength = 254; // unit id + the longest PDU (253 bytes)
 constexpr std::uint8_t kGatewayTargetFailed = 0x0B;
 constexpr std::uint8_t kEncapsulatedInterface = 0x2B;
 constexpr std::uint8_t kReadDeviceIdentification = 0x0E;
-
-std::int64_t nowNs()
-{
-    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
 
 std::uint16_t be16(const std::uint8_t* p)
 {
@@ -103,8 +97,8 @@ struct PlcServer::Impl {
     Counters counters;
 };
 
-PlcServer::PlcServer(PlcRegisters& registers, station::PlcConfig config)
-    : registers_(registers), config_(std::move(config))
+PlcServer::PlcServer(PlcRegisters& registers, station::PlcConfig config, Clock& clock)
+    : registers_(registers), config_(std::move(config)), clock_(clock)
 {
 }
 
@@ -140,7 +134,7 @@ void PlcServer::start()
     }
     impl_->wakeRead = pipeFds[0];
     impl_->wakeWrite = pipeFds[1];
-    lastLoopNs_ = nowNs();
+    lastLoopNs_ = clock_.nowNs();
     log->info("Modbus TCP server on {}:{}, unit id {}, {} allowed client networks", config_.bindAddress, port_,
               config_.unitId,
               config_.allowedClients.empty() ? std::string("any") : std::to_string(config_.allowedClients.size()));
@@ -185,7 +179,7 @@ void PlcServer::serve(std::stop_token stop)
     auto log = hg::log::category("plc");
     std::vector<pollfd> fds;
     while (!stop.stop_requested()) {
-        lastLoopNs_ = nowNs();
+        lastLoopNs_ = clock_.nowNs();
         fds.assign({{impl_->wakeRead, POLLIN, 0}, {impl_->listenFd, POLLIN, 0}});
         for (const auto& c : impl_->clients) fds.push_back({c.fd, POLLIN, 0});
         // Wake up at least every 100 ms: the watchdog sees the loop turn, and
@@ -212,7 +206,7 @@ void PlcServer::accept()
     socklen_t len = sizeof addr;
     int fd = accept4(impl_->listenFd, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_CLOEXEC | SOCK_NONBLOCK);
     if (fd < 0) return;
-    const auto now = Clock::now();
+    const auto now = clock_.now();
     const std::string who = peerText(fd);
     auto refuse = [&](const std::string& why) {
         impl_->refusals.warn(now, "refused connection from {}: {}", who, why);
@@ -252,7 +246,7 @@ void PlcServer::close(std::size_t index, const char* why)
 
 void PlcServer::expire()
 {
-    const auto now = Clock::now();
+    const auto now = clock_.now();
     for (std::size_t i = impl_->clients.size(); i-- > 0;) {
         const auto& c = impl_->clients[i];
         if (!c.buffer.empty() && now - c.partialSince > config_.frameTimeout) {
@@ -286,7 +280,7 @@ bool PlcServer::receive(Connection& c)
         hg::log::category("plc")->debug("client {} disconnected: {}", c.peer, std::strerror(errno));
         return false;
     }
-    const auto now = Clock::now();
+    const auto now = clock_.now();
     if (c.buffer.empty()) c.partialSince = now;
     c.buffer.insert(c.buffer.end(), chunk, chunk + n);
     // The frame is delimited by the MBAP header's length, whatever the function code.

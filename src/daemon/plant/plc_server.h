@@ -20,6 +20,7 @@
 #pragma once
 
 #include "daemon_config.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
 #include "plant/plc_registers.h"
 
@@ -52,7 +53,8 @@ ModbusAnswer answerModbusRequest(PlcRegisters& registers, int unitId, const std:
 
 class PlcServer {
   public:
-    PlcServer(PlcRegisters& registers, station::PlcConfig config);
+    /// `clock` times the frame, idle and yield timeouts and the loop's turns.
+    PlcServer(PlcRegisters& registers, station::PlcConfig config, Clock& clock = Clock::steady());
     ~PlcServer();
     PlcServer(const PlcServer&) = delete;
     PlcServer& operator=(const PlcServer&) = delete;
@@ -64,7 +66,7 @@ class PlcServer {
 
     /// The bound port (the configured one, or the kernel's choice for port 0).
     int port() const { return port_; }
-    /// Monotonic time (ns) of the serving loop's last turn, for the watchdog.
+    /// The time on its clock (ns) of the serving loop's last turn, for the watchdog.
     std::int64_t lastLoopNs() const { return lastLoopNs_.load(); }
     /// Counters for the maintenance socket.
     struct Counters {
@@ -94,6 +96,7 @@ class PlcServer {
 
     PlcRegisters& registers_;
     station::PlcConfig config_;
+    Clock& clock_;
     struct Impl;
     Impl* impl_ = nullptr;
     int port_ = 0;

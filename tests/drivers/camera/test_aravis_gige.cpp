@@ -3,6 +3,7 @@
 // pixels are the images the test itself wrote for the simulator to serve.
 #include "gige_sim_process.h"
 #include "hgtest/log_capture.h"
+#include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/drivers/camera.h"
@@ -52,11 +53,11 @@ class AravisGige : public ::testing::Test {
 
     void startSim() { sim_.start({"--images", dir_.path().string(), "--frame-rate", "100"}); }
 
-    std::unique_ptr<Camera> makeCamera(const std::string& extra)
+    std::unique_ptr<Camera> makeCamera(const std::string& extra, hg::Clock& clock = hg::Clock::steady())
     {
         auto root = hg::ConfigNode::parse("camera:\n  driver:\n    backend: aravis\n    address: 127.0.0.1\n" + extra,
                                           "station.yaml");
-        return hg::drivers::makeCamera(root);
+        return hg::drivers::makeCamera(root, {}, clock);
     }
 
     static double maxDifference(const cv::Mat& a, const cv::Mat& b)
@@ -351,6 +352,78 @@ TEST_F(AravisGige, DeactivatingWhileTheCameraIsLostIsBounded)
     auto f = cam->grab(2000ms);
     ASSERT_TRUE(f.ok()) << f.message;
     EXPECT_GE(matchingImage(f.image), 0);
+}
+
+// docs/camera.md, "Recovery", and docs/drivers.md, "Clock": the link worker
+// reopens a lost camera after `reconnect_backoff_ms` min, doubling up to max,
+// on the driver's clock. The loss itself is Aravis' to notice (the probe's
+// GVCP read times out after its own ~2.5 s, real time: polled under a
+// generous deadline). The back-off is then the test's: on a clock it holds,
+// the worker waits exactly 1 s, reopens a dead camera once the clock has
+// passed it (the attempt fails: the next wait is 2 s), and does not reopen a
+// camera that is back before the clock has passed that wait — only then.
+TEST_F(AravisGige, TheLinkWorkerReconnectsAtItsBackOffOnTheDriversClockAndNotBefore)
+{
+    startSim();
+    hgtest::ManualClock clock(hgtest::ManualClock::Sleeps::WaitForTheHand);
+    auto cam = makeCamera("    trigger: software\n    reconnect_backoff_ms: [1000, 4000]\n", clock);
+    ASSERT_TRUE(cam->configure());
+    ASSERT_TRUE(cam->activate());
+    ASSERT_TRUE(cam->grab(2000ms).ok());
+    sim_.kill();
+
+    // Grabs of 400 ms until the driver says what it waits for (it closes the dead
+    // connection first: ~10 s of Aravis' GVCP timeouts against a dead camera).
+    auto grabUntil = [&](const std::string& wanted) {
+        std::string last;
+        const auto giveUp = Clock::now() + 120s;
+        while (Clock::now() < giveUp) {
+            auto f = cam->grab(400ms);
+            EXPECT_FALSE(f.ok()) << "a frame from a dead camera";
+            last = f.message;
+            if (last.find(wanted) != std::string::npos) return last;
+        }
+        ADD_FAILURE() << "no grab said '" << wanted << "' within 120 s; the last: " << last;
+        return last;
+    };
+    const auto lostAt = clock.now(); // the clock has not moved since the kill
+    std::string message = grabUntil("next attempt in");
+    EXPECT_NE(message.find("camera 127.0.0.1: lost (not answering"), std::string::npos) << message;
+    EXPECT_NE(message.find("next attempt in 1000 ms"), std::string::npos) << message;
+    ASSERT_EQ(clock.nextWake(), lostAt + 1000ms) << "the worker does not wait the back-off on the driver's clock";
+
+    // 999 ms: nothing yet. 1 ms more: the attempt, against the dead camera, fails.
+    clock.advance(999ms);
+    ASSERT_EQ(clock.nextWake(), lostAt + 1000ms);
+    EXPECT_NE(cam->grab(400ms).message.find("next attempt in 1 ms"), std::string::npos);
+    clock.advance(1ms);
+    message = grabUntil("reconnect failed");
+    EXPECT_NE(message.find("next attempt in 2000 ms"), std::string::npos) << message;
+    ASSERT_EQ(clock.nextWake(), lostAt + 3000ms) << "the wait did not double";
+
+    // The camera is back and answers: no reconnection before the clock has passed the wait.
+    startSim();
+    for (int k = 0; k < 5; ++k) {
+        auto f = cam->grab(400ms);
+        EXPECT_EQ(f.status, FrameStatus::Error) << "grab " << k << ": " << f.message;
+        EXPECT_NE(f.message.find("next attempt in 2000 ms"), std::string::npos) << f.message;
+    }
+    clock.advance(1999ms);
+    ASSERT_EQ(clock.nextWake(), lostAt + 3000ms);
+    EXPECT_NE(cam->grab(400ms).message.find("next attempt in 1 ms"), std::string::npos);
+    clock.advance(1ms);
+    int recoveredAfter = -1;
+    for (int k = 0; k < 40 && recoveredAfter < 0; ++k) {
+        auto f = cam->grab(2000ms);
+        if (f.ok()) {
+            recoveredAfter = k;
+            EXPECT_GE(matchingImage(f.image), 0);
+        }
+    }
+    ASSERT_GE(recoveredAfter, 0) << "no frame within 40 grabs once the back-off had passed";
+    EXPECT_EQ(cam->state(), LifecycleState::Active);
+    EXPECT_TRUE(cam->deactivate());
+    EXPECT_TRUE(cam->cleanup());
 }
 
 /// GLib's messages (g_log, every domain without a handler of its own) while

@@ -169,7 +169,7 @@ void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
             notifier_.watchdog();
             nextPing = now + watchdogPeriod;
         }
-        const auto state = std::string(station::toString(runner_.state()));
+        const auto state = std::string(enumName(runner_.state()));
         notifier_.status(ok ? state : "unhealthy: " + state);
 
         auto wake = std::min(nextBeat, notifier_.watchdogInterval() ? nextPing : nextBeat);
@@ -237,7 +237,7 @@ void MainLoop::reload()
     } catch (const InputError& e) {
         log->error("reload refused, keeping the running configuration: {}", e.what());
     }
-    notifier_.ready(std::string(station::toString(runner_.state())));
+    notifier_.ready(std::string(enumName(runner_.state())));
 }
 
 /// Opens the store, starts the PLC server, the runner and the maintenance socket, and serves until stopped.
@@ -266,7 +266,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
         mqtt = std::make_unique<MqttPublisher>(config->mqtt, config->results.database, [&runner] {
             // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
             const auto state = runner.state();
-            return station::isBusy(state) ? std::string("busy") : std::string(station::toString(state));
+            return station::isBusy(state) ? std::string("busy") : std::string(enumName(state));
         });
     MaintenanceContext context{
         registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};

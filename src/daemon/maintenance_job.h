@@ -30,7 +30,7 @@ template <class Job> class MaintenanceJob {
             return false;
         }
         if (state == S::Fault || state == S::Starting || state == S::Calibrating) {
-            why = std::string("the station is not ready (") + std::string(station::toString(state)) + ")";
+            why = std::string("the station is not ready (") + std::string(enumName(state)) + ")";
             return false;
         }
         status_ = std::move(status);

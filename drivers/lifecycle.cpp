@@ -7,18 +7,6 @@
 
 namespace hg::drivers {
 
-std::string_view toString(LifecycleState s)
-{
-    constexpr std::array<std::string_view, 4> names{"unconfigured", "inactive", "active", "failed"};
-    return names[static_cast<int>(s)];
-}
-
-std::string_view toString(Transition t)
-{
-    constexpr std::array<std::string_view, 4> names{"configure", "activate", "deactivate", "cleanup"};
-    return names[static_cast<int>(t)];
-}
-
 namespace {
 constexpr std::array<LifecycleState, 4> kStates{LifecycleState::Unconfigured, LifecycleState::Inactive,
                                                 LifecycleState::Active, LifecycleState::Failed};
@@ -27,7 +15,7 @@ constexpr std::array<LifecycleState, 4> kStates{LifecycleState::Unconfigured, Li
 Status Device::notAllowed(std::string_view call, const std::string& needs) const
 {
     return Status::failure(StatusCode::NotAllowed, kind_ + ": " + std::string(call) + " is not allowed while " +
-                                                       std::string(toString(state())) + " (needs " + needs + ")");
+                                                       std::string(enumName(state())) + " (needs " + needs + ")");
 }
 
 Status Device::require(std::initializer_list<LifecycleState> states, std::string_view call) const
@@ -35,7 +23,7 @@ Status Device::require(std::initializer_list<LifecycleState> states, std::string
     std::string needs;
     for (LifecycleState s : states) {
         if (s == state()) return Status::success();
-        needs += (needs.empty() ? "" : " or ") + std::string(toString(s));
+        needs += (needs.empty() ? "" : " or ") + std::string(enumName(s));
     }
     return notAllowed(call, needs);
 }
@@ -70,21 +58,21 @@ Status Device::run(Transition t)
     if (!allowed(from, t)) {
         std::string needs;
         for (LifecycleState s : kStates)
-            if (allowed(s, t)) needs += (needs.empty() ? "" : " or ") + std::string(toString(s));
-        return notAllowed(toString(t), needs);
+            if (allowed(s, t)) needs += (needs.empty() ? "" : " or ") + std::string(enumName(s));
+        return notAllowed(enumName(t), needs);
     }
     HookResult r = hook(t);
     auto log = log::category(kind_);
     if (r.status().ok()) {
         state_ = target(t);
-        log->info("{}: {} -> {}", kind_, toString(from), toString(target(t)));
+        log->info("{}: {} -> {}", kind_, enumName(from), enumName(target(t)));
     } else if (r.isError()) {
         state_ = LifecycleState::Failed;
-        log->error("{} failed: {} (now failed)", toString(t), r.status().message());
+        log->error("{} failed: {} (now failed)", enumName(t), r.status().message());
     } else {
         // Configure leaves nothing half open: whatever the hook opened is released.
         if (t == Transition::Configure) onCleanup();
-        log->error("{} failed: {} (still {})", toString(t), r.status().message(), toString(from));
+        log->error("{} failed: {} (still {})", enumName(t), r.status().message(), enumName(from));
     }
     return r.status();
 }

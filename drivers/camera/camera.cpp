@@ -17,36 +17,9 @@
 
 namespace hg::drivers {
 
-namespace {
-constexpr std::array<std::string_view, 3> kPixelFormatNames{"Mono8", "Mono12", "Mono16"};
-}
-
-std::string_view toString(PixelFormat f)
-{
-    return kPixelFormatNames[static_cast<int>(f)];
-}
-
-std::string_view toString(TriggerMode t)
-{
-    return t == TriggerMode::Software ? "software" : "free_run";
-}
-
-std::optional<PixelFormat> pixelFormatFromString(std::string_view name)
-{
-    for (std::size_t i = 0; i < kPixelFormatNames.size(); ++i)
-        if (kPixelFormatNames[i] == name) return static_cast<PixelFormat>(i);
-    return std::nullopt;
-}
-
 int cvTypeOf(PixelFormat f)
 {
     return f == PixelFormat::Mono8 ? CV_8UC1 : CV_16UC1;
-}
-
-std::string_view toString(FrameStatus s)
-{
-    constexpr std::array<std::string_view, 4> names{"ok", "timeout", "incomplete", "error"};
-    return names[static_cast<int>(s)];
 }
 
 // ---------------------------------------------------------------------------
@@ -253,11 +226,7 @@ Result<CameraInfo> Camera::info()
 CameraSettings parseCameraSettings(const ConfigNode& driver)
 {
     CameraSettings s;
-    if (auto n = driver.optional("pixel_format")) {
-        auto f = pixelFormatFromString(n->asString());
-        if (!f) n->fail("unknown pixel format '" + n->asString() + "' (expected Mono8, Mono12 or Mono16)");
-        s.pixelFormat = *f;
-    }
+    if (auto n = driver.optional("pixel_format")) s.pixelFormat = n->asEnum<PixelFormat>("pixel format");
     if (auto n = driver.optional("exposure_us")) s.exposureUs = n->asDoubleIn(1.0, 60e6);
     if (auto n = driver.optional("gain_db")) s.gainDb = n->asDoubleIn(-20.0, 60.0);
     if (auto n = driver.optional("roi")) {
@@ -269,15 +238,7 @@ CameraSettings parseCameraSettings(const ConfigNode& driver)
         if ((s.roi.width == 0) != (s.roi.height == 0))
             n->fail("width and height must both be positive, or both 0 for the whole sensor");
     }
-    if (auto n = driver.optional("trigger")) {
-        auto t = n->asString();
-        if (t == "software")
-            s.trigger = TriggerMode::Software;
-        else if (t == "free_run")
-            s.trigger = TriggerMode::FreeRun;
-        else
-            n->fail("unknown trigger '" + t + "' (expected software or free_run)");
-    }
+    if (auto n = driver.optional("trigger")) s.trigger = n->asEnum<TriggerMode>("trigger");
     return s;
 }
 

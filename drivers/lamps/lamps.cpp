@@ -15,8 +15,6 @@
 namespace hg::drivers {
 namespace {
 
-constexpr std::array<std::string_view, 3> kLampKeys{"green", "amber", "red"};
-
 std::size_t index(Lamp lamp)
 {
     return static_cast<std::size_t>(lamp);
@@ -73,23 +71,6 @@ LampLine parseLine(const ConfigNode& node, bool defaultActiveLow)
 
 } // namespace
 
-std::string_view toString(Lamp lamp)
-{
-    return kLampKeys[index(lamp)];
-}
-
-std::string_view toString(LampState state)
-{
-    constexpr std::array<std::string_view, 3> names{"off", "on", "blinking"};
-    return names[static_cast<std::size_t>(state)];
-}
-
-std::string_view toString(StationIndication indication)
-{
-    constexpr std::array<std::string_view, 6> names{"dark", "pass", "fail", "busy", "fault", "reseat"};
-    return names[static_cast<std::size_t>(indication)];
-}
-
 std::string LampLine::describe() const
 {
     if (name) return "line '" + *name + "'";
@@ -121,7 +102,7 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
         c.blinkPeriod = std::chrono::milliseconds(static_cast<long long>(std::lround(s * 1000.0)));
     }
     for (Lamp lamp : kAllLamps) {
-        auto node = section[kLampKeys[index(lamp)]];
+        auto node = section[enumName(lamp)];
         LampLine line = parseLine(node, activeLow);
         if (line.offset && c.chip.empty())
             node.fail("a line given by offset needs '" + c.key + ".chip' (the GPIO chip it belongs to)");
@@ -136,17 +117,26 @@ LampsConfig LampsConfig::parse(const ConfigNode& section)
     return c;
 }
 
-std::array<LampState, 3> lampStatesFor(StationIndication indication)
+std::array<LampState, 3> lampStatesFor(station::LampPattern pattern)
 {
     using S = LampState;
-    // docs/contracts.md §6 and its re-seat extension, indexed by StationIndication; each row green, amber, red.
-    constexpr std::array<std::array<LampState, 3>, 6> table{{{S::Off, S::Off, S::Off},
-                                                             {S::On, S::Off, S::Off},
-                                                             {S::Off, S::Off, S::On},
-                                                             {S::Off, S::On, S::Off},
-                                                             {S::Off, S::Blinking, S::Blinking},
-                                                             {S::Off, S::Blinking, S::Off}}};
-    return table[static_cast<std::size_t>(indication)];
+    using P = station::LampPattern;
+    // docs/contracts.md §6 and its re-seat extension; each row green, amber, red.
+    switch (pattern) {
+    case P::Off:
+        break;
+    case P::Busy:
+        return {S::Off, S::On, S::Off};
+    case P::Pass:
+        return {S::On, S::Off, S::Off};
+    case P::Fail:
+        return {S::Off, S::Off, S::On};
+    case P::Fault:
+        return {S::Off, S::Blinking, S::Blinking};
+    case P::Reseat:
+        return {S::Off, S::Blinking, S::Off};
+    }
+    return {S::Off, S::Off, S::Off};
 }
 
 Lamps::Lamps(LampsConfig config, Clock& clock) : Device("lamps", clock), config_(std::move(config))
@@ -213,7 +203,7 @@ void Lamps::command(const std::array<LampState, 3>& states)
 Status Lamps::set(Lamp lamp, LampState s)
 {
     std::unique_lock lock(mutex());
-    if (auto r = require({LifecycleState::Active}, "set " + std::string(toString(lamp))); !r) return r;
+    if (auto r = require({LifecycleState::Active}, "set " + std::string(enumName(lamp))); !r) return r;
     auto states = commanded_;
     states[index(lamp)] = s;
     command(states);
@@ -223,11 +213,11 @@ Status Lamps::set(Lamp lamp, LampState s)
     return r;
 }
 
-Status Lamps::show(StationIndication indication)
+Status Lamps::show(station::LampPattern pattern)
 {
     std::unique_lock lock(mutex());
-    if (auto r = require({LifecycleState::Active}, "show " + std::string(toString(indication))); !r) return r;
-    command(lampStatesFor(indication));
+    if (auto r = require({LifecycleState::Active}, "show " + std::string(enumName(pattern))); !r) return r;
+    command(lampStatesFor(pattern));
     auto r = applyLocked();
     lock.unlock();
     wake_.notify_all();

@@ -565,7 +565,7 @@ nlohmann::json toJson(const AlignmentResult& r)
         if (d.kind == FixedDof::Kind::Rotation) j["point"] = toJson(d.point);
         fixed.push_back(std::move(j));
     }
-    return {{"method", model::toString(r.method)},
+    return {{"method", enumName(r.method)},
             {"measured", r.measured},
             {"R", toJson(r.seat.R)},
             {"t", toJson(r.seat.t)},

@@ -121,7 +121,7 @@ void StationFileUpdate::setRailIntrinsics(const RailCalibration& r, const std::s
 void StationFileUpdate::setFixtureAxes(const FixtureAxesResult& r)
 {
     YAML::Node fix = section(root_, "fixture");
-    fix["type"] = "rotation_declination";
+    fix["type"] = std::string(enumName(geometry::FixtureType::RotationDeclination));
     YAML::Node cff(YAML::NodeType::Map);
     cff["R"] = mat3(r.cameraFromFixture.R);
     cff["t"] = vec3(r.cameraFromFixture.t);

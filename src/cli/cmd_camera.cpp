@@ -101,7 +101,7 @@ int runGrab(const CameraArgs& a)
     const auto timeout = std::chrono::milliseconds(static_cast<long>(a.timeoutS * 1000.0));
     auto frame = camera->grab(timeout);
     if (!frame.ok())
-        throw FaultError("no usable frame (" + std::string(drivers::toString(frame.status)) + "): " + frame.message);
+        throw FaultError("no usable frame (" + std::string(enumName(frame.status)) + "): " + frame.message);
     // PNG keeps 16-bit frames (Mono12/Mono16) at full depth.
     if (!cv::imwrite(a.out, frame.image)) throw FaultError(a.out + ": cannot write the image");
     nlohmann::json j{{"out", a.out},
@@ -109,7 +109,7 @@ int runGrab(const CameraArgs& a)
                      {"timestamp_ns", frame.timestamp.count()},
                      {"width", frame.image.cols},
                      {"height", frame.image.rows},
-                     {"pixel_format", std::string(drivers::toString(camera->settings().pixelFormat))}};
+                     {"pixel_format", std::string(enumName(camera->settings().pixelFormat))}};
     frame.release();
     (void)camera->deactivate();
     (void)camera->cleanup();

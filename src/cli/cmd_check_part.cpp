@@ -113,7 +113,7 @@ std::string stepText(const model::StepModel& brep)
 nlohmann::json repairJson(const model::PartProgram& program)
 {
     const model::MeshRepairReport& r = program.meshRepairReport;
-    return {{"mode", model::toString(program.meshRepair.mode)},
+    return {{"mode", enumName(program.meshRepair.mode)},
             {"gap_tolerance_mm", program.meshRepair.gapToleranceMm},
             {"repaired", !r.clean()},
             {"duplicate_faces", r.duplicateFaces},
@@ -136,7 +136,7 @@ std::string repairText(const model::PartProgram& program)
     const model::MeshRepairReport& r = program.meshRepairReport;
     if (r.clean()) return "repaired    nothing (the mesh needed no repair)\n";
     std::string text = fmt::format("repaired    {} kind{} of defect (mesh_repair: {}):\n", r.items().size(),
-                                   r.items().size() == 1 ? "" : "s", model::toString(program.meshRepair.mode));
+                                   r.items().size() == 1 ? "" : "s", enumName(program.meshRepair.mode));
     for (const std::string& item : r.items()) text += "  " + item + "\n";
     return text;
 }
@@ -196,7 +196,7 @@ int run(const CheckArgs& args)
         out["parameters"] = nlohmann::json::array();
         for (const auto& p : program.parameters)
             out["parameters"].push_back({{"id", p.id},
-                                         {"kind", model::toString(p.kind)},
+                                         {"kind", enumName(p.kind)},
                                          {"landmarks", p.landmarkIds},
                                          {"nominal_mm", p.nominalMm},
                                          {"tolerance_mm", p.toleranceMm}});
@@ -227,8 +227,8 @@ int run(const CheckArgs& args)
                                  lm.bestViews.size(), lm.bestViews.size() == 1 ? "" : "s");
     std::cout << fmt::format("parameters  {}\n", program.parameters.size());
     for (const auto& p : program.parameters)
-        std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id,
-                                 model::toString(p.kind), p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
+        std::cout << fmt::format("  {:<16} {} of {} landmarks, nominal {:.6g} ± {:.4g}\n", p.id, enumName(p.kind),
+                                 p.landmarkIds.size(), p.nominalMm, p.toleranceMm);
     if (capability) {
         std::cout << fmt::format("capability  expected uncertainty (k = 2) at the {} views of {}:\n",
                                  geometry::loadPoses(args.views).size(), args.views);

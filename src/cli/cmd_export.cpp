@@ -59,8 +59,8 @@ int run(const ExportOptions& o)
     std::ostringstream text;
     store::writeExport(text, format, rows);
     replaceFileDurably(o.out, text.str());
-    hg::log::category("store")->info("export: {} cycles of {} as {} to {}", rows.size(), o.store,
-                                     store::toString(format), o.out);
+    hg::log::category("store")->info("export: {} cycles of {} as {} to {}", rows.size(), o.store, enumName(format),
+                                     o.out);
     return 0;
 }
 

@@ -31,21 +31,19 @@ struct FixtureArgs {
 /// Turns a failed call into the exception main() maps to exit status 3.
 void check(const Status& r, const std::string& what)
 {
-    if (!r.ok()) throw FaultError("fixture " + what + ": " + std::string(toString(r.code())) + ": " + r.message());
+    if (!r.ok()) throw FaultError("fixture " + what + ": " + std::string(enumName(r.code())) + ": " + r.message());
 }
 
 nlohmann::json statusJson(const drivers::Fixture& fixture, const drivers::FixtureStatus& st)
 {
     nlohmann::json j;
     j["backend"] = std::string(fixture.backend());
-    j["state"] = std::string(drivers::toString(fixture.state()));
-    if (fixture.type() == geometry::FixtureType::Rail) {
-        j["type"] = "rail";
+    j["state"] = std::string(enumName(fixture.state()));
+    j["type"] = enumName(fixture.type());
+    if (fixture.type() == geometry::FixtureType::Rail)
         j["position"] = {{"rail_mm", st.position.railMm}};
-    } else {
-        j["type"] = "rotation_declination";
+    else
         j["position"] = {{"rotation_deg", st.position.rotationDeg}, {"declination_deg", st.position.declinationDeg}};
-    }
     j["in_position"] = st.inPosition;
     j["busy"] = st.busy;
     j["homed"] = st.homed;

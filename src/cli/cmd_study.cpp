@@ -132,7 +132,7 @@ std::map<std::string, double> loadReference(const std::string& file, const std::
 
 json sourceJson(const study::LandmarkSeries& s)
 {
-    json j{{"id", s.id}, {"values", std::string(study::toString(s.source))}, {"zone_mm", {s.zone.lower, s.zone.upper}}};
+    json j{{"id", s.id}, {"values", std::string(enumName(s.source))}, {"zone_mm", {s.zone.lower, s.zone.upper}}};
     if (s.source == study::ValueSource::BracketMiddle) j["note"] = "bracket middle: resolution one voxel";
     return j;
 }

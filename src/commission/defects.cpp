@@ -26,11 +26,6 @@ Eigen::Matrix3d tangentFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& al
 
 } // namespace
 
-const char* toString(DefectKind kind)
-{
-    return kind == DefectKind::Added ? "added" : "removed";
-}
-
 model::TriangleMesh defectBox(const Eigen::Vector3d& landmark, const Eigen::Vector3d& normal,
                               const SeededDefect& defect, double halfWidthMm, const Eigen::Vector3d& along,
                               double halfLengthMm)

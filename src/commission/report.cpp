@@ -27,11 +27,11 @@ json optionalNumber(const std::optional<double>& v)
 
 json trialJson(const DefectTrial& t)
 {
-    return {{"kind", toString(t.defect.kind)},
+    return {{"kind", enumName(t.defect.kind)},
             {"multiple", t.multiple},
             {"depth_mm", t.defect.depthMm},
             {"true_deviation_mm", t.defect.trueDeviationMm()},
-            {"status", inspect::toString(t.status)},
+            {"status", enumName(t.status)},
             {"deviation_mm", optionalNumber(t.deviationMm)},
             {"uncertainty_mm", optionalNumber(t.uncertaintyMm)},
             {"caught", t.caught()},
@@ -81,7 +81,7 @@ json viewJson(const ViewVerification& v)
 json findingJson(const Finding& f)
 {
     json fixes = json::array();
-    for (Fix x : f.fixes) fixes.push_back(toString(x));
+    for (Fix x : f.fixes) fixes.push_back(enumName(x));
     return {{"subject", f.subject}, {"test", f.test}, {"what", f.what}, {"fixes", fixes}, {"fix", f.fixText}};
 }
 
@@ -108,8 +108,8 @@ void defectTable(std::ostringstream& md, const VerificationReport& r)
        << "| landmark | defect | depth mm | status | deviation mm | U mm | caught |\n|---|---|---|---|---|---|---|\n";
     for (const LandmarkVerification& v : r.landmarks)
         for (const DefectTrial& t : v.defects)
-            md << "| " << v.id << " | " << toString(t.defect.kind) << " " << num(t.multiple) << " × tol | "
-               << num(t.defect.depthMm) << " | " << inspect::toString(t.status) << " | " << num(t.deviationMm) << " | "
+            md << "| " << v.id << " | " << enumName(t.defect.kind) << " " << num(t.multiple) << " × tol | "
+               << num(t.defect.depthMm) << " | " << enumName(t.status) << " | " << num(t.deviationMm) << " | "
                << num(t.uncertaintyMm) << " | "
                << (t.caught()        ? "yes"
                    : t.error.empty() ? "**no**"

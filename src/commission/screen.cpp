@@ -82,8 +82,8 @@ plan::SuggestScreen twinScreen(const model::PartProgram& base, const geometry::S
             std::vector<plan::Refusal> refused;
             for (std::size_t i = 0; i < chosen.size(); ++i)
                 if (!planned.plan.landmarks[i].inspectable())
-                    refused.push_back(
-                        {i, toString(planned.plan.landmarks[i].verdict), planned.plan.landmarks[i].reason});
+                    refused.push_back({i, std::string(enumName(planned.plan.landmarks[i].verdict)),
+                                       planned.plan.landmarks[i].reason});
             return refused;
         }
         VerificationOptions verify;

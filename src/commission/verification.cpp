@@ -142,7 +142,7 @@ class Verifier {
         const inspect::LandmarkResult* r = findResult(result, v.id);
         ++v.seats;
         if (!r) return;
-        ++v.statuses[inspect::toString(r->status)];
+        ++v.statuses[std::string(enumName(r->status))];
         if (r->status != LandmarkStatus::NotObservable && r->status != LandmarkStatus::NotInspected)
             ++v.observableSeats;
         if (r->status == LandmarkStatus::Ok) ++v.acceptedSeats;
@@ -296,7 +296,8 @@ void Verifier::concludeLandmark(LandmarkVerification& v)
     for (const DefectTrial& t : v.defects) {
         if (t.multiple < options_.releaseMultiple - 1e-9 || t.caught()) continue;
         std::string what = "a defect of " + formatNumber(t.multiple) + " × tolerance (" +
-                           formatNumber(t.defect.depthMm, 4) + " mm " + toString(t.defect.kind) + ") is accepted";
+                           formatNumber(t.defect.depthMm, 4) + " mm " + std::string(enumName(t.defect.kind)) +
+                           ") is accepted";
         if (t.deviationMm) what += ": deviation measured " + formatNumber(*t.deviationMm, 4) + " mm";
         if (!t.error.empty())
             what = "a defect of " + formatNumber(t.multiple) +
@@ -340,25 +341,6 @@ void Verifier::conclude()
 }
 
 } // namespace
-
-const char* toString(Fix fix)
-{
-    switch (fix) {
-    case Fix::DropLandmark:
-        return "drop_landmark";
-    case Fix::MoveLandmark:
-        return "move_landmark";
-    case Fix::AddView:
-        return "add_view";
-    case Fix::ChangeDepth:
-        return "change_depth";
-    case Fix::ChangeLens:
-        return "change_lens";
-    case Fix::WidenTolerance:
-        return "widen_tolerance";
-    }
-    return "unknown";
-}
 
 VerificationReport verifyProgram(const VerificationProblem& problem, const VerificationOptions& options,
                                  const FrameSourceFactory& frames, const Progress& progress)

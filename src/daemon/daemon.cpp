@@ -1,4 +1,5 @@
 #include "daemon.h"
+#include "config_reload.h"
 
 #include "command_mailbox.h"
 #include "cycle/cycle_runner.h"
@@ -24,8 +25,6 @@
 
 namespace hg::daemon {
 namespace {
-
-using ConfigPtr = std::shared_ptr<const station::DaemonConfig>;
 
 std::set<std::uint16_t> programNumbers(const station::DaemonConfig& cfg)
 {
@@ -129,7 +128,8 @@ class MainLoop {
     bool healthy();
     /// Takes the pending signals; false on SIGTERM/SIGINT.
     bool takeSignals();
-    void reload();
+    /// Applies a finished reload (read and checked on the reload's worker).
+    void applyReload();
 
     ConfigPtr config_;
     ProgramCheck checkProgram_;
@@ -141,6 +141,7 @@ class MainLoop {
     Clock& clock_; ///< the PLC server's and the runner's: the watchdog compares their times with it
     HmiServer* hmi_ = nullptr;
     bool wasHealthy_ = true;
+    ConfigReload reload_{[this](const std::filesystem::path& file) { return loadConfig(file, checkProgram_); }};
 };
 
 void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
@@ -163,19 +164,20 @@ void MainLoop::serve(MaintenanceServer& maintenance, CommandMailbox& mailbox,
             notifier_.watchdog();
             nextPing = now + watchdogPeriod;
         }
-        const auto state = std::string(station::toString(runner_.state()));
+        const auto state = std::string(enumName(runner_.state()));
         notifier_.status(ok ? state : "unhealthy: " + state);
 
         auto wake = std::min(nextBeat, notifier_.watchdogInterval() ? nextPing : nextBeat);
         auto timeoutMs = std::chrono::duration_cast<std::chrono::milliseconds>(wake - clock_.now()).count();
         // Waiting maintenance clients are polled too, and closed past their time even when silent.
         auto clients = maintenance.pollFds();
-        std::vector<pollfd> fds{{sigFd_, POLLIN, 0}, {mailbox.fd(), POLLIN, 0}};
+        std::vector<pollfd> fds{{sigFd_, POLLIN, 0}, {mailbox.fd(), POLLIN, 0}, {reload_.fd(), POLLIN, 0}};
         fds.insert(fds.end(), clients.begin(), clients.end());
         int n = poll(fds.data(), fds.size(), static_cast<int>(std::clamp<long long>(timeoutMs, 1, 200)));
-        std::copy(fds.begin() + 2, fds.end(), clients.begin());
+        std::copy(fds.begin() + 3, fds.end(), clients.begin());
         maintenance.serve(clients);
         if (n > 0 && (fds[1].revents & POLLIN)) mailbox.serve(commands);
+        if (n > 0 && (fds[2].revents & POLLIN)) applyReload();
         if (n > 0 && (fds[0].revents & POLLIN) && !takeSignals()) return;
     }
 }
@@ -203,7 +205,9 @@ bool MainLoop::takeSignals()
     bool running = true;
     while (read(sigFd_, &info, sizeof info) == sizeof info) {
         if (info.ssi_signo == SIGHUP) {
-            reload();
+            hg::log::category("daemon")->info("reload of {} requested", config_->file.string());
+            notifier_.reloading();
+            reload_.request(config_->file);
         } else if (info.ssi_signo == SIGTERM || info.ssi_signo == SIGINT) {
             hg::log::category("daemon")->info("stopping on signal {}", info.ssi_signo);
             running = false;
@@ -213,12 +217,15 @@ bool MainLoop::takeSignals()
 }
 
 // SIGHUP: a configuration that does not validate is refused; the running one stays.
-void MainLoop::reload()
+void MainLoop::applyReload()
 {
     auto log = hg::log::category("daemon");
-    notifier_.reloading();
-    try {
-        auto fresh = loadConfig(config_->file, checkProgram_);
+    auto finished = reload_.take();
+    if (!finished) return;
+    if (!finished->ok()) {
+        log->error("reload refused, keeping the running configuration: {}", finished->status().message());
+    } else {
+        auto fresh = finished->value();
         for (const auto& key : needsRestart(*config_, *fresh))
             log->warn("reload: '{}' changed; it takes effect when the daemon restarts", key);
         // The runner first: the program list's recheck of the active program (docs/plc.md,
@@ -229,10 +236,9 @@ void MainLoop::reload()
         config_ = fresh;
         log->info("configuration reloaded from {} ({} part programs)", config_->file.string(),
                   config_->programs.size());
-    } catch (const InputError& e) {
-        log->error("reload refused, keeping the running configuration: {}", e.what());
     }
-    notifier_.ready(std::string(station::toString(runner_.state())));
+    // READY once the last reload asked for is applied (a SIGHUP during one asked for another).
+    if (!reload_.busy()) notifier_.ready(std::string(enumName(runner_.state())));
 }
 
 /// Opens the store, starts the PLC server, the runner and the maintenance socket, and serves until stopped.
@@ -264,7 +270,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
             [&runner] {
                 // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
                 const auto state = runner.state();
-                return station::isBusy(state) ? std::string("busy") : std::string(station::toString(state));
+                return station::isBusy(state) ? std::string("busy") : std::string(enumName(state));
             },
             clock);
     MaintenanceContext context{

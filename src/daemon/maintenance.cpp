@@ -197,7 +197,7 @@ json status(const MaintenanceContext& c, const json&)
               {"result_seq", regs[station::reg::ResultSeq]},
               {"active_program", regs[station::reg::ActiveProgram]},
               {"program_state",
-               std::string(station::toString(static_cast<station::ProgramState>(regs[station::reg::ProgramState])))},
+               std::string(enumName(static_cast<station::ProgramState>(regs[station::reg::ProgramState])))},
               {"counters", plcCounters(regs)},
               {"clients", counters.clients},
               {"requests", counters.requests},
@@ -212,7 +212,7 @@ json status(const MaintenanceContext& c, const json&)
             {"mqtt", c.mqttStatus ? c.mqttStatus() : json()},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
-            {"purpose", std::string(station::toString(c.registers.purpose()))},
+            {"purpose", std::string(enumName(c.registers.purpose()))},
             {"program", c.runner.program()},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
 }
@@ -283,14 +283,16 @@ json purpose(const MaintenanceContext& c, const json& request)
 {
     if (request.contains("purpose")) {
         const auto& wanted = request["purpose"];
-        const auto parsed = wanted.is_string() ? station::parsePurpose(wanted.get<std::string>()) : std::nullopt;
+        const auto parsed =
+            wanted.is_string() ? parseEnum<station::CyclePurpose>(wanted.get<std::string>()) : std::nullopt;
         if (!parsed)
             return {{"ok", false},
-                    {"error", "purpose: " + wanted.dump() + " is not \"production\", \"master\" or \"study\""}};
+                    {"error", "purpose: " + wanted.dump() + " is not \"" +
+                                  enumNameList<station::CyclePurpose>("\", \"", "\" or \"") + "\""}};
         c.registers.setPurpose(*parsed);
-        hg::log::category("daemon")->info("cycle purpose {} (maintenance socket)", station::toString(*parsed));
+        hg::log::category("daemon")->info("cycle purpose {} (maintenance socket)", enumName(*parsed));
     }
-    return {{"ok", true}, {"purpose", std::string(station::toString(c.registers.purpose()))}};
+    return {{"ok", true}, {"purpose", std::string(enumName(c.registers.purpose()))}};
 }
 
 json abortCycle(const MaintenanceContext& c, const json&)

@@ -30,8 +30,8 @@ template <class Job> class MaintenanceJob {
         std::lock_guard lock(mutex_);
         if (job_ || running_) return Status::failure(StatusCode::NotAllowed, what_ + " is already queued or running");
         if (state == S::Fault || state == S::Starting || state == S::Calibrating)
-            return Status::failure(StatusCode::NotAllowed, std::string("the station is not ready (") +
-                                                               std::string(station::toString(state)) + ")");
+            return Status::failure(StatusCode::NotAllowed,
+                                   std::string("the station is not ready (") + std::string(enumName(state)) + ")");
         status_ = std::move(status);
         status_["state"] = "queued";
         job_ = std::move(job);

@@ -211,8 +211,7 @@ FixtureMotion stationMotion(const Station& station)
     const auto& root = *station.document;
     // A station whose kinematics were changed in code after loading no longer matches its file.
     auto typeNode = root["fixture"].optional("type");
-    if (!typeNode || typeNode->asString() != (type == FixtureType::Rail ? "rail" : "rotation_declination"))
-        return defaultFixtureMotion(type);
+    if (!typeNode || typeNode->asString() != enumName(type)) return defaultFixtureMotion(type);
     return parseFixtureMotion(root["fixture"], root["camera"], type);
 }
 

@@ -77,13 +77,11 @@ FixtureKinematics parseFixture(const ConfigNode& fix)
                        "declination_axis_point", "driver", "calibration", "motion"});
     FixtureKinematics k;
     auto typeNode = fix["type"];
-    auto type = typeNode.asString();
-    if (type == "rotation_declination")
-        k.type = FixtureType::RotationDeclination;
-    else if (type == "rail")
-        k.type = FixtureType::Rail;
-    else
-        typeNode.fail("unknown fixture type '" + type + "' (rotation_declination or rail)");
+    const auto type = parseEnum<FixtureType>(typeNode.asString());
+    if (!type)
+        typeNode.fail("unknown fixture type '" + typeNode.asString() + "' (" + enumNameList<FixtureType>(", ", " or ") +
+                      ")");
+    k.type = *type;
 
     auto cff = fix["camera_from_fixture"];
     cff.allowOnlyKeys({"R", "t"});

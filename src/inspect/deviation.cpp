@@ -169,24 +169,6 @@ double viewVariance(const ViewDeviation& v)
 
 } // namespace
 
-const char* toString(DecisionRule rule)
-{
-    return rule == DecisionRule::Guarded ? "guarded" : "simple";
-}
-
-const char* toString(Decision decision)
-{
-    switch (decision) {
-    case Decision::Conforms:
-        return "conforms";
-    case Decision::Nonconforms:
-        return "nonconforms";
-    case Decision::Uncertain:
-        return "uncertain";
-    }
-    return "uncertain";
-}
-
 // ISO 14253-1: the acceptance zone is the tolerance zone shrunk by U on both
 // sides, the rejection zone the outside widened by U; between them nothing is
 // proven. The simple rule (ILAC G8's "simple acceptance") takes the value as it is.

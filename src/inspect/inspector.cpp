@@ -96,27 +96,6 @@ class Memo {
 
 } // namespace
 
-const char* toString(LandmarkStatus status)
-{
-    switch (status) {
-    case LandmarkStatus::Ok:
-        return "ok";
-    case LandmarkStatus::OutOfTolerance:
-        return "out_of_tolerance";
-    case LandmarkStatus::Overflow:
-        return "overflow";
-    case LandmarkStatus::NotFound:
-        return "not_found";
-    case LandmarkStatus::NotObservable:
-        return "not_observable";
-    case LandmarkStatus::NotInspected:
-        return "not_inspected";
-    case LandmarkStatus::Uncertain:
-        return "uncertain";
-    }
-    return "not_inspected";
-}
-
 Inspector::Inspector(const InspectionMap& map, InspectionOptions options, std::shared_ptr<const align::Aligner> aligner,
                      std::shared_ptr<const DeviationGauge> gauge)
     : map_(&map), options_(std::move(options)), aligner_(std::move(aligner)), gauge_(std::move(gauge))
@@ -727,7 +706,7 @@ nlohmann::json toJson(const InspectionResult& r)
     for (const LandmarkResult& lr : r.landmarks) {
         json l;
         l["id"] = lr.id;
-        l["status"] = toString(lr.status);
+        l["status"] = enumName(lr.status);
         l["error_number"] = lr.errorNumber;
         auto measured = [&](double v) { return lr.measured ? json(v) : json(nullptr); };
         l["error_min_mm"] = measured(lr.errorMinMm);
@@ -747,7 +726,7 @@ nlohmann::json toJson(const InspectionResult& r)
             l["deviation_mm"] = lr.deviation->measured ? json(lr.deviation->deviationMm) : json(nullptr);
             l["uncertainty_mm"] = lr.deviation->measured ? json(lr.deviation->uncertaintyMm) : json(nullptr);
             l["deviation"] = toJson(*lr.deviation);
-            if (lr.decision) l["decision"] = toString(*lr.decision);
+            if (lr.decision) l["decision"] = enumName(*lr.decision);
         }
         if (!lr.views.empty()) {
             json vs = json::array();
@@ -780,7 +759,7 @@ nlohmann::json toJson(const InspectionResult& r)
     json ps = json::array();
     for (const ParameterResult& p : r.parameters) {
         json jp{{"id", p.id},
-                {"kind", toString(p.kind)},
+                {"kind", enumName(p.kind)},
                 {"nominal_mm", p.nominal},
                 {"tolerance_mm", p.tolerance},
                 {"status", p.status}};

@@ -181,21 +181,6 @@ int monotoneChain(Vec2* pts, int n, Vec2* hull)
 
 } // namespace
 
-const char* toString(VoxelLabel label)
-{
-    switch (label) {
-    case VoxelLabel::Unknown:
-        return "unknown";
-    case VoxelLabel::Void:
-        return "void";
-    case VoxelLabel::Object:
-        return "object";
-    case VoxelLabel::Undecided:
-        return "undecided";
-    }
-    return "unknown";
-}
-
 bool SilhouetteIndex::Region::background(int frameRow, int frameCol) const
 {
     const int r = frameRow - rect.y, c = frameCol - rect.x;

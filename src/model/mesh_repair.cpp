@@ -593,11 +593,6 @@ void requireClosedManifold(const TriangleMesh& m, const std::string& name, doubl
 
 } // namespace
 
-std::string toString(MeshRepairMode mode)
-{
-    return mode == MeshRepairMode::Strict ? "strict" : "repair";
-}
-
 bool MeshRepairReport::clean() const
 {
     return duplicateFaces + opposedFaces + degenerateFaces + mergedVertices + reorientedFaces + flippedShells +

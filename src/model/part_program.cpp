@@ -191,11 +191,7 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     const ConfigNode idNode = node["id"];
     p.id = idNode.asString();
     if (p.id.empty()) idNode.fail("parameter id is empty");
-    const ConfigNode kindNode = node["kind"];
-    const std::string kind = kindNode.asString();
-    const std::optional<ParameterKind> parsedKind = parseParameterKind(kind);
-    if (!parsedKind) kindNode.fail("unknown kind '" + kind + "' (expected distance, perimeter or area)");
-    p.kind = *parsedKind;
+    p.kind = node["kind"].asEnum<ParameterKind>("kind");
     const ConfigNode list = node["landmarks"];
     for (const ConfigNode& item : list.items()) {
         const std::string id = item.asString();
@@ -207,22 +203,13 @@ GeometricParameter parseParameter(const ConfigNode& node, const std::map<std::st
     if (p.kind == ParameterKind::Distance && p.landmarkIds.size() != 2)
         list.fail(fmt::format("a distance needs exactly 2 landmarks, found {}", p.landmarkIds.size()));
     if (p.kind != ParameterKind::Distance && p.landmarkIds.size() < 3)
-        list.fail(
-            fmt::format("a {} needs at least 3 landmarks (a closed polygon), found {}", kind, p.landmarkIds.size()));
+        list.fail(fmt::format("a {} needs at least 3 landmarks (a closed polygon), found {}", enumName(p.kind),
+                              p.landmarkIds.size()));
     std::set<std::string> unique(p.landmarkIds.begin(), p.landmarkIds.end());
     if (unique.size() != p.landmarkIds.size()) list.fail("a landmark is listed twice");
     p.nominalMm = node["nominal_mm"].asDoubleIn(0.0, 1e12);
     p.toleranceMm = node["tolerance_mm"].asPositive();
     return p;
-}
-
-/// `decision_rule`: true for simple, false for guarded.
-bool parseDecisionRule(const ConfigNode& n)
-{
-    const std::string rule = n.asString();
-    if (rule != "guarded" && rule != "simple")
-        n.fail("unknown decision rule '" + rule + "' (expected guarded or simple)");
-    return rule == "simple";
 }
 
 // The `inspection` section, checked against the octree.
@@ -242,7 +229,8 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
     if (auto n = node.optional("resolution_check")) s.requireResolution = n->asBool();
     if (auto n = node.optional("early_exit")) s.earlyExit = n->asBool();
     if (auto n = node.optional("deviation")) s.deviation = n->asBool();
-    if (auto n = node.optional("decision_rule")) s.simpleDecision = parseDecisionRule(*n);
+    if (auto n = node.optional("decision_rule"))
+        s.simpleDecision = n->asEnum<DecisionRule>("decision rule") == DecisionRule::Simple;
     return s;
 }
 
@@ -254,20 +242,10 @@ AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::str
         node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg, correct_poses_after");
     node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg", "correct_poses_after"});
     AlignmentSettings s;
-    if (auto n = node.optional("method")) {
-        const std::string method = n->asString();
-        if (method == "silhouette")
-            s.method = AlignmentMethod::Silhouette;
-        else if (method == "datums")
-            s.method = AlignmentMethod::Datums;
-        else if (method == "none")
-            s.method = AlignmentMethod::None;
-        else
-            n->fail("unknown method '" + method + "' (expected silhouette, datums or none)");
-    }
+    if (auto n = node.optional("method")) s.method = n->asEnum<AlignmentMethod>("method");
     const auto datums = node.optional("datums");
     if (datums && s.method != AlignmentMethod::Datums)
-        datums->fail("datums are read by method datums only (method is " + toString(s.method) + ")");
+        datums->fail("datums are read by method datums only (method is " + std::string(enumName(s.method)) + ")");
     if (s.method == AlignmentMethod::Datums) {
         if (!datums) node.fail("method datums needs datums: [landmark id, ...] (in priority order)");
         for (const ConfigNode& item : datums->items()) {
@@ -302,11 +280,7 @@ TriangleMesh tessellateFor(StepModel& brep, const OctreeSpec& octree)
 MeshRepairOptions parseMeshRepair(const ConfigNode& root)
 {
     MeshRepairOptions options;
-    if (auto n = root.optional("mesh_repair")) {
-        const std::string mode = n->asString();
-        if (mode != "repair" && mode != "strict") n->fail("unknown mode '" + mode + "' (expected repair or strict)");
-        options.mode = mode == "strict" ? MeshRepairMode::Strict : MeshRepairMode::Repair;
-    }
+    if (auto n = root.optional("mesh_repair")) options.mode = n->asEnum<MeshRepairMode>("mode");
     // A gap wider than a millimetre is a hole in the CAD model, not rounding in its export.
     if (auto n = root.optional("mesh_gap_mm")) options.gapToleranceMm = n->asDoubleIn(0.0, 1.0);
     return options;
@@ -381,39 +355,6 @@ std::shared_ptr<StepModel> readCadStep(const std::filesystem::path& file, const 
 double OctreeSpec::voxelSize() const
 {
     return cubeSize / std::ldexp(1.0, depth);
-}
-
-std::string toString(AlignmentMethod method)
-{
-    switch (method) {
-    case AlignmentMethod::Silhouette:
-        return "silhouette";
-    case AlignmentMethod::Datums:
-        return "datums";
-    case AlignmentMethod::None:
-        return "none";
-    }
-    return "?";
-}
-
-std::string toString(ParameterKind kind)
-{
-    switch (kind) {
-    case ParameterKind::Distance:
-        return "distance";
-    case ParameterKind::Perimeter:
-        return "perimeter";
-    case ParameterKind::Area:
-        return "area";
-    }
-    return "?";
-}
-
-std::optional<ParameterKind> parseParameterKind(const std::string& name)
-{
-    for (ParameterKind kind : {ParameterKind::Distance, ParameterKind::Perimeter, ParameterKind::Area})
-        if (toString(kind) == name) return kind;
-    return std::nullopt;
 }
 
 double PartProgram::surfaceToleranceMm() const
@@ -538,11 +479,11 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     if (auto n = root.optional("inspection")) program.inspection = parseInspection(*n, program.octree);
     // docs/contracts.md §8 writes the rule at the top level; inspection.decision_rule says the same.
     if (auto n = root.optional("decision_rule")) {
-        const bool simple = parseDecisionRule(*n);
+        const auto rule = n->asEnum<DecisionRule>("decision rule");
         const auto inner = root.optional("inspection") ? root["inspection"].optional("decision_rule") : std::nullopt;
-        if (inner && parseDecisionRule(*inner) != simple)
+        if (inner && inner->asEnum<DecisionRule>("decision rule") != rule)
             n->fail("decision_rule disagrees with inspection.decision_rule (give it once)");
-        program.inspection.simpleDecision = simple;
+        program.inspection.simpleDecision = rule == DecisionRule::Simple;
     }
     if (auto n = root.optional("alignment")) program.alignment = parseAlignment(*n, index);
     if (auto n = root.optional("release")) program.release = parseRelease(*n);

@@ -22,19 +22,6 @@
 
 namespace hg::plan {
 
-const char* toString(FeatureKind kind)
-{
-    switch (kind) {
-    case FeatureKind::Face:
-        return "face";
-    case FeatureKind::Edge:
-        return "edge";
-    case FeatureKind::Hole:
-        return "hole";
-    }
-    return "?";
-}
-
 namespace {
 
 using model::TriangleMesh;
@@ -1046,7 +1033,7 @@ PlanCheck planChosen(const SuggestProblem& problem, const SuggestOptions& option
     for (std::size_t i = 0; i < chosen.size(); ++i) {
         const LandmarkAnalysis& a = check.plan.landmarks[i];
         if (!a.inspectable())
-            check.refused.push_back({i, toString(a.verdict), a.reason});
+            check.refused.push_back({i, std::string(enumName(a.verdict)), a.reason});
         else if (!observed[i])
             check.refused.push_back({i, "not_observed", "observed by no view planned with the others"});
     }
@@ -1099,7 +1086,7 @@ Spread spreadVerified(const SuggestProblem& problem, const SuggestOptions& optio
             refused.push_back(i);
             refusedSoFar.push_back({all[i], r.rule, "planned with the others: " + r.why});
             log::category("plan")->info("candidate {} ({} at {}) left out: planned with the others, {}: {}", i + 1,
-                                        toString(all[i].kind), vecText(all[i].position), r.rule, r.why);
+                                        enumName(all[i].kind), vecText(all[i].position), r.rule, r.why);
         }
         std::erase_if(usable,
                       [&](std::size_t i) { return std::find(refused.begin(), refused.end(), i) != refused.end(); });
@@ -1114,8 +1101,9 @@ std::string reasonFor(const SpreadPick& pick, const std::vector<std::string>& id
                formatNumber(pick.distanceMm, 3) + " mm)";
     const std::string from = formatNumber(pick.distanceMm, 3) + " mm from " + idOf[*pick.nearest];
     if (pick.forMinimumShare)
-        return std::string("the ") + toString(kind) + " farthest from the earlier suggestions (at least " +
-               std::to_string(minimumOfKind) + " of " + std::to_string(count) + " on " + toString(kind) + "s): " + from;
+        return "the " + std::string(enumName(kind)) + " farthest from the earlier suggestions (at least " +
+               std::to_string(minimumOfKind) + " of " + std::to_string(count) + " on " + std::string(enumName(kind)) +
+               "s): " + from;
     return "farthest from the earlier suggestions: " + from;
 }
 
@@ -1130,7 +1118,7 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
     for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole})
         if (s.candidates[kindIndex(k)] > 0 && s.inspectable[kindIndex(k)] == 0)
             s.notes.push_back(std::string("none of the ") + std::to_string(s.candidates[kindIndex(k)]) + " " +
-                              toString(k) +
+                              std::string(enumName(k)) +
                               " candidates is inspectable at this station (weak convexity, Rules 1-4: "
                               "docs/planning.md)");
     for (FeatureKind k : {FeatureKind::Face, FeatureKind::Edge, FeatureKind::Hole}) {
@@ -1142,8 +1130,8 @@ void addNotes(Suggestion& s, std::size_t asked, std::size_t inspectable)
         if (suggested || byRule.empty()) continue;
         std::string rules;
         for (const auto& [rule, n] : byRule) rules += (rules.empty() ? "" : ", ") + std::to_string(n) + " " + rule;
-        s.notes.push_back(std::string("no ") + toString(k) + " is suggested: the " +
-                          std::to_string(s.inspectable[kindIndex(k)]) + " inspectable " + toString(k) +
+        s.notes.push_back("no " + std::string(enumName(k)) + " is suggested: the " +
+                          std::to_string(s.inspectable[kindIndex(k)]) + " inspectable " + std::string(enumName(k)) +
                           " candidates tried with the others were refused (" + rules + ")");
     }
 }
@@ -1168,9 +1156,9 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
     for (std::size_t i = 0; i < all.size(); ++i) {
         ++s.candidates[kindIndex(all[i].kind)];
         if (!verdicts[i].inspectable()) {
-            log::category("plan")->debug("candidate {} ({} at {}) left out: {}", i + 1, toString(all[i].kind),
+            log::category("plan")->debug("candidate {} ({} at {}) left out: {}", i + 1, enumName(all[i].kind),
                                          vecText(all[i].position), verdicts[i].reason);
-            s.refused.push_back({all[i], toString(verdicts[i].verdict), verdicts[i].reason});
+            s.refused.push_back({all[i], std::string(enumName(verdicts[i].verdict)), verdicts[i].reason});
             continue;
         }
         ++s.inspectable[kindIndex(all[i].kind)];
@@ -1192,7 +1180,7 @@ Suggestion suggestLandmarks(const SuggestProblem& problem, const SuggestOptions&
         const LandmarkCandidate& c = all[spread.usable[pick.index]];
         SuggestedLandmark lm;
         lm.candidate = c;
-        lm.id = std::string(toString(c.kind)) + "-" + std::to_string(++numbered[kindIndex(c.kind)]);
+        lm.id = std::string(enumName(c.kind)) + "-" + std::to_string(++numbered[kindIndex(c.kind)]);
         idOf[pick.index] = lm.id;
         lm.reason = reasonFor(pick, idOf, c.kind, minimum[kindIndex(c.kind)], options.count);
         lm.witnessPoses = spread.plan.landmarks[k].witnessPoses.size();
@@ -1241,7 +1229,7 @@ std::string refusedMarkdown(const Suggestion& suggestion)
     out << "| # | kind | position (mm) | feature | rule | why |\n|---|---|---|---|---|---|\n";
     std::size_t n = 0;
     for (const RefusedCandidate& r : suggestion.refused)
-        out << "| " << ++n << " | " << toString(r.candidate.kind) << " | " << vecText(r.candidate.position) << " | "
+        out << "| " << ++n << " | " << enumName(r.candidate.kind) << " | " << vecText(r.candidate.position) << " | "
             << r.candidate.feature << " | " << r.rule << " | " << r.why << " |\n";
     return out.str();
 }
@@ -1254,7 +1242,7 @@ std::string landmarksYaml(const Suggestion& suggestion, double toleranceMm, cons
     out << "landmarks:\n";
     for (const SuggestedLandmark& lm : suggestion.landmarks) {
         const LandmarkCandidate& c = lm.candidate;
-        out << "  # " << toString(c.kind) << ": " << c.feature << ".\n";
+        out << "  # " << enumName(c.kind) << ": " << c.feature << ".\n";
         out << "  #   chosen: " << lm.reason << "; seen against background from " << lm.witnessPoses
             << " reachable poses, finest MED " << formatNumber(lm.bestMedMm, 3) << " mm.\n";
         out << "  - {id: " << lm.id << ", position: " << yamlVector(c.position) << ", normal: " << yamlVector(c.normal)

@@ -126,7 +126,7 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
     json out;
     out["part"] = problem.part;
     out["feasible"] = plan.feasible;
-    out["fixture_type"] = type == FixtureType::Rail ? "rail" : "rotation_declination";
+    out["fixture_type"] = enumName(type);
     out["voxel_size_mm"] = problem.frame.voxelSize();
     out["voxel_level"] = problem.frame.depth;
     out["problems"] = plan.problems;
@@ -161,7 +161,7 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         auto [ids, med] = observers(plan, l);
         json j;
         j["id"] = a.id;
-        j["status"] = toString(a.verdict);
+        j["status"] = enumName(a.verdict);
         j["inspectable"] = a.inspectable();
         // The drawing's tolerance; where it is decided to U (finer than ΔV)
         // the planner judged the views against the voxel size instead.
@@ -265,7 +265,7 @@ std::string planMarkdown(const ViewPlan& plan, const PlanProblem& problem)
         std::string viewList;
         for (const auto& id : ids) viewList += (viewList.empty() ? "" : " ") + id;
         const auto& drawn = l < problem.landmarks.size() ? problem.landmarks[l].drawingToleranceMm : std::nullopt;
-        s << "| " << a.id << " | " << toString(a.verdict) << " | " << num(drawn.value_or(a.toleranceMm)) << " | "
+        s << "| " << a.id << " | " << enumName(a.verdict) << " | " << num(drawn.value_or(a.toleranceMm)) << " | "
           << num(a.toleranceMm) << (drawn ? " (ΔV)" : "") << " | "
           << (a.witnessPoses.empty() ? "-" : num(a.bestMedMm, 3)) << " | " << (viewList.empty() ? "-" : viewList)
           << " | " << a.witnessPoses.size() << " | " << a.unseenVoids.size() << " |\n";

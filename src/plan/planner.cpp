@@ -17,29 +17,6 @@
 
 namespace hg::plan {
 
-const char* toString(LandmarkVerdict verdict)
-{
-    switch (verdict) {
-    case LandmarkVerdict::Inspectable:
-        return "inspectable";
-    case LandmarkVerdict::NoVoidNeighbour:
-        return "no_void_neighbour";
-    case LandmarkVerdict::Concavity:
-        return "concavity";
-    case LandmarkVerdict::OutOfFixtureRange:
-        return "out_of_fixture_range";
-    case LandmarkVerdict::OutsideDepthOfField:
-        return "outside_depth_of_field";
-    case LandmarkVerdict::BelowStationMed:
-        return "below_station_med";
-    case LandmarkVerdict::VoxelTooCoarse:
-        return "voxel_too_coarse";
-    case LandmarkVerdict::BestViewsFail:
-        return "best_views_fail";
-    }
-    return "?";
-}
-
 namespace {
 
 std::string fmt(double v, int precision = 3)
@@ -786,7 +763,7 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
     for (const auto& lm : problem.landmarks) {
         analysed.push_back(analyser.analyse(lm));
         const auto& a = analysed.back().a;
-        logger->debug("landmark {}: {} ({} witnesses)", a.id, toString(a.verdict), a.witnessPoses.size());
+        logger->debug("landmark {}: {} ({} witnesses)", a.id, enumName(a.verdict), a.witnessPoses.size());
         if (!a.inspectable()) plan.problems.push_back(a.reason);
     }
     // View pattern analysis (5.5): variations, AND-OR requirements, reduction, final views.

@@ -69,30 +69,13 @@ bool throughOwnMaterial(const Eigen::AlignedBox3d& voxel, const Vec3& origin, co
 
 } // namespace
 
-const char* toString(Blocker blocker)
-{
-    switch (blocker) {
-    case Blocker::None:
-        return "none";
-    case Blocker::OwnSurface:
-        return "own surface";
-    case Blocker::Part:
-        return "part";
-    case Blocker::Floor:
-        return "floor";
-    case Blocker::CameraBelowFloor:
-        return "camera below floor";
-    }
-    return "?";
-}
-
 std::string RuleCheck::failure() const
 {
     std::ostringstream s;
     if (!inFrame)
         s << "the landmark's neighbourhood is not wholly in the image";
     else if (!rule2) {
-        s << "Rule 2: the line of sight meets " << toString(obstruction);
+        s << "Rule 2: the line of sight meets " << enumName(obstruction);
         if (blockingTriangle)
             s << " (triangle " << *blockingTriangle << " at " << blockingPoint.x() << ", " << blockingPoint.y() << ", "
               << blockingPoint.z() << ")";

@@ -2,25 +2,6 @@
 
 namespace hg::station {
 
-std::string_view toString(LampPattern p)
-{
-    switch (p) {
-    case LampPattern::Off:
-        return "off";
-    case LampPattern::Busy:
-        return "busy";
-    case LampPattern::Pass:
-        return "pass";
-    case LampPattern::Fail:
-        return "fail";
-    case LampPattern::Fault:
-        return "fault";
-    case LampPattern::Reseat:
-        return "reseat";
-    }
-    return "off";
-}
-
 SequencerEvent moveEvent(StatusCode code)
 {
     switch (code) {

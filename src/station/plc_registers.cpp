@@ -13,36 +13,6 @@ std::uint16_t u16(auto v)
 
 } // namespace
 
-std::string_view toString(CyclePurpose p)
-{
-    switch (p) {
-    case CyclePurpose::Production:
-        return "production";
-    case CyclePurpose::Master:
-        return "master";
-    case CyclePurpose::Study:
-        return "study";
-    }
-    return "production";
-}
-
-std::string_view toString(ProgramState s)
-{
-    switch (s) {
-    case ProgramState::None:
-        return "none";
-    case ProgramState::Ready:
-        return "ready";
-    case ProgramState::Preparing:
-        return "preparing";
-    case ProgramState::UnknownProgram:
-        return "unknown program";
-    case ProgramState::LoadFailed:
-        return "load failed";
-    }
-    return "none";
-}
-
 std::uint32_t readU32(std::span<const std::uint16_t> regs, std::uint16_t address)
 {
     return (std::uint32_t{regs[address]} << 16) | regs[address + 1u];
@@ -52,13 +22,6 @@ PlcCounters readCounters(std::span<const std::uint16_t> regs)
 {
     return {readU32(regs, reg::TriggerCount), readU32(regs, reg::PassCount), readU32(regs, reg::FailCount),
             readU32(regs, reg::FaultCount), readU32(regs, reg::MissedCount)};
-}
-
-std::optional<CyclePurpose> parsePurpose(std::string_view name)
-{
-    for (auto p : {CyclePurpose::Production, CyclePurpose::Master, CyclePurpose::Study})
-        if (toString(p) == name) return p;
-    return std::nullopt;
 }
 
 bool validSerialByte(unsigned byte)

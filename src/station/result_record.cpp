@@ -6,21 +6,6 @@
 
 namespace hg::station {
 
-std::string_view toString(Verdict v)
-{
-    switch (v) {
-    case Verdict::Pass:
-        return "pass";
-    case Verdict::Fail:
-        return "fail";
-    case Verdict::Aborted:
-        return "aborted";
-    case Verdict::Error:
-        return "error";
-    }
-    return "error";
-}
-
 std::size_t InspectionRecord::landmarksFailed() const
 {
     return static_cast<std::size_t>(std::count_if(landmarks.begin(), landmarks.end(), [](auto& l) { return !l.ok(); }));

@@ -38,63 +38,6 @@ bool isBusy(SequencerState s)
     return s == S::Moving || s == S::Settling || s == S::Grabbing || s == S::Processing;
 }
 
-std::string_view toString(SequencerState s)
-{
-    constexpr std::array<std::string_view, 9> names{"starting",   "ready", "moving", "settling",   "grabbing",
-                                                    "processing", "done",  "fault",  "calibrating"};
-    return names[static_cast<std::size_t>(s)];
-}
-
-std::string_view toString(SequencerEvent e)
-{
-    constexpr std::array<std::string_view, 24> names{
-        "devices-active",  "devices-failed",    "trigger",         "in-position", "move-timeout",
-        "move-fault",      "move-comm-error",   "move-refused",    "settled",     "frame-ok",
-        "frame-timeout",   "frame-bad",         "frame-error",     "processed",   "processing-failed",
-        "not-seated",      "program-failed",    "abort",           "shutdown",    "recovered",
-        "recovery-failed", "calibration-start", "calibration-end", "fault-reset"};
-    return names[static_cast<std::size_t>(e)];
-}
-
-std::string_view toString(FaultCode c)
-{
-    switch (c) {
-    case FaultCode::None:
-        return "none";
-    case FaultCode::CameraTimeout:
-        return "camera-timeout";
-    case FaultCode::CameraBadFrame:
-        return "camera-bad-frame";
-    case FaultCode::CameraError:
-        return "camera-error";
-    case FaultCode::FixtureTimeout:
-        return "fixture-timeout";
-    case FaultCode::FixtureFault:
-        return "fixture-fault";
-    case FaultCode::FixtureCommunication:
-        return "fixture-communication";
-    case FaultCode::FixtureRefused:
-        return "fixture-refused";
-    case FaultCode::ProgramLoad:
-        return "program-load";
-    case FaultCode::InspectionError:
-        return "inspection-error";
-    case FaultCode::PartNotSeated:
-        return "part-not-seated";
-    case FaultCode::AbortedByPlc:
-        return "aborted-by-plc";
-    case FaultCode::AbortedByShutdown:
-        return "aborted-by-shutdown";
-    case FaultCode::ResultStore:
-        return "result-store";
-    case FaultCode::DevicesDown:
-        return "devices-down";
-    case FaultCode::Internal:
-        return "internal";
-    }
-    return "unknown";
-}
-
 std::string describe(FaultCode c, int retries)
 {
     // A step that failed after its retries says how many the cycle had (docs/plc.md, "Fault codes").

@@ -21,23 +21,9 @@ using nlohmann::json;
 
 ExportFormat parseExportFormat(std::string_view text)
 {
-    if (text == "aqdef") return ExportFormat::Aqdef;
-    if (text == "csv") return ExportFormat::Csv;
-    if (text == "json") return ExportFormat::Json;
-    throw InputError("", "format", "'" + std::string(text) + "' is not an export format (aqdef, csv, json)");
-}
-
-std::string_view toString(ExportFormat format)
-{
-    switch (format) {
-    case ExportFormat::Aqdef:
-        return "aqdef";
-    case ExportFormat::Csv:
-        return "csv";
-    case ExportFormat::Json:
-        return "json";
-    }
-    return "json";
+    if (auto format = parseEnum<ExportFormat>(text)) return *format;
+    throw InputError("", "format",
+                     "'" + std::string(text) + "' is not an export format (" + enumNameList<ExportFormat>() + ")");
 }
 
 std::string_view contentType(ExportFormat format)
@@ -208,8 +194,7 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows)
             const auto& e = *m.entry;
             auto cells = cycle;
             cells.insert(cells.end(),
-                         {m.id, m.status, csvNumber(m.value),
-                          m.value ? std::string(study::toString(m.source)) : std::string(),
+                         {m.id, m.status, csvNumber(m.value), m.value ? std::string(enumName(m.source)) : std::string(),
                           csvNumber(e.value("deviation_mm", json())), csvNumber(e.value("uncertainty_mm", json())),
                           csvNumber(e.value("error_mm", json())), csvNumber(json(m.zone.lower)),
                           csvNumber(json(m.zone.upper)), e.value("decision", std::string())});

@@ -60,7 +60,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         .bind(5, r.serial)
         .bind(6, r.program)
         .bind(7, r.part)
-        .bind(8, std::string(station::toString(r.verdict)))
+        .bind(8, std::string(enumName(r.verdict)))
         .bind(9, static_cast<int>(r.faultCode))
         .bind(10, r.cycleMs)
         .bind(11, static_cast<std::int64_t>(r.landmarksFailed()))
@@ -70,7 +70,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         .bind(15, imagesDir)
         .bind(16, dumpJson(r.alignment))
         .bind(17, dumpJson(r.simulation))
-        .bind(18, std::string(station::toString(r.purpose)))
+        .bind(18, std::string(enumName(r.purpose)))
         .bind(19, newCycleId());
     // The program's release: NULL and '' for a draft (docs/daemon.md, "Result store").
     if (r.programRelease)

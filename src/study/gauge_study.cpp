@@ -10,24 +10,6 @@
 
 namespace hg::study {
 
-std::string_view toString(ValueSource source)
-{
-    return source == ValueSource::Deviation ? "deviation_mm" : "error_mm";
-}
-
-std::string_view toString(Acceptance a)
-{
-    switch (a) {
-    case Acceptance::Acceptable:
-        return "acceptable";
-    case Acceptance::Conditional:
-        return "conditional";
-    case Acceptance::NotAcceptable:
-        return "not_acceptable";
-    }
-    return "not_acceptable";
-}
-
 namespace {
 
 std::string cycleName(const StudyRecord& r)
@@ -294,7 +276,7 @@ nlohmann::json toJson(const Type1Result& r)
 nlohmann::json toJson(const Type3Result& r)
 {
     auto acceptance = [](const std::optional<Acceptance>& a) {
-        return a ? nlohmann::json(std::string(toString(*a))) : nlohmann::json(nullptr);
+        return a ? nlohmann::json(std::string(enumName(*a))) : nlohmann::json(nullptr);
     };
     return {{"parts", r.parts},
             {"trials", r.trials},
@@ -313,7 +295,7 @@ nlohmann::json toJson(const Type3Result& r)
             {"ndc", optionalJson(r.ndc)},
             {"acceptance_variation", acceptance(r.acceptanceVariation)},
             {"acceptance_tolerance", acceptance(r.acceptanceTolerance)},
-            {"acceptance", std::string(toString(r.acceptance))}};
+            {"acceptance", std::string(enumName(r.acceptance))}};
 }
 
 } // namespace hg::study

@@ -16,19 +16,9 @@ namespace hg::study {
 
 RuleSet parseRuleSet(std::string_view text)
 {
-    if (text == "nelson") return RuleSet::Nelson;
-    if (text == "western_electric") return RuleSet::WesternElectric;
-    throw InputError("", "rules", "unknown rule set '" + std::string(text) + "': expected nelson or western_electric");
-}
-
-std::string_view toString(RuleSet rules)
-{
-    return rules == RuleSet::Nelson ? "nelson" : "western_electric";
-}
-
-std::string_view toString(Direction d)
-{
-    return d == Direction::Up ? "up" : "down";
+    if (const auto rules = parseEnum<RuleSet>(text)) return *rules;
+    throw InputError("", "rules",
+                     "unknown rule set '" + std::string(text) + "': expected " + enumNameList<RuleSet>(", ", " or "));
 }
 
 namespace {
@@ -311,8 +301,8 @@ nlohmann::json rulesJson(const SpcResult& r)
             {{"rule", v.rule},
              {"point", v.point},
              {"points", v.points},
-             {"direction", v.direction ? nlohmann::json(std::string(toString(*v.direction))) : nlohmann::json()}});
-    return {{"set", std::string(toString(r.rules))},
+             {"direction", v.direction ? nlohmann::json(std::string(enumName(*v.direction))) : nlohmann::json()}});
+    return {{"set", std::string(enumName(r.rules))},
             {"tested", r.tested},
             {"not_tested", r.notTested.empty() ? nlohmann::json() : nlohmann::json(r.notTested)},
             {"violations", violations}};
@@ -350,7 +340,7 @@ nlohmann::json toJson(const SpcResult& r)
     auto points = nlohmann::json::array();
     for (const auto& p : r.points) points.push_back(pointJson(p));
     nlohmann::json j{{"id", r.id},
-                     {"values", std::string(toString(r.source))},
+                     {"values", std::string(enumName(r.source))},
                      {"zone_mm", nlohmann::json::array({number(r.zone.lower), number(r.zone.upper)})},
                      {"n", r.n},
                      {"evaluated", r.evaluated},

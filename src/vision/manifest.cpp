@@ -262,11 +262,11 @@ class ManifestReader {
         SegmentationSettings s;
         if (j.contains("method")) {
             const std::string name = string(j["method"], at + ".method");
-            try {
-                s.method = parseSegmentationMethod(name);
-            } catch (const ArgumentError&) {
-                fail(at + ".method", "expected otsu, fixed or mask, found '" + name + "'");
-            }
+            const auto method = parseEnum<SegmentationMethod>(name);
+            if (!method)
+                fail(at + ".method",
+                     "expected " + enumNameList<SegmentationMethod>(", ", " or ") + ", found '" + name + "'");
+            s.method = *method;
         }
         if (j.contains("threshold")) {
             s.threshold = number(j["threshold"], at + ".threshold");
@@ -420,7 +420,7 @@ std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder
         views.push_back(std::move(j));
     }
     json seg;
-    seg["method"] = toString(manifest.segmentation.method);
+    seg["method"] = enumName(manifest.segmentation.method);
     if (manifest.segmentation.method == SegmentationMethod::Fixed) seg["threshold"] = manifest.segmentation.threshold;
     seg["object_is_dark"] = manifest.segmentation.objectIsDark;
     json root = {{"views", views}, {"segmentation", seg}};

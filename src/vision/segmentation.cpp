@@ -54,24 +54,9 @@ int otsuBin(const std::vector<double>& hist)
 
 SegmentationMethod parseSegmentationMethod(const std::string& name)
 {
-    if (name == "otsu") return SegmentationMethod::Otsu;
-    if (name == "fixed") return SegmentationMethod::Fixed;
-    if (name == "mask") return SegmentationMethod::Mask;
-    // The caller knows where the name came from and reports it there (docs/style.md point 4).
-    throw ArgumentError("unknown segmentation method '" + name + "' (expected otsu, fixed or mask)");
-}
-
-std::string toString(SegmentationMethod method)
-{
-    switch (method) {
-    case SegmentationMethod::Otsu:
-        return "otsu";
-    case SegmentationMethod::Fixed:
-        return "fixed";
-    case SegmentationMethod::Mask:
-        return "mask";
-    }
-    return "otsu";
+    if (const auto method = parseEnum<SegmentationMethod>(name)) return *method;
+    throw ArgumentError("unknown segmentation method '" + name + "' (expected " +
+                        enumNameList<SegmentationMethod>(", ", " or ") + ")");
 }
 
 SegmentationSettings parseSegmentation(const ConfigNode& node)
@@ -79,11 +64,10 @@ SegmentationSettings parseSegmentation(const ConfigNode& node)
     node.allowOnlyKeys({"method", "threshold", "object_is_dark"});
     SegmentationSettings s;
     if (auto n = node.optional("method")) {
-        try {
-            s.method = parseSegmentationMethod(n->asString());
-        } catch (const ArgumentError&) {
-            n->fail("expected otsu, fixed or mask, found '" + n->asString() + "'");
-        }
+        const auto method = parseEnum<SegmentationMethod>(n->asString());
+        if (!method)
+            n->fail("expected " + enumNameList<SegmentationMethod>(", ", " or ") + ", found '" + n->asString() + "'");
+        s.method = *method;
     }
     if (auto n = node.optional("threshold"))
         s.threshold = n->asDoubleIn(0.0, kMaxThreshold);

@@ -149,7 +149,7 @@ TEST_P(PublicPartCommissioning, IsReleasedAndPassesJudgedOnIndependentFrames)
     EXPECT_EQ(judged.nominalPassed, 20u);
     for (const LandmarkVerification& v : judged.landmarks) {
         for (const DefectTrial& t : v.defects)
-            EXPECT_TRUE(t.caught()) << v.id << ": " << toString(t.defect.kind) << " " << t.defect.depthMm << " mm";
+            EXPECT_TRUE(t.caught()) << v.id << ": " << hg::enumName(t.defect.kind) << " " << t.defect.depthMm << " mm";
         ASSERT_TRUE(v.measuredUMaxMm.has_value()) << v.id;
         EXPECT_LE(*v.measuredUMaxMm, 1.25 * v.predictedUMm) << v.id;
     }

@@ -68,7 +68,7 @@ TEST(Verification, TheSimulatedLinesProgramIsReleased)
     for (const LandmarkVerification& v : r.landmarks) {
         EXPECT_EQ(v.observableSeats, 4u) << v.id;
         ASSERT_EQ(v.defects.size(), 2u) << v.id;
-        for (const DefectTrial& t : v.defects) EXPECT_TRUE(t.caught()) << v.id << " " << toString(t.defect.kind);
+        for (const DefectTrial& t : v.defects) EXPECT_TRUE(t.caught()) << v.id << " " << hg::enumName(t.defect.kind);
         EXPECT_EQ(v.smallestCaughtMultiple, 2.0) << v.id;
     }
     const std::string md = toMarkdown(r);

@@ -8,6 +8,8 @@
 //   HG_FAKE_MOVE_FAIL      "timeout" | "fault" : every move fails so
 //   HG_FAKE_GRAB_FAIL      "timeout" | "bad"   : every grab fails so
 //   HG_FAKE_START_FAIL     "1": the devices never start
+//   HG_FAKE_CHECK_HOLD     a path: while that file exists, every program check
+//                          (start, --check, reload) waits (a reload the test holds)
 //   HG_FAKE_RELEASE        a version number: the program is released as that
 //                          version (verification digest 64 × 'a'); else a draft
 // The fake camera has two simulated parts (`hullgauge ctl sim-part`):
@@ -151,5 +153,9 @@ int main(int argc, char** argv)
             SimulationControl* simulation = devices.get();
             return StationHardware{std::move(devices), simulation};
         },
-        [](const hg::station::DaemonConfig&) { return std::make_unique<FakeInspector>(); });
+        [](const hg::station::DaemonConfig&) { return std::make_unique<FakeInspector>(); },
+        [](const hg::station::PartProgramRef&, const hg::geometry::Station&) {
+            if (auto hold = env("HG_FAKE_CHECK_HOLD"); !hold.empty())
+                while (std::filesystem::exists(hold)) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        });
 }

@@ -395,6 +395,55 @@ TEST(DaemonProcess, SighupWithABadConfigurationKeepsTheRunningOne)
     EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
 }
 
+// A reload reads the part programs on a worker of its own (docs/daemon.md, "Reload"): while the
+// test holds it, the watchdog is pinged, the maintenance socket and the PLC answer; then it applies.
+TEST(DaemonProcess, AReloadInProgressLeavesTheMainLoopServing)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    const auto hold = dir / "hold-the-check";
+    FakeNotifySocket notify(dir / "notify.sock");
+    auto config = hgdaemon::writeConfig(dir, port);
+    DaemonProcess daemon(config, {{"NOTIFY_SOCKET", (dir / "notify.sock").string()},
+                                  {"WATCHDOG_USEC", "400000"},
+                                  {"WATCHDOG_PID", "$PID"},
+                                  {"HG_FAKE_CHECK_HOLD", hold.string()}});
+    notify.collect(10s, [&] { return notify.seen("READY=1"); });
+    ASSERT_TRUE(notify.seen("READY=1")) << daemon.logText();
+
+    std::string withTwo = hgtest::run("cat " + config.string()).out;
+    withTwo.replace(withTwo.find("plc:"), 0, "  2: {part: part.yaml, views: views.yaml}\n");
+    hgtest::writeFile(config, withTwo);
+    hgtest::writeFile(hold, "held\n");
+    notify.messages.clear();
+    daemon.signal(SIGHUP);
+    notify.collect(10s, [&] { return notify.seen("RELOADING=1"); });
+    ASSERT_TRUE(notify.seen("RELOADING=1")) << daemon.logText();
+    // Held for three seconds, checked from the outside: the loop's answers and its pings.
+    const auto heldUntil = std::chrono::steady_clock::now() + 3s;
+    int answers = 0;
+    while (std::chrono::steady_clock::now() < heldUntil) {
+        auto status = hgdaemon::maintenance(dir / "hg.sock", {{"command", "status"}});
+        if (status.is_object() && status.value("ok", false)) ++answers;
+        notify.collect(200ms);
+    }
+    EXPECT_GE(answers, 3) << "the maintenance socket answered during the reload";
+    EXPECT_EQ(hgdaemon::plcClient(port, "read 109 1").status, 0) << "the PLC answered during the reload";
+    EXPECT_EQ(daemon.logText().find("configuration reloaded"), std::string::npos) << "the check is still held";
+    EXPECT_FALSE(notify.seen("READY=1")) << "READY comes once the reload is applied";
+    auto pings = notify.times("WATCHDOG=1");
+    ASSERT_GE(pings.size(), 2u) << daemon.logText();
+    for (std::size_t i = 1; i < pings.size(); ++i) EXPECT_LE(pings[i] - pings[i - 1], 2s) << "gap before ping " << i;
+
+    std::filesystem::remove(hold);
+    ASSERT_TRUE(eventually([&] { return daemon.logText().find("configuration reloaded") != std::string::npos; }))
+        << daemon.logText();
+    notify.collect(10s, [&] { return notify.seen("READY=1"); });
+    EXPECT_TRUE(notify.seen("READY=1"));
+    auto r = hgdaemon::plcClient(port, "cycles 1 --program 2 --bad-every 0");
+    EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
+}
+
 std::size_t occurrences(const std::string& text, const std::string& what)
 {
     std::size_t n = 0;

@@ -98,7 +98,7 @@ const std::vector<Row> kTable = {
 
 std::string name(const Row& r)
 {
-    return std::string(toString(r.t)) + " from " + std::string(toString(r.from));
+    return std::string(hg::enumName(r.t)) + " from " + std::string(hg::enumName(r.from));
 }
 
 /// Drives a fresh device into `state` with hooks that succeed (Failed: an erring activate).
@@ -128,8 +128,8 @@ TEST(Lifecycle, EveryTransitionFromEveryStateWithEveryHookAnswer)
             const hg::Status s = run(d, row.t);
             if (row.needs) {
                 EXPECT_EQ(s.code(), StatusCode::NotAllowed);
-                EXPECT_EQ(s.message(), "scripted: " + std::string(toString(row.t)) + " is not allowed while " +
-                                           std::string(toString(row.from)) + " (needs " + row.needs + ")");
+                EXPECT_EQ(s.message(), "scripted: " + std::string(hg::enumName(row.t)) + " is not allowed while " +
+                                           std::string(hg::enumName(row.from)) + " (needs " + row.needs + ")");
                 EXPECT_TRUE(d.calls.empty()) << "a refused transition runs no hook";
                 EXPECT_EQ(d.state(), row.from);
                 continue;
@@ -146,7 +146,7 @@ TEST(Lifecycle, EveryTransitionFromEveryStateWithEveryHookAnswer)
                     << "the hook's own status reaches the caller";
             }
             // A configure that fails releases what it half opened.
-            std::vector<std::string> hooks{std::string(toString(row.t))};
+            std::vector<std::string> hooks{std::string(hg::enumName(row.t))};
             if (row.t == T::Configure && answer == Answer::Failure) hooks.emplace_back("cleanup");
             EXPECT_EQ(d.calls, hooks);
         }

@@ -177,8 +177,8 @@ TEST(Decision, GuardedProvesConformanceAndNonconformanceBeyondU)
     // Simple acceptance: the value against the limits as it is.
     EXPECT_EQ(decide(0.045, 0.01, -0.05, 0.05, DecisionRule::Simple), Decision::Conforms);
     EXPECT_EQ(decide(0.055, 0.01, -0.05, 0.05, DecisionRule::Simple), Decision::Nonconforms);
-    EXPECT_STREQ(toString(Decision::Uncertain), "uncertain");
-    EXPECT_STREQ(toString(DecisionRule::Guarded), "guarded");
+    EXPECT_STREQ(hg::enumName(Decision::Uncertain).data(), "uncertain");
+    EXPECT_STREQ(hg::enumName(DecisionRule::Guarded).data(), "guarded");
 }
 
 // The post's four edges with a tolerance of `tolMm`, made with every edge `offsetMm` out.
@@ -202,7 +202,7 @@ TEST(Decision, TheDeviationDecidesWhereTheBracketCannot)
     InspectionResult r = postWith(0.05, 0.08, 11);
     EXPECT_FALSE(r.pass);
     for (const auto& l : r.landmarks) {
-        ASSERT_TRUE(l.decision) << l.id << " " << toString(l.status) << " " << l.reason;
+        ASSERT_TRUE(l.decision) << l.id << " " << hg::enumName(l.status) << " " << l.reason;
         EXPECT_EQ(*l.decision, Decision::Nonconforms) << l.id;
         EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
     }

@@ -44,7 +44,7 @@ Tally runRandomSets(const hgtest::TestPart& part, int sets, std::uint64_t seed)
                 ++t.notObservable;
             } else if (l.status != LandmarkStatus::Ok) {
                 ++t.falseRejects;
-                ADD_FAILURE() << part.name << " set " << s << ": " << l.id << " " << toString(l.status) << " error "
+                ADD_FAILURE() << part.name << " set " << s << ": " << l.id << " " << hg::enumName(l.status) << " error "
                               << l.errorMm << " [" << l.offsetLowMm << ", " << l.offsetHighMm << "] " << l.reason;
             }
             // The nominal surface (e = 0) is bracketed as docs/contracts.md §4 promises

@@ -558,7 +558,7 @@ void expectInspectedLikeTheCleanTwin(const TriangleMesh& clean, const TriangleMe
                 EXPECT_EQ(expected[i], inspect::LandmarkStatus::OutOfTolerance) << made->name << " " << id;
             else
                 EXPECT_EQ(expected[i], inspect::LandmarkStatus::Ok)
-                    << made->name << " " << id << ": " << inspect::toString(expected[i]);
+                    << made->name << " " << id << ": " << hg::enumName(expected[i]);
         }
     }
 }

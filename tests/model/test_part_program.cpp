@@ -315,9 +315,9 @@ TEST_F(PartProgramTest, AlignmentSectionIsOptionalWithSilhouetteWithinOneMillime
     EXPECT_EQ(d.correctPosesAfter, 0);
 
     EXPECT_EQ(loadPartProgram(write(kGood + "alignment:\n  method: none\n")).alignment.method, AlignmentMethod::None);
-    EXPECT_EQ(toString(AlignmentMethod::Silhouette), "silhouette");
-    EXPECT_EQ(toString(AlignmentMethod::Datums), "datums");
-    EXPECT_EQ(toString(AlignmentMethod::None), "none");
+    EXPECT_EQ(hg::enumName(AlignmentMethod::Silhouette), "silhouette");
+    EXPECT_EQ(hg::enumName(AlignmentMethod::Datums), "datums");
+    EXPECT_EQ(hg::enumName(AlignmentMethod::None), "none");
 }
 
 TEST_F(PartProgramTest, AlignmentSectionMistakesNameLineAndKey)

@@ -455,7 +455,7 @@ TEST(LandmarkSuggest, RefusedCandidatesNameTheRuleThatRemovedThem)
     for (LandmarkVerdict v :
          {LandmarkVerdict::NoVoidNeighbour, LandmarkVerdict::Concavity, LandmarkVerdict::OutOfFixtureRange,
           LandmarkVerdict::OutsideDepthOfField, LandmarkVerdict::BelowStationMed, LandmarkVerdict::VoxelTooCoarse})
-        verdicts.insert(toString(v));
+        verdicts.insert(std::string(hg::enumName(v)));
     for (const RefusedCandidate& r : s.refused) {
         EXPECT_NEAR(r.candidate.position.z(), 0.0, 1e-9) << r.candidate.feature;
         EXPECT_TRUE(verdicts.count(r.rule)) << r.rule;

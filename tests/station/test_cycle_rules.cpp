@@ -51,7 +51,7 @@ TEST(CycleRules, LampsFollowTheStateAndInDoneTheVerdict)
     EXPECT_EQ(lampPattern(S::Done, Verdict::Error, FaultCode::InspectionError), LampPattern::Off);
     EXPECT_EQ(lampPattern(S::Moving, Verdict::Error, FaultCode::PartNotSeated), LampPattern::Busy);
     EXPECT_EQ(lampPattern(S::Fault, Verdict::Error, FaultCode::PartNotSeated), LampPattern::Fault);
-    EXPECT_EQ(toString(LampPattern::Fault), "fault");
+    EXPECT_EQ(hg::enumName(LampPattern::Fault), "fault");
 }
 
 TEST(CycleRules, StatusRegisterForEachState)

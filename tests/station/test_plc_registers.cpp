@@ -320,9 +320,9 @@ TEST(PlcRegisterMap, CyclePurposeTakesProductionMasterStudyAndRefusesAnythingEls
     EXPECT_EQ(r.write(0, block), ModbusException::IllegalDataValue);
     EXPECT_FALSE(r.takeTrigger());
     EXPECT_EQ(readOne(r, 0), 0);
-    EXPECT_EQ(toString(CyclePurpose::Master), "master");
-    EXPECT_EQ(parsePurpose("study"), CyclePurpose::Study);
-    EXPECT_FALSE(parsePurpose("golden"));
+    EXPECT_EQ(hg::enumName(CyclePurpose::Master), "master");
+    EXPECT_EQ(hg::parseEnum<CyclePurpose>("study"), CyclePurpose::Study);
+    EXPECT_FALSE(hg::parseEnum<CyclePurpose>("golden"));
 }
 
 TEST(PlcRegisterMap, ThePurposeIsLatchedWithTheTriggerAndTheLastWriterWins)
@@ -579,7 +579,7 @@ TEST(PlcHandshake, AnUnknownProgramIsNotReadyAtOnceAndItsTriggerIsRefused)
     EXPECT_FALSE(r.takeChangeover());
     r.programPrepared(9, ProgramState::Ready); // a late report cannot make an unknown program ready
     EXPECT_EQ(readOne(r, 117), 3);
-    EXPECT_EQ(toString(ProgramState::LoadFailed), "load failed");
+    EXPECT_EQ(hg::enumName(ProgramState::LoadFailed), "load failed");
 }
 
 } // namespace

@@ -218,7 +218,7 @@ TEST(Sequencer, PartNotSeatedEndsTheCycleReadyForTheNextTrigger)
     EXPECT_EQ(s.state(), S::Done); // STATUS 2: the PLC re-seats and triggers again, no recovery
     EXPECT_EQ(s.faultCode(), FaultCode::PartNotSeated);
     EXPECT_EQ(static_cast<int>(FaultCode::PartNotSeated), 32);
-    EXPECT_EQ(toString(FaultCode::PartNotSeated), "part-not-seated");
+    EXPECT_EQ(hg::enumName(FaultCode::PartNotSeated), "part-not-seated");
     EXPECT_EQ(s.outcome(), CycleOutcome::Faulted);
     EXPECT_EQ(s.afterPublish().kind, A::None);
     EXPECT_EQ(s.trigger(1).kind, A::MoveTo);
@@ -261,9 +261,9 @@ TEST(Sequencer, FaultCodesHaveNamesAndStableNumbers)
     EXPECT_EQ(static_cast<int>(FaultCode::FixtureTimeout), 20);
     EXPECT_EQ(static_cast<int>(FaultCode::ProgramLoad), 30);
     EXPECT_EQ(static_cast<int>(FaultCode::AbortedByPlc), 40);
-    EXPECT_EQ(toString(FaultCode::FixtureFault), "fixture-fault");
-    EXPECT_EQ(toString(S::Grabbing), "grabbing");
-    EXPECT_EQ(toString(E::RecoveryFailed), "recovery-failed");
+    EXPECT_EQ(hg::enumName(FaultCode::FixtureFault), "fixture-fault");
+    EXPECT_EQ(hg::enumName(S::Grabbing), "grabbing");
+    EXPECT_EQ(hg::enumName(E::RecoveryFailed), "recovery-failed");
 }
 
 } // namespace
@@ -283,7 +283,7 @@ TEST(Sequencer, CalibrationRunsOnlyFromAnIdleStationAndReturnsToReady)
     EXPECT_FALSE(transitionAllowed(SequencerState::Calibrating, SequencerState::Moving)); // no trigger in between
     s.onEvent(SequencerEvent::CalibrationEnd);
     EXPECT_EQ(s.state(), SequencerState::Ready);
-    EXPECT_EQ(toString(SequencerState::Calibrating), "calibrating");
+    EXPECT_EQ(hg::enumName(SequencerState::Calibrating), "calibrating");
 
     CaptureSequencer busy = readySequencer();
     busy.trigger(2);
@@ -423,16 +423,16 @@ TEST(Sequencer, RulesStayInsideTheTable)
             auto copy = start;
             (void)copy.onEvent(static_cast<E>(e));
             EXPECT_NE(copy.faultCode(), FaultCode::Internal)
-                << toString(start.state()) << " + " << toString(static_cast<E>(e));
+                << hg::enumName(start.state()) << " + " << hg::enumName(static_cast<E>(e));
             // Three failures in a row exhaust the retry from any state.
             (void)copy.onEvent(static_cast<E>(e));
             (void)copy.onEvent(static_cast<E>(e));
             EXPECT_NE(copy.faultCode(), FaultCode::Internal)
-                << toString(start.state()) << " + 3 x " << toString(static_cast<E>(e));
+                << hg::enumName(start.state()) << " + 3 x " << hg::enumName(static_cast<E>(e));
         }
         auto copy = start;
         (void)copy.trigger(0);
-        EXPECT_NE(copy.faultCode(), FaultCode::Internal) << toString(start.state()) << " + trigger(0)";
+        EXPECT_NE(copy.faultCode(), FaultCode::Internal) << hg::enumName(start.state()) << " + trigger(0)";
     }
 }
 

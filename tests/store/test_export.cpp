@@ -57,7 +57,7 @@ TEST(ExportFormat, NamesTypesAndExtensions)
     EXPECT_EQ(hg::store::parseExportFormat("csv"), ExportFormat::Csv);
     EXPECT_EQ(hg::store::parseExportFormat("json"), ExportFormat::Json);
     for (auto f : {ExportFormat::Aqdef, ExportFormat::Csv, ExportFormat::Json})
-        EXPECT_EQ(hg::store::parseExportFormat(hg::store::toString(f)), f);
+        EXPECT_EQ(hg::store::parseExportFormat(hg::enumName(f)), f);
     EXPECT_EQ(hg::store::contentType(ExportFormat::Aqdef), "text/plain; charset=ISO-8859-1");
     EXPECT_EQ(hg::store::contentType(ExportFormat::Csv), "text/csv; charset=utf-8");
     EXPECT_EQ(hg::store::contentType(ExportFormat::Json), "application/json");

@@ -156,8 +156,8 @@ TEST(SpcRules, ParseAndName)
 {
     EXPECT_EQ(parseRuleSet("nelson"), RuleSet::Nelson);
     EXPECT_EQ(parseRuleSet("western_electric"), RuleSet::WesternElectric);
-    EXPECT_EQ(toString(RuleSet::Nelson), "nelson");
-    EXPECT_EQ(toString(RuleSet::WesternElectric), "western_electric");
+    EXPECT_EQ(hg::enumName(RuleSet::Nelson), "nelson");
+    EXPECT_EQ(hg::enumName(RuleSet::WesternElectric), "western_electric");
     try {
         parseRuleSet("foo");
         ADD_FAILURE() << "foo accepted";

@@ -382,7 +382,7 @@ void expectJudgedAgainstTruth(const hg::inspect::InspectionResult& r, const Test
         const double dv = (tip ? 2.0 : 1.0) * r.voxelSizeMm;
         const double e = asMade.offsetMm[i];
         const std::string where = asMade.name + " " + l.id + " (e = " + std::to_string(e) + " mm, status " +
-                                  hg::inspect::toString(l.status) + ", " + l.reason + ")";
+                                  std::string(hg::enumName(l.status)) + ", " + l.reason + ")";
         ASSERT_TRUE(l.measured) << where;
         EXPECT_LE(l.errorMinMm - dv, std::abs(e)) << where;
         EXPECT_GE(l.errorMaxMm + dv, std::abs(e)) << where;

@@ -960,7 +960,7 @@ class AravisCamera final : public Camera {
 
         arv_camera_set_pixel_format(camera, arvPixelFormat(s.pixelFormat), &error);
         if (error)
-            return Status::failure(where + "pixel format " + std::string(toString(s.pixelFormat)) +
+            return Status::failure(where + "pixel format " + std::string(enumName(s.pixelFormat)) +
                                    " refused: " + takeError(error));
 
         int x = s.roi.x, y = s.roi.y, w = s.roi.width, h = s.roi.height;
@@ -1095,7 +1095,7 @@ class AravisCamera final : public Camera {
             giveBack();
             std::ostringstream m;
             m << "camera " << config_.id() << ": frame " << id << " has pixel format 0x" << std::hex << pf << std::dec
-              << ", " << size << " bytes for " << w << "x" << h << " (expected " << toString(want) << ")";
+              << ", " << size << " bytes for " << w << "x" << h << " (expected " << enumName(want) << ")";
             Frame f = Frame::failed(FrameStatus::Error, m.str());
             f.frameId = id;
             return f;

@@ -116,15 +116,6 @@ struct SimConfig {
     SimulatedCameraFault fault = SimulatedCameraFault::None;
 };
 
-constexpr std::array<std::string_view, 5> kFaultNames{"none", "timeout", "incomplete", "dropped", "refuse_region"};
-
-std::optional<SimulatedCameraFault> faultFromString(std::string_view name)
-{
-    for (std::size_t i = 0; i < kFaultNames.size(); ++i)
-        if (kFaultNames[i] == name) return static_cast<SimulatedCameraFault>(i);
-    return std::nullopt;
-}
-
 /// Rows a frame with missing packets lacks: every fourth band of 8 rows reads 0.
 void dropPackets(cv::Mat& image)
 {
@@ -206,7 +197,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     {
         std::lock_guard lock(mutex_);
         fault_ = fault;
-        log::category("camera")->info("sim camera: fault switch {}", toString(fault));
+        log::category("camera")->info("sim camera: fault switch {}", enumName(fault));
     }
 
   protected:
@@ -277,7 +268,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
             if (fault == SimulatedCameraFault::Dropped) ++frameCount_;
             return Frame::failed(FrameStatus::Timeout, "sim camera: no frame within " +
                                                            std::to_string(timeout.count()) + " ms (fault switch " +
-                                                           std::string(toString(fault)) + ")");
+                                                           std::string(enumName(fault)) + ")");
         }
         const auto pose = source ? source() : std::optional<geometry::FixturePose>(geometry::FixturePose{});
         if (!pose)
@@ -368,9 +359,9 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         if (name == "Part") return part();
         if (name == "Fault") {
             std::lock_guard lock(mutex_);
-            return std::string(toString(fault_));
+            return std::string(enumName(fault_));
         }
-        if (name == "PixelFormat") return std::string(toString(settings().pixelFormat));
+        if (name == "PixelFormat") return std::string(enumName(settings().pixelFormat));
         if (name == "ExposureTime") return num(exposureUs_);
         if (name == "Gain") return num(gainDb_);
         const cv::Rect region = currentRegion();
@@ -387,12 +378,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     {
         if (name == "Part") return setPart(value);
         if (name == "Fault") {
-            auto fault = faultFromString(value);
+            auto fault = parseEnum<SimulatedCameraFault>(value);
             if (!fault)
-                return Status::failure(StatusCode::NotAllowed,
-                                       "sim camera: Fault is one of none, timeout, incomplete, dropped, "
-                                       "refuse_region; got '" +
-                                           value + "'");
+                return Status::failure(StatusCode::NotAllowed, "sim camera: Fault is one of " +
+                                                                   enumNameList<SimulatedCameraFault>() + "; got '" +
+                                                                   value + "'");
             injectFault(*fault);
             return Status::success();
         }
@@ -457,11 +447,6 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
 
 } // namespace
 
-std::string_view toString(SimulatedCameraFault fault)
-{
-    return kFaultNames[static_cast<std::size_t>(fault)];
-}
-
 std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment, Clock& clock)
 {
     const ConfigNode driver = root["camera"]["driver"];
@@ -482,13 +467,7 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
     if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
     if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
-    if (auto n = driver.optional("fault")) {
-        auto fault = faultFromString(n->asString());
-        if (!fault)
-            n->fail("unknown fault '" + n->asString() +
-                    "' (expected none, timeout, incomplete, dropped or refuse_region)");
-        c.fault = *fault;
-    }
+    if (auto n = driver.optional("fault")) c.fault = n->asEnum<SimulatedCameraFault>("fault");
     if (auto n = driver.optional("target")) {
         const bool taken =
             std::any_of(parts.begin(), parts.end(), [](const auto& p) { return p.first == kTargetPart; });

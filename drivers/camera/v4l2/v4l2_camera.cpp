@@ -450,7 +450,7 @@ class V4l2Camera final : public Camera {
             const auto fits = v4l2::candidateFourccs(s.pixelFormat);
             if (std::find(fits.begin(), fits.end(), *config_.deviceFormat) == fits.end())
                 return Status::failure(configPath() + ".device_format: " + v4l2::fourccName(*config_.deviceFormat) +
-                                       " cannot deliver " + std::string(toString(s.pixelFormat)));
+                                       " cannot deliver " + std::string(enumName(s.pixelFormat)));
             if (std::find(offered.begin(), offered.end(), *config_.deviceFormat) != offered.end())
                 chosen = config_.deviceFormat;
         } else {
@@ -465,7 +465,7 @@ class V4l2Camera final : public Camera {
             else
                 for (auto f : v4l2::candidateFourccs(s.pixelFormat))
                     want += (want.empty() ? "" : " or ") + v4l2::fourccName(f);
-            return Status::failure(where + std::string(toString(s.pixelFormat)) + " needs " + want +
+            return Status::failure(where + std::string(enumName(s.pixelFormat)) + " needs " + want +
                                    "; the device offers " + (list.empty() ? "nothing" : list));
         }
         v4l2_format fmt{};
@@ -614,7 +614,7 @@ std::unique_ptr<Camera> makeV4l2Camera(const ConfigNode& driver, Clock& clock)
             fits += (fits.empty() ? "" : " or ") + v4l2::fourccName(f);
         }
         if (!c.deviceFormat)
-            n->fail("'" + name + "' cannot deliver " + std::string(toString(s.pixelFormat)) + "; expected " + fits);
+            n->fail("'" + name + "' cannot deliver " + std::string(enumName(s.pixelFormat)) + "; expected " + fits);
     }
     if (s.gainDb) driver["gain_db"].fail("V4L2 gain has no unit; set the device's gain control under 'features'");
     return std::make_unique<V4l2Camera>(driver.path(), s, std::move(c), clock);

@@ -28,6 +28,7 @@
 // Pure computation on values (CGAL's corefinement through csg.h).
 #pragma once
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/model/mesh.h"
 
 #include <Eigen/Core>
@@ -37,7 +38,11 @@
 namespace hg::commission {
 
 enum class DefectKind { Added, Removed };
-const char* toString(DefectKind kind);
+constexpr auto nameTable(DefectKind)
+{
+    using enum DefectKind;
+    return std::to_array<EnumName<DefectKind>>({{Added, "added"}, {Removed, "removed"}});
+}
 
 struct SeededDefect {
     DefectKind kind = DefectKind::Removed;

@@ -40,7 +40,16 @@ namespace hg::commission {
 
 /// What a failure asks of the engineer; `--fix` applies DropLandmark.
 enum class Fix { DropLandmark, MoveLandmark, AddView, ChangeDepth, ChangeLens, WidenTolerance };
-const char* toString(Fix fix);
+constexpr auto nameTable(Fix)
+{
+    using enum Fix;
+    return std::to_array<EnumName<Fix>>({{DropLandmark, "drop_landmark"},
+                                         {MoveLandmark, "move_landmark"},
+                                         {AddView, "add_view"},
+                                         {ChangeDepth, "change_depth"},
+                                         {ChangeLens, "change_lens"},
+                                         {WidenTolerance, "widen_tolerance"}});
+}
 
 struct Finding {
     std::string subject; ///< the landmark's or the view's id

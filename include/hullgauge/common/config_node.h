@@ -15,6 +15,8 @@
 #include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg {
 
 class ConfigNode {
@@ -63,6 +65,14 @@ class ConfigNode {
     Eigen::Vector3d asVector3() const;
     /// A 3x3 matrix written as three rows of three numbers.
     Eigen::Matrix3d asMatrix3() const;
+    /// The enumerator the scalar names (common/enum_names.h); any other text
+    /// fails "unknown <what> '<text>' (expected a, b or c)".
+    template <class E> E asEnum(std::string_view what) const
+    {
+        const std::string text = asString();
+        if (const auto e = parseEnum<E>(text)) return *e;
+        fail("unknown " + std::string(what) + " '" + text + "' (expected " + enumNameList<E>(", ", " or ") + ")");
+    }
 
     /// Throws InputError if the map holds a key not in `allowed` (catches typos
     /// such as `tolerence_mm`, which would otherwise be silently ignored).

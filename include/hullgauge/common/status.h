@@ -11,6 +11,8 @@
 #include <string_view>
 #include <utility>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg {
 
 enum class StatusCode {
@@ -24,7 +26,18 @@ enum class StatusCode {
     Error,              ///< anything else
 };
 
-std::string_view toString(StatusCode code);
+constexpr auto nameTable(StatusCode)
+{
+    using enum StatusCode;
+    return std::to_array<EnumName<StatusCode>>({{Ok, "ok"},
+                                                {Timeout, "timeout"},
+                                                {Fault, "fault"},
+                                                {CommunicationError, "communication error"},
+                                                {IoError, "i/o error"},
+                                                {NotAllowed, "not allowed"},
+                                                {BadFrame, "bad frame"},
+                                                {Error, "error"}});
+}
 
 class [[nodiscard]] Status {
   public:

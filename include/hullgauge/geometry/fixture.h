@@ -16,11 +16,17 @@
 
 #include <string>
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/geometry/transform.h"
 
 namespace hg::geometry {
 
 enum class FixtureType { RotationDeclination, Rail };
+constexpr auto nameTable(FixtureType)
+{
+    using enum FixtureType;
+    return std::to_array<EnumName<FixtureType>>({{RotationDeclination, "rotation_declination"}, {Rail, "rail"}});
+}
 
 /// A commanded fixture position. A rotation/declination fixture uses the two
 /// angles (degrees), a rail uses `railMm`; the other fields stay zero.

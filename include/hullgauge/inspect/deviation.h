@@ -21,8 +21,10 @@
 
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/inspect/outcome.h"
 #include "hullgauge/inspect/voxel_frame.h"
 #include "hullgauge/inspect/voxel_test.h"
+#include "hullgauge/model/part_program.h"
 #include "hullgauge/model/solid.h"
 
 namespace hg::inspect {
@@ -94,14 +96,8 @@ struct Deviation {
     std::string reason; ///< why not measured
 };
 
-/// ISO 14253-1 decision rules (docs/inspection.md, "Decisions"): `guarded`
-/// — conformance must be proven: the deviation lies inside the limits by at
-/// least U, nonconformance when it lies outside by at least U, else
-/// uncertain; `simple` — the deviation against the limits, U ignored.
-enum class DecisionRule { Guarded, Simple };
-enum class Decision { Conforms, Nonconforms, Uncertain };
-const char* toString(DecisionRule rule);
-const char* toString(Decision decision);
+/// The part program's decision rule (model/part_program.h).
+using model::DecisionRule;
 /// The decision for a deviation with expanded uncertainty U against the
 /// limits [lower, upper] (lower < upper; mm, outward positive).
 Decision decide(double deviationMm, double uncertaintyMm, double lowerMm, double upperMm, DecisionRule rule);

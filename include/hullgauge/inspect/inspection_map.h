@@ -73,7 +73,7 @@ struct MapNode {
 /// centre skipped). Slot s and slot 25 - s are opposite.
 const std::array<Eigen::Vector3i, 26>& neighbourOffsets();
 
-/// The part program's parameter kinds (model::toString, model::parseParameterKind name them).
+/// The part program's parameter kinds (named by their table, model/part_program.h).
 using ParameterKind = model::ParameterKind;
 
 struct MapParameter {

@@ -33,16 +33,12 @@
 #include "hullgauge/inspect/deviation.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/inspect/measures.h"
+#include "hullgauge/inspect/outcome.h"
 #include "hullgauge/inspect/regions.h"
 #include "hullgauge/inspect/voxel_test.h"
 #include "hullgauge/vision/segmentation.h"
 
 namespace hg::inspect {
-
-/// Uncertain (extension): the deviation lies within its uncertainty of a
-/// limit, so the guarded decision rule cannot prove conformance (docs/inspection.md, "Decisions").
-enum class LandmarkStatus { Ok, OutOfTolerance, Overflow, NotFound, NotObservable, NotInspected, Uncertain };
-const char* toString(LandmarkStatus status);
 
 /// Run-time adaptation of the map (3.4) and the mode of the traversal.
 struct InspectionOptions {

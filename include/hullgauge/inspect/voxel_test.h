@@ -53,8 +53,6 @@ using Box3 = Eigen::AlignedBox3d;
 /// Result of a voxel reconstruction. `Unknown` means "not reconstructed yet".
 enum class VoxelLabel : std::uint8_t { Unknown = 0, Void = 1, Object = 2, Undecided = 3 };
 
-const char* toString(VoxelLabel label);
-
 /// Per-row prefix sums of a background indicator over rectangular regions of
 /// one frame. count(r, k) = Σ_{c<k} b(r, c); moment(r, k) = Σ_{c<k} b(r, c)·c
 /// (region-local columns), both exact integers.

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/model/mesh.h"
 
 namespace hg::model {
@@ -20,7 +21,11 @@ namespace hg::model {
 /// `mesh_repair` of a part program: repair and report (the default), or refuse
 /// a mesh that needed any repair, naming the defect.
 enum class MeshRepairMode { Repair, Strict };
-std::string toString(MeshRepairMode mode);
+constexpr auto nameTable(MeshRepairMode)
+{
+    using enum MeshRepairMode;
+    return std::to_array<EnumName<MeshRepairMode>>({{Repair, "repair"}, {Strict, "strict"}});
+}
 
 struct MeshRepairOptions {
     MeshRepairMode mode = MeshRepairMode::Repair;

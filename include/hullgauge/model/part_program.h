@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/model/mesh_repair.h"
 #include "hullgauge/model/solid.h"
@@ -64,10 +65,11 @@ struct Landmark {
 
 /// Inspection map files (.hgmap) store the kind as its value in one byte: keep the order.
 enum class ParameterKind : std::uint8_t { Distance, Perimeter, Area };
-/// "distance", "perimeter", "area".
-std::string toString(ParameterKind kind);
-/// The kind toString names; std::nullopt for any other name.
-std::optional<ParameterKind> parseParameterKind(const std::string& name);
+constexpr auto nameTable(ParameterKind)
+{
+    using enum ParameterKind;
+    return std::to_array<EnumName<ParameterKind>>({{Distance, "distance"}, {Perimeter, "perimeter"}, {Area, "area"}});
+}
 
 /// A geometric parameter (dissertation 4.6.4): a distance between two
 /// landmarks, or the perimeter or area of the closed polygon through 3 or more.
@@ -79,6 +81,18 @@ struct GeometricParameter {
     double nominalMm = 0.0;                   // mm, or mm² for an area
     double toleranceMm = 0.0;                 // mm, or mm² for an area
 };
+
+/// ISO 14253-1 decision rules (docs/inspection.md, "Decisions"): `guarded`
+/// — conformance must be proven: the deviation lies inside the limits by at
+/// least U, nonconformance when it lies outside by at least U, else
+/// uncertain; `simple` — the deviation against the limits, U ignored. The
+/// part program chooses one (`inspection.decision_rule`); inspect/deviation.h decides by it.
+enum class DecisionRule { Guarded, Simple };
+constexpr auto nameTable(DecisionRule)
+{
+    using enum DecisionRule;
+    return std::to_array<EnumName<DecisionRule>>({{Guarded, "guarded"}, {Simple, "simple"}});
+}
 
 /// How the part is inspected: the optional `inspection` section
 /// (docs/part-program.md), the run-time adaptation of the map (3.4). The daemon
@@ -104,7 +118,11 @@ struct InspectionSettings {
 /// `alignment` section (docs/part-program.md, docs/alignment.md). A part seated
 /// beyond either limit is not inspected: it is a seating fault.
 enum class AlignmentMethod { Silhouette, Datums, None };
-std::string toString(AlignmentMethod method);
+constexpr auto nameTable(AlignmentMethod)
+{
+    using enum AlignmentMethod;
+    return std::to_array<EnumName<AlignmentMethod>>({{Silhouette, "silhouette"}, {Datums, "datums"}, {None, "none"}});
+}
 
 struct AlignmentSettings {
     AlignmentMethod method = AlignmentMethod::Silhouette;

@@ -75,9 +75,11 @@ namespace hg::plan {
 /// The kind of feature a landmark lies on (3.3.1: a region, a corner, a hole).
 enum class FeatureKind { Face = 0, Edge = 1, Hole = 2 };
 inline constexpr std::size_t kFeatureKinds = 3;
-
-/// "face", "edge", "hole".
-const char* toString(FeatureKind kind);
+constexpr auto nameTable(FeatureKind)
+{
+    using enum FeatureKind;
+    return std::to_array<EnumName<FeatureKind>>({{Face, "face"}, {Edge, "edge"}, {Hole, "hole"}});
+}
 
 /// A point of the part that could be a landmark.
 struct LandmarkCandidate {
@@ -126,7 +128,7 @@ std::vector<SpreadPick> spreadSelect(const std::vector<Vec3>& points, const std:
                                      std::size_t count, const std::array<std::size_t, kFeatureKinds>& minimum = {});
 
 /// A chosen landmark refused (index into the chosen), the rule that refused
-/// it — a planner verdict (toString(LandmarkVerdict)), "not_observed",
+/// it — a planner verdict (its name in LandmarkVerdict's table), "not_observed",
 /// "capability" (over the nest's play), or the screen's own — and why, with the numbers.
 struct Refusal {
     std::size_t index = 0;

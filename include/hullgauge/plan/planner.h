@@ -92,8 +92,18 @@ enum class LandmarkVerdict {
     VoxelTooCoarse,      ///< tolerance below the map's voxel size (eq. 5.3.6-1)
     BestViewsFail,       ///< a designer AND term has no usable pose
 };
-
-const char* toString(LandmarkVerdict verdict);
+constexpr auto nameTable(LandmarkVerdict)
+{
+    using enum LandmarkVerdict;
+    return std::to_array<EnumName<LandmarkVerdict>>({{Inspectable, "inspectable"},
+                                                     {NoVoidNeighbour, "no_void_neighbour"},
+                                                     {Concavity, "concavity"},
+                                                     {OutOfFixtureRange, "out_of_fixture_range"},
+                                                     {OutsideDepthOfField, "outside_depth_of_field"},
+                                                     {BelowStationMed, "below_station_med"},
+                                                     {VoxelTooCoarse, "voxel_too_coarse"},
+                                                     {BestViewsFail, "best_views_fail"}});
+}
 
 struct LandmarkAnalysis {
     std::string id;

@@ -33,6 +33,7 @@
 // axis (the turntable under the part); beyond it the back light is seen.
 #pragma once
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/model/solid.h"
 
@@ -64,8 +65,15 @@ struct RuleOptions {
 
 /// What blocked a line of sight.
 enum class Blocker { None, OwnSurface, Part, Floor, CameraBelowFloor };
-
-const char* toString(Blocker blocker);
+constexpr auto nameTable(Blocker)
+{
+    using enum Blocker;
+    return std::to_array<EnumName<Blocker>>({{None, "none"},
+                                             {OwnSurface, "own surface"},
+                                             {Part, "part"},
+                                             {Floor, "floor"},
+                                             {CameraBelowFloor, "camera below floor"}});
+}
 
 /// A landmark as the rules see it: where it is, its voxel neighbourhood and
 /// its tolerance (= the MED Rule 3 asks for).

@@ -6,19 +6,12 @@
 #pragma once
 
 #include "hullgauge/common/status.h"
+#include "hullgauge/station/lamp_pattern.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/result_record.h"
 #include "hullgauge/station/sequencer.h"
 
-#include <string_view>
-
 namespace hg::station {
-
-/// Operator lamp patterns (docs/contracts.md §6): green pass, red fail, amber busy,
-/// red and amber blinking on fault; extension: amber blinking alone after a
-/// part not seated (FAULT_CODE 32: re-seat it, docs/plc.md).
-enum class LampPattern { Off, Busy, Pass, Fail, Fault, Reseat };
-std::string_view toString(LampPattern p);
 
 /// The event a move's status feeds to the sequencer.
 SequencerEvent moveEvent(StatusCode code);

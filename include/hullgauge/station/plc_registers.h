@@ -32,6 +32,8 @@
 #include <string_view>
 #include <vector>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg::station {
 
 /// Holding-register addresses (0-based), docs/contracts.md §6. Extensions beyond the
@@ -110,7 +112,15 @@ enum class PlcCommand : std::uint16_t { None = 0, Abort = 1, ResetFault = 2, Res
 /// PROGRAM_STATE register values (extension, docs/plc.md "Recipe changeover"):
 /// what the daemon made of ACTIVE_PROGRAM. Only Ready lets a PLC trigger at once.
 enum class ProgramState : std::uint16_t { None = 0, Ready = 1, Preparing = 2, UnknownProgram = 3, LoadFailed = 4 };
-std::string_view toString(ProgramState s);
+constexpr auto nameTable(ProgramState)
+{
+    using enum ProgramState;
+    return std::to_array<EnumName<ProgramState>>({{None, "none"},
+                                                  {Ready, "ready"},
+                                                  {Preparing, "preparing"},
+                                                  {UnknownProgram, "unknown program"},
+                                                  {LoadFailed, "load failed"}});
+}
 /// The counters registers (extension), u32 each, wrapping at 2^32. Only the
 /// PLC's triggers count (the maintenance socket's manual cycles never do), and
 /// between results TRIGGERS = PASSES + FAILS + FAULTS (+ 1 while a PLC trigger
@@ -130,9 +140,11 @@ PlcCounters readCounters(std::span<const std::uint16_t> regs);
 /// CYCLE_PURPOSE register values (extension, docs/study.md): what the cycles
 /// are for. Master and study cycles stay out of production statistics.
 enum class CyclePurpose : std::uint16_t { Production = 0, Master = 1, Study = 2 };
-std::string_view toString(CyclePurpose p);
-/// "production", "master" or "study"; nothing for any other name.
-std::optional<CyclePurpose> parsePurpose(std::string_view name);
+constexpr auto nameTable(CyclePurpose)
+{
+    using enum CyclePurpose;
+    return std::to_array<EnumName<CyclePurpose>>({{Production, "production"}, {Master, "master"}, {Study, "study"}});
+}
 /// The commands written to COMMAND and not taken yet: each is latched until
 /// taken, so an abort and a fault reset written back to back are both seen.
 struct PlcCommands {

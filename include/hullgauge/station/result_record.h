@@ -43,7 +43,11 @@ struct ProgramRelease {
 };
 
 enum class Verdict { Pass, Fail, Aborted, Error };
-std::string_view toString(Verdict v);
+constexpr auto nameTable(Verdict)
+{
+    using enum Verdict;
+    return std::to_array<EnumName<Verdict>>({{Pass, "pass"}, {Fail, "fail"}, {Aborted, "aborted"}, {Error, "error"}});
+}
 
 struct InspectionRecord {
     std::int64_t startedUnixMs = 0; ///< wall clock at trigger acceptance (ms since 1970, UTC)

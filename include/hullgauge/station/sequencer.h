@@ -36,11 +36,26 @@
 #include <string_view>
 #include <utility>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg::station {
 
 /// Calibrating: the live fixture calibration runs from the maintenance socket
 /// (production paused, PLC STATUS 5).
 enum class SequencerState { Starting, Ready, Moving, Settling, Grabbing, Processing, Done, Fault, Calibrating };
+constexpr auto nameTable(SequencerState)
+{
+    using enum SequencerState;
+    return std::to_array<EnumName<SequencerState>>({{Starting, "starting"},
+                                                    {Ready, "ready"},
+                                                    {Moving, "moving"},
+                                                    {Settling, "settling"},
+                                                    {Grabbing, "grabbing"},
+                                                    {Processing, "processing"},
+                                                    {Done, "done"},
+                                                    {Fault, "fault"},
+                                                    {Calibrating, "calibrating"}});
+}
 
 enum class SequencerEvent {
     DevicesActive,    ///< drivers configured and active (start, or after recovery)
@@ -68,6 +83,34 @@ enum class SequencerEvent {
     CalibrationEnd,   ///< the calibration sequence ended (solved, failed or cancelled)
     FaultReset,       ///< COMMAND = 2 from the PLC: retry the recovery now (in Fault only)
 };
+constexpr auto nameTable(SequencerEvent)
+{
+    using enum SequencerEvent;
+    return std::to_array<EnumName<SequencerEvent>>({{DevicesActive, "devices-active"},
+                                                    {DevicesFailed, "devices-failed"},
+                                                    {Trigger, "trigger"},
+                                                    {InPosition, "in-position"},
+                                                    {MoveTimeout, "move-timeout"},
+                                                    {MoveFault, "move-fault"},
+                                                    {MoveCommError, "move-comm-error"},
+                                                    {MoveRefused, "move-refused"},
+                                                    {Settled, "settled"},
+                                                    {FrameOk, "frame-ok"},
+                                                    {FrameTimeout, "frame-timeout"},
+                                                    {FrameBad, "frame-bad"},
+                                                    {FrameError, "frame-error"},
+                                                    {Processed, "processed"},
+                                                    {ProcessingFailed, "processing-failed"},
+                                                    {NotSeated, "not-seated"},
+                                                    {ProgramFailed, "program-failed"},
+                                                    {Abort, "abort"},
+                                                    {Shutdown, "shutdown"},
+                                                    {Recovered, "recovered"},
+                                                    {RecoveryFailed, "recovery-failed"},
+                                                    {CalibrationStart, "calibration-start"},
+                                                    {CalibrationEnd, "calibration-end"},
+                                                    {FaultReset, "fault-reset"}});
+}
 
 /// FAULT_CODE register values (docs/plc.md lists them for PLC programmers).
 /// 1x camera, 2x fixture, 3x part program / inspection, 4x daemon.
@@ -89,10 +132,27 @@ enum class FaultCode : std::uint16_t {
     DevicesDown = 43,          ///< drivers could not be started or recovered
     Internal = 44,             ///< unexpected internal error
 };
+constexpr auto nameTable(FaultCode)
+{
+    using enum FaultCode;
+    return std::to_array<EnumName<FaultCode>>({{None, "none"},
+                                               {CameraTimeout, "camera-timeout"},
+                                               {CameraBadFrame, "camera-bad-frame"},
+                                               {CameraError, "camera-error"},
+                                               {FixtureTimeout, "fixture-timeout"},
+                                               {FixtureFault, "fixture-fault"},
+                                               {FixtureCommunication, "fixture-communication"},
+                                               {FixtureRefused, "fixture-refused"},
+                                               {ProgramLoad, "program-load"},
+                                               {InspectionError, "inspection-error"},
+                                               {PartNotSeated, "part-not-seated"},
+                                               {AbortedByPlc, "aborted-by-plc"},
+                                               {AbortedByShutdown, "aborted-by-shutdown"},
+                                               {ResultStore, "result-store"},
+                                               {DevicesDown, "devices-down"},
+                                               {Internal, "internal"}});
+}
 
-std::string_view toString(SequencerState s);
-std::string_view toString(SequencerEvent e);
-std::string_view toString(FaultCode c);
 /// A sentence for operators ("the fixture did not reach position within the move
 /// timeout (after 2 retries)"); `retries`: the extra attempts the faulted cycle had.
 std::string describe(FaultCode c, int retries);

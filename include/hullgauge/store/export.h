@@ -19,14 +19,20 @@
 #include <string_view>
 #include <vector>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg::store {
 
 enum class ExportFormat { Aqdef, Csv, Json };
+constexpr auto nameTable(ExportFormat)
+{
+    using enum ExportFormat;
+    return std::to_array<EnumName<ExportFormat>>({{Aqdef, "aqdef"}, {Csv, "csv"}, {Json, "json"}});
+}
 
 /// "aqdef", "csv" or "json"; anything else is hg::InputError (field "format")
 /// naming the text and the formats there are.
 ExportFormat parseExportFormat(std::string_view text);
-std::string_view toString(ExportFormat format);
 /// The HTTP Content-Type of a download: text/plain; charset=ISO-8859-1 for
 /// AQDEF (8-bit text, docs/export.md), text/csv; charset=utf-8, application/json.
 std::string_view contentType(ExportFormat format);

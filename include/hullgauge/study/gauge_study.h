@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg::study {
 
 /// A landmark's tolerance zone in mm: `limits_mm: [lower, upper]` when the
@@ -40,7 +42,11 @@ enum class ValueSource {
     Deviation,     ///< `deviation_mm`, the signed sub-voxel deviation (every record had it)
     BracketMiddle, ///< `error_mm`, the middle of the voxel bracket: resolution one voxel
 };
-std::string_view toString(ValueSource source);
+constexpr auto nameTable(ValueSource)
+{
+    using enum ValueSource;
+    return std::to_array<EnumName<ValueSource>>({{Deviation, "deviation_mm"}, {BracketMiddle, "error_mm"}});
+}
 
 /// One cycle of the study as the result store holds it.
 struct StudyRecord {
@@ -98,7 +104,12 @@ struct Type1Result {
 Type1Result type1(const std::vector<double>& values, double tolerance, double reference, const Limits& limits = {});
 
 enum class Acceptance { Acceptable, Conditional, NotAcceptable };
-std::string_view toString(Acceptance a);
+constexpr auto nameTable(Acceptance)
+{
+    using enum Acceptance;
+    return std::to_array<EnumName<Acceptance>>(
+        {{Acceptable, "acceptable"}, {Conditional, "conditional"}, {NotAcceptable, "not_acceptable"}});
+}
 Acceptance grrAcceptance(double percent, const Limits& limits = {});
 
 /// Type-3 study of one landmark: p parts × r trials, one-way ANOVA (no operators).

@@ -23,9 +23,13 @@ inline constexpr double kD2 = 1.128;
 inline constexpr double kD4 = 3.267;
 
 enum class RuleSet { Nelson, WesternElectric };
+constexpr auto nameTable(RuleSet)
+{
+    using enum RuleSet;
+    return std::to_array<EnumName<RuleSet>>({{Nelson, "nelson"}, {WesternElectric, "western_electric"}});
+}
 /// "nelson" | "western_electric"; throws hg::InputError naming the text otherwise.
 RuleSet parseRuleSet(std::string_view text);
-std::string_view toString(RuleSet rules);
 
 struct SpcOptions {
     std::size_t baseline = 25; ///< values of the baseline window, at least 2
@@ -41,7 +45,11 @@ struct ControlLimits {
 
 /// Which side of the centre line a rule saw the points on.
 enum class Direction { Up, Down };
-std::string_view toString(Direction d);
+constexpr auto nameTable(Direction)
+{
+    using enum Direction;
+    return std::to_array<EnumName<Direction>>({{Up, "up"}, {Down, "down"}});
+}
 
 /// One completion of a run rule: the point that completes it and the points
 /// it involves (indices into the series, ascending).

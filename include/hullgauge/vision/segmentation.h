@@ -20,6 +20,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "hullgauge/common/enum_names.h"
+
 namespace hg {
 class ConfigNode;
 }
@@ -34,6 +36,11 @@ enum class SegmentationMethod {
     Fixed, ///< `threshold` as given
     Mask,  ///< the frames already are silhouettes: non-zero = object
 };
+constexpr auto nameTable(SegmentationMethod)
+{
+    using enum SegmentationMethod;
+    return std::to_array<EnumName<SegmentationMethod>>({{Otsu, "otsu"}, {Fixed, "fixed"}, {Mask, "mask"}});
+}
 
 struct SegmentationSettings {
     SegmentationMethod method = SegmentationMethod::Otsu;
@@ -48,7 +55,6 @@ struct SegmentationSettings {
 
 /// "otsu", "fixed", "mask"; throws ArgumentError for anything else.
 SegmentationMethod parseSegmentationMethod(const std::string& name);
-std::string toString(SegmentationMethod method);
 
 /// Largest `threshold` accepted in a file: the top grey level of a 16-bit frame.
 constexpr double kMaxThreshold = 65535.0;

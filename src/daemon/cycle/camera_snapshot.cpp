@@ -125,7 +125,7 @@ bool CameraSnapshot::run(const SnapshotJob& job, StationDevices& devices, const 
                        {"pose", job.pose ? geometry::toJson(*job.pose, cfg.station.fixture.type) : nullptr},
                        {"grab_ms", grabMs},
                        {"segmentation",
-                        {{"method", vision::toString(seg.method)},
+                        {{"method", enumName(seg.method)},
                          {"threshold", figures.threshold},
                          {"object_is_dark", seg.objectIsDark}}},
                        {"object_fraction", figures.objectFraction},

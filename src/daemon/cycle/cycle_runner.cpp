@@ -121,10 +121,8 @@ nlohmann::json CycleRunner::describe() const
     if (cycleStartNs_.load() != 0 && !station::isBusy(shown)) shown = SequencerState::Processing;
     auto last = lastCycle_;
     if (lastImagesMs_ && lastImagesMs_->load() >= 0) last["timing_ms"]["images"] = lastImagesMs_->load();
-    nlohmann::json j{{"state", std::string(station::toString(shown))},
-                     {"cycles", cycles_},
-                     {"faults", faults_},
-                     {"last_cycle", last}};
+    nlohmann::json j{
+        {"state", std::string(enumName(shown))}, {"cycles", cycles_}, {"faults", faults_}, {"last_cycle", last}};
     if (station::isBusy(sequencer_.state())) {
         j["view"] = sequencer_.view();
         j["views"] = sequencer_.viewCount();
@@ -150,11 +148,9 @@ SequencerAction CycleRunner::transition(const std::function<SequencerAction()>& 
     const auto before = sequencer_.state();
     const auto refusedBefore = sequencer_.refusedTransition();
     auto action = step();
-    if (sequencer_.state() != before)
-        log->debug("{} -> {}", station::toString(before), station::toString(sequencer_.state()));
+    if (sequencer_.state() != before) log->debug("{} -> {}", enumName(before), enumName(sequencer_.state()));
     if (auto refused = sequencer_.refusedTransition(); refused != refusedBefore)
-        log->error("the sequencer refused {} -> {}: internal fault", station::toString(refused.first),
-                   station::toString(refused.second));
+        log->error("the sequencer refused {} -> {}: internal fault", enumName(refused.first), enumName(refused.second));
     return action;
 }
 
@@ -288,7 +284,7 @@ void CycleRunner::prepareProgram(std::uint16_t number)
         noteLoaded(number);
         log->info("part program {} ready", number);
     } else {
-        log->error("part program {}: {}: {}", number, station::toString(state),
+        log->error("part program {}: {}: {}", number, enumName(state),
                    error.empty() ? "the part program could not be loaded" : error);
     }
 }
@@ -407,8 +403,7 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     const auto& r = cycle.record;
     log->info("cycle {}{}: program {}, serial '{}'{}", r.manual ? "manual" : "seq ",
               r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial,
-              r.purpose == station::CyclePurpose::Production ? std::string()
-                                                             : ", " + std::string(station::toString(r.purpose)));
+              r.purpose == station::CyclePurpose::Production ? std::string() : ", " + std::string(enumName(r.purpose)));
     devices_.showLamps(LampPattern::Busy);
     // The simulated line puts a new part in the nest, seated within its play.
     if (simulation_) simulation_->newPart();
@@ -448,7 +443,7 @@ std::optional<SequencerAction> CycleRunner::interruption(Cycle& cycle)
     if (!abort && !graceOver) return std::nullopt;
     cycle.interruptFed = true;
     const auto event = abort ? SequencerEvent::Abort : SequencerEvent::Shutdown;
-    hg::log::category("seq")->warn("{} during {}", station::toString(event), station::toString(state()));
+    hg::log::category("seq")->warn("{} during {}", enumName(event), enumName(state()));
     auto next = feed(event);
     if (next.kind == Kind::None) return std::nullopt; // processing: let it finish
     return next;
@@ -470,7 +465,7 @@ SequencerAction CycleRunner::perform(Cycle& cycle, const SequencerAction& action
     }
     // Nothing to perform: an event was ignored in a state that has no action. Cannot happen
     // with a consistent table; end the cycle as an internal error rather than spin.
-    hg::log::category("seq")->error("sequencer stalled in {}", station::toString(state()));
+    hg::log::category("seq")->error("sequencer stalled in {}", enumName(state()));
     auto next = feed(SequencerEvent::DevicesFailed);
     return next.kind == Kind::Publish ? next : SequencerAction{Kind::Publish, action.view, false, true};
 }
@@ -714,13 +709,13 @@ void CycleRunner::report(Cycle& cycle)
         lastCycle_ = {{"trigger_seq", record.triggerSeq},
                       {"serial", record.serial},
                       {"program", record.program},
-                      {"verdict", std::string(station::toString(record.verdict))},
+                      {"verdict", std::string(enumName(record.verdict))},
                       {"fault_code", static_cast<int>(record.faultCode)},
                       {"cycle_ms", record.cycleMs},
                       {"landmarks_failed", record.landmarksFailed()},
                       {"landmarks_total", record.landmarks.size()},
                       {"manual", record.manual},
-                      {"purpose", std::string(station::toString(record.purpose))},
+                      {"purpose", std::string(enumName(record.purpose))},
                       {"images_dir", cycle.imagesDir},
                       {"alignment", record.alignment},
                       {"timing_ms", timing},
@@ -731,8 +726,8 @@ void CycleRunner::report(Cycle& cycle)
     hg::log::category("seq")->info(
         "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
         "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
-        station::toString(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.moveMs,
-        cycle.settleMs, cycle.grabMs, cycle.outcome.prepareMs, cycle.finishMs, cycle.commitMs,
+        enumName(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.moveMs, cycle.settleMs,
+        cycle.grabMs, cycle.outcome.prepareMs, cycle.finishMs, cycle.commitMs,
         std::max(cycle.lastFrameToPublishMs, 0.0));
 }
 

@@ -10,7 +10,6 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <mutex>
 #include <random>
@@ -25,13 +24,6 @@ using drivers::LifecycleState;
 SimulatedSeat drawSeat(std::mt19937_64& rng, const station::DaemonConfig::Seating& play, const geometry::Vec3& c)
 {
     return {commission::drawSeat(rng, play.shiftMm, play.rotationDeg, c), c};
-}
-
-drivers::StationIndication indication(LampPattern p)
-{
-    using I = drivers::StationIndication;
-    constexpr std::array<I, 6> byPattern{I::Dark, I::Busy, I::Pass, I::Fail, I::Fault, I::Reseat}; // LampPattern order
-    return byPattern[static_cast<std::size_t>(p)];
 }
 
 class DriverDevices : public StationDevices, public SimulationControl {
@@ -172,15 +164,15 @@ class DriverDevices : public StationDevices, public SimulationControl {
 
     void showLamps(LampPattern pattern) override
     {
-        if (auto r = lamps_->show(indication(pattern)); !r.ok()) hg::log::category("daemon")->warn("{}", r.message());
+        if (auto r = lamps_->show(pattern); !r.ok()) hg::log::category("daemon")->warn("{}", r.message());
     }
 
     nlohmann::json lampStatus() const override
     {
         nlohmann::json j{{"backend", std::string(lamps_->backend())}};
         for (auto lamp : drivers::kAllLamps) {
-            auto name = std::string(drivers::toString(lamp));
-            j[name] = std::string(drivers::toString(lamps_->commanded(lamp)));
+            auto name = std::string(enumName(lamp));
+            j[name] = enumName(lamps_->commanded(lamp));
             // The simulated lines' levels: what an operator would see now (blink phase included).
             if (sim_.lamps) j["lit"][name] = sim_.lamps->lit(lamp);
         }

@@ -190,12 +190,12 @@ class EngineInspector : public Inspector {
             out.processingMs = prepared.prepareMs + result.totalMs;
             for (const auto& l : result.landmarks) {
                 station::LandmarkOutcome o{
-                    l.id, inspect::toString(l.status), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
+                    l.id, std::string(enumName(l.status)), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
                 if (l.deviation && l.deviation->measured) {
                     o.deviationMm = l.deviation->deviationMm;
                     o.uncertaintyMm = l.deviation->uncertaintyMm;
                 }
-                if (l.decision) o.decision = inspect::toString(*l.decision);
+                if (l.decision) o.decision = enumName(*l.decision);
                 o.limitsMm = l.limitsMm;
                 out.landmarks.push_back(std::move(o));
             }
@@ -273,7 +273,7 @@ class EngineInspector : public Inspector {
     std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result)
     {
         std::map<std::string, std::string> status;
-        for (const auto& l : result.landmarks) status[l.id] = inspect::toString(l.status);
+        for (const auto& l : result.landmarks) status[l.id] = enumName(l.status);
         std::vector<ViewEvidence> views = std::move(views_);
         // The archive's manifest keeps the nominal cameras (`hullgauge inspect` aligns again from
         // them); the landmarks are drawn where the seated part shows them.

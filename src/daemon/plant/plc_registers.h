@@ -32,7 +32,7 @@ class PlcRegisters {
         const auto before = map_.snapshot();
         auto written = map_.write(address, values);
         if (map_.purpose() != purpose)
-            hg::log::category("plc")->info("cycle purpose {} (PLC)", station::toString(map_.purpose()));
+            hg::log::category("plc")->info("cycle purpose {} (PLC)", enumName(map_.purpose()));
         if (written == station::ModbusException::None) logChanges(before, address, values);
         // An abort applies to the running cycle only (docs/plc.md): one written
         // while idle is dropped, so it cannot abort the next part.
@@ -154,7 +154,7 @@ class PlcRegisters {
         if (after[reg::ActiveProgram] != before[reg::ActiveProgram] ||
             after[reg::ProgramState] != before[reg::ProgramState])
             log->info("part program {}: {}", after[reg::ActiveProgram],
-                      station::toString(static_cast<station::ProgramState>(after[reg::ProgramState])));
+                      enumName(static_cast<station::ProgramState>(after[reg::ProgramState])));
         const auto command = static_cast<std::size_t>(reg::Command - address);
         if (address <= reg::Command && command < values.size() &&
             values[command] == static_cast<std::uint16_t>(station::PlcCommand::ResetCounters))

@@ -178,7 +178,7 @@ TEST_F(AravisGige, RoiAndWidePixelFormatsCarryTheServedPixels)
                 img(roi).convertTo(expected, hg::drivers::cvTypeOf(c.format), c.scale);
                 matched = matched || maxDifference(frame.image, expected) == 0.0;
             }
-            EXPECT_TRUE(matched) << toString(c.format) << " frame " << k;
+            EXPECT_TRUE(matched) << hg::enumName(c.format) << " frame " << k;
         }
         ASSERT_TRUE(cam->deactivate());
     }

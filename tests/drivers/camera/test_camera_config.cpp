@@ -222,10 +222,10 @@ TEST(CameraConfigRegions, EveryAnswerContainsTheRequestOnTheIncrementsInsideTheB
 
 TEST(CameraFrame, PixelFormatNames)
 {
-    EXPECT_EQ(hg::drivers::pixelFormatFromString("Mono16"), PixelFormat::Mono16);
-    EXPECT_FALSE(hg::drivers::pixelFormatFromString("mono8").has_value());
+    EXPECT_EQ(hg::parseEnum<PixelFormat>("Mono16"), PixelFormat::Mono16);
+    EXPECT_FALSE(hg::parseEnum<PixelFormat>("mono8").has_value());
     EXPECT_EQ(hg::drivers::cvTypeOf(PixelFormat::Mono12), CV_16UC1);
-    EXPECT_EQ(toString(FrameStatus::Incomplete), "incomplete");
+    EXPECT_EQ(hg::enumName(FrameStatus::Incomplete), "incomplete");
 }
 
 } // namespace

@@ -9,6 +9,7 @@
 #include "hullgauge/drivers/simulation.h"
 
 using namespace hg::drivers;
+using hg::station::LampPattern;
 using namespace std::chrono_literals;
 
 namespace {
@@ -113,7 +114,7 @@ TEST(Lamps, CyclicCallsNeedTheDriverActive)
     SimulationControls controls;
     auto lamps = makeLamps(section(kSim), &controls);
     ASSERT_NE(controls.lamps, nullptr);
-    EXPECT_EQ(lamps->show(StationIndication::Pass).code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(lamps->show(LampPattern::Pass).code(), hg::StatusCode::NotAllowed);
     EXPECT_EQ(lamps->activate().code(), hg::StatusCode::NotAllowed);
     ASSERT_TRUE(lamps->configure().ok());
     EXPECT_TRUE(controls.lamps->linesRequested());
@@ -131,27 +132,26 @@ TEST(Lamps, StationIndicationsFollowContracts)
 {
     SteppedLamps l;
     struct Case {
-        StationIndication what;
+        LampPattern what;
         bool green, amber, red;
     };
-    for (auto c :
-         {Case{StationIndication::Pass, true, false, false}, Case{StationIndication::Fail, false, false, true},
-          Case{StationIndication::Busy, false, true, false}, Case{StationIndication::Dark, false, false, false}}) {
+    for (auto c : {Case{LampPattern::Pass, true, false, false}, Case{LampPattern::Fail, false, false, true},
+                   Case{LampPattern::Busy, false, true, false}, Case{LampPattern::Off, false, false, false}}) {
         ASSERT_TRUE(l.lamps->show(c.what).ok());
-        EXPECT_EQ(l.sim.lit(Lamp::Green), c.green) << toString(c.what);
-        EXPECT_EQ(l.sim.lit(Lamp::Amber), c.amber) << toString(c.what);
-        EXPECT_EQ(l.sim.lit(Lamp::Red), c.red) << toString(c.what);
+        EXPECT_EQ(l.sim.lit(Lamp::Green), c.green) << hg::enumName(c.what);
+        EXPECT_EQ(l.sim.lit(Lamp::Amber), c.amber) << hg::enumName(c.what);
+        EXPECT_EQ(l.sim.lit(Lamp::Red), c.red) << hg::enumName(c.what);
     }
-    ASSERT_TRUE(l.lamps->show(StationIndication::Fault).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Fault).ok());
     EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Blinking);
     EXPECT_EQ(l.lamps->commanded(Lamp::Amber), LampState::Blinking);
     EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
     // Re-seat the part: amber blinks alone.
-    ASSERT_TRUE(l.lamps->show(StationIndication::Reseat).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Reseat).ok());
     EXPECT_EQ(l.lamps->commanded(Lamp::Amber), LampState::Blinking);
     EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Off);
     EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
-    EXPECT_EQ(toString(StationIndication::Reseat), "reseat");
+    EXPECT_EQ(hg::enumName(LampPattern::Reseat), "reseat");
 }
 
 TEST(Lamps, ActiveLowLinesAreInverted)
@@ -161,7 +161,7 @@ TEST(Lamps, ActiveLowLinesAreInverted)
     EXPECT_FALSE(l.sim.lit(Lamp::Red));
     EXPECT_TRUE(l.sim.lineLevel(Lamp::Red));
     EXPECT_FALSE(l.sim.lineLevel(Lamp::Green));
-    ASSERT_TRUE(l.lamps->show(StationIndication::Fail).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Fail).ok());
     EXPECT_TRUE(l.sim.lit(Lamp::Red));
     EXPECT_FALSE(l.sim.lineLevel(Lamp::Red));
 }
@@ -169,7 +169,7 @@ TEST(Lamps, ActiveLowLinesAreInverted)
 TEST(Lamps, FaultBlinksRedAndAmberTogetherAtTheConfiguredPeriod)
 {
     SteppedLamps l; // blink period 100 ms: lit for [0, 50) ms, dark for [50, 100) ms
-    ASSERT_TRUE(l.lamps->show(StationIndication::Fault).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Fault).ok());
     auto both = [&](bool lit) {
         return l.sim.lit(Lamp::Red) == lit && l.sim.lit(Lamp::Amber) == lit && !l.sim.lit(Lamp::Green);
     };
@@ -189,7 +189,7 @@ TEST(Lamps, FaultBlinksRedAndAmberTogetherAtTheConfiguredPeriod)
     EXPECT_EQ(l.sim.transitions(), writes + 3);
 
     // Leaving the fault stops the blinking at once.
-    ASSERT_TRUE(l.lamps->show(StationIndication::Busy).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Busy).ok());
     const auto after = l.sim.transitions();
     for (int i = 0; i < 10; ++i) l.after(std::chrono::milliseconds(25));
     EXPECT_EQ(l.sim.transitions(), after);
@@ -218,7 +218,7 @@ TEST(Lamps, TheTimerThreadBlinksOnTheSteadyClock)
     auto lamps = makeLamps(section(kSim), &controls); // the driver's own timer
     ASSERT_TRUE(lamps->configure().ok());
     ASSERT_TRUE(lamps->activate().ok());
-    ASSERT_TRUE(lamps->show(StationIndication::Fault).ok());
+    ASSERT_TRUE(lamps->show(LampPattern::Fault).ok());
     // Only that it blinks at all (the pattern is checked on a stepped clock
     // above): polled under a generous deadline, never early, never a sleep.
     const auto writes = controls.lamps->transitions();
@@ -247,18 +247,18 @@ TEST(Lamps, WriteFailureFailsTheDriverAndCleanupRecovers)
 {
     SteppedLamps l;
     l.sim.injectWriteFailure(true);
-    auto r = l.lamps->show(StationIndication::Pass);
+    auto r = l.lamps->show(LampPattern::Pass);
     EXPECT_EQ(r.code(), hg::StatusCode::IoError);
     EXPECT_NE(r.message().find("lamps"), std::string::npos);
     EXPECT_EQ(l.lamps->state(), LifecycleState::Failed);
-    EXPECT_EQ(l.lamps->show(StationIndication::Pass).code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(l.lamps->show(LampPattern::Pass).code(), hg::StatusCode::NotAllowed);
     ASSERT_TRUE(l.lamps->cleanup().ok());
     EXPECT_EQ(l.lamps->configure().code(), hg::StatusCode::IoError); // still unplugged
     EXPECT_EQ(l.lamps->state(), LifecycleState::Unconfigured);
     l.sim.injectWriteFailure(false);
     ASSERT_TRUE(l.lamps->configure().ok());
     ASSERT_TRUE(l.lamps->activate().ok());
-    ASSERT_TRUE(l.lamps->show(StationIndication::Pass).ok());
+    ASSERT_TRUE(l.lamps->show(LampPattern::Pass).ok());
     EXPECT_TRUE(l.sim.lit(Lamp::Green));
 }
 
@@ -271,7 +271,7 @@ TEST(GpiodLamps, MissingChipFailsConfigureNamingTheKey)
     EXPECT_NE(r.message().find("lamps.chip: cannot open GPIO chip 'hg-no-such-chip'"), std::string::npos)
         << r.message();
     EXPECT_EQ(lamps->state(), LifecycleState::Unconfigured);
-    EXPECT_EQ(lamps->show(StationIndication::Fault).code(), hg::StatusCode::NotAllowed);
+    EXPECT_EQ(lamps->show(LampPattern::Fault).code(), hg::StatusCode::NotAllowed);
 }
 
 TEST(GpiodLamps, UnknownLineNameFailsConfigureNamingTheLamp)

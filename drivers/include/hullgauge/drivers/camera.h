@@ -39,12 +39,18 @@ namespace hg::drivers {
 /// Pixel formats of the station (PFNC names). Mono12 is delivered unpacked:
 /// 12 significant bits in the low bits of a 16-bit word (CV_16UC1).
 enum class PixelFormat { Mono8, Mono12, Mono16 };
+constexpr auto nameTable(PixelFormat)
+{
+    using enum PixelFormat;
+    return std::to_array<EnumName<PixelFormat>>({{Mono8, "Mono8"}, {Mono12, "Mono12"}, {Mono16, "Mono16"}});
+}
 enum class TriggerMode { Software, FreeRun };
+constexpr auto nameTable(TriggerMode)
+{
+    using enum TriggerMode;
+    return std::to_array<EnumName<TriggerMode>>({{Software, "software"}, {FreeRun, "free_run"}});
+}
 
-std::string_view toString(PixelFormat f);
-std::string_view toString(TriggerMode t);
-/// "Mono8" -> PixelFormat::Mono8; std::nullopt for anything else.
-std::optional<PixelFormat> pixelFormatFromString(std::string_view name);
 /// OpenCV element type of a frame in this format (CV_8UC1 or CV_16UC1).
 int cvTypeOf(PixelFormat f);
 
@@ -100,7 +106,12 @@ enum class FrameStatus {
     Incomplete, ///< a frame arrived but with missing packets / wrong size; pixels unreliable
     Error,      ///< the driver could not grab (wrong state, device lost and not yet back)
 };
-std::string_view toString(FrameStatus s);
+constexpr auto nameTable(FrameStatus)
+{
+    using enum FrameStatus;
+    return std::to_array<EnumName<FrameStatus>>(
+        {{Ok, "ok"}, {Timeout, "timeout"}, {Incomplete, "incomplete"}, {Error, "error"}});
+}
 
 /// One grabbed frame. `image` is a view of the driver's buffer (no copy); the
 /// buffer goes back to the pool on release() or destruction. Move-only.

@@ -36,27 +36,25 @@
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/worker.h"
 #include "hullgauge/drivers/lifecycle.h"
+#include "hullgauge/station/lamp_pattern.h"
 
 namespace hg::drivers {
 
+/// A lamp; its name is its key in the `lamps` section.
 enum class Lamp { Green = 0, Amber = 1, Red = 2 };
+constexpr auto nameTable(Lamp)
+{
+    using enum Lamp;
+    return std::to_array<EnumName<Lamp>>({{Green, "green"}, {Amber, "amber"}, {Red, "red"}});
+}
 inline constexpr std::array<Lamp, 3> kAllLamps{Lamp::Green, Lamp::Amber, Lamp::Red};
 
 enum class LampState { Off, On, Blinking };
-
-/// What the station shows the operator (docs/contracts.md §6).
-enum class StationIndication {
-    Dark,   ///< every lamp off
-    Pass,   ///< green
-    Fail,   ///< red
-    Busy,   ///< amber
-    Fault,  ///< red and amber blinking
-    Reseat, ///< amber blinking alone: the part is not seated, re-seat it (extension)
-};
-
-std::string_view toString(Lamp lamp);
-std::string_view toString(LampState state);
-std::string_view toString(StationIndication indication);
+constexpr auto nameTable(LampState)
+{
+    using enum LampState;
+    return std::to_array<EnumName<LampState>>({{Off, "off"}, {On, "on"}, {Blinking, "blinking"}});
+}
 
 /// Where one lamp is wired: a GPIO line by name or by offset on the chip.
 struct LampLine {
@@ -86,8 +84,8 @@ struct LampsConfig {
     static LampsConfig parse(const ConfigNode& section);
 };
 
-/// The lamp states that show `indication` (indexed by Lamp).
-std::array<LampState, 3> lampStatesFor(StationIndication indication);
+/// The lamp states that show `pattern` (indexed by Lamp).
+std::array<LampState, 3> lampStatesFor(station::LampPattern pattern);
 
 class Lamps : public Device {
   public:
@@ -95,8 +93,8 @@ class Lamps : public Device {
 
     /// Sets one lamp (Active only).
     Status set(Lamp lamp, LampState state);
-    /// Sets all three lamps at once to show `indication` (Active only).
-    Status show(StationIndication indication);
+    /// Sets all three lamps at once to show `pattern` (Active only).
+    Status show(station::LampPattern pattern);
     /// The commanded state of a lamp.
     LampState commanded(Lamp lamp) const;
     /// Drives the blinking lamps to their phase at the clock's now (a write

@@ -26,11 +26,20 @@
 namespace hg::drivers {
 
 enum class LifecycleState { Unconfigured, Inactive, Active, Failed };
+constexpr auto nameTable(LifecycleState)
+{
+    using enum LifecycleState;
+    return std::to_array<EnumName<LifecycleState>>(
+        {{Unconfigured, "unconfigured"}, {Inactive, "inactive"}, {Active, "active"}, {Failed, "failed"}});
+}
 
 enum class Transition { Configure, Activate, Deactivate, Cleanup };
-
-std::string_view toString(LifecycleState s);
-std::string_view toString(Transition t);
+constexpr auto nameTable(Transition)
+{
+    using enum Transition;
+    return std::to_array<EnumName<Transition>>(
+        {{Configure, "configure"}, {Activate, "activate"}, {Deactivate, "deactivate"}, {Cleanup, "cleanup"}});
+}
 
 /// The transition table: where `t` may start from (cleanup: Inactive or Failed).
 constexpr bool allowed(LifecycleState from, Transition t)

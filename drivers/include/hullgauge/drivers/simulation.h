@@ -25,7 +25,15 @@ enum class SimulatedCameraFault {
     Dropped,      ///< the next frame is lost: that grab times out, the frame counter skips it (one-shot)
     RefuseRegion, ///< OffsetX/Y, Width/Height not writable: a region request falls back to whole frames
 };
-std::string_view toString(SimulatedCameraFault fault);
+constexpr auto nameTable(SimulatedCameraFault)
+{
+    using enum SimulatedCameraFault;
+    return std::to_array<EnumName<SimulatedCameraFault>>({{None, "none"},
+                                                          {Timeout, "timeout"},
+                                                          {Incomplete, "incomplete"},
+                                                          {Dropped, "dropped"},
+                                                          {RefuseRegion, "refuse_region"}});
+}
 
 /// The simulated camera's controls.
 class SimCameraControl {

@@ -1,0 +1,30 @@
+// What the station shows the operator on its three lamps (docs/contracts.md
+// §6, docs/lamps.md): the cycle rules choose the pattern for the sequencer's
+// state, the lamps driver lights it. One type for both, so the driver needs
+// no translation of its own.
+#pragma once
+
+#include "hullgauge/common/enum_names.h"
+
+namespace hg::station {
+
+/// Green pass, red fail, amber busy, red and amber blinking on fault;
+/// extension: amber blinking alone after a part not seated (FAULT_CODE 32:
+/// re-seat it, docs/plc.md).
+enum class LampPattern {
+    Off,    ///< every lamp off
+    Busy,   ///< amber
+    Pass,   ///< green
+    Fail,   ///< red
+    Fault,  ///< red and amber blinking
+    Reseat, ///< amber blinking alone: the part is not seated, re-seat it
+};
+
+constexpr auto nameTable(LampPattern)
+{
+    using enum LampPattern;
+    return std::to_array<EnumName<LampPattern>>(
+        {{Off, "off"}, {Busy, "busy"}, {Pass, "pass"}, {Fail, "fail"}, {Fault, "fault"}, {Reseat, "reseat"}});
+}
+
+} // namespace hg::station

@@ -48,10 +48,10 @@ class ConfigReload {
     int fd_ = -1;
     mutable std::mutex mutex_;
     std::condition_variable wake_;
-    std::optional<std::filesystem::path> wanted_;  ///< a reload asked for and not yet started
-    bool running_ = false;                         ///< a reload is being read
-    std::optional<Result<ConfigPtr>> finished_;    ///< read, not yet taken
-    Worker worker_;                                ///< last: it ends before what it uses
+    std::optional<std::filesystem::path> wanted_; ///< a reload asked for and not yet started
+    bool running_ = false;                        ///< a reload is being read
+    std::optional<Result<ConfigPtr>> finished_;   ///< read, not yet taken
+    Worker worker_;                               ///< last: it ends before what it uses
 };
 
 } // namespace hg::daemon

@@ -76,7 +76,7 @@ void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& r
     if (auto n = node.optional("save_failed_images")) results.saveFailedImages = n->asBool();
     if (auto n = node.optional("archive_all")) results.archiveAll = n->asBool();
     if (auto r = node.optional("retention")) {
-        r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes", "keep_failed"});
+        r->allowOnlyKeys({"max_count", "max_age_days", "max_bytes", "keep_failed", "min_free_mb"});
         if (auto n = r->optional("keep_failed"))
             results.retention.keepFailed = static_cast<std::size_t>(n->asIntIn(0, 100'000));
         if (auto n = r->optional("max_count"))
@@ -85,6 +85,8 @@ void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& r
             results.retention.maxAge = std::chrono::hours(std::llround(n->asDoubleIn(0.0, 36500.0) * 24.0));
         if (auto n = r->optional("max_bytes"))
             results.retention.maxBytes = static_cast<std::uint64_t>(n->asDoubleIn(0.0, 1e15));
+        if (auto n = r->optional("min_free_mb"))
+            results.retention.minFreeBytes = static_cast<std::uint64_t>(n->asDoubleIn(0.0, 1e9) * 1024.0 * 1024.0);
     }
 }
 

@@ -74,6 +74,10 @@ struct RetentionConfig {
     std::size_t keepFailed = 50;
     std::chrono::hours maxAge{24 * 30};  ///< older image sets are removed
     std::uint64_t maxBytes = 2ull << 30; ///< total size of the archive folder
+    /// Free space the archive leaves on its volume (the result store's too when it shares it):
+    /// the oldest folders give way, failed ones too, and a part's images are not kept while
+    /// less is free, so the verdict and its record always find room (docs/daemon.md).
+    std::uint64_t minFreeBytes = 1ull << 30;
 };
 
 struct ResultsConfig {

@@ -69,9 +69,10 @@ def encode_serial(text):
 class Line:
     """tools/simline in a work folder of its own, stopped (and killed if need be) at the end."""
 
-    def __init__(self, args, extra_config=()):
+    def __init__(self, args, extra_config=(), results_dir=None, extra_args=(), env=None):
         self.args = args
         self.workdir = Path(tempfile.mkdtemp(prefix="hg-robust-"))
+        self.results = Path(results_dir) if results_dir else self.workdir
         self.plc_port = free_port()
         self.out = open(self.workdir / "simline.out", "w")
         configs = []
@@ -79,8 +80,10 @@ class Line:
             configs += ["--config", str(c)]
         self.proc = subprocess.Popen(
             [str(args.source / "tools" / "simline"), "--bin", str(args.bin), "--workdir", str(self.workdir),
-             "--plc-port", str(self.plc_port), "--fixture-port", "0", *configs],
-            stdout=self.out, stderr=subprocess.STDOUT, start_new_session=True, preexec_fn=die_with_parent)
+             "--plc-port", str(self.plc_port), "--fixture-port", "0", "--results", str(self.results), *configs,
+             *extra_args],
+            stdout=self.out, stderr=subprocess.STDOUT, start_new_session=True, preexec_fn=die_with_parent,
+            env={**os.environ, **(env or {})})
         deadline = time.monotonic() + 90
         while not (self.workdir / "simline.ready").exists():
             if self.proc.poll() is not None:
@@ -107,7 +110,7 @@ class Line:
         return 0
 
     def stored_rows(self):
-        db = sqlite3.connect(f"file:{self.workdir / 'results.db'}?mode=ro", uri=True)
+        db = sqlite3.connect(f"file:{self.results / 'results.db'}?mode=ro", uri=True)
         try:
             return db.execute("SELECT trigger_seq, verdict FROM inspections WHERE manual = 0 ORDER BY id").fetchall()
         finally:
@@ -488,6 +491,276 @@ SCENARIOS = {
     "stale_abort": scenario_stale_abort,
     "maintenance_clients": scenario_maintenance_clients,
 }
+
+
+class PlantBroker:
+    """mosquitto on a free port of 127.0.0.1 and a subscriber (paho) to the station's topics."""
+
+    def __init__(self, folder):
+        import paho.mqtt.client as mqtt
+        self.port = free_port()
+        conf = folder / "mosquitto.conf"
+        conf.write_text(f"listener {self.port} 127.0.0.1\nallow_anonymous true\npersistence false\n" +
+                        ("user root\n" if os.geteuid() == 0 else ""))
+        self.log = open(folder / "mosquitto.log", "w")
+        self.proc = subprocess.Popen(["mosquitto", "-c", str(conf)], stdout=self.log, stderr=subprocess.STDOUT,
+                                     preexec_fn=die_with_parent)
+        deadline = time.monotonic() + 10
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", self.port), timeout=1).close()
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("mosquitto did not listen within 10 s")
+                time.sleep(0.05)
+        self.messages = []
+        self.lock = threading.Lock()
+        subscribed = threading.Event()
+        self.client = mqtt.Client(client_id="robustness-plant")
+        self.client.on_connect = lambda c, u, f, rc: c.subscribe("hullgauge/sim/#", qos=1)
+        self.client.on_subscribe = lambda c, u, mid, q: subscribed.set()
+        self.client.on_message = self.on_message
+        self.client.connect("127.0.0.1", self.port)
+        self.client.loop_start()
+        if not subscribed.wait(10):
+            raise RuntimeError("the subscriber was not subscribed within 10 s")
+
+    def on_message(self, client, userdata, message):
+        with self.lock:
+            self.messages.append((message.topic, message.payload))
+
+    def count(self):
+        with self.lock:
+            return len(self.messages)
+
+    def kinds_since(self, first):
+        """topic's last part ("result", "state", "counters") -> messages, from index `first` on."""
+        kinds = {}
+        with self.lock:
+            for topic, _ in self.messages[first:]:
+                kind = topic.rsplit("/", 1)[-1]
+                kinds[kind] = kinds.get(kind, 0) + 1
+        return kinds
+
+    def connections(self):
+        """The station's connections the broker logged (its log: `New client connected ... as <id>`)."""
+        self.log.flush()
+        text = (Path(self.log.name)).read_text()
+        return sum(1 for l in text.splitlines() if "New client connected" in l and "robustness-plant" not in l)
+
+    def results_since(self, first):
+        """cycle id -> copies received, of the result messages from index `first` on."""
+        copies = {}
+        with self.lock:
+            for topic, payload in self.messages[first:]:
+                if topic.endswith("/result"):
+                    cid = json.loads(payload)["cycle_id"]
+                    copies[cid] = copies.get(cid, 0) + 1
+        return copies
+
+    def close(self):
+        self.client.loop_stop()
+        self.client.disconnect()
+        self.proc.terminate()
+        self.proc.wait(timeout=10)
+        self.log.close()
+
+
+def fill(path, leave_bytes=0):
+    """Grows the file at `path` until its volume has `leave_bytes` free (0: until ENOSPC)."""
+    chunk = b"\0" * (1 << 20)
+    with open(path, "ab") as f:
+        while True:
+            free = os.statvfs(path).f_bavail * os.statvfs(path).f_frsize
+            if free <= leave_bytes:
+                return
+            try:
+                f.write(chunk[:max(4096, min(len(chunk), free - leave_bytes))])
+                f.flush()
+                os.fsync(f.fileno())
+            except OSError:
+                return
+
+
+def scenario_disk_full(args):
+    """The results volume (a 64 MiB tmpfs) filled: images give way to verdicts; a store that takes
+    no writes costs the plant link no storm and the journal no flood."""
+    if os.geteuid() != 0:
+        row("the results volume full (a small tmpfs)", "not run: mounting a tmpfs needs root", "—", "—")
+        return
+    volume = Path(tempfile.mkdtemp(prefix="hg-robust-volume-"))
+    subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64m", "tmpfs", str(volume)], check=True)
+    overlay = Path(tempfile.mkdtemp(prefix="hg-robust-overlay-"))
+    config = (args.source / "config" / "sim" / "hullgauged.yaml").read_text()
+    config = config.replace("  retention: {max_count: 200, max_age_days: 7, max_bytes: 268435456}",
+                            "  archive_all: true\n"
+                            "  retention: {max_count: 100000, max_age_days: 7, max_bytes: 1e12, min_free_mb: 12}")
+    (overlay / "hullgauged.yaml").write_text(config)
+    broker = PlantBroker(overlay)
+    line = None
+    try:
+        line = Line(args, [args.source / "config" / "sim-fast", overlay], results_dir=volume,
+                    extra_args=["--mqtt", f"mqtt://127.0.0.1:{broker.port}"])
+        plc = Plc(line.plc_port)
+        log = line.workdir / "hullgauged.log"
+        filler = volume / "filler"
+        # 1. Less and less room: every part archived; the oldest folders give way.
+        fill(filler, leave_bytes=20 << 20)
+        first = [plc.cycle(f"ROOM{i:03d}") for i in range(12)]
+        check(all(r[1] == 1 and r[2] == 0 for r in first), f"disk full: results while images gave way {first}")
+        gave_way = "removed the oldest" in log.read_text()
+        check(gave_way, "disk full: the archive never made room")
+        # 2. The volume full to the last byte while archived folders remain: they go, the verdicts stay.
+        fill(filler)
+        second = [plc.cycle(f"FULL{i:03d}") for i in range(4)]
+        check(all(r[1] == 1 and r[2] == 0 for r in second), f"disk full: a verdict lost to images {second}")
+        # 3. Nothing left to drop: the record cannot be written (FAULT 42); the plant link stays calm.
+        for folder in (volume / "images").iterdir():
+            subprocess.run(["rm", "-rf", str(folder)])
+        fill(filler)
+        lines_before = len(log.read_text().splitlines())
+        messages_before = broker.count()
+        third = [plc.cycle(f"NONE{i:03d}") for i in range(4)]
+        check(all(r[1] == 3 and r[2] == 42 for r in third), f"disk full: nothing to drop gives FAULT 42 {third}")
+        during = log.read_text().splitlines()[lines_before:]
+        kinds = broker.kinds_since(messages_before)
+        sent = kinds.get("result", 0) + kinds.get("counters", 0)
+        check(len(during) <= 12 * len(third), f"disk full: {len(during)} log lines for {len(third)} cycles")
+        check(sent <= 2 * len(third), f"disk full: {sent} result and counter messages for {len(third)} cycles")
+        check(kinds.get("state", 0) <= 4 * len(third), f"disk full: {kinds.get('state', 0)} state messages")
+        # 4. Room again: verdicts, and every stored result out once, marked published.
+        filler.unlink()
+        fourth = [plc.cycle(f"BACK{i:03d}") for i in range(3)]
+        check(all(r[1] == 1 and r[2] == 0 for r in fourth), f"disk full: after room came back {fourth}")
+        stored = line.stored_rows()
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            copies = broker.results_since(0)
+            db = sqlite3.connect(f"file:{volume / 'results.db'}?mode=ro", uri=True)
+            waiting = db.execute("SELECT COUNT(*) FROM inspections WHERE published_unix_ms IS NULL").fetchone()[0]
+            db.close()
+            if len(copies) >= len(stored) and waiting == 0:
+                break
+            time.sleep(0.2)
+        check(len(copies) == len(stored) and waiting == 0,
+              f"disk full: {len(copies)} results out of {len(stored)} stored, {waiting} not marked published")
+        most = max(copies.values(), default=0)
+        check(most <= 2, f"disk full: a result went out {most} times")
+        connections = broker.connections()
+        check(connections <= 1, f"disk full: the station connected {connections} times")
+        check(line.alive(), "disk full: the daemon died")
+        row("the results volume fills up (a 64 MiB tmpfs, every part archived, `min_free_mb` 12)",
+            f"{len(first)} + {len(second)} parts RESULT 1: the oldest archived folders gave way to the new ones, "
+            "and to the records once the volume was full to the last byte",
+            "—", "images only, oldest first")
+        row("the results volume full with nothing left to drop",
+            f"RESULT 3, FAULT 42 ({len(third)} parts); {len(during)} journal lines, {sent} result and counter "
+            f"and {kinds.get('state', 0)} state messages for them; {connections} connection to the broker in all", f"the next parts RESULT 1 once there is room; every stored result "
+            f"published (at most {most}× each)", "the parts' records while the volume was full")
+        plc.close()
+    finally:
+        if line:
+            line.stop()
+        broker.close()
+        subprocess.run(["umount", str(volume)])
+        subprocess.run(["rm", "-rf", str(volume), str(overlay)])
+
+
+SCENARIOS["disk_full"] = scenario_disk_full
+
+
+class NotifySocket:
+    """A NOTIFY_SOCKET as systemd's: every message the daemon sends, with its arrival time."""
+
+    def __init__(self, path):
+        self.path = path
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        self.sock.bind(str(path))
+        self.sock.settimeout(0.1)
+        self.messages = []
+        self.lock = threading.Lock()
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self.receive, daemon=True)
+        self.thread.start()
+
+    def receive(self):
+        while not self.stopped.is_set():
+            try:
+                text = self.sock.recv(4096).decode(errors="replace")
+            except socket.timeout:
+                continue
+            with self.lock:
+                self.messages.append((time.monotonic(), text))
+
+    def times(self, field, since=0.0):
+        with self.lock:
+            return [t for t, text in self.messages if t >= since and field in text.split("\n")]
+
+    def close(self):
+        self.stopped.set()
+        self.thread.join(timeout=5)
+        self.sock.close()
+
+
+def scenario_reload_large_mesh(args):
+    """SIGHUP with a program whose mesh is a 2 GB STL: refused naming the limit, the watchdog pinged throughout."""
+    folder = Path(tempfile.mkdtemp(prefix="hg-robust-notify-"))
+    notify = NotifySocket(folder / "notify.sock")
+    line = Line(args, env={"NOTIFY_SOCKET": str(folder / "notify.sock"), "WATCHDOG_USEC": "1000000"})
+    cfg = line.workdir / "config"
+    log = line.workdir / "hullgauged.log"
+    try:
+        deadline = time.monotonic() + 10
+        while len(notify.times("WATCHDOG=1")) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        check(len(notify.times("WATCHDOG=1")) >= 2, "large mesh: the daemon does not ping the watchdog")
+        # A binary STL whose facet count matches its 2.15 GB (sparse: it takes no disk).
+        facets = 43_000_000
+        with open(cfg / "huge.stl", "wb") as f:
+            f.write(b"hullgauge robustness: a large mesh".ljust(80, b" ") + facets.to_bytes(4, "little"))
+            f.truncate(84 + 50 * facets)
+        (cfg / "cube-2.yaml").write_text(cube_program("huge.stl"))
+        daemon_yaml = cfg / "hullgauged.yaml"
+        daemon_yaml.write_text(daemon_yaml.read_text().replace(
+            "programs:\n", "programs:\n  2: {part: cube-2.yaml, views: stepped-block-views.yaml}\n", 1))
+        rss_before = line.rss_kib()
+        t0 = time.monotonic()
+        os.kill(line.daemon_pid, signal.SIGHUP)
+        deadline = t0 + 60
+        while "reload refused" not in log.read_text() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        refused_s = time.monotonic() - t0
+        text = log.read_text()
+        refusal = next((l for l in text.splitlines() if "reload refused" in l), "")
+        check("mesh size limit" in refusal, f"large mesh: the refusal does not name the limit: {refusal!r}")
+        # The pings from a second before the SIGHUP to two seconds after the refusal.
+        until = time.monotonic() + 2
+        while time.monotonic() < until:
+            time.sleep(0.05)
+        pings = notify.times("WATCHDOG=1", since=t0 - 1)
+        gaps = [b - a for a, b in zip(pings, pings[1:])]
+        longest = max(gaps, default=float("inf"))
+        check(longest <= 2.0, f"large mesh: the watchdog's longest gap was {longest:.2f} s")
+        rss_after = line.rss_kib()
+        check(rss_after - rss_before < 64 * 1024, f"large mesh: RSS {rss_before >> 10} -> {rss_after >> 10} MiB")
+        plc = Plc(line.plc_port)
+        _, result, fault, _ = plc.cycle("AFTERHUGE")
+        check(result == 1 and fault == 0, f"large mesh: the next part {result}/{fault}")
+        plc.close()
+        reason = refusal.split("reload refused, keeping the running configuration: ", 1)[-1]
+        reason = reason.replace(str(cfg) + "/", "")
+        row("SIGHUP with a part program whose mesh is a 2.15 GB STL",
+            f"refused in {refused_s:.1f} s: `{reason}`; watchdog pings every 0.5 s throughout (longest gap "
+            f"{longest:.2f} s, WatchdogSec 1 s), RSS {rss_before >> 10} → {rss_after >> 10} MiB",
+            "— (the running configuration kept; the next part passes)", "nothing")
+    finally:
+        line.stop()
+        notify.close()
+        subprocess.run(["rm", "-rf", str(folder)])
+
+
+SCENARIOS["reload_large_mesh"] = scenario_reload_large_mesh
 
 
 def main():

@@ -51,6 +51,7 @@ struct CycleRunner::Cycle {
     InspectionOutcome outcome;
     bool interruptFed = false; ///< the abort or the shutdown was fed to the sequencer
     bool saveImages = false;
+    bool archiveFull = false; ///< images not kept for want of free space: the writer makes room
     std::string imagesDir;
 };
 
@@ -594,6 +595,10 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
     commitAndPublish(cycle);
     report(cycle);
     if (cycle.saveImages) archivePart(cycle);
+    if (cycle.archiveFull) {
+        ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
+        images_.post([archive]() mutable { archive.makeRoom(); });
+    }
     // A cycle that left the station in fault: the sequencer says recover (at once).
     if (!stop_.stop_requested()) schedule(sequencer_.afterPublish());
 }
@@ -636,7 +641,8 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     if (!cycle.poseCorrection.is_null()) record.timingMs["correct_poses"] = cycle.poseCorrection["ms"];
     // A failed part's images are written after the result is shown: the record names their
     // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
-    cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) && (!outcome.views.empty() || outcome.evidence);
+    cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) &&
+                       (!outcome.views.empty() || outcome.evidence) && archiveHasRoom(cycle);
     if (cycle.saveImages)
         cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
                               .folderFor(record.startedUnixMs, record.serial)
@@ -670,13 +676,7 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     auto& record = cycle.record;
     // The record is durable before the PLC can see DONE_SEQ (docs/contracts.md §6).
     const auto commitStart = clock_.now();
-    try {
-        store_.commit(record, cycle.imagesDir);
-    } catch (const std::exception& e) {
-        hg::log::category("seq")->error("{}", e.what());
-        record.verdict = station::Verdict::Error;
-        record.faultCode = station::FaultCode::ResultStore;
-    }
+    commitRecord(cycle);
     cycle.commitMs = clock_.msSince(commitStart);
     // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
     const auto after = state();
@@ -691,6 +691,51 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
     lastLoopNs_ = clock_.nowNs();
     cycleStartNs_ = 0;
+}
+
+// The record wins over images (docs/daemon.md, "Archived parts"): a commit the full volume
+// refused is tried once more after the oldest archived folders made room.
+void CycleRunner::commitRecord(Cycle& cycle)
+{
+    auto& record = cycle.record;
+    auto log = hg::log::category("seq");
+    for (int attempt = 0;; ++attempt) {
+        try {
+            store_.commit(record, cycle.imagesDir);
+            return;
+        } catch (const std::exception& e) {
+            ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
+            if (attempt == 0 && !archive.hasRoom() && archive.makeRoom() > 0) {
+                log->warn("{}; the oldest archived images made room, committing again", e.what());
+                continue;
+            }
+            log->error("{}", e.what());
+            record.verdict = station::Verdict::Error;
+            record.faultCode = station::FaultCode::ResultStore;
+            return;
+        }
+    }
+}
+
+// The verdict and its record win over images (docs/daemon.md, "Archived parts"): with less than
+// min_free_mb free the part's images are not kept (its row names no folder), and the writer makes
+// room for the next parts once the result is shown. Said once when it starts and once when it ends.
+bool CycleRunner::archiveHasRoom(Cycle& cycle)
+{
+    const auto& results = cycle.cfg->results;
+    const bool room = ImageArchive(results.imageDir, results.retention, clock_).hasRoom();
+    if (room != archiveHadRoom_) {
+        auto log = hg::log::category("store");
+        if (room)
+            log->info("the results volume has room again: parts' images are kept");
+        else
+            log->warn("the results volume has less than results.retention.min_free_mb ({} MiB) free: parts' images "
+                      "are not kept until the oldest archived folders have made room",
+                      results.retention.minFreeBytes >> 20);
+        archiveHadRoom_ = room;
+    }
+    cycle.archiveFull = !room;
+    return room;
 }
 
 void CycleRunner::report(Cycle& cycle)

@@ -119,6 +119,8 @@ class CycleRunner {
     void commitAndPublish(Cycle& cycle);
     void report(Cycle& cycle);
     void archivePart(Cycle& cycle);
+    bool archiveHasRoom(Cycle& cycle);
+    void commitRecord(Cycle& cycle);
 
     PlcRegisters& registers_;
     StationDevices& devices_;
@@ -142,6 +144,7 @@ class CycleRunner {
     // Runner thread only.
     bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
     std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
+    bool archiveHadRoom_ = true;                 ///< the last part found min_free_mb free (logged on change)
 
     std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;

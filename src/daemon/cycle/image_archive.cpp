@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -50,7 +51,32 @@ void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
     syncFolder(dir);
 }
 
+/// The archived folders, oldest first (not the hidden ones being written).
+std::vector<fs::path> foldersOldestFirst(const fs::path& root)
+{
+    std::vector<std::pair<fs::file_time_type, fs::path>> found;
+    std::error_code ec;
+    for (const auto& d : fs::directory_iterator(root, ec))
+        if (d.is_directory(ec) && !isPartial(d.path())) found.emplace_back(d.last_write_time(ec), d.path());
+    std::sort(found.begin(), found.end());
+    std::vector<fs::path> folders;
+    for (auto& [time, dir] : found) folders.push_back(std::move(dir));
+    return folders;
+}
+
 } // namespace
+
+std::uint64_t volumeFreeBytes(const fs::path& path)
+{
+    std::error_code ec;
+    for (fs::path at = path; !at.empty(); at = at.parent_path()) {
+        const auto info = fs::space(at, ec);
+        if (!ec) return info.available;
+        if (at == at.parent_path()) break;
+    }
+    // Nothing to ask: the free-space rule stands aside, the write itself then says what failed.
+    return std::numeric_limits<std::uint64_t>::max();
+}
 
 bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict)
 {
@@ -100,9 +126,34 @@ cv::Mat annotate(const ViewEvidence& view)
     return out;
 }
 
-ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention, const Clock& clock)
-    : root_(std::move(root)), retention_(retention), clock_(&clock)
+ImageArchive::ImageArchive(fs::path root, station::RetentionConfig retention, const Clock& clock,
+                           FreeSpaceProbe freeBytes)
+    : root_(std::move(root)), retention_(retention), clock_(&clock), freeBytes_(std::move(freeBytes))
 {
+}
+
+bool ImageArchive::hasRoom() const
+{
+    return freeBytes_(root_) >= retention_.minFreeBytes;
+}
+
+std::size_t ImageArchive::makeRoom()
+{
+    if (hasRoom()) return 0;
+    const auto before = freeBytes_(root_);
+    std::size_t removed = 0;
+    std::error_code ec;
+    for (const auto& dir : foldersOldestFirst(root_)) {
+        if (hasRoom()) break;
+        fs::remove_all(dir, ec);
+        if (!ec) ++removed;
+    }
+    auto log = hg::log::category("store");
+    if (removed)
+        log->warn("the results volume had {} MiB free, under results.retention.min_free_mb {}: removed the oldest {} "
+                  "archived folders (failed parts too); now {} MiB free",
+                  before >> 20, retention_.minFreeBytes >> 20, removed, freeBytes_(root_) >> 20);
+    return removed;
 }
 
 fs::path ImageArchive::folderFor(std::int64_t startedUnixMs, const std::string& serial) const
@@ -174,7 +225,7 @@ std::size_t ImageArchive::enforceRetention()
         if (!ec) ++removed;
     }
     if (removed) hg::log::category("store")->info("image retention removed {} folders", removed);
-    return removed;
+    return removed + makeRoom();
 }
 
 } // namespace hg::daemon

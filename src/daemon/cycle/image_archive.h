@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <opencv2/core/types.hpp>
 #include <string>
 #include <vector>
@@ -32,13 +33,19 @@ cv::Mat annotate(const ViewEvidence& view);
 /// `archive_all`, else a failed one with `save_failed_images`.
 bool archivesPart(const station::ResultsConfig& results, station::Verdict verdict);
 
+/// The bytes free for the daemon on the volume that holds `path` (or its nearest
+/// existing parent); the archive's probe, which tests replace.
+using FreeSpaceProbe = std::function<std::uint64_t(const std::filesystem::path& path)>;
+std::uint64_t volumeFreeBytes(const std::filesystem::path& path);
+
 class ImageArchive {
   public:
     /// The file that marks a failed part's folder (its verdict, for the retention).
     static constexpr const char* kFailedMarker = "FAILED";
 
     /// `clock`'s wall time is the now the retention's `max_age_days` counts back from.
-    ImageArchive(std::filesystem::path root, station::RetentionConfig retention, const Clock& clock = Clock::steady());
+    ImageArchive(std::filesystem::path root, station::RetentionConfig retention, const Clock& clock = Clock::steady(),
+                 FreeSpaceProbe freeBytes = volumeFreeBytes);
 
     /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
     /// (serial characters other than letters, digits and '-' become '_').
@@ -54,13 +61,22 @@ class ImageArchive {
     /// or beyond max_bytes in total (raw frames, pictures and manifests all
     /// count), and any partial folder a crash left — but never the folders of
     /// the newest keep_failed failed parts.
+    /// Then, while the volume has less than min_free_mb free, the oldest
+    /// folders (failed ones too) until it has.
     /// Returns how many archived folders were removed.
     std::size_t enforceRetention();
+    /// Whether the volume has min_free_mb free: a part's images are written only then.
+    bool hasRoom() const;
+    /// Removes the oldest folders, failed ones too (never one being written), until the volume
+    /// has min_free_mb free or no folder is left; returns how many were removed. Safe beside
+    /// a save on another thread: it skips the hidden folder being written.
+    std::size_t makeRoom();
 
   private:
     std::filesystem::path root_;
     station::RetentionConfig retention_;
     const Clock* clock_;
+    FreeSpaceProbe freeBytes_;
 };
 
 } // namespace hg::daemon

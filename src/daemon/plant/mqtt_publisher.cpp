@@ -170,6 +170,44 @@ void markAcknowledged(ResultOutbox& outbox, Session& session)
     session.acknowledged.clear();
 }
 
+/// Marks acknowledged results published, backed off while the store refuses writes (a full
+/// disk, docs/mqtt.md "Failures"): the session goes on, nothing is sent again, the marks wait
+/// in memory and the journal says so when it starts and when it ends.
+class PublishedMarks {
+  public:
+    PublishedMarks(const Clock& clock, std::chrono::milliseconds first, std::chrono::milliseconds most)
+        : clock_(clock), first_(first), most_(most), wait_(first)
+    {
+    }
+    void mark(ResultOutbox& outbox, Session& session)
+    {
+        if (session.acknowledged.empty() || (failing_ && clock_.now() < nextTry_)) return;
+        const auto count = session.acknowledged.size();
+        try {
+            markAcknowledged(outbox, session);
+        } catch (const FaultError& e) {
+            if (!failing_)
+                logger()->warn("plant link: the store takes no writes ({}); acknowledged results are marked "
+                               "published when it does (nothing is sent again)",
+                               e.what());
+            failing_ = true;
+            nextTry_ = clock_.now() + wait_;
+            wait_ = std::min(wait_ * 2, most_);
+            return;
+        }
+        if (failing_) logger()->info("plant link: the store takes writes again; {} results marked published", count);
+        failing_ = false;
+        wait_ = first_;
+    }
+
+  private:
+    const Clock& clock_;
+    const std::chrono::milliseconds first_, most_;
+    std::chrono::milliseconds wait_;
+    Clock::time_point nextTry_{};
+    bool failing_ = false;
+};
+
 /// The station's state and counters, when they changed since last published (retained: a
 /// subscriber that comes later gets the latest at once).
 bool publishLatest(Session& session, const std::string& state, const ResultCounters& counters)
@@ -318,6 +356,7 @@ void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
     const auto answerBy = clock_.now() + std::chrono::seconds(std::max(10, config_.keepaliveS));
     bool connected = false;
     auto countedPendingAt = clock_.now();
+    PublishedMarks marks(clock_, config_.retryMin, config_.retryMax);
     ++attempts_;
     bool ok = session.start();
     while (ok && !stop.stop_requested()) {
@@ -341,7 +380,7 @@ void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
             setStatus(true, {});
             logger()->info("connected to {}; {} results waiting in the outbox", config_.url, pending_.load());
         }
-        markAcknowledged(outbox, session);
+        marks.mark(outbox, session);
         counters_ += outbox.countAfter(counted_, counted_);
         ok = publishLatest(session, state_(), counters_) && sendWaiting(session, outbox);
         // For `ctl status`: counted twice a second, not at every turn (a long backlog costs a scan).

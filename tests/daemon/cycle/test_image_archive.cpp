@@ -105,6 +105,53 @@ TEST(ImageArchive, RetentionNeverRemovesTheNewestFailedParts)
     EXPECT_FALSE(std::filesystem::exists(folders[2]));
 }
 
+// docs/daemon.md, "Archived parts": the verdict and its record win over images. A volume that
+// holds 3 folders' worth of bytes beyond the others' files (the probe counts the archive's bytes
+// against a capacity) keeps min_free_mb free by removing the oldest folders, failed ones too.
+TEST(ImageArchive, TheOldestFoldersGiveWayWhileTheVolumeHasLessThanMinFree)
+{
+    hgtest::TempDir dir;
+    const auto root = dir / "images";
+    ViewEvidence v{cv::Mat(10, 10, CV_8UC1, cv::Scalar(9)), {}, {}};
+    std::vector<std::filesystem::path> folders;
+    {
+        ImageArchive writer(root, {});
+        for (int i = 0; i < 5; ++i) {
+            folders.push_back(writer.save(1000 + i, "S", {v}, i == 0));
+            std::filesystem::last_write_time(folders.back(), std::filesystem::file_time_type::clock::now() -
+                                                                 std::chrono::minutes(10 - i));
+        }
+    }
+    std::uintmax_t folderBytes = 0;
+    for (const auto& f : std::filesystem::recursive_directory_iterator(folders[0]))
+        if (f.is_regular_file()) folderBytes += f.file_size();
+    ASSERT_GT(folderBytes, 0u);
+    const auto archiveBytes = [&] {
+        std::uintmax_t total = 0;
+        for (const auto& f : std::filesystem::recursive_directory_iterator(root))
+            if (f.is_regular_file()) total += f.file_size();
+        return total;
+    };
+    // Five folders on a volume of 6.5 folders: 1.5 free. min_free is 3 folders: two must go.
+    const std::uintmax_t capacity = folderBytes * 13 / 2;
+    const auto probe = [&](const std::filesystem::path&) { return capacity - archiveBytes(); };
+    station::RetentionConfig retention; // count, age and bytes all hold: only the free space acts
+    retention.minFreeBytes = folderBytes * 3;
+    retention.keepFailed = 5;
+    ImageArchive archive(root, retention, Clock::steady(), probe);
+    EXPECT_FALSE(archive.hasRoom());
+    EXPECT_EQ(archive.enforceRetention(), 2u);
+    EXPECT_TRUE(archive.hasRoom());
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(std::filesystem::exists(folders[i]), i >= 2) << "part " << i;
+    EXPECT_EQ(archive.makeRoom(), 0u) << "room enough: nothing more goes";
+
+    // A volume that nothing in the archive can free: every folder goes, and there is still no room.
+    ImageArchive full(root, retention, Clock::steady(), [](const std::filesystem::path&) { return 0ull; });
+    EXPECT_EQ(full.makeRoom(), 3u);
+    EXPECT_FALSE(full.hasRoom());
+    EXPECT_TRUE(std::filesystem::is_empty(root));
+}
+
 // A view as the engine inspector hands it over: a 16-bit frame and the camera it was inspected with.
 ViewEvidence capturedView(const std::string& id, double rotationDeg)
 {

@@ -4,19 +4,28 @@
 // verdict's count. Its reconnection back-off on a clock the test moves by hand
 // (docs/mqtt.md, "Failures"). The broker's side runs in
 // tests/integration/mqtt_plant_link.py.
+#include "daemon_harness.h"
+#include "hgtest/log_capture.h"
 #include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/store/result_store.h"
+#include "hullgauge/store/sqlite.h"
 #include "plant/mqtt_config.h"
 #include "plant/mqtt_publisher.h"
 
 #include <algorithm>
 #include <arpa/inet.h>
+#include <csignal>
+#include <fcntl.h>
+#include <fstream>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <sstream>
 #include <stdexcept>
 #include <sys/socket.h>
+#include <sys/wait.h>
+#include <thread>
 #include <unistd.h>
 
 namespace hg::daemon {
@@ -122,6 +131,144 @@ TEST(MqttPublisher, ARefusedConnectionIsTriedAgainAtTheBackOffStepsAndNotBefore)
     const auto status = publisher.status();
     EXPECT_EQ(status["connected"], false);
     EXPECT_NE(status.value("last_error", "").find(config.url), std::string::npos) << status.dump();
+}
+
+/// A program the test runs beside it (a broker, a subscriber), its output to `log`, killed at the end.
+class Spawned {
+  public:
+    Spawned(std::vector<std::string> argv, const std::filesystem::path& log)
+    {
+        pid_ = fork();
+        if (pid_ == 0) {
+            const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            dup2(fd, 1);
+            dup2(fd, 2);
+            std::vector<char*> args;
+            for (auto& a : argv) args.push_back(a.data());
+            args.push_back(nullptr);
+            execvp(args[0], args.data());
+            _exit(127);
+        }
+    }
+    ~Spawned()
+    {
+        kill(pid_, SIGKILL);
+        waitpid(pid_, nullptr, 0);
+    }
+    Spawned(const Spawned&) = delete;
+    Spawned& operator=(const Spawned&) = delete;
+
+  private:
+    pid_t pid_ = -1;
+};
+
+std::string readText(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+/// Polls `condition` until it holds or `deadline` passes (the deadline decides, never a sleep).
+bool within(std::chrono::milliseconds deadline, const std::function<bool()>& condition)
+{
+    const auto until = std::chrono::steady_clock::now() + deadline;
+    while (!condition()) {
+        if (std::chrono::steady_clock::now() > until) return false;
+        std::this_thread::sleep_for(20ms);
+    }
+    return true;
+}
+
+/// Whether 127.0.0.1:`port` accepts a connection now.
+bool accepts(int port)
+{
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<std::uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+    ::close(fd);
+    return ok;
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what)
+{
+    std::size_t n = 0;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+    return n;
+}
+
+// docs/mqtt.md, "Failures": a store that takes no writes (a full disk; here a write lock the test
+// holds) ends neither the session nor the results' order: each result goes out once, the client
+// does not reconnect, and the acknowledged results are marked published once the store takes
+// writes again. Before, every refused mark ended the session, and each reconnection sent the
+// waiting results again.
+TEST(MqttPublisher, AStoreThatTakesNoWritesKeepsTheSessionAndSendsNothingTwice)
+{
+    hgtest::TempDir dir;
+    const auto database = dir / "results.db";
+    {
+        store::ResultStore created(database);
+        for (int k = 1; k <= 3; ++k) {
+            station::InspectionRecord r;
+            r.startedUnixMs = 1'700'000'000'000 + k;
+            r.triggerSeq = static_cast<std::uint16_t>(k);
+            r.serial = "LOCKED-" + std::to_string(k);
+            r.program = 1;
+            r.verdict = station::Verdict::Pass;
+            created.commit(r);
+        }
+    }
+    const int port = hgdaemon::freePort();
+    const auto conf = hgtest::writeFile(dir / "mosquitto.conf", "listener " + std::to_string(port) +
+                                                                    " 127.0.0.1\nallow_anonymous true\n"
+                                                                    "persistence false\nuser root\n");
+    Spawned broker({"mosquitto", "-c", conf.string()}, dir / "broker.log");
+    ASSERT_TRUE(within(10s, [&] { return accepts(port); })) << readText(dir / "broker.log");
+    // Subscribed (SUBACK in the client's debug output) before anything is published.
+    const auto received = dir / "received.txt";
+    // Line-buffered: the subscriber writes to a file, which stdio would buffer whole.
+    Spawned subscriber({"stdbuf", "-oL", "mosquitto_sub", "-d", "-v", "-q", "1", "-h", "127.0.0.1", "-p",
+                        std::to_string(port), "-t", "hullgauge/gauge-7/result"},
+                       received);
+    ASSERT_TRUE(within(10s, [&] { return readText(received).find("SUBACK") != std::string::npos; }))
+        << readText(received);
+
+    station::MqttConfig config;
+    const auto yaml = "mqtt: {url: 'mqtt://127.0.0.1:" + std::to_string(port) +
+                      "', station_id: gauge-7, qos: 1, retry_min_s: 0.5, retry_max_s: 1}\n";
+    station::parseMqtt(ConfigNode::parse(yaml, (dir / "hullgauged.yaml").string())["mqtt"], dir.path(), config);
+    hgtest::LogCapture log("mqtt");
+    auto lock = store::sqlite::open(database, store::sqlite::Access::Write, "the test's lock");
+    lock.exec("BEGIN EXCLUSIVE");
+    MqttPublisher publisher(
+        config, database, [] { return std::string("ready"); }, Clock::steady());
+    const auto sentOnce = [&] {
+        const auto text = readText(received);
+        for (int k = 1; k <= 3; ++k)
+            if (occurrences(text, "\"LOCKED-" + std::to_string(k) + "\"") != 1) return false;
+        return true;
+    };
+    ASSERT_TRUE(within(20s, sentOnce)) << readText(received);
+    ASSERT_TRUE(within(20s, [&] { return log.text().find("the store takes no writes") != std::string::npos; }))
+        << log.text();
+    // Long enough for two more marks refused at the back-off and, before, two reconnections.
+    EXPECT_FALSE(within(6s, [&] { return !sentOnce() || publisher.connectionAttempts() != 1; }))
+        << readText(received) << log.text();
+
+    lock.exec("ROLLBACK");
+    const auto marked = [&] {
+        auto reader = store::sqlite::open(database, store::sqlite::Access::Read, "the test's reader");
+        auto count = reader.prepare("SELECT COUNT(*) FROM inspections WHERE published_unix_ms IS NOT NULL");
+        return count.step() && count.int64(0) == 3;
+    };
+    EXPECT_TRUE(within(20s, marked)) << log.text();
+    EXPECT_TRUE(sentOnce()) << readText(received);
+    EXPECT_EQ(publisher.connectionAttempts(), 1);
+    EXPECT_NE(log.text().find("the store takes writes again"), std::string::npos) << log.text();
 }
 
 } // namespace

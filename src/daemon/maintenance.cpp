@@ -88,6 +88,7 @@ void MaintenanceServer::serve(const std::vector<pollfd>& polled)
     const auto now = clock_.now();
     for (std::size_t i = clients_.size(); i-- > 0;) {
         if (!done[i] && now - clients_[i].since < kRequestTimeout) continue;
+        if (!done[i] && !clients_[i].request.empty()) refuseUnfinished(clients_[i]);
         close(clients_[i].fd);
         clients_.erase(clients_.begin() + static_cast<std::ptrdiff_t>(i));
     }
@@ -113,7 +114,14 @@ bool MaintenanceServer::readFrom(Client& client)
     char buf[4096];
     ssize_t n = read(client.fd, buf, sizeof buf);
     if (n < 0 && (errno == EAGAIN || errno == EINTR)) return false;
-    if (n <= 0) return true; // gone before sending a whole line
+    if (n < 0) return true; // gone before sending a whole line
+    if (n == 0) {
+        // The client closed its side after its request: the end of the stream ends the line.
+        if (client.request.empty()) return true;
+        client.request.push_back('\n');
+        answer(client);
+        return true;
+    }
     client.request.append(buf, static_cast<std::size_t>(n));
     const bool complete = client.request.find('\n') != std::string::npos;
     if (!complete && client.request.size() < kMaxRequestBytes) return false;
@@ -139,6 +147,18 @@ std::string answerMaintenanceRequest(const std::string& request, const Maintenan
     // bytes are sent as U+FFFD rather than failing the dump (docs/daemon.md,
     // "Maintenance socket").
     return dumpJson(answer) + "\n";
+}
+
+// A request begun and not ended by a newline within the time allowed is told so, not just closed.
+void MaintenanceServer::refuseUnfinished(const Client& client)
+{
+    const std::string text =
+        dumpJson({{"ok", false},
+                  {"error", fmt::format("request: no newline within {} ms (a request is one JSON line ending in a "
+                                        "newline, or the client closes its side after it)",
+                                        kRequestTimeout.count())}}) +
+        "\n";
+    [[maybe_unused]] auto n = send(client.fd, text.data(), text.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
 }
 
 void MaintenanceServer::answer(const Client& client)
@@ -240,6 +260,26 @@ Result<std::int64_t> wholeNumber(const json& request, const char* key, std::int6
     return n;
 }
 
+/// A text field of a request, `fallback` when absent; any other type is refused naming the key.
+Result<std::string> textField(const json& request, const char* key, std::string fallback = {})
+{
+    if (!request.contains(key)) return fallback;
+    const json& v = request[key];
+    if (!v.is_string())
+        return Status::failure(StatusCode::NotAllowed, fmt::format("{}: {} is not a string", key, v.dump()));
+    return v.get<std::string>();
+}
+
+/// A true/false field of a request, false when absent; any other type is refused naming the key.
+Result<bool> flagField(const json& request, const char* key)
+{
+    if (!request.contains(key)) return false;
+    const json& v = request[key];
+    if (!v.is_boolean())
+        return Status::failure(StatusCode::NotAllowed, fmt::format("{}: {} is not true or false", key, v.dump()));
+    return v.get<bool>();
+}
+
 json refusal(const Status& status)
 {
     return {{"ok", false}, {"error", status.message()}};
@@ -307,17 +347,22 @@ json calibrate(const MaintenanceContext& c, const json& request)
 {
     const auto& config = *c.config;
     CalibrationJob job;
+    const auto pattern = textField(request, "pattern");
+    const auto poses = textField(request, "poses");
+    const auto out = textField(request, "out", config.stationFile.string());
+    if (!pattern) return refusal(pattern.status());
+    if (!poses) return refusal(poses.status());
+    if (!out) return refusal(out.status());
     try {
-        job.target = calib::TargetSpec::parse(request.value("pattern", std::string()), "pattern");
-        const auto poses = request.value("poses", std::string());
-        if (poses.empty()) return {{"ok", false}, {"error", "poses: the poses YAML file is required"}};
-        job.poses = geometry::loadPoses(poses, &config.station.fixture);
+        job.target = calib::TargetSpec::parse(pattern.value(), "pattern");
+        if (poses.value().empty()) return {{"ok", false}, {"error", "poses: the poses YAML file is required"}};
+        job.poses = geometry::loadPoses(poses.value(), &config.station.fixture);
     } catch (const std::exception& e) {
         return {{"ok", false}, {"error", e.what()}};
     }
     if (config.station.fixture.type != geometry::FixtureType::RotationDeclination)
         return {{"ok", false}, {"error", "calibrate solves rotation/declination fixtures"}};
-    job.out = request.value("out", config.stationFile.string());
+    job.out = out.value();
     if (const Status queued = c.runner.requestCalibration(std::move(job)); !queued.ok())
         return {{"ok", false}, {"error", queued.message()}};
     return {{"ok", true}, {"calibration", c.runner.calibration()}};
@@ -334,7 +379,9 @@ json calibration(const MaintenanceContext& c, const json&)
 // `grab` only reads the last one.
 json snapshot(const MaintenanceContext& c, const json& request)
 {
-    if (!request.value("grab", false)) return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
+    const auto grab = flagField(request, "grab");
+    if (!grab) return refusal(grab.status().prefixed("snapshot: "));
+    if (!grab.value()) return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
     SnapshotJob job;
     const auto& fixture = c.config->station.fixture;
     const bool rail = fixture.type == geometry::FixtureType::Rail;
@@ -362,8 +409,12 @@ json simPart(const MaintenanceContext& c, const json& request)
 {
     auto parts = c.simulation ? c.simulation->parts() : std::vector<std::string>{};
     if (parts.empty()) return {{"ok", false}, {"error", "the camera is not simulated"}};
-    if (request.value("list", false)) return {{"ok", true}, {"parts", parts}, {"current", c.simulation->part()}};
-    auto name = request.value("name", std::string());
+    const auto list = flagField(request, "list");
+    if (!list) return refusal(list.status());
+    if (list.value()) return {{"ok", true}, {"parts", parts}, {"current", c.simulation->part()}};
+    const auto named = textField(request, "name");
+    if (!named) return refusal(named.status());
+    const auto& name = named.value();
     if (!c.simulation->selectPart(name))
         return {{"ok", false}, {"error", "unknown simulated part '" + name + "' (see sim-part --list)"}};
     return {{"ok", true}, {"current", name}};
@@ -381,7 +432,9 @@ const std::map<std::string, Command, std::less<>> kCommands{
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context)
 {
     return [context](const json& request) -> json {
-        const auto command = request.at("command").get<std::string>();
+        const auto named = textField(request, "command");
+        if (!named) return refusal(named.status());
+        const auto& command = named.value();
         const auto it = kCommands.find(command);
         if (it == kCommands.end()) return {{"ok", false}, {"error", "unknown command '" + command + "'"}};
         return it->second(context, request);

@@ -65,6 +65,7 @@ class MaintenanceServer {
     /// Reads once; true when the client is done with (answered or gone).
     bool readFrom(Client& client);
     void answer(const Client& client);
+    void refuseUnfinished(const Client& client);
 
     std::filesystem::path path_;
     Handler handler_;

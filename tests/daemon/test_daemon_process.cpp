@@ -171,6 +171,63 @@ TEST(DaemonProcess, LooseNumbersAndOverlongSerialsAreRefusedNamingTheKey)
     EXPECT_EQ(hgdaemon::maintenance(sock, {{"command", "results"}, {"limit", 1000}})["results"].size(), 1u);
 }
 
+/// Sends `bytes` to the maintenance socket as they are (no newline added); `closeWrite` then shuts
+/// the client's side. Returns what the daemon answered until it closed (at most 10 s).
+std::string rawMaintenance(const std::filesystem::path& socketPath, const std::string& bytes, bool closeWrite)
+{
+    int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::strncpy(addr.sun_path, socketPath.c_str(), sizeof addr.sun_path - 1);
+    if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+        close(fd);
+        return "(no connection)";
+    }
+    timeval tv{10, 0};
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    (void)!write(fd, bytes.data(), bytes.size());
+    if (closeWrite) shutdown(fd, SHUT_WR);
+    std::string answer;
+    char buf[4096];
+    ssize_t n;
+    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
+    close(fd);
+    return answer;
+}
+
+// docs/daemon.md, "Maintenance socket": a field of the wrong type is refused naming its key (not
+// with the JSON library's words); a request the client ends by closing its side is answered; one
+// left without its newline is told so when its time is up.
+TEST(DaemonProcess, WrongTypesAndUnendedRequestsAreAnsweredNamingWhat)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    const auto sock = dir / "hg.sock";
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    using nlohmann::json;
+    const std::pair<json, std::string> refused[] = {
+        {{{"command", 5}}, "command: 5 is not a string"},
+        {{{"command", "sim-part"}, {"name", 7}}, "name: 7 is not a string"},
+        {{{"command", "sim-part"}, {"list", "yes"}}, "list: \"yes\" is not true or false"},
+        {{{"command", "snapshot"}, {"grab", 1}}, "snapshot: grab: 1 is not true or false"},
+        {{{"command", "calibrate"}, {"poses", 3}}, "poses: 3 is not a string"},
+        {{{"command", "calibrate"}, {"poses", "p.yaml"}, {"out", false}}, "out: false is not a string"},
+    };
+    for (const auto& [request, error] : refused) {
+        const json answer = hgdaemon::maintenance(sock, request);
+        EXPECT_EQ(answer["ok"], false) << request.dump();
+        EXPECT_EQ(answer.value("error", ""), error) << request.dump();
+    }
+    const auto ended = json::parse(rawMaintenance(sock, R"({"command": "status"})", true), nullptr, false);
+    ASSERT_TRUE(ended.is_object()) << "no answer to a request ended by closing the client's side";
+    EXPECT_EQ(ended["ok"], true) << ended.dump();
+    const auto unended = json::parse(rawMaintenance(sock, R"({"command": "status"})", false), nullptr, false);
+    ASSERT_TRUE(unended.is_object()) << "no answer to a request left without its newline";
+    EXPECT_EQ(unended["ok"], false);
+    EXPECT_NE(unended.value("error", "").find("no newline within"), std::string::npos) << unended.dump();
+}
+
 TEST(DaemonProcess, CyclePurposeFromThePlcOrTheSocketIsLatchedAtTheTriggerAndStored)
 {
     hgtest::TempDir dir;

@@ -571,7 +571,9 @@ void HmiServer::routeMaintenance()
         "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
             const auto csrf = sessions_.touch(sessionCookie(req));
             if (!csrf) throw HttpError(401, "sign in first");
-            if (req.get_header_value("X-CSRF-Token") != *csrf) throw HttpError(403, "CSRF token missing");
+            if (!req.has_header("X-CSRF-Token")) throw HttpError(403, "CSRF token missing (header X-CSRF-Token)");
+            if (req.get_header_value("X-CSRF-Token") != *csrf)
+                throw HttpError(403, "CSRF token does not match the session's (sign in again)");
             auto body = json::parse(req.body, nullptr, false);
             if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
                 throw HttpError(400, "expected {\"command\": \"...\", ...}");

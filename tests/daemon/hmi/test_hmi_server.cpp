@@ -414,6 +414,14 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
     auto noToken = client->Post("/api/maintenance", {{"Cookie", cookie}}, body, "application/json");
     ASSERT_TRUE(noToken);
     EXPECT_EQ(noToken->status, 403);
+    EXPECT_NE(noToken->body.find("CSRF token missing"), std::string::npos) << noToken->body;
+    // A token that is there but wrong is said to be wrong, not missing.
+    auto wrongToken =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf + "x"}}, body, "application/json");
+    ASSERT_TRUE(wrongToken);
+    EXPECT_EQ(wrongToken->status, 403);
+    EXPECT_NE(wrongToken->body.find("does not match"), std::string::npos) << wrongToken->body;
+    EXPECT_EQ(wrongToken->body.find("missing"), std::string::npos) << wrongToken->body;
     auto form = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "text/plain");
     ASSERT_TRUE(form);
     EXPECT_EQ(form->status, 415);

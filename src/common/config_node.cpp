@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <utility>
 #include <vector>
+#include <yaml-cpp/eventhandler.h>
 
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
@@ -43,6 +45,60 @@ std::string keyText(const YAML::Node& key)
 /// threw yaml-cpp's own exception past every caller (docs/fuzzing.md,
 /// "Findings, fixed"): it is refused at its line too. `budget` bounds the
 /// walk over a document whose aliases repeat one subtree many times.
+/// Watches a YAML document's events for content: a scalar, a map, a sequence or an alias.
+class ContentSeen : public YAML::EventHandler {
+  public:
+    std::optional<YAML::Mark> at; ///< where the document's content begins, when it has any
+
+    void OnDocumentStart(const YAML::Mark&) override {}
+    void OnDocumentEnd() override {}
+    void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+    void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { seen(mark); }
+    void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string&) override
+    {
+        seen(mark);
+    }
+    void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override
+    {
+        seen(mark);
+    }
+    void OnSequenceEnd() override {}
+    void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override
+    {
+        seen(mark);
+    }
+    void OnMapEnd() override {}
+
+  private:
+    void seen(const YAML::Mark& mark)
+    {
+        if (!at) at = mark;
+    }
+};
+
+/// Refuses a second document with content: it was once silently ignored, and with it whatever
+/// the engineer wrote there. A stream holds at most one document more than it has '---' and
+/// '...' lines; the walk stops there, as yaml-cpp's parser can report the same empty document
+/// forever (on "," for one).
+void rejectSecondDocument(const std::string& text, const std::string& name)
+{
+    std::size_t bound = 1;
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);)
+        if (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) ++bound;
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    for (std::size_t k = 0; k < bound; ++k) {
+        ContentSeen content;
+        if (!parser.HandleNextDocument(content)) return;
+        if (k > 0 && content.at)
+            throw InputError(name, "",
+                             "a second YAML document begins here; a configuration file is one document (remove "
+                             "the '---' line or the text after it)",
+                             content.at->is_null() ? std::nullopt : std::optional<int>(content.at->line + 1));
+    }
+}
+
 void rejectDuplicateKeys(const YAML::Node& node, const std::string& file, const std::string& path, long& budget)
 {
     if (--budget < 0) throw InputError(file, path, "document too large (more than 1000000 nodes, aliases counted)");
@@ -100,17 +156,8 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name)
 {
     auto fileName = std::make_shared<const std::string>(name);
     try {
-        // Every document is read: a second one (after `---`) was once silently
-        // ignored, and with it whatever the engineer wrote there.
-        const std::vector<YAML::Node> documents = YAML::LoadAll(text);
-        for (std::size_t k = 1; k < documents.size(); ++k)
-            if (documents[k] && !documents[k].IsNull())
-                throw InputError(name, "",
-                                 "a second YAML document begins here; a configuration file is one document (remove "
-                                 "the '---' line or the text after it)",
-                                 documents[k].Mark().is_null() ? std::nullopt
-                                                               : std::optional<int>(documents[k].Mark().line + 1));
-        YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
+        YAML::Node root = YAML::Load(text);
+        rejectSecondDocument(text, name);
         if (!root || root.IsNull()) throw InputError(name, "", "file is empty");
         long budget = 1000000;
         rejectDuplicateKeys(root, name, "", budget);

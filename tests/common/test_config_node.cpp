@@ -97,6 +97,15 @@ TEST(ConfigNode, ASecondDocumentIsRefusedAtItsLine)
     EXPECT_EQ(hg::ConfigNode::parse("part: block\n...\n", "p.yaml")["part"].asString(), "block");
 }
 
+// Found by fuzzing: yaml-cpp's parser reports "," as one empty document after another without
+// end; reading every document hung. The walk is bounded by the stream's document markers.
+TEST(ConfigNode, ALoneCommaIsAnEmptyFileNotAnEndlessStream)
+{
+    const hg::InputError e = parseError(",");
+    EXPECT_EQ(e.problem(), "file is empty");
+    EXPECT_EQ(hg::ConfigNode::parse("part: block\n---\n---\n...\n", "p.yaml")["part"].asString(), "block");
+}
+
 TEST(ConfigNode, DeviceNodesAndFoldersAreRefusedWithoutReading)
 {
     // /dev/zero once grew a reader without bound; it is not a configuration file.

@@ -1,6 +1,7 @@
 #include "hmi/gate_listener.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 
 #include <algorithm>
@@ -68,7 +69,8 @@ std::string_view reasonPhrase(int status)
 /// not read it loses it, the listener does not wait for it.
 void answerRefusal(int fd, int status, const std::string& reason)
 {
-    const std::string body = nlohmann::json{{"error", reason}}.dump();
+    // The reason may quote what the client sent (its Host, its Origin), which need not be UTF-8.
+    const std::string body = dumpJson({{"error", reason}});
     std::string out = fmt::format("HTTP/1.1 {} {}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n"
                                   "Connection: close\r\nX-Content-Type-Options: nosniff\r\n",
                                   status, reasonPhrase(status), body.size());

@@ -349,6 +349,10 @@ TEST_F(HmiServerTest, TheGateRefusesWhatTheLibraryOnceLetThrough)
               "HTTP/1.1 400 Bad Request");
     EXPECT_EQ(rawRequest(port, "FOO /api/status HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"),
               "HTTP/1.1 405 Method Not Allowed");
+    // A refusal that quotes bytes that are not UTF-8 (a Host of Latin-1 bytes, found by fuzzing:
+    // the listener's thread once died on it) is answered, the bytes as U+FFFD.
+    EXPECT_EQ(rawRequest(port, "GET /api/status HTTP/1.1\r\nHost: \xe0\xce\xcd\r\n\r\n"),
+              "HTTP/1.1 421 Misdirected Request");
     EXPECT_EQ(getJson("/api/status")["sequencer"]["state"], "ready");
 }
 

@@ -279,7 +279,7 @@ void Inspector::measureDeviations(InspectionResult& r, const std::vector<Silhoue
     for (const LandmarkResult& lr : r.landmarks)
         if (lr.status != LandmarkStatus::Ok) r.pass = false;
     for (const ParameterResult& pr : r.parameters)
-        if (pr.status != "ok") r.pass = false;
+        if (pr.status != ParameterStatus::Ok) r.pass = false;
 }
 
 // A landmark the capability check refused and the user forced (docs/inspection.md,
@@ -612,7 +612,8 @@ ParameterResult measureParameter(const InspectionMap& map, const MapParameter& p
         break;
     }
     pr.measured = true;
-    pr.status = std::abs(pr.value.mid() - p.nominal) > p.tolerance ? "out_of_tolerance" : "ok";
+    pr.status =
+        std::abs(pr.value.mid() - p.nominal) > p.tolerance ? ParameterStatus::OutOfTolerance : ParameterStatus::Ok;
     return pr;
 }
 
@@ -682,7 +683,7 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
     for (const LandmarkResult& lr : result.landmarks)
         if (lr.status != LandmarkStatus::Ok) result.pass = false;
     for (const ParameterResult& pr : result.parameters)
-        if (pr.status != "ok") result.pass = false;
+        if (pr.status != ParameterStatus::Ok) result.pass = false;
     result.voxelsReconstructed = memo.total();
     result.reconstructionMs = watch.ms();
     log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}",
@@ -762,7 +763,7 @@ nlohmann::json toJson(const InspectionResult& r)
                 {"kind", enumName(p.kind)},
                 {"nominal_mm", p.nominal},
                 {"tolerance_mm", p.tolerance},
-                {"status", p.status}};
+                {"status", enumName(p.status)}};
         jp["min_mm"] = p.measured ? json(p.value.min) : json(nullptr);
         jp["max_mm"] = p.measured ? json(p.value.max) : json(nullptr);
         ps.push_back(std::move(jp));

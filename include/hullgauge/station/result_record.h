@@ -3,6 +3,7 @@
 // the result store, and only then publishes it to the PLC.
 #pragma once
 
+#include "hullgauge/inspect/outcome.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
 
@@ -18,7 +19,7 @@ namespace hg::station {
 /// A landmark's outcome, as in the inspection result JSON (docs/contracts.md §4).
 struct LandmarkOutcome {
     std::string id;
-    std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable | uncertain
+    inspect::LandmarkStatus status = inspect::LandmarkStatus::NotInspected;
     double errorMinMm = 0.0;
     double errorMaxMm = 0.0;
     double errorMm = 0.0;
@@ -27,10 +28,10 @@ struct LandmarkOutcome {
     /// signed sub-voxel deviation, its expanded uncertainty and the decision.
     std::optional<double> deviationMm{};
     std::optional<double> uncertaintyMm{};
-    std::string decision{};
+    std::optional<inspect::Decision> decision{};
     /// The part program's asymmetric limits [lower, upper], when it gives them.
     std::optional<std::pair<double, double>> limitsMm{};
-    bool ok() const { return status == "ok"; }
+    bool ok() const { return status == inspect::LandmarkStatus::Ok; }
 };
 
 /// The release of a part program a part was judged with (docs/commissioning.md,

@@ -30,6 +30,13 @@ nlohmann::json InspectionRecord::landmarksJson() const
     return list;
 }
 
+nlohmann::json toJson(const CycleTimings& timings)
+{
+    auto j = nlohmann::json::object();
+    for (const auto& [step, time] : timings) j[std::string(enumName(step))] = time.count();
+    return j;
+}
+
 namespace {
 
 /// `value` × `scale` rounded into a register: 0 for no value, 65535 beyond.

@@ -38,6 +38,14 @@ json trialJson(const DefectTrial& t)
             {"error", t.error.empty() ? nlohmann::json(nullptr) : nlohmann::json(t.error)}};
 }
 
+/// {"ok": 40, "uncertain": 2}: the nominal seats per status, under the statuses' names.
+json statusesJson(const std::map<inspect::LandmarkStatus, std::size_t>& statuses)
+{
+    json j = json::object();
+    for (const auto& [status, seats] : statuses) j[std::string(enumName(status))] = seats;
+    return j;
+}
+
 json landmarkJson(const LandmarkVerification& v)
 {
     json trials = json::array();
@@ -48,7 +56,7 @@ json landmarkJson(const LandmarkVerification& v)
             {"observable_seats", v.observableSeats},
             {"accepted_seats", v.acceptedSeats},
             {"false_rejects", v.observableSeats - v.acceptedSeats + (v.seats - v.observableSeats)},
-            {"statuses", v.statuses},
+            {"statuses", statusesJson(v.statuses)},
             {"predicted_u_mm", v.predictedUMm},
             {"measured_u_max_mm", optionalNumber(v.measuredUMaxMm)},
             {"measured_u_median_mm", optionalNumber(v.measuredUMedianMm)},

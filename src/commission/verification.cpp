@@ -142,7 +142,7 @@ class Verifier {
         const inspect::LandmarkResult* r = findResult(result, v.id);
         ++v.seats;
         if (!r) return;
-        ++v.statuses[std::string(enumName(r->status))];
+        ++v.statuses[r->status];
         if (r->status != LandmarkStatus::NotObservable && r->status != LandmarkStatus::NotInspected)
             ++v.observableSeats;
         if (r->status == LandmarkStatus::Ok) ++v.acceptedSeats;
@@ -279,7 +279,8 @@ void Verifier::concludeLandmark(LandmarkVerification& v)
                    {Fix::ChangeLens, Fix::WidenTolerance, Fix::DropLandmark},
                    "a camera closer to the part or a longer lens (smaller U), a wider tolerance, or drop it");
     else if (v.acceptedSeats < v.observableSeats) {
-        const std::size_t uncertain = v.statuses.count("uncertain") ? v.statuses.at("uncertain") : 0;
+        const auto uncertainSeats = v.statuses.find(inspect::LandmarkStatus::Uncertain);
+        const std::size_t uncertain = uncertainSeats == v.statuses.end() ? 0 : uncertainSeats->second;
         std::string what = "the nominal part is rejected at " + std::to_string(v.observableSeats - v.acceptedSeats) +
                            seats + " (false rejects)";
         if (v.deviationMaxAbsMm) what += ", |deviation| up to " + formatNumber(*v.deviationMaxAbsMm, 4) + " mm";

@@ -279,7 +279,7 @@ void Inspector::measureDeviations(InspectionResult& r, const std::vector<Silhoue
     for (const LandmarkResult& lr : r.landmarks)
         if (lr.status != LandmarkStatus::Ok) r.pass = false;
     for (const ParameterResult& pr : r.parameters)
-        if (pr.status != "ok") r.pass = false;
+        if (pr.status != ParameterStatus::Ok) r.pass = false;
 }
 
 // A landmark the capability check refused and the user forced (docs/inspection.md,
@@ -612,7 +612,8 @@ ParameterResult measureParameter(const InspectionMap& map, const MapParameter& p
         break;
     }
     pr.measured = true;
-    pr.status = std::abs(pr.value.mid() - p.nominal) > p.tolerance ? "out_of_tolerance" : "ok";
+    pr.status =
+        std::abs(pr.value.mid() - p.nominal) > p.tolerance ? ParameterStatus::OutOfTolerance : ParameterStatus::Ok;
     return pr;
 }
 
@@ -682,98 +683,13 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
     for (const LandmarkResult& lr : result.landmarks)
         if (lr.status != LandmarkStatus::Ok) result.pass = false;
     for (const ParameterResult& pr : result.parameters)
-        if (pr.status != "ok") result.pass = false;
+        if (pr.status != ParameterStatus::Ok) result.pass = false;
     result.voxelsReconstructed = memo.total();
     result.reconstructionMs = watch.ms();
     log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}",
                                     result.landmarks.size(), level_, result.voxelsReconstructed,
                                     result.pass ? "pass" : "fail");
     return result;
-}
-
-nlohmann::json toJson(const InspectionResult& r)
-{
-    using nlohmann::json;
-    json j;
-    j["part"] = r.part;
-    j["verdict"] = r.pass ? "pass" : "fail";
-    j["voxel_size_mm"] = r.voxelSizeMm;
-    j["views_used"] = r.viewsUsed;
-    j["voxels_reconstructed"] = r.voxelsReconstructed;
-    j["level"] = r.level;
-    j["adjacency"] = r.adjacency;
-    json lms = json::array();
-    for (const LandmarkResult& lr : r.landmarks) {
-        json l;
-        l["id"] = lr.id;
-        l["status"] = enumName(lr.status);
-        l["error_number"] = lr.errorNumber;
-        auto measured = [&](double v) { return lr.measured ? json(v) : json(nullptr); };
-        l["error_min_mm"] = measured(lr.errorMinMm);
-        l["error_max_mm"] = measured(lr.errorMaxMm);
-        l["error_mm"] = measured(lr.errorMm);
-        if (lr.measured) {
-            l["offset_low_mm"] = lr.offsetLowMm;
-            l["offset_high_mm"] = lr.offsetHighMm;
-        }
-        l["tolerance_mm"] = lr.toleranceMm;
-        if (lr.limitsMm) l["limits_mm"] = {lr.limitsMm->first, lr.limitsMm->second};
-        if (!lr.reason.empty()) l["reason"] = lr.reason;
-        l["voxels_reconstructed"] = lr.voxelsReconstructed;
-        if (lr.medMm) l["med_mm"] = *lr.medMm;
-        if (lr.deviation) {
-            // docs/inspection.md, "Sub-voxel deviation": signed, outward positive; U with k = 2.
-            l["deviation_mm"] = lr.deviation->measured ? json(lr.deviation->deviationMm) : json(nullptr);
-            l["uncertainty_mm"] = lr.deviation->measured ? json(lr.deviation->uncertaintyMm) : json(nullptr);
-            l["deviation"] = toJson(*lr.deviation);
-            if (lr.decision) l["decision"] = enumName(*lr.decision);
-        }
-        if (!lr.views.empty()) {
-            json vs = json::array();
-            for (const ViewReport& v : lr.views) {
-                json jv{{"view", v.viewId},
-                        {"observes", v.discrimination.observes},
-                        {"distance_mm", v.discrimination.distanceMm},
-                        {"theta_deg", v.discrimination.thetaDeg},
-                        {"med_range_mm", v.discrimination.medRangeMm}};
-                const double angle = v.discrimination.medAngleMm;
-                jv["med_angle_mm"] = std::isfinite(angle) ? json(angle) : json(nullptr);
-                vs.push_back(std::move(jv));
-            }
-            l["views"] = std::move(vs);
-        }
-        lms.push_back(std::move(l));
-    }
-    j["landmarks"] = std::move(lms);
-    const Statistics& s = r.statistics;
-    j["statistics"] = {{"ave_error_min_mm", s.aveErrorMin},
-                       {"ave_error_max_mm", s.aveErrorMax},
-                       {"ave_error_mm", s.aveError},
-                       {"std_error_min_mm", s.stdErrorMin},
-                       {"std_error_max_mm", s.stdErrorMax},
-                       {"std_error_mm", s.stdError},
-                       {"max_error_mm", s.maxError},
-                       {"min_error_mm", s.minError},
-                       {"total_volume_error_mm3", s.totalVolumeError},
-                       {"landmarks_measured", s.landmarksMeasured}};
-    json ps = json::array();
-    for (const ParameterResult& p : r.parameters) {
-        json jp{{"id", p.id},
-                {"kind", enumName(p.kind)},
-                {"nominal_mm", p.nominal},
-                {"tolerance_mm", p.tolerance},
-                {"status", p.status}};
-        jp["min_mm"] = p.measured ? json(p.value.min) : json(nullptr);
-        jp["max_mm"] = p.measured ? json(p.value.max) : json(nullptr);
-        ps.push_back(std::move(jp));
-    }
-    j["parameters"] = std::move(ps);
-    j["timing_ms"] = {{"segmentation", r.segmentationMs}, {"reconstruction", r.reconstructionMs}, {"total", r.totalMs}};
-    if (r.alignment) {
-        j["alignment"] = align::toJson(*r.alignment);
-        j["seating_fault"] = r.seatingFault;
-    }
-    return j;
 }
 
 } // namespace hg::inspect

@@ -16,18 +16,25 @@ nlohmann::json InspectionRecord::landmarksJson() const
     auto list = nlohmann::json::array();
     for (const auto& l : landmarks) {
         nlohmann::json j{{"id", l.id},
-                         {"status", l.status},
+                         {"status", enumName(l.status)},
                          {"error_min_mm", l.errorMinMm},
                          {"error_max_mm", l.errorMaxMm},
                          {"error_mm", l.errorMm},
                          {"tolerance_mm", l.toleranceMm}};
         if (l.deviationMm) j["deviation_mm"] = *l.deviationMm;
         if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
-        if (!l.decision.empty()) j["decision"] = l.decision;
+        if (l.decision) j["decision"] = enumName(*l.decision);
         if (l.limitsMm) j["limits_mm"] = {l.limitsMm->first, l.limitsMm->second};
         list.push_back(std::move(j));
     }
     return list;
+}
+
+nlohmann::json toJson(const CycleTimings& timings)
+{
+    auto j = nlohmann::json::object();
+    for (const auto& [step, time] : timings) j[std::string(enumName(step))] = time.count();
+    return j;
 }
 
 namespace {

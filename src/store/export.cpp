@@ -59,7 +59,8 @@ namespace {
 /// One landmark of one cycle as every format takes it.
 struct Measurement {
     std::string id;
-    std::string status;
+    std::optional<inspect::LandmarkStatus> status; ///< none when the entry names none
+    std::optional<inspect::Decision> decision;
     study::Zone zone;
     std::optional<double> value;                               ///< none for a landmark the cycle could not place
     study::ValueSource source = study::ValueSource::Deviation; ///< where `value` comes from
@@ -89,12 +90,14 @@ std::vector<Measurement> measurementsOf(const json& row)
             throw InputError("", field, "a landmark without a string \"id\"");
         Measurement m;
         m.id = entry["id"].get<std::string>();
-        m.status = entry.value("status", std::string());
+        m.status = study::statusOf(entry, field + "." + m.id);
+        m.decision = study::decisionOf(entry, field + "." + m.id);
         m.zone = study::zoneOf(entry, field + "." + m.id);
         m.entry = &entry;
         // A landmark the bracket could not place, or one the traversal never
         // reached, has no value (docs/inspection.md "Result JSON extensions").
-        const bool placed = m.status != "not_found" && m.status != "not_observable" && m.status != "not_inspected";
+        using enum inspect::LandmarkStatus;
+        const bool placed = m.status != NotFound && m.status != NotObservable && m.status != NotInspected;
         if (placed && isNumber(entry, "deviation_mm")) {
             m.value = entry["deviation_mm"].get<double>();
         } else if (placed && isNumber(entry, "error_mm")) {
@@ -194,10 +197,12 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows)
             const auto& e = *m.entry;
             auto cells = cycle;
             cells.insert(cells.end(),
-                         {m.id, m.status, csvNumber(m.value), m.value ? std::string(enumName(m.source)) : std::string(),
+                         {m.id, m.status ? std::string(enumName(*m.status)) : std::string(), csvNumber(m.value),
+                          m.value ? std::string(enumName(m.source)) : std::string(),
                           csvNumber(e.value("deviation_mm", json())), csvNumber(e.value("uncertainty_mm", json())),
                           csvNumber(e.value("error_mm", json())), csvNumber(json(m.zone.lower)),
-                          csvNumber(json(m.zone.upper)), e.value("decision", std::string())});
+                          csvNumber(json(m.zone.upper)),
+                          m.decision ? std::string(enumName(*m.decision)) : std::string()});
             cells.insert(cells.end(), tail.begin(), tail.end());
             writeCsvLine(out, cells);
         }

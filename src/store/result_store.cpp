@@ -66,7 +66,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         .bind(11, static_cast<std::int64_t>(r.landmarksFailed()))
         .bind(12, static_cast<std::int64_t>(r.landmarks.size()))
         .bind(13, dumpJson(r.landmarksJson()))
-        .bind(14, dumpJson(r.timingMs))
+        .bind(14, dumpJson(station::toJson(r.timings)))
         .bind(15, imagesDir)
         .bind(16, dumpJson(r.alignment))
         .bind(17, dumpJson(r.simulation))

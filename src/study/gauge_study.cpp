@@ -47,7 +47,31 @@ bool isNumber(const nlohmann::json& entry, const char* key)
     return entry.contains(key) && entry[key].is_number();
 }
 
+/// The enumerator `entry[key]` names, nullopt when the entry has no `key`; any
+/// other value is bad input naming the field.
+template <class E>
+std::optional<E> enumOf(const nlohmann::json& entry, const char* key, const std::string& field, const char* what)
+{
+    if (!entry.contains(key)) return std::nullopt;
+    const auto& value = entry[key];
+    if (value.is_string())
+        if (const auto e = parseEnum<E>(value.get<std::string>())) return e;
+    throw InputError("", field + "." + key,
+                     "unknown " + std::string(what) + " " + value.dump() + " (expected " +
+                         enumNameList<E>(", ", " or ") + ")");
+}
+
 } // namespace
+
+std::optional<inspect::LandmarkStatus> statusOf(const nlohmann::json& entry, const std::string& field)
+{
+    return enumOf<inspect::LandmarkStatus>(entry, "status", field, "landmark status");
+}
+
+std::optional<inspect::Decision> decisionOf(const nlohmann::json& entry, const std::string& field)
+{
+    return enumOf<inspect::Decision>(entry, "decision", field, "decision");
+}
 
 // limits_mm when the landmark has it, else ±tolerance_mm (docs/study.md).
 Zone zoneOf(const nlohmann::json& entry, const std::string& field)
@@ -76,12 +100,13 @@ LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& r
             series.problem = cycleName(record) + " has no result for it";
             return series;
         }
-        const auto status = entry->value("status", std::string());
-        if (status == "not_found" || status == "not_observable") {
-            series.problem = cycleName(record) + " reports it " + status;
+        const auto field = cycleName(record) + ".landmarks." + id;
+        const auto status = statusOf(*entry, field);
+        if (status == inspect::LandmarkStatus::NotFound || status == inspect::LandmarkStatus::NotObservable) {
+            series.problem = cycleName(record) + " reports it " + std::string(enumName(*status));
             return series;
         }
-        const Zone zone = zoneOf(*entry, cycleName(record) + ".landmarks." + id);
+        const Zone zone = zoneOf(*entry, field);
         if (entries.empty()) series.zone = zone;
         if (zone != series.zone) {
             series.problem = "its tolerance zone changed within the selection (" + cycleName(record) + ": [" +

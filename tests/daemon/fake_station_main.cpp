@@ -33,6 +33,7 @@ namespace {
 using namespace hg::daemon;
 using hg::Status;
 using hg::StatusCode;
+using hg::inspect::LandmarkStatus;
 
 std::string env(const char* name)
 {
@@ -124,14 +125,14 @@ class FakeInspector : public Inspector {
         out.pass = !dark;
         for (int i = 0; i < 20; ++i) {
             bool bad = dark && (i == 3 || i == 17);
-            out.landmarks.push_back({"L" + std::to_string(i), bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0,
-                                     bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2});
+            out.landmarks.push_back({"L" + std::to_string(i), bad ? LandmarkStatus::OutOfTolerance : LandmarkStatus::Ok,
+                                     bad ? 0.5 : 0.0, bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2});
         }
         if (dark)
             for (const auto& f : frames_) {
                 ViewEvidence v{f, cv::Mat(f.size(), CV_8UC1, cv::Scalar(0)), {}};
                 v.silhouette(cv::Rect(16, 12, 32, 24)).setTo(255);
-                v.landmarks.push_back({cv::Point2d(16, 12), "L3", "out_of_tolerance"});
+                v.landmarks.push_back({cv::Point2d(16, 12), "L3", LandmarkStatus::OutOfTolerance});
                 out.views.push_back(v);
             }
         return out;

@@ -150,8 +150,8 @@ TEST(DissertationObjects, PostFourCornersGiveSquarePerimeterAndArea)
     EXPECT_GE(per.value.max, 24.0);
     EXPECT_LE(area.value.min, 36.0);
     EXPECT_GE(area.value.max, 36.0);
-    EXPECT_EQ(per.status, "ok");
-    EXPECT_EQ(area.status, "ok");
+    EXPECT_EQ(hg::enumName(per.status), "ok");
+    EXPECT_EQ(hg::enumName(area.status), "ok");
 
     // Every side 0.45 mm out: corners 0.45·√2 = 0.64 mm out along their
     // bisectors; the square is 6.9 mm: perimeter 27.6 mm, area 47.61 mm².
@@ -165,8 +165,8 @@ TEST(DissertationObjects, PostFourCornersGiveSquarePerimeterAndArea)
     EXPECT_GE(wper.value.max, 27.6);
     EXPECT_LE(warea.value.min, 47.61);
     EXPECT_GE(warea.value.max, 47.61);
-    EXPECT_EQ(wper.status, "out_of_tolerance");
-    EXPECT_EQ(warea.status, "out_of_tolerance");
+    EXPECT_EQ(hg::enumName(wper.status), "out_of_tolerance");
+    EXPECT_EQ(hg::enumName(warea.status), "out_of_tolerance");
     EXPECT_FALSE(w.pass);
 }
 
@@ -204,13 +204,13 @@ TEST(DissertationObjects, HoleSixteenLandmarksBracketPerimeterAndArea)
                            std::to_string(perimeter) + ", circle " + std::to_string(2 * M_PI * (6.0 + grow)) + ")");
         if (grow == 0.0) {
             EXPECT_TRUE(r.pass) << toJson(r).dump(1);
-            EXPECT_EQ(per.status, "ok");
-            EXPECT_EQ(ar.status, "ok");
+            EXPECT_EQ(hg::enumName(per.status), "ok");
+            EXPECT_EQ(hg::enumName(ar.status), "ok");
         } else {
             // 0.6 mm > tolerance 0.3 + 2ΔV at every landmark; perimeter +3.8 mm, area +24 mm².
             for (const LandmarkResult& l : r.landmarks) EXPECT_EQ(l.status, LandmarkStatus::OutOfTolerance) << l.id;
-            EXPECT_EQ(per.status, "out_of_tolerance");
-            EXPECT_EQ(ar.status, "out_of_tolerance");
+            EXPECT_EQ(hg::enumName(per.status), "out_of_tolerance");
+            EXPECT_EQ(hg::enumName(ar.status), "out_of_tolerance");
             EXPECT_FALSE(r.pass);
         }
     }

@@ -314,6 +314,18 @@ TEST(ExportAqdef, MalformedLandmarksAreBadInputNamingTheResult)
     EXPECT_THROW(written(ExportFormat::Csv, {bad}), hg::InputError);
 }
 
+TEST(ExportCsv, AStoredStatusThatIsNoStatusIsBadInputNamingIt)
+{
+    const auto bad =
+        row(42, kT0, "S", json::array({{{"id", "a"}, {"status", "fine"}, {"error_mm", 0.0}, {"tolerance_mm", 0.1}}}));
+    try {
+        written(ExportFormat::Csv, {bad});
+        FAIL() << "a landmark status 'fine' accepted";
+    } catch (const hg::InputError& e) {
+        EXPECT_EQ(e.field(), "result 42.landmarks.a.status");
+    }
+}
+
 TEST(ExportAqdef, NoRowsIsAFileWithoutCharacteristics)
 {
     EXPECT_EQ(written(ExportFormat::Aqdef, {}), "K0100 0\r\n");

@@ -25,7 +25,8 @@ station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict)
     r.part = "block";
     r.verdict = verdict;
     r.cycleMs = 1234;
-    r.landmarks = {{"c1", "ok", 0.0, 0.125, 0.0625, 0.2}, {"c2", "out_of_tolerance", 0.5, 0.625, 0.5625, 0.2}};
+    r.landmarks = {{"c1", inspect::LandmarkStatus::Ok, 0.0, 0.125, 0.0625, 0.2},
+                   {"c2", inspect::LandmarkStatus::OutOfTolerance, 0.5, 0.625, 0.5625, 0.2}};
     return r;
 }
 

@@ -77,7 +77,7 @@ struct LandmarkVerification {
     std::size_t seats = 0;
     std::size_t observableSeats = 0;
     std::size_t acceptedSeats = 0;
-    std::map<std::string, std::size_t> statuses; ///< nominal seats per status
+    std::map<inspect::LandmarkStatus, std::size_t> statuses; ///< nominal seats per status
     double predictedUMm = 0.0;
     std::optional<double> measuredUMaxMm; ///< largest U over the nominal seats
     std::optional<double> measuredUMedianMm;

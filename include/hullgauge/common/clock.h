@@ -18,6 +18,10 @@
 
 namespace hg {
 
+/// A span of time in milliseconds with its fraction: the unit run times are
+/// reported in (a result's `timing_ms`, docs/contracts.md §4).
+using Milliseconds = std::chrono::duration<double, std::milli>;
+
 class Clock {
   public:
     using time_point = std::chrono::steady_clock::time_point;
@@ -43,8 +47,10 @@ class Clock {
     {
         return std::chrono::duration_cast<std::chrono::nanoseconds>(now().time_since_epoch()).count();
     }
+    /// The time from `t` to now.
+    Milliseconds since(time_point t) const { return Milliseconds(now() - t); }
     /// Milliseconds from `t` to now.
-    double msSince(time_point t) const { return std::chrono::duration<double, std::milli>(now() - t).count(); }
+    double msSince(time_point t) const { return since(t).count(); }
     /// The wall time in milliseconds since the Unix epoch (UTC).
     std::int64_t wallMs() const
     {

@@ -106,7 +106,7 @@ struct ParameterResult {
     Bracket value;
     double nominal = 0.0;
     double tolerance = 0.0;
-    std::string status = "not_measured"; ///< ok | out_of_tolerance | not_measured
+    ParameterStatus status = ParameterStatus::NotMeasured;
 };
 
 struct Statistics {

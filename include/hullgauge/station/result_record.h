@@ -3,10 +3,14 @@
 // the result store, and only then publishes it to the PLC.
 #pragma once
 
+#include "hullgauge/common/clock.h"
+#include "hullgauge/common/enum_names.h"
+#include "hullgauge/inspect/outcome.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
 
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -18,7 +22,7 @@ namespace hg::station {
 /// A landmark's outcome, as in the inspection result JSON (docs/contracts.md §4).
 struct LandmarkOutcome {
     std::string id;
-    std::string status; ///< ok | out_of_tolerance | overflow | not_found | not_observable | uncertain
+    inspect::LandmarkStatus status = inspect::LandmarkStatus::NotInspected;
     double errorMinMm = 0.0;
     double errorMaxMm = 0.0;
     double errorMm = 0.0;
@@ -27,11 +31,52 @@ struct LandmarkOutcome {
     /// signed sub-voxel deviation, its expanded uncertainty and the decision.
     std::optional<double> deviationMm{};
     std::optional<double> uncertaintyMm{};
-    std::string decision{};
+    std::optional<inspect::Decision> decision{};
     /// The part program's asymmetric limits [lower, upper], when it gives them.
     std::optional<std::pair<double, double>> limitsMm{};
-    bool ok() const { return status == "ok"; }
+    bool ok() const { return status == inspect::LandmarkStatus::Ok; }
 };
+
+/// The steps of a cycle whose time the result reports; their names are the
+/// keys of its `timing_ms` (docs/daemon.md, "Maintenance socket"). Prepare runs
+/// on the pipeline's worker, mostly while the fixture moves, so the steps
+/// overlap and do not add up to the cycle.
+enum class CycleStep {
+    Move,
+    Settle,
+    Grab,
+    Region,
+    Prepare,
+    Traversal,
+    Processing,
+    WaitForVerdict,
+    CorrectPoses,
+    Commit,
+    Publish,
+    LastFrameToPublish,
+};
+constexpr auto nameTable(CycleStep)
+{
+    using enum CycleStep;
+    return std::to_array<EnumName<CycleStep>>({{Move, "move"},
+                                               {Settle, "settle"},
+                                               {Grab, "grab"},
+                                               {Region, "region"},
+                                               {Prepare, "prepare"},
+                                               {Traversal, "traversal"},
+                                               {Processing, "processing"},
+                                               {WaitForVerdict, "wait_for_verdict"},
+                                               {CorrectPoses, "correct_poses"},
+                                               {Commit, "commit"},
+                                               {Publish, "publish"},
+                                               {LastFrameToPublish, "last_frame_to_publish"}});
+}
+
+/// A cycle's time per step; a step the cycle did not report has no entry.
+using CycleTimings = std::map<CycleStep, Milliseconds>;
+/// {"commit": 1.5, "grab": 20.25, ...}: each step's milliseconds under its name
+/// (the result's `timing_ms`; the only place it is written).
+nlohmann::json toJson(const CycleTimings& timings);
 
 /// The release of a part program a part was judged with (docs/commissioning.md,
 /// "Release"): its version and the SHA-256 of the verification report it was
@@ -65,8 +110,8 @@ struct InspectionRecord {
     FaultCode faultCode = FaultCode::None;
     std::uint32_t cycleMs = 0; ///< trigger accepted -> verdict
     std::vector<LandmarkOutcome> landmarks;
-    /// Cycle-time breakdown in ms (move, settle, grab, processing, ...).
-    nlohmann::json timingMs = nlohmann::json::object();
+    /// Cycle-time breakdown (move, settle, grab, processing, ...).
+    CycleTimings timings;
     /// The measured seat: the result's `alignment` object (docs/alignment.md,
     /// docs/contracts.md §4); null when the cycle measured none.
     nlohmann::json alignment = nullptr;

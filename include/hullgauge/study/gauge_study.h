@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "hullgauge/common/enum_names.h"
+#include "hullgauge/inspect/outcome.h"
 
 namespace hg::study {
 
@@ -36,6 +37,13 @@ struct Zone {
 /// throws hg::InputError naming it when neither is there or limits_mm is not
 /// [lower, upper]. The studies and the exports (docs/export.md) take it from here.
 Zone zoneOf(const nlohmann::json& entry, const std::string& field);
+
+/// The `status` of one landmark entry of a stored result, nullopt when the
+/// entry has none; a status that is no landmark status (docs/contracts.md §4)
+/// throws hg::InputError naming `field`.status.
+std::optional<inspect::LandmarkStatus> statusOf(const nlohmann::json& entry, const std::string& field);
+/// Its `decision` likewise (docs/inspection.md, "Decisions"), nullopt when it has none.
+std::optional<inspect::Decision> decisionOf(const nlohmann::json& entry, const std::string& field);
 
 /// Which number of a landmark's result the study measured.
 enum class ValueSource {

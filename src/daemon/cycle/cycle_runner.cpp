@@ -43,11 +43,11 @@ struct CycleRunner::Cycle {
     station::InspectionRecord record;
     Clock::time_point started;
     std::optional<Clock::time_point> lastFrameAt; ///< when the last good frame was in (the latency)
-    double moveMs = 0, settleMs = 0, grabMs = 0, finishMs = 0, commitMs = 0, publishMs = 0;
-    /// The camera's time applying the views' regions (within grabMs), and the bytes it sent.
-    double regionMs = 0;
+    Milliseconds move{}, settle{}, grab{}, finish{}, commit{}, publish{};
+    /// The camera's time applying the views' regions (within grab), and the bytes it sent.
+    Milliseconds region{};
     std::size_t payloadBytes = 0;
-    double lastFrameToPublishMs = -1;
+    std::optional<Milliseconds> lastFrameToPublish; ///< none when no frame came in
     InspectionOutcome outcome;
     bool interruptFed = false; ///< the abort or the shutdown was fed to the sequencer
     bool saveImages = false;
@@ -478,7 +478,7 @@ SequencerAction CycleRunner::move(Cycle& cycle, const SequencerAction& action)
     askRegion(cycle, action.view);
     const auto start = clock_.now();
     auto r = devices_.moveTo(cycle.poses[action.view], cycle.cfg->sequencer.moveTimeout, action.retry);
-    cycle.moveMs += clock_.msSince(start);
+    cycle.move += clock_.since(start);
     if (!r.ok()) hg::log::category("seq")->warn("view {}: move failed: {}", action.view, r.message());
     return feed(station::moveEvent(r.code()));
 }
@@ -529,7 +529,7 @@ SequencerAction CycleRunner::settle(Cycle& cycle, const SequencerAction&)
         takeCommands();
         return abortRequested_ || stop_.stop_requested();
     });
-    cycle.settleMs += clock_.msSince(start);
+    cycle.settle += clock_.since(start);
     return feed(SequencerEvent::Settled);
 }
 
@@ -552,8 +552,8 @@ SequencerAction CycleRunner::grab(Cycle& cycle, const SequencerAction& action)
     const auto start = clock_.now();
     GrabbedFrame frame;
     auto r = devices_.grab(cycle.cfg->sequencer.grabTimeout, frame);
-    cycle.grabMs += clock_.msSince(start);
-    cycle.regionMs += frame.regionChangeMs;
+    cycle.grab += clock_.since(start);
+    cycle.region += Milliseconds(frame.regionChangeMs);
     cycle.payloadBytes += frame.payloadBytes;
     if (r.ok()) {
         cycle.lastFrameAt = clock_.now();
@@ -571,7 +571,7 @@ SequencerAction CycleRunner::finishInspection(Cycle& cycle)
 {
     const auto start = clock_.now();
     cycle.outcome = inspector_.finish();
-    cycle.finishMs += clock_.msSince(start);
+    cycle.finish += clock_.since(start);
     const auto& outcome = cycle.outcome;
     if (!outcome.ok) {
         hg::log::category("seq")->error("inspection failed: {}", outcome.error);
@@ -630,15 +630,17 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
     // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
     // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.
-    record.timingMs = {{"move", cycle.moveMs},
-                       {"settle", cycle.settleMs},
-                       {"grab", cycle.grabMs},
-                       {"region", cycle.regionMs},
-                       {"prepare", outcome.prepareMs},
-                       {"traversal", outcome.traversalMs},
-                       {"processing", outcome.processingMs},
-                       {"wait_for_verdict", cycle.finishMs}};
-    if (!cycle.poseCorrection.is_null()) record.timingMs["correct_poses"] = cycle.poseCorrection["ms"];
+    using station::CycleStep;
+    record.timings = {{CycleStep::Move, cycle.move},
+                      {CycleStep::Settle, cycle.settle},
+                      {CycleStep::Grab, cycle.grab},
+                      {CycleStep::Region, cycle.region},
+                      {CycleStep::Prepare, Milliseconds(outcome.prepareMs)},
+                      {CycleStep::Traversal, Milliseconds(outcome.traversalMs)},
+                      {CycleStep::Processing, Milliseconds(outcome.processingMs)},
+                      {CycleStep::WaitForVerdict, cycle.finish}};
+    if (!cycle.poseCorrection.is_null())
+        record.timings[CycleStep::CorrectPoses] = Milliseconds(cycle.poseCorrection["ms"].get<double>());
     // A failed part's images are written after the result is shown: the record names their
     // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
     cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) &&
@@ -677,17 +679,16 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     // The record is durable before the PLC can see DONE_SEQ (docs/contracts.md §6).
     const auto commitStart = clock_.now();
     commitRecord(cycle);
-    cycle.commitMs = clock_.msSince(commitStart);
+    cycle.commit = clock_.since(commitStart);
     // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
     const auto after = state();
     devices_.showLamps(station::lampPattern(after, record.verdict, record.faultCode));
     const auto publishStart = clock_.now();
     registers_.publishResult(record.toPublished(station::plcStatus(after)));
     const auto published = clock_.now();
-    cycle.publishMs = std::chrono::duration<double, std::milli>(published - publishStart).count();
+    cycle.publish = published - publishStart;
     // Last frame grabbed -> RESULT and DONE_SEQ readable on the registers (the benchmark's latency).
-    if (cycle.lastFrameAt)
-        cycle.lastFrameToPublishMs = std::chrono::duration<double, std::milli>(published - *cycle.lastFrameAt).count();
+    if (cycle.lastFrameAt) cycle.lastFrameToPublish = published - *cycle.lastFrameAt;
     // The runner turns: a failed part's images, written next, count as the loop, not as a stall.
     lastLoopNs_ = clock_.nowNs();
     cycleStartNs_ = 0;
@@ -741,10 +742,10 @@ bool CycleRunner::archiveHasRoom(Cycle& cycle)
 void CycleRunner::report(Cycle& cycle)
 {
     const auto& record = cycle.record;
-    auto timing = record.timingMs;
-    timing["commit"] = cycle.commitMs;
-    timing["publish"] = cycle.publishMs;
-    if (cycle.lastFrameToPublishMs >= 0) timing["last_frame_to_publish"] = cycle.lastFrameToPublishMs;
+    auto timings = record.timings;
+    timings[station::CycleStep::Commit] = cycle.commit;
+    timings[station::CycleStep::Publish] = cycle.publish;
+    if (cycle.lastFrameToPublish) timings[station::CycleStep::LastFrameToPublish] = *cycle.lastFrameToPublish;
     abortRequested_ = false;
     {
         std::lock_guard lock(mutex_);
@@ -763,7 +764,7 @@ void CycleRunner::report(Cycle& cycle)
                       {"purpose", std::string(enumName(record.purpose))},
                       {"images_dir", cycle.imagesDir},
                       {"alignment", record.alignment},
-                      {"timing_ms", timing},
+                      {"timing_ms", station::toJson(timings)},
                       {"payload_bytes", cycle.payloadBytes}};
         putRelease(lastCycle_, record.programRelease);
         if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
@@ -771,9 +772,9 @@ void CycleRunner::report(Cycle& cycle)
     hg::log::category("seq")->info(
         "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
         "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
-        enumName(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.moveMs, cycle.settleMs,
-        cycle.grabMs, cycle.outcome.prepareMs, cycle.finishMs, cycle.commitMs,
-        std::max(cycle.lastFrameToPublishMs, 0.0));
+        enumName(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.move.count(),
+        cycle.settle.count(), cycle.grab.count(), cycle.outcome.prepareMs, cycle.finish.count(), cycle.commit.count(),
+        cycle.lastFrameToPublish.value_or(Milliseconds{}).count());
 }
 
 // On the writer's thread: the runner is free for the next trigger meanwhile. The job

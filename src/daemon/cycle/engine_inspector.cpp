@@ -189,13 +189,12 @@ class EngineInspector : public Inspector {
             out.seatingFault = result.seatingFault;
             out.processingMs = prepared.prepareMs + result.totalMs;
             for (const auto& l : result.landmarks) {
-                station::LandmarkOutcome o{
-                    l.id, std::string(enumName(l.status)), l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
+                station::LandmarkOutcome o{l.id, l.status, l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
                 if (l.deviation && l.deviation->measured) {
                     o.deviationMm = l.deviation->deviationMm;
                     o.uncertaintyMm = l.deviation->uncertaintyMm;
                 }
-                if (l.decision) o.decision = enumName(*l.decision);
+                o.decision = l.decision;
                 o.limitsMm = l.limitsMm;
                 out.landmarks.push_back(std::move(o));
             }
@@ -272,8 +271,9 @@ class EngineInspector : public Inspector {
     // which the cycle runs after the result is shown, if it archives the part.
     std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result)
     {
-        std::map<std::string, std::string> status;
-        for (const auto& l : result.landmarks) status[l.id] = enumName(l.status);
+        // A landmark the result does not hold (masked) is drawn as not inspected.
+        std::map<std::string, inspect::LandmarkStatus> status;
+        for (const auto& l : result.landmarks) status[l.id] = l.status;
         std::vector<ViewEvidence> views = std::move(views_);
         // The archive's manifest keeps the nominal cameras (`hullgauge inspect` aligns again from
         // them); the landmarks are drawn where the seated part shows them.
@@ -285,7 +285,9 @@ class EngineInspector : public Inspector {
             const cv::Point origin = e.capture->origin.value_or(cv::Point(0, 0));
             for (const auto& l : current_->program.landmarks)
                 if (auto px = seated.project(l.position))
-                    e.landmarks.push_back({cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id, status[l.id]});
+                    e.landmarks.push_back(
+                        {cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id,
+                         status.contains(l.id) ? status.at(l.id) : inspect::LandmarkStatus::NotInspected});
         }
         return [views = std::move(views)]() mutable {
             for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);

@@ -84,12 +84,23 @@ bool archivesPart(const station::ResultsConfig& results, station::Verdict verdic
     return verdict == station::Verdict::Pass && results.archiveAll;
 }
 
-cv::Scalar statusColour(const std::string& status)
+cv::Scalar statusColour(inspect::LandmarkStatus status)
 {
-    if (status == "ok") return {0, 200, 0};
-    if (status == "out_of_tolerance") return {0, 0, 255};
-    if (status == "overflow") return {255, 0, 255};
-    if (status == "not_found") return {0, 140, 255};
+    using enum inspect::LandmarkStatus;
+    switch (status) {
+    case Ok:
+        return {0, 200, 0};
+    case OutOfTolerance:
+        return {0, 0, 255};
+    case Overflow:
+        return {255, 0, 255};
+    case NotFound:
+        return {0, 140, 255};
+    case NotObservable:
+    case NotInspected:
+    case Uncertain:
+        break;
+    }
     return {160, 160, 160};
 }
 

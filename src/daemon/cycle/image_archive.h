@@ -23,8 +23,8 @@
 namespace hg::daemon {
 
 /// BGR colour of a landmark status: ok green, out_of_tolerance red, overflow
-/// magenta, not_found orange, not_observable grey.
-cv::Scalar statusColour(const std::string& status);
+/// magenta, not_found orange, any other grey.
+cv::Scalar statusColour(inspect::LandmarkStatus status);
 
 /// The annotated picture of one view (BGR, the frame scaled to 8 bit).
 cv::Mat annotate(const ViewEvidence& view);

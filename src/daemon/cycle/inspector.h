@@ -26,7 +26,7 @@ namespace hg::daemon {
 struct LandmarkMark {
     cv::Point2d pixel;
     std::string id;
-    std::string status;
+    inspect::LandmarkStatus status = inspect::LandmarkStatus::NotInspected;
 };
 
 /// What a view contributes to the part's archive (docs/daemon.md, "Archived parts").

@@ -5,6 +5,7 @@
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
+#include "hullgauge/inspect/outcome.h"
 #include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
 #include "hullgauge/study/spc.h"
@@ -172,8 +173,11 @@ void sendExport(const fs::path& database, const httplib::Request& req, httplib::
 json summary(const json& row)
 {
     json failed = json::array();
+    // A landmark whose status is missing or unknown is listed as failed, not refused:
+    // the list shows every stored row (docs/hmi.md).
     for (const auto& l : row.at("landmarks"))
-        if (l.value("status", "") != "ok") failed.push_back(l.value("id", ""));
+        if (parseEnum<inspect::LandmarkStatus>(l.value("status", "")) != inspect::LandmarkStatus::Ok)
+            failed.push_back(l.value("id", ""));
     json s = row;
     for (const char* bulky : {"landmarks", "timing", "alignment", "simulation"}) s.erase(bulky);
     s["failed_landmarks"] = std::move(failed);

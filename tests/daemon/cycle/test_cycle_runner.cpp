@@ -182,7 +182,9 @@ class PassingInspector : public Inspector {
         out.seatingFault = seatingFault;
         out.pass = !seatingFault;
         for (const char* id : {"A", "B", "C"})
-            out.landmarks.push_back({id, seatingFault ? "not_inspected" : "ok", 0.0, 0.1, 0.05, 0.2});
+            out.landmarks.push_back({id,
+                                     seatingFault ? inspect::LandmarkStatus::NotInspected : inspect::LandmarkStatus::Ok,
+                                     0.0, 0.1, 0.05, 0.2});
         return out;
     }
     void cancel() override {}

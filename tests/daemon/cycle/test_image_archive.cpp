@@ -19,7 +19,8 @@ TEST(ImageArchive, FailedViewsAreAnnotatedInStatusColours)
     v.image = cv::Mat(100, 120, CV_16UC1, cv::Scalar(4000));
     v.silhouette = cv::Mat(100, 120, CV_8UC1, cv::Scalar(0));
     v.silhouette(cv::Rect(30, 20, 60, 50)).setTo(255);
-    v.landmarks = {{cv::Point2d(90, 70), "c2", "out_of_tolerance"}, {cv::Point2d(30, 20), "c1", "ok"}};
+    v.landmarks = {{cv::Point2d(90, 70), "c2", inspect::LandmarkStatus::OutOfTolerance},
+                   {cv::Point2d(30, 20), "c1", inspect::LandmarkStatus::Ok}};
     auto folder = archive.save(1'700'000'000'000, "SN/1", {v, v});
     ASSERT_FALSE(folder.empty());
     EXPECT_EQ(folder.filename(), "1700000000000_SN_1");

@@ -282,7 +282,7 @@ class EnginePipeline : public ::testing::Test {
     {
         std::set<std::string> ids;
         for (const auto& l : outcome.landmarks)
-            if (l.status != "ok") ids.insert(l.id);
+            if (hg::enumName(l.status) != "ok") ids.insert(l.id);
         return ids;
     }
 
@@ -322,7 +322,7 @@ TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
     }
     std::set<std::string> drawnFailing;
     for (const auto& mark : views[0].landmarks)
-        if (mark.status != "ok") drawnFailing.insert(mark.id);
+        if (hg::enumName(mark.status) != "ok") drawnFailing.insert(mark.id);
     EXPECT_EQ(drawnFailing, (std::set<std::string>{"step-top", "step-top-back"}));
 }
 

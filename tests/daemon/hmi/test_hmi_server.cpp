@@ -48,9 +48,10 @@ station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict, co
     r.verdict = verdict;
     r.cycleMs = 900 + seq;
     const bool bad = verdict == station::Verdict::Fail;
-    r.landmarks = {
-        {"c1", "ok", 0.0, 0.125, 0.0625, 0.2},
-        {"c2", bad ? "out_of_tolerance" : "ok", bad ? 0.5 : 0.0, bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2}};
+    using inspect::LandmarkStatus;
+    r.landmarks = {{"c1", LandmarkStatus::Ok, 0.0, 0.125, 0.0625, 0.2},
+                   {"c2", bad ? LandmarkStatus::OutOfTolerance : LandmarkStatus::Ok, bad ? 0.5 : 0.0,
+                    bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2}};
     return r;
 }
 

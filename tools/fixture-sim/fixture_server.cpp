@@ -1,5 +1,6 @@
 #include "fixture_server.h"
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "modbus/modbus_link.h"
@@ -30,9 +31,10 @@ using drivers::fixture::SimulatedDrive;
 constexpr std::size_t kMaxClients = 16;
 constexpr int kPollMs = 10;
 
+// The simulated drive moves on the one steady clock every part of the station reads (docs/style.md point 9).
 double steadySeconds()
 {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    return std::chrono::duration<double>(Clock::steady().now().time_since_epoch()).count();
 }
 
 std::shared_ptr<spdlog::logger> logger()

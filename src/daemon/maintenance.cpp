@@ -296,9 +296,9 @@ json trigger(const MaintenanceContext& c, const json& request)
 {
     const auto program = wholeNumber(request, "program", 1, 65535, std::nullopt);
     if (!program) return refusal(program.status());
-    if (request.contains("serial") && !request["serial"].is_string())
-        return {{"ok", false}, {"error", "serial: " + request["serial"].dump() + " is not a string"}};
-    const auto serial = request.value("serial", std::string());
+    const auto named = textField(request, "serial");
+    if (!named) return refusal(named.status());
+    const auto& serial = named.value();
     // A manual serial fits the PLC's SERIAL registers too: it names the part's
     // record and its image folder, which a 300-character serial once broke.
     if (serial.size() > station::kSerialChars)

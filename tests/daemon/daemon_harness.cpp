@@ -96,7 +96,29 @@ int DaemonProcess::wait(std::chrono::milliseconds timeout)
 
 std::string DaemonProcess::logText() const
 {
-    std::ifstream in(log_);
+    return readText(log_);
+}
+
+bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds deadline)
+{
+    const auto until = std::chrono::steady_clock::now() + deadline;
+    while (!condition()) {
+        if (std::chrono::steady_clock::now() > until) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return true;
+}
+
+std::size_t occurrences(const std::string& text, const std::string& what)
+{
+    std::size_t n = 0;
+    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
+    return n;
+}
+
+std::string readText(const std::filesystem::path& file)
+{
+    std::ifstream in(file);
     std::stringstream s;
     s << in.rdbuf();
     return s.str();

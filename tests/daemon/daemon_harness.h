@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,6 +16,14 @@ namespace hgdaemon {
 
 /// A TCP port on 127.0.0.1 nobody listens on right now.
 int freePort();
+
+/// Polls `condition` until it holds or `deadline` passes (the deadline decides, never a sleep).
+bool eventually(const std::function<bool()>& condition,
+                std::chrono::milliseconds deadline = std::chrono::milliseconds(10000));
+/// How many times `what` occurs in `text`, not overlapping.
+std::size_t occurrences(const std::string& text, const std::string& what);
+/// The whole of a text file as it is now (empty when it cannot be read).
+std::string readText(const std::filesystem::path& file);
 
 /// Writes station.yaml, part.yaml, views.yaml (`views` poses) and
 /// hullgauged.yaml (with `extra` appended) into `dir`; returns the config path.

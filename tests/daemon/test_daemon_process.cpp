@@ -39,16 +39,8 @@ std::string sql(const std::filesystem::path& db, const std::string& query)
     return hgtest::run("sqlite3 " + db.string() + " \"" + query + "\"").out;
 }
 
-/// Polls `condition` until it holds or `deadline` passes (the deadline decides, never a sleep).
-bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds deadline = 10s)
-{
-    const auto until = std::chrono::steady_clock::now() + deadline;
-    while (!condition()) {
-        if (std::chrono::steady_clock::now() > until) return false;
-        std::this_thread::sleep_for(10ms);
-    }
-    return true;
-}
+using hgdaemon::eventually;
+using hgdaemon::occurrences;
 
 int heartbeat(int port)
 {
@@ -499,13 +491,6 @@ TEST(DaemonProcess, AReloadInProgressLeavesTheMainLoopServing)
     EXPECT_TRUE(notify.seen("READY=1"));
     auto r = hgdaemon::plcClient(port, "cycles 1 --program 2 --bad-every 0");
     EXPECT_EQ(r.status, 0) << r.err << daemon.logText();
-}
-
-std::size_t occurrences(const std::string& text, const std::string& what)
-{
-    std::size_t n = 0;
-    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
-    return n;
 }
 
 // The PLC's allow-list needs a restart (docs/daemon.md): a reload that changes

@@ -596,8 +596,7 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
     report(cycle);
     if (cycle.saveImages) archivePart(cycle);
     if (cycle.archiveFull) {
-        ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
-        images_.post([archive]() mutable { archive.makeRoom(); });
+        images_.post([archive = archiveOf(cycle)]() mutable { archive.makeRoom(); });
     }
     // A cycle that left the station in fault: the sequencer says recover (at once).
     if (!stop_.stop_requested()) schedule(sequencer_.afterPublish());
@@ -645,10 +644,7 @@ void CycleRunner::recordOutcome(Cycle& cycle)
     // folder now; the whole-frame drawing is not on the path from the last frame to DONE_SEQ.
     cycle.saveImages = archivesPart(cycle.cfg->results, record.verdict) &&
                        (!outcome.views.empty() || outcome.evidence) && archiveHasRoom(cycle);
-    if (cycle.saveImages)
-        cycle.imagesDir = ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention)
-                              .folderFor(record.startedUnixMs, record.serial)
-                              .string();
+    if (cycle.saveImages) cycle.imagesDir = archiveOf(cycle).folderFor(record.startedUnixMs, record.serial).string();
 }
 
 // Per view the planned and the commanded pose and how far off the planned
@@ -694,6 +690,12 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     cycleStartNs_ = 0;
 }
 
+// The archive of the cycle's configuration, its retention aged on the runner's clock.
+ImageArchive CycleRunner::archiveOf(const Cycle& cycle) const
+{
+    return ImageArchive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
+}
+
 // The record wins over images (docs/daemon.md, "Archived parts"): a commit the full volume
 // refused is tried once more after the oldest archived folders made room.
 void CycleRunner::commitRecord(Cycle& cycle)
@@ -705,7 +707,7 @@ void CycleRunner::commitRecord(Cycle& cycle)
             store_.commit(record, cycle.imagesDir);
             return;
         } catch (const std::exception& e) {
-            ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
+            ImageArchive archive = archiveOf(cycle);
             if (attempt == 0 && !archive.hasRoom() && archive.makeRoom() > 0) {
                 log->warn("{}; the oldest archived images made room, committing again", e.what());
                 continue;
@@ -724,7 +726,7 @@ void CycleRunner::commitRecord(Cycle& cycle)
 bool CycleRunner::archiveHasRoom(Cycle& cycle)
 {
     const auto& results = cycle.cfg->results;
-    const bool room = ImageArchive(results.imageDir, results.retention, clock_).hasRoom();
+    const bool room = archiveOf(cycle).hasRoom();
     if (room != archiveHadRoom_) {
         auto log = hg::log::category("store");
         if (room)
@@ -781,7 +783,7 @@ void CycleRunner::report(Cycle& cycle)
 // touches only what it was given and reports its time through its own counter.
 void CycleRunner::archivePart(Cycle& cycle)
 {
-    ImageArchive archive(cycle.cfg->results.imageDir, cycle.cfg->results.retention, clock_);
+    ImageArchive archive = archiveOf(cycle);
     auto& outcome = cycle.outcome;
     auto evidence =
         outcome.views.empty() ? std::move(outcome.evidence) : [views = std::move(outcome.views)] { return views; };

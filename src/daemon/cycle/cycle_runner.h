@@ -15,6 +15,7 @@
 #include "cycle/camera_snapshot.h"
 #include "cycle/devices.h"
 #include "cycle/fixture_calibration.h"
+#include "cycle/image_archive.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
 #include "daemon_config.h"
@@ -120,6 +121,7 @@ class CycleRunner {
     void report(Cycle& cycle);
     void archivePart(Cycle& cycle);
     bool archiveHasRoom(Cycle& cycle);
+    ImageArchive archiveOf(const Cycle& cycle) const;
     void commitRecord(Cycle& cycle);
 
     PlcRegisters& registers_;

@@ -32,6 +32,9 @@ namespace hg::daemon {
 namespace {
 
 using namespace std::chrono_literals;
+using hgdaemon::eventually;
+using hgdaemon::occurrences;
+using hgdaemon::readText;
 
 TEST(MqttPayloads, TheResultIsTheStoredRowWithStationAndCycleId)
 {
@@ -162,25 +165,6 @@ class Spawned {
     pid_t pid_ = -1;
 };
 
-std::string readText(const std::filesystem::path& file)
-{
-    std::ifstream in(file);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-/// Polls `condition` until it holds or `deadline` passes (the deadline decides, never a sleep).
-bool within(std::chrono::milliseconds deadline, const std::function<bool()>& condition)
-{
-    const auto until = std::chrono::steady_clock::now() + deadline;
-    while (!condition()) {
-        if (std::chrono::steady_clock::now() > until) return false;
-        std::this_thread::sleep_for(20ms);
-    }
-    return true;
-}
-
 /// Whether 127.0.0.1:`port` accepts a connection now.
 bool accepts(int port)
 {
@@ -192,13 +176,6 @@ bool accepts(int port)
     const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
     ::close(fd);
     return ok;
-}
-
-std::size_t occurrences(const std::string& text, const std::string& what)
-{
-    std::size_t n = 0;
-    for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + what.size())) ++n;
-    return n;
 }
 
 // docs/mqtt.md, "Failures": a store that takes no writes (a full disk; here a write lock the test
@@ -227,14 +204,14 @@ TEST(MqttPublisher, AStoreThatTakesNoWritesKeepsTheSessionAndSendsNothingTwice)
                                                                     " 127.0.0.1\nallow_anonymous true\n"
                                                                     "persistence false\nuser root\n");
     Spawned broker({"mosquitto", "-c", conf.string()}, dir / "broker.log");
-    ASSERT_TRUE(within(10s, [&] { return accepts(port); })) << readText(dir / "broker.log");
+    ASSERT_TRUE(eventually([&] { return accepts(port); }, 10s)) << readText(dir / "broker.log");
     // Subscribed (SUBACK in the client's debug output) before anything is published.
     const auto received = dir / "received.txt";
     // Line-buffered: the subscriber writes to a file, which stdio would buffer whole.
     Spawned subscriber({"stdbuf", "-oL", "mosquitto_sub", "-d", "-v", "-q", "1", "-h", "127.0.0.1", "-p",
                         std::to_string(port), "-t", "hullgauge/gauge-7/result"},
                        received);
-    ASSERT_TRUE(within(10s, [&] { return readText(received).find("SUBACK") != std::string::npos; }))
+    ASSERT_TRUE(eventually([&] { return readText(received).find("SUBACK") != std::string::npos; }, 10s))
         << readText(received);
 
     station::MqttConfig config;
@@ -252,11 +229,11 @@ TEST(MqttPublisher, AStoreThatTakesNoWritesKeepsTheSessionAndSendsNothingTwice)
             if (occurrences(text, "\"LOCKED-" + std::to_string(k) + "\"") != 1) return false;
         return true;
     };
-    ASSERT_TRUE(within(20s, sentOnce)) << readText(received);
-    ASSERT_TRUE(within(20s, [&] { return log.text().find("the store takes no writes") != std::string::npos; }))
+    ASSERT_TRUE(eventually(sentOnce, 20s)) << readText(received);
+    ASSERT_TRUE(eventually([&] { return log.text().find("the store takes no writes") != std::string::npos; }, 20s))
         << log.text();
     // Long enough for two more marks refused at the back-off and, before, two reconnections.
-    EXPECT_FALSE(within(6s, [&] { return !sentOnce() || publisher.connectionAttempts() != 1; }))
+    EXPECT_FALSE(eventually([&] { return !sentOnce() || publisher.connectionAttempts() != 1; }, 6s))
         << readText(received) << log.text();
 
     lock.exec("ROLLBACK");
@@ -265,7 +242,7 @@ TEST(MqttPublisher, AStoreThatTakesNoWritesKeepsTheSessionAndSendsNothingTwice)
         auto count = reader.prepare("SELECT COUNT(*) FROM inspections WHERE published_unix_ms IS NOT NULL");
         return count.step() && count.int64(0) == 3;
     };
-    EXPECT_TRUE(within(20s, marked)) << log.text();
+    EXPECT_TRUE(eventually(marked, 20s)) << log.text();
     EXPECT_TRUE(sentOnce()) << readText(received);
     EXPECT_EQ(publisher.connectionAttempts(), 1);
     EXPECT_NE(log.text().find("the store takes writes again"), std::string::npos) << log.text();

@@ -7,9 +7,9 @@
 // background without meeting the part or the floor). The witnesses it looks
 // for first are the grazing poses — camera centre in the landmark's tangent
 // plane, solved analytically (pose_space.h) — because a void voxel beside a
-// flat face is proven void only from there (ARCHITECTURE "perspective and
-// grazing views"); a coarse pose grid within a small band of the tangent plane
-// adds the rest. Each candidate is judged by Rules 1-4 (view_rules.h).
+// flat face is proven void only from there (docs/architecture.md,
+// "Perspective and grazing views"); a coarse pose grid within a small band of
+// the tangent plane adds the rest. Each candidate is judged by Rules 1-4 (view_rules.h).
 //
 // Then the view pattern analysis of 5.5/5.6.1 (view_pattern.h): every landmark
 // gets its best views (the designer's AND-of-OR lists, 5.3.2, or derived: the

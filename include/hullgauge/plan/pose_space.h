@@ -1,6 +1,6 @@
 // The station's pose space for view planning (dissertation 5.4, 5.5.1) and the
-// analytic grazing poses of a landmark (ARCHITECTURE "perspective and grazing
-// views").
+// analytic grazing poses of a landmark (docs/architecture.md, "Perspective and
+// grazing views").
 //
 // A pose is a fixture position (docs/contracts.md §2). The camera centre in the part
 // frame, C(pose), is what decides what a view sees of the part. For a

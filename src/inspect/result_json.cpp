@@ -84,7 +84,9 @@ nlohmann::json toJson(const InspectionResult& r)
         ps.push_back(std::move(jp));
     }
     j["parameters"] = std::move(ps);
-    j["timing_ms"] = {{"segmentation", r.segmentationMs}, {"reconstruction", r.reconstructionMs}, {"total", r.totalMs}};
+    j["timing_ms"] = {{"segmentation", r.segmentationTime.count()},
+                      {"reconstruction", r.reconstructionTime.count()},
+                      {"total", r.totalTime.count()}};
     if (r.alignment) {
         j["alignment"] = align::toJson(*r.alignment);
         j["seating_fault"] = r.seatingFault;

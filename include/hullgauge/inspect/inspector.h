@@ -140,6 +140,8 @@ struct InspectionResult {
 
 /// docs/contracts.md §4 plus the documented extensions.
 nlohmann::json toJson(const InspectionResult& result);
+/// A landmark's sub-voxel deviation with its budget and its views (docs/inspection.md, "Sub-voxel deviation").
+nlohmann::json toJson(const Deviation& deviation);
 
 /// A reconstruction oracle: the label of a voxel box (Void, Object or Undecided).
 using VoxelOracle = std::function<VoxelLabel(const Box3&)>;

@@ -1,5 +1,7 @@
 // The rules a view must satisfy to observe a landmark (dissertation 5.3.4-5.3.6)
-// and the line-of-sight test of weak convexity (Definition 2).
+// and the line-of-sight test of weak convexity in the practical form the
+// station uses (Definition 2, "reconstructible": Definition 1 under the
+// assumptions of 2.5.1, which implies weak convexity, 2.7.1).
 //
 // A landmark is observed from a pose when its witness voxel — the void
 // neighbour of the landmark's voxel lying most nearly along the outward normal,

@@ -272,10 +272,18 @@ CommissionOutcome Workspace::commission(std::string_view part, const fs::path& s
     const geometry::Station station = geometry::loadStation(stationFile);
     const StagedDraft staged(folder, s.draftText);
     if (settings.progress && !settings.progress("plan", 0, 1)) throw commission::Cancelled();
+    // The plan is done when the verification's first step comes.
+    bool planned = false;
+    const commission::Progress progress = [&](const std::string& phase, std::size_t done, std::size_t total) {
+        if (!settings.progress) return true;
+        if (!planned && !settings.progress("plan", 1, 1)) return false;
+        planned = true;
+        return settings.progress(phase, done, total);
+    };
     PhaseClock clock;
     CommissionRound r;
     try {
-        r = commissionRound(staged.path(), station, options, settings.progress, clock);
+        r = commissionRound(staged.path(), station, options, progress, clock);
     } catch (const InputError& e) {
         refuseAsDraft(e, staged.path(), s.record.part + ".draft.yaml");
     }

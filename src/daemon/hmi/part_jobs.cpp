@@ -72,7 +72,6 @@ std::vector<std::string> commandLine(const std::filesystem::path& cli, const std
     std::vector<std::string> argv{"nice", "-n", "10", cli.string(), "part", kind, "--workspace", workspace.string(),
                                   part};
     argv.insert(argv.end(), args.begin(), args.end());
-    argv.emplace_back("--progress");
     return argv;
 }
 

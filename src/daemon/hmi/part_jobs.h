@@ -69,7 +69,7 @@ class PartJobs {
     PartJobs(const PartJobs&) = delete;
     PartJobs& operator=(const PartJobs&) = delete;
 
-    /// Starts `hullgauge part <kind> --workspace W <part> <args…> --progress`;
+    /// Starts `hullgauge part <kind> --workspace W <part> <args…>`;
     /// refused (NotAllowed) while the part has a job or max_jobs run.
     Status start(const std::string& part, const std::string& kind, const std::vector<std::string>& args,
                  const std::string& by);

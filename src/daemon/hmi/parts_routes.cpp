@@ -62,33 +62,6 @@ workbench::LandmarkEdit editOf(const json& body)
     return edit;
 }
 
-json landmarkJson(const workbench::DraftLandmark& l)
-{
-    json j{{"id", l.id},
-           {"position", vec(l.position)},
-           {"normal", vec(l.normal)},
-           {"normal_given", l.normalGiven},
-           {"on", enumName(l.on)}};
-    j["tolerance_mm"] = l.toleranceMm ? json(*l.toleranceMm) : json(nullptr);
-    j["limits_mm"] = l.limitsMm ? json::array({l.limitsMm->first, l.limitsMm->second}) : json(nullptr);
-    return j;
-}
-
-json recordJson(const workbench::PartState& s)
-{
-    const auto& r = s.record;
-    json j{{"name", r.part},
-           {"revision", r.revision},
-           {"changed_by", r.changedBy},
-           {"changed_at", r.changedAt},
-           {"change", r.change},
-           {"cad", r.cad},
-           {"landmarks", s.draft.landmarks.size()}};
-    j["plc_program"] = r.plcProgram ? json(*r.plcProgram) : json(nullptr);
-    j["released_version"] = s.releasedVersion ? json(*s.releasedVersion) : json(nullptr);
-    return j;
-}
-
 json fixtureJson(const geometry::FixtureKinematics& f)
 {
     auto axis = [](const Eigen::Vector3d& point, const Eigen::Vector3d& direction) {
@@ -112,50 +85,36 @@ std::optional<json> jsonFile(const fs::path& file)
     return j.is_discarded() ? std::nullopt : std::optional<json>(std::move(j));
 }
 
-/// Each planned view's camera in the part frame (docs/workbench.md): the
-/// plan's K, R, t (camera from part) turned into the centre, the rotation
-/// camera → part and the working distance to the part's centre.
-json viewsJson(const json& plan, const Eigen::Vector3d& partCentre)
-{
-    json views = json::array();
-    std::size_t index = 1;
-    for (const auto& v : plan.value("views", json::array())) {
-        Eigen::Matrix3d r;
-        Eigen::Vector3d t;
-        for (int i = 0; i < 3; ++i) {
-            t[i] = v.at("t").at(i).get<double>();
-            for (int k = 0; k < 3; ++k) r(i, k) = v.at("R").at(i).at(k).get<double>();
-        }
-        const Eigen::Matrix3d toPart = r.transpose();
-        const Eigen::Vector3d centre = -toPart * t;
-        json rotation = json::array();
-        for (int i = 0; i < 3; ++i) rotation.push_back({toPart(i, 0), toPart(i, 1), toPart(i, 2)});
-        const auto& k = v.at("K");
-        views.push_back({{"index", index++},
-                         {"id", v.value("id", "")},
-                         {"pose", v.at("pose")},
-                         {"landmarks", v.value("landmarks", json::array())},
-                         {"camera",
-                          {{"centre", vec(centre)},
-                           {"rotation", rotation},
-                           {"fx", k[0][0]},
-                           {"fy", k[1][1]},
-                           {"cx", k[0][2]},
-                           {"cy", k[1][2]},
-                           {"width", v.at("image_size")[0]},
-                           {"height", v.at("image_size")[1]},
-                           {"working_distance_mm", (r * partCentre + t).z()}}}});
-    }
-    return views;
-}
-
-/// A refusal of the workspace as its HTTP status: a stale revision 409, a
-/// part that is not there 404, any other bad input 400.
+/// A refusal of the workspace as its HTTP status: a part that is not there
+/// 404; a stale revision, a name taken, a release refused 409; any other bad input 400.
 [[noreturn]] void refuse(const InputError& e)
 {
-    if (dynamic_cast<const workbench::StaleRevision*>(&e)) throw HttpError(409, e.what());
-    if (e.field() == "part") throw HttpError(404, e.what());
+    if (dynamic_cast<const workbench::PartNotFound*>(&e)) throw HttpError(404, e.what());
+    if (dynamic_cast<const workbench::StaleRevision*>(&e) || dynamic_cast<const workbench::PartExists*>(&e) ||
+        dynamic_cast<const workbench::ReleaseRefused*>(&e))
+        throw HttpError(409, e.what());
     throw HttpError(400, e.what());
+}
+
+/// Runs `work`, turning the workspace's refusals into their HTTP status.
+template <class Work> auto refusing(Work work)
+{
+    try {
+        return work();
+    } catch (const InputError& e) {
+        refuse(e);
+    }
+}
+
+/// A list row: the part's record without its draft.
+json rowJson(const workbench::PartState& s)
+{
+    json j = workbench::toJson(s);
+    j["landmarks"] = s.draft.landmarks.size();
+    j["cad"] = s.record.cad;
+    j["released_version"] = s.releasedVersion ? json(*s.releasedVersion) : json(nullptr);
+    j.erase("draft");
+    return j;
 }
 
 } // namespace
@@ -175,17 +134,7 @@ json PartsRoutes::partJson(const std::string& part) const
 {
     const workbench::PartState s = workspace_.read(part);
     const fs::path folder = workspace_.partFolder(part);
-    json j = recordJson(s);
-    j["cad"] = {{"file", s.record.cad},
-                {"kind", s.cadKind},
-                {"triangles", s.triangles},
-                {"bounds_mm", {vec(s.boundsMin), vec(s.boundsMax)}},
-                {"sha256", s.cadSha256}};
-    json landmarks = json::array();
-    for (const auto& l : s.draft.landmarks) landmarks.push_back(landmarkJson(l));
-    j["draft"] = {{"octree", {{"depth", s.draft.depth}, {"adjacency_depth", s.draft.adjacencyDepth}}},
-                  {"tolerance_mm", s.draft.defaultToleranceMm},
-                  {"landmarks", landmarks}};
+    json j = workbench::toJson(s);
     const auto cfg = config_();
     j["station"] = {{"fixture", fixtureJson(cfg->station.fixture)}, {"floor_z_mm", cfg->station.floorZMm}};
     j["suggestions"] = jsonFile(folder / "suggestions.json").value_or(json(nullptr));
@@ -194,16 +143,8 @@ json PartsRoutes::partJson(const std::string& part) const
                             {"views", plan->value("views", json::array()).size()},
                             {"problems", plan->value("problems", json::array())}}
                      : json(nullptr);
-    if (const auto& v = s.record.verified)
-        j["verified"] = {{"revision", v->revision},
-                         {"released", v->released},
-                         {"stale", v->revision != s.record.revision},
-                         {"verification_sha256", v->verificationSha256}};
-    else
-        j["verified"] = nullptr;
-    const auto versions = workspace_.versions(part);
-    j["released"] = nullptr;
-    for (const auto& v : versions)
+    if (j["verified"].is_object()) j["verified"]["stale"] = j["verified"]["revision"] != s.record.revision;
+    for (const auto& v : workspace_.versions(part))
         if (v.inForce)
             j["released"] = {{"version", v.version},
                              {"plc_program", s.record.plcProgram ? json(*s.record.plcProgram) : json(nullptr)},
@@ -216,71 +157,65 @@ json PartsRoutes::partJson(const std::string& part) const
 
 void PartsRoutes::routeReads(httplib::Server& server)
 {
+    const std::string parts = std::string("/api/parts/") + kPart;
     server.Get("/api/parts", api([this](const httplib::Request&, httplib::Response& res) {
-                   json parts = json::array();
+                   json rows = json::array();
                    for (const auto& s : workspace_.list()) {
-                       json p = recordJson(s);
+                       json row = rowJson(s);
                        const auto job = jobs_->job(s.record.part);
-                       p["job"] = job ? toJson(*job) : json(nullptr);
-                       parts.push_back(std::move(p));
+                       row["job"] = job ? toJson(*job) : json(nullptr);
+                       rows.push_back(std::move(row));
                    }
-                   sendJson(res, {{"parts", parts}});
+                   sendJson(res, {{"parts", rows}});
                }));
-    server.Get(std::string("/api/parts/") + kPart, api([this](const httplib::Request& req, httplib::Response& res) {
-                   try {
-                       sendJson(res, partJson(req.matches[1].str()));
-                   } catch (const InputError& e) {
-                       refuse(e);
-                   }
+    server.Get(parts, api([this](const httplib::Request& req, httplib::Response& res) {
+                   sendJson(res, refusing([&] { return partJson(req.matches[1].str()); }));
                }));
-    server.Get(std::string("/api/parts/") + kPart + "/model\\.stl",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   try {
-                       const bool lod = req.has_param("lod") && req.get_param_value("lod") == "1";
-                       res.set_header("Cache-Control", "no-cache");
-                       res.set_content(workspace_.displayMesh(req.matches[1].str(), lod), "model/stl");
-                   } catch (const InputError& e) {
-                       refuse(e);
-                   }
+    server.Get(parts + "/model\\.stl", api([this](const httplib::Request& req, httplib::Response& res) {
+                   const bool lod = req.has_param("lod") && req.get_param_value("lod") == "1";
+                   auto mesh = refusing([&] { return workspace_.displayMesh(req.matches[1].str(), lod); });
+                   res.set_header("Cache-Control", "no-cache");
+                   res.set_content(std::move(mesh), "model/stl");
                }));
-    server.Get(std::string("/api/parts/") + kPart + "/verification",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   try {
-                       const auto file = workspace_.partFolder(req.matches[1].str()) / "verification.json";
-                       const auto report = jsonFile(file);
-                       if (!report) throw HttpError(404, "part " + req.matches[1].str() + " has not been commissioned");
-                       sendJson(res, *report);
-                   } catch (const InputError& e) {
-                       refuse(e);
-                   }
+    server.Get(parts + "/verification", api([this](const httplib::Request& req, httplib::Response& res) {
+                   const auto folder = refusing([&] { return workspace_.partFolder(req.matches[1].str()); });
+                   const auto report = jsonFile(folder / "verification.json");
+                   if (!report) throw HttpError(404, "part " + req.matches[1].str() + " has not been commissioned");
+                   sendJson(res, *report);
                }));
-    server.Get(std::string("/api/parts/") + kPart + "/views",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   try {
-                       const std::string part = req.matches[1].str();
-                       const auto s = workspace_.read(part);
-                       const auto plan = jsonFile(workspace_.partFolder(part) / "plan.json");
-                       if (!plan) throw HttpError(404, "part " + part + " has no plan: plan or commission it");
-                       sendJson(res, {{"views", viewsJson(*plan, (s.boundsMin + s.boundsMax) / 2.0)}});
-                   } catch (const InputError& e) {
-                       refuse(e);
-                   }
+    server.Get(parts + "/views", api([this](const httplib::Request& req, httplib::Response& res) {
+                   const auto station = config_()->stationFile;
+                   sendJson(res, refusing([&] { return workspace_.views(req.matches[1].str(), station); }));
                }));
-    server.Get(std::string("/api/parts/") + kPart + "/views/([0-9]{1,3})\\.png",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   try {
-                       const std::string part = req.matches[1].str(), k = req.matches[2].str();
-                       const fs::path folder = workspace_.partFolder(part);
-                       const fs::path png = folder / "display" / ("view_" + k + ".png");
-                       std::error_code ec;
-                       const auto planned = fs::last_write_time(folder / "plan.json", ec);
-                       if (ec) throw HttpError(404, "part " + part + " has no plan: plan or commission it");
-                       if (!fs::exists(png) || fs::last_write_time(png, ec) < planned)
-                           runPart({"view", part, k, "--out", png.string()}, std::chrono::seconds(120));
-                       sendFile(res, png);
-                   } catch (const InputError& e) {
-                       refuse(e);
-                   }
+    server.Get(parts + "/views/([0-9]{1,3})\\.png", api([this](const httplib::Request& req, httplib::Response& res) {
+                   const std::string part = req.matches[1].str(), k = req.matches[2].str();
+                   const fs::path folder = refusing([&] { return workspace_.partFolder(part); });
+                   const fs::path png = folder / "display" / ("view_" + k + ".png");
+                   std::error_code ec;
+                   const auto planned = fs::last_write_time(folder / "plan.json", ec);
+                   if (ec) throw HttpError(404, "part " + part + " has no plan: plan or commission it");
+                   // Rendered by a process of its own at nice 10, kept until the next plan.
+                   if (!fs::exists(png) || fs::last_write_time(png, ec) < planned)
+                       runPart({"view", part, k, "--out", png.string(), "--station", config_()->stationFile.string()},
+                               std::chrono::seconds(120));
+                   sendFile(res, png);
+               }));
+    server.Get(parts + "/job", api([this](const httplib::Request& req, httplib::Response& res) {
+                   const auto job = jobs_->job(req.matches[1].str());
+                   sendJson(res, job ? toJson(*job) : json(nullptr));
+               }));
+    server.Get(parts + "/versions", api([this](const httplib::Request& req, httplib::Response& res) {
+                   json versions = json::array();
+                   for (const auto& v : refusing([&] { return workspace_.versions(req.matches[1].str()); }))
+                       versions.push_back(workbench::toJson(v));
+                   sendJson(res, {{"versions", versions}});
+               }));
+    server.Get(parts + "/diff", api([this](const httplib::Request& req, httplib::Response& res) {
+                   static const std::regex kVersion(R"(draft|[0-9]{1,6})");
+                   const auto from = req.get_param_value("from"), to = req.get_param_value("to");
+                   if (!std::regex_match(from, kVersion) || !std::regex_match(to, kVersion))
+                       throw HttpError(400, "from, to: a version number or 'draft'");
+                   sendJson(res, refusing([&] { return workspace_.diff(req.matches[1].str(), from, to); }));
                }));
 }
 
@@ -293,9 +228,8 @@ std::string PartsRoutes::runPart(const std::vector<std::string>& args, std::chro
     if (outcome.exitStatus != 0) {
         std::string words = outcome.err;
         while (!words.empty() && (words.back() == '\n' || words.back() == ' ')) words.pop_back();
-        if (const auto nl = words.rfind('\n'); nl != std::string::npos && words.size() > 4000)
-            words = words.substr(nl + 1);
-        throw HttpError(outcome.exitStatus == 2 || outcome.exitStatus == 1 ? 409 : 500,
+        if (words.size() > 4000) words = words.substr(words.size() - 4000);
+        throw HttpError(outcome.exitStatus == 2 ? 400 : 500,
                         words.empty() ? "hullgauge part " + args.at(0) + " failed" : words);
     }
     return outcome.out;
@@ -303,107 +237,92 @@ std::string PartsRoutes::runPart(const std::vector<std::string>& args, std::chro
 
 void PartsRoutes::routeLandmarks(httplib::Server& server)
 {
+    const std::string parts = std::string("/api/parts/") + kPart;
     server.Post("/api/parts", api([this](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     if (!req.has_param("file")) throw HttpError(400, "file: missing (the CAD file's name)");
                     workbench::AddOptions options;
                     if (req.has_param("name")) options.name = req.get_param_value("name");
-                    if (auto t = req.get_param_value("tolerance"); !t.empty()) {
-                        try {
-                            options.toleranceMm = std::stod(t);
-                        } catch (const std::exception&) {
-                            throw HttpError(400, "tolerance: '" + t + "' is not a number");
-                        }
+                    if (req.has_param("tolerance")) {
+                        const auto t = req.get_param_value("tolerance");
+                        char* end = nullptr;
+                        options.toleranceMm = std::strtod(t.c_str(), &end);
+                        if (t.empty() || *end != '\0' || !(options.toleranceMm > 0.0))
+                            throw HttpError(400, "tolerance: '" + t + "' is not a number > 0 (mm)");
                     }
-                    const auto state =
-                        workspace_.addUpload(req.get_param_value("file"), req.body, options, {session.name});
+                    const auto state = refusing([&] {
+                        return workspace_.addUpload(req.get_param_value("file"), req.body, options, {session.name});
+                    });
                     hg::log::category("workbench")->info("part {} added by {}", state.record.part, session.name);
                     sendJson(res, partJson(state.record.part), 201);
                 }));
-    server.Post(std::string("/api/parts/") + kPart + "/landmarks",
-                api([this](const httplib::Request& req, httplib::Response& res) {
+    const auto placedAnswer = [this](const std::string& part, const workbench::Placed& placed) {
+        json answer = partJson(part);
+        answer["placed"] = workbench::toJson(placed);
+        return answer;
+    };
+    server.Post(parts + "/landmarks", api([this, placedAnswer](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     const auto body = jsonBody(req, "{\"revision\": N, \"position\": [x, y, z], ...}");
                     if (!body.contains("position")) throw HttpError(400, "position: missing");
                     std::optional<std::string> id;
-                    if (body.contains("id") && body["id"].is_string()) id = body["id"].get<std::string>();
-                    try {
-                        const std::string part = req.matches[1].str();
-                        const auto placed =
-                            workspace_.addLandmark(part, revisionOf(body), id, editOf(body), {session.name});
-                        json answer = partJson(part);
-                        answer["placed"] = {{"id", placed.landmark.id},
-                                            {"on", enumName(placed.landmark.on)},
-                                            {"moved_mm", placed.movedMm}};
-                        sendJson(res, answer);
-                    } catch (const InputError& e) {
-                        refuse(e);
+                    if (body.contains("id") && !body["id"].is_null()) {
+                        if (!body["id"].is_string()) throw HttpError(400, "id: not a string");
+                        id = body["id"].get<std::string>();
                     }
+                    const std::string part = req.matches[1].str();
+                    const auto placed = refusing([&] {
+                        return workspace_.addLandmark(part, revisionOf(body), id, editOf(body), {session.name});
+                    });
+                    sendJson(res, placedAnswer(part, placed));
                 }));
-    server.Post(std::string("/api/parts/") + kPart + "/landmarks/([^/]{1,64})",
-                api([this](const httplib::Request& req, httplib::Response& res) {
+    server.Post(parts + "/landmarks/([^/]{1,64})",
+                api([this, placedAnswer](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     const auto body = jsonBody(req, "{\"revision\": N, ...}");
-                    try {
-                        const std::string part = req.matches[1].str();
-                        const auto placed = workspace_.changeLandmark(part, revisionOf(body), req.matches[2].str(),
-                                                                      editOf(body), {session.name});
-                        json answer = partJson(part);
-                        answer["placed"] = {{"id", placed.landmark.id},
-                                            {"on", enumName(placed.landmark.on)},
-                                            {"moved_mm", placed.movedMm}};
-                        sendJson(res, answer);
-                    } catch (const InputError& e) {
-                        refuse(e);
-                    }
+                    const std::string part = req.matches[1].str();
+                    const auto placed = refusing([&] {
+                        return workspace_.changeLandmark(part, revisionOf(body), req.matches[2].str(), editOf(body),
+                                                         {session.name});
+                    });
+                    sendJson(res, placedAnswer(part, placed));
                 }));
-    server.Post(std::string("/api/parts/") + kPart + "/landmarks/([^/]{1,64})/remove",
+    server.Post(parts + "/landmarks/([^/]{1,64})/remove",
                 api([this](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     const auto body = jsonBody(req, "{\"revision\": N}");
-                    try {
-                        const std::string part = req.matches[1].str();
-                        workspace_.removeLandmark(part, revisionOf(body), req.matches[2].str(), {session.name});
-                        sendJson(res, partJson(part));
-                    } catch (const InputError& e) {
-                        refuse(e);
-                    }
+                    const std::string part = req.matches[1].str();
+                    refusing([&] {
+                        return workspace_.removeLandmark(part, revisionOf(body), req.matches[2].str(), {session.name});
+                    });
+                    sendJson(res, partJson(part));
                 }));
 }
 
 void PartsRoutes::routeJobs(httplib::Server& server)
 {
-    static const std::map<std::string, std::string> kJobs{
-        {"suggest", "suggest"}, {"plan", "plan"}, {"commission", "commission"}};
-    for (const auto& [route, kind] : kJobs)
-        server.Post(std::string("/api/parts/") + kPart + "/" + route,
-                    api([this, kind = kind](const httplib::Request& req, httplib::Response& res) {
+    const std::string parts = std::string("/api/parts/") + kPart;
+    for (const std::string kind : {"suggest", "plan", "commission"})
+        server.Post(parts + "/" + kind, api([this, kind](const httplib::Request& req, httplib::Response& res) {
                         const auto session = signedIn_(req);
                         const auto body = jsonBody(req, "{...}");
                         const std::string part = req.matches[1].str();
-                        try {
-                            (void)workspace_.partFolder(part);
-                        } catch (const InputError& e) {
-                            refuse(e);
-                        }
-                        std::vector<std::string> args;
-                        if (kind == "commission" && body.contains("seats")) {
-                            if (!body["seats"].is_number_integer() || body["seats"].get<int>() < 1 ||
-                                body["seats"].get<int>() > 200)
-                                throw HttpError(400, "seats: a whole number 1..200");
-                            args = {"--seats", std::to_string(body["seats"].get<int>())};
+                        refusing([&] { return workspace_.partFolder(part); });
+                        std::vector<std::string> args{"--station", config_()->stationFile.string()};
+                        if (kind == "commission") {
+                            args.emplace_back("--progress");
+                            if (body.contains("seats")) {
+                                if (!body["seats"].is_number_integer() || body["seats"].get<int>() < 1 ||
+                                    body["seats"].get<int>() > 200)
+                                    throw HttpError(400, "seats: a whole number 1..200");
+                                args.insert(args.end(), {"--seats", std::to_string(body["seats"].get<int>())});
+                            }
                         }
                         if (auto started = jobs_->start(part, kind, args, session.name); !started)
                             throw HttpError(409, started.message());
                         sendJson(res, toJson(*jobs_->job(part)), 202);
                     }));
-    server.Get(std::string("/api/parts/") + kPart + "/job",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   const auto job = jobs_->job(req.matches[1].str());
-                   sendJson(res, job ? toJson(*job) : json(nullptr));
-               }));
-    server.Post(std::string("/api/parts/") + kPart + "/job/cancel",
-                api([this](const httplib::Request& req, httplib::Response& res) {
+    server.Post(parts + "/job/cancel", api([this](const httplib::Request& req, httplib::Response& res) {
                     (void)signedIn_(req);
                     if (!jobs_->cancel(req.matches[1].str()))
                         throw HttpError(409, "part " + req.matches[1].str() + " has no job running");
@@ -411,66 +330,56 @@ void PartsRoutes::routeJobs(httplib::Server& server)
                 }));
 }
 
+// A release or rollback changes what the daemon runs: it reads its programs
+// again (as on SIGHUP) and runs the version in force from its next cycle.
+json PartsRoutes::reloaded(const std::string& part)
+{
+    const auto reload = mailbox_.call({{"command", "reload"}}, std::chrono::milliseconds(2000));
+    json answer = partJson(part);
+    answer["reload"] = reload ? *reload : json{{"ok", false}, {"error", "the daemon did not answer in time"}};
+    return answer;
+}
+
 void PartsRoutes::routeVersions(httplib::Server& server)
 {
-    server.Get(std::string("/api/parts/") + kPart + "/versions",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   sendJson(res, parseJson(runPart({"versions", req.matches[1].str(), "--json"},
-                                                   std::chrono::seconds(30)),
-                                           "hullgauge part versions"));
-               }));
-    server.Get(std::string("/api/parts/") + kPart + "/diff",
-               api([this](const httplib::Request& req, httplib::Response& res) {
-                   static const std::regex kVersion(R"(draft|[0-9]{1,6})");
-                   const auto from = req.get_param_value("from"), to = req.get_param_value("to");
-                   if (!std::regex_match(from, kVersion) || !std::regex_match(to, kVersion))
-                       throw HttpError(400, "from, to: a version number or 'draft'");
-                   sendJson(res, parseJson(runPart({"diff", req.matches[1].str(), from, to, "--json"},
-                                                   std::chrono::seconds(60)),
-                                           "hullgauge part diff"));
-               }));
-    server.Post(std::string("/api/parts/") + kPart + "/release",
-                api([this](const httplib::Request& req, httplib::Response& res) {
+    const std::string parts = std::string("/api/parts/") + kPart;
+    server.Post(parts + "/release", api([this](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     const auto body = jsonBody(req, "{\"revision\": N, \"plc_program\": P}");
                     const std::string part = req.matches[1].str();
-                    if (!body.contains("plc_program") || !body["plc_program"].is_number_integer() ||
-                        body["plc_program"].get<int>() < 1 || body["plc_program"].get<int>() > 65535)
-                        throw HttpError(400, "plc_program: a whole number 1..65535 (the PLC's PART_PROGRAM)");
-                    const int number = body["plc_program"].get<int>();
-                    const auto cfg = config_();
-                    if (auto it = cfg->programs.find(static_cast<std::uint16_t>(number));
-                        it != cfg->programs.end() && it->second.workbenchPart != part)
-                        throw HttpError(409, "program " + std::to_string(number) + " is " +
-                                                 (it->second.workbenchPart.empty()
-                                                      ? it->second.partFile.string()
-                                                      : "the workspace's part '" + it->second.workbenchPart + "'") +
-                                                 " on this station: choose another number");
+                    std::optional<int> number;
+                    if (body.contains("plc_program") && !body["plc_program"].is_null()) {
+                        if (!body["plc_program"].is_number_integer() || body["plc_program"].get<int>() < 1 ||
+                            body["plc_program"].get<int>() > 65535)
+                            throw HttpError(400, "plc_program: a whole number 1..65535 (the PLC's PART_PROGRAM)");
+                        number = body["plc_program"].get<int>();
+                    }
                     if (jobs_->running(part)) throw HttpError(409, "part " + part + " has a job running");
-                    runPart({"release", part, "--plc-program", std::to_string(number), "--by", session.name,
-                             "--revision", std::to_string(revisionOf(body))},
-                            std::chrono::seconds(120));
-                    hg::log::category("workbench")->info("part {} released as program {} by {}", part, number,
+                    const auto cfg = config_();
+                    std::vector<int> taken;
+                    for (const auto& [n, ref] : cfg->programs)
+                        if (ref.workbenchPart != part) taken.push_back(n);
+                    const auto version = refusing([&] {
+                        return workspace_.release(part, revisionOf(body), cfg->stationFile, number, taken,
+                                                  {session.name});
+                    });
+                    hg::log::category("workbench")->info("part {} version {} released by {}", part, version.version,
                                                          session.name);
-                    // The daemon reads its programs again (as on SIGHUP): the version runs from the next cycle.
-                    const auto reload = mailbox_.call({{"command", "reload"}}, std::chrono::milliseconds(2000));
-                    json answer = partJson(part);
-                    answer["reload"] = reload ? *reload : json{{"ok", false}, {"error", "the daemon did not answer"}};
-                    sendJson(res, answer);
+                    sendJson(res, reloaded(part));
                 }));
-    server.Post(std::string("/api/parts/") + kPart + "/rollback",
-                api([this](const httplib::Request& req, httplib::Response& res) {
+    server.Post(parts + "/rollback", api([this](const httplib::Request& req, httplib::Response& res) {
                     const auto session = signedIn_(req);
                     const auto body = jsonBody(req, "{\"version\": V}");
                     if (!body.contains("version") || !body["version"].is_number_integer())
                         throw HttpError(400, "version: the version to make the one in force again");
                     const std::string part = req.matches[1].str();
-                    runPart({"rollback", part, std::to_string(body["version"].get<int>()), "--by", session.name},
-                            std::chrono::seconds(60));
-                    const auto reload = mailbox_.call({{"command", "reload"}}, std::chrono::milliseconds(2000));
-                    json answer = partJson(part);
-                    answer["reload"] = reload ? *reload : json{{"ok", false}, {"error", "the daemon did not answer"}};
-                    sendJson(res, answer);
+                    if (jobs_->running(part)) throw HttpError(409, "part " + part + " has a job running");
+                    const auto version = refusing(
+                        [&] { return workspace_.rollback(part, body["version"].get<int>(), {session.name}); });
+                    hg::log::category("workbench")->info("part {} rolled back to version {} as version {} by {}",
+                                                         part, body["version"].get<int>(), version.version,
+                                                         session.name);
+                    sendJson(res, reloaded(part));
                 }));
 }
 

@@ -37,6 +37,7 @@ class PartsRoutes {
     void routeJobs(httplib::Server& server);
     void routeVersions(httplib::Server& server);
     nlohmann::json partJson(const std::string& part) const;
+    nlohmann::json reloaded(const std::string& part);
     /// Runs `hullgauge part <args…>` and waits (at most `deadline`): its stdout; 409 with its words when it refuses.
     std::string runPart(const std::vector<std::string>& args, std::chrono::seconds deadline) const;
 

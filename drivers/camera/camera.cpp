@@ -25,15 +25,9 @@ int cvTypeOf(PixelFormat f)
 // ---------------------------------------------------------------------------
 // Regions
 
-std::string toString(const Roi& roi)
-{
-    return "[" + std::to_string(roi.x) + ", " + std::to_string(roi.y) + ", " + std::to_string(roi.width) + ", " +
-           std::to_string(roi.height) + "]";
-}
-
 std::ostream& operator<<(std::ostream& out, const Roi& roi)
 {
-    return out << toString(roi);
+    return out << fmt::format("{}", roi);
 }
 
 namespace {
@@ -69,17 +63,17 @@ Result<Roi> alignRegion(const Roi& requested, const Roi& bounds, const RegionRul
 {
     if (requested.isFullSensor()) return bounds;
     if (requested.width <= 0 || requested.height <= 0)
-        return Status::failure(StatusCode::NotAllowed, "region " + toString(requested) +
-                                                           ": width and height must both be positive "
-                                                           "(or both 0 for the configured region)");
+        return Status::failure(StatusCode::NotAllowed, fmt::format("region {}: width and height must both be positive "
+                                                                   "(or both 0 for the configured region)",
+                                                                   requested));
     const int x0 = std::max(requested.x, bounds.x);
     const int y0 = std::max(requested.y, bounds.y);
     const int x1 = std::min(requested.x + requested.width, bounds.x + bounds.width);
     const int y1 = std::min(requested.y + requested.height, bounds.y + bounds.height);
     if (x0 >= x1 || y0 >= y1)
-        return Status::failure(StatusCode::NotAllowed, "region " + toString(requested) +
-                                                           " lies outside the sensor region " + toString(bounds) +
-                                                           " the camera delivers");
+        return Status::failure(
+            StatusCode::NotAllowed,
+            fmt::format("region {} lies outside the sensor region {} the camera delivers", requested, bounds));
     const auto [x, width] = alignAxis(x0, x1, bounds.x, bounds.x + bounds.width, rules.x);
     const auto [y, height] = alignAxis(y0, y1, bounds.y, bounds.y + bounds.height, rules.y);
     return Roi{x, y, width, height};
@@ -187,8 +181,7 @@ Result<Roi> Camera::setRegion(const Roi& requested)
 void Camera::fallBackToWholeFrames(const std::string& why)
 {
     if (!wholeFramesOnly_.exchange(true))
-        log::category("camera")->warn("{}; delivering whole frames ({}) from now on", why,
-                                      toString(configuredRegion()));
+        log::category("camera")->warn("{}; delivering whole frames ({}) from now on", why, configuredRegion());
 }
 
 Status Camera::requireOpen(std::string_view call) const
@@ -261,3 +254,9 @@ std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment env
 }
 
 } // namespace hg::drivers
+
+fmt::format_context::iterator fmt::formatter<hg::drivers::Roi>::format(const hg::drivers::Roi& roi,
+                                                                       fmt::format_context& ctx) const
+{
+    return fmt::format_to(ctx.out(), "[{}, {}, {}, {}]", roi.x, roi.y, roi.width, roi.height);
+}

@@ -17,7 +17,7 @@ FixtureSequenceResult runFixtureSequence(const std::vector<geometry::FixturePose
     for (std::size_t i = 0; i < poses.size(); ++i) {
         if (io.cancelled && io.cancelled()) throw FaultError("calibrate run: cancelled");
         const auto& pose = poses[i];
-        const std::string where = geometry::toString(pose, type);
+        const std::string where = fmt::format("{}", geometry::PoseOn{pose, type});
         check(io.moveTo(pose), "move to " + where);
         cv::Mat frame;
         check(io.grab(frame), "grab at " + where);

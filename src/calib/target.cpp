@@ -119,14 +119,6 @@ TargetSpec TargetSpec::parse(const std::string& text, const std::string& field)
     return spec;
 }
 
-std::string TargetSpec::toString() const
-{
-    std::ostringstream s;
-    s << (kind == TargetKind::Chessboard ? "chessboard:" : "charuco:") << cols << 'x' << rows << ':' << squareMm;
-    if (kind == TargetKind::Charuco) s << ':' << markerMm << ':' << dictionary;
-    return s.str();
-}
-
 int TargetSpec::cornerCount() const
 {
     return kind == TargetKind::Chessboard ? cols * rows : (cols - 1) * (rows - 1);
@@ -199,3 +191,14 @@ std::optional<TargetView> detectTarget(const cv::Mat& image, const TargetSpec& s
 }
 
 } // namespace hg::calib
+
+fmt::format_context::iterator fmt::formatter<hg::calib::TargetSpec>::format(const hg::calib::TargetSpec& spec,
+                                                                            fmt::format_context& ctx) const
+{
+    using hg::formatNumber;
+    using hg::calib::TargetKind;
+    if (spec.kind == TargetKind::Chessboard)
+        return fmt::format_to(ctx.out(), "chessboard:{}x{}:{}", spec.cols, spec.rows, formatNumber(spec.squareMm));
+    return fmt::format_to(ctx.out(), "charuco:{}x{}:{}:{}:{}", spec.cols, spec.rows, formatNumber(spec.squareMm),
+                          formatNumber(spec.markerMm), spec.dictionary);
+}

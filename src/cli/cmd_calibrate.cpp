@@ -98,7 +98,7 @@ int runIntrinsics(const IntrinsicsArgs& a)
     auto result = calib::calibrateIntrinsics(views, size, a.options);
     std::cout << calib::formatIntrinsicsReport(result);
     calib::StationFileUpdate update(a.out);
-    update.setIntrinsics(result, spec.toString());
+    update.setIntrinsics(result, fmt::format("{}", spec));
     commitAndReport(update, a.out);
     return 0;
 }
@@ -183,8 +183,8 @@ std::vector<calib::FixtureView> loadFixtureObservations(const fs::path& file)
                     ids.push_back(static_cast<int>(id.asIntIn(0, spec.cornerCount() - 1)));
                 if (ids.size() != pixels.size()) idsNode->fail("needs one id per corner");
             } else if (static_cast<int>(pixels.size()) != spec.cornerCount()) {
-                cornersNode.fail("expected all " + std::to_string(spec.cornerCount()) + " corners of " +
-                                 spec.toString() + " in order (or give 'ids')");
+                cornersNode.fail(
+                    fmt::format("expected all {} corners of {} in order (or give 'ids')", spec.cornerCount(), spec));
             }
             v.target = calib::viewFromCorners(spec, "views[" + std::to_string(i - 1) + "]", pixels, ids);
         }

@@ -102,7 +102,8 @@ int runFixture(const std::string& action, const FixtureArgs& a)
             auto timeout = a.timeoutS         ? std::chrono::milliseconds(static_cast<long long>(*a.timeoutS * 1000.0))
                            : action == "home" ? fixture->homeTimeout()
                                               : fixture->moveTimeout();
-            std::cerr << (action == "home" ? "homing" : "moving to " + geometry::toString(*pose, fixture->type()))
+            std::cerr << (action == "home" ? "homing"
+                                           : fmt::format("moving to {}", geometry::PoseOn{*pose, fixture->type()}))
                       << " ..." << std::endl;
             check(fixture->waitInPosition(timeout), action);
         }

@@ -160,7 +160,7 @@ int run(const InspectArgs& args)
     } catch (const ArgumentError& e) {
         throw InputError(args.views, "views", e.what());
     }
-    result.totalMs = watch.ms();
+    result.totalTime = watch.elapsed();
 
     const std::string text = inspect::toJson(result).dump(2) + "\n";
     if (args.out.empty()) {

@@ -156,7 +156,8 @@ int run(const SimulateArgs& args)
         if (!cv::imwrite(file.string(), image)) throw FaultError("cannot write image " + file.string());
 
         const sim::CoverageStats stats = sim::measureCoverage(coverage);
-        std::cout << summary(id, geometry::toString(poses[i], station.fixture.type), stats) << std::endl;
+        std::cout << summary(id, fmt::format("{}", geometry::PoseOn{poses[i], station.fixture.type}), stats)
+                  << std::endl;
 
         vision::ManifestView view;
         view.id = id;

@@ -114,7 +114,7 @@ class Verifier {
         TwinCycle c = runCycle(*inspector_.inspector, *problem_.station, problem_.poses, inspector_.setup.seatViews,
                                problem_.segmentation, seat, asMade, frames, frame_);
         frame_ += problem_.poses.size();
-        inspectionMs_.push_back(c.result.reconstructionMs);
+        inspectionMs_.push_back(c.result.reconstructionTime.count());
         cycleS_.push_back(
             plan::predictCycleTime(c.commanded, motion_, plan::homePose(problem_.station->fixture)).totalS);
         for (std::size_t k = 0; k < report_.views.size() && k < c.frameMarginPx.size(); ++k)

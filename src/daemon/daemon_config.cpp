@@ -242,14 +242,6 @@ bool Ipv4Network::contains(std::uint32_t hostOrderAddress) const
     return (hostOrderAddress & mask) == (address & mask);
 }
 
-std::string Ipv4Network::toString() const
-{
-    in_addr a{htonl(address)};
-    char buf[INET_ADDRSTRLEN] = {};
-    inet_ntop(AF_INET, &a, buf, sizeof buf);
-    return std::string(buf) + "/" + std::to_string(prefix);
-}
-
 std::optional<Ipv4Network> parseIpv4Network(const std::string& text)
 {
     Ipv4Network net;
@@ -382,3 +374,12 @@ std::vector<std::string> allowedHostsFor(const HmiConfig& http)
 }
 
 } // namespace hg::station
+
+fmt::format_context::iterator fmt::formatter<hg::station::Ipv4Network>::format(const hg::station::Ipv4Network& network,
+                                                                               fmt::format_context& ctx) const
+{
+    in_addr a{htonl(network.address)};
+    char buf[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &a, buf, sizeof buf);
+    return fmt::format_to(ctx.out(), "{}/{}", buf, network.prefix);
+}

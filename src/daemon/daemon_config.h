@@ -30,7 +30,6 @@ struct Ipv4Network {
     std::uint32_t address = 0; ///< host byte order
     int prefix = 32;
     bool contains(std::uint32_t hostOrderAddress) const;
-    std::string toString() const;
 };
 /// Parses "192.168.0.10" or "10.1.0.0/16"; std::nullopt when malformed.
 std::optional<Ipv4Network> parseIpv4Network(const std::string& text);
@@ -196,3 +195,8 @@ struct DaemonConfig {
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
 
 } // namespace hg::station
+
+/// A network as "192.168.10.0/24" (a plain address as "10.1.0.7/32"): fmt::format("{}", network).
+template <> struct fmt::formatter<hg::station::Ipv4Network> : hg::ValueFormatter {
+    fmt::format_context::iterator format(const hg::station::Ipv4Network& network, fmt::format_context& ctx) const;
+};

@@ -397,9 +397,9 @@ json snapshot(const MaintenanceContext& c, const json& request)
                                  : job.pose->declinationDeg) = v;
     }
     if (job.pose && !fixture.reachable(*job.pose))
-        return {
-            {"ok", false},
-            {"error", "snapshot: " + geometry::toString(*job.pose, fixture.type) + " is outside the fixture's ranges"}};
+        return {{"ok", false},
+                {"error", fmt::format("snapshot: {} is outside the fixture's ranges",
+                                      geometry::PoseOn{*job.pose, fixture.type})}};
     if (const Status queued = c.runner.requestSnapshot(std::move(job)); !queued.ok())
         return {{"ok", false}, {"error", "snapshot: " + queued.message()}};
     return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};

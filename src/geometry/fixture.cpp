@@ -1,7 +1,5 @@
 #include "hullgauge/geometry/fixture.h"
 
-#include <sstream>
-
 namespace hg::geometry {
 namespace {
 
@@ -14,16 +12,6 @@ RigidTransform rotationAboutLine(const Vec3& axis, const Vec3& point, double ang
 }
 
 } // namespace
-
-std::string toString(const FixturePose& pose, FixtureType type)
-{
-    std::ostringstream s;
-    if (type == FixtureType::Rail)
-        s << "rail " << pose.railMm << " mm";
-    else
-        s << "rotation " << pose.rotationDeg << " deg, declination " << pose.declinationDeg << " deg";
-    return s.str();
-}
 
 RigidTransform FixtureKinematics::cameraFromPart(const FixturePose& pose) const
 {
@@ -47,3 +35,13 @@ Vec3 FixtureKinematics::cameraCentreInPart(const FixturePose& pose) const
 }
 
 } // namespace hg::geometry
+
+fmt::format_context::iterator fmt::formatter<hg::geometry::PoseOn>::format(const hg::geometry::PoseOn& p,
+                                                                           fmt::format_context& ctx) const
+{
+    using hg::formatNumber;
+    if (p.type == hg::geometry::FixtureType::Rail)
+        return fmt::format_to(ctx.out(), "rail {} mm", formatNumber(p.pose.railMm));
+    return fmt::format_to(ctx.out(), "rotation {} deg, declination {} deg", formatNumber(p.pose.rotationDeg),
+                          formatNumber(p.pose.declinationDeg));
+}

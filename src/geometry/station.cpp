@@ -206,7 +206,7 @@ std::vector<FixturePose> loadPoses(const std::filesystem::path& file, const Fixt
                 item.fail(railFixture ? "the station's fixture is a rail: give rail_mm"
                                       : "the station's fixture turns and tilts: give rotation_deg/declination_deg");
             if (!fixture->reachable(p))
-                item.fail("pose " + toString(p, fixture->type) + " is outside the fixture's range");
+                item.fail(fmt::format("pose {} is outside the fixture's range", PoseOn{p, fixture->type}));
         }
         poses.push_back(p);
     }

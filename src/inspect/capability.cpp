@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "hullgauge/common/format.h"
+#include "hullgauge/inspect/inspector.h"
 
 namespace hg::inspect {
 

@@ -382,27 +382,4 @@ Deviation DeviationGauge::expected(const MapLandmark& lm, const std::vector<geom
     return combine(std::move(views), 0.0);
 }
 
-nlohmann::json toJson(const Deviation& d)
-{
-    nlohmann::json views = nlohmann::json::array();
-    for (const ViewDeviation& v : d.views)
-        views.push_back({{"view", v.viewId},
-                         {"deviation_mm", v.deviationMm},
-                         {"sigma_mm", v.sigmaMm},
-                         {"px_per_mm", v.pxPerMm},
-                         {"tilt_mm", v.tiltMm},
-                         {"calibration_mm", v.calibrationMm}});
-    return {{"measured", d.measured},
-            {"deviation_mm", d.measured ? nlohmann::json(d.deviationMm) : nlohmann::json(nullptr)},
-            {"uncertainty_mm", d.measured ? nlohmann::json(d.uncertaintyMm) : nlohmann::json(nullptr)},
-            {"budget_mm",
-             {{"edge_noise", d.budget.edgeNoise},
-              {"method", d.budget.method},
-              {"views", d.budget.views},
-              {"alignment", d.budget.alignment},
-              {"calibration", d.budget.calibration}}},
-            {"views", views},
-            {"reason", d.reason}};
-}
-
 } // namespace hg::inspect

@@ -222,10 +222,10 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
         silhouettes.push_back(prepareView(v, segmentation));
         ids.push_back(v.id);
     }
-    const double segMs = watch.ms();
+    const Milliseconds segmentationTime = watch.elapsed();
     InspectionResult r = inspect(std::move(silhouettes), ids);
-    r.segmentationMs = segMs;
-    r.totalMs = watch.ms();
+    r.segmentationTime = segmentationTime;
+    r.totalTime = watch.elapsed();
     return r;
 }
 
@@ -234,7 +234,7 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     const Stopwatch watch;
     InspectionResult seatFault;
     if (aligner_ && !seat(views, seatFault)) {
-        seatFault.totalMs = watch.ms();
+        seatFault.totalTime = watch.elapsed();
         return seatFault;
     }
     VoxelTester tester(&views, options_.method);
@@ -242,7 +242,7 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     r.alignment = std::move(seatFault.alignment);
     if (gauge_) measureDeviations(r, views, viewIds);
     markUnproven(r);
-    r.totalMs = watch.ms();
+    r.totalTime = watch.elapsed();
     return r;
 }
 
@@ -364,7 +364,7 @@ InspectionResult Inspector::inspectWith(const VoxelOracle& oracle) const
 {
     const Stopwatch watch;
     InspectionResult r = run(oracle, nullptr, nullptr);
-    r.totalMs = watch.ms();
+    r.totalTime = watch.elapsed();
     return r;
 }
 
@@ -685,7 +685,7 @@ InspectionResult Inspector::run(const VoxelOracle& oracle, const std::vector<Sil
     for (const ParameterResult& pr : result.parameters)
         if (pr.status != ParameterStatus::Ok) result.pass = false;
     result.voxelsReconstructed = memo.total();
-    result.reconstructionMs = watch.ms();
+    result.reconstructionTime = watch.elapsed();
     log::category("inspect")->debug("inspected {} landmarks at level {}: {} voxels reconstructed, {}",
                                     result.landmarks.size(), level_, result.voxelsReconstructed,
                                     result.pass ? "pass" : "fail");

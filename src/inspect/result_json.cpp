@@ -7,6 +7,29 @@
 
 namespace hg::inspect {
 
+nlohmann::json toJson(const Deviation& d)
+{
+    nlohmann::json views = nlohmann::json::array();
+    for (const ViewDeviation& v : d.views)
+        views.push_back({{"view", v.viewId},
+                         {"deviation_mm", v.deviationMm},
+                         {"sigma_mm", v.sigmaMm},
+                         {"px_per_mm", v.pxPerMm},
+                         {"tilt_mm", v.tiltMm},
+                         {"calibration_mm", v.calibrationMm}});
+    return {{"measured", d.measured},
+            {"deviation_mm", d.measured ? nlohmann::json(d.deviationMm) : nlohmann::json(nullptr)},
+            {"uncertainty_mm", d.measured ? nlohmann::json(d.uncertaintyMm) : nlohmann::json(nullptr)},
+            {"budget_mm",
+             {{"edge_noise", d.budget.edgeNoise},
+              {"method", d.budget.method},
+              {"views", d.budget.views},
+              {"alignment", d.budget.alignment},
+              {"calibration", d.budget.calibration}}},
+            {"views", views},
+            {"reason", d.reason}};
+}
+
 nlohmann::json toJson(const InspectionResult& r)
 {
     using nlohmann::json;
@@ -84,7 +107,9 @@ nlohmann::json toJson(const InspectionResult& r)
         ps.push_back(std::move(jp));
     }
     j["parameters"] = std::move(ps);
-    j["timing_ms"] = {{"segmentation", r.segmentationMs}, {"reconstruction", r.reconstructionMs}, {"total", r.totalMs}};
+    j["timing_ms"] = {{"segmentation", r.segmentationTime.count()},
+                      {"reconstruction", r.reconstructionTime.count()},
+                      {"total", r.totalTime.count()}};
     if (r.alignment) {
         j["alignment"] = align::toJson(*r.alignment);
         j["seating_fault"] = r.seatingFault;

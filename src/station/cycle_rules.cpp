@@ -1,35 +1,62 @@
 #include "hullgauge/station/cycle_rules.h"
 
+#include <array>
+
+#include "hullgauge/common/enum_table.h"
+
 namespace hg::station {
+namespace {
+
+using E = SequencerEvent;
+
+/// The event a device's status feeds to the sequencer after a move and after a grab.
+struct StepEvents {
+    SequencerEvent move;
+    SequencerEvent grab;
+};
+
+// A move that failed for a reason the fixture does not name is a communication failure; a
+// grab that failed otherwise than by timeout or an incomplete frame, a camera that could not grab.
+constexpr auto kStepEvents = std::to_array<EnumRow<StatusCode, StepEvents>>({
+    {StatusCode::Ok, {E::InPosition, E::FrameOk}},
+    {StatusCode::Timeout, {E::MoveTimeout, E::FrameTimeout}},
+    {StatusCode::Fault, {E::MoveFault, E::FrameError}},
+    {StatusCode::CommunicationError, {E::MoveCommError, E::FrameError}},
+    {StatusCode::IoError, {E::MoveCommError, E::FrameError}},
+    {StatusCode::NotAllowed, {E::MoveRefused, E::FrameError}},
+    {StatusCode::BadFrame, {E::MoveCommError, E::FrameBad}},
+    {StatusCode::Error, {E::MoveCommError, E::FrameError}},
+});
+
+/// A code that is no StatusCode (a cast from a number) counts as StatusCode::Error.
+StepEvents stepEvents(StatusCode code)
+{
+    return mapEnum<kStepEvents>(code).value_or(StepEvents{E::MoveCommError, E::FrameError});
+}
+
+// STATUS (docs/plc.md): every state of a running cycle is busy.
+constexpr auto kPlcStatus = std::to_array<EnumRow<SequencerState, PlcStatus>>({
+    {SequencerState::Starting, PlcStatus::Starting},
+    {SequencerState::Ready, PlcStatus::Ready},
+    {SequencerState::Moving, PlcStatus::Busy},
+    {SequencerState::Settling, PlcStatus::Busy},
+    {SequencerState::Grabbing, PlcStatus::Busy},
+    {SequencerState::Processing, PlcStatus::Busy},
+    {SequencerState::Done, PlcStatus::Done},
+    {SequencerState::Fault, PlcStatus::Fault},
+    {SequencerState::Calibrating, PlcStatus::Maintenance},
+});
+
+} // namespace
 
 SequencerEvent moveEvent(StatusCode code)
 {
-    switch (code) {
-    case StatusCode::Ok:
-        return SequencerEvent::InPosition;
-    case StatusCode::Timeout:
-        return SequencerEvent::MoveTimeout;
-    case StatusCode::Fault:
-        return SequencerEvent::MoveFault;
-    case StatusCode::NotAllowed:
-        return SequencerEvent::MoveRefused;
-    default:
-        return SequencerEvent::MoveCommError;
-    }
+    return stepEvents(code).move;
 }
 
 SequencerEvent grabEvent(StatusCode code)
 {
-    switch (code) {
-    case StatusCode::Ok:
-        return SequencerEvent::FrameOk;
-    case StatusCode::Timeout:
-        return SequencerEvent::FrameTimeout;
-    case StatusCode::BadFrame:
-        return SequencerEvent::FrameBad;
-    default:
-        return SequencerEvent::FrameError;
-    }
+    return stepEvents(code).grab;
 }
 
 Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed)
@@ -58,20 +85,7 @@ LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode las
 
 PlcStatus plcStatus(SequencerState state)
 {
-    switch (state) {
-    case SequencerState::Starting:
-        return PlcStatus::Starting;
-    case SequencerState::Ready:
-        return PlcStatus::Ready;
-    case SequencerState::Done:
-        return PlcStatus::Done;
-    case SequencerState::Fault:
-        return PlcStatus::Fault;
-    case SequencerState::Calibrating:
-        return PlcStatus::Maintenance;
-    default:
-        return PlcStatus::Busy;
-    }
+    return mapEnum<kPlcStatus>(state).value_or(PlcStatus::Busy);
 }
 
 } // namespace hg::station

@@ -3,7 +3,10 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
+
+#include "hullgauge/common/enum_table.h"
 
 namespace hg::station {
 namespace {
@@ -24,6 +27,33 @@ constexpr std::array<std::pair<S, S>, 28> kTransitions{{
     {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault}, {S::Ready, S::Done},        {S::Done, S::Done},
 }};
 
+/// How an operator reads a fault code (docs/plc.md, "Fault codes").
+struct FaultSentence {
+    std::string_view text;
+    bool afterRetries = false; ///< the step was retried: the sentence says how often
+};
+constexpr bool kAfterRetries = true;
+
+constexpr auto kFaultSentences = std::to_array<EnumRow<FaultCode, FaultSentence>>({
+    {FaultCode::None, {"no fault"}},
+    {FaultCode::CameraTimeout, {"no frame from the camera within the grab timeout", kAfterRetries}},
+    {FaultCode::CameraBadFrame, {"the camera delivered incomplete frames", kAfterRetries}},
+    {FaultCode::CameraError, {"the camera could not grab"}},
+    {FaultCode::FixtureTimeout, {"the fixture did not reach position within the move timeout", kAfterRetries}},
+    {FaultCode::FixtureFault, {"the fixture drive reports a fault that a reset did not clear"}},
+    {FaultCode::FixtureCommunication, {"the fixture does not answer"}},
+    {FaultCode::FixtureRefused, {"the fixture refused the pose (out of range or not homed)"}},
+    {FaultCode::ProgramLoad, {"the part program or its view plan could not be loaded"}},
+    {FaultCode::InspectionError, {"the inspection could not be computed"}},
+    {FaultCode::PartNotSeated,
+     {"the part is not seated within the part program's alignment limits: re-seat it and trigger again"}},
+    {FaultCode::AbortedByPlc, {"the PLC aborted the cycle"}},
+    {FaultCode::AbortedByShutdown, {"the daemon was stopped during the cycle"}},
+    {FaultCode::ResultStore, {"the result could not be committed to the result database"}},
+    {FaultCode::DevicesDown, {"the camera or fixture could not be started"}},
+    {FaultCode::Internal, {"internal error"}},
+});
+
 } // namespace
 
 bool transitionAllowed(SequencerState from, SequencerState to)
@@ -40,45 +70,14 @@ bool isBusy(SequencerState s)
 
 std::string describe(FaultCode c, int retries)
 {
+    const std::optional<FaultSentence> sentence = mapEnum<kFaultSentences>(c);
+    if (!sentence) return "unknown fault";
+    if (!sentence->afterRetries) return std::string(sentence->text);
     // A step that failed after its retries says how many the cycle had (docs/plc.md, "Fault codes").
     const std::string afterRetries = retries <= 0   ? " (without a retry)"
                                      : retries == 1 ? " (after one retry)"
                                                     : " (after " + std::to_string(retries) + " retries)";
-    switch (c) {
-    case FaultCode::None:
-        return "no fault";
-    case FaultCode::CameraTimeout:
-        return "no frame from the camera within the grab timeout" + afterRetries;
-    case FaultCode::CameraBadFrame:
-        return "the camera delivered incomplete frames" + afterRetries;
-    case FaultCode::CameraError:
-        return "the camera could not grab";
-    case FaultCode::FixtureTimeout:
-        return "the fixture did not reach position within the move timeout" + afterRetries;
-    case FaultCode::FixtureFault:
-        return "the fixture drive reports a fault that a reset did not clear";
-    case FaultCode::FixtureCommunication:
-        return "the fixture does not answer";
-    case FaultCode::FixtureRefused:
-        return "the fixture refused the pose (out of range or not homed)";
-    case FaultCode::ProgramLoad:
-        return "the part program or its view plan could not be loaded";
-    case FaultCode::InspectionError:
-        return "the inspection could not be computed";
-    case FaultCode::PartNotSeated:
-        return "the part is not seated within the part program's alignment limits: re-seat it and trigger again";
-    case FaultCode::AbortedByPlc:
-        return "the PLC aborted the cycle";
-    case FaultCode::AbortedByShutdown:
-        return "the daemon was stopped during the cycle";
-    case FaultCode::ResultStore:
-        return "the result could not be committed to the result database";
-    case FaultCode::DevicesDown:
-        return "the camera or fixture could not be started";
-    case FaultCode::Internal:
-        return "internal error";
-    }
-    return "unknown fault";
+    return std::string(sentence->text) + afterRetries;
 }
 
 CaptureSequencer::CaptureSequencer(int retries, std::chrono::milliseconds recoveryRetry, TransitionCheck allowed)

@@ -123,7 +123,7 @@ TEST(CalibrateCli, FixtureFromCornerObservationsWritesTheAxes)
     auto station = hgtest::writeFile(dir / "station.yaml", st.str());
     std::ostringstream obs;
     obs.precision(10);
-    obs << "pattern: " << rig.board.toString() << "\nviews:\n";
+    obs << "pattern: " << fmt::format("{}", rig.board) << "\nviews:\n";
     for (const auto& v : rig.views(21)) {
         obs << "  - rotation_deg: " << v.pose.rotationDeg << "\n    declination_deg: " << v.pose.declinationDeg
             << "\n    corners: [";

@@ -214,7 +214,7 @@ TEST(DaemonConfig, Ipv4Networks)
     ASSERT_TRUE(n);
     EXPECT_TRUE(n->contains(0xC0A80A63));  // 192.168.10.99
     EXPECT_FALSE(n->contains(0xC0A80B01)); // 192.168.11.1
-    EXPECT_EQ(n->toString(), "192.168.10.0/24");
+    EXPECT_EQ(fmt::format("{}", *n), "192.168.10.0/24");
     auto any = parseIpv4Network("0.0.0.0/0");
     ASSERT_TRUE(any);
     EXPECT_TRUE(any->contains(0x01020304));

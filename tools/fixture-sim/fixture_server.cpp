@@ -231,8 +231,8 @@ struct FixtureServer::Impl {
             std::vector<double> targets;
             for (const auto& a : map.axes)
                 targets.push_back(a.target.decode(&deviceRegs->tab_registers[a.target.address]));
-            logger()->debug("move to {}", geometry::toString(drivers::fixture::poseFromAxes(targets, kinematics.type),
-                                                             kinematics.type));
+            logger()->debug("move to {}", geometry::PoseOn{drivers::fixture::poseFromAxes(targets, kinematics.type),
+                                                           kinematics.type});
             drive.move(targets, speeds(), now);
         } else if (value == map.homeCommand) {
             logger()->debug("home");

@@ -430,8 +430,8 @@ class AravisCamera final : public Camera {
     Result<Roi> doSetRegion(const Roi& aligned) override
     {
         if (!regionsUnsupported_.empty()) {
-            fallBackToWholeFrames("camera " + config_.id() + ": cannot deliver region " + toString(aligned) + ": " +
-                                  regionsUnsupported_);
+            fallBackToWholeFrames(
+                fmt::format("camera {}: cannot deliver region {}: {}", config_.id(), aligned, regionsUnsupported_));
             return configured_;
         }
         {
@@ -492,9 +492,8 @@ class AravisCamera final : public Camera {
                                                      : "reconnecting in the background, next attempt in " +
                                                            std::to_string(msUntil(clock(), nextAttempt_)) + " ms"));
         } else if (wantedRegion_ != deviceRegion_) {
-            t.refusal = Frame::failed(FrameStatus::Timeout, id + ": region " + toString(wantedRegion_) +
-                                                                " not applied within " +
-                                                                std::to_string(timeout.count()) + " ms");
+            t.refusal = Frame::failed(FrameStatus::Timeout, fmt::format("{}: region {} not applied within {} ms", id,
+                                                                        wantedRegion_, timeout.count()));
         } else {
             t.link = link_;
             t.region = deviceRegion_;
@@ -514,7 +513,7 @@ class AravisCamera final : public Camera {
             if (!buffer || arv_buffer_get_status(buffer) != ARV_BUFFER_STATUS_SUCCESS || regionOf(buffer) == region)
                 return buffer;
             logger()->trace("camera {}: dropped frame {} of region {} (now {})", config_.id(),
-                            arv_buffer_get_frame_id(buffer), toString(regionOf(buffer)), toString(region));
+                            arv_buffer_get_frame_id(buffer), regionOf(buffer), region);
             arv_stream_push_buffer(link.stream, buffer);
             if (Clock::steady().now() >= deadline) return nullptr;
         }
@@ -795,12 +794,11 @@ class AravisCamera final : public Camera {
         if (s.code() == StatusCode::Timeout) {
             declareLost("region change: " + s.message());
         } else if (!s) {
-            fallBackToWholeFrames("camera " + config_.id() + ": region " + toString(want) + " refused: " + s.message());
+            fallBackToWholeFrames(fmt::format("camera {}: region {} refused: {}", config_.id(), want, s.message()));
             wantedRegion_ = deviceRegion_ = configured_;
         } else {
             deviceRegion_ = want;
-            logger()->debug("camera {}: region {} -> {} in {:.1f} ms", config_.id(), toString(from), toString(want),
-                            ms);
+            logger()->debug("camera {}: region {} -> {} in {:.1f} ms", config_.id(), from, want, ms);
         }
         regionChangeMs_ = ms;
         reportChange_ = true;
@@ -845,7 +843,8 @@ class AravisCamera final : public Camera {
     {
         auto held = readRegion(link);
         if (!held) return held.status();
-        if (held.value() != want) return Status::failure(StatusCode::NotAllowed, "it became " + toString(held.value()));
+        if (held.value() != want)
+            return Status::failure(StatusCode::NotAllowed, fmt::format("it became {}", held.value()));
         GError* error = nullptr;
         const guint payload = arv_camera_get_payload(link.camera, &error);
         if (error) return deviceFailure(error, "cannot read the payload size");
@@ -985,8 +984,8 @@ class AravisCamera final : public Camera {
         held = readRegion(link);
         if (!held) return Status::failure(where + "cannot read the ROI back: " + held.message());
         if (held.value() != want)
-            return Status::failure(where + "ROI " + toString(want) + " became " + toString(held.value()) +
-                                   " (camera increments or limits)");
+            return Status::failure(
+                fmt::format("{}ROI {} became {} (camera increments or limits)", where, want, held.value()));
 
         if (s.exposureUs) {
             if (arv_camera_is_exposure_auto_available(camera, nullptr))

@@ -316,9 +316,9 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     {
         std::lock_guard lock(mutex_);
         if (fault_ == SimulatedCameraFault::RefuseRegion) {
-            fallBackToWholeFrames("sim camera: region " + toString(aligned) +
-                                  " refused: OffsetX, OffsetY, Width and Height are not writable (fault switch "
-                                  "refuse_region)");
+            fallBackToWholeFrames(fmt::format("sim camera: region {} refused: OffsetX, OffsetY, Width and Height are "
+                                              "not writable (fault switch refuse_region)",
+                                              aligned));
             region_ = roi_;
             return configuredRegion();
         }

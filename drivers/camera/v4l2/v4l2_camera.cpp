@@ -189,7 +189,7 @@ class V4l2Camera final : public Camera {
     {
         const std::string where = "v4l2 " + config_.device + ": ";
         if (!cropUnsupported_.empty()) {
-            fallBackToWholeFrames(where + "cannot deliver region " + toString(aligned) + ": " + cropUnsupported_);
+            fallBackToWholeFrames(fmt::format("{}cannot deliver region {}: {}", where, aligned, cropUnsupported_));
             return configured_;
         }
         if (aligned == region_) return region_;
@@ -200,8 +200,9 @@ class V4l2Camera final : public Camera {
         if (const Result<Roi> region = cropTo(aligned); !region.ok()) {
             // Back to the configured crop, which the buffers hold; a failure there is said too.
             const Result<Roi> restored = cropTo(configured_);
-            fallBackToWholeFrames(where + "region " + toString(aligned) + " refused: " + region.message() +
-                                  (restored.ok() ? "" : "; the configured crop not restored: " + restored.message()));
+            fallBackToWholeFrames(
+                fmt::format("{}region {} refused: {}{}", where, aligned, region.message(),
+                            restored.ok() ? "" : "; the configured crop not restored: " + restored.message()));
         }
         pool_->queueIdle();
         if (xioctl(fd_, VIDIOC_STREAMON, &type) == -1)
@@ -399,7 +400,7 @@ class V4l2Camera final : public Camera {
             return Status::failure(StatusCode::IoError, "VIDIOC_S_SELECTION: " + errnoText(errno));
         const Roi chosen{sel.r.left, sel.r.top, static_cast<int>(sel.r.width), static_cast<int>(sel.r.height)};
         auto region = v4l2::acceptedCrop(want, chosen, configured_);
-        if (!region) return Status::failure(StatusCode::NotAllowed, "the device cropped to " + toString(chosen));
+        if (!region) return Status::failure(StatusCode::NotAllowed, fmt::format("the device cropped to {}", chosen));
         v4l2_format fmt{};
         fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
         if (xioctl(fd_, VIDIOC_G_FMT, &fmt) == -1)
@@ -408,10 +409,9 @@ class V4l2Camera final : public Camera {
                                                 [&](const auto& slot) { return slot.length >= fmt.fmt.pix.sizeimage; });
         if (static_cast<int>(fmt.fmt.pix.width) != region->width ||
             static_cast<int>(fmt.fmt.pix.height) != region->height || !fits)
-            return Status::failure(StatusCode::NotAllowed, "the image became " + std::to_string(fmt.fmt.pix.width) +
-                                                               "x" + std::to_string(fmt.fmt.pix.height) + " (" +
-                                                               std::to_string(fmt.fmt.pix.sizeimage) +
-                                                               " bytes) for the crop " + toString(*region));
+            return Status::failure(StatusCode::NotAllowed,
+                                   fmt::format("the image became {}x{} ({} bytes) for the crop {}", fmt.fmt.pix.width,
+                                               fmt.fmt.pix.height, fmt.fmt.pix.sizeimage, *region));
         width_ = region->width;
         height_ = region->height;
         bytesPerLine_ = fmt.fmt.pix.bytesperline;

@@ -15,6 +15,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "hullgauge/common/format.h"
+
 namespace hg::calib {
 
 enum class TargetKind { Chessboard, Charuco };
@@ -29,7 +31,6 @@ struct TargetSpec {
 
     /// Parses a pattern description; errors throw hg::InputError naming `field`.
     static TargetSpec parse(const std::string& text, const std::string& field = "--pattern");
-    std::string toString() const;
 
     /// Number of inner corners of the full board.
     int cornerCount() const;
@@ -57,3 +58,9 @@ TargetView viewFromCorners(const TargetSpec& spec, const std::string& name, cons
                            const std::vector<int>& ids = {});
 
 } // namespace hg::calib
+
+/// A target as its description, which TargetSpec::parse reads back: fmt::format("{}", spec),
+/// "chessboard:9x6:25" or "charuco:8x6:30:22:DICT_5X5_100".
+template <> struct fmt::formatter<hg::calib::TargetSpec> : hg::ValueFormatter {
+    fmt::format_context::iterator format(const hg::calib::TargetSpec& spec, fmt::format_context& ctx) const;
+};

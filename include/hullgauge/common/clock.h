@@ -69,7 +69,8 @@ class Stopwatch {
 
     void restart() { started_ = clock_->now(); }
     Clock::time_point started() const { return started_; }
-    double ms() const { return clock_->msSince(started_); }
+    Milliseconds elapsed() const { return clock_->since(started_); }
+    double ms() const { return elapsed().count(); }
     double seconds() const { return ms() / 1000.0; }
 
   private:

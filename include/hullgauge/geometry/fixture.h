@@ -14,9 +14,8 @@
 //   camera_from_part = camera_from_fixture * Trans(rail_axis * rail_mm)
 #pragma once
 
-#include <string>
-
 #include "hullgauge/common/enum_names.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/geometry/transform.h"
 
 namespace hg::geometry {
@@ -38,9 +37,13 @@ struct FixturePose {
     bool operator==(const FixturePose&) const = default;
 };
 
-/// "rotation 30 deg, declination 10 deg" (or "rail 120 mm"): how every
-/// message, log and progress line names a pose.
-std::string toString(const FixturePose& pose, FixtureType type);
+/// A pose as a fixture of `type` takes it, to be written into text: every
+/// message, log and progress line names a pose as fmt::format("{}",
+/// PoseOn{pose, type}), "rotation 30 deg, declination 10 deg" (or "rail 120 mm").
+struct PoseOn {
+    FixturePose pose;
+    FixtureType type = FixtureType::RotationDeclination;
+};
 
 struct Range {
     double min = 0.0;
@@ -71,3 +74,7 @@ class FixtureKinematics {
 };
 
 } // namespace hg::geometry
+
+template <> struct fmt::formatter<hg::geometry::PoseOn> : hg::ValueFormatter {
+    fmt::format_context::iterator format(const hg::geometry::PoseOn& pose, fmt::format_context& ctx) const;
+};

@@ -152,6 +152,4 @@ class DeviationGauge {
     geometry::CalibrationUncertainty calibration_;
 };
 
-nlohmann::json toJson(const Deviation& deviation);
-
 } // namespace hg::inspect

@@ -29,6 +29,7 @@
 #include <opencv2/core.hpp>
 
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/geometry/camera.h"
 #include "hullgauge/inspect/deviation.h"
 #include "hullgauge/inspect/inspection_map.h"
@@ -128,7 +129,8 @@ struct InspectionResult {
     std::vector<LandmarkResult> landmarks;
     Statistics statistics;
     std::vector<ParameterResult> parameters;
-    double segmentationMs = 0.0, reconstructionMs = 0.0, totalMs = 0.0;
+    /// Run times (docs/contracts.md §4 `timing_ms`), never an input to a decision.
+    Milliseconds segmentationTime{}, reconstructionTime{}, totalTime{};
     /// The measured seat, when the inspector aligns (docs/alignment.md).
     std::optional<align::AlignmentResult> alignment;
     /// The seat is beyond the program's limits: nothing was inspected (every
@@ -138,6 +140,8 @@ struct InspectionResult {
 
 /// docs/contracts.md §4 plus the documented extensions.
 nlohmann::json toJson(const InspectionResult& result);
+/// A landmark's sub-voxel deviation with its budget and its views (docs/inspection.md, "Sub-voxel deviation").
+nlohmann::json toJson(const Deviation& deviation);
 
 /// A reconstruction oracle: the label of a voxel box (Void, Object or Undecided).
 using VoxelOracle = std::function<VoxelLabel(const Box3&)>;

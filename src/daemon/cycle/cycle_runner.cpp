@@ -637,9 +637,9 @@ void CycleRunner::recordOutcome(Cycle& cycle)
                       {CycleStep::Settle, cycle.settle},
                       {CycleStep::Grab, cycle.grab},
                       {CycleStep::Region, cycle.region},
-                      {CycleStep::Prepare, Milliseconds(outcome.prepareMs)},
-                      {CycleStep::Traversal, Milliseconds(outcome.traversalMs)},
-                      {CycleStep::Processing, Milliseconds(outcome.processingMs)},
+                      {CycleStep::Prepare, outcome.prepareTime},
+                      {CycleStep::Traversal, outcome.traversalTime},
+                      {CycleStep::Processing, outcome.processingTime},
                       {CycleStep::WaitForVerdict, cycle.finish}};
     if (!cycle.poseCorrection.is_null())
         record.timings[CycleStep::CorrectPoses] = Milliseconds(cycle.poseCorrection["ms"].get<double>());
@@ -778,8 +778,8 @@ void CycleRunner::report(Cycle& cycle)
         "cycle done: {} (fault {}, {} ms: move {:.0f}, settle {:.0f}, grab {:.0f}, prepare {:.1f}, verdict wait "
         "{:.1f}, commit {:.1f}; last frame to result {:.1f})",
         enumName(record.verdict), static_cast<int>(record.faultCode), record.cycleMs, cycle.move.count(),
-        cycle.settle.count(), cycle.grab.count(), cycle.outcome.prepareMs, cycle.finish.count(), cycle.commit.count(),
-        cycle.lastFrameToPublish.value_or(Milliseconds{}).count());
+        cycle.settle.count(), cycle.grab.count(), cycle.outcome.prepareTime.count(), cycle.finish.count(),
+        cycle.commit.count(), cycle.lastFrameToPublish.value_or(Milliseconds{}).count());
 }
 
 // On the writer's thread: the runner is free for the next trigger meanwhile. The job

@@ -111,8 +111,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
             region.empty() ? drivers::Roi{} : drivers::Roi{region.x, region.y, region.width, region.height};
         auto delivered = camera_->setRegion(roi);
         if (!delivered.ok()) return delivered.status();
-        hg::log::category("camera")->trace("region {} asked, {} delivered", drivers::toString(roi),
-                                           drivers::toString(delivered.value()));
+        hg::log::category("camera")->trace("region {} asked, {} delivered", roi, delivered.value());
         return Status::success();
     }
 

@@ -172,7 +172,7 @@ class EngineInspector : public Inspector {
         }
         try {
             auto prepared = pipeline_.wait();
-            out.prepareMs = prepared.prepareMs;
+            out.prepareTime = prepared.prepareTime;
             if (!prepared.error.empty()) {
                 out.error = prepared.error;
                 views_.clear();
@@ -184,10 +184,10 @@ class EngineInspector : public Inspector {
             out.part = result.part;
             out.release = releaseOf(current_->program);
             out.pass = result.pass;
-            out.traversalMs = result.totalMs;
+            out.traversalTime = result.totalTime;
             out.alignment = result.alignment;
             out.seatingFault = result.seatingFault;
-            out.processingMs = prepared.prepareMs + result.totalMs;
+            out.processingTime = prepared.prepareTime + result.totalTime;
             for (const auto& l : result.landmarks) {
                 station::LandmarkOutcome o{l.id, l.status, l.errorMinMm, l.errorMaxMm, l.errorMm, l.toleranceMm};
                 if (l.deviation && l.deviation->measured) {

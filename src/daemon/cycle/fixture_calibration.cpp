@@ -19,8 +19,7 @@ bool FixtureCalibration::run(const CalibrationJob& job, StationDevices& devices,
 {
     auto log = hg::log::category("calib");
     queue_.update({{"state", "running"}});
-    log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target.toString(),
-              job.out.string());
+    log->info("calibration: {} poses, target {}, writing {}", job.poses.size(), job.target, job.out.string());
     calib::FixtureSequenceIo io;
     io.moveTo = [&](const geometry::FixturePose& pose) {
         stepNs_ = clock.nowNs();

@@ -6,6 +6,7 @@
 
 #include "daemon_config.h"
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
@@ -65,9 +66,9 @@ struct InspectionOutcome {
     /// The seat is beyond the program's limits: nothing was inspected, the
     /// cycle ends with FAULT_CODE 32 (part-not-seated, docs/plc.md).
     bool seatingFault = false;
-    double processingMs = 0.0; ///< preparation of every view plus the traversal
-    double prepareMs = 0.0;    ///< segmentation of the views (mostly while the fixture moved)
-    double traversalMs = 0.0;  ///< the goal-driven traversal after the last frame
+    Milliseconds processingTime{}; ///< preparation of every view plus the traversal
+    Milliseconds prepareTime{};    ///< segmentation of the views (mostly while the fixture moved)
+    Milliseconds traversalTime{};  ///< the goal-driven traversal after the last frame
 };
 
 /// A part program as the inspection loaded it: what `ctl status` shows of the

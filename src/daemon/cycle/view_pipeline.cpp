@@ -64,7 +64,7 @@ ViewPipeline::Prepared ViewPipeline::wait()
     Prepared out;
     for (auto& s : slots_) {
         out.timings.push_back(s.timing);
-        out.prepareMs += std::chrono::duration<double, std::milli>(s.timing.finished - s.timing.started).count();
+        out.prepareTime += s.timing.finished - s.timing.started;
         if (!s.error.empty()) {
             if (out.error.empty()) out.error = s.error;
             continue;

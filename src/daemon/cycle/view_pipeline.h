@@ -54,7 +54,7 @@ class ViewPipeline {
         /// Empty, or why the first failing view (in submission order) could not be
         /// prepared, naming the view; `views` is then incomplete and must not be inspected.
         std::string error;
-        double prepareMs = 0.0; ///< sum of the worker's preparation times
+        Milliseconds prepareTime{}; ///< sum of the worker's preparation times
         std::vector<ViewTiming> timings;
     };
 

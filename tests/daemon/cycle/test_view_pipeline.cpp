@@ -97,8 +97,8 @@ TEST(ViewPipeline, PreparesEachViewWhileTheFixtureMovesToTheNext)
         EXPECT_LE(t.started, t.finished);
         sumMs += std::chrono::duration<double, std::milli>(t.finished - t.started).count();
     }
-    // prepareMs is the worker's time: each view's start to finish, summed.
-    EXPECT_NEAR(prepared.prepareMs, sumMs, 1e-3 + 1e-6 * sumMs);
+    // prepareTime is the worker's time: each view's start to finish, summed.
+    EXPECT_NEAR(prepared.prepareTime.count(), sumMs, 1e-3 + 1e-6 * sumMs);
 }
 
 TEST(ViewPipeline, NamesTheViewThatCouldNotBePrepared)
@@ -300,8 +300,8 @@ TEST_F(EnginePipeline, VerdictsOfNominalAndDefectiveParts)
     EXPECT_EQ(nominal.landmarks.size(), 10u);
     EXPECT_TRUE(failing(nominal).empty());
     EXPECT_TRUE(nominal.evidence) << "a passed part can be archived too (results.archive_all)";
-    EXPECT_GT(nominal.prepareMs, 0.0);
-    EXPECT_GT(nominal.traversalMs, 0.0);
+    EXPECT_GT(nominal.prepareTime.count(), 0.0);
+    EXPECT_GT(nominal.traversalTime.count(), 0.0);
 
     // Same inspector, next cycle: the map is reused, the worker starts clean.
     auto low = inspect(*inspector, frames("face-low"));

@@ -536,7 +536,7 @@ class AravisRegions : public AravisGige {
             {{}, {0, 0, kWidth, kHeight}},
         };
         for (const Case& c : cases) {
-            SCOPED_TRACE("request " + toString(c.request));
+            SCOPED_TRACE(fmt::format("request {}", c.request));
             auto region = cam.setRegion(c.request);
             ASSERT_TRUE(region.ok()) << region.message();
             EXPECT_EQ(region.value(), c.expected);

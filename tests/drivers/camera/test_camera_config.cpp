@@ -204,12 +204,12 @@ TEST(CameraConfigRegions, EveryAnswerContainsTheRequestOnTheIncrementsInsideTheB
         const int x0 = std::max(r.x, bounds.x), x1 = std::min(r.x + r.width, bounds.x + bounds.width);
         const int y0 = std::max(r.y, bounds.y), y1 = std::min(r.y + r.height, bounds.y + bounds.height);
         if (x0 >= x1 || y0 >= y1) {
-            EXPECT_FALSE(a.ok()) << toString(r);
+            EXPECT_FALSE(a.ok()) << r;
             continue;
         }
-        ASSERT_TRUE(a.ok()) << toString(r) << ": " << a.message();
+        ASSERT_TRUE(a.ok()) << r << ": " << a.message();
         const Roi g = a.value();
-        SCOPED_TRACE(toString(r) + " -> " + toString(g));
+        SCOPED_TRACE(fmt::format("{} -> {}", r, g));
         EXPECT_TRUE(g.x <= x0 && g.y <= y0 && g.x + g.width >= x1 && g.y + g.height >= y1);
         EXPECT_TRUE(g.x >= bounds.x && g.y >= bounds.y && g.x + g.width <= bounds.x + bounds.width &&
                     g.y + g.height <= bounds.y + bounds.height);

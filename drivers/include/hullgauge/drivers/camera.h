@@ -30,6 +30,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "hullgauge/common/config_node.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/drivers/lifecycle.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/model/mesh.h"
@@ -64,8 +65,7 @@ struct Roi {
     bool operator==(const Roi&) const = default;
 };
 
-/// "[x, y, width, height]", for messages.
-std::string toString(const Roi& roi);
+/// The region as fmt's "{}" writes it, for gtest's messages.
 std::ostream& operator<<(std::ostream& out, const Roi& roi);
 
 /// How a device lets one axis of its region be set: GenICam's OffsetX/Width
@@ -274,3 +274,8 @@ std::unique_ptr<Camera> makeCamera(const ConfigNode& root, CameraEnvironment env
                                    Clock& clock = Clock::steady());
 
 } // namespace hg::drivers
+
+/// A region as "[x, y, width, height]": fmt::format("region {}", roi).
+template <> struct fmt::formatter<hg::drivers::Roi> : hg::ValueFormatter {
+    fmt::format_context::iterator format(const hg::drivers::Roi& roi, fmt::format_context& ctx) const;
+};

@@ -429,7 +429,12 @@ const PartView = (() => {
     pickSurface(clientX, clientY, light) {
       const mesh = (light && this.meshes.lod) || this.meshes.full || this.meshes.lod;
       if (!mesh) return null;
-      const hit = this.raycastAt(clientX, clientY, [mesh], false)[0];
+      // The mesh asked directly: the raycaster skips a hidden object, and
+      // which mesh is shown depends on whether the view is moving.
+      const hits = [];
+      this.raycastAt(clientX, clientY, [], false);
+      mesh.raycast(this.raycaster, hits);
+      const hit = hits.sort((a, b) => a.distance - b.distance)[0];
       if (!hit) return null;
       return { point: hit.point, normal: hit.face.normal.clone(), distance: hit.distance,
         mesh: mesh === this.meshes.full ? "full" : "lod" };

@@ -20,7 +20,16 @@ const hook = window.hgParts = {
   ready: false, state: "empty", part: null, busy: 0, lastPlaced: null, lastError: null, view: null,
   get frames() { return hook.view ? hook.view.stats.frames : 0; },
   landmarks() { return state.part ? JSON.parse(JSON.stringify(state.part.draft.landmarks)) : []; },
+  // Where a part-frame point is on the screen (and whether the part hides it).
   screenOf(point) { return hook.view.screenOf(point); },
+  // A click there through the view's own mouse handling (as a hand's).
+  clickAt(point) {
+    const at = hook.view.screenOf(point);
+    for (const type of ["mousedown", "mouseup", "click"])
+      hook.view.canvas.dispatchEvent(new MouseEvent(type, { bubbles: true, cancelable: true, view: window,
+        clientX: at.clientX, clientY: at.clientY, button: 0, buttons: type === "mousedown" ? 1 : 0 }));
+    return at;
+  },
   lookAt(point, dir) { hook.view.lookAt(point, dir); },
   idle() { return hook.busy === 0 && hook.view && !hook.view.moving && !hook.view.pending; },
   select(name) { return selectPart(name); },
@@ -345,7 +354,11 @@ function candidates(s) {
   return Array.isArray(s) ? s : Array.isArray(s.candidates) ? s.candidates : [];
 }
 
-function refused(c) { return c.chosen === false || !!c.rule; }
+// suggestions.json: a refused candidate names its rule in `refused`.
+function refused(c) { return !!(c.refused || c.rule) || c.chosen === false; }
+function ruleOf(c) { return c.refused || c.rule || ""; }
+function featureOf(c) { return c.name || c.feature || ""; }
+function whyOf(c) { return c.comment || c.why || ""; }
 
 function showSuggestions() {
   state.suggestions = candidates(state.part.suggestions);
@@ -356,17 +369,20 @@ function showSuggestions() {
     const adopt = hg.el("button", { class: "needs-sign-in", text: "Adopt" });
     adopt.disabled = !state.signedIn;
     adopt.addEventListener("click", (ev) => { ev.stopPropagation(); adoptSuggestion(c); });
-    const tr = hg.el("tr", { "data-suggestion": String(k), title: [c.feature, c.why].filter(Boolean).join(": "),
+    const tr = hg.el("tr", { "data-suggestion": String(k), title: [featureOf(c), whyOf(c)].filter(Boolean).join(": "),
       class: [refused(c) ? "refused" : "chosen", k === state.selectedSuggestion ? "selected" : ""].join(" ") },
     hg.el("td", { text: String(k + 1) }), hg.el("td", { text: c.kind || "" }),
     hg.el("td", { text: c.position.map((x) => PartsReport.num(x, 4)).join(", ") }),
-    hg.el("td", { text: refused(c) ? "refused: " + (c.rule || "") : "chosen" }), hg.el("td", {}, adopt));
+    hg.el("td", { text: refused(c) ? "refused: " + ruleOf(c) : "chosen" + (c.id ? " as " + c.id : "") }),
+    hg.el("td", {}, adopt));
     tr.addEventListener("click", () => selectSuggestion(k));
     tbody.append(tr);
   });
   const s = state.part.suggestions;
+  const notes = s && Array.isArray(s.notes) && s.notes.length ? "; " + s.notes.join("; ") : "";
   say("suggest-state", s ? `${state.suggestions.filter((c) => !refused(c)).length} chosen, ` +
-    `${state.suggestions.filter(refused).length} refused` : "none yet");
+    `${state.suggestions.filter(refused).length} refused` + (s.refused_by_rule ? ` (${s.refused_by_rule})` : "") + notes
+    : "none yet");
 }
 
 function selectSuggestion(k) {
@@ -374,8 +390,8 @@ function selectSuggestion(k) {
   showSuggestions();
   const c = state.suggestions[k];
   if (!c) return say("suggestion-detail", "");
-  say("suggestion-detail", `${c.kind || "candidate"} ${k + 1}${refused(c) ? ", refused by " + c.rule : ", chosen"}: ` +
-    [c.feature, c.why].filter(Boolean).join(". "), refused(c) ? "refused-text" : "muted");
+  say("suggestion-detail", `${c.kind || "candidate"} ${k + 1}${refused(c) ? ", refused by " + ruleOf(c) : ", chosen"}: ` +
+    [featureOf(c), whyOf(c)].filter(Boolean).join(". "), refused(c) ? "refused-text" : "muted");
 }
 
 async function adoptSuggestion(c) {
@@ -425,6 +441,7 @@ function selectView(index) {
   $("view-panel").hidden = false;
   zoom.scale = null;
   const img = $("view-img");
+  say("view-note", "rendering the twin's frame…", "muted");
   img.src = `${base()}/views/${index}.png?revision=${state.part.revision}`;
 }
 
@@ -440,7 +457,13 @@ function setZoom(scale) {
   img.style.width = Math.round(img.naturalWidth * zoom.scale) + "px";
   say("zoom-level", `${Math.round(zoom.scale * 100)} %`);
 }
-$("view-img").addEventListener("load", () => setZoom(zoom.scale));
+// The server renders a view's frame the first time it is asked for (the
+// twin, seconds); a frame it could not render is said in its words.
+$("view-img").addEventListener("load", () => { say("view-note", ""); setZoom(zoom.scale); });
+$("view-img").addEventListener("error", async () => {
+  const words = await fetch($("view-img").src).then((r) => r.json()).then((b) => b.error).catch(() => null);
+  say("view-note", "The frame could not be shown: " + (words || "the server did not answer with a picture"), "error");
+});
 $("zoom-in").addEventListener("click", () => setZoom(zoom.scale * 1.5));
 $("zoom-out").addEventListener("click", () => setZoom(zoom.scale / 1.5));
 $("zoom-fit").addEventListener("click", () => setZoom(null));
@@ -525,10 +548,18 @@ $("release").addEventListener("submit", async (ev) => {
   const answer = await change(base() + "/release", { revision: state.part.revision, plc_program: plc }, "release-result");
   if (!answer) return;
   showPart(answer);
-  say("release-result", answer.released ? `Released as version ${answer.released.version}, PLC program ` +
-    `${answer.released.plc_program}: the station runs it from its next cycle.` : "Released.", "status-ok");
+  say("release-result", (answer.released ? `Released as version ${answer.released.version}, PLC program ` +
+    `${answer.released.plc_program}` : "Released") + reloaded(answer.reload), answer.reload && !answer.reload.ok ? "error" : "status-ok");
   await Promise.all([loadVersions(), listParts()]);
 });
+
+// The daemon reads its programs again after a release or rollback; if it
+// could not, the version is kept but the station still runs the old one.
+function reloaded(reload) {
+  if (!reload) return ".";
+  return reload.ok === false ? `; the station did not load it: ${reload.error || "the daemon refused the reload"}`
+    : ": the station runs it from its next cycle.";
+}
 
 async function loadVersions() {
   let versions = [];
@@ -544,7 +575,8 @@ async function rollback(version) {
   if (!answer) return;
   showPart(answer);
   say("release-result", `Version ${version} is in force again` +
-    (answer.released ? ` as version ${answer.released.version}.` : "."), "status-ok");
+    (answer.released ? ` as version ${answer.released.version}` : "") + reloaded(answer.reload),
+  answer.reload && !answer.reload.ok ? "error" : "status-ok");
   await Promise.all([loadVersions(), listParts()]);
 }
 
@@ -573,11 +605,14 @@ $("upload").addEventListener("submit", async (ev) => {
   ev.preventDefault();
   const file = $("upload-file").files[0];
   if (!file) return say("upload-result", "Choose a CAD file first.", "error");
-  const name = $("upload-name").value.trim() || file.name.replace(/\.[^.]*$/, "");
+  // Without a name the server names the part after the file (`part add`).
+  const query = new URLSearchParams({ file: file.name });
+  if ($("upload-name").value.trim()) query.set("name", $("upload-name").value.trim());
+  if ($("upload-tolerance").value) query.set("tolerance", $("upload-tolerance").value);
   say("upload-result", `uploading ${file.name} (${hg.bytes(file.size)})…`, "muted");
-  const url = `/api/parts?name=${encodeURIComponent(name)}&file=${encodeURIComponent(file.name)}`;
-  const res = await api(() => fetch(url, { method: "POST", body: file, credentials: "same-origin",
-    headers: { "Content-Type": "application/octet-stream", "X-CSRF-Token": state.csrf || "" } }));
+  const res = await api(() => fetch("/api/parts?" + query, { method: "POST", body: file, credentials: "same-origin",
+    headers: { "Content-Type": "application/octet-stream", "X-CSRF-Token": state.csrf || "" } }))
+    .catch((e) => ({ ok: false, status: 0, json: async () => ({ error: "the upload did not reach the station: " + e.message }) }));
   const answer = await res.json().catch(() => ({ error: "HTTP " + res.status }));
   if (!res.ok) {
     hook.lastError = answer.error;

@@ -160,16 +160,25 @@ const PartsReport = (() => {
     return [draft, ...rows];
   }
 
+  // One changed landmark as `hullgauge part diff --json` gives it: moved by,
+  // normal turned by (0 when not), its zone before and after as text.
   function landmarkChange(c) {
     const parts = [];
-    if (typeof c.moved_mm === "number") parts.push(`moved ${num(c.moved_mm)} mm`);
-    if (typeof c.normal_turned_deg === "number") parts.push(`normal turned ${num(c.normal_turned_deg, 3)}°`);
-    for (const key of ["tolerance_mm", "limits_mm", "id"])
+    if (c.moved_mm > 0) parts.push(`moved ${num(c.moved_mm)} mm`);
+    if (c.normal_turned_deg > 0) parts.push(`normal turned ${num(c.normal_turned_deg, 3)}°`);
+    for (const key of ["tolerance", "tolerance_mm", "limits_mm"])
       if (c[key] && typeof c[key] === "object" && "from" in c[key])
-        parts.push(`${key.replace("_mm", "")} ${JSON.stringify(c[key].from)} → ${JSON.stringify(c[key].to)}`);
-    for (const [k, val] of Object.entries(c))
-      if (!["id", "moved_mm", "normal_turned_deg", "tolerance_mm", "limits_mm"].includes(k)) parts.push(`${k}: ${JSON.stringify(val)}`);
+        parts.push(`zone ${zoneText(c[key].from)} → ${zoneText(c[key].to)}`);
+    if (c.best_views_changed) parts.push("best views changed");
+    const known = ["id", "moved_mm", "normal_turned_deg", "tolerance", "tolerance_mm", "limits_mm", "best_views_changed"];
+    for (const [k, val] of Object.entries(c)) if (!known.includes(k)) parts.push(`${k}: ${JSON.stringify(val)}`);
     return `${c.id}: ${parts.join(", ") || "changed"}`;
+  }
+
+  function zoneText(z) {
+    if (typeof z === "string") return z;
+    if (Array.isArray(z)) return `[${z.join(", ")}]`;
+    return typeof z === "number" ? "±" + z : JSON.stringify(z);
   }
 
   function listSection(title, items, text) {
@@ -185,11 +194,14 @@ const PartsReport = (() => {
     return `${l.id}${l.position ? " at (" + l.position.map((x) => num(x)).join(", ") + ")" : ""} ${zone}`.trim();
   }
 
+  function value(v) { return typeof v === "string" ? v : v === null || v === undefined ? "—" : JSON.stringify(v); }
+
+  // Settings changed: [{key, from, to}] (a key absent on one side is null there).
   function settingChanges(s) {
     if (!s) return [];
-    if (Array.isArray(s)) return s.map((c) => `${c.key}: ${JSON.stringify(c.from)} → ${JSON.stringify(c.to)}`);
+    if (Array.isArray(s)) return s.map((c) => `${c.key}: ${value(c.from)} → ${value(c.to)}`);
     return Object.entries(s).map(([k, c]) => c && typeof c === "object" && "from" in c
-      ? `${k}: ${JSON.stringify(c.from)} → ${JSON.stringify(c.to)}` : `${k}: ${JSON.stringify(c)}`);
+      ? `${k}: ${value(c.from)} → ${value(c.to)}` : `${k}: ${value(c)}`);
   }
 
   // A diff answer (docs/workbench.md: landmarks added, removed and changed,
@@ -198,7 +210,7 @@ const PartsReport = (() => {
   function diff(d) {
     const box = el("div", { class: "diff" }, el("p", {}, el("strong", { text: `${d.from} → ${d.to}` })));
     const lm = d.landmarks || {};
-    const views = d.views || {};
+    const views = d.views || {};  // null when a side was never planned
     const sections = [listSection("Landmarks added", lm.added, describeLandmark),
       listSection("Landmarks removed", lm.removed, describeLandmark),
       listSection("Landmarks changed", lm.changed, landmarkChange),
@@ -206,10 +218,12 @@ const PartsReport = (() => {
       listSection("Views added", views.added, (v) => typeof v === "object" ? pose(v.pose || v) : String(v)),
       listSection("Views removed", views.removed, (v) => typeof v === "object" ? pose(v.pose || v) : String(v))];
     for (const s of sections) if (s) box.append(s);
-    const known = new Set(["from", "to", "landmarks", "settings", "views"]);
+    if (d.views === null) box.append(el("p", { class: "muted", text: "Views: not compared (one side has no plan yet)." }));
+    const known = new Set(["part", "from", "to", "landmarks", "settings", "views"]);
     const rest = Object.fromEntries(Object.entries(d).filter(([k]) => !known.has(k)));
     if (Object.keys(rest).length) box.append(el("pre", { text: JSON.stringify(rest, null, 2) }));
-    if (box.children.length === 1) box.append(el("p", { class: "muted", text: "No difference." }));
+    if (box.querySelectorAll("li").length === 0 && box.children.length <= 2)
+      box.append(el("p", { class: "muted", text: "No difference." }));
     return box;
   }
 

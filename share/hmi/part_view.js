@@ -54,6 +54,11 @@ const PartView = (() => {
         if (ev.data.error) w.reject(new Error(ev.data.error));
         else w.resolve(ev.data);
       });
+      // A worker that could not start answers nothing: every question is refused.
+      worker.addEventListener("error", (ev) => {
+        for (const w of waiting.values()) w.reject(new Error("the mesh worker failed: " + (ev.message || "not loaded")));
+        waiting.clear();
+      });
     }
     const id = ++asked;
     return new Promise((resolve, reject) => {
@@ -88,7 +93,6 @@ const PartView = (() => {
       this.levelOfDetail = true;  // false: the full mesh at full resolution while moving too (the baseline)
       this.intervals = [];
       this.meshes = { lod: null, full: null, coarse: null };
-      this.selected = { landmark: null, view: null, suggestion: null };
       this.initRenderer();
       performance.mark("parts: WebGL context");
       this.initScene();
@@ -116,10 +120,12 @@ const PartView = (() => {
       this.camera = new THREE.PerspectiveCamera(35, aspect, 0.1, 10000);
       this.camera.up.set(0, 0, 1);
       this.scene.add(new THREE.AmbientLight(0xffffff, 0.5));
-      // A headlight: the faces the engineer looks at are lit, whichever side.
+      // A headlight, from a little above and right of the camera along its
+      // view: the faces the engineer looks at are lit, whichever side.
       const light = new THREE.DirectionalLight(0xffffff, 0.65);
-      light.position.set(0.3, 0.5, 1);
-      this.camera.add(light);
+      light.position.set(0.3, 0.5, 0);
+      light.target.position.set(0, 0, -1);
+      this.camera.add(light, light.target);
       this.scene.add(this.camera);
       this.material = new THREE.MeshLambertMaterial({ color: COLORS.part });
       this.groups = {};
@@ -135,9 +141,9 @@ const PartView = (() => {
     // them): one of each kind of mark, with the part's material and lights.
     precompile() {
       const tiny = new THREE.BoxBufferGeometry(1, 1, 1);
+      const box = new THREE.Box3(new THREE.Vector3(), new THREE.Vector3(1, 1, 1));
       const kinds = new THREE.Group();
-      kinds.add(new THREE.Mesh(tiny, this.material), PartMarks.nest(new THREE.Box3(new THREE.Vector3(), new THREE.Vector3(1, 1, 1)), 1, 0),
-        PartMarks.frame(new THREE.Box3(new THREE.Vector3(), new THREE.Vector3(1, 1, 1)), 1, 0),
+      kinds.add(new THREE.Mesh(tiny, this.material), PartMarks.nest(box, 1, 0), PartMarks.frame(box, 1, 0),
         new THREE.LineSegments(tiny, new THREE.LineBasicMaterial()));
       this.scene.add(kinds);
       this.renderer.compile(this.scene, this.camera);
@@ -154,7 +160,9 @@ const PartView = (() => {
     }
 
     // The view moved: draw the light mesh now, the full one once it is still.
+    // A move made here (fit, lookAt) is drawn at rest at once.
     motion() {
+      if (this.quiet) return this.requestRender();
       if (!this.moving) { this.moving = true; this.lastMovingAt = null; }
       this.restSoon();
       this.requestRender();
@@ -183,7 +191,8 @@ const PartView = (() => {
       // light mesh's bytes would wait behind it.
       if (this.loading) return;
       const moving = this.moving && this.meshes.lod !== null;
-      const { mesh, ratio } = moving ? this.movingLevel() : { mesh: this.meshes.full || this.meshes.lod, ratio: this.restRatio };
+      const { mesh, ratio } = moving ? this.movingLevel()
+        : { mesh: this.meshes.full || this.meshes.lod, ratio: this.restRatio };
       for (const m of Object.values(this.meshes)) if (m) m.visible = m === mesh;
       this.setRatio(ratio);
       this.renderer.render(this.scene, this.camera);
@@ -270,8 +279,7 @@ const PartView = (() => {
     // ---- the part ----
 
     // A new part: its frame's marks from the API's facts (bounds, station),
-    // the shaders compiled while the meshes are on their way, then the light
-    // mesh (the first view), then the full one.
+    // then the light mesh (the first view), then the full one.
     async showPart(facts, fetched) {
       const token = ++this.token;
       this.clearMeshes();
@@ -299,12 +307,12 @@ const PartView = (() => {
         this.makeCoarse();
     }
 
-    setMesh(level, geometry) {
-      const mesh = new THREE.Mesh(geometry, this.material);
+    setMesh(level, g) {
+      const mesh = new THREE.Mesh(g, this.material);
       mesh.matrixAutoUpdate = false;
       mesh.visible = false;
       this.meshes[level] = mesh;
-      this.stats.triangles[level] = geometry.attributes.position.count / 3;
+      this.stats.triangles[level] = g.attributes.position.count / 3;
       this.scene.add(mesh);
       this.requestRender();
     }
@@ -388,7 +396,20 @@ const PartView = (() => {
       const dir = new THREE.Vector3(1, -1.4, 0.9).normalize();
       this.controls.target.copy(sphere.center);
       this.camera.position.copy(sphere.center).addScaledVector(dir, distance);
+      this.update();
+    }
+
+    update() {
+      this.quiet = true;
       this.controls.update();
+      this.quiet = false;
+    }
+
+    // The camera's matrices as the next frame will have them (the renderer
+    // updates them only when it draws; a pick may come before).
+    syncCamera() {
+      this.camera.updateMatrixWorld();
+      this.camera.matrixWorldInverse.getInverse(this.camera.matrixWorld);
     }
 
     // Looks at a point of the part along `dir` (default: from where the camera is).
@@ -398,13 +419,14 @@ const PartView = (() => {
         : this.camera.position.clone().sub(this.controls.target).normalize();
       this.controls.target.copy(target);
       this.camera.position.copy(target).addScaledVector(from, 1.6 * this.size);
-      this.controls.update();
+      this.update();
     }
 
     // Where a part-frame point is on the screen (CSS pixels of the page and of
     // the canvas), and whether the part hides it from the camera.
     screenOf(point) {
       const p = PartMarks.vec(point);
+      this.syncCamera();
       const ndc = p.clone().project(this.camera);
       const rect = this.canvas.getBoundingClientRect();
       const x = (ndc.x + 1) / 2 * rect.width, y = (1 - ndc.y) / 2 * rect.height;
@@ -418,6 +440,7 @@ const PartView = (() => {
 
     raycastAt(clientX, clientY, objects, recursive) {
       const rect = this.canvas.getBoundingClientRect();
+      this.syncCamera();
       const ndc = new THREE.Vector2((clientX - rect.left) / rect.width * 2 - 1, 1 - (clientY - rect.top) / rect.height * 2);
       this.raycaster.setFromCamera(ndc, this.camera);
       return this.raycaster.intersectObjects(objects, recursive);

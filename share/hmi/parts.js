@@ -15,7 +15,21 @@ const state = { csrf: null, signedIn: false, who: null, name: null, part: null, 
 
 performance.mark("parts: script");
 
-// What a browser test or tools/bench-parts-view reads and drives.
+// What a browser test or tools/bench-parts-view reads and drives:
+//   ready        the part's facts, meshes, views, report and versions shown
+//   state        "empty" | "loading" | "lod" (the light mesh drawn) | "full" | "error"
+//   part, busy   the part shown; API requests under way
+//   frames       frames drawn (view.stats: movingFrames, restFrames, firstFrameMs,
+//                fullFrameMs, level, pixelRatio, rung, triangles)
+//   idle()       nothing requested, the view at rest with nothing left to draw
+//   landmarks()  the draft's landmarks as the page has them
+//   screenOf(p)  where part-frame point p is on the screen: {clientX, clientY,
+//                canvasX, canvasY, visible} (visible: not hidden by the part)
+//   clickAt(p)   a click there through the view's own mouse handling
+//   lookAt(p, d) the camera looking at p from direction d (drawn at rest)
+//   lastPlaced   the server's `placed` of the last landmark added or moved
+//   lastError    the last refusal's words; job: the last job read
+//   view         the PartView (view.levelOfDetail = false: the full mesh while moving too)
 const hook = window.hgParts = {
   ready: false, state: "empty", part: null, busy: 0, lastPlaced: null, lastError: null, view: null,
   get frames() { return hook.view ? hook.view.stats.frames : 0; },

@@ -49,7 +49,7 @@ const PartsReport = (() => {
       ["Defects seeded", `${(v.defect_multiples || []).join(", ")} × tolerance; release needs ${v.release_multiple} × caught`],
       ["Cycle time", v.cycle_time_s ? `planned ${num(v.cycle_time_s.planned, 3)} s, on the twin ${num(v.cycle_time_s.twin_median, 3)} s median` : "—"],
     ];
-    if (part && part.verified && part.verified.revision !== part.revision)
+    if (part && part.verified && (part.verified.stale || part.verified.revision !== part.revision))
       rows.unshift(["Stale", `this report is of revision ${part.verified.revision}; the draft is at ${part.revision}: commission again before releasing`]);
     for (const [k, text] of rows) {
       const cls = k === "Verdict" ? (v.released ? "status-ok" : "status-bad") : k === "Stale" ? "error" : "";

@@ -288,9 +288,7 @@ const PartView = (() => {
       this.setContext(facts);
       this.fit();
       this.loading = true;
-      const lod = geometry(PartMesh.parseStl(await fetched.lod.finally(() => {
-        if (token === this.token) this.loading = false;
-      })));
+      const lod = geometry(await fetched.lod.finally(() => { if (token === this.token) this.loading = false; }));
       if (token !== this.token) return;
       performance.mark("parts: light mesh received");
       this.setMesh("lod", lod);
@@ -550,8 +548,10 @@ const PartView = (() => {
   // light one is drawn first, the full one (ten times the bytes) meanwhile
   // arrives and is parsed by the worker.
   PartView.prefetch = (url) => {
+    // Parsed as soon as its bytes are here: in a gap of the page's thread,
+    // perhaps while the part's facts are still on their way.
     const light = fetch(url + "?lod=1", { cache: "no-store" }).then(async (res) => {
-      if (res.ok) return res.arrayBuffer();
+      if (res.ok) return PartMesh.parseStl(await res.arrayBuffer());
       const body = await res.json().catch(() => ({}));
       throw new Error(body.error || `${url}?lod=1: HTTP ${res.status}`);
     });

@@ -6,7 +6,7 @@ const hg = {
   async get(path) {
     const res = await fetch(path, { headers: { Accept: "application/json" }, cache: "no-store" });
     const body = await res.json().catch(() => ({ error: "HTTP " + res.status }));
-    if (!res.ok) throw new Error(body.error || "HTTP " + res.status);
+    if (!res.ok) throw hg.refusal(res, body);
     return body;
   },
   async post(path, body, csrf) {
@@ -14,8 +14,15 @@ const hg = {
     if (csrf) headers["X-CSRF-Token"] = csrf;
     const res = await fetch(path, { method: "POST", headers, body: JSON.stringify(body), credentials: "same-origin" });
     const answer = await res.json().catch(() => ({ error: "HTTP " + res.status }));
-    if (!res.ok) throw new Error(answer.error || "HTTP " + res.status);
+    if (!res.ok) throw hg.refusal(res, answer);
     return answer;
+  },
+  // An error answer as an Error in the server's words, with the HTTP status
+  // (the Parts page reloads the draft on 409, a change made on an old revision).
+  refusal(res, body) {
+    const e = new Error(body.error || "HTTP " + res.status);
+    e.status = res.status;
+    return e;
   },
   el(tag, attrs = {}, ...children) {
     const e = document.createElement(tag);
@@ -37,7 +44,7 @@ const hg = {
   },
   statusClass(s) { return s === "ok" ? "status-ok" : s === "uncertain" ? "status-uncertain" : "status-bad"; },
   nav(active) {
-    const pages = [["/", "Line"], ["/results", "Results"], ["/spc", "SPC"], ["/maintenance", "Maintenance"]];
+    const pages = [["/", "Line"], ["/results", "Results"], ["/spc", "SPC"], ["/parts", "Parts"], ["/maintenance", "Maintenance"]];
     const nav = document.querySelector("nav");
     for (const [href, label] of pages)
       nav.append(hg.el("a", { href, class: href === active ? "active" : "", text: label }));

@@ -6,35 +6,35 @@
 // at every landmark — and released with a version only when it passes. A
 // program that fails names each landmark's failing test and its fix; --fix
 // makes the fixes that can be made here (a second view, a finer octree depth,
-// dropping the landmark) and verifies again.
+// dropping the landmark) and verifies again. With --no-release the
+// verification is written and nothing released (what `hullgauge part
+// commission` does on the workbench's draft, docs/workbench.md); the release
+// itself is the workbench library's (workbench/commissioning.h), shared with
+// `hullgauge part release`.
 //
-// Exit status: 0 released, 1 verified but not released (the report says
-// why), 2 bad input or no plan, 3 a fault (a file that cannot be written).
+// Exit status: 0 released (with --no-release: it would be), 1 verified but
+// not released (the report says why), 2 bad input or no plan, 3 a fault (a
+// file that cannot be written).
 #include "command.h"
-#include "hullgauge/commission/report.h"
 #include "hullgauge/commission/screen.h" // verificationProblem
 #include "hullgauge/commission/verification.h"
 #include "hullgauge/common/clock.h"
-#include "hullgauge/common/digest.h"
 #include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 #include "hullgauge/plan/landmark_suggest.h"
 #include "hullgauge/plan/plan_report.h"
 #include "hullgauge/plan/program_plan.h"
+#include "hullgauge/workbench/commissioning.h"
 
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <chrono>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
-#include <pwd.h>
 #include <set>
-#include <unistd.h>
 
 namespace hg::cli {
 namespace {
@@ -60,6 +60,7 @@ struct CommissionArgs {
     double seatRotationDeg = -1.0;
     bool fix = false;
     int rounds = 4;
+    bool noRelease = false;
 };
 
 void say(const std::string& line)
@@ -67,24 +68,11 @@ void say(const std::string& line)
     std::cerr << "hullgauge commission: " << line << '\n';
 }
 
-/// Wall time of the phases, as the progress callback marks them.
-class PhaseClock {
-  public:
-    void start(const std::string& phase) { started_.insert_or_assign(phase, Stopwatch()); }
-    void stop(const std::string& phase) { ms_[phase] += started_.at(phase).ms(); }
-    const std::map<std::string, double>& ms() const { return ms_; }
-
-  private:
-    std::map<std::string, Stopwatch> started_;
-    std::map<std::string, double> ms_;
-};
+using workbench::PhaseClock;
 
 std::string whoAmI(const CommissionArgs& args)
 {
-    if (!args.releasedBy.empty()) return args.releasedBy;
-    if (const char* sudo = std::getenv("SUDO_USER"); sudo && *sudo) return sudo;
-    if (const passwd* pw = getpwuid(getuid()); pw && pw->pw_name) return pw->pw_name;
-    return "uid " + std::to_string(getuid());
+    return args.releasedBy.empty() ? workbench::currentUser() : args.releasedBy;
 }
 
 /// The part's name: --part, else the CAD file's stem.
@@ -193,30 +181,12 @@ void dropLandmarks(YAML::Node& draft, const std::set<std::string>& ids)
         draft["parameters"] = params;
 }
 
-struct Round {
-    model::PartProgram program;
-    plan::ProgramPlan planned;
-    std::optional<commission::VerificationReport> report;
-};
-
-plan::PlanOptions planOptions(const model::PartProgram& program)
-{
-    plan::PlanOptions options;
-    options.pareLayers = std::max(1, program.octree.adjacencyDepth);
-    return options;
-}
+using Round = workbench::CommissionRound;
 
 /// One round: the draft loaded as the daemon loads it, planned, verified.
 Round verifyDraft(const CommissionArgs& args, const geometry::Station& station, const fs::path& draftFile,
                   PhaseClock& clock)
 {
-    clock.start("plan");
-    Round r{model::loadPartProgram(draftFile), {}, std::nullopt};
-    r.planned = plan::planProgram(r.program, station, planOptions(r.program));
-    clock.stop("plan");
-    if (!r.planned.plan.feasible) return r;
-    const commission::VerificationProblem problem =
-        commission::verificationProblem(r.program, station, r.planned.plan, *r.planned.capability);
     commission::VerificationOptions options;
     options.seats = args.seats;
     options.defectMultiples = args.defectMultiples;
@@ -224,15 +194,10 @@ Round verifyDraft(const CommissionArgs& args, const geometry::Station& station, 
     options.seatShiftMm = args.seatShiftMm;
     options.seatRotationDeg = args.seatRotationDeg;
     const auto progress = [&](const std::string& phase, std::size_t done, std::size_t total) {
-        if (done == 0) clock.start(phase);
-        if (done == total) {
-            clock.stop(phase);
-            say(phase + ": " + std::to_string(total) + " cycles on the twin");
-        }
+        if (done == total) say(phase + ": " + std::to_string(total) + " cycles on the twin");
         return true;
     };
-    r.report = commission::verifyProgram(problem, options, commission::twinFrames(station, args.seed), progress);
-    return r;
+    return workbench::commissionRound(draftFile, station, options, progress, clock);
 }
 
 /// The fixes --fix applies, in the order a finding names them; the others
@@ -368,52 +333,28 @@ bool applyFixes(YAML::Node& draft, const FixRound& fixes, const Round& r, const 
     return true;
 }
 
-void writePlan(const fs::path& out, const Round& r)
-{
-    replaceFileDurably(out / "plan.json", plan::toJson(r.planned).dump(2) + "\n");
-    replaceFileDurably(out / "plan.md", plan::planMarkdown(r.planned.plan, r.planned.problem));
-}
-
-/// Every released version whole in a folder of its own (releases/<part>.v<N>/):
-/// the program, its views, its model and the verification it rests on.
-void keepVersion(const fs::path& out, const std::string& part, int version, const std::string& program,
-                 const std::string& views, const model::PartProgram& draft)
-{
-    const fs::path folder = out / "releases" / (part + ".v" + std::to_string(version));
-    fs::create_directories(folder);
-    fs::copy_file(draft.meshFile, folder / draft.meshFile.filename(), fs::copy_options::overwrite_existing);
-    for (const char* file : {"verification.json", "verification.md", "plan.json"})
-        fs::copy_file(out / file, folder / file, fs::copy_options::overwrite_existing);
-    replaceFileDurably(folder / (part + "-views.yaml"), views);
-    replaceFileDurably(folder / (part + ".yaml"), program);
-}
-
 /// The release (docs/commissioning.md, "Release"): the program with its
 /// record and its views; every version kept under releases/.
-int release(const CommissionArgs& args, const fs::path& out, YAML::Node draft, const Round& r,
+int release(const CommissionArgs& args, const fs::path& out, const YAML::Node& draft, const Round& r,
             const geometry::Station& station, const std::string& reportJson)
 {
     const std::string part = r.program.part;
-    const fs::path released = out / (part + ".yaml");
-    int version = 1;
-    if (fs::exists(released)) {
-        const model::PartProgram previous = model::loadPartProgram(released);
-        if (previous.release) version = previous.release->version + 1;
-    }
     const std::string views = part + "-views.yaml";
-    const std::string posesText = plan::posesYaml(r.planned.plan, station.fixture.type);
-    draft["release"]["version"] = version;
-    draft["release"]["verification_sha256"] = sha256Hex(reportJson);
-    draft["release"]["released_by"] = whoAmI(args);
-    draft["release"]["released_at"] = localTimestamp();
-    const std::string text = emit(draft, "# Part program released by hullgauge commission (docs/commissioning.md).\n"
-                                         "# Its views: " +
-                                             views + "; its verification: verification.json.\n");
-    keepVersion(out, part, version, text, posesText, r.program);
-    replaceFileDurably(out / views, posesText);
-    replaceFileDurably(released, text);
-    say("released " + part + " version " + std::to_string(version) + ": " + released.string() + " (views " +
-        (out / views).string() + ")");
+    workbench::ReleaseInput input;
+    input.folder = out;
+    input.part = part;
+    input.program = draft;
+    input.meshFile = r.program.meshFile;
+    input.viewsYaml = plan::posesYaml(r.planned.plan, station.fixture.type);
+    input.verificationJson = reportJson;
+    input.evidenceFolder = out;
+    input.releasedBy = whoAmI(args);
+    input.header = "# Part program released by hullgauge commission (docs/commissioning.md).\n"
+                   "# Its views: " +
+                   views + "; its verification: verification.json.\n";
+    const workbench::Released released = workbench::releaseVersion(input);
+    say("released " + part + " version " + std::to_string(released.version) + ": " + released.programFile.string() +
+        " (views " + released.viewsFile.string() + ")");
     return 0;
 }
 
@@ -434,16 +375,19 @@ int run(const CommissionArgs& args)
         replaceFileDurably(draftFile, emit(draft, "# Draft part program of hullgauge commission (round " +
                                                       std::to_string(round) + ").\n"));
         Round r = verifyDraft(args, station, draftFile, clock);
-        writePlan(out, r);
+        workbench::writePlanFiles(out, r.planned);
         if (!r.report) {
             say("no plan for " + r.program.part + ":");
             for (const std::string& p : r.planned.plan.problems) std::cerr << "  " << p << '\n';
             return static_cast<int>(ExitStatus::BadInput);
         }
         r.report->phaseMs = clock.ms();
-        const std::string reportJson = commission::toJson(*r.report).dump(2) + "\n";
-        replaceFileDurably(out / "verification.json", reportJson);
-        replaceFileDurably(out / "verification.md", commission::toMarkdown(*r.report));
+        const std::string reportJson = workbench::writeVerificationFiles(out, *r.report);
+        if (r.report->released && args.noRelease) {
+            say(r.program.part +
+                " is verified and may be released; not released (--no-release): " + (out / "verification.md").string());
+            return 0;
+        }
         if (r.report->released) return release(args, out, draft, r, station, reportJson);
         say(r.program.part + " is not released (" + (out / "verification.md").string() + "):");
         for (const commission::Finding& f : r.report->findings)
@@ -511,6 +455,9 @@ std::function<int()> factory(CLI::App& app)
         ->check(CLI::Range(1, 20))
         ->capture_default_str();
     cmd->add_option("--released-by", args->releasedBy, "who releases the program (default: the user)");
+    cmd->add_flag("--no-release", args->noRelease,
+                  "verify only: write the plan and the verification, never release (exit 0 when it would be "
+                  "released)");
     return [args] {
         if (args->program.empty() && args->toleranceMm <= 0.0)
             throw InputError("", "--tolerance", "give the drawing's tolerance (--tolerance) or a --program");

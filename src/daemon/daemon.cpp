@@ -54,6 +54,9 @@ std::vector<std::string> needsRestart(const station::DaemonConfig& a, const stat
     if (a.results.database != b.results.database) keys.push_back("results.database");
     if (a.maintenance.socket != b.maintenance.socket) keys.push_back("maintenance.socket");
     if (!(a.mqtt == b.mqtt)) keys.push_back("mqtt");
+    if (a.workbench.folder != b.workbench.folder || a.workbench.cli != b.workbench.cli ||
+        a.workbench.maxUploadBytes != b.workbench.maxUploadBytes || a.workbench.maxJobs != b.workbench.maxJobs)
+        keys.push_back("workbench");
     return keys;
 }
 
@@ -123,6 +126,13 @@ class MainLoop {
     void serve(MaintenanceServer& maintenance, CommandMailbox& mailbox, const MaintenanceServer::Handler& commands);
     /// Told of every reloaded configuration.
     void setHmi(HmiServer* hmi) { hmi_ = hmi; }
+    /// As SIGHUP: the configuration read and checked again on the reload's worker.
+    void requestReload()
+    {
+        hg::log::category("daemon")->info("reload of {} requested", config_->file.string());
+        notifier_.reloading();
+        reload_.request(config_->file);
+    }
 
   private:
     bool healthy();
@@ -205,9 +215,7 @@ bool MainLoop::takeSignals()
     bool running = true;
     while (read(sigFd_, &info, sizeof info) == sizeof info) {
         if (info.ssi_signo == SIGHUP) {
-            hg::log::category("daemon")->info("reload of {} requested", config_->file.string());
-            notifier_.reloading();
-            reload_.request(config_->file);
+            requestReload();
         } else if (info.ssi_signo == SIGTERM || info.ssi_signo == SIGINT) {
             hg::log::category("daemon")->info("stopping on signal {}", info.ssi_signo);
             running = false;
@@ -276,6 +284,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     MaintenanceContext context{
         registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};
     if (mqtt) context.mqttStatus = [&mqtt] { return mqtt->status(); };
+    context.requestReload = [&loop] { loop.requestReload(); };
     const auto commands = maintenanceCommands(context);
     MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands, clock);
     notifier.status("starting devices");

@@ -5,6 +5,7 @@
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/file_kind.h"
+#include "hullgauge/workbench/workspace.h"
 
 #include <algorithm>
 #include <arpa/inet.h>
@@ -191,6 +192,47 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     return ref;
 }
 
+void parseWorkbench(const ConfigNode& node, const fs::path& base, WorkbenchConfig& workbench)
+{
+    node.allowOnlyKeys({"folder", "cli", "max_upload_bytes", "max_jobs"});
+    workbench.folder = resolve(node["folder"], base);
+    if (auto n = node.optional("cli")) workbench.cli = existingFile(*n, base);
+    if (auto n = node.optional("max_upload_bytes"))
+        workbench.maxUploadBytes = static_cast<std::size_t>(n->asIntIn(1024, std::int64_t{1} << 30));
+    if (auto n = node.optional("max_jobs")) workbench.maxJobs = static_cast<int>(n->asIntIn(1, 4));
+    std::error_code ec;
+    fs::create_directories(workbench.folder, ec);
+    if (ec || !fs::is_directory(workbench.folder))
+        node["folder"].fail("cannot create the workspace " + workbench.folder.string() + ": " + ec.message());
+}
+
+/// The released parts of the workspace as programs (docs/workbench.md,
+/// "Released parts on the station"); a number the `programs:` table holds too is refused naming both.
+void addWorkbenchPrograms(const ConfigNode& node, DaemonConfig& cfg)
+{
+    const workbench::Workspace workspace(cfg.workbench.folder);
+    for (const auto& part : workspace.list()) {
+        if (!part.record.plcProgram || !part.releasedVersion) continue;
+        const auto number = static_cast<std::uint16_t>(*part.record.plcProgram);
+        const fs::path folder = workspace.partFolder(part.record.part);
+        if (auto it = cfg.programs.find(number); it != cfg.programs.end())
+            node.fail("the workspace's part '" + part.record.part + "' is released as program " +
+                      std::to_string(number) + ", which is " +
+                      (it->second.workbenchPart.empty() ? it->second.partFile.string()
+                                                        : "the workspace's part '" + it->second.workbenchPart + "'") +
+                      " too");
+        PartProgramRef ref;
+        ref.number = number;
+        ref.workbenchPart = part.record.part;
+        ref.partFile = folder / (part.record.part + ".yaml");
+        ref.partSha256 = sha256OfFile(ref.partFile);
+        ref.viewsFile = folder / (part.record.part + "-views.yaml");
+        ref.views = geometry::loadPoses(ref.viewsFile, &cfg.station.fixture);
+        ref.simulatedNominal = folder / part.record.cad;
+        cfg.programs.emplace(number, std::move(ref));
+    }
+}
+
 } // namespace
 
 bool Ipv4Network::contains(std::uint32_t hostOrderAddress) const
@@ -241,7 +283,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "mqtt", "watchdog", "simulation"});
+                        "mqtt", "watchdog", "simulation", "workbench"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -279,6 +321,10 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         if (auto g = n->optional("group")) cfg.maintenance.group = g->asString();
     }
     if (auto n = root.optional("http")) parseHmi(*n, base, cfg.http);
+    if (auto n = root.optional("workbench")) {
+        parseWorkbench(*n, base, cfg.workbench);
+        addWorkbenchPrograms(*n, cfg);
+    }
     if (auto n = root.optional("mqtt")) parseMqtt(*n, base, cfg.mqtt);
     if (auto n = root.optional("watchdog")) {
         n->allowOnlyKeys({"max_cycle_s"});

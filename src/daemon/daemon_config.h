@@ -44,6 +44,13 @@ struct PartProgramRef {
     /// docs/commissioning.md) loads the program anew; one that refuses it keeps
     /// the configuration, and so the program, it had (docs/daemon.md).
     std::string partSha256;
+    /// A released part of the workbench's workspace (docs/workbench.md,
+    /// "Released parts on the station"): its name; empty for a program of the
+    /// `programs:` table.
+    std::string workbenchPart;
+    /// The CAD model a workbench part's program names: what the simulated
+    /// camera renders as its nominal part (docs/workbench.md).
+    std::filesystem::path simulatedNominal;
     /// Run the program although the capability check finds a tolerance this
     /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
     bool force = false;
@@ -131,6 +138,15 @@ struct HmiConfig {
 /// `http.allowed_hosts` as given, or its default for `bindAddress`.
 std::vector<std::string> allowedHostsFor(const HmiConfig& http);
 
+/// The part workbench (docs/workbench.md, "Configuration").
+struct WorkbenchConfig {
+    std::filesystem::path folder;                ///< the workspace; empty: no workbench
+    std::filesystem::path cli = "/usr/bin/hullgauge"; ///< the command its jobs run
+    std::size_t maxUploadBytes = 64u << 20;
+    int maxJobs = 1;
+    bool enabled() const { return !folder.empty(); }
+};
+
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer
     /// than this (the sequencer is stuck) or the PLC server loop stalls.
@@ -155,6 +171,7 @@ struct DaemonConfig {
     SequencerConfig sequencer;
     MaintenanceConfig maintenance;
     HmiConfig http;
+    WorkbenchConfig workbench;
     /// The plant link (docs/mqtt.md): results, state and counters published to a broker.
     MqttConfig mqtt;
     WatchdogConfig watchdog;

@@ -420,11 +420,20 @@ json simPart(const MaintenanceContext& c, const json& request)
     return {{"ok", true}, {"current", name}};
 }
 
+// As SIGHUP (docs/daemon.md, "Reload"): answered at once, applied when read and checked.
+json reload(const MaintenanceContext& c, const json&)
+{
+    if (!c.requestReload) return {{"ok", false}, {"error", "reload is not offered here"}};
+    c.requestReload();
+    return {{"ok", true}, {"reloading", true}};
+}
+
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
     {"status", status},    {"results", results},     {"trigger", trigger},
     {"abort", abortCycle}, {"calibrate", calibrate}, {"calibration", calibration},
     {"sim-part", simPart}, {"purpose", purpose},     {"snapshot", snapshot},
+    {"reload", reload},
 };
 
 } // namespace

@@ -96,6 +96,9 @@ struct MaintenanceContext {
     int hmiPort = 0;
     /// The plant link's state (docs/mqtt.md); empty when it is off.
     std::function<nlohmann::json()> mqttStatus = {};
+    /// Reads the configuration and its programs again, as SIGHUP does (the
+    /// workbench's release, docs/workbench.md); empty: `reload` is refused.
+    std::function<void()> requestReload = {};
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,

@@ -417,7 +417,7 @@ namespace {
 // docs/commissioning.md, "Release": the record commissioning writes.
 ReleaseRecord parseRelease(const ConfigNode& node)
 {
-    node.allowOnlyKeys({"version", "verification_sha256", "released_by", "released_at"});
+    node.allowOnlyKeys({"version", "verification_sha256", "released_by", "released_at", "rolled_back_from"});
     ReleaseRecord r;
     r.version = static_cast<int>(node["version"].asIntIn(1, 1000000));
     r.verificationSha256 = node["verification_sha256"].asString();
@@ -428,6 +428,12 @@ ReleaseRecord parseRelease(const ConfigNode& node)
     if (r.releasedBy.empty()) node["released_by"].fail("who released the program is empty");
     r.releasedAt = node["released_at"].asString();
     if (r.releasedAt.empty()) node["released_at"].fail("when the program was released is empty");
+    if (auto n = node.optional("rolled_back_from")) {
+        r.rolledBackFrom = static_cast<int>(n->asIntIn(1, 1000000));
+        if (*r.rolledBackFrom >= r.version)
+            n->fail("version " + std::to_string(r.version) + " can only roll back to an earlier version, not " +
+                    std::to_string(*r.rolledBackFrom));
+    }
     return r;
 }
 

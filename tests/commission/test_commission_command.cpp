@@ -1,7 +1,7 @@
 // `hullgauge commission` end to end on the simulated line's part (docs/commissioning.md):
 // the program is released with its views, its record's digest is the
 // SHA-256 of the report as `sha256sum` computes it, a second release is
-// version 2 with version 1 kept; a missing tolerance and a release multiple
+// version 2 with version 1 kept; --no-release verifies and releases nothing; a missing tolerance and a release multiple
 // left out are refused naming the option; a lens too long gives no plan.
 #include "hgtest/paths.h"
 #include "hullgauge/model/part_program.h"
@@ -73,6 +73,24 @@ TEST(CommissionCommand, ReleasesTheProgramWithItsViewsAndRecordAndKeepsEveryVers
         EXPECT_TRUE(fs::exists(kept / "stepped-block-views.yaml"));
         EXPECT_TRUE(fs::exists(kept / "verification.json"));
     }
+}
+
+// --no-release: the verification is written and would release the program
+// (exit 0), and nothing is released: no program in force, no kept version.
+TEST(CommissionCommand, NoReleaseVerifiesAndReleasesNothing)
+{
+    hgtest::TempDir dir;
+    const fs::path out = dir / "stepped";
+    const hgtest::RunResult r =
+        hgtest::run(commission(out, "--program " + sim("stepped-block.yaml").string() + " --no-release"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("not released (--no-release)"), std::string::npos) << r.err;
+    EXPECT_TRUE(nlohmann::json::parse(readText(out / "verification.json"))["released"].get<bool>());
+    EXPECT_TRUE(fs::exists(out / "plan.json"));
+    EXPECT_TRUE(fs::exists(out / "stepped-block.draft.yaml"));
+    EXPECT_FALSE(fs::exists(out / "stepped-block.yaml"));
+    EXPECT_FALSE(fs::exists(out / "stepped-block-views.yaml"));
+    EXPECT_FALSE(fs::exists(out / "releases"));
 }
 
 // The simulated line's program with one more landmark whose tolerance no

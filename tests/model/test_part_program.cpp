@@ -194,6 +194,22 @@ TEST_F(PartProgramTest, LimitsReplaceTheToleranceAndTheDecisionRuleMayStandAtThe
     EXPECT_TRUE(p.inspection.simpleDecision);
 }
 
+// A version a rollback made names the earlier version it puts in force again
+// (docs/workbench.md, rollback); only an earlier one.
+TEST_F(PartProgramTest, AReleaseRecordMayNameTheVersionItRollsBackFrom)
+{
+    const std::string record = "release:\n  version: 3\n  verification_sha256: " + std::string(64, 'a') +
+                               "\n  released_by: jdoe\n  released_at: 2026-12-07T10:32:05+01:00\n";
+    const PartProgram plain = loadPartProgram(write(kGood + record));
+    ASSERT_TRUE(plain.release.has_value());
+    EXPECT_FALSE(plain.release->rolledBackFrom.has_value());
+    const PartProgram rolled = loadPartProgram(write(kGood + record + "  rolled_back_from: 1\n"));
+    EXPECT_EQ(rolled.release->rolledBackFrom, 1);
+    const InputError e = error(kGood + record + "  rolled_back_from: 3\n");
+    EXPECT_EQ(e.field(), "release.rolled_back_from");
+    EXPECT_EQ(e.problem(), "version 3 can only roll back to an earlier version, not 3");
+}
+
 TEST_F(PartProgramTest, EachMistakeIsNamed)
 {
     const std::vector<Mistake> mistakes = {

@@ -187,6 +187,19 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         return out;
     }
 
+    void showMesh(const std::string& name, std::shared_ptr<const model::TriangleMesh> mesh) override
+    {
+        std::lock_guard lock(mutex_);
+        if (shownMesh_ != mesh) {
+            shownRenderer_ =
+                std::make_shared<const sim::SilhouetteRenderer>(std::vector<model::TriangleMesh>{*mesh});
+            shownMesh_ = std::move(mesh);
+        }
+        if (partName_ != name) log::category("camera")->info("sim camera: part under test is now '{}'", name);
+        current_ = shownRenderer_;
+        partName_ = name;
+    }
+
     void setSeat(const geometry::RigidTransform& seat) override
     {
         std::lock_guard lock(mutex_);
@@ -434,6 +447,8 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_, region_
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
+    std::shared_ptr<const model::TriangleMesh> shownMesh_; ///< showMesh's last mesh and its renderer
+    std::shared_ptr<const sim::SilhouetteRenderer> shownRenderer_;
     PoseSource poseSource_;
     SimulatedCameraFault fault_;
     geometry::RigidTransform seat_; ///< nominal_from_part of the part in the nest

@@ -145,6 +145,9 @@ struct ReleaseRecord {
     std::string verificationSha256; ///< 64 hex digits: SHA-256 of verification.json
     std::string releasedBy;
     std::string releasedAt; ///< ISO 8601 with the zone, as written
+    /// `rolled_back_from`: the earlier version this one puts in force again
+    /// (docs/workbench.md, rollback); its program, views and CAD model are that version's.
+    std::optional<int> rolledBackFrom;
 };
 
 struct PartProgram {

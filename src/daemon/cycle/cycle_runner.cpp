@@ -407,9 +407,12 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
               r.purpose == station::CyclePurpose::Production ? std::string() : ", " + std::string(enumName(r.purpose)));
     devices_.showLamps(LampPattern::Busy);
     // The simulated line puts a new part in the nest, seated within its play.
-    if (simulation_) simulation_->newPart();
     auto it = cycle.cfg->programs.find(r.program);
     cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
+    if (simulation_) {
+        simulation_->useProgram(cycle.program ? cycle.program->simulatedNominal : std::filesystem::path());
+        simulation_->newPart();
+    }
     if (cycle.program) cycle.poses = cycle.program->views;
     auto action = transition([&] {
         // The cycle's configuration gives its retries: a reload's count applies from the next cycle (docs/daemon.md).

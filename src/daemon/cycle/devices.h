@@ -14,6 +14,7 @@
 #include "hullgauge/station/cycle_rules.h"
 
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core/mat.hpp>
@@ -90,6 +91,11 @@ class SimulationControl {
     /// at random within the play, else exactly as drawn. The cycle runner calls
     /// it at the start of every cycle.
     virtual void newPart() {}
+    /// The program the next part is inspected with, before newPart(): a
+    /// released part of the workbench (`simulatedNominal` set) is rendered as
+    /// its own CAD model while the "nominal" part is selected
+    /// (docs/workbench.md, "Released parts on the station"); null: none.
+    virtual void useProgram(const std::filesystem::path& simulatedNominal) { (void)simulatedNominal; }
     /// The seat of the part in the nest; nullopt without `simulation.seating`.
     virtual std::optional<SimulatedSeat> trueSeat() const { return std::nullopt; }
     /// The simulated fixture's fault switches (docs/fixture.md); null when the

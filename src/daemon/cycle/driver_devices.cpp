@@ -7,6 +7,7 @@
 #include "hullgauge/common/log.h"
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/model/mesh_io.h"
+#include "hullgauge/model/part_program.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -37,7 +38,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
         drivers::CameraEnvironment environment;
         for (const auto& [name, file] : config.simulatedParts) {
             environment.parts.emplace_back(name, model::loadMesh(file));
-            if (name == "nominal") seatCentre_ = environment.parts.back().second.bounds().center();
+            if (name == "nominal") nominalCentre_ = seatCentre_ = environment.parts.back().second.bounds().center();
         }
         if (config.simulatedSeating) {
             seating_ = *config.simulatedSeating;
@@ -46,6 +47,7 @@ class DriverDevices : public StationDevices, public SimulationControl {
         environment.poseSource = [this] { return heldPose(); };
         environment.simulation = &sim_;
         camera_ = drivers::makeCamera(doc, std::move(environment), clock);
+        if (sim_.camera) selected_ = sim_.camera->part();
         if (!sim_.camera && seating_) {
             // Only the simulated camera renders a seat; a real camera sees the part as it lies.
             hg::log::category("daemon")->warn("simulation.seating ignored: the camera is not the simulated one");
@@ -145,7 +147,30 @@ class DriverDevices : public StationDevices, public SimulationControl {
 
     std::vector<std::string> parts() const override { return sim_.camera->partNames(); }
     std::string part() const override { return sim_.camera->part(); }
-    bool selectPart(const std::string& name) override { return sim_.camera->setPart(name).ok(); }
+    bool selectPart(const std::string& name) override
+    {
+        if (!sim_.camera->setPart(name).ok()) return false;
+        selected_ = name;
+        return true;
+    }
+
+    void useProgram(const std::filesystem::path& simulatedNominal) override
+    {
+        if (!simulatedNominal.empty() && selected_ == "nominal") {
+            if (shownFile_ != simulatedNominal) {
+                // A STEP model as the program loader tessellates it; the default octree only sizes the cube.
+                const auto cad = model::loadCadModel(simulatedNominal, 8, 4);
+                shownMesh_ = std::make_shared<const model::TriangleMesh>(cad.solid->mesh());
+                shownFile_ = simulatedNominal;
+            }
+            sim_.camera->showMesh(simulatedNominal.parent_path().filename().string(), shownMesh_);
+            seatCentre_ = shownMesh_->bounds().center();
+        } else if (!shownFile_.empty()) {
+            (void)sim_.camera->setPart(selected_);
+            seatCentre_ = nominalCentre_;
+            shownFile_.clear();
+        }
+    }
     drivers::SimFixtureControl* fixtureFaults() override { return sim_.fixture; }
 
     void newPart() override
@@ -232,6 +257,10 @@ class DriverDevices : public StationDevices, public SimulationControl {
     std::optional<station::DaemonConfig::Seating> seating_;
     std::mt19937_64 seatRng_;
     geometry::Vec3 seatCentre_ = geometry::Vec3::Zero();
+    geometry::Vec3 nominalCentre_ = geometry::Vec3::Zero();
+    std::string selected_ = "nominal"; ///< the operator's choice (sim-part)
+    std::filesystem::path shownFile_;  ///< a workbench part's CAD model the camera shows, if any
+    std::shared_ptr<const model::TriangleMesh> shownMesh_;
     SimulatedSeat seat_;
     std::unique_ptr<drivers::Fixture> fixture_;
     std::unique_ptr<drivers::Camera> camera_;

@@ -33,6 +33,8 @@ struct Pending {
     /// the close does not reset the connection before the answer is read.
     bool draining = false;
     std::size_t drained = 0;
+    /// An upload's deadline was extended for its size (once, when its head was read).
+    bool uploadTimed = false;
 };
 
 constexpr std::size_t kDrainBytes = 1 << 20;
@@ -166,6 +168,12 @@ void GateListener::run(std::stop_token stop)
             }
             const RequestGate::State state = p.gate.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
             if (p.gate.takeContinue()) (void)::send(p.fd, "HTTP/1.1 100 Continue\r\n\r\n", 25, MSG_NOSIGNAL);
+            if (!p.uploadTimed && p.gate.uploadBytes() > 0) {
+                // A CAD upload may take longer than a request: its size at the slowest rate the plant network is
+                // expected to carry (docs/workbench.md), on top of request_timeout_s.
+                p.deadline += std::chrono::milliseconds(p.gate.uploadBytes() * 1000 / options_.uploadBytesPerSecond);
+                p.uploadTimed = true;
+            }
             if (state == RequestGate::State::Refused) {
                 answerRefusal(p.fd, p.gate.status(), p.gate.reason());
                 ++refused_;

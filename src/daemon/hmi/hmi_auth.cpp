@@ -69,7 +69,7 @@ void Sessions::expire()
     std::erase_if(sessions_, [&](const auto& kv) { return now - kv.second.last > idle_; });
 }
 
-Sessions::Session Sessions::open()
+Sessions::Session Sessions::open(std::string name)
 {
     std::lock_guard lock(mutex_);
     expire();
@@ -79,19 +79,19 @@ Sessions::Session Sessions::open()
                                        [](const auto& a, const auto& b) { return a.second.last < b.second.last; });
         sessions_.erase(oldest);
     }
-    Session s{randomToken(), randomToken()};
-    sessions_[s.id] = {s.csrf, clock_.now()};
+    Session s{randomToken(), randomToken(), std::move(name)};
+    sessions_[s.id] = {s.csrf, s.name, clock_.now()};
     return s;
 }
 
-std::optional<std::string> Sessions::touch(const std::string& id)
+std::optional<Sessions::Session> Sessions::touch(const std::string& id)
 {
     std::lock_guard lock(mutex_);
     expire();
     auto it = sessions_.find(id);
     if (it == sessions_.end()) return std::nullopt;
     it->second.last = clock_.now();
-    return it->second.csrf;
+    return Session{id, it->second.csrf, it->second.name};
 }
 
 void Sessions::close(const std::string& id)

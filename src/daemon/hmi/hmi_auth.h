@@ -31,10 +31,13 @@ class Sessions {
     struct Session {
         std::string id;
         std::string csrf;
+        /// The name the engineer signed in with (docs/workbench.md: who released
+        /// what); one shared password, so it is what they said, not a proof.
+        std::string name;
     };
-    Session open();
-    /// The session's CSRF token when `id` is live (its idle time restarts), else nothing.
-    std::optional<std::string> touch(const std::string& id);
+    Session open(std::string name = {});
+    /// The session when `id` is live (its idle time restarts), else nothing.
+    std::optional<Session> touch(const std::string& id);
     void close(const std::string& id);
 
     static constexpr std::size_t kMaxSessions = 64;
@@ -44,6 +47,7 @@ class Sessions {
 
     struct Entry {
         std::string csrf;
+        std::string name;
         Clock::time_point last;
     };
     Clock::duration idle_;

@@ -1,4 +1,6 @@
 #include "hmi/hmi_server.h"
+#include "hmi/http_util.h"
+#include "hmi/parts_routes.h"
 
 #include "hullgauge/calib/station_file.h"
 #include "hullgauge/common/error.h"
@@ -28,68 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-/// A request the API refuses: its HTTP status and what was wrong.
-struct HttpError : std::runtime_error {
-    int status;
-    HttpError(int s, const std::string& what) : std::runtime_error(what), status(s) {}
-};
-
-constexpr const char* kJson = "application/json";
-
-void sendJson(httplib::Response& res, const json& body, int status = 200)
-{
-    res.status = status;
-    res.set_header("Cache-Control", "no-store");
-    res.set_content(dumpJson(body), kJson);
-}
-
-void sendError(httplib::Response& res, int status, const std::string& message)
-{
-    sendJson(res, {{"error", message}}, status);
-}
-
-/// Runs `handler`, turning a refused request into its 4xx and any other failure into 500 (logged).
-template <class Handler> httplib::Server::Handler api(Handler handler)
-{
-    return [handler](const httplib::Request& req, httplib::Response& res) {
-        try {
-            handler(req, res);
-        } catch (const HttpError& e) {
-            sendError(res, e.status, e.what());
-        } catch (const InputError& e) {
-            sendError(res, 400, e.what());
-        } catch (const std::exception& e) {
-            hg::log::category("hmi")->error("{} {}: {}", req.method, req.path, e.what());
-            sendError(res, 500, e.what());
-        }
-    };
-}
-
-/// A query parameter as a whole number in [lo, hi]; nothing when absent.
-std::optional<std::int64_t> intParam(const httplib::Request& req, const char* name, std::int64_t lo, std::int64_t hi)
-{
-    if (!req.has_param(name)) return std::nullopt;
-    const auto text = req.get_param_value(name);
-    std::int64_t value = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc() || end != text.data() + text.size() || value < lo || value > hi)
-        throw HttpError(400, std::string(name) + ": '" + text + "' is not a whole number in " + std::to_string(lo) +
-                                 ".." + std::to_string(hi));
-    return value;
-}
-
-std::string oneOf(const httplib::Request& req, const char* name, const std::vector<std::string>& allowed,
-                  const std::string& fallback)
-{
-    if (!req.has_param(name)) return fallback;
-    auto value = req.get_param_value(name);
-    if (std::find(allowed.begin(), allowed.end(), value) == allowed.end()) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        throw HttpError(400, std::string(name) + ": '" + value + "' is not one of " + list);
-    }
-    return value;
-}
 
 /// The selection of /api/results and the exports (docs/hmi.md, "JSON API").
 store::ResultQuery resultQuery(const httplib::Request& req)
@@ -217,34 +157,6 @@ std::optional<json> storedResult(const station::DaemonConfig& cfg, const std::st
     return row;
 }
 
-std::optional<std::string> readFile(const fs::path& file)
-{
-    std::ifstream in(file, std::ios::binary);
-    if (!in) return std::nullopt;
-    std::ostringstream out;
-    out << in.rdbuf();
-    return out.str();
-}
-
-const char* contentType(const fs::path& file)
-{
-    const auto ext = file.extension().string();
-    if (ext == ".html") return "text/html; charset=utf-8";
-    if (ext == ".js") return "text/javascript; charset=utf-8";
-    if (ext == ".css") return "text/css; charset=utf-8";
-    if (ext == ".svg") return "image/svg+xml";
-    if (ext == ".png") return "image/png";
-    return "application/octet-stream";
-}
-
-void sendFile(httplib::Response& res, const fs::path& file)
-{
-    auto body = readFile(file);
-    if (!body) return sendError(res, 404, "not found");
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(std::move(*body), contentType(file));
-}
-
 /// The station's calibrations, newest first (calib::calibrationHistory): the
 /// station file's records and each backup's, with the file's name.
 json calibrationHistory(const fs::path& stationFile)
@@ -256,15 +168,6 @@ json calibrationHistory(const fs::path& stationFile)
         history.push_back(std::move(entry));
     }
     return history;
-}
-
-/// The client's own session: the cookie `hg_session`.
-std::string sessionCookie(const httplib::Request& req)
-{
-    const auto cookies = req.get_header_value("Cookie");
-    static const std::regex kSession(R"((?:^|;\s*)hg_session=([0-9a-f]{64})(?:;|$))");
-    std::smatch m;
-    return std::regex_search(cookies, m, kSession) ? m[1].str() : std::string();
 }
 
 /// A request the gate passed, as cpp-httplib reads it: its bytes from memory,
@@ -314,6 +217,19 @@ class GatedStream : public httplib::Stream {
     std::size_t pos_ = 0;
 };
 
+/// The name an engineer signs in with (`name`, optional): who released what
+/// on the workbench (docs/workbench.md). Printable, at most 64 bytes.
+std::string signInName(const json& body)
+{
+    if (!body.contains("name")) return "engineer";
+    if (!body["name"].is_string()) throw HttpError(400, "name: not a string");
+    const auto name = body["name"].get<std::string>();
+    if (name.empty() || name.size() > 64 ||
+        !std::all_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; }))
+        throw HttpError(400, "name: 1 to 64 printable characters");
+    return name;
+}
+
 } // namespace
 
 /// cpp-httplib's server answering requests the gate read (GateListener): its
@@ -337,7 +253,8 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
       signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<GatedHttpServer>())
 {
     const auto& http = config_->http;
-    server_->set_payload_max_length(http.maxRequestBytes);
+    // The gate holds each request to its own limit (the CAD upload to workbench.max_upload_bytes).
+    server_->set_payload_max_length(std::max(http.maxRequestBytes, config_->workbench.maxUploadBytes));
     // Every answer closes its connection: a line view polling four times a
     // second would otherwise keep a thread, and `threads` screens starve every other.
     server_->set_keep_alive_max_count(1);
@@ -364,6 +281,10 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     routePages();
     routeApi();
     routeMaintenance();
+    if (config_->workbench.enabled())
+        parts_ = std::make_unique<PartsRoutes>(
+            *server_, config_->workbench, [this] { return this->config(); },
+            [this](const httplib::Request& req) { return signedIn(req); }, mailbox_);
     port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
                            : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
@@ -373,6 +294,10 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     pool_ = std::make_unique<httplib::ThreadPool>(static_cast<std::size_t>(http.threads));
     GateListener::Options gate;
     gate.limits.maxBodyBytes = http.maxRequestBytes;
+    if (config_->workbench.enabled()) {
+        gate.limits.uploadTarget = "/api/parts";
+        gate.limits.maxUploadBytes = config_->workbench.maxUploadBytes;
+    }
     gate.limits.allowedHosts = station::allowedHostsFor(http);
     gate.requestTimeout = http.requestTimeout;
     gate.maxPending = http.maxPendingRequests;
@@ -399,6 +324,7 @@ void HmiServer::stop()
     if (gate_) gate_->stop();
     if (pool_) pool_->shutdown();
     pool_.reset();
+    parts_.reset(); // the workbench's jobs end with the daemon
     if (listenFd_ >= 0) ::close(listenFd_);
     listenFd_ = -1;
 }
@@ -430,7 +356,11 @@ bool HmiServer::guard(const httplib::Request& req, httplib::Response& res)
     if (req.method != "POST") return true;
     // A state change comes from our own pages only: JSON (no HTML form can send it
     // cross-site without a preflight we never grant) from our own origin.
-    if (req.get_header_value("Content-Type").rfind(kJson, 0) != 0) {
+    // The one exception, a CAD upload (docs/workbench.md), carries its file's bytes and still needs
+    // the session's CSRF token: a custom header no other site can send without a preflight.
+    const bool upload = req.path == "/api/parts" &&
+                        req.get_header_value("Content-Type").rfind("application/octet-stream", 0) == 0;
+    if (!upload && req.get_header_value("Content-Type").rfind(kJson, 0) != 0) {
         sendError(res, 415, "a POST carries application/json");
         return false;
     }
@@ -454,7 +384,8 @@ void HmiServer::routePages()
                                                            {"/results", "results.html"},
                                                            {"/result", "result.html"},
                                                            {"/spc", "spc.html"},
-                                                           {"/maintenance", "maintenance.html"}};
+                                                           {"/maintenance", "maintenance.html"},
+                                                           {"/parts", "parts.html"}};
     for (const auto& [path, file] : kPages)
         server_->Get(path, [this, file = file](const httplib::Request&, httplib::Response& res) {
             sendFile(res, config()->http.assets / file);
@@ -467,6 +398,16 @@ void HmiServer::routePages()
     server_->Get("/lib/chart.js", [this](const httplib::Request&, httplib::Response& res) {
         sendFile(res, config()->http.javascript / "chart.js" / "chart.min.js");
     });
+    // three.js from Debian's libjs-three (the UMD build, window.THREE, and the examples' non-module scripts that
+    // add to it) for the workbench's 3D view (docs/workbench.md).
+    static const std::map<std::string, std::string> kThree{
+        {"/lib/three/three.min.js", "three/build/three.min.js"},
+        {"/lib/three/OrbitControls.js", "three/examples/js/controls/OrbitControls.js"},
+        {"/lib/three/STLLoader.js", "three/examples/js/loaders/STLLoader.js"}};
+    for (const auto& [path, file] : kThree)
+        server_->Get(path, [this, file = file](const httplib::Request&, httplib::Response& res) {
+            sendFile(res, config()->http.javascript / file);
+        });
 }
 
 void HmiServer::routeApi()
@@ -553,11 +494,12 @@ void HmiServer::routeMaintenance()
                       const auto body = json::parse(req.body, nullptr, false);
                       if (!body.is_object() || !body.contains("password") || !body["password"].is_string())
                           throw HttpError(400, "expected {\"password\": \"...\"}");
+                      const auto name = signInName(body);
                       if (!verifyPassword(body["password"].get<std::string>(), hash))
                           throw HttpError(401, "wrong password");
-                      const auto session = sessions_.open();
+                      const auto session = sessions_.open(name);
                       res.set_header("Set-Cookie", "hg_session=" + session.id + "; Path=/; HttpOnly; SameSite=Strict");
-                      hg::log::category("hmi")->info("maintenance sign-in from {}", req.remote_addr);
+                      hg::log::category("hmi")->info("maintenance sign-in from {} as '{}'", req.remote_addr, name);
                       sendJson(res, {{"csrf", session.csrf}});
                   }));
     server_->Post("/api/logout", api([this](const httplib::Request& req, httplib::Response& res) {
@@ -566,18 +508,18 @@ void HmiServer::routeMaintenance()
                       sendJson(res, {{"ok", true}});
                   }));
     server_->Get("/api/session", api([this](const httplib::Request& req, httplib::Response& res) {
-                     const auto csrf = sessions_.touch(sessionCookie(req));
-                     json body{{"signed_in", csrf.has_value()}, {"configured", !config()->http.passwordHash.empty()}};
-                     if (csrf) body["csrf"] = *csrf;
+                     const auto session = sessions_.touch(sessionCookie(req));
+                     json body{{"signed_in", session.has_value()},
+                               {"configured", !config()->http.passwordHash.empty()}};
+                     if (session) {
+                         body["csrf"] = session->csrf;
+                         body["name"] = session->name;
+                     }
                      sendJson(res, body);
                  }));
     server_->Post(
         "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
-            const auto csrf = sessions_.touch(sessionCookie(req));
-            if (!csrf) throw HttpError(401, "sign in first");
-            if (!req.has_header("X-CSRF-Token")) throw HttpError(403, "CSRF token missing (header X-CSRF-Token)");
-            if (req.get_header_value("X-CSRF-Token") != *csrf)
-                throw HttpError(403, "CSRF token does not match the session's (sign in again)");
+            signedIn(req);
             auto body = json::parse(req.body, nullptr, false);
             if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
                 throw HttpError(400, "expected {\"command\": \"...\", ...}");
@@ -589,6 +531,16 @@ void HmiServer::routeMaintenance()
             if (!answer) throw HttpError(503, "the daemon did not answer in time");
             sendJson(res, *answer, answer->value("ok", false) ? 200 : 409);
         }));
+}
+
+Sessions::Session HmiServer::signedIn(const httplib::Request& req)
+{
+    auto session = sessions_.touch(sessionCookie(req));
+    if (!session) throw HttpError(401, "sign in first");
+    if (!req.has_header("X-CSRF-Token")) throw HttpError(403, "CSRF token missing (header X-CSRF-Token)");
+    if (req.get_header_value("X-CSRF-Token") != session->csrf)
+        throw HttpError(403, "CSRF token does not match the session's (sign in again)");
+    return *session;
 }
 
 // The line view's data: the daemon's status (at most ten asks a second of the

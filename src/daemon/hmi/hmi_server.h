@@ -35,6 +35,7 @@ struct Response;
 namespace hg::daemon {
 
 class GatedHttpServer; // hmi_server.cpp: cpp-httplib answering the gate's requests
+class PartsRoutes;     // hmi/parts_routes.h: the workbench's pages and API
 
 class HmiServer {
   public:
@@ -62,6 +63,8 @@ class HmiServer {
     void routeApi();
     void routeMaintenance();
     bool guard(const httplib::Request& req, httplib::Response& res);
+    /// The signed-in session of a state-changing request, with its CSRF token checked (401/403 otherwise).
+    Sessions::Session signedIn(const httplib::Request& req);
     nlohmann::json status();
     nlohmann::json disk(const station::DaemonConfig& cfg);
 
@@ -74,6 +77,7 @@ class HmiServer {
     RateLimiter limiter_;
     RateLimiter signIns_;
     std::unique_ptr<GatedHttpServer> server_;
+    std::unique_ptr<PartsRoutes> parts_; ///< with `workbench` configured
     int port_ = 0;
     int listenFd_ = -1;
 

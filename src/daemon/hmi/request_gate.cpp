@@ -129,6 +129,9 @@ RequestGate::State RequestGate::checkHead(std::string_view head)
         return refuse(405, fmt::format("method '{}' is not one the HMI answers ({})", isToken(method) ? method : "?",
                                        kAllowedMethods));
     head_ = std::string(line) + "\r\n";
+    const std::string_view target = line.substr(sp1 + 1, sp2 - sp1 - 1);
+    upload_ = method == "POST" && !limits_.uploadTarget.empty() && target.rfind(limits_.uploadTarget, 0) == 0 &&
+              (target.size() == limits_.uploadTarget.size() || target[limits_.uploadTarget.size()] == '?');
     std::optional<std::string> host, contentLength;
     bool sawEncoding = false;
     for (int number = 2; nextLine(text, pos, line) && !line.empty(); ++number) {
@@ -174,9 +177,9 @@ RequestGate::State RequestGate::checkHead(std::string_view head)
         if (v.empty() || end != v.data() + v.size() || error != std::errc())
             return refuse(400, fmt::format("Content-Length '{}' is not a byte count", v));
     }
-    if (length_ > limits_.maxBodyBytes)
-        return refuse(413, fmt::format("the body of {} bytes is larger than the {} allowed (http.max_request_bytes)",
-                                       length_, limits_.maxBodyBytes));
+    if (length_ > bodyLimit())
+        return refuse(413, fmt::format("the body of {} bytes is larger than the {} allowed ({})", length_, bodyLimit(),
+                                       upload_ ? "workbench.max_upload_bytes" : "http.max_request_bytes"));
     return state_;
 }
 
@@ -238,10 +241,9 @@ RequestGate::State RequestGate::readChunks()
             inTrailers_ = true;
             continue;
         }
-        if (size > limits_.maxBodyBytes || body_.size() + size > limits_.maxBodyBytes)
-            return refuse(413, fmt::format("the chunked body is larger than the {} bytes allowed "
-                                           "(http.max_request_bytes)",
-                                           limits_.maxBodyBytes));
+        if (size > bodyLimit() || body_.size() + size > bodyLimit())
+            return refuse(413, fmt::format("the chunked body is larger than the {} bytes allowed ({})", bodyLimit(),
+                                           upload_ ? "workbench.max_upload_bytes" : "http.max_request_bytes"));
         chunkLeft_ = size;
         inChunk_ = true;
     }

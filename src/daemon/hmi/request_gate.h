@@ -27,6 +27,11 @@ struct GateLimits {
     /// Host names a request may name in Host and Origin, lower-case, without
     /// port (`http.allowed_hosts`); empty: any (the gate is then no guard against DNS rebinding).
     std::vector<std::string> allowedHosts;
+    /// The one request that may carry more (docs/workbench.md): `POST
+    /// <uploadTarget>[?query]`, a CAD upload, up to `maxUploadBytes`
+    /// (`workbench.max_upload_bytes`); empty target: none.
+    std::string uploadTarget;
+    std::size_t maxUploadBytes = 0;
 };
 
 class RequestGate {
@@ -51,6 +56,9 @@ class RequestGate {
     const std::string& reason() const { return reason_; }
     /// Refused with 405: the methods the HMI answers.
     static constexpr std::string_view kAllowedMethods = "GET, HEAD, POST";
+    /// An upload's announced body size once its head is read (0 for any other
+    /// request): the listener gives it time to arrive in proportion.
+    std::uint64_t uploadBytes() const { return upload_ ? length_ : 0; }
 
   private:
     State refuse(int status, std::string reason);
@@ -59,6 +67,7 @@ class RequestGate {
     State readBody();
     State readChunks();
     bool hostAllowed(std::string_view host) const;
+    std::size_t bodyLimit() const { return upload_ ? limits_.maxUploadBytes : limits_.maxBodyBytes; }
 
     GateLimits limits_;
     State state_ = State::Reading;
@@ -73,6 +82,7 @@ class RequestGate {
     bool inChunk_ = false;
     bool continue_ = false;
     bool headDone_ = false;
+    bool upload_ = false;        ///< the upload request: its own body limit
     std::size_t lines_ = 0;
     std::string out_;
     int status_ = 0;

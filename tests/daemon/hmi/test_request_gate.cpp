@@ -148,5 +148,32 @@ TEST(RequestGate, Expect100ContinueIsAskedForOnceAndNotPassedOn)
     EXPECT_EQ(gate.request(), "POST / HTTP/1.1\r\nHost: localhost\r\nContent-Length: 2\r\n\r\nok");
 }
 
+// The workbench's CAD upload (docs/workbench.md) has its own limit; only a
+// POST to exactly its target gets it, never a GET, another path or a path
+// that only begins with the same letters.
+TEST(RequestGate, OnlyTheUploadTargetGetsTheUploadLimit)
+{
+    GateLimits l = limits();
+    l.uploadTarget = "/api/parts";
+    l.maxUploadBytes = 1 << 20;
+    const auto head = [](const std::string& line, std::size_t length) {
+        return line + " HTTP/1.1\r\nHost: localhost\r\nContent-Length: " + std::to_string(length) + "\r\n\r\n";
+    };
+    RequestGate upload(l);
+    EXPECT_EQ(upload.feed(head("POST /api/parts?name=b&file=b.stl", 500000)), State::Reading);
+    EXPECT_EQ(upload.uploadBytes(), 500000u);
+    RequestGate tooLarge(l);
+    EXPECT_EQ(tooLarge.feed(head("POST /api/parts", (1 << 20) + 1)), State::Refused);
+    EXPECT_EQ(tooLarge.status(), 413);
+    EXPECT_EQ(tooLarge.reason(), "the body of 1048577 bytes is larger than the 1048576 allowed "
+                                 "(workbench.max_upload_bytes)");
+    for (const std::string line : {"POST /api/parts/b/landmarks", "POST /api/partsx", "POST /api/login"}) {
+        RequestGate other(l);
+        EXPECT_EQ(other.feed(head(line, 500000)), State::Refused) << line;
+        EXPECT_EQ(other.status(), 413) << line;
+        EXPECT_EQ(other.uploadBytes(), 0u) << line;
+    }
+}
+
 } // namespace
 } // namespace hg::daemon

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "hullgauge/drivers/fixture.h"
 #include "hullgauge/drivers/lamps.h"
 #include "hullgauge/geometry/transform.h"
+#include "hullgauge/model/mesh.h"
 
 namespace hg::drivers {
 
@@ -44,6 +46,11 @@ class SimCameraControl {
     virtual Status setPart(const std::string& name) = 0;
     virtual std::string part() const = 0;
     virtual std::vector<std::string> partNames() const = 0;
+    /// Renders `mesh` as the part under test, named `name` (a released part of
+    /// the workbench, docs/workbench.md: its own CAD model), until setPart
+    /// picks a listed part again. Thread-safe; the renderer of the last mesh
+    /// shown under `name` is kept, so showing it again costs nothing.
+    virtual void showMesh(const std::string& name, std::shared_ptr<const model::TriangleMesh> mesh) = 0;
     /// Seats the part under test (and every part shown next): the camera
     /// renders it through camera_from_part = camera_from_fixture · fixture
     /// motion · `seat`, with `seat` = nominal_from_part (docs/alignment.md).

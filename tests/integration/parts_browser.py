@@ -1,0 +1,389 @@
+#!/usr/bin/python3
+"""The Parts page in a real browser (docs/workbench.md): Debian's chromium,
+headless, driven by chromium-driver through selenium, against the simulated
+line with its workbench (tools/simline --http-port), checking what the page
+shows and does against the HTTP API read here:
+
+- changes need a signed-in engineer; the engineer signs in on the page with
+  a name, and the workbench records that name;
+- a CAD model the loader refuses is refused on the page in the loader's words;
+  the stepped block uploaded from the page is drawn (its light mesh first,
+  then the full one);
+- clicks on known faces (the page's hgParts.screenOf: where a part-frame
+  point is on the screen) place landmarks the server snaps onto the edge
+  beside them, and the page says so ("on an edge", the distance moved);
+  dragging a pin onto a face moves the landmark there;
+- the edit panel renames a landmark and changes its tolerance; a tolerance the
+  loader refuses is shown in its words;
+- a change made on a revision another engineer has since changed is refused
+  (409) in the server's words and the page shows the draft as it now is;
+- suggestions: every candidate of suggestions.json listed, the refused ones
+  with their rule;
+- commissioning from the page: its progress shown, then the report's rows
+  the verification's landmarks, the failing cells its failing landmarks; the
+  views listed as the plan's, a view's frame loads;
+- release as PLC program 2: the daemon runs it (a cycle triggered for
+  program 2 is judged with version 1), a PLC number the daemon already uses
+  is refused; a second version after a change, their difference, a
+  rollback to version 1 (version 3, rolled back from 1).
+
+  parts_browser.py --source DIR --bin DIR [--screenshots DIR]
+"""
+import argparse
+import http.client
+import json
+import sqlite3
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.parse
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+
+from selenium import webdriver  # noqa: E402
+from selenium.webdriver.chrome.service import Service  # noqa: E402
+from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+PASSWORD = "parts-test-password"
+ENGINEER = "Jane Doe"
+PART = "stepped-block"
+# Points on faces 0.8 mm beside the block's edges (the snap distance is 2 % of
+# its 78 mm diagonal: 1.56 mm), the edge point each lands on, and a direction
+# the face is seen from. The five edges are the ones commissioning proves on
+# the simulated station (docs/commissioning.md, config/sim).
+CLICKS = [([-29.2, -20, 15], [-30, -20, 15], [0.3, -1, 0.4]),
+          ([30, 19.2, 7.5], [30, 20, 7.5], [1, 0.3, 0.4]),
+          ([15, -19.2, 15], [15, -20, 15], [0.2, -0.6, 1]),
+          ([-0.8, 0, 30], [0, 0, 30], [0.3, -0.2, 1]),
+          ([-29.2, 0, 30], [-30, 0, 30], [-0.3, -0.2, 1])]
+
+
+def browser():
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--enable-unsafe-swiftshader", "--window-size=1400,1100", "--disable-extensions", "--no-first-run"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_page_load_timeout(60)
+    driver.set_script_timeout(60)
+    return driver
+
+
+class Api:
+    """The HMI's API as a script sees it; sign_in() gives it a session of its own."""
+
+    def __init__(self, port):
+        self.port, self.cookie, self.csrf = port, None, None
+
+    def call(self, method, path, body=None, headers=None):
+        con = http.client.HTTPConnection("127.0.0.1", self.port, timeout=120)
+        h = dict(headers or {})
+        if self.cookie:
+            h["Cookie"] = self.cookie
+        if self.csrf:
+            h["X-CSRF-Token"] = self.csrf
+        if isinstance(body, dict):
+            body, h["Content-Type"] = json.dumps(body), "application/json"
+        con.request(method, path, body=body, headers=h)
+        res = con.getresponse()
+        data = res.read()
+        cookie = res.getheader("Set-Cookie")
+        con.close()
+        if cookie and cookie.startswith("hg_session="):
+            self.cookie = cookie.split(";", 1)[0]
+        try:
+            return res.status, json.loads(data) if data else None
+        except ValueError:
+            return res.status, data
+
+    def sign_in(self, name):
+        status, body = self.call("POST", "/api/login", {"password": PASSWORD, "name": name})
+        self.csrf = body["csrf"] if status == 200 else None
+        return status
+
+    def part(self):
+        return self.call("GET", f"/api/parts/{PART}")[1]
+
+
+def until(driver, script, timeout_s=60, *args):
+    return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: d.execute_script(script, *args))
+
+
+def settled(driver, timeout_s=60):
+    until(driver, "return window.hgParts && hgParts.ready && hgParts.idle()", timeout_s)
+
+
+def text(driver, element_id):
+    return driver.execute_script("return document.getElementById(arguments[0]).innerText.trim()", element_id)
+
+
+def sign_in_on_page(driver, url, api):
+    status, _ = api.call("POST", "/api/parts?" + urllib.parse.urlencode({"name": "x", "file": "x.stl"}), b"solid x",
+                         {"Content-Type": "application/octet-stream"})
+    check(status in (401, 403), f"an upload without a session answered {status}")
+    driver.get(url + "/parts")
+    until(driver, "return window.hgParts && hgParts.ready")
+    check("No parts yet" in text(driver, "part-message"), "an empty workspace is not said so")
+    driver.find_element(By.ID, "login-name").send_keys(ENGINEER)
+    driver.find_element(By.ID, "password").send_keys(PASSWORD)
+    driver.find_element(By.CSS_SELECTOR, "#login button").click()
+    until(driver, "return document.getElementById('login').hidden")
+    check(ENGINEER in text(driver, "session"), f"signed in, the page says {text(driver, 'session')!r}")
+
+
+def upload(driver, path, name=""):
+    driver.find_element(By.ID, "upload-name").clear()
+    if name:
+        driver.find_element(By.ID, "upload-name").send_keys(name)
+    driver.find_element(By.ID, "upload-file").send_keys(str(path))
+    driver.find_element(By.ID, "upload-button").click()
+
+
+def uploads(driver, source, api):
+    upload(driver, source / "tests" / "data" / "cad" / "block-tjunction-open.stl")
+    until(driver, "return document.getElementById('upload-result').innerText.startsWith('Refused')")
+    words = text(driver, "upload-result")
+    check("block-tjunction-open.stl" in words and "mesh" in words, f"the refused model is said as {words!r}")
+    upload(driver, source / "config" / "sim" / "stepped-block.stl", PART)
+    until(driver, f"return hgParts.part === '{PART}' && hgParts.state === 'full' && hgParts.idle()", 120)
+    part = api.part()
+    check(part and part["changed_by"] == ENGINEER, f"the part was added by {part and part['changed_by']!r}")
+    stats = driver.execute_script("return hgParts.view.stats")
+    check(stats["triangles"]["full"] == part["cad"]["triangles"] and stats["firstFrameMs"] is not None,
+          f"the page drew {stats['triangles']} triangles, the part has {part['cad']['triangles']}")
+
+
+def click_face(driver, point, looking_from):
+    driver.execute_script("hgParts.lookAt(arguments[0], arguments[1])", point, looking_from)
+    until(driver, "return hgParts.idle()")
+    at = driver.execute_script("return hgParts.screenOf(arguments[0])", point)
+    check(at["visible"], f"the face point {point} is hidden from the camera")
+    canvas = driver.find_element(By.CSS_SELECTOR, "#viewer canvas")
+    size = canvas.size
+    ActionChains(driver).move_to_element_with_offset(canvas, at["canvasX"] - size["width"] / 2,
+                                                     at["canvasY"] - size["height"] / 2).click().perform()
+
+
+def place_landmarks(driver, api):
+    for k, (point, edge, looking_from) in enumerate(CLICKS, 1):
+        click_face(driver, point, looking_from)
+        until(driver, f"return hgParts.landmarks().length === {k} && hgParts.busy === 0")
+        placed = driver.execute_script("return hgParts.lastPlaced")
+        said = text(driver, "landmark-result")
+        landmark = next(l for l in api.part()["draft"]["landmarks"] if l["id"] == placed["id"])
+        check(landmark["on"] == "edge" and max(abs(a - b) for a, b in zip(landmark["position"], edge)) < 1e-6,
+              f"a click at {point} placed {landmark}, not on the edge at {edge}")
+        check("on an edge" in said and f"{placed['moved_mm']:.3f} mm" in said and abs(placed["moved_mm"] - 0.8) < 1e-6,
+              f"the page says {said!r} of {placed}")
+
+
+def drag_pin(driver, landmark_id, to):
+    settled(driver)
+    at = driver.execute_script("return hgParts.screenOf(hgParts.landmarks().find(l => l.id === arguments[0]).position)",
+                               landmark_id)
+    end = driver.execute_script("return hgParts.screenOf(arguments[0])", to)
+    canvas = driver.find_element(By.CSS_SELECTOR, "#viewer canvas")
+    size = canvas.size
+    chain = ActionChains(driver).move_to_element_with_offset(canvas, at["canvasX"] - size["width"] / 2,
+                                                             at["canvasY"] - size["height"] / 2).click_and_hold()
+    for _ in range(10):
+        chain = chain.move_by_offset((end["canvasX"] - at["canvasX"]) / 10, (end["canvasY"] - at["canvasY"]) / 10)
+    chain.release().perform()
+    until(driver, "return hgParts.busy === 0 && /moved/.test(document.getElementById('landmark-result').innerText)")
+
+
+def drag_and_edit(driver, api):
+    first = api.part()["draft"]["landmarks"][0]
+    driver.execute_script("hgParts.lookAt([-25, -20, 10], [0.3, -1, 0.4])")
+    drag_pin(driver, first["id"], [-25, -20, 10])
+    moved = next(l for l in api.part()["draft"]["landmarks"] if l["id"] == first["id"])
+    check(moved["on"] == "face" and abs(moved["position"][1] + 20) < 1e-6 and abs(moved["position"][0] + 25) < 1.0,
+          f"the pin dragged to (-25, -20, 10) is at {moved}")
+    drag_pin(driver, first["id"], CLICKS[0][0])
+    back = next(l for l in api.part()["draft"]["landmarks"] if l["id"] == first["id"])
+    check(back["on"] == "edge", f"the pin dragged back beside the edge is at {back}")
+    last = api.part()["draft"]["landmarks"][-1]["id"]
+    edit(driver, last, new_id="top-edge", tolerance="0.12")
+    changed = next((l for l in api.part()["draft"]["landmarks"] if l["id"] == "top-edge"), None)
+    check(changed is not None and changed["tolerance_mm"] == 0.12, f"the edit panel's change gave {changed}")
+    edit(driver, "top-edge", tolerance="0")
+    check(text(driver, "landmark-result").startswith("Refused"), f"a tolerance of 0 was {text(driver, 'landmark-result')!r}")
+    edit(driver, "top-edge", tolerance="0.1")
+
+
+def edit(driver, landmark_id, new_id=None, tolerance=None):
+    driver.execute_script("document.querySelector(`#landmarks tr[data-landmark='${arguments[0]}']`).click()", landmark_id)
+    until(driver, "return !document.getElementById('landmark-edit').hidden")
+    if new_id:
+        driver.find_element(By.ID, "lm-id").clear()
+        driver.find_element(By.ID, "lm-id").send_keys(new_id)
+    driver.execute_script("const z = document.getElementById('lm-zone'); z.value = 'tolerance';"
+                          "z.dispatchEvent(new Event('change'))")
+    driver.find_element(By.ID, "lm-tol").clear()
+    driver.find_element(By.ID, "lm-tol").send_keys(tolerance)
+    driver.execute_script("document.getElementById('landmark-result').textContent = ''")
+    driver.find_element(By.ID, "lm-apply").click()
+    until(driver, "return hgParts.busy === 0 && document.getElementById('landmark-result').innerText !== ''")
+
+
+def stale_revision(driver, api):
+    """Another engineer changes the draft; the page's next change is refused naming who, and shows the draft."""
+    other = Api(api.port)
+    check(other.sign_in("John Roe") == 200, "a second engineer could not sign in")
+    part = other.part()
+    status, _ = other.call("POST", f"/api/parts/{PART}/landmarks/top-edge", {"revision": part["revision"],
+                                                                          "tolerance_mm": 0.1})
+    check(status == 200, f"the second engineer's change answered {status}")
+    edit(driver, "top-edge", tolerance="0.11")
+    said = text(driver, "landmark-result")
+    check("John Roe" in said and "revision" in said, f"a change on an old revision was said as {said!r}")
+    until(driver, f"return hgParts.busy === 0 && document.getElementById('part-title').innerText.includes("
+                  f"'revision {api.part()['revision']}')")
+
+
+def suggestions(driver, api):
+    driver.find_element(By.ID, "suggest").click()
+    until(driver, "return hgParts.job && hgParts.job.kind === 'suggest' && hgParts.job.state !== 'running' && "
+                  "hgParts.busy === 0", 180)
+    candidates = (api.part()["suggestions"] or {}).get("candidates", [])
+    until(driver, f"return document.querySelectorAll('#suggestions tr[data-suggestion]').length === {len(candidates)}")
+    refused = driver.execute_script("return [...document.querySelectorAll('#suggestions tr.refused td:nth-child(4)')]"
+                                    ".map(td => td.innerText)")
+    want = [f"refused: {c['refused']}" for c in candidates if c.get("refused")]
+    check(len(candidates) > 0 and refused == want, f"refused candidates shown {refused}, suggestions.json {want}")
+
+
+def commission(driver, api):
+    phases = set()
+    driver.find_element(By.ID, "commission").click()
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline:
+        job = driver.execute_script("return hgParts.job")
+        if job and job["kind"] == "commission":
+            phases.add(job["phase"])
+            if job["state"] != "running" and driver.execute_script("return hgParts.busy === 0"):
+                break
+        time.sleep(0.2)
+    check(job and job["state"] == "finished", f"commissioning ended {job}")
+    check(len(phases) >= 2, f"the progress showed the phases {phases}")
+    until(driver, "return document.querySelector('#report-landmarks') !== null")
+    status, v = api.call("GET", f"/api/parts/{PART}/verification")
+    rows = driver.execute_script("return [...document.querySelectorAll('#report-landmarks tr[data-landmark]')]"
+                                 ".map(r => [r.dataset.landmark, r.querySelectorAll('td.cell-fail').length])")
+    check([r[0] for r in rows] == [l["id"] for l in v["landmarks"]], f"report rows {rows}")
+    failing = sorted(r[0] for r in rows if r[1] > 0)
+    check(failing == sorted(l["id"] for l in v["landmarks"] if not l["passed"]), f"failing rows {failing}")
+    return v
+
+
+def views(driver, api):
+    status, planned = api.call("GET", f"/api/parts/{PART}/views")
+    shown = driver.execute_script("return [...document.querySelectorAll('#views tr[data-view]')].map(r => r.dataset.view)")
+    check(shown == [str(v["index"]) for v in planned["views"]], f"views listed {shown}, planned {planned['views']}")
+    driver.execute_script("document.querySelector('#views tr[data-view]').click()")
+    size = until(driver, "const i = document.getElementById('view-img');"
+                         "return i.complete && i.naturalWidth > 0 ? [i.naturalWidth, i.naturalHeight] : false", 180)
+    cam = planned["views"][0]["camera"]
+    check(size == [cam["width"], cam["height"]], f"the view's frame is {size}, the camera's {cam['width']}x{cam['height']}")
+
+
+def release(driver, number):
+    driver.find_element(By.ID, "plc-program").clear()
+    driver.find_element(By.ID, "plc-program").send_keys(str(number))
+    driver.execute_script("document.getElementById('release-result').textContent = ''")
+    driver.find_element(By.ID, "release-button").click()
+    until(driver, "return hgParts.busy === 0 && document.getElementById('release-result').innerText !== ''", 180)
+    return text(driver, "release-result")
+
+
+def stored(db, serial):
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
+    con.row_factory = sqlite3.Row
+    row = con.execute("SELECT * FROM inspections WHERE serial = ?", (serial,)).fetchone()
+    con.close()
+    return row
+
+
+def released_runs(driver, api, sock, db):
+    said = release(driver, 2)
+    check("version 1" in said and "PLC program 2" in said, f"the release was said as {said!r}")
+    maintenance(sock, {"command": "trigger", "program": 2, "serial": "WB-V1"})
+    deadline = time.monotonic() + 60
+    while stored(db, "WB-V1") is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    row = stored(db, "WB-V1")
+    check(row is not None and row["program"] == 2 and row["program_version"] == 1,
+          f"the cycle of program 2 was judged with {dict(row) if row else None}")
+    said = release(driver, 1)
+    check(said.startswith("Refused") and "1" in said, f"PLC program 1 (the daemon's) was said {said!r}")
+
+
+def versions(driver, api):
+    edit(driver, "top-edge", tolerance="0.12")
+    commission(driver, api)
+    said = release(driver, 2)
+    check("version 2" in said, f"the second release was said {said!r}")
+    driver.execute_script("document.querySelector('input[name=diff-from][value=\"1\"]').click();"
+                          "document.querySelector('input[name=diff-to][value=\"2\"]').click()")
+    driver.find_element(By.ID, "diff").click()
+    until(driver, "return hgParts.busy === 0 && document.getElementById('diff-result').innerText.includes('top-edge')")
+    driver.execute_script("document.querySelector('#versions tr[data-version=\"1\"] button').click()")
+    until(driver, "return hgParts.busy === 0 && document.getElementById('release-result').innerText.includes('again')")
+    _, listed = api.call("GET", f"/api/parts/{PART}/versions")
+    newest = max(listed["versions"], key=lambda v: v["version"])
+    check(newest["version"] == 3 and newest["rolled_back_from"] == 1 and newest["in_force"],
+          f"after the rollback the versions are {listed}")
+    shown = driver.execute_script("return [...document.querySelectorAll('#versions tr[data-version]')]"
+                                  ".map(r => r.dataset.version)")
+    check(shown == ["draft", "3", "2", "1"], f"versions listed {shown}")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--source", required=True, type=Path)
+    ap.add_argument("--bin", required=True, type=Path)
+    ap.add_argument("--screenshots", type=Path)
+    args = ap.parse_args()
+    workdir = Path(tempfile.mkdtemp(prefix="hg-parts-"))
+    http_port = free_port()
+    digest = subprocess.run(["openssl", "passwd", "-6", PASSWORD], capture_output=True, text=True,
+                            check=True).stdout.strip()
+    line, out, _ = start_line(args.source, args.bin, workdir, free_port(),
+                              ["--http-port", str(http_port), "--hmi-password-hash", digest])
+    url, api = f"http://127.0.0.1:{http_port}", Api(http_port)
+    sock, db = str(workdir / "hullgauged.sock"), workdir / "results.db"
+    driver = browser()
+    try:
+        sign_in_on_page(driver, url, api)
+        uploads(driver, args.source, api)
+        place_landmarks(driver, api)
+        drag_and_edit(driver, api)
+        stale_revision(driver, api)
+        suggestions(driver, api)
+        if commission(driver, api)["released"]:
+            views(driver, api)
+            released_runs(driver, api, sock, db)
+            versions(driver, api)
+        else:
+            check(False, "the five edge landmarks of the stepped block were not proven releasable")
+        if args.screenshots:
+            args.screenshots.mkdir(parents=True, exist_ok=True)
+            driver.save_screenshot(str(args.screenshots / "hmi-parts.png"))
+    finally:
+        driver.quit()
+        stop_line(line, out)
+    if failures:
+        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
+        return 1
+    print("Parts page: every check passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

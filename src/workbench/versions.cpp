@@ -3,6 +3,7 @@
 // list of versions, and history.jsonl. Comparing versions: diff.cpp.
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/digest.h"
+#include "hullgauge/common/log.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/plan/plan_report.h"
 #include "hullgauge/workbench/commissioning.h"
@@ -237,6 +238,29 @@ std::vector<Version> Workspace::versions(std::string_view part) const
         }
     }
     std::sort(out.begin(), out.end(), [](const Version& a, const Version& b) { return a.version < b.version; });
+    return out;
+}
+
+std::vector<ReleasedPart> Workspace::releasedParts() const
+{
+    std::vector<ReleasedPart> out;
+    std::error_code ec;
+    for (auto it = fs::directory_iterator(folder_, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (!validPartName(name) || !files::exists(it->path() / files::kRecord)) continue;
+        try {
+            files::PartLock lock(it->path(), false);
+            const PartRecord record = files::readRecord(it->path());
+            const auto inForce = keptVersion(files::releasedFile(it->path(), record.part));
+            if (!record.plcProgram || !inForce) continue;
+            out.push_back({record.part, *record.plcProgram, inForce->version,
+                           files::releasedFile(it->path(), record.part), files::viewsFile(it->path(), record.part),
+                           it->path() / record.cad});
+        } catch (const InputError& e) {
+            log::category("workbench")->warn("{}: {}", name, e.what());
+        }
+    }
+    std::sort(out.begin(), out.end(), [](const ReleasedPart& a, const ReleasedPart& b) { return a.part < b.part; });
     return out;
 }
 

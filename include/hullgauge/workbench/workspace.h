@@ -136,6 +136,17 @@ struct Version {
     bool inForce = false;
 };
 
+/// A released part the daemon runs beside its `programs:` table
+/// (docs/workbench.md, "Released parts on the station").
+struct ReleasedPart {
+    std::string part;
+    int plcProgram = 0; ///< the PLC's PART_PROGRAM number
+    int version = 0;    ///< the version in force
+    fs::path program;   ///< `<part>.yaml`
+    fs::path views;     ///< `<part>-views.yaml`
+    fs::path cad;       ///< the CAD model (what the simulated camera renders)
+};
+
 /// Called as commissioning proceeds (commission::Progress): the phase, the
 /// cycles done and their total; return false to cancel between two cycles.
 using Progress = std::function<bool(const std::string& phase, std::size_t done, std::size_t total)>;
@@ -198,6 +209,9 @@ class Workspace {
     std::string displayMesh(std::string_view part, bool lod) const;
 
     std::vector<Version> versions(std::string_view part) const;
+    /// Every part with a released program in force and a PLC program number,
+    /// by name; a part whose record cannot be read is left out (and logged).
+    std::vector<ReleasedPart> releasedParts() const;
 
     /// Suggests landmarks on the part at the station (`stationFile`), keeping
     /// every candidate in suggestions.json; returns what it wrote.

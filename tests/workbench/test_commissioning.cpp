@@ -125,7 +125,13 @@ TEST_F(SteppedBlock, AReleaseRecordsItsPlcProgramWhichNoOtherPartMayTake)
     const Version v1 = ws.release("stepped-block", 4, sim("station.yaml"), 3, {1, 2}, tester);
     EXPECT_EQ(v1.version, 1);
     EXPECT_TRUE(v1.inForce);
-    EXPECT_EQ(ws.read("stepped-block").record.plcProgram, 3);
+    const PartState state = ws.read("stepped-block");
+    EXPECT_EQ(state.record.plcProgram, 3);
+    ASSERT_TRUE(state.released.has_value());
+    EXPECT_EQ(state.released->releasedBy, "tester");
+    EXPECT_EQ(state.releasedVersion, 1);
+    EXPECT_EQ(toJson(state)["released"]["plc_program"], 3);
+    EXPECT_EQ(toJson(state)["released"]["version"], 1);
     const std::vector<ReleasedPart> released = ws.releasedParts();
     ASSERT_EQ(released.size(), 1u);
     EXPECT_EQ(released[0].part, "stepped-block");

@@ -277,6 +277,21 @@ model::PartProgram loadProgramAs(const fs::path& file, const std::string& shownA
     }
 }
 
+std::optional<Version> releaseRecordOf(const fs::path& program)
+{
+    if (!files::exists(program)) return std::nullopt;
+    const ConfigNode root = ConfigNode::loadFile(program);
+    if (!root.isMap() || !root.has("release")) return std::nullopt;
+    const ConfigNode r = root["release"];
+    Version v;
+    v.version = static_cast<int>(r["version"].asIntIn(1, 1000000));
+    v.verificationSha256 = r["verification_sha256"].asString();
+    v.releasedBy = r["released_by"].asString();
+    v.releasedAt = r["released_at"].asString();
+    if (auto n = r.optional("rolled_back_from")) v.rolledBackFrom = static_cast<int>(n->asIntIn(1, 1000000));
+    return v;
+}
+
 void appendHistory(const fs::path& partFolder, const nlohmann::json& line)
 {
     const fs::path file = partFolder / kHistory;

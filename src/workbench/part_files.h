@@ -92,6 +92,10 @@ model::CadModel loadDraftCad(const fs::path& partFolder, const PartRecord& recor
 /// draft file (`shownAs`) in the loader's words.
 model::PartProgram loadProgramAs(const fs::path& file, const std::string& shownAs);
 
+/// The release record of a program file (`release`), read without loading
+/// the program; none for a file that is absent or holds no record.
+std::optional<Version> releaseRecordOf(const fs::path& program);
+
 /// Appends one line to history.jsonl (the whole file replaced durably).
 void appendHistory(const fs::path& partFolder, const nlohmann::json& line);
 

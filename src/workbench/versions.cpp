@@ -3,6 +3,7 @@
 // list of versions, and history.jsonl. Comparing versions: diff.cpp.
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/digest.h"
+#include "hullgauge/common/log.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/plan/plan_report.h"
 #include "hullgauge/workbench/commissioning.h"
@@ -200,22 +201,6 @@ Version Workspace::rollback(std::string_view part, int version, const Actor& by)
 
 namespace {
 
-/// A kept version's record (its `release` map), read without loading the program.
-std::optional<Version> keptVersion(const fs::path& program)
-{
-    if (!files::exists(program)) return std::nullopt;
-    const ConfigNode root = ConfigNode::loadFile(program);
-    if (!root.isMap() || !root.has("release")) return std::nullopt;
-    const ConfigNode r = root["release"];
-    Version v;
-    v.version = static_cast<int>(r["version"].asIntIn(1, 1000000));
-    v.verificationSha256 = r["verification_sha256"].asString();
-    v.releasedBy = r["released_by"].asString();
-    v.releasedAt = r["released_at"].asString();
-    if (auto n = r.optional("rolled_back_from")) v.rolledBackFrom = static_cast<int>(n->asIntIn(1, 1000000));
-    return v;
-}
-
 } // namespace
 
 std::vector<Version> Workspace::versions(std::string_view part) const
@@ -223,7 +208,7 @@ std::vector<Version> Workspace::versions(std::string_view part) const
     const fs::path folder = partFolder(part);
     files::PartLock lock(folder, false);
     const PartRecord record = files::readRecord(folder);
-    const auto inForce = keptVersion(files::releasedFile(folder, record.part));
+    const auto inForce = files::releaseRecordOf(files::releasedFile(folder, record.part));
     std::vector<Version> out;
     const fs::path releases = folder / "releases";
     const std::string prefix = record.part + ".v";
@@ -231,12 +216,35 @@ std::vector<Version> Workspace::versions(std::string_view part) const
     for (auto it = fs::directory_iterator(releases, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
         const std::string name = it->path().filename().string();
         if (name.rfind(prefix, 0) != 0) continue;
-        if (auto v = keptVersion(it->path() / (record.part + ".yaml"))) {
+        if (auto v = files::releaseRecordOf(it->path() / (record.part + ".yaml"))) {
             v->inForce = inForce && inForce->version == v->version;
             out.push_back(*v);
         }
     }
     std::sort(out.begin(), out.end(), [](const Version& a, const Version& b) { return a.version < b.version; });
+    return out;
+}
+
+std::vector<ReleasedPart> Workspace::releasedParts() const
+{
+    std::vector<ReleasedPart> out;
+    std::error_code ec;
+    for (auto it = fs::directory_iterator(folder_, ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (!validPartName(name) || !files::exists(it->path() / files::kRecord)) continue;
+        try {
+            files::PartLock lock(it->path(), false);
+            const PartRecord record = files::readRecord(it->path());
+            const auto inForce = files::releaseRecordOf(files::releasedFile(it->path(), record.part));
+            if (!record.plcProgram || !inForce) continue;
+            out.push_back({record.part, *record.plcProgram, inForce->version,
+                           files::releasedFile(it->path(), record.part), files::viewsFile(it->path(), record.part),
+                           it->path() / record.cad});
+        } catch (const InputError& e) {
+            log::category("workbench")->warn("{}: {}", name, e.what());
+        }
+    }
+    std::sort(out.begin(), out.end(), [](const ReleasedPart& a, const ReleasedPart& b) { return a.part < b.part; });
     return out;
 }
 

@@ -67,16 +67,6 @@ std::vector<PartState> Workspace::list() const
 
 namespace {
 
-/// The version of the program in force (`<part>.yaml`), read from its record alone.
-std::optional<int> inForce(const fs::path& folder, const std::string& part)
-{
-    const fs::path file = files::releasedFile(folder, part);
-    if (!files::exists(file)) return std::nullopt;
-    const ConfigNode root = ConfigNode::loadFile(file);
-    if (!root.isMap() || !root.has("release")) return std::nullopt;
-    return static_cast<int>(root["release"]["version"].asIntIn(1, 1000000));
-}
-
 /// The CAD model's facts written at add (display/model.json).
 void readFacts(const fs::path& folder, PartState& state)
 {
@@ -130,7 +120,11 @@ PartState Workspace::read(std::string_view part) const
     for (DraftLandmark& l : state.draft.landmarks)
         if (!l.toleranceMm && !l.limitsMm) l.toleranceMm = state.record.toleranceMm;
     readFacts(folder, state);
-    state.releasedVersion = inForce(folder, state.record.part);
+    state.released = files::releaseRecordOf(files::releasedFile(folder, state.record.part));
+    if (state.released) {
+        state.released->inForce = true;
+        state.releasedVersion = state.released->version;
+    }
     return state;
 }
 
@@ -151,6 +145,18 @@ nlohmann::json landmarkJson(const DraftLandmark& l)
             {"tolerance_mm", l.toleranceMm ? nlohmann::json(*l.toleranceMm) : nlohmann::json(nullptr)},
             {"limits_mm", l.limitsMm ? nlohmann::json{l.limitsMm->first, l.limitsMm->second} : nlohmann::json(nullptr)},
             {"on", enumName(l.on)}};
+}
+
+nlohmann::json releasedJson(const PartState& state)
+{
+    if (!state.released) return nullptr;
+    const Version& v = *state.released;
+    return {
+        {"version", v.version},
+        {"plc_program", state.record.plcProgram ? nlohmann::json(*state.record.plcProgram) : nlohmann::json(nullptr)},
+        {"released_by", v.releasedBy},
+        {"released_at", v.releasedAt},
+        {"rolled_back_from", v.rolledBackFrom ? nlohmann::json(*v.rolledBackFrom) : nlohmann::json(nullptr)}};
 }
 
 } // namespace
@@ -184,8 +190,7 @@ nlohmann::json toJson(const PartState& state)
           {"landmarks", landmarks}}},
         {"plc_program", state.record.plcProgram ? nlohmann::json(*state.record.plcProgram) : nlohmann::json(nullptr)},
         {"verified", verified},
-        {"released",
-         state.releasedVersion ? nlohmann::json{{"version", *state.releasedVersion}} : nlohmann::json(nullptr)}};
+        {"released", releasedJson(state)}};
 }
 
 nlohmann::json toJson(const Version& v)

@@ -100,7 +100,9 @@ TEST_F(SteppedBlock, ACancelBetweenTwoCyclesLeavesThePreviousVerification)
     ws.changeLandmark("stepped-block", 4, "riser", tighter, tester);
 
     CommissionSettings s = quick();
-    s.progress = [](const std::string& phase, std::size_t done, std::size_t) { return !(phase == "nominal" && done == 1); };
+    s.progress = [](const std::string& phase, std::size_t done, std::size_t) {
+        return !(phase == "nominal" && done == 1);
+    };
     EXPECT_THROW(ws.commission("stepped-block", sim("station.yaml"), s, tester), commission::Cancelled);
     EXPECT_EQ(readText(folder() / "verification.json"), report);
     const Verified after = *ws.read("stepped-block").record.verified;
@@ -115,6 +117,46 @@ TEST_F(SteppedBlock, ACancelBetweenTwoCyclesLeavesThePreviousVerification)
     } catch (const ReleaseRefused& e) {
         EXPECT_NE(e.problem().find("the last verification is of revision 4"), std::string::npos) << e.what();
     }
+}
+
+TEST_F(SteppedBlock, AReleaseRecordsItsPlcProgramWhichNoOtherPartMayTake)
+{
+    ASSERT_EQ(ws.commission("stepped-block", sim("station.yaml"), quick(), tester).status, 0);
+    const Version v1 = ws.release("stepped-block", 4, sim("station.yaml"), 3, {1, 2}, tester);
+    EXPECT_EQ(v1.version, 1);
+    EXPECT_TRUE(v1.inForce);
+    const PartState state = ws.read("stepped-block");
+    EXPECT_EQ(state.record.plcProgram, 3);
+    ASSERT_TRUE(state.released.has_value());
+    EXPECT_EQ(state.released->releasedBy, "tester");
+    EXPECT_EQ(state.releasedVersion, 1);
+    EXPECT_EQ(toJson(state)["released"]["plc_program"], 3);
+    EXPECT_EQ(toJson(state)["released"]["version"], 1);
+    const std::vector<ReleasedPart> released = ws.releasedParts();
+    ASSERT_EQ(released.size(), 1u);
+    EXPECT_EQ(released[0].part, "stepped-block");
+    EXPECT_EQ(released[0].plcProgram, 3);
+    EXPECT_EQ(released[0].version, 1);
+    EXPECT_EQ(released[0].program, folder() / "stepped-block.yaml");
+    EXPECT_EQ(released[0].cad, folder() / "stepped-block.stl");
+
+    AddOptions o;
+    o.name = "other";
+    o.toleranceMm = 0.4;
+    ws.add(sim("stepped-block.stl"), o, tester);
+    LandmarkEdit edit;
+    edit.position = Eigen::Vector3d(-15, 0, 30);
+    ws.addLandmark("other", 1, std::nullopt, edit, tester);
+    ASSERT_EQ(ws.commission("other", sim("station.yaml"), quick(), tester).status, 0);
+    try {
+        ws.release("other", 2, sim("station.yaml"), 3, {}, tester);
+        FAIL() << "two parts were given PLC program 3";
+    } catch (const ReleaseRefused& e) {
+        EXPECT_EQ(e.problem(), "PLC program 3 is already part stepped-block's; give other another number");
+    }
+    EXPECT_THROW(ws.release("other", 2, sim("station.yaml"), std::nullopt, {}, tester), InputError);
+    EXPECT_EQ(ws.release("other", 2, sim("station.yaml"), 4, {}, tester).version, 1);
+    EXPECT_EQ(ws.releasedParts().size(), 2u);
 }
 
 TEST_F(SteppedBlock, AStationChangedSinceTheVerificationRefusesTheRelease)

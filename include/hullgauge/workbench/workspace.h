@@ -85,6 +85,14 @@ struct Draft {
     std::vector<DraftLandmark> landmarks;
 };
 
+/// A released version (`releases/<part>.v<N>/`).
+struct Version {
+    int version = 0;
+    std::string releasedBy, releasedAt, verificationSha256;
+    std::optional<int> rolledBackFrom;
+    bool inForce = false;
+};
+
 /// A part under work: its record, its draft, the CAD model's facts.
 struct PartState {
     PartRecord record;
@@ -94,6 +102,7 @@ struct PartState {
     Eigen::Vector3d boundsMin = Eigen::Vector3d::Zero(), boundsMax = Eigen::Vector3d::Zero();
     std::string cadSha256;
     std::optional<int> releasedVersion; ///< the version in force (`<part>.yaml`), if any
+    std::optional<Version> released;    ///< its release record (inForce true)
 };
 
 /// Options of a new part (`hullgauge part add`).
@@ -128,12 +137,15 @@ struct Actor {
     std::string name;
 };
 
-/// A released version (`releases/<part>.v<N>/`).
-struct Version {
-    int version = 0;
-    std::string releasedBy, releasedAt, verificationSha256;
-    std::optional<int> rolledBackFrom;
-    bool inForce = false;
+/// A released part the daemon runs beside its `programs:` table
+/// (docs/workbench.md, "Released parts on the station").
+struct ReleasedPart {
+    std::string part;
+    int plcProgram = 0; ///< the PLC's PART_PROGRAM number
+    int version = 0;    ///< the version in force
+    fs::path program;   ///< `<part>.yaml`
+    fs::path views;     ///< `<part>-views.yaml`
+    fs::path cad;       ///< the CAD model (what the simulated camera renders)
 };
 
 /// Called as commissioning proceeds (commission::Progress): the phase, the
@@ -198,6 +210,9 @@ class Workspace {
     std::string displayMesh(std::string_view part, bool lod) const;
 
     std::vector<Version> versions(std::string_view part) const;
+    /// Every part with a released program in force and a PLC program number,
+    /// by name; a part whose record cannot be read is left out (and logged).
+    std::vector<ReleasedPart> releasedParts() const;
 
     /// Suggests landmarks on the part at the station (`stationFile`), keeping
     /// every candidate in suggestions.json; returns what it wrote.
@@ -248,7 +263,8 @@ inline constexpr std::size_t kLodTriangles = 25000;
 /// The part as `GET /api/parts/{part}` answers its workspace facts:
 /// `{name, revision, changed_by, changed_at, change, cad: {file, kind,
 /// triangles, bounds_mm, sha256}, draft: {octree, tolerance_mm, landmarks},
-/// plc_program, verified, released: {version}}`.
+/// plc_program, verified, released: {version, plc_program, released_by,
+/// released_at, rolled_back_from}}`.
 nlohmann::json toJson(const PartState& state);
 nlohmann::json toJson(const Version& version);
 nlohmann::json toJson(const Placed& placed);

@@ -27,6 +27,7 @@ performance.mark("parts: script");
 //                canvasX, canvasY, visible} (visible: not hidden by the part)
 //   clickAt(p)   a click there through the view's own mouse handling
 //   lookAt(p, d) the camera looking at p from direction d (drawn at rest)
+//   lastPick     the surface point the page last sent for a landmark (part frame)
 //   lastPlaced   the server's `placed` of the last landmark added or moved
 //   lastError    the last refusal's words; job: the last job read
 //   view         the PartView (view.levelOfDetail = false: the full mesh while moving too)
@@ -313,6 +314,7 @@ async function addLandmark(hit) {
   if (!$("click-adds").checked) return;
   if (!state.signedIn) return say("landmark-result", "Sign in to add landmarks.", "error");
   const position = hit.point.toArray();
+  hook.lastPick = position;
   const answer = await change(base() + "/landmarks", { revision: state.part.revision, position }, "landmark-result");
   if (!answer) return;
   hook.lastPlaced = answer.placed || null;
@@ -322,6 +324,7 @@ async function addLandmark(hit) {
 }
 
 async function moveLandmark(id, position) {
+  hook.lastPick = position;
   const answer = await change(`${base()}/landmarks/${encodeURIComponent(id)}`, { revision: state.part.revision, position },
     "landmark-result");
   if (!answer) return showLandmarks();  // the pin back where the draft has it
@@ -493,6 +496,7 @@ async function startJob(kind, body) {
   const where = kind === "suggest" ? "suggest-state" : "job-state";
   const answer = await change(`${base()}/${kind}`, body, where);
   if (!answer) return;
+  if (answer.kind && answer.state) showJob(answer);  // the job as started (202), before the first look
   watchJob();
 }
 
@@ -522,9 +526,12 @@ function showJob(job) {
   $("suggest").disabled = running || !state.signedIn;
   hook.job = job;
   if (!job) return;
-  const status = running ? `${job.phase} ${job.done} / ${job.total}`
+  // Commissioning's exit status 1 is a verification that does not release
+  // the draft (docs/commissioning.md): the report says why, not a fault.
+  const notReleasable = job.kind === "commission" && job.exit_status === 1;
+  const status = running ? `${job.phase} ${job.done} / ${job.total}` : notReleasable ? "verified, not releasable"
     : `${job.state}${job.exit_status !== null && job.exit_status !== undefined ? " (exit status " + job.exit_status + ")" : ""}`;
-  const cls = job.state === "failed" || job.state === "cancelled" ? "error" : "muted";
+  const cls = (job.state === "failed" && !notReleasable) || job.state === "cancelled" ? "error" : "muted";
   if (job.kind === "suggest")
     return say("suggest-state", running ? `suggesting… ${job.phase || ""}` : status + (job.message && job.state !== "finished" ? ": " + job.message : ""), cls);
   const share = job.total ? Math.min(1, job.done / job.total) : 0;

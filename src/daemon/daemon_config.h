@@ -140,7 +140,7 @@ std::vector<std::string> allowedHostsFor(const HmiConfig& http);
 
 /// The part workbench (docs/workbench.md, "Configuration").
 struct WorkbenchConfig {
-    std::filesystem::path folder;                ///< the workspace; empty: no workbench
+    std::filesystem::path folder;                     ///< the workspace; empty: no workbench
     std::filesystem::path cli = "/usr/bin/hullgauge"; ///< the command its jobs run
     std::size_t maxUploadBytes = 64u << 20;
     int maxJobs = 1;

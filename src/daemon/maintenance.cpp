@@ -430,10 +430,9 @@ json reload(const MaintenanceContext& c, const json&)
 
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
-    {"status", status},    {"results", results},     {"trigger", trigger},
-    {"abort", abortCycle}, {"calibrate", calibrate}, {"calibration", calibration},
-    {"sim-part", simPart}, {"purpose", purpose},     {"snapshot", snapshot},
-    {"reload", reload},
+    {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
+    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
+    {"snapshot", snapshot},   {"reload", reload},
 };
 
 } // namespace

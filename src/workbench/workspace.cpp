@@ -128,10 +128,9 @@ PartState Workspace::read(std::string_view part) const
     return state;
 }
 
-std::string Workspace::displayMesh(std::string_view part, bool lod) const
+fs::path Workspace::displayMeshFile(std::string_view part, bool lod) const
 {
-    const fs::path folder = partFolder(part);
-    return files::readText(folder / (lod ? files::kLodStl : files::kModelStl));
+    return partFolder(part) / (lod ? files::kLodStl : files::kModelStl);
 }
 
 namespace {

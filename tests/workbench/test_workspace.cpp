@@ -81,7 +81,9 @@ TEST_F(BoxWorkspace, AddsThePartWithItsDisplayMeshesAndADraftWithoutLandmarks)
     // The display meshes: the mesh as the station sees it, and (12 ≤ 25 000) the same.
     EXPECT_EQ(model::loadMesh(dir / "parts" / "box" / "display" / "model.stl").triangles.size(), 12u);
     EXPECT_EQ(model::loadMesh(dir / "parts" / "box" / "display" / "lod.stl").triangles.size(), 12u);
-    EXPECT_EQ(ws.displayMesh("box", false), readText(dir / "parts" / "box" / "display" / "model.stl"));
+    EXPECT_EQ(ws.displayMeshFile("box", false), dir / "parts" / "box" / "display" / "model.stl");
+    EXPECT_EQ(ws.displayMeshFile("box", true), dir / "parts" / "box" / "display" / "lod.stl");
+    EXPECT_THROW(ws.displayMeshFile("nobox", true), workbench::PartNotFound);
     ASSERT_EQ(ws.list().size(), 1u);
     // Nothing of the part's making is left in the workspace.
     std::size_t entries = 0;

@@ -191,8 +191,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     {
         std::lock_guard lock(mutex_);
         if (shownMesh_ != mesh) {
-            shownRenderer_ =
-                std::make_shared<const sim::SilhouetteRenderer>(std::vector<model::TriangleMesh>{*mesh});
+            shownRenderer_ = std::make_shared<const sim::SilhouetteRenderer>(std::vector<model::TriangleMesh>{*mesh});
             shownMesh_ = std::move(mesh);
         }
         if (partName_ != name) log::category("camera")->info("sim camera: part under test is now '{}'", name);

@@ -206,8 +206,8 @@ class Workspace {
                           const Actor& by);
     int removeLandmark(std::string_view part, int revision, const std::string& id, const Actor& by);
 
-    /// The display mesh (binary STL bytes); `lod`: the simplified one.
-    std::string displayMesh(std::string_view part, bool lod) const;
+    /// The display mesh's file (binary STL); `lod`: the simplified one.
+    std::filesystem::path displayMeshFile(std::string_view part, bool lod) const;
 
     std::vector<Version> versions(std::string_view part) const;
     /// Every part with a released program in force and a PLC program number,

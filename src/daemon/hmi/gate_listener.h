@@ -36,7 +36,7 @@ class GateListener {
         std::chrono::milliseconds requestTimeout{5000}; ///< `http.request_timeout_s`
         /// An upload gets this long per byte on top of requestTimeout (1 MiB/s: a busy 10 Mbit/s link).
         std::uint64_t uploadBytesPerSecond = 1 << 20;
-        std::size_t maxPending = 64;                    ///< `http.max_pending_requests`
+        std::size_t maxPending = 64; ///< `http.max_pending_requests`
     };
     using Answer = std::function<void(GatedRequest)>;
 

@@ -30,7 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-
 /// The selection of /api/results and the exports (docs/hmi.md, "JSON API").
 store::ResultQuery resultQuery(const httplib::Request& req)
 {
@@ -224,8 +223,9 @@ std::string signInName(const json& body)
     if (!body.contains("name")) return "engineer";
     if (!body["name"].is_string()) throw HttpError(400, "name: not a string");
     const auto name = body["name"].get<std::string>();
-    if (name.empty() || name.size() > 64 ||
-        !std::all_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f; }))
+    if (name.empty() || name.size() > 64 || !std::all_of(name.begin(), name.end(), [](char c) {
+            return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+        }))
         throw HttpError(400, "name: 1 to 64 printable characters");
     return name;
 }
@@ -284,7 +284,7 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     if (config_->workbench.enabled())
         parts_ = std::make_unique<PartsRoutes>(
             *server_, config_->workbench, [this] { return this->config(); },
-            [this](const httplib::Request& req) { return signedIn(req); }, mailbox_);
+            [this](const httplib::Request& req) { return signedIn(req); }, mailbox_, files_);
     port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
                            : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
@@ -358,8 +358,8 @@ bool HmiServer::guard(const httplib::Request& req, httplib::Response& res)
     // cross-site without a preflight we never grant) from our own origin.
     // The one exception, a CAD upload (docs/workbench.md), carries its file's bytes and still needs
     // the session's CSRF token: a custom header no other site can send without a preflight.
-    const bool upload = req.path == "/api/parts" &&
-                        req.get_header_value("Content-Type").rfind("application/octet-stream", 0) == 0;
+    const bool upload =
+        req.path == "/api/parts" && req.get_header_value("Content-Type").rfind("application/octet-stream", 0) == 0;
     if (!upload && req.get_header_value("Content-Type").rfind(kJson, 0) != 0) {
         sendError(res, 415, "a POST carries application/json");
         return false;
@@ -380,23 +380,20 @@ bool HmiServer::guard(const httplib::Request& req, httplib::Response& res)
 void HmiServer::routePages()
 {
     // The pages: one HTML file each, their scripts and styles beside them.
-    static const std::map<std::string, std::string> kPages{{"/", "line.html"},
-                                                           {"/results", "results.html"},
-                                                           {"/result", "result.html"},
-                                                           {"/spc", "spc.html"},
-                                                           {"/maintenance", "maintenance.html"},
-                                                           {"/parts", "parts.html"}};
+    static const std::map<std::string, std::string> kPages{
+        {"/", "line.html"},   {"/results", "results.html"},         {"/result", "result.html"},
+        {"/spc", "spc.html"}, {"/maintenance", "maintenance.html"}, {"/parts", "parts.html"}};
     for (const auto& [path, file] : kPages)
-        server_->Get(path, [this, file = file](const httplib::Request&, httplib::Response& res) {
-            sendFile(res, config()->http.assets / file);
+        server_->Get(path, [this, file = file](const httplib::Request& req, httplib::Response& res) {
+            files_.serve(req, res, config()->http.assets / file);
         });
     server_->Get(R"(/assets/([a-z0-9][a-z0-9_-]*\.(?:js|css|svg|png)))",
                  [this](const httplib::Request& req, httplib::Response& res) {
-                     sendFile(res, config()->http.assets / req.matches[1].str());
+                     files_.serve(req, res, config()->http.assets / req.matches[1].str());
                  });
     // Chart.js from Debian's libjs-chart.js (UMD build: window.Chart), never from a CDN.
-    server_->Get("/lib/chart.js", [this](const httplib::Request&, httplib::Response& res) {
-        sendFile(res, config()->http.javascript / "chart.js" / "chart.min.js");
+    server_->Get("/lib/chart.js", [this](const httplib::Request& req, httplib::Response& res) {
+        files_.serve(req, res, config()->http.javascript / "chart.js" / "chart.min.js");
     });
     // three.js from Debian's libjs-three (the UMD build, window.THREE, and the examples' non-module scripts that
     // add to it) for the workbench's 3D view (docs/workbench.md).
@@ -405,8 +402,8 @@ void HmiServer::routePages()
         {"/lib/three/OrbitControls.js", "three/examples/js/controls/OrbitControls.js"},
         {"/lib/three/STLLoader.js", "three/examples/js/loaders/STLLoader.js"}};
     for (const auto& [path, file] : kThree)
-        server_->Get(path, [this, file = file](const httplib::Request&, httplib::Response& res) {
-            sendFile(res, config()->http.javascript / file);
+        server_->Get(path, [this, file = file](const httplib::Request& req, httplib::Response& res) {
+            files_.serve(req, res, config()->http.javascript / file);
         });
 }
 
@@ -440,7 +437,7 @@ void HmiServer::routeApi()
                      const auto name = req.matches[2].str();
                      if (std::find(names.begin(), names.end(), name) == names.end())
                          throw HttpError(404, "result " + req.matches[1].str() + " has no image " + name);
-                     sendFile(res, folder / name);
+                     files_.serve(req, res, folder / name);
                  }));
     server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendJson(res, spcSeries(config()->results.database, req));
@@ -507,16 +504,16 @@ void HmiServer::routeMaintenance()
                       res.set_header("Set-Cookie", "hg_session=; Path=/; HttpOnly; SameSite=Strict; Max-Age=0");
                       sendJson(res, {{"ok", true}});
                   }));
-    server_->Get("/api/session", api([this](const httplib::Request& req, httplib::Response& res) {
-                     const auto session = sessions_.touch(sessionCookie(req));
-                     json body{{"signed_in", session.has_value()},
-                               {"configured", !config()->http.passwordHash.empty()}};
-                     if (session) {
-                         body["csrf"] = session->csrf;
-                         body["name"] = session->name;
-                     }
-                     sendJson(res, body);
-                 }));
+    server_->Get(
+        "/api/session", api([this](const httplib::Request& req, httplib::Response& res) {
+            const auto session = sessions_.touch(sessionCookie(req));
+            json body{{"signed_in", session.has_value()}, {"configured", !config()->http.passwordHash.empty()}};
+            if (session) {
+                body["csrf"] = session->csrf;
+                body["name"] = session->name;
+            }
+            sendJson(res, body);
+        }));
     server_->Post(
         "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
             signedIn(req);

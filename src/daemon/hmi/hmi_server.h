@@ -17,6 +17,7 @@
 #include "daemon_config.h"
 #include "hmi/gate_listener.h"
 #include "hmi/hmi_auth.h"
+#include "hmi/static_files.h"
 #include "hullgauge/common/worker.h"
 
 #include <atomic>
@@ -77,6 +78,7 @@ class HmiServer {
     RateLimiter limiter_;
     RateLimiter signIns_;
     std::unique_ptr<GatedHttpServer> server_;
+    StaticFiles files_;                  ///< the pages, libraries and images, validated and compressed once
     std::unique_ptr<PartsRoutes> parts_; ///< with `workbench` configured
     int port_ = 0;
     int listenFd_ = -1;

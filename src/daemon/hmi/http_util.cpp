@@ -34,8 +34,6 @@ std::optional<std::string> readFile(const fs::path& file)
     return out.str();
 }
 
-namespace {
-
 const char* contentType(const fs::path& file)
 {
     const auto ext = file.extension().string();
@@ -46,16 +44,6 @@ const char* contentType(const fs::path& file)
     if (ext == ".png") return "image/png";
     if (ext == ".stl") return "model/stl";
     return "application/octet-stream";
-}
-
-} // namespace
-
-void sendFile(httplib::Response& res, const fs::path& file)
-{
-    auto body = readFile(file);
-    if (!body) return sendError(res, 404, "not found");
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(std::move(*body), contentType(file));
 }
 
 std::optional<std::int64_t> intParam(const httplib::Request& req, const char* name, std::int64_t lo, std::int64_t hi)

@@ -1,6 +1,6 @@
 // The web HMI's answers (docs/hmi.md, "JSON API"): every answer JSON with
 // `Cache-Control: no-store`, every refusal `{"error": "what was wrong"}` with
-// its 4xx, the pages and libraries served as files. Shared by the routes of
+// its 4xx (the files: hmi/static_files.h). Shared by the routes of
 // hmi_server.cpp and parts_routes.cpp.
 #pragma once
 
@@ -28,8 +28,8 @@ inline constexpr const char* kJson = "application/json";
 
 void sendJson(httplib::Response& res, const nlohmann::json& body, int status = 200);
 void sendError(httplib::Response& res, int status, const std::string& message);
-/// A file of the pages or libraries (404 when it cannot be read), typed by its extension.
-void sendFile(httplib::Response& res, const std::filesystem::path& file);
+/// The media type of a page, script, style, image or mesh, by its extension.
+const char* contentType(const std::filesystem::path& file);
 std::optional<std::string> readFile(const std::filesystem::path& file);
 
 /// Runs `handler`, turning a refused request into its 4xx (an InputError is

@@ -24,9 +24,9 @@ using nlohmann::json;
 
 json toJson(const PartJob& job)
 {
-    json j{{"part", job.part},         {"kind", job.kind},     {"state", enumName(job.state)},
-           {"phase", job.phase},       {"done", job.done},     {"total", job.total},
-           {"started_by", job.startedBy}, {"started_at", job.startedAt}, {"message", job.message}};
+    json j{{"part", job.part},      {"kind", job.kind},   {"state", enumName(job.state)}, {"phase", job.phase},
+           {"done", job.done},      {"total", job.total}, {"started_by", job.startedBy},  {"started_at", job.startedAt},
+           {"message", job.message}};
     j["exit_status"] = job.exitStatus ? json(*job.exitStatus) : json(nullptr);
     return j;
 }
@@ -114,8 +114,8 @@ CommandOutcome runPartCommand(const std::filesystem::path& cli, const std::files
                               const std::vector<std::string>& args, std::chrono::milliseconds deadline)
 {
     CommandOutcome outcome;
-    std::vector<std::string> argv{"nice", "-n", "10", cli.string(), "part", args.at(0), "--workspace",
-                                  workspace.string()};
+    std::vector<std::string> argv{"nice", "-n",       "10",          cli.string(),
+                                  "part", args.at(0), "--workspace", workspace.string()};
     argv.insert(argv.end(), args.begin() + 1, args.end());
     int fds[2] = {-1, -1};
     auto pid = spawn(argv, fds[0], fds[1]);
@@ -144,8 +144,7 @@ CommandOutcome runPartCommand(const std::filesystem::path& cli, const std::files
     ::close(fds[0]);
     ::close(fds[1]);
     int status = 0;
-    while (::waitpid(pid.value(), &status, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid.value(), &status, 0) < 0 && errno == EINTR) {}
     if (WIFEXITED(status)) outcome.exitStatus = WEXITSTATUS(status);
     return outcome;
 }
@@ -233,8 +232,7 @@ void PartJobs::follow(Running& run, std::stop_token stop)
             if (p[k].revents & (POLLIN | POLLHUP | POLLERR)) open[k] = read(run, fds[k], pending[k], k == 0);
     }
     int status = 0;
-    while (::waitpid(run.pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(run.pid, &status, 0) < 0 && errno == EINTR) {}
     std::lock_guard lock(mutex_);
     PartJob& job = jobs_[run.part];
     if (WIFEXITED(status)) job.exitStatus = WEXITSTATUS(status);

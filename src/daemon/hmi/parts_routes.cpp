@@ -43,8 +43,8 @@ workbench::LandmarkEdit editOf(const json& body)
     workbench::LandmarkEdit edit;
     edit.position = vecOf(body, "position");
     edit.normal = vecOf(body, "normal");
-    if (body.contains("normal_from_mesh")) edit.normalFromMesh = body["normal_from_mesh"].is_boolean() &&
-                                                                 body["normal_from_mesh"].get<bool>();
+    if (body.contains("normal_from_mesh"))
+        edit.normalFromMesh = body["normal_from_mesh"].is_boolean() && body["normal_from_mesh"].get<bool>();
     if (body.contains("new_id")) {
         if (!body["new_id"].is_string()) throw HttpError(400, "new_id: not a string");
         edit.newId = body["new_id"].get<std::string>();
@@ -120,9 +120,10 @@ json rowJson(const workbench::PartState& s)
 } // namespace
 
 PartsRoutes::PartsRoutes(httplib::Server& server, const station::WorkbenchConfig& workbench, ConfigSource config,
-                         SignedIn signedIn, CommandMailbox& mailbox)
+                         SignedIn signedIn, CommandMailbox& mailbox, StaticFiles& files)
     : workbench_(workbench), workspace_(workbench.folder), config_(std::move(config)), signedIn_(std::move(signedIn)),
-      mailbox_(mailbox), jobs_(std::make_unique<PartJobs>(workbench.cli, workbench.folder, workbench.maxJobs))
+      mailbox_(mailbox), files_(files),
+      jobs_(std::make_unique<PartJobs>(workbench.cli, workbench.folder, workbench.maxJobs))
 {
     routeReads(server);
     routeLandmarks(server);
@@ -173,9 +174,8 @@ void PartsRoutes::routeReads(httplib::Server& server)
                }));
     server.Get(parts + "/model\\.stl", api([this](const httplib::Request& req, httplib::Response& res) {
                    const bool lod = req.has_param("lod") && req.get_param_value("lod") == "1";
-                   auto mesh = refusing([&] { return workspace_.displayMesh(req.matches[1].str(), lod); });
-                   res.set_header("Cache-Control", "no-cache");
-                   res.set_content(std::move(mesh), "model/stl");
+                   const auto mesh = refusing([&] { return workspace_.displayMeshFile(req.matches[1].str(), lod); });
+                   files_.serve(req, res, mesh);
                }));
     server.Get(parts + "/verification", api([this](const httplib::Request& req, httplib::Response& res) {
                    const auto folder = refusing([&] { return workspace_.partFolder(req.matches[1].str()); });
@@ -198,7 +198,7 @@ void PartsRoutes::routeReads(httplib::Server& server)
                    if (!fs::exists(png) || fs::last_write_time(png, ec) < planned)
                        runPart({"view", part, k, "--out", png.string(), "--station", config_()->stationFile.string()},
                                std::chrono::seconds(120));
-                   sendFile(res, png);
+                   files_.serve(req, res, png);
                }));
     server.Get(parts + "/job", api([this](const httplib::Request& req, httplib::Response& res) {
                    const auto job = jobs_->job(req.matches[1].str());
@@ -363,8 +363,8 @@ void PartsRoutes::routeVersions(httplib::Server& server)
                         return workspace_.release(part, revisionOf(body), cfg->stationFile, number, taken,
                                                   {session.name});
                     });
-                    hg::log::category("workbench")->info("part {} version {} released by {}", part, version.version,
-                                                         session.name);
+                    hg::log::category("workbench")
+                        ->info("part {} version {} released by {}", part, version.version, session.name);
                     sendJson(res, reloaded(part));
                 }));
     server.Post(parts + "/rollback", api([this](const httplib::Request& req, httplib::Response& res) {
@@ -374,11 +374,11 @@ void PartsRoutes::routeVersions(httplib::Server& server)
                         throw HttpError(400, "version: the version to make the one in force again");
                     const std::string part = req.matches[1].str();
                     if (jobs_->running(part)) throw HttpError(409, "part " + part + " has a job running");
-                    const auto version = refusing(
-                        [&] { return workspace_.rollback(part, body["version"].get<int>(), {session.name}); });
-                    hg::log::category("workbench")->info("part {} rolled back to version {} as version {} by {}",
-                                                         part, body["version"].get<int>(), version.version,
-                                                         session.name);
+                    const auto version =
+                        refusing([&] { return workspace_.rollback(part, body["version"].get<int>(), {session.name}); });
+                    hg::log::category("workbench")
+                        ->info("part {} rolled back to version {} as version {} by {}", part,
+                               body["version"].get<int>(), version.version, session.name);
                     sendJson(res, reloaded(part));
                 }));
 }

@@ -10,6 +10,7 @@
 #include "daemon_config.h"
 #include "hmi/hmi_auth.h"
 #include "hmi/part_jobs.h"
+#include "hmi/static_files.h"
 #include "hullgauge/workbench/workspace.h"
 
 #include <functional>
@@ -29,7 +30,7 @@ class PartsRoutes {
 
     /// Routes /parts and /api/parts/… on `server` when `workbench` is configured.
     PartsRoutes(httplib::Server& server, const station::WorkbenchConfig& workbench, ConfigSource config,
-                SignedIn signedIn, CommandMailbox& mailbox);
+                SignedIn signedIn, CommandMailbox& mailbox, StaticFiles& files);
 
   private:
     void routeReads(httplib::Server& server);
@@ -46,6 +47,7 @@ class PartsRoutes {
     ConfigSource config_;
     SignedIn signedIn_;
     CommandMailbox& mailbox_;
+    StaticFiles& files_;
     std::unique_ptr<PartJobs> jobs_;
 };
 

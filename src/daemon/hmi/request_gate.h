@@ -82,7 +82,7 @@ class RequestGate {
     bool inChunk_ = false;
     bool continue_ = false;
     bool headDone_ = false;
-    bool upload_ = false;        ///< the upload request: its own body limit
+    bool upload_ = false; ///< the upload request: its own body limit
     std::size_t lines_ = 0;
     std::string out_;
     int status_ = 0;

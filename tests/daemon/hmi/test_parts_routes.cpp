@@ -108,8 +108,8 @@ class PartsApi : public ::testing::Test {
     };
     Engineer signIn(const std::string& name)
     {
-        auto res = client->Post("/api/login", json{{"password", "bench secret"}, {"name", name}}.dump(),
-                                "application/json");
+        auto res =
+            client->Post("/api/login", json{{"password", "bench secret"}, {"name", name}}.dump(), "application/json");
         EXPECT_TRUE(res && res->status == 200) << (res ? res->body : "no answer");
         const auto cookie = res->get_header_value("Set-Cookie");
         return {cookie.substr(0, cookie.find(';')), json::parse(res->body).at("csrf").get<std::string>()};
@@ -199,8 +199,8 @@ TEST_F(PartsApi, RefusedUploadsLeaveNothingBehind)
     ASSERT_TRUE(anonymous);
     EXPECT_EQ(anonymous->status, 401);
     const auto anna = signIn("anna");
-    auto noToken = client->Post("/api/parts?name=x&file=x.stl", {{"Cookie", anna.cookie}}, block,
-                                "application/octet-stream");
+    auto noToken =
+        client->Post("/api/parts?name=x&file=x.stl", {{"Cookie", anna.cookie}}, block, "application/octet-stream");
     ASSERT_TRUE(noToken);
     EXPECT_EQ(noToken->status, 403);
 
@@ -222,9 +222,10 @@ TEST_F(PartsApi, RefusedUploadsLeaveNothingBehind)
     addr.sin_port = htons(static_cast<std::uint16_t>(server->port()));
     addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-    const std::string head = "POST /api/parts?name=big&file=big.stl HTTP/1.1\r\nHost: 127.0.0.1\r\nCookie: " +
-                             anna.cookie + "\r\nX-CSRF-Token: " + anna.csrf +
-                             "\r\nContent-Type: application/octet-stream\r\nContent-Length: 2147483648\r\n\r\n";
+    const std::string head =
+        "POST /api/parts?name=big&file=big.stl HTTP/1.1\r\nHost: 127.0.0.1\r\nCookie: " + anna.cookie +
+        "\r\nX-CSRF-Token: " + anna.csrf +
+        "\r\nContent-Type: application/octet-stream\r\nContent-Length: 2147483648\r\n\r\n";
     ASSERT_EQ(::send(fd, head.data(), head.size(), 0), static_cast<ssize_t>(head.size()));
     std::string answer;
     char buffer[4096];
@@ -291,8 +292,8 @@ TEST_F(PartsApi, CommissionedReleasedComparedAndRolledBack)
     addBlock(anna);
     int revision = 1;
     for (const auto& at : {json{-15.0, 0.0, 30.0}, json{0.0, 0.0, 22.5}, json{15.0, 0.0, 15.0}}) {
-        auto res = post(anna, "/api/parts/block/landmarks",
-                        {{"revision", revision}, {"position", at}, {"tolerance_mm", 0.4}});
+        auto res =
+            post(anna, "/api/parts/block/landmarks", {{"revision", revision}, {"position", at}, {"tolerance_mm", 0.4}});
         ASSERT_TRUE(res && res->status == 200) << (res ? res->body : "no answer");
         revision = json::parse(res->body)["revision"].get<int>();
     }

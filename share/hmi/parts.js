@@ -243,11 +243,11 @@ function octree(draft) {
 
 function legend() {
   const part = state.part, view = hook.view;
-  const play = part && part.station && part.station.play;
+  const play = part && part.draft.alignment;
   const scale = part && part.draft.landmarks.length ? `× ${view.zoneScale || 1}` : "—";
   const lines = [[`tolerance zones drawn ${scale}`, "zone"],
     [`grid ${view.gridCellMm || "—"} mm`, ""],
-    [play ? `nest play ±${play.shift_mm} mm, ±${play.rotation_deg}°` : "nest play —", "nest"],
+    [play ? `nest play ±${play.max_shift_mm} mm, ±${play.max_rotation_deg}°` : "nest play —", "nest"],
     ["landmark", "pin"], ["suggested", "chosen"], ["refused", "refused"], ["view", "frustum"]];
   $("legend").replaceChildren(...lines.map(([t, cls]) => hg.el("div", {}, hg.el("span", { class: "swatch " + cls }), t)));
 }
@@ -526,12 +526,11 @@ function showJob(job) {
   $("suggest").disabled = running || !state.signedIn;
   hook.job = job;
   if (!job) return;
-  // Commissioning's exit status 1 is a verification that does not release
-  // the draft (docs/commissioning.md): the report says why, not a fault.
-  const notReleasable = job.kind === "commission" && job.exit_status === 1;
+  // A verification that does not release the draft: the report says why, not a fault.
+  const notReleasable = job.state === "not_releasable";
   const status = running ? `${job.phase} ${job.done} / ${job.total}` : notReleasable ? "verified, not releasable"
     : `${job.state}${job.exit_status !== null && job.exit_status !== undefined ? " (exit status " + job.exit_status + ")" : ""}`;
-  const cls = (job.state === "failed" && !notReleasable) || job.state === "cancelled" ? "error" : "muted";
+  const cls = job.state === "failed" || job.state === "cancelled" ? "error" : "muted";
   if (job.kind === "suggest")
     return say("suggest-state", running ? `suggesting… ${job.phase || ""}` : status + (job.message && job.state !== "finished" ? ": " + job.message : ""), cls);
   const share = job.total ? Math.min(1, job.done / job.total) : 0;
@@ -630,6 +629,7 @@ $("upload").addEventListener("submit", async (ev) => {
   const query = new URLSearchParams({ file: file.name });
   if ($("upload-name").value.trim()) query.set("name", $("upload-name").value.trim());
   if ($("upload-tolerance").value) query.set("tolerance", $("upload-tolerance").value);
+  if ($("upload-depth").value) query.set("depth", $("upload-depth").value);
   say("upload-result", `uploading ${file.name} (${hg.bytes(file.size)})…`, "muted");
   const res = await api(() => fetch("/api/parts?" + query, { method: "POST", body: file, credentials: "same-origin",
     headers: { "Content-Type": "application/octet-stream", "X-CSRF-Token": state.csrf || "" } }))

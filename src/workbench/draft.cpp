@@ -60,6 +60,10 @@ Draft parse(const YAML::Node& node, const fs::path& file, double defaultToleranc
         if (node["octree"] && node["octree"]["depth"]) d.depth = node["octree"]["depth"].as<int>();
         if (node["octree"] && node["octree"]["adjacency_depth"])
             d.adjacencyDepth = node["octree"]["adjacency_depth"].as<int>();
+        if (const auto a = node["alignment"]; a && a.IsMap()) {
+            if (a["max_shift_mm"]) d.maxShiftMm = a["max_shift_mm"].as<double>();
+            if (a["max_rotation_deg"]) d.maxRotationDeg = a["max_rotation_deg"].as<double>();
+        }
         if (node["landmarks"] && node["landmarks"].IsSequence())
             for (const YAML::Node& n : node["landmarks"]) d.landmarks.push_back(parseLandmark(n));
     } catch (const YAML::Exception& e) {

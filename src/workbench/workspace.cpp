@@ -185,6 +185,7 @@ nlohmann::json toJson(const PartState& state)
           {"sha256", state.cadSha256}}},
         {"draft",
          {{"octree", {{"depth", state.draft.depth}, {"adjacency_depth", state.draft.adjacencyDepth}}},
+          {"alignment", {{"max_shift_mm", state.draft.maxShiftMm}, {"max_rotation_deg", state.draft.maxRotationDeg}}},
           {"tolerance_mm", state.draft.defaultToleranceMm},
           {"landmarks", landmarks}}},
         {"plc_program", state.record.plcProgram ? nlohmann::json(*state.record.plcProgram) : nlohmann::json(nullptr)},

@@ -64,6 +64,18 @@ struct BoxWorkspace : ::testing::Test {
     }
 };
 
+TEST_F(BoxWorkspace, TheNestPlayIsTheDraftsAlignmentLimits)
+{
+    addBox();
+    // Absent from the draft: the part program's defaults (docs/part-program.md, 1 mm and 1°).
+    EXPECT_EQ(ws.read("box").draft.maxShiftMm, 1.0);
+    EXPECT_EQ(toJson(ws.read("box"))["draft"]["alignment"]["max_rotation_deg"], 1.0);
+    std::ofstream(draftFile(), std::ios::app) << "alignment: {max_shift_mm: 0.4, max_rotation_deg: 0.25}\n";
+    const auto j = toJson(ws.read("box"));
+    EXPECT_EQ(j["draft"]["alignment"]["max_shift_mm"], 0.4);
+    EXPECT_EQ(j["draft"]["alignment"]["max_rotation_deg"], 0.25);
+}
+
 TEST_F(BoxWorkspace, AddsThePartWithItsDisplayMeshesAndADraftWithoutLandmarks)
 {
     const PartState s = addBox();

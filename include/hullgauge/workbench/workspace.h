@@ -26,6 +26,7 @@
 #include "hullgauge/common/enum_names.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/model/part_program.h"
 
 namespace hg::workbench {
 
@@ -82,6 +83,10 @@ struct Draft {
     int depth = 8;
     int adjacencyDepth = 4;
     double defaultToleranceMm = 0.1; ///< what a new landmark gets
+    /// The play of the part in its nest: the alignment's limits (part program
+    /// `alignment.max_shift_mm`, `max_rotation_deg`, their defaults when absent).
+    double maxShiftMm = model::AlignmentSettings{}.maxShiftMm;
+    double maxRotationDeg = model::AlignmentSettings{}.maxRotationDeg;
     std::vector<DraftLandmark> landmarks;
 };
 

@@ -237,7 +237,10 @@ void PartJobs::follow(Running& run, std::stop_token stop)
     PartJob& job = jobs_[run.part];
     if (WIFEXITED(status)) job.exitStatus = WEXITSTATUS(status);
     const bool cancelled = run.cancelled || killAt.has_value();
-    job.state = cancelled ? JobState::Cancelled : job.exitStatus == 0 ? JobState::Finished : JobState::Failed;
+    job.state = cancelled                                         ? JobState::Cancelled
+                : job.exitStatus == 0                             ? JobState::Finished
+                : job.kind == "commission" && job.exitStatus == 1 ? JobState::NotReleasable
+                                                                  : JobState::Failed;
     if (WIFSIGNALED(status) && !cancelled) job.message = "ended by " + describeSignal(WTERMSIG(status));
     hg::log::category("workbench")
         ->info("{} of {} {} (exit {})", job.kind, job.part, enumName(job.state), job.exitStatus.value_or(-1));

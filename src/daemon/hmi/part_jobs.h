@@ -26,12 +26,18 @@
 
 namespace hg::daemon {
 
-enum class JobState { Running, Finished, Failed, Cancelled };
+/// How a job ended. `NotReleasable`: a commissioning that verified the draft
+/// and found it not releasable (`hullgauge part commission` exit status 1,
+/// docs/commissioning.md) — the report says why; not a fault of the job.
+enum class JobState { Running, Finished, NotReleasable, Failed, Cancelled };
 constexpr auto nameTable(JobState)
 {
     using enum JobState;
-    return std::to_array<EnumName<JobState>>(
-        {{Running, "running"}, {Finished, "finished"}, {Failed, "failed"}, {Cancelled, "cancelled"}});
+    return std::to_array<EnumName<JobState>>({{Running, "running"},
+                                              {Finished, "finished"},
+                                              {NotReleasable, "not_releasable"},
+                                              {Failed, "failed"},
+                                              {Cancelled, "cancelled"}});
 }
 
 /// What a part's job is doing or came to.

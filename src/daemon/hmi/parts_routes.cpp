@@ -145,12 +145,6 @@ json PartsRoutes::partJson(const std::string& part) const
                             {"problems", plan->value("problems", json::array())}}
                      : json(nullptr);
     if (j["verified"].is_object()) j["verified"]["stale"] = j["verified"]["revision"] != s.record.revision;
-    for (const auto& v : workspace_.versions(part))
-        if (v.inForce)
-            j["released"] = {{"version", v.version},
-                             {"plc_program", s.record.plcProgram ? json(*s.record.plcProgram) : json(nullptr)},
-                             {"released_by", v.releasedBy},
-                             {"released_at", v.releasedAt}};
     const auto job = jobs_->job(part);
     j["job"] = job ? toJson(*job) : json(nullptr);
     return j;
@@ -243,6 +237,7 @@ void PartsRoutes::routeLandmarks(httplib::Server& server)
                     if (!req.has_param("file")) throw HttpError(400, "file: missing (the CAD file's name)");
                     workbench::AddOptions options;
                     if (req.has_param("name")) options.name = req.get_param_value("name");
+                    if (const auto depth = intParam(req, "depth", 1, 15)) options.depth = static_cast<int>(*depth);
                     if (req.has_param("tolerance")) {
                         const auto t = req.get_param_value("tolerance");
                         char* end = nullptr;

@@ -33,11 +33,16 @@ void sendBody(httplib::Response& res, std::shared_ptr<const std::string> body, c
 }
 
 /// An empty answer: cpp-httplib sends no body with a content provider of length 0.
-void sendEmpty(httplib::Response& res, const std::string& type) { res.set_content("", type); }
+void sendEmpty(httplib::Response& res, const std::string& type)
+{
+    res.set_content("", type);
+}
 
 } // namespace
 
-StaticFiles::StaticFiles(std::size_t maxBytes) : maxBytes_(maxBytes) {}
+StaticFiles::StaticFiles(std::size_t maxBytes) : maxBytes_(maxBytes)
+{
+}
 
 std::string StaticFiles::entityTag(fs::file_time_type modified, std::uintmax_t size)
 {
@@ -69,8 +74,7 @@ bool StaticFiles::acceptsGzip(const std::string& acceptEncoding)
     std::size_t at = 0;
     while (at < acceptEncoding.size()) {
         const auto comma = acceptEncoding.find(',', at);
-        const auto item =
-            acceptEncoding.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+        const auto item = acceptEncoding.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
         at = comma == std::string::npos ? acceptEncoding.size() : comma + 1;
         const auto semi = item.find(';');
         auto coding = item.substr(0, semi);

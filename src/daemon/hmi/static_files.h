@@ -21,7 +21,7 @@
 namespace hg::daemon {
 
 class StaticFiles {
-public:
+  public:
     /// `maxBytes`: what the cache may hold (raw and compressed together); the
     /// least recently served files leave first. A file larger than that is
     /// served from disk each time, uncompressed.
@@ -43,7 +43,7 @@ public:
     /// What the cache holds now, in bytes (for the tests).
     std::size_t heldBytes() const;
 
-private:
+  private:
     struct Version {
         std::string etag;
         std::string raw;

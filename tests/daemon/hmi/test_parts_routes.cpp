@@ -190,6 +190,16 @@ TEST_F(PartsApi, AnUploadedModelIsAPartWithItsDisplayMeshes)
     auto lod = client->Get("/api/parts/block/model.stl?lod=1");
     ASSERT_TRUE(lod);
     EXPECT_EQ(lod->status, 200);
+    // Validated (docs/hmi.md, "Files and caching"): the mesh the browser holds is not sent again.
+    const auto etag = mesh->get_header_value("ETag");
+    ASSERT_FALSE(etag.empty());
+    auto held = client->Get("/api/parts/block/model.stl", {{"If-None-Match", etag}});
+    ASSERT_TRUE(held);
+    EXPECT_EQ(held->status, 304);
+    EXPECT_TRUE(held->body.empty());
+    // The nest play drawn by the page: the draft's alignment limits, the part program's defaults.
+    EXPECT_EQ(part["draft"]["alignment"]["max_shift_mm"], 1.0);
+    EXPECT_EQ(part["draft"]["alignment"]["max_rotation_deg"], 1.0);
     EXPECT_EQ(get("/api/parts/nothere", 404).value("error", "").empty(), false);
 }
 
@@ -209,6 +219,11 @@ TEST_F(PartsApi, RefusedUploadsLeaveNothingBehind)
     EXPECT_EQ(notAMesh->status, 400) << notAMesh->body;
     EXPECT_NE(json::parse(notAMesh->body)["error"].get<std::string>().find("junk.stl"), std::string::npos)
         << notAMesh->body;
+
+    auto badDepth = upload(anna, "name=deep&file=stepped-block.stl&depth=16", block);
+    ASSERT_TRUE(badDepth);
+    EXPECT_EQ(badDepth->status, 400) << badDepth->body;
+    EXPECT_NE(badDepth->body.find("depth: '16'"), std::string::npos) << badDepth->body;
 
     addBlock(anna);
     auto twice = upload(anna, "name=block&file=stepped-block.stl", block);

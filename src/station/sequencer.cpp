@@ -68,6 +68,12 @@ bool isBusy(SequencerState s)
     return s == S::Moving || s == S::Settling || s == S::Grabbing || s == S::Processing;
 }
 
+std::string describe(FaultCode c)
+{
+    const std::optional<FaultSentence> sentence = mapEnum<kFaultSentences>(c);
+    return sentence ? std::string(sentence->text) : "unknown fault";
+}
+
 std::string describe(FaultCode c, int retries)
 {
     const std::optional<FaultSentence> sentence = mapEnum<kFaultSentences>(c);

@@ -90,19 +90,26 @@ Zone zoneOf(const nlohmann::json& entry, const std::string& field)
 namespace {
 
 /// A landmark's series over all records, or its problem.
-LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& records)
+LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& records, MissingValues missing)
 {
-    LandmarkSeries series{id, {}, ValueSource::Deviation, {}, {}, {}};
+    LandmarkSeries series{id, {}, ValueSource::Deviation, {}, {}, {}, {}, {}};
     std::vector<const nlohmann::json*> entries;
-    for (const auto& record : records) {
+    for (std::size_t cycle = 0; cycle < records.size(); ++cycle) {
+        const auto& record = records[cycle];
         const auto* entry = findLandmark(record, id);
+        const auto field = cycleName(record) + ".landmarks." + id;
+        const auto status = entry ? statusOf(*entry, field) : std::nullopt;
+        const bool noValue =
+            !entry || status == inspect::LandmarkStatus::NotFound || status == inspect::LandmarkStatus::NotObservable;
+        if (noValue && missing == MissingValues::Gap) {
+            series.gaps.push_back({cycle, record.serial, entry ? std::string(enumName(*status)) : "absent"});
+            continue;
+        }
         if (!entry) {
             series.problem = cycleName(record) + " has no result for it";
             return series;
         }
-        const auto field = cycleName(record) + ".landmarks." + id;
-        const auto status = statusOf(*entry, field);
-        if (status == inspect::LandmarkStatus::NotFound || status == inspect::LandmarkStatus::NotObservable) {
+        if (noValue) {
             series.problem = cycleName(record) + " reports it " + std::string(enumName(*status));
             return series;
         }
@@ -118,6 +125,7 @@ LandmarkSeries seriesOf(const std::string& id, const std::vector<StudyRecord>& r
             throw InputError("", cycleName(record) + ".landmarks." + id + ".error_mm", "expected a number");
         entries.push_back(entry);
         series.serials.push_back(record.serial);
+        series.cycles.push_back(cycle);
     }
     const char* key = series.source == ValueSource::Deviation ? "deviation_mm" : "error_mm";
     for (const auto* entry : entries) series.values.push_back((*entry)[key].get<double>());
@@ -144,10 +152,10 @@ template <class T> nlohmann::json optionalJson(const std::optional<T>& v)
 
 } // namespace
 
-std::vector<LandmarkSeries> collectSeries(const std::vector<StudyRecord>& records)
+std::vector<LandmarkSeries> collectSeries(const std::vector<StudyRecord>& records, MissingValues missing)
 {
     std::vector<LandmarkSeries> out;
-    for (const auto& id : landmarkIds(records)) out.push_back(seriesOf(id, records));
+    for (const auto& id : landmarkIds(records)) out.push_back(seriesOf(id, records, missing));
     return out;
 }
 

@@ -23,14 +23,6 @@ RuleSet parseRuleSet(std::string_view text)
 
 namespace {
 
-/// |x_i − x_{i−1}| for i = 1 … n − 1.
-std::vector<double> movingRanges(std::span<const double> x)
-{
-    std::vector<double> mr;
-    for (std::size_t i = 1; i < x.size(); ++i) mr.push_back(std::abs(x[i] - x[i - 1]));
-    return mr;
-}
-
 /// Where the points lie against the baseline's centre line and σ (docs/spc.md,
 /// "Zones"): beyond kσ is strictly farther than kσ; a point on the centre line
 /// is on neither side.
@@ -159,11 +151,15 @@ std::pair<std::optional<double>, std::optional<double>> indices(const Zone& zone
     return {cp, nearest ? indexOf(*nearest, 3.0 * sigma) : std::nullopt};
 }
 
-Capability capabilityOf(const std::vector<double>& x, const Zone& zone)
+/// `points`' moving ranges are those of x, none across a gap.
+Capability capabilityOf(const std::vector<double>& x, const std::vector<SpcPoint>& points, const Zone& zone)
 {
     Capability c;
     c.mean = mean(x);
-    c.sigmaWithin = mean(movingRanges(x)) / kD2;
+    std::vector<double> ranges;
+    for (const auto& p : points)
+        if (p.movingRange) ranges.push_back(*p.movingRange);
+    c.sigmaWithin = mean(ranges) / kD2;
     c.stddev = sampleStddev(x, c.mean);
     std::tie(c.cp, c.cpk) = indices(zone, c.mean, c.sigmaWithin);
     std::tie(c.pp, c.ppk) = indices(zone, c.mean, c.stddev);
@@ -208,25 +204,39 @@ Histogram histogramOf(const std::vector<double>& x, const Zone& zone)
     return h;
 }
 
+/// The values as points, each with its cycle (its index when the series
+/// names none) and its moving range when the cycle before it has a value.
 std::vector<SpcPoint> pointsOf(const LandmarkSeries& series)
 {
     std::vector<SpcPoint> points;
+    const bool cyclesGiven = series.cycles.size() == series.values.size();
     for (std::size_t i = 0; i < series.values.size(); ++i) {
         SpcPoint p;
         p.index = i;
+        p.cycle = cyclesGiven ? series.cycles[i] : i;
         if (i < series.serials.size()) p.serial = series.serials[i];
         p.value = series.values[i];
-        if (i > 0) p.movingRange = std::abs(series.values[i] - series.values[i - 1]);
+        if (i > 0 && p.cycle == points.back().cycle + 1)
+            p.movingRange = std::abs(series.values[i] - series.values[i - 1]);
         points.push_back(std::move(p));
     }
     return points;
+}
+
+/// The moving ranges of the baseline's points (none across a gap).
+std::vector<double> baselineRanges(const SpcResult& r)
+{
+    std::vector<double> mr;
+    for (std::size_t i = 1; i < r.baselineUsed; ++i)
+        if (r.points[i].movingRange) mr.push_back(*r.points[i].movingRange);
+    return mr;
 }
 
 /// The I-MR limits from the first baselineUsed values (docs/spc.md, "Charts").
 void chartLimits(const std::vector<double>& x, SpcResult& r)
 {
     const std::span<const double> baseline(x.data(), r.baselineUsed);
-    const double mrBar = mean(movingRanges(baseline));
+    const double mrBar = mean(baselineRanges(r));
     r.sigmaWithin = mrBar / kD2;
     r.iChart.centre = mean(baseline);
     r.iChart.ucl = r.iChart.centre + 3.0 * r.sigmaWithin;
@@ -248,13 +258,19 @@ SpcResult spcOf(const LandmarkSeries& series, const SpcOptions& options)
     r.rules = options.rules;
     r.baselineRequested = options.baseline;
     r.points = pointsOf(series);
+    r.gaps = series.gaps;
     r.notEvaluated = !series.problem.empty() ? series.problem : (r.n < 2 ? "fewer than 2 values" : "");
     if (!r.notEvaluated.empty()) return r;
+    r.baselineUsed = std::min(options.baseline, r.n);
+    r.baselineShort = r.baselineUsed < options.baseline;
+    if (baselineRanges(r).empty()) {
+        r.notEvaluated = "no two values of the baseline come from consecutive cycles (a gap between each): no moving "
+                         "range to estimate sigma_within from";
+        return r;
+    }
     r.evaluated = true;
 
     const auto& x = series.values;
-    r.baselineUsed = std::min(options.baseline, r.n);
-    r.baselineShort = r.baselineUsed < options.baseline;
     chartLimits(x, r);
     for (auto& p : r.points) p.mrAboveUcl = p.movingRange && *p.movingRange > r.mrChart.ucl;
     if (r.sigmaWithin > 0.0) {
@@ -264,7 +280,7 @@ SpcResult spcOf(const LandmarkSeries& series, const SpcOptions& options)
     } else {
         r.notTested = "the baseline's values are all equal (sigma_within 0): no zones to test the points against";
     }
-    r.capability = capabilityOf(x, r.zone);
+    r.capability = capabilityOf(x, r.points, r.zone);
     r.yield = yieldOf(x, r.zone);
     r.histogram = histogramOf(x, r.zone);
     return r;
@@ -286,6 +302,7 @@ nlohmann::json number(const std::optional<double>& v)
 nlohmann::json pointJson(const SpcPoint& p)
 {
     return {{"index", p.index},
+            {"cycle", p.cycle},
             {"serial", p.serial},
             {"value_mm", number(p.value)},
             {"moving_range_mm", number(p.movingRange)},
@@ -339,6 +356,8 @@ nlohmann::json toJson(const SpcResult& r)
 {
     auto points = nlohmann::json::array();
     for (const auto& p : r.points) points.push_back(pointJson(p));
+    auto gaps = nlohmann::json::array();
+    for (const auto& g : r.gaps) gaps.push_back({{"cycle", g.cycle}, {"serial", g.serial}, {"reason", g.reason}});
     nlohmann::json j{{"id", r.id},
                      {"values", std::string(enumName(r.source))},
                      {"zone_mm", nlohmann::json::array({number(r.zone.lower), number(r.zone.upper)})},
@@ -346,7 +365,8 @@ nlohmann::json toJson(const SpcResult& r)
                      {"evaluated", r.evaluated},
                      {"not_evaluated", r.evaluated ? nlohmann::json() : nlohmann::json(r.notEvaluated)},
                      {"constants", {{"d2", kD2}, {"D4", kD4}}},
-                     {"points", points}};
+                     {"points", points},
+                     {"gaps", gaps}};
     for (const char* key : {"baseline", "i_chart", "mr_chart", "rules", "capability", "yield", "histogram"})
         j[key] = nullptr;
     if (r.evaluated) addEvaluated(r, j);

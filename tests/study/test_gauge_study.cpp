@@ -219,7 +219,7 @@ TEST(Series, AsymmetricLimitsAndMissingLandmarks)
 
 TEST(Series, GroupsByPartAndChecksTheLayout)
 {
-    LandmarkSeries s{"a", {-0.4, 0.4}, ValueSource::Deviation, {1, 2, 3, 4}, {"P", "Q", "P", "Q"}, {}};
+    LandmarkSeries s{"a", {-0.4, 0.4}, ValueSource::Deviation, {1, 2, 3, 4}, {"P", "Q", "P", "Q"}, {}, {}, {}};
     const auto parts = groupByPart(s);
     ASSERT_EQ(parts.size(), 2u);
     EXPECT_EQ(parts[0], (std::pair<std::string, std::vector<double>>{"P", {1, 3}}));

@@ -472,8 +472,8 @@ TEST(SpcJson, KeysAndValues)
     series.source = ValueSource::BracketMiddle;
     const auto j = toJson(spcOf(series, {}));
     EXPECT_EQ(keysOf(j), (std::set<std::string>{"id", "values", "zone_mm", "n", "evaluated", "not_evaluated",
-                                                "baseline", "constants", "i_chart", "mr_chart", "points", "rules",
-                                                "capability", "yield", "histogram"}));
+                                                "baseline", "constants", "i_chart", "mr_chart", "points", "gaps",
+                                                "rules", "capability", "yield", "histogram"}));
     EXPECT_EQ(j["values"], "error_mm");
     EXPECT_EQ(j["zone_mm"], (nlohmann::json{0.0, 0.3}));
     EXPECT_TRUE(j["not_evaluated"].is_null());
@@ -482,8 +482,8 @@ TEST(SpcJson, KeysAndValues)
     EXPECT_EQ(keysOf(j["i_chart"]), (std::set<std::string>{"centre_mm", "ucl_mm", "lcl_mm", "sigma_within_mm"}));
     EXPECT_NEAR(j["i_chart"]["ucl_mm"].get<double>(), 0.1761466, 1e-7);
     EXPECT_EQ(keysOf(j["mr_chart"]), (std::set<std::string>{"centre_mm", "ucl_mm", "lcl_mm"}));
-    EXPECT_EQ(keysOf(j["points"][0]),
-              (std::set<std::string>{"index", "serial", "value_mm", "moving_range_mm", "mr_above_ucl", "rules"}));
+    EXPECT_EQ(keysOf(j["points"][0]), (std::set<std::string>{"index", "cycle", "serial", "value_mm", "moving_range_mm",
+                                                             "mr_above_ucl", "rules"}));
     EXPECT_EQ(j["points"][4]["serial"], "S4");
     EXPECT_EQ(keysOf(j["rules"]), (std::set<std::string>{"set", "tested", "not_tested", "violations"}));
     EXPECT_EQ(j["rules"]["set"], "nelson");
@@ -524,6 +524,94 @@ TEST(SpcJson, NoInfiniteOrNanAnywhere)
     const auto dumped = toJson(spcOf(seriesOf(repeated(5, 0.2), {-kInf, 0.3}), {})).dump();
     EXPECT_EQ(dumped.find("inf"), std::string::npos) << dumped;
     EXPECT_EQ(dumped.find("nan"), std::string::npos) << dumped;
+}
+
+} // namespace
+} // namespace hg::study
+
+namespace hg::study {
+namespace {
+
+nlohmann::json reading(const std::string& status, double deviation)
+{
+    nlohmann::json j{{"id", "bore"}, {"status", status}, {"error_mm", deviation}, {"tolerance_mm", 0.3}};
+    if (status == "ok") j["deviation_mm"] = deviation;
+    return j;
+}
+
+/// Seven cycles S0..S6 of landmark bore: 0.10, 0.12, not_found, 0.11, 0.14,
+/// (bore not listed), 0.12 mm.
+std::vector<StudyRecord> withGaps()
+{
+    const auto one = [](double v) { return nlohmann::json::array({reading("ok", v)}); };
+    return {{1, "S0", one(0.10)}, {2, "S1", one(0.12)}, {3, "S2", nlohmann::json::array({reading("not_found", 0.0)})},
+            {4, "S3", one(0.11)}, {5, "S4", one(0.14)}, {6, "S5", nlohmann::json::array()},
+            {7, "S6", one(0.12)}};
+}
+
+TEST(SpcGaps, AStudyRefusesACycleWithoutAValueAChartShowsItAsAGap)
+{
+    const auto refused = collectSeries(withGaps());
+    ASSERT_EQ(refused.size(), 1u);
+    EXPECT_NE(refused[0].problem.find("reports it not_found"), std::string::npos) << refused[0].problem;
+
+    const auto series = collectSeries(withGaps(), MissingValues::Gap);
+    ASSERT_EQ(series.size(), 1u);
+    const auto& s = series[0];
+    EXPECT_TRUE(s.problem.empty()) << s.problem;
+    EXPECT_EQ(s.values, (std::vector<double>{0.10, 0.12, 0.11, 0.14, 0.12}));
+    EXPECT_EQ(s.cycles, (std::vector<std::size_t>{0, 1, 3, 4, 6}));
+    EXPECT_EQ(s.serials, (std::vector<std::string>{"S0", "S1", "S3", "S4", "S6"}));
+    ASSERT_EQ(s.gaps.size(), 2u);
+    EXPECT_EQ(s.gaps[0].cycle, 2u);
+    EXPECT_EQ(s.gaps[0].serial, "S2");
+    EXPECT_EQ(s.gaps[0].reason, "not_found");
+    EXPECT_EQ(s.gaps[1].cycle, 5u);
+    EXPECT_EQ(s.gaps[1].reason, "absent");
+}
+
+TEST(SpcGaps, NoMovingRangeSpansAGap)
+{
+    // Moving ranges only between neighbouring cycles: S1−S0 = 0.02, S4−S3 = 0.03
+    // (S3 follows the gap at cycle 2, S6 the gap at 5). MR̄ = 0.025,
+    // σ_within = 0.025 / 1.128 = 0.0221631, CL = (0.10 + 0.12 + 0.11 + 0.14 + 0.12) / 5 = 0.118,
+    // UCL = 0.118 + 3 · 0.0221631 = 0.1844894, LCL = 0.0515106, MR UCL = 3.267 · 0.025 = 0.081675.
+    const auto r = spcOf(collectSeries(withGaps(), MissingValues::Gap)[0], {5, RuleSet::Nelson});
+    ASSERT_TRUE(r.evaluated) << r.notEvaluated;
+    ASSERT_EQ(r.points.size(), 5u);
+    EXPECT_FALSE(r.points[0].movingRange);
+    EXPECT_NEAR(r.points[1].movingRange.value_or(-1), 0.02, 1e-12);
+    EXPECT_FALSE(r.points[2].movingRange);
+    EXPECT_NEAR(r.points[3].movingRange.value_or(-1), 0.03, 1e-12);
+    EXPECT_FALSE(r.points[4].movingRange);
+    EXPECT_EQ(r.points[2].cycle, 3u);
+    EXPECT_EQ(r.points[4].cycle, 6u);
+    EXPECT_NEAR(r.mrChart.centre, 0.025, 1e-12);
+    EXPECT_NEAR(r.sigmaWithin, 0.0221631, 1e-7);
+    EXPECT_NEAR(r.iChart.centre, 0.118, 1e-12);
+    EXPECT_NEAR(r.iChart.ucl, 0.1844894, 1e-7);
+    EXPECT_NEAR(r.iChart.lcl, 0.0515106, 1e-7);
+    EXPECT_NEAR(r.mrChart.ucl, 0.081675, 1e-9);
+    // Capability's σ_within over all values: the same two ranges.
+    EXPECT_NEAR(r.capability.sigmaWithin, 0.0221631, 1e-7);
+
+    const auto j = toJson(r);
+    ASSERT_EQ(j["gaps"].size(), 2u);
+    EXPECT_EQ(j["gaps"][0], (nlohmann::json{{"cycle", 2}, {"serial", "S2"}, {"reason", "not_found"}}));
+    EXPECT_EQ(j["points"][2]["cycle"], 3);
+    EXPECT_TRUE(j["points"][2]["moving_range_mm"].is_null());
+}
+
+TEST(SpcGaps, ABaselineWithoutNeighbouringValuesIsNotEvaluated)
+{
+    LandmarkSeries s = seriesOf({0.10, 0.12, 0.11});
+    s.cycles = {0, 2, 4};
+    s.gaps = {{1, "G1", "not_found"}, {3, "G3", "not_observable"}};
+    const auto r = spcOf(s, {3, RuleSet::Nelson});
+    EXPECT_FALSE(r.evaluated);
+    EXPECT_NE(r.notEvaluated.find("no moving range"), std::string::npos) << r.notEvaluated;
+    EXPECT_EQ(toJson(r)["gaps"].size(), 2u);
+    EXPECT_TRUE(toJson(r)["i_chart"].is_null());
 }
 
 } // namespace

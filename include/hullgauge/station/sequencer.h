@@ -156,6 +156,8 @@ constexpr auto nameTable(FaultCode)
 /// A sentence for operators ("the fixture did not reach position within the move
 /// timeout (after 2 retries)"); `retries`: the extra attempts the faulted cycle had.
 std::string describe(FaultCode c, int retries);
+/// The sentence alone, without the retries ("unknown fault" for a code not in the table).
+std::string describe(FaultCode c);
 
 /// The transition table: may the sequencer go from `from` to `to`?
 bool transitionAllowed(SequencerState from, SequencerState to);

@@ -63,6 +63,14 @@ struct StudyRecord {
     nlohmann::json landmarks; ///< the record's `landmarks_json` (array of objects)
 };
 
+/// A cycle of the selection without a value for a landmark (SPC only,
+/// docs/spc.md "Gaps"): where it is and why.
+struct SeriesGap {
+    std::size_t cycle = 0; ///< its position in the selection (0 = the oldest)
+    std::string serial;
+    std::string reason; ///< the landmark's status (`not_found`, `not_observable`), or `absent` when not listed
+};
+
 /// A landmark's measurements over the selected cycles, in cycle order.
 struct LandmarkSeries {
     std::string id;
@@ -70,16 +78,27 @@ struct LandmarkSeries {
     ValueSource source = ValueSource::Deviation;
     std::vector<double> values;
     std::vector<std::string> serials; ///< the part of each value
+    std::vector<std::size_t> cycles;  ///< the position of each value in the selection
+    std::vector<SeriesGap> gaps;      ///< the cycles without a value (only when gaps are allowed)
     /// Why the landmark cannot be studied (empty when it can): a cycle without
-    /// a value for it, a tolerance zone that changed within the selection.
+    /// a value for it (unless gaps are allowed), a tolerance zone that changed
+    /// within the selection.
     std::string problem;
 };
 
+/// How collectSeries treats a cycle without a value for a landmark.
+enum class MissingValues {
+    Refuse, ///< a problem naming the cycle: a gauge study needs every cycle
+    Gap,    ///< a gap in the series: an SPC chart shows it and goes on
+};
+
 /// Per landmark, in the order of the first record: the deviation when every
-/// record has one for that landmark, else the bracket middle. A landmark a
-/// record does not list, or lists `not_found` / `not_observable`, has a
-/// problem naming the cycle. Throws hg::InputError on malformed landmarks JSON.
-std::vector<LandmarkSeries> collectSeries(const std::vector<StudyRecord>& records);
+/// record with a value has one for that landmark, else the bracket middle. A
+/// landmark a record does not list, or lists `not_found` / `not_observable`,
+/// has a problem naming the cycle, or with MissingValues::Gap a gap there.
+/// Throws hg::InputError on malformed landmarks JSON.
+std::vector<LandmarkSeries> collectSeries(const std::vector<StudyRecord>& records,
+                                          MissingValues missing = MissingValues::Refuse);
 
 /// The acceptance limits of both studies (docs/study.md).
 struct Limits {

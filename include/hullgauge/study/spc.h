@@ -61,12 +61,15 @@ struct RuleViolation {
 };
 
 struct SpcPoint {
-    std::size_t index = 0;
+    std::size_t index = 0; ///< among the values
+    std::size_t cycle = 0; ///< among the selection's cycles, gaps included
     std::string serial;
     double value = 0.0;
-    std::optional<double> movingRange; ///< |x_i − x_{i−1}|, none for the first point
-    bool mrAboveUcl = false;           ///< movingRange > the MR chart's UCL
-    std::vector<std::string> rules;    ///< the rules this point completes
+    /// |x_i − x_{i−1}|; none for the first point and for a point right after
+    /// a gap (a range over a missing cycle is no moving range, docs/spc.md "Gaps")
+    std::optional<double> movingRange;
+    bool mrAboveUcl = false;        ///< movingRange > the MR chart's UCL
+    std::vector<std::string> rules; ///< the rules this point completes
 };
 
 /// Capability over all values; an index is absent when its σ is 0 or the
@@ -104,6 +107,7 @@ struct SpcResult {
     double sigmaWithin = 0.0;     ///< the baseline's MR̄ / d2
     ControlLimits mrChart;        ///< CL = baseline MR̄, UCL = D4 · MR̄, LCL = 0
     std::vector<SpcPoint> points;
+    std::vector<SeriesGap> gaps; ///< the cycles without a value, drawn as gaps
     RuleSet rules = RuleSet::Nelson;
     std::vector<std::string> tested; ///< the rules applied
     std::string notTested;           ///< why the rules were not applied (empty when they were)
@@ -113,9 +117,9 @@ struct SpcResult {
     Histogram histogram;
 };
 
-/// Throws hg::InputError when options.baseline < 2. A series with a problem
-/// or fewer than 2 values is not evaluated: then only its id, source, zone,
-/// n, notEvaluated and points are set.
+/// Throws hg::InputError when options.baseline < 2. A series with a problem,
+/// fewer than 2 values or no moving range in its baseline is not evaluated:
+/// then only its id, source, zone, n, notEvaluated, points and gaps are set.
 SpcResult spcOf(const LandmarkSeries& series, const SpcOptions& options);
 
 /// The JSON of docs/spc.md: missing and non-finite numbers are null.

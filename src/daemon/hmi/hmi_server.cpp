@@ -8,8 +8,10 @@
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/inspect/outcome.h"
+#include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
+#include "hullgauge/study/pareto.h"
 #include "hullgauge/study/spc.h"
 
 #include <algorithm>
@@ -73,7 +75,8 @@ json spcSeries(const fs::path& database, const httplib::Request& req)
         records.push_back({row.at("id").get<std::int64_t>(), row.value("serial", ""), std::move(row["landmarks"])});
     json ids = json::array();
     json charts = json::array();
-    for (const auto& series : study::collectSeries(records)) {
+    // A cycle without a value for a landmark is a gap in its chart, not the end of it (docs/spc.md, "Gaps").
+    for (const auto& series : study::collectSeries(records, study::MissingValues::Gap)) {
         ids.push_back(series.id);
         if (landmark.empty() || series.id == landmark) charts.push_back(study::toJson(study::spcOf(series, options)));
     }
@@ -81,6 +84,41 @@ json spcSeries(const fs::path& database, const httplib::Request& req)
         throw HttpError(404, "program " + std::to_string(*q.program) + " has no landmark '" + landmark +
                                  "' in its production cycles");
     return {{"program", *q.program}, {"cycles", records.size()}, {"landmark_ids", ids}, {"landmarks", charts}};
+}
+
+/// A Pareto counts at most this many cycles (a few MB of landmarks read at once).
+constexpr std::int64_t kMaxParetoCycles = 100000;
+
+/// The Pareto of what fails (docs/spc.md, "Pareto"): the PLC's production
+/// cycles of a period — every verdict, so faults count — optionally of one
+/// program; each fault code named.
+json paretoSeries(const fs::path& database, const httplib::Request& req)
+{
+    store::ResultQuery q;
+    if (const auto program = intParam(req, "program", 1, 65535)) q.program = static_cast<int>(*program);
+    q.purpose = "production";
+    q.manual = false;
+    if (req.has_param("since")) q.sinceMs = store::parseUtc(req.get_param_value("since"), "since");
+    if (req.has_param("until")) q.untilMs = store::parseUtc(req.get_param_value("until"), "until");
+    q.newestFirst = false;
+    const store::ResultReader reader(database);
+    if (const auto cycles = reader.count(q); cycles > kMaxParetoCycles)
+        throw HttpError(400, "the period holds " + std::to_string(cycles) + " cycles, a Pareto at most " +
+                                 std::to_string(kMaxParetoCycles) + ": narrow it (since/until, program)");
+    std::vector<study::ParetoRecord> records;
+    for (auto& row : reader.select(q))
+        records.push_back({row.at("id").get<std::int64_t>(), row.value("verdict", ""), row.value("fault_code", 0),
+                           std::move(row["landmarks"])});
+    json answer = study::toJson(study::paretoOf(records));
+    for (auto& f : answer["faults"]) {
+        const auto code = static_cast<station::FaultCode>(f["code"].get<int>());
+        f["name"] = std::string(enumName(code));
+        f["sentence"] = station::describe(code);
+    }
+    answer["program"] = q.program ? json(*q.program) : json(nullptr);
+    answer["since"] = q.sinceMs ? json(store::formatUtc(*q.sinceMs)) : json(nullptr);
+    answer["until"] = q.untilMs ? json(store::formatUtc(*q.untilMs)) : json(nullptr);
+    return answer;
 }
 
 /// A download holds at most this many cycles; `hullgauge export` has no limit.
@@ -441,6 +479,9 @@ void HmiServer::routeApi()
                  }));
     server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendJson(res, spcSeries(config()->results.database, req));
+                 }));
+    server_->Get("/api/pareto", api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendJson(res, paretoSeries(config()->results.database, req));
                  }));
     server_->Get("/api/export", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendExport(config()->results.database, req, res);

@@ -9,6 +9,7 @@
 #include "hgtest/station.h"
 #include "hmi/hmi_auth.h"
 #include "hmi/hmi_server.h"
+#include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/result_store.h"
 
 #include <arpa/inet.h>
@@ -232,6 +233,55 @@ TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)
     EXPECT_NE(getJson("/api/spc?program=1&landmark=c9", 404)["error"].get<std::string>().find("c9"), std::string::npos);
     EXPECT_NE(getJson("/api/spc?program=1&rules=shewhart", 400)["error"].get<std::string>().find("shewhart"),
               std::string::npos);
+}
+
+TEST_F(HmiServerTest, TheParetoCountsFailedLandmarksAndNamesTheFaults)
+{
+    {
+        // Rows 1..4: c2 failed in 1 and 4 (row 4's serial X). Two camera timeouts and an abort by the
+        // PLC end cycles 5..7; a master part failing c2 and a maintenance-triggered fault are left out.
+        store::ResultStore store(config->results.database);
+        for (std::uint16_t seq : {5, 6}) {
+            auto faulted = record(seq, station::Verdict::Error, "E");
+            faulted.faultCode = station::FaultCode::CameraTimeout;
+            store.commit(faulted);
+        }
+        auto aborted = record(7, station::Verdict::Aborted, "Z");
+        aborted.faultCode = station::FaultCode::AbortedByPlc;
+        store.commit(aborted);
+        auto master = record(8, station::Verdict::Fail, "M");
+        master.purpose = station::CyclePurpose::Master;
+        store.commit(master);
+        auto manual = record(9, station::Verdict::Error, "H");
+        manual.manual = true;
+        manual.faultCode = station::FaultCode::FixtureTimeout;
+        store.commit(manual);
+    }
+    start();
+    const auto p = getJson("/api/pareto?program=1");
+    EXPECT_EQ(p["cycles"], 7);
+    EXPECT_EQ(p["failed_cycles"], 2);
+    EXPECT_EQ(p["faulted_cycles"], 3);
+    ASSERT_EQ(p["landmarks"].size(), 1u);
+    EXPECT_EQ(p["landmarks"][0]["id"], "c2");
+    EXPECT_EQ(p["landmarks"][0]["count"], 2);
+    EXPECT_EQ(p["landmarks"][0]["by_status"]["out_of_tolerance"], 2);
+    ASSERT_EQ(p["faults"].size(), 2u);
+    EXPECT_EQ(p["faults"][0]["code"], 10);
+    EXPECT_EQ(p["faults"][0]["count"], 2);
+    EXPECT_EQ(p["faults"][0]["name"], "camera-timeout");
+    EXPECT_EQ(p["faults"][0]["sentence"], station::describe(station::FaultCode::CameraTimeout));
+    EXPECT_NEAR(p["faults"][0]["cumulative_share"].get<double>(), 2.0 / 3.0, 1e-12);
+    EXPECT_EQ(p["faults"][1]["code"], 40);
+    EXPECT_EQ(p["faults"][1]["name"], "aborted-by-plc");
+    // The period: rows start at 1 764 000 000 000 + seq s; from seq 4 on (2025-11-24T16:00:04Z).
+    const auto late = getJson("/api/pareto?program=1&since=2025-11-24T16:00:04");
+    EXPECT_EQ(late["cycles"], 4);
+    EXPECT_EQ(late["since"], "2025-11-24T16:00:04.000Z");
+    EXPECT_EQ(getJson("/api/pareto?program=2")["cycles"], 0);
+    EXPECT_EQ(getJson("/api/pareto")["program"], nullptr);
+    EXPECT_NE(getJson("/api/pareto?since=yesterday", 400)["error"].get<std::string>().find("since"), std::string::npos);
+    EXPECT_NE(getJson("/api/pareto?program=0", 400)["error"].get<std::string>().find("program"), std::string::npos);
 }
 
 TEST_F(HmiServerTest, TheResultsPageDownloadsItsSelection)

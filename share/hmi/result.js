@@ -9,6 +9,8 @@ async function show() {
     if (!/^[0-9]+$/.test(id || "")) throw new Error("no result id given");
     const r = await hg.get(`/api/results/${id}`);
     document.getElementById("title").textContent = `Result ${r.id}`;
+    // The printable record of this part and its PDF (docs/hmi.md, "Part record").
+    document.getElementById("record-link").href = `/record?id=${r.id}`;
     const v = document.getElementById("verdict");
     v.textContent = r.verdict.toUpperCase();
     v.className = "verdict " + r.verdict;

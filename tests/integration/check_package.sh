@@ -57,7 +57,8 @@ dpkg-deb -I "$deb" >"$scratch/info"
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
 # The libraries the daemon links, as dpkg-shlibdeps names their packages.
-for lib in libmodbus5 libsqlite3-0 libsystemd0 libyaml-cpp0.7 libstdc++6 libc6 systemd libjs-chart.js libjs-three; do
+for lib in libmodbus5 libsqlite3-0 libsystemd0 libyaml-cpp0.7 libcairo2 libstdc++6 libc6 systemd libjs-chart.js libjs-three \
+           fonts-dejavu-core; do
   check "Depends lacks $lib" grep -qE "(^|, )${lib//+/\\+}( |,|$)" <<<"$depends"
 done
 # Every file under /etc is a conffile: dpkg keeps the engineer's edits.

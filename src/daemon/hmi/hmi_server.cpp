@@ -8,6 +8,7 @@
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/inspect/outcome.h"
+#include "hullgauge/report/record_pdf.h"
 #include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
@@ -192,6 +193,33 @@ std::optional<json> storedResult(const station::DaemonConfig& cfg, const std::st
     auto row = reader.byId(std::stoll(id));
     if (!row) throw HttpError(404, "no result " + id);
     return row;
+}
+
+/// The station's name on a part record (docs/hmi.md, "Part record"): the plant
+/// link's station id when there is one, the name the plant knows it by, else the host name.
+std::string stationName(const station::DaemonConfig& cfg)
+{
+    if (cfg.mqtt.enabled && !cfg.mqtt.stationId.empty()) return cfg.mqtt.stationId;
+    char host[256] = {};
+    return ::gethostname(host, sizeof host - 1) == 0 ? std::string(host) : std::string();
+}
+
+/// The part record of a stored result as a PDF download (docs/hmi.md, "Part record"): its row and archived views.
+void sendRecordPdf(const station::DaemonConfig& cfg, const std::string& id, std::int64_t nowMs, httplib::Response& res)
+{
+    const auto row = storedResult(cfg, id);
+    fs::path folder;
+    std::vector<report::RecordView> views;
+    for (const auto& name : imagesOf(*row, cfg.results.imageDir, folder)) {
+        auto bytes = readFile(folder / name);
+        if (!bytes) throw HttpError(500, "result " + id + ": cannot read its image " + name);
+        views.push_back({name, std::vector<unsigned char>(bytes->begin(), bytes->end())});
+    }
+    std::ostringstream pdf;
+    report::writeRecordPdf(pdf, *row, views, {stationName(cfg), nowMs});
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("Content-Disposition", "attachment; filename=\"" + report::recordFileName(*row) + "\"");
+    res.set_content(pdf.str(), "application/pdf");
 }
 
 /// The station's calibrations, newest first (calib::calibrationHistory): the
@@ -419,8 +447,9 @@ void HmiServer::routePages()
 {
     // The pages: one HTML file each, their scripts and styles beside them.
     static const std::map<std::string, std::string> kPages{
-        {"/", "line.html"},   {"/results", "results.html"},         {"/result", "result.html"},
-        {"/spc", "spc.html"}, {"/maintenance", "maintenance.html"}, {"/parts", "parts.html"}};
+        {"/", "line.html"},        {"/results", "results.html"},         {"/result", "result.html"},
+        {"/spc", "spc.html"},      {"/maintenance", "maintenance.html"}, {"/parts", "parts.html"},
+        {"/record", "record.html"}};
     for (const auto& [path, file] : kPages)
         server_->Get(path, [this, file = file](const httplib::Request& req, httplib::Response& res) {
             files_.serve(req, res, config()->http.assets / file);
@@ -464,7 +493,12 @@ void HmiServer::routeApi()
                      fs::path folder;
                      (*row)["image_files"] = imagesOf(*row, cfg->results.imageDir, folder);
                      row->erase("images");
+                     (*row)["station"] = stationName(*cfg);
                      sendJson(res, *row);
+                 }));
+    server_->Get(R"(/api/results/([0-9]{1,18})/record\.pdf)",
+                 api([this](const httplib::Request& req, httplib::Response& res) {
+                     sendRecordPdf(*config(), req.matches[1].str(), clock_.wallMs(), res);
                  }));
     server_->Get(R"(/api/results/([0-9]{1,18})/images/(view_[0-9]{1,3}\.png))",
                  api([this](const httplib::Request& req, httplib::Response& res) {

@@ -42,8 +42,7 @@ TEST(Pareto, CountsFailedReadingsAndFaultsMostFirst)
     EXPECT_NEAR(p.landmarks[0].cumulativeShare, 2.0 / 5.0, 1e-12);
     EXPECT_EQ(p.landmarks[0].byStatus, (std::map<std::string, std::size_t>{{"out_of_tolerance", 2}}));
     EXPECT_EQ(p.landmarks[1].key, "B");
-    EXPECT_EQ(p.landmarks[1].byStatus,
-              (std::map<std::string, std::size_t>{{"not_found", 1}, {"out_of_tolerance", 1}}));
+    EXPECT_EQ(p.landmarks[1].byStatus, (std::map<std::string, std::size_t>{{"not_found", 1}, {"out_of_tolerance", 1}}));
     EXPECT_NEAR(p.landmarks[1].cumulativeShare, 4.0 / 5.0, 1e-12);
     EXPECT_EQ(p.landmarks[2].key, "C");
     EXPECT_NEAR(p.landmarks[2].cumulativeShare, 1.0, 1e-12);

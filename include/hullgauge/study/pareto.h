@@ -33,10 +33,10 @@ struct ParetoBar {
 
 struct Pareto {
     std::size_t cycles = 0;
-    std::size_t failedCycles = 0;       ///< verdict fail
-    std::size_t faultedCycles = 0;      ///< a fault code other than 0
-    std::vector<ParetoBar> landmarks;   ///< failed landmark readings, most first (ties by id)
-    std::vector<ParetoBar> faults;      ///< fault codes (as decimal text), most first (ties by code)
+    std::size_t failedCycles = 0;     ///< verdict fail
+    std::size_t faultedCycles = 0;    ///< a fault code other than 0
+    std::vector<ParetoBar> landmarks; ///< failed landmark readings, most first (ties by id)
+    std::vector<ParetoBar> faults;    ///< fault codes (as decimal text), most first (ties by code)
 };
 
 /// Counts every landmark entry whose status is not `ok` and every non-zero

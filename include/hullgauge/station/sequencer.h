@@ -156,6 +156,9 @@ constexpr auto nameTable(FaultCode)
 /// A sentence for operators ("the fixture did not reach position within the move
 /// timeout (after 2 retries)"); `retries`: the extra attempts the faulted cycle had.
 std::string describe(FaultCode c, int retries);
+/// What the operator does about the fault (empty for None): the line view
+/// shows it under the sentence (docs/hmi.md, "Line view").
+std::string_view faultAction(FaultCode c);
 
 /// The transition table: may the sequencer go from `from` to `to`?
 bool transitionAllowed(SequencerState from, SequencerState to);

@@ -42,28 +42,92 @@ const hg = {
     while (n >= 1024 && i < units.length - 1) { n /= 1024; i++; }
     return n.toFixed(i ? 1 : 0) + " " + units[i];
   },
-  statusClass(s) { return s === "ok" ? "status-ok" : s === "uncertain" ? "status-uncertain" : "status-bad"; },
   nav(active) {
     const pages = [["/", "Line"], ["/results", "Results"], ["/spc", "SPC"], ["/parts", "Parts"], ["/maintenance", "Maintenance"]];
     const nav = document.querySelector("nav");
     for (const [href, label] of pages)
       nav.append(hg.el("a", { href, class: href === active ? "active" : "", text: label }));
   },
-  // The landmark table of one result: status, the measured value and its zone.
+  // A time for the operator: the browser's local time with its zone ("14:03:12 CET"), the date
+  // in front when it is not today; `utc` (the store's ISO text or ms since 1970) goes in the tooltip.
+  localTime(utc) {
+    const t = typeof utc === "number" ? new Date(utc) : new Date(Date.parse(utc));
+    if (isNaN(t)) return { text: "—", title: "" };
+    const zone = new Intl.DateTimeFormat("en-GB", { timeZoneName: "short" }).formatToParts(t)
+      .find((p) => p.type === "timeZoneName").value;
+    const pad = (n) => String(n).padStart(2, "0");
+    let text = `${pad(t.getHours())}:${pad(t.getMinutes())}:${pad(t.getSeconds())} ${zone}`;
+    if (t.toDateString() !== new Date().toDateString())
+      text = `${t.getFullYear()}-${pad(t.getMonth() + 1)}-${pad(t.getDate())} ${text}`;
+    return { text, title: "UTC " + t.toISOString() };
+  },
+  // An element showing a time as localTime() does.
+  timeEl(tag, utc, attrs = {}) {
+    const t = hg.localTime(utc);
+    return hg.el(tag, { ...attrs, text: t.text, title: t.title });
+  },
+  // A landmark's status in words (docs/inspection.md, "Status" and "Decisions").
+  statusWords: {
+    ok: "in tolerance", out_of_tolerance: "out of tolerance", uncertain: "uncertain", not_found: "not found",
+    overflow: "out of range", not_observable: "not observable", not_inspected: "not inspected",
+  },
+  // Why a landmark has no sub-voxel deviation, in plain words, by its status; one table for every page.
+  noDeviationWords: {
+    not_found: "edge not found in the views",
+    overflow: "outside the measuring range",
+    not_observable: "no view sees it",
+    not_inspected: "not inspected: the inspection stopped before it",
+    ok: "no sub-voxel deviation: judged on the voxel bracket",
+    out_of_tolerance: "no sub-voxel deviation: judged on the voxel bracket",
+    uncertain: "no sub-voxel deviation: judged on the voxel bracket",
+  },
+  // The decision on a measured deviation (docs/inspection.md, "Decisions").
+  decisionWords: { conforms: "conforms", nonconforms: "does not conform", uncertain: "uncertain: conformance not proven" },
+  statusClass(s) { return s === "ok" ? "status-ok" : s === "uncertain" ? "status-uncertain" : "status-bad"; },
+  signedMm(v) { return (v >= 0 ? "+" : "-") + Math.abs(v).toFixed(4); },
+  // ONE reading per landmark (docs/hmi.md, "Landmark rows"): the deviation ± U with its decision
+  // where one was measured, else the voxel bracket of |error| with why there is no deviation.
+  // A deviation outside the bracket widened by its own width on each side is a fault of the
+  // inspection itself: the deviation is shown and the row flagged with the disagreement.
+  landmarkReading(l) {
+    const num = (v) => typeof v === "number" && isFinite(v);
+    const hasBracket = num(l.error_min_mm) && num(l.error_max_mm);
+    if (num(l.deviation_mm)) {
+      const u = num(l.uncertainty_mm) ? ` ± ${l.uncertainty_mm.toFixed(4)}` : "";
+      const r = { kind: "deviation", text: `${hg.signedMm(l.deviation_mm)}${u} mm`,
+        note: hg.decisionWords[l.decision] || l.decision || "no decision on the deviation", fault: null };
+      // The bracket is of the unsigned error (docs/inspection.md, "The boundary bracket"); only a bracket
+      // that placed the surface (not overflow, open on one side) can contradict the deviation.
+      if (hasBracket && ["ok", "out_of_tolerance", "uncertain"].includes(l.status)) {
+        const width = l.error_max_mm - l.error_min_mm;
+        const e = Math.abs(l.deviation_mm);
+        const off = e < l.error_min_mm ? l.error_min_mm - e : e > l.error_max_mm ? e - l.error_max_mm : 0;
+        if (e < l.error_min_mm - width || e > l.error_max_mm + width)
+          r.fault = `deviation and voxel bracket disagree by ${off.toFixed(4)} mm: inspection fault`;
+      }
+      return r;
+    }
+    const why = hg.noDeviationWords[l.status] || "no deviation measured";
+    if (!hasBracket) return { kind: "none", text: "no reading", note: why, fault: null };
+    return { kind: "bracket", text: `|error| in [${hg.mm(l.error_min_mm)}, ${hg.mm(l.error_max_mm)}] mm`, note: why,
+      fault: null };
+  },
+  // The landmark table of one result, the same on every page: one reading, the zone, the status in words.
   landmarkTable(landmarks, onlyFailed = false) {
     const table = hg.el("table", { class: "landmarks" });
     const head = hg.el("tr");
-    for (const h of ["Landmark", "Status", "Deviation mm", "U mm", "Error bracket mm", "Zone mm", "Decision"])
+    for (const h of ["Landmark", "Reading", "Decision or reason", "Zone mm", "Status"])
       head.append(hg.el("th", { text: h }));
     table.append(head);
     for (const l of landmarks) {
       if (onlyFailed && l.status === "ok") continue;
       const zone = l.limits_mm ? `[${hg.mm(l.limits_mm[0])}, ${hg.mm(l.limits_mm[1])}]` : `±${hg.mm(l.tolerance_mm)}`;
-      const tr = hg.el("tr", { "data-landmark": l.id });
-      tr.append(hg.el("td", { text: l.id }), hg.el("td", { class: hg.statusClass(l.status), text: l.status }),
-        hg.el("td", { class: "num", text: hg.mm(l.deviation_mm) }), hg.el("td", { class: "num", text: hg.mm(l.uncertainty_mm) }),
-        hg.el("td", { class: "num", text: `[${hg.mm(l.error_min_mm)}, ${hg.mm(l.error_max_mm)}]` }),
-        hg.el("td", { class: "num", text: zone }), hg.el("td", { text: l.decision || "" }));
+      const r = hg.landmarkReading(l);
+      const tr = hg.el("tr", { "data-landmark": l.id, "data-status": l.status, "data-reading": r.kind,
+        class: r.fault ? "inspection-fault" : "" });
+      tr.append(hg.el("td", { text: l.id }), hg.el("td", { class: "num reading", text: r.text }),
+        hg.el("td", { class: "note", text: r.fault || r.note }), hg.el("td", { class: "num", text: zone }),
+        hg.el("td", { class: "status " + hg.statusClass(l.status), text: hg.statusWords[l.status] || l.status }));
       table.append(tr);
     }
     return table;

@@ -283,7 +283,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "mqtt", "watchdog", "simulation", "workbench"});
+                        "mqtt", "watchdog", "simulation", "workbench", "shifts"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -330,6 +330,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
         n->allowOnlyKeys({"max_cycle_s"});
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);
     }
+    if (auto n = root.optional("shifts")) cfg.shifts = parseShifts(*n);
     if (auto n = root.optional("simulation")) {
         n->allowOnlyKeys({"parts", "seating"});
         auto parts = (*n)["parts"];

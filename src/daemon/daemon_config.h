@@ -14,6 +14,7 @@
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/vision/segmentation.h"
 #include "plant/mqtt_config.h"
+#include "shifts.h"
 
 #include <chrono>
 #include <cstdint>
@@ -175,6 +176,8 @@ struct DaemonConfig {
     /// The plant link (docs/mqtt.md): results, state and counters published to a broker.
     MqttConfig mqtt;
     WatchdogConfig watchdog;
+    /// The station's shifts in the order of the day (docs/daemon.md, `shifts`): the line view's shift counters.
+    std::vector<Shift> shifts = defaultShifts();
     /// Simulated line only (`camera.driver.backend: sim`): the parts the
     /// simulated camera can render, by name ("nominal" first, then defect
     /// variants), as mesh files. Empty on real hardware.

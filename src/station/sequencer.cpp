@@ -27,31 +27,62 @@ constexpr std::array<std::pair<S, S>, 28> kTransitions{{
     {S::Calibrating, S::Ready}, {S::Calibrating, S::Fault}, {S::Ready, S::Done},        {S::Done, S::Done},
 }};
 
-/// How an operator reads a fault code (docs/plc.md, "Fault codes").
+/// How an operator reads a fault code (docs/plc.md, "Fault codes") and what
+/// to do about it: the one table of these words — `hullgauge ctl status` shows
+/// the sentence, the line view (docs/hmi.md, "Line view") both.
 struct FaultSentence {
     std::string_view text;
     bool afterRetries = false; ///< the step was retried: the sentence says how often
+    std::string_view action = {};
 };
 constexpr bool kAfterRetries = true;
 
 constexpr auto kFaultSentences = std::to_array<EnumRow<FaultCode, FaultSentence>>({
     {FaultCode::None, {"no fault"}},
-    {FaultCode::CameraTimeout, {"no frame from the camera within the grab timeout", kAfterRetries}},
-    {FaultCode::CameraBadFrame, {"the camera delivered incomplete frames", kAfterRetries}},
-    {FaultCode::CameraError, {"the camera could not grab"}},
-    {FaultCode::FixtureTimeout, {"the fixture did not reach position within the move timeout", kAfterRetries}},
-    {FaultCode::FixtureFault, {"the fixture drive reports a fault that a reset did not clear"}},
-    {FaultCode::FixtureCommunication, {"the fixture does not answer"}},
-    {FaultCode::FixtureRefused, {"the fixture refused the pose (out of range or not homed)"}},
-    {FaultCode::ProgramLoad, {"the part program or its view plan could not be loaded"}},
-    {FaultCode::InspectionError, {"the inspection could not be computed"}},
+    {FaultCode::CameraTimeout,
+     {"no frame from the camera within the grab timeout", kAfterRetries,
+      "The station restarts the camera by itself. If the fault returns, check the camera's cable and power and call "
+      "maintenance."}},
+    {FaultCode::CameraBadFrame,
+     {"the camera delivered incomplete frames", kAfterRetries,
+      "The station restarts the camera by itself. If the fault returns, check the camera's network cable and call "
+      "maintenance."}},
+    {FaultCode::CameraError,
+     {"the camera could not grab", false,
+      "The station restarts the camera by itself. If the fault stays, check the camera's power and call maintenance."}},
+    {FaultCode::FixtureTimeout,
+     {"the fixture did not reach position within the move timeout", kAfterRetries,
+      "Check that nothing blocks the fixture; the station re-homes it by itself. Then inspect the part again."}},
+    {FaultCode::FixtureFault,
+     {"the fixture drive reports a fault that a reset did not clear", false,
+      "Check the fixture drive (emergency stop, overload), clear its fault, then reset the fault from the PLC."}},
+    {FaultCode::FixtureCommunication,
+     {"the fixture does not answer", false,
+      "Check the fixture drive's power and cable; the station reconnects by itself."}},
+    {FaultCode::FixtureRefused,
+     {"the fixture refused the pose (out of range or not homed)", false,
+      "The station re-homes the fixture by itself. If the fault stays, call maintenance."}},
+    {FaultCode::ProgramLoad,
+     {"the part program or its view plan could not be loaded", false,
+      "Call the manufacturing engineer: the part program cannot be used. The part was not inspected."}},
+    {FaultCode::InspectionError,
+     {"the inspection could not be computed", false,
+      "Inspect the part again. If the fault returns, set the part aside and call maintenance."}},
     {FaultCode::PartNotSeated,
-     {"the part is not seated within the part program's alignment limits: re-seat it and trigger again"}},
-    {FaultCode::AbortedByPlc, {"the PLC aborted the cycle"}},
-    {FaultCode::AbortedByShutdown, {"the daemon was stopped during the cycle"}},
-    {FaultCode::ResultStore, {"the result could not be committed to the result database"}},
-    {FaultCode::DevicesDown, {"the camera or fixture could not be started"}},
-    {FaultCode::Internal, {"internal error"}},
+     {"the part is not seated within the part program's alignment limits: re-seat it and trigger again", false,
+      "Re-seat the part in the nest and inspect it again."}},
+    {FaultCode::AbortedByPlc, {"the PLC aborted the cycle", false, "The part was not judged: inspect it again."}},
+    {FaultCode::AbortedByShutdown,
+     {"the daemon was stopped during the cycle", false,
+      "The part was not judged: inspect it again once the station is back."}},
+    {FaultCode::ResultStore,
+     {"the result could not be committed to the result database", false,
+      "Set the part aside (its result was not recorded) and call maintenance: the result disk may be full."}},
+    {FaultCode::DevicesDown,
+     {"the camera or fixture could not be started", false,
+      "Check the camera's and the fixture's power and cables; the station tries again every few seconds."}},
+    {FaultCode::Internal,
+     {"internal error", false, "Call maintenance with the time shown; the station recovers by itself."}},
 });
 
 } // namespace
@@ -84,6 +115,12 @@ std::string describe(FaultCode c, int retries)
                                      : retries == 1 ? " (after one retry)"
                                                     : " (after " + std::to_string(retries) + " retries)";
     return std::string(sentence->text) + afterRetries;
+}
+
+std::string_view faultAction(FaultCode c)
+{
+    const std::optional<FaultSentence> sentence = mapEnum<kFaultSentences>(c);
+    return sentence ? sentence->action : std::string_view("Call maintenance: the station reports an unknown fault.");
 }
 
 CaptureSequencer::CaptureSequencer(int retries, std::chrono::milliseconds recoveryRetry, TransitionCheck allowed)

@@ -131,8 +131,6 @@ def line_view_cycles(driver, url, client, sock, db, cycles, screenshots):
         check(row["verdict"] == ("fail" if bad else "pass"), f"cycle {serial}: verdict {row['verdict']}")
         if bad:
             failed_part(driver, row, serial)
-        if screenshots and i == cycles - 1:
-            driver.save_screenshot(str(screenshots / "hmi-line.png"))
     plc_counters(driver, client)
     return latencies, seq
 
@@ -184,7 +182,7 @@ def search_and_result(driver, url, db, serial, screenshots):
     WebDriverWait(driver, 30).until(
         lambda d: len(texts(d, "#landmarks tr[data-landmark]")) == len(landmarks))
     statuses = dict(zip(texts(driver, "#landmarks tr[data-landmark]", "data-landmark"),
-                        texts(driver, "#landmarks tr[data-landmark] td:nth-child(2)")))
+                        texts(driver, "#landmarks tr[data-landmark]", "data-status")))
     check(statuses == {l["id"]: l["status"] for l in landmarks}, f"result {row['id']}: statuses shown {statuses}")
     if screenshots:
         WebDriverWait(driver, 30).until(lambda d: d.execute_script(

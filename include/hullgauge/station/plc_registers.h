@@ -105,6 +105,17 @@ inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
 /// Maintenance (5) is an extension: a calibration runs from the maintenance
 /// socket; triggers are refused as not ready.
 enum class PlcStatus : std::uint16_t { Ready = 0, Busy = 1, Done = 2, Fault = 3, Starting = 4, Maintenance = 5 };
+/// The names docs/plc.md gives the STATUS values (the line view shows them, docs/hmi.md).
+constexpr auto nameTable(PlcStatus)
+{
+    using enum PlcStatus;
+    return std::to_array<EnumName<PlcStatus>>({{Ready, "ready"},
+                                               {Busy, "busy"},
+                                               {Done, "done"},
+                                               {Fault, "fault"},
+                                               {Starting, "starting"},
+                                               {Maintenance, "maintenance"}});
+}
 /// RESULT register values (docs/contracts.md §6).
 enum class PlcResult : std::uint16_t { None = 0, Pass = 1, Fail = 2, Aborted = 3 };
 /// COMMAND register values (extension). ResetCounters acts in the write itself.

@@ -158,6 +158,9 @@ constexpr auto nameTable(FaultCode)
 std::string describe(FaultCode c, int retries);
 /// The sentence alone, without the retries ("unknown fault" for a code not in the table).
 std::string describe(FaultCode c);
+/// What the operator does about the fault (empty for None): the line view
+/// shows it under the sentence (docs/hmi.md, "Line view").
+std::string_view faultAction(FaultCode c);
 
 /// The transition table: may the sequencer go from `from` to `to`?
 bool transitionAllowed(SequencerState from, SequencerState to);

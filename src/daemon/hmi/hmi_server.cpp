@@ -9,6 +9,7 @@
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/inspect/outcome.h"
 #include "hullgauge/report/record_pdf.h"
+#include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
@@ -164,6 +165,53 @@ json summary(const json& row)
     return s;
 }
 
+/// The fault the operator reads on the line view (docs/hmi.md, "Line view"): the
+/// station's own while it is in fault, else the FAULT_CODE the PLC reads with
+/// the last result (docs/plc.md, "Fault codes"); sentence and action from the
+/// one table of them (station::describe, station::faultAction).
+json faultOf(const json& status, int retries)
+{
+    const json& sequencer = status.contains("sequencer") ? status["sequencer"] : json::object();
+    const json& plc = status.contains("plc") ? status["plc"] : json::object();
+    const bool inFault = sequencer.contains("fault_code");
+    const int code = inFault ? sequencer["fault_code"].get<int>() : plc.value("fault_code", 0);
+    const auto fault = static_cast<station::FaultCode>(code);
+    // The sequencer's sentence counts the retries its cycle had; the register's, the configured ones.
+    const auto sentence = inFault && sequencer.contains("fault") ? sequencer["fault"].get<std::string>()
+                                                                 : station::describe(fault, retries);
+    return {{"code", code},
+            {"name", std::string(enumName(fault))},
+            {"sentence", sentence},
+            {"action", std::string(station::faultAction(fault))},
+            {"source", inFault     ? "station"
+                       : code != 0 ? "last_result"
+                                   : "none"}};
+}
+
+/// The current shift's production (docs/hmi.md, "Line view"): the PLC-triggered
+/// production cycles that started since the shift began, by verdict; the yield
+/// is pass / (pass + fail), null before the first judged part.
+json shiftOf(const station::DaemonConfig& cfg, std::int64_t nowUnixMs, const station::UtcOffset& offset)
+{
+    const auto window = station::currentShift(cfg.shifts, nowUnixMs, offset);
+    const store::ResultReader reader(cfg.results.database);
+    store::ResultQuery q;
+    q.purpose = "production";
+    q.manual = false;
+    q.sinceMs = window.startUnixMs;
+    json shift{{"name", cfg.shifts[window.index].name},
+               {"started_utc", store::formatUtc(window.startUnixMs)},
+               {"started_unix_ms", window.startUnixMs},
+               {"cycles", reader.count(q)}};
+    for (const char* verdict : {"pass", "fail", "aborted", "error"}) {
+        q.verdicts = {verdict};
+        shift[verdict] = reader.count(q);
+    }
+    const auto judged = shift["pass"].get<std::int64_t>() + shift["fail"].get<std::int64_t>();
+    shift["yield"] = judged ? json(double(shift["pass"].get<std::int64_t>()) / double(judged)) : json();
+    return shift;
+}
+
 /// The annotated pictures of an archived part (view_<k>.png), when its folder
 /// lies inside the configured image folder; never a path the row could name outside it.
 std::vector<std::string> imagesOf(const json& row, const fs::path& imageRoot, fs::path& folder)
@@ -311,8 +359,9 @@ class GatedHttpServer : public httplib::Server {
 };
 
 HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock,
-                     SnapshotSource snapshots)
+                     SnapshotSource snapshots, station::UtcOffset utcOffset)
     : config_(std::move(config)), mailbox_(mailbox), clock_(clock), snapshots_(std::move(snapshots)),
+      utcOffset_(utcOffset ? std::move(utcOffset) : station::UtcOffset(station::localUtcOffset)),
       sessions_(config_->http.sessionIdle, clock),
       limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
       // Guessing the password: five tries at once, then one every 12 s per address.
@@ -616,7 +665,8 @@ Sessions::Session HmiServer::signedIn(const httplib::Request& req)
 }
 
 // The line view's data: the daemon's status (at most ten asks a second of the
-// main loop however many pages poll), the newest result and the disk.
+// main loop however many pages poll), the newest result, the disk, the fault in
+// words, the PLC status's name and the current shift's counts (docs/hmi.md).
 json HmiServer::status()
 {
     std::lock_guard lock(cacheMutex_);
@@ -631,6 +681,13 @@ json HmiServer::status()
         const auto rows = reader.select(newest);
         (*answer)["last_result"] = rows.empty() ? json() : summary(rows.front());
         (*answer)["disk"] = disk(*cfg);
+        (*answer)["fault"] = faultOf(*answer, cfg->sequencer.retries);
+        const auto wallMs =
+            std::chrono::duration_cast<std::chrono::milliseconds>(clock_.wallNow().time_since_epoch()).count();
+        (*answer)["shift"] = shiftOf(*cfg, wallMs, utcOffset_);
+        if (answer->contains("plc") && (*answer)["plc"].contains("status"))
+            (*answer)["plc"]["status_name"] =
+                std::string(enumName(static_cast<station::PlcStatus>((*answer)["plc"]["status"].get<int>())));
         answer->erase("pid");
         answer->erase("config");
         statusCache_ = std::move(*answer);

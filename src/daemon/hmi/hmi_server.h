@@ -45,9 +45,10 @@ class HmiServer {
 
     /// Binds the configured address (throws hg::FaultError naming it when it
     /// cannot) and starts serving. `config` is the running configuration;
-    /// `snapshots` gives the maintenance page its camera frame (none: 404).
+    /// `snapshots` gives the maintenance page its camera frame (none: 404);
+    /// `utcOffset` the station's zone for the shifts (none: the machine's, station::localUtcOffset).
     HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox,
-              Clock& clock = Clock::steady(), SnapshotSource snapshots = {});
+              Clock& clock = Clock::steady(), SnapshotSource snapshots = {}, station::UtcOffset utcOffset = {});
     ~HmiServer();
     HmiServer(const HmiServer&) = delete;
     HmiServer& operator=(const HmiServer&) = delete;
@@ -74,6 +75,7 @@ class HmiServer {
     CommandMailbox& mailbox_;
     Clock& clock_;
     SnapshotSource snapshots_;
+    station::UtcOffset utcOffset_;
     Sessions sessions_;
     RateLimiter limiter_;
     RateLimiter signIns_;

@@ -10,6 +10,7 @@
 #include "hmi/hmi_auth.h"
 #include "hmi/hmi_server.h"
 #include "hullgauge/station/sequencer.h"
+#include "hullgauge/store/result_reader.h"
 #include "hullgauge/store/result_store.h"
 
 #include <arpa/inet.h>
@@ -71,6 +72,12 @@ class FakeLoop {
         std::lock_guard lock(mutex_);
         return commands_;
     }
+    /// What `status` answers from now on.
+    void setStatus(json status)
+    {
+        std::lock_guard lock(mutex_);
+        status_ = std::move(status);
+    }
 
   private:
     void run()
@@ -84,12 +91,7 @@ class FakeLoop {
     {
         std::lock_guard lock(mutex_);
         commands_.push_back(request);
-        if (request.at("command") == "status")
-            return {{"ok", true},
-                    {"pid", 1},
-                    {"sequencer", {{"state", "ready"}, {"cycles", 3}, {"faults", 0}}},
-                    {"plc", {{"status", 1}, {"done_seq", 3}}},
-                    {"lamps", {{"green", "on"}, {"amber", "off"}, {"red", "off"}}}};
+        if (request.at("command") == "status") return status_;
         return {{"ok", true}, {"did", request.at("command")}};
     }
 
@@ -97,6 +99,11 @@ class FakeLoop {
     std::atomic<bool> stop_{false};
     std::mutex mutex_;
     std::vector<json> commands_;
+    json status_{{"ok", true},
+                 {"pid", 1},
+                 {"sequencer", {{"state", "ready"}, {"cycles", 3}, {"faults", 0}}},
+                 {"plc", {{"status", 1}, {"done_seq", 3}}},
+                 {"lamps", {{"green", "on"}, {"amber", "off"}, {"red", "off"}}}};
     std::thread thread_;
 };
 
@@ -129,7 +136,7 @@ class HmiServerTest : public ::testing::Test {
     {
         auto cfg = std::make_shared<station::DaemonConfig>(*config);
         if (tweak) tweak(*cfg);
-        server = std::make_unique<HmiServer>(cfg, mailbox, clock, std::move(snapshots));
+        server = std::make_unique<HmiServer>(cfg, mailbox, clock, std::move(snapshots), utcOffset);
         loop = std::make_unique<FakeLoop>(mailbox);
         client = std::make_unique<httplib::Client>("127.0.0.1", server->port());
         client->set_read_timeout(10, 0);
@@ -157,6 +164,8 @@ class HmiServerTest : public ::testing::Test {
     std::shared_ptr<const station::DaemonConfig> config;
     ManualClock clock;
     CommandMailbox mailbox;
+    /// The station's zone for the shifts: none is the machine's; a test that counts a shift sets one.
+    station::UtcOffset utcOffset;
     std::unique_ptr<HmiServer> server;
     std::unique_ptr<FakeLoop> loop;
     std::unique_ptr<httplib::Client> client;
@@ -194,6 +203,69 @@ TEST_F(HmiServerTest, TheApiAnswersFromTheStoreAndTheMainLoop)
     EXPECT_EQ(png->status, 200);
     EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
     EXPECT_EQ(png->body.substr(1, 3), "PNG");
+}
+
+// The line view's words and counts (docs/hmi.md, "Line view"): the fault with
+// its sentence and action from the daemon's one table, the PLC status by its
+// name, and the current shift's production cycles counted from the store — in
+// a zone one hour east of UTC, whatever the machine's.
+TEST_F(HmiServerTest, TheStatusNamesTheFaultAndCountsTheCurrentShift)
+{
+    const auto at = [](const char* utc) { return store::parseUtc(utc, "test"); };
+    {
+        store::ResultStore store(config->results.database);
+        const auto commit = [&](std::uint16_t seq, station::Verdict verdict, const char* utc,
+                                std::function<void(station::InspectionRecord&)> tweak = {}) {
+            auto r = record(seq, verdict, "S-" + std::to_string(seq));
+            r.startedUnixMs = at(utc);
+            if (tweak) tweak(r);
+            store.commit(r);
+        };
+        commit(10, station::Verdict::Pass, "2026-03-02T04:59:59"); // the night before (local 05:59:59)
+        commit(11, station::Verdict::Pass, "2026-03-02T05:00:00"); // the early shift's first second
+        commit(12, station::Verdict::Fail, "2026-03-02T06:00:00");
+        commit(13, station::Verdict::Aborted, "2026-03-02T07:00:00");
+        commit(14, station::Verdict::Error, "2026-03-02T07:10:00");
+        commit(15, station::Verdict::Pass, "2026-03-02T07:20:00", [](auto& r) { r.manual = true; });
+        commit(16, station::Verdict::Fail, "2026-03-02T07:30:00",
+               [](auto& r) { r.purpose = station::CyclePurpose::Master; });
+    }
+    utcOffset = [](std::int64_t) { return std::int64_t{3600}; };
+    start([](station::DaemonConfig& c) { c.shifts = {{"early", 6 * 60}, {"late", 14 * 60}, {"night", 22 * 60}}; });
+    loop->setStatus({{"ok", true},
+                     {"sequencer", {{"state", "fault"}, {"fault_code", 21}, {"fault", "the drive says no"}}},
+                     {"plc", {{"status", 3}, {"fault_code", 0}}}});
+
+    // The manual clock reads 2026-03-02T08:00Z: 09:00 local, the early shift since 05:00Z.
+    auto status = getJson("/api/status");
+    EXPECT_EQ(status["plc"]["status_name"], "fault");
+    EXPECT_EQ(status["fault"]["code"], 21);
+    EXPECT_EQ(status["fault"]["name"], "fixture-fault");
+    EXPECT_EQ(status["fault"]["sentence"], "the drive says no"); // the sequencer's, counting its cycle's retries
+    EXPECT_EQ(status["fault"]["action"], std::string(station::faultAction(station::FaultCode::FixtureFault)));
+    EXPECT_EQ(status["fault"]["source"], "station");
+    const auto& shift = status["shift"];
+    EXPECT_EQ(shift["name"], "early");
+    EXPECT_EQ(shift["started_utc"], "2026-03-02T05:00:00.000Z");
+    EXPECT_EQ(shift["cycles"], 4); // neither the manual nor the master cycle, nor the one before 05:00Z
+    EXPECT_EQ(shift["pass"], 1);
+    EXPECT_EQ(shift["fail"], 1);
+    EXPECT_EQ(shift["aborted"], 1);
+    EXPECT_EQ(shift["error"], 1);
+    EXPECT_DOUBLE_EQ(shift["yield"].get<double>(), 0.5);
+
+    // The last result's fault code when the station itself is not in fault; 22:30 local is the night shift.
+    loop->setStatus({{"ok", true}, {"sequencer", {{"state", "done"}}}, {"plc", {{"status", 2}, {"fault_code", 32}}}});
+    clock.advance(std::chrono::hours(13) + std::chrono::minutes(30));
+    status = getJson("/api/status");
+    EXPECT_EQ(status["plc"]["status_name"], "done");
+    EXPECT_EQ(status["fault"]["name"], "part-not-seated");
+    EXPECT_EQ(status["fault"]["source"], "last_result");
+    EXPECT_EQ(status["fault"]["sentence"], station::describe(station::FaultCode::PartNotSeated, 1));
+    EXPECT_EQ(status["shift"]["name"], "night");
+    EXPECT_EQ(status["shift"]["started_utc"], "2026-03-02T21:00:00.000Z");
+    EXPECT_EQ(status["shift"]["cycles"], 0);
+    EXPECT_TRUE(status["shift"]["yield"].is_null());
 }
 
 TEST_F(HmiServerTest, SpcChartsThePlcsProductionCyclesOldestFirst)

@@ -86,31 +86,38 @@ const hg = {
   statusClass(s) { return s === "ok" ? "status-ok" : s === "uncertain" ? "status-uncertain" : "status-bad"; },
   signedMm(v) { return (v >= 0 ? "+" : "-") + Math.abs(v).toFixed(4); },
   // ONE reading per landmark (docs/hmi.md, "Landmark rows"): the deviation ± U with its decision
-  // where one was measured, else the voxel bracket of |error| with why there is no deviation.
-  // A deviation outside the bracket widened by its own width on each side is a fault of the
-  // inspection itself: the deviation is shown and the row flagged with the disagreement.
+  // where the deviation decided the landmark, else the voxel bracket of |error| with why there is no
+  // decision on a deviation. Where both exist and disagree by more than the bracket's width — a
+  // deviation outside the bracket widened by its own width on each side — that is a fault of the
+  // inspection itself, named in the row: never two readings side by side as if both held.
   landmarkReading(l) {
     const num = (v) => typeof v === "number" && isFinite(v);
     const hasBracket = num(l.error_min_mm) && num(l.error_max_mm);
-    if (num(l.deviation_mm)) {
+    // The bracket is of the unsigned error (docs/inspection.md, "The boundary bracket"); an overflow's is
+    // open above (its upper end only the layers' reach).
+    const disagreement = () => {
+      if (!hasBracket || !num(l.deviation_mm)) return null;
+      const width = l.error_max_mm - l.error_min_mm, e = Math.abs(l.deviation_mm);
+      if (e < l.error_min_mm - width) return l.error_min_mm - e;
+      if (l.status !== "overflow" && e > l.error_max_mm + width) return e - l.error_max_mm;
+      return null;
+    };
+    const bracketText = () => `|error| in [${hg.mm(l.error_min_mm)}, ${hg.mm(l.error_max_mm)}] mm`;
+    const placed = ["ok", "out_of_tolerance", "uncertain"].includes(l.status);
+    if (num(l.deviation_mm) && placed) {
       const u = num(l.uncertainty_mm) ? ` ± ${l.uncertainty_mm.toFixed(4)}` : "";
-      const r = { kind: "deviation", text: `${hg.signedMm(l.deviation_mm)}${u} mm`,
-        note: hg.decisionWords[l.decision] || l.decision || "no decision on the deviation", fault: null };
-      // The bracket is of the unsigned error (docs/inspection.md, "The boundary bracket"); only a bracket
-      // that placed the surface (not overflow, open on one side) can contradict the deviation.
-      if (hasBracket && ["ok", "out_of_tolerance", "uncertain"].includes(l.status)) {
-        const width = l.error_max_mm - l.error_min_mm;
-        const e = Math.abs(l.deviation_mm);
-        const off = e < l.error_min_mm ? l.error_min_mm - e : e > l.error_max_mm ? e - l.error_max_mm : 0;
-        if (e < l.error_min_mm - width || e > l.error_max_mm + width)
-          r.fault = `deviation and voxel bracket disagree by ${off.toFixed(4)} mm: inspection fault`;
-      }
-      return r;
+      const off = disagreement();
+      return { kind: "deviation", text: `${hg.signedMm(l.deviation_mm)}${u} mm`,
+        note: hg.decisionWords[l.decision] || l.decision || "no decision on the deviation",
+        fault: off === null ? null
+          : `the voxel bracket ${bracketText()} disagrees with the deviation by ${off.toFixed(4)} mm: inspection fault` };
     }
     const why = hg.noDeviationWords[l.status] || "no deviation measured";
     if (!hasBracket) return { kind: "none", text: "no reading", note: why, fault: null };
-    return { kind: "bracket", text: `|error| in [${hg.mm(l.error_min_mm)}, ${hg.mm(l.error_max_mm)}] mm`, note: why,
-      fault: null };
+    const off = disagreement();
+    return { kind: "bracket", text: bracketText(), note: why,
+      fault: off === null ? null
+        : `the sub-voxel deviation ${hg.signedMm(l.deviation_mm)} mm disagrees with the voxel bracket by ${off.toFixed(4)} mm: inspection fault` };
   },
   // The landmark table of one result, the same on every page: one reading, the zone, the status in words.
   landmarkTable(landmarks, onlyFailed = false) {

@@ -1,14 +1,11 @@
 // The part record (docs/hmi.md, "Part record"): one inspected part on a page
 // made for printing — the facts, the release it was judged with, the verdict,
 // every landmark and the annotated views — with the station's PDF of the same
-// record (GET /api/results/{id}/record.pdf). The words for statuses and
-// decisions are the PDF's (src/report/record_pdf.cpp).
+// record (GET /api/results/{id}/record.pdf). The landmark rows follow the
+// rule every page shares (docs/hmi.md, "Landmark rows"; hg.landmarkReading).
 "use strict";
 hg.nav("/results");
 
-const statusWords = { ok: "ok", out_of_tolerance: "out of tolerance", overflow: "out of range",
-  not_found: "not found", not_observable: "not observable", not_inspected: "not inspected", uncertain: "uncertain" };
-const decisionWords = { conforms: "conforms", nonconforms: "does not conform", uncertain: "undecided" };
 
 // What the test reads: the result shown, once everything is on the page.
 window.hgRecord = { shown: null };
@@ -54,29 +51,25 @@ function alignment(a) {
   document.getElementById("alignment-section").hidden = false;
 }
 
-// Every landmark: status in words, deviation with its U, the zone, the decision; the voxel
-// bracket only where no deviation was measured (docs/inspection.md, "Sub-voxel deviation").
+// Every landmark with one reading (docs/hmi.md, "Landmark rows", the rule every page shares):
+// its deviation with U and decision, or its voxel bracket with why, and an inspection fault named.
 function landmarkTable(landmarks) {
   const table = hg.el("table", { class: "landmarks" });
   const head = hg.el("tr");
-  for (const [h, cls] of [["Landmark", ""], ["Status", ""], ["Deviation mm", "num"], ["U mm", "num"], ["Zone mm", ""],
-    ["Decision", ""], ["Bracket mm", ""]])
+  for (const [h, cls] of [["Landmark", ""], ["Status", ""], ["Reading", "num"], ["Decision or reason", ""], ["Zone mm", "num"]])
     head.append(hg.el("th", { class: cls, text: h }));
   table.append(hg.el("thead", {}, head));
   const body = hg.el("tbody");
   for (const l of landmarks) {
-    const measured = typeof l.deviation_mm === "number";
+    const r = hg.landmarkReading(l);
     const zone = l.limits_mm ? `[${hg.mm(l.limits_mm[0])}, ${hg.mm(l.limits_mm[1])}]` : `±${hg.mm(l.tolerance_mm)}`;
-    const bracket = measured || (l.error_min_mm == null && l.error_max_mm == null) ? ""
-      : `[${hg.mm(l.error_min_mm)}, ${hg.mm(l.error_max_mm)}]`;
-    const tr = hg.el("tr", { "data-landmark": l.id, "data-status": l.status });
+    const tr = hg.el("tr", { "data-landmark": l.id, "data-status": l.status, "data-reading": r.kind,
+      class: r.fault ? "inspection-fault" : "" });
     tr.append(hg.el("td", { text: l.id }),
-      hg.el("td", { class: hg.statusClass(l.status), text: statusWords[l.status] || l.status }),
-      hg.el("td", { class: "num", text: measured ? hg.mm(l.deviation_mm) : "" }),
-      hg.el("td", { class: "num", text: measured ? hg.mm(l.uncertainty_mm) : "" }),
-      hg.el("td", { class: "num", text: zone }),
-      hg.el("td", { text: l.decision ? decisionWords[l.decision] || l.decision : "" }),
-      hg.el("td", { class: "num", text: bracket }));
+      hg.el("td", { class: hg.statusClass(l.status), text: hg.statusWords[l.status] || l.status }),
+      hg.el("td", { class: "num", text: r.text }),
+      hg.el("td", { text: r.fault || r.note }),
+      hg.el("td", { class: "num", text: zone }));
     body.append(tr);
   }
   table.append(body);

@@ -218,10 +218,26 @@ std::string zoneText(const Landmark& l)
     return l.limits ? "[" + mm(l.limits->first) + ", " + mm(l.limits->second) + "]" : "±" + mm(l.tolerance);
 }
 
-/// The voxel bracket, only where no deviation was measured (docs/inspection.md, "Sub-voxel deviation").
+/// Whether the landmark is read by its deviation (docs/hmi.md, "Landmark rows"): measured, and its
+/// bracket placed the surface (ok, out of tolerance, uncertain); otherwise by its voxel bracket.
+bool readByDeviation(const Landmark& l)
+{
+    return l.deviation && (l.status == "ok" || l.status == "out_of_tolerance" || l.status == "uncertain");
+}
+
+/// Whether the deviation and the bracket of |error| disagree by more than the bracket's width — a fault
+/// of the inspection itself (docs/hmi.md, "Landmark rows"); an overflow's bracket is open above.
+bool inspectionFault(const Landmark& l)
+{
+    if (!l.deviation || !l.bracketMin || !l.bracketMax) return false;
+    const double width = *l.bracketMax - *l.bracketMin, e = std::abs(*l.deviation);
+    return e < *l.bracketMin - width || (l.status != "overflow" && e > *l.bracketMax + width);
+}
+
+/// The voxel bracket where the bracket reads the landmark, or where it contradicts the deviation.
 std::string bracketText(const Landmark& l)
 {
-    if (l.deviation || (!l.bracketMin && !l.bracketMax)) return "";
+    if ((readByDeviation(l) && !inspectionFault(l)) || (!l.bracketMin && !l.bracketMax)) return "";
     return "[" + mm(l.bracketMin) + ", " + mm(l.bracketMax) + "]";
 }
 
@@ -464,10 +480,12 @@ void RecordLayout::landmarkRow(const Landmark& l)
     const bool bad = l.status != "ok";
     const std::string cells[] = {l.id,
                                  statusWords(l.status),
-                                 l.deviation ? mm(l.deviation) : "",
-                                 l.deviation ? mm(l.uncertainty) : "",
+                                 readByDeviation(l) ? mm(l.deviation) : "",
+                                 readByDeviation(l) ? mm(l.uncertainty) : "",
                                  zoneText(l),
-                                 l.decision.empty() ? "" : decisionWords(l.decision),
+                                 inspectionFault(l)                          ? "inspection fault"
+                                 : readByDeviation(l) && !l.decision.empty() ? decisionWords(l.decision)
+                                                                             : "",
                                  bracketText(l)};
     for (std::size_t i = 0; i < std::size(kColumns); ++i) {
         const auto& c = kColumns[i];

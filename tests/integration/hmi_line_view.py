@@ -220,20 +220,32 @@ def landmark_rows(driver, url, db):
     shown = driver.execute_script(
         "return [...document.querySelectorAll('#landmarks tr[data-landmark]')].map(r => ({id: r.dataset.landmark,"
         " status: r.dataset.status, kind: r.dataset.reading, readings: r.querySelectorAll('td.reading').length,"
-        " reading: r.querySelector('td.reading').textContent, note: r.querySelector('td.note').textContent}))")
+        " reading: r.querySelector('td.reading').textContent, note: r.querySelector('td.note').textContent,"
+        " fault: r.classList.contains('inspection-fault')}))")
     by_id = {l["id"]: l for l in landmarks}
     for row in shown:
         l = by_id[row["id"]]
         both = "±" in row["reading"] and "[" in row["reading"]
         check(row["readings"] == 1 and not both, f"landmark {row['id']}: readings {row['readings']}: {row['reading']!r}")
         check(row["status"] == l["status"], f"landmark {row['id']}: status {row['status']}, stored {l['status']}")
-        if "deviation_mm" in l and l["deviation_mm"] is not None:
-            check(row["kind"] == "deviation" and f"{abs(l['deviation_mm']):.4f}" in row["reading"],
-                  f"landmark {row['id']}: shows {row['reading']!r}, stored deviation {l['deviation_mm']}")
-        if l["status"] == "not_found" and l.get("deviation_mm") is None:
-            want = f"[{l['error_min_mm']:.4f}, {l['error_max_mm']:.4f}]"
-            check(row["kind"] == "bracket" and want in row["reading"] and row["note"] == "edge not found in the views",
-                  f"not_found landmark {row['id']}: shows {row['reading']!r} / {row['note']!r}")
+        deviation = l.get("deviation_mm")
+        bracket = l.get("error_min_mm"), l.get("error_max_mm")
+        if deviation is not None and l["status"] in ("ok", "out_of_tolerance", "uncertain"):
+            check(row["kind"] == "deviation" and f"{abs(deviation):.4f}" in row["reading"],
+                  f"landmark {row['id']}: shows {row['reading']!r}, stored deviation {deviation}")
+        elif None not in bracket:
+            want = f"[{bracket[0]:.4f}, {bracket[1]:.4f}]"
+            check(row["kind"] == "bracket" and want in row["reading"],
+                  f"{l['status']} landmark {row['id']}: shows {row['reading']!r}, stored bracket {want}")
+            if l["status"] == "not_found":
+                check("edge not found in the views" in row["note"] or "inspection fault" in row["note"],
+                      f"not_found landmark {row['id']}: says {row['note']!r}")
+            if deviation is not None:
+                # The bracket of |error| widened by its width on each side (open above for an overflow).
+                width, e = bracket[1] - bracket[0], abs(deviation)
+                apart = e < bracket[0] - width or (l["status"] != "overflow" and e > bracket[1] + width)
+                check(apart == ("inspection fault" in row["note"] and row["fault"]),
+                      f"landmark {row['id']}: deviation {deviation} against {want}: the row says {row['note']!r}")
     print(f"result {rid}: {len(shown)} landmark rows, kinds "
           f"{sorted({r['kind'] for r in shown})}, statuses {sorted({r['status'] for r in shown})}", flush=True)
 

@@ -89,10 +89,18 @@ def record_page(driver, url, row):
     landmarks = json.loads(row["landmarks_json"])
     shown = list(zip(texts(driver, "#landmarks tbody tr", "data-landmark"),
                      texts(driver, "#landmarks tbody tr", "data-status"),
-                     texts(driver, "#landmarks tbody tr td:nth-child(3)"),
-                     texts(driver, "#landmarks tbody tr td:nth-child(4)")))
-    expected = [(l["id"], l["status"], f"{l['deviation_mm']:.4f}" if l.get("deviation_mm") is not None else "",
-                 f"{l['uncertainty_mm']:.4f}" if l.get("deviation_mm") is not None else "") for l in landmarks]
+                     texts(driver, "#landmarks tbody tr td:nth-child(3)")))
+
+    def reading(l):
+        """docs/hmi.md, "Landmark rows": the deviation ± U where it decided the landmark, else the bracket."""
+        if l.get("deviation_mm") is not None and l["status"] in ("ok", "out_of_tolerance", "uncertain"):
+            d = l["deviation_mm"]
+            return f"{'+' if d >= 0 else '-'}{abs(d):.4f} ± {l['uncertainty_mm']:.4f} mm"
+        if l.get("error_min_mm") is not None and l.get("error_max_mm") is not None:
+            return f"|error| in [{l['error_min_mm']:.4f}, {l['error_max_mm']:.4f}] mm"
+        return "no reading"
+
+    expected = [(l["id"], l["status"], reading(l)) for l in landmarks]
     check(shown == expected, f"record {rid}: landmark rows {shown}, stored {expected}")
     check(any(l["status"] != "ok" for l in landmarks), f"record {rid}: the defective part has no failed landmark")
     views = sorted(p.name for p in Path(row["images_dir"]).glob("view_*.png")) if row["images_dir"] else []

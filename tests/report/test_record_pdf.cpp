@@ -122,6 +122,43 @@ TEST(RecordPdf, HoldsTheFactsEveryLandmarkAndTheView)
     EXPECT_EQ(views, 1) << images.out;
 }
 
+TEST(RecordPdf, ALandmarkTheBracketCouldNotPlaceIsReadByItsBracketAndAContradictionIsNamed)
+{
+    // docs/hmi.md, "Landmark rows": a not-found corner whose sub-voxel gauge still reported −0.2260 mm
+    // against a bracket of |error| in [0.9756, 1.0976] (width 0.1220): 0.2260 < 0.9756 − 0.1220, a fault
+    // of the inspection. The row shows the bracket and names the fault, never the deviation as a reading;
+    // an overflow 0.01 mm below its open bracket's lower end is no contradiction.
+    hgtest::TempDir dir;
+    auto row = failedRow();
+    row["landmarks"].push_back({{"id", "tall_corner"},
+                                {"status", "not_found"},
+                                {"error_min_mm", 0.9756},
+                                {"error_max_mm", 1.0976},
+                                {"tolerance_mm", 0.4},
+                                {"deviation_mm", -0.2260},
+                                {"uncertainty_mm", 0.0496}});
+    row["landmarks"].push_back({{"id", "tall_side"},
+                                {"status", "overflow"},
+                                {"error_min_mm", 1.0976},
+                                {"error_max_mm", 1.2195},
+                                {"tolerance_mm", 0.4},
+                                {"deviation_mm", 1.0876},
+                                {"uncertainty_mm", 0.05}});
+    const auto text = poppler("pdftotext -layout", writePdf(dir, row, {}));
+    const auto line = [&](const std::string& id) {
+        const auto at = text.find(id);
+        return at == std::string::npos ? std::string() : text.substr(at, text.find('\n', at) - at);
+    };
+    const auto corner = line("tall_corner");
+    EXPECT_NE(corner.find("[0.9756, 1.0976]"), std::string::npos) << corner;
+    EXPECT_NE(corner.find("inspection fault"), std::string::npos) << corner;
+    EXPECT_EQ(corner.find("0.2260"), std::string::npos) << corner;
+    const auto side = line("tall_side");
+    EXPECT_NE(side.find("[1.0976, 1.2195]"), std::string::npos) << side;
+    EXPECT_EQ(side.find("inspection fault"), std::string::npos) << side;
+    EXPECT_EQ(side.find("1.0876"), std::string::npos) << side;
+}
+
 TEST(RecordPdf, ADraftAndNoViewsSaySo)
 {
     hgtest::TempDir dir;

@@ -123,7 +123,7 @@ async function showFailed() {
   text("failed-title", `Serial ${result.serial || "(none)"} at ${when.text}: ${result.landmarks_failed} of ${result.landmarks_total} landmarks failed`);
   document.getElementById("failed-title").title = when.title;
   document.getElementById("failed-landmarks").replaceChildren(hg.landmarkTable(result.landmarks, true));
-  document.getElementById("failed-images").replaceChildren(hg.images(result));
+  document.getElementById("failed-images").replaceChildren(ViewViewer.views(result));
 }
 
 // The PLC's own counters (docs/plc.md) and the program the changeover made active.

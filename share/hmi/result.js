@@ -1,5 +1,5 @@
 // One result (docs/hmi.md, "Results"): every landmark with its status,
-// deviation, uncertainty, bracket and zone, and the annotated views.
+// deviation, uncertainty, bracket and zone, and its views with the overlay (view_viewer.js).
 "use strict";
 hg.nav("/results");
 
@@ -24,7 +24,7 @@ async function show() {
       ["Landmarks failed", `${r.landmarks_failed} of ${r.landmarks_total}`]];
     for (const [k, val] of rows) facts.append(hg.el("dt", { text: k }), hg.el("dd", { text: String(val) }));
     document.getElementById("landmarks").replaceChildren(hg.landmarkTable(r.landmarks));
-    document.getElementById("images").replaceChildren(hg.images(r));
+    document.getElementById("images").replaceChildren(ViewViewer.views(r));
   } catch (e) {
     document.getElementById("error").textContent = e.message;
   }

@@ -11,22 +11,25 @@ std::size_t InspectionRecord::landmarksFailed() const
     return static_cast<std::size_t>(std::count_if(landmarks.begin(), landmarks.end(), [](auto& l) { return !l.ok(); }));
 }
 
+nlohmann::json toJson(const LandmarkOutcome& l)
+{
+    nlohmann::json j{{"id", l.id},
+                     {"status", enumName(l.status)},
+                     {"error_min_mm", l.errorMinMm},
+                     {"error_max_mm", l.errorMaxMm},
+                     {"error_mm", l.errorMm},
+                     {"tolerance_mm", l.toleranceMm}};
+    if (l.deviationMm) j["deviation_mm"] = *l.deviationMm;
+    if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
+    if (l.decision) j["decision"] = enumName(*l.decision);
+    if (l.limitsMm) j["limits_mm"] = {l.limitsMm->first, l.limitsMm->second};
+    return j;
+}
+
 nlohmann::json InspectionRecord::landmarksJson() const
 {
     auto list = nlohmann::json::array();
-    for (const auto& l : landmarks) {
-        nlohmann::json j{{"id", l.id},
-                         {"status", enumName(l.status)},
-                         {"error_min_mm", l.errorMinMm},
-                         {"error_max_mm", l.errorMaxMm},
-                         {"error_mm", l.errorMm},
-                         {"tolerance_mm", l.toleranceMm}};
-        if (l.deviationMm) j["deviation_mm"] = *l.deviationMm;
-        if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
-        if (l.decision) j["decision"] = enumName(*l.decision);
-        if (l.limitsMm) j["limits_mm"] = {l.limitsMm->first, l.limitsMm->second};
-        list.push_back(std::move(j));
-    }
+    for (const auto& l : landmarks) list.push_back(toJson(l));
     return list;
 }
 

@@ -78,6 +78,10 @@ using CycleTimings = std::map<CycleStep, Milliseconds>;
 /// (the result's `timing_ms`; the only place it is written).
 nlohmann::json toJson(const CycleTimings& timings);
 
+/// A landmark's outcome as the result store and the HMI read it: id, status, the voxel bracket, the deviation
+/// with U and decision where measured, the zone (docs/daemon.md, "Result store").
+nlohmann::json toJson(const LandmarkOutcome& landmark);
+
 /// The release of a part program a part was judged with (docs/commissioning.md,
 /// "Release"): its version and the SHA-256 of the verification report it was
 /// released on. A draft program has none.

@@ -9,6 +9,7 @@
 #include "hullgauge/vision/segmentation.h"
 
 #include <chrono>
+#include <cmath>
 #include <map>
 
 namespace hg::daemon {
@@ -198,7 +199,7 @@ class EngineInspector : public Inspector {
                 o.limitsMm = l.limitsMm;
                 out.landmarks.push_back(std::move(o));
             }
-            out.evidence = evidence(result);
+            out.evidence = evidence(result, out.landmarks);
         } catch (const std::exception& e) {
             out.error = e.what();
         } catch (...) {
@@ -265,34 +266,64 @@ class EngineInspector : public Inspector {
         }
     }
 
-    // The part's archive (docs/daemon.md): frames, cameras, silhouettes and landmark
-    // projections. The projections are taken now (they need the program); the
-    // whole-frame segmentation for the outline is left to the returned function,
-    // which the cycle runs after the result is shown, if it archives the part.
-    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result)
+    // The part's archive (docs/daemon.md): frames, cameras, silhouettes, landmark
+    // projections and the overlay the HMI draws (docs/hmi.md, "Reject views"). The
+    // projections are taken now (they need the program); the whole-frame segmentation
+    // and the nominal outline are left to the returned function, which the cycle runs
+    // after the result is shown, if it archives the part.
+    std::function<std::vector<ViewEvidence>()> evidence(const inspect::InspectionResult& result,
+                                                        const std::vector<station::LandmarkOutcome>& outcomes)
     {
-        // A landmark the result does not hold (masked) is drawn as not inspected.
-        std::map<std::string, inspect::LandmarkStatus> status;
-        for (const auto& l : result.landmarks) status[l.id] = l.status;
+        std::map<std::string, const station::LandmarkOutcome*> outcome;
+        for (const auto& l : outcomes) outcome[l.id] = &l;
         std::vector<ViewEvidence> views = std::move(views_);
         // The archive's manifest keeps the nominal cameras (`hullgauge inspect` aligns again from
-        // them); the landmarks are drawn where the seated part shows them.
+        // them); the landmarks and the outline are drawn where the seated part shows them.
+        const bool measured = result.alignment && result.alignment->measured;
         const geometry::RigidTransform seat =
             result.alignment ? result.alignment->seat : geometry::RigidTransform::identity();
         for (auto& e : views) {
+            e.seatMeasured = measured;
             const geometry::CameraModel seated = align::seatedCamera(e.capture->camera, seat);
-            // Drawn on the archived image: a region's pixels are the sensor's less its origin.
-            const cv::Point origin = e.capture->origin.value_or(cv::Point(0, 0));
-            for (const auto& l : current_->program.landmarks)
-                if (auto px = seated.project(l.position))
-                    e.landmarks.push_back(
-                        {cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id,
-                         status.contains(l.id) ? status.at(l.id) : inspect::LandmarkStatus::NotInspected});
+            for (const auto& l : current_->program.landmarks) {
+                const auto it = outcome.find(l.id);
+                // A landmark the result does not hold (masked) is drawn as not inspected.
+                if (auto mark = landmarkMark(l, seated, e.capture->origin.value_or(cv::Point(0, 0)),
+                                             it == outcome.end() ? nullptr : it->second))
+                    e.landmarks.push_back(std::move(*mark));
+            }
         }
-        return [views = std::move(views)]() mutable {
-            for (auto& e : views) e.silhouette = vision::segment(e.image, e.segmentation);
+        return [views = std::move(views), solid = current_->program.solid, seat]() mutable {
+            for (auto& e : views) {
+                e.silhouette = vision::segment(e.image, e.segmentation);
+                // The frame is the sensor's region at its origin: the outline in its pixels.
+                const cv::Rect window(e.capture->origin.value_or(cv::Point(0, 0)), e.image.size());
+                if (solid)
+                    e.outline =
+                        vision::projectedOutline(solid->mesh(), align::seatedCamera(e.capture->camera, seat), {window});
+            }
             return views;
         };
+    }
+
+    /// Where landmark `l` shows in the archived image of the seated camera (sensor pixels less `origin`)
+    /// and which way it measures there: the image direction of its outward normal, taken from the
+    /// projection of P + 0.01 mm·n as the sub-voxel deviation takes it (docs/inspection.md, "Sub-voxel
+    /// deviation", step 1); nullopt when it lies behind the camera.
+    static std::optional<LandmarkMark> landmarkMark(const model::Landmark& l, const geometry::CameraModel& seated,
+                                                    cv::Point origin, const station::LandmarkOutcome* outcome)
+    {
+        const auto px = seated.project(l.position);
+        if (!px) return std::nullopt;
+        LandmarkMark mark{cv::Point2d(px->x() - origin.x, px->y() - origin.y), l.id,
+                          outcome ? outcome->status : inspect::LandmarkStatus::NotInspected};
+        if (const auto tip = seated.project(l.position + 0.01 * l.normal)) {
+            const cv::Point2d d(tip->x() - px->x(), tip->y() - px->y());
+            const double length = std::hypot(d.x, d.y);
+            if (length > 1e-6) mark.direction = d / length;
+        }
+        if (outcome) mark.outcome = *outcome;
+        return mark;
     }
 
     geometry::Station station_;

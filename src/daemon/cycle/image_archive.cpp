@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
@@ -31,6 +32,27 @@ void writePng(const fs::path& file, const cv::Mat& image)
     writeFileDurably(file, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
+/// The frame a browser shows well: 8-bit grey as grabbed, else scaled to 8 bit as the annotated picture is.
+cv::Mat eightBit(const cv::Mat& image)
+{
+    if (image.depth() != CV_16U) return image;
+    double maxValue = 0;
+    cv::minMaxLoc(image, nullptr, &maxValue);
+    cv::Mat grey;
+    image.convertTo(grey, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
+    return grey;
+}
+
+/// The plain frame of view `k` for the HMI's overlay (docs/daemon.md, "Archived parts"): the capture's own
+/// PNG when it is stored 8-bit grey, else frame_<k>.png written now. Returns its file name.
+std::string writeFrame(const fs::path& dir, std::size_t k, const ViewEvidence& view, const std::string& captureFile)
+{
+    if (!captureFile.empty() && view.image.type() == CV_8UC1) return captureFile;
+    const std::string name = "frame_" + std::to_string(k) + ".png";
+    writePng(dir / name, eightBit(view.image));
+    return name;
+}
+
 /// Every file of an archived part into `dir` (docs/daemon.md, "Archived parts").
 void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
 {
@@ -40,12 +62,18 @@ void writeArchive(const fs::path& dir, const std::vector<ViewEvidence>& views)
     manifest.calibration = views.front().calibration;
     if (views.front().imageQuality.given) manifest.imageQuality = views.front().imageQuality;
     for (std::size_t k = 0; k < views.size(); ++k) {
-        writePng(dir / ("view_" + std::to_string(k) + ".png"), annotate(views[k]));
-        if (!capture) continue;
-        vision::ManifestView view = *views[k].capture;
-        view.image = dir / (view.id + ".png");
-        writePng(view.image, views[k].image);
-        manifest.views.push_back(std::move(view));
+        const std::string stem = "view_" + std::to_string(k);
+        writePng(dir / (stem + ".png"), annotate(views[k]));
+        std::string captureFile;
+        if (capture) {
+            vision::ManifestView view = *views[k].capture;
+            captureFile = view.id + ".png";
+            view.image = dir / captureFile;
+            writePng(view.image, views[k].image);
+            manifest.views.push_back(std::move(view));
+        }
+        const std::string frame = writeFrame(dir, k, views[k], captureFile);
+        writeFileDurably(dir / (stem + ".json"), overlayJson(views[k], frame).dump());
     }
     if (capture) writeFileDurably(dir / "manifest.json", vision::manifestJson(manifest, dir));
     syncFolder(dir);
@@ -104,16 +132,39 @@ cv::Scalar statusColour(inspect::LandmarkStatus status)
     return {160, 160, 160};
 }
 
+nlohmann::json overlayJson(const ViewEvidence& view, const std::string& frame)
+{
+    const auto point = [](const cv::Point2d& p) {
+        // Hundredths of a pixel: finer than the outline's accuracy, and a short file.
+        return nlohmann::json::array({std::round(p.x * 100.0) / 100.0, std::round(p.y * 100.0) / 100.0});
+    };
+    auto outline = nlohmann::json::array();
+    for (const auto& polyline : view.outline) {
+        auto points = nlohmann::json::array();
+        for (const auto& p : polyline.points) points.push_back(point(p));
+        outline.push_back({{"closed", polyline.closed}, {"points", std::move(points)}});
+    }
+    auto landmarks = nlohmann::json::array();
+    for (const auto& mark : view.landmarks) {
+        if (mark.pixel.x < -0.5 || mark.pixel.y < -0.5 || mark.pixel.x > view.image.cols - 0.5 ||
+            mark.pixel.y > view.image.rows - 0.5)
+            continue; // not in this frame
+        nlohmann::json l = mark.outcome ? station::toJson(*mark.outcome)
+                                        : nlohmann::json{{"id", mark.id}, {"status", enumName(mark.status)}};
+        l["pixel"] = point(mark.pixel);
+        l["direction"] = mark.direction == cv::Point2d() ? nlohmann::json() : point(mark.direction);
+        landmarks.push_back(std::move(l));
+    }
+    return {{"image_size", {view.image.cols, view.image.rows}},
+            {"frame", frame},
+            {"seat", view.seatMeasured ? "measured" : "nominal"},
+            {"outline", std::move(outline)},
+            {"landmarks", std::move(landmarks)}};
+}
+
 cv::Mat annotate(const ViewEvidence& view)
 {
-    cv::Mat grey;
-    if (view.image.depth() == CV_16U) {
-        double maxValue = 0;
-        cv::minMaxLoc(view.image, nullptr, &maxValue);
-        view.image.convertTo(grey, CV_8U, maxValue > 0 ? 255.0 / maxValue : 1.0);
-    } else {
-        grey = view.image;
-    }
+    const cv::Mat grey = eightBit(view.image);
     cv::Mat out;
     if (grey.channels() == 1)
         cv::cvtColor(grey, out, cv::COLOR_GRAY2BGR);

@@ -1,6 +1,7 @@
 // The parts' archive (docs/daemon.md, "Archived parts"): one folder per
-// archived inspection holding, per view, the frame as grabbed and a PNG with
-// the silhouette outline and the landmarks drawn in their status colours, and a
+// archived inspection holding, per view, the frame as grabbed, a PNG with
+// the silhouette outline and the landmarks drawn in their status colours, the
+// overlay the HMI draws on the plain frame (view_<k>.json), and a
 // capture manifest (docs/contracts.md §3) with the cameras and the segmentation the
 // daemon inspected with, so `hullgauge inspect --part P --views
 // <folder>/manifest.json` reproduces its landmark results. A folder is written
@@ -16,6 +17,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <opencv2/core/types.hpp>
 #include <string>
 #include <vector>
@@ -28,6 +30,11 @@ cv::Scalar statusColour(inspect::LandmarkStatus status);
 
 /// The annotated picture of one view (BGR, the frame scaled to 8 bit).
 cv::Mat annotate(const ViewEvidence& view);
+
+/// The overlay the HMI draws on view's plain frame `frame` (a file of the part's folder): view_<k>.json
+/// (docs/daemon.md, "Archived parts"; docs/hmi.md, "Reject views"): the image size, the nominal outline at
+/// the seat as polylines, each landmark in the frame with its pixel, measuring direction and outcome.
+nlohmann::json overlayJson(const ViewEvidence& view, const std::string& frame);
 
 /// Whether a part with `verdict` is archived: every inspected part with
 /// `archive_all`, else a failed one with `save_failed_images`.
@@ -50,11 +57,11 @@ class ImageArchive {
     /// The folder of an archived inspection: `<root>/<startedUnixMs>_<serial>`
     /// (serial characters other than letters, digits and '-' become '_').
     std::filesystem::path folderFor(std::int64_t startedUnixMs, const std::string& serial) const;
-    /// Writes `views` into folderFor(startedUnixMs, serial): view_<k>.png (annotated),
-    /// and when every view carries its capture, <id>.png (the frame, lossless) and
-    /// manifest.json; a failed part's folder also holds the marker file FAILED. Returns the folder, or an empty path
-    /// when there was nothing to write or the folder could not be written whole (logged; nothing is left). Never
-    /// throws.
+    /// Writes `views` into folderFor(startedUnixMs, serial): view_<k>.png (annotated), view_<k>.json
+    /// (overlayJson) with the plain frame it names, and when every view carries its capture, <id>.png (the
+    /// frame, lossless; the overlay's frame when it is 8-bit grey, else frame_<k>.png) and manifest.json; a failed
+    /// part's folder also holds the marker file FAILED. Returns the folder, or an empty path when there was nothing to
+    /// write or the folder could not be written whole (logged; nothing is left). Never throws.
     std::filesystem::path save(std::int64_t startedUnixMs, const std::string& serial,
                                const std::vector<ViewEvidence>& views, bool failed = false);
     /// Removes the oldest folders beyond max_count, older than max_age_days,

@@ -11,6 +11,7 @@
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
 #include "hullgauge/vision/manifest.h"
+#include "hullgauge/vision/outline.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -28,6 +29,11 @@ struct LandmarkMark {
     cv::Point2d pixel;
     std::string id;
     inspect::LandmarkStatus status = inspect::LandmarkStatus::NotInspected;
+    /// The measuring direction (the landmark's outward normal) in the image: unit, pixels; zero where the
+    /// normal points along the line of sight.
+    cv::Point2d direction{};
+    /// Its outcome as the result records it (absent: the result does not hold it, e.g. masked).
+    std::optional<station::LandmarkOutcome> outcome{};
 };
 
 /// What a view contributes to the part's archive (docs/daemon.md, "Archived parts").
@@ -45,6 +51,11 @@ struct ViewEvidence {
     /// archive's manifest carries for the deviation's budget (docs/inspection.md).
     geometry::CalibrationUncertainty calibration{};
     geometry::ImageQuality imageQuality{};
+    /// The nominal CAD outline at the measured seat, in the archived image's pixels (vision/outline.h); the
+    /// overlay the HMI draws on the frame (docs/hmi.md, "Reject views").
+    std::vector<vision::OutlinePolyline> outline{};
+    /// Whether the outline is posed by a measured seat (false: the nominal seat).
+    bool seatMeasured = false;
 };
 
 struct InspectionOutcome {

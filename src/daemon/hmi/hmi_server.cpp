@@ -212,18 +212,28 @@ json shiftOf(const station::DaemonConfig& cfg, std::int64_t nowUnixMs, const sta
     return shift;
 }
 
+/// The archived part's folder, when it lies inside the configured image folder; never a path the row could
+/// name outside it. Empty when the part has none there.
+fs::path archiveFolderOf(const json& row, const fs::path& imageRoot)
+{
+    const auto stored = row.at("images").get<std::string>();
+    if (stored.empty()) return {};
+    std::error_code ec;
+    fs::path folder = fs::weakly_canonical(stored, ec);
+    const auto root = fs::weakly_canonical(imageRoot, ec);
+    const auto rel = folder.lexically_relative(root);
+    if (ec || rel.empty() || *rel.begin() == ".." || *rel.begin() == "." || !fs::is_directory(folder, ec)) return {};
+    return folder;
+}
+
 /// The annotated pictures of an archived part (view_<k>.png), when its folder
-/// lies inside the configured image folder; never a path the row could name outside it.
+/// lies inside the configured image folder (archiveFolderOf).
 std::vector<std::string> imagesOf(const json& row, const fs::path& imageRoot, fs::path& folder)
 {
     std::vector<std::string> names;
-    const auto stored = row.at("images").get<std::string>();
-    if (stored.empty()) return names;
+    folder = archiveFolderOf(row, imageRoot);
+    if (folder.empty()) return names;
     std::error_code ec;
-    folder = fs::weakly_canonical(stored, ec);
-    const auto root = fs::weakly_canonical(imageRoot, ec);
-    const auto rel = folder.lexically_relative(root);
-    if (ec || rel.empty() || *rel.begin() == ".." || !fs::is_directory(folder, ec)) return names;
     static const std::regex kView(R"(view_[0-9]{1,3}\.png)");
     for (const auto& entry : fs::directory_iterator(folder, ec))
         if (entry.is_regular_file() && std::regex_match(entry.path().filename().string(), kView))
@@ -241,6 +251,31 @@ std::optional<json> storedResult(const station::DaemonConfig& cfg, const std::st
     auto row = reader.byId(std::stoll(id));
     if (!row) throw HttpError(404, "no result " + id);
     return row;
+}
+
+/// The file of view `view`'s overlay (`overlay`: view_<k>.json) or plain frame (the file its overlay names:
+/// frame_<k>.png or the capture's 8-bit frame; docs/daemon.md, "Archived parts") in the part's folder.
+/// 404 when the part has no such file, as an older part without overlays has not.
+fs::path overlayFile(const station::DaemonConfig& cfg, const std::string& id, const std::string& view, bool overlay)
+{
+    const auto row = storedResult(cfg, id);
+    const fs::path folder = archiveFolderOf(*row, cfg.results.imageDir);
+    const std::string what = overlay ? "overlay of view " + view : "plain frame of view " + view;
+    if (folder.empty()) throw HttpError(404, "result " + id + " has no archived images");
+    const fs::path file = folder / ("view_" + view + ".json");
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) throw HttpError(404, "result " + id + " has no " + what);
+    if (overlay) return file;
+    // The overlay names its frame; only a plain file name of the folder is followed.
+    const auto text = readFile(file);
+    const json parsed = text ? json::parse(*text, nullptr, false) : json();
+    const std::string frame = parsed.is_object() && parsed.value("frame", json()).is_string()
+                                  ? parsed.at("frame").get<std::string>()
+                                  : std::string();
+    static const std::regex kFrame(R"([A-Za-z0-9_-]{1,64}\.png)");
+    if (!std::regex_match(frame, kFrame) || !fs::is_regular_file(folder / frame, ec))
+        throw HttpError(404, "result " + id + " has no " + what);
+    return folder / frame;
 }
 
 /// The station's name on a part record (docs/hmi.md, "Part record"): the plant
@@ -559,6 +594,15 @@ void HmiServer::routeApi()
                      if (std::find(names.begin(), names.end(), name) == names.end())
                          throw HttpError(404, "result " + req.matches[1].str() + " has no image " + name);
                      files_.serve(req, res, folder / name);
+                 }));
+    // The reject view's plain frame and overlay (docs/hmi.md, "Reject views").
+    server_->Get(R"(/api/results/([0-9]{1,18})/images/frame_([0-9]{1,3})\.png)",
+                 api([this](const httplib::Request& req, httplib::Response& res) {
+                     files_.serve(req, res, overlayFile(*config(), req.matches[1].str(), req.matches[2].str(), false));
+                 }));
+    server_->Get(R"(/api/results/([0-9]{1,18})/views/([0-9]{1,3})\.json)",
+                 api([this](const httplib::Request& req, httplib::Response& res) {
+                     files_.serve(req, res, overlayFile(*config(), req.matches[1].str(), req.matches[2].str(), true));
                  }));
     server_->Get("/api/spc", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendJson(res, spcSeries(config()->results.database, req));

@@ -25,6 +25,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace {
 
@@ -536,3 +537,70 @@ TEST_F(EngineParity, AnArchiveOfRegionFramesReproducesTheDaemonsLandmarks)
 }
 
 } // namespace
+
+namespace {
+
+// Where the thresholded frame changes between part and background: the pixels with a 4-neighbour of the other
+// class, as the HMI's browser test reads the plain frame (docs/hmi.md, "Reject views").
+cv::Mat silhouetteEdges(const cv::Mat& frame)
+{
+    cv::Mat mask;
+    cv::threshold(frame, mask, 0, 255, cv::THRESH_BINARY_INV | cv::THRESH_OTSU);
+    cv::Mat eroded, dilated;
+    const cv::Mat cross = cv::getStructuringElement(cv::MORPH_CROSS, {3, 3});
+    cv::erode(mask, eroded, cross);
+    cv::dilate(mask, dilated, cross);
+    return dilated != eroded;
+}
+
+nlohmann::json readJson(const fs::path& file)
+{
+    std::ifstream in(file);
+    return in ? nlohmann::json::parse(in) : nlohmann::json();
+}
+
+} // namespace
+
+// The overlay of a reject picture (docs/hmi.md, "Reject views"): per view its plain frame and view_<k>.json
+// with the CAD outline at the measured seat, within a pixel of the silhouette's edge in the frame, and every
+// landmark in the frame with its pixel, measuring direction and outcome.
+TEST_F(EngineParity, AnArchivedPartHoldsTheOverlayOfEveryView)
+{
+    const auto seat = seatAboutCentre(*config_, {1, 1, 0}, 0.3, {0.2, -0.3, 1.0}, 0.3);
+    auto inspector = hg::daemon::makeEngineInspector(*config_);
+    hgtest::TempDir dir;
+    for (const std::string part : {"nominal", "corner-missing"}) {
+        SCOPED_TRACE(part);
+        const auto images = frames(*config_, part, seat);
+        auto outcome = inspect(*inspector, *config_, images);
+        ASSERT_TRUE(outcome.ok) << outcome.error;
+        const fs::path folder = archive(*config_, outcome, dir / "images", part);
+        ASSERT_FALSE(folder.empty());
+        std::map<std::string, std::string> failedSeen;
+        for (std::size_t k = 0; k < images.size(); ++k) {
+            const auto overlay = readJson(folder / ("view_" + std::to_string(k) + ".json"));
+            ASSERT_TRUE(overlay.is_object()) << "view " << k;
+            EXPECT_EQ(overlay["image_size"], nlohmann::json({images[k].cols, images[k].rows}));
+            EXPECT_EQ(overlay["seat"], "measured");
+            const cv::Mat frame =
+                cv::imread((folder / overlay["frame"].get<std::string>()).string(), cv::IMREAD_UNCHANGED);
+            EXPECT_EQ(cv::norm(frame, images[k], cv::NORM_INF), 0.0) << "the plain frame is the grabbed one";
+            ASSERT_FALSE(overlay["outline"].empty());
+            if (part == "nominal") {
+                // The nominal part at its seat: the outline lies on the silhouette's edge (within a pixel).
+                cv::Mat distance;
+                cv::distanceTransform(~silhouetteEdges(images[k]), distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+                for (const auto& line : overlay["outline"])
+                    for (const auto& p : line["points"]) {
+                        const cv::Point px(cvRound(p[0].get<double>()), cvRound(p[1].get<double>()));
+                        EXPECT_LE(distance.at<float>(px), 1.0f) << "view " << k << " at " << px;
+                    }
+            }
+            for (const auto& l : overlay["landmarks"]) {
+                EXPECT_EQ(l["pixel"].size(), 2u);
+                if (l["status"] != "ok") failedSeen[l["id"]] = l["status"];
+            }
+        }
+        EXPECT_EQ(failedSeen, notOk(outcome)) << "every failed landmark in a view, with its status";
+    }
+}

@@ -5,7 +5,9 @@
 #include "hullgauge/vision/manifest.h"
 
 #include <cmath>
+#include <fstream>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 namespace hg::daemon {
@@ -214,6 +216,50 @@ TEST(ImageArchive, ArchivedPartHoldsItsFramesLosslesslyAndTheManifestOfItsCamera
         EXPECT_EQ(cv::norm(frame, views[k].image, cv::NORM_INF), 0.0);
         EXPECT_TRUE(std::filesystem::exists(folder / ("view_" + std::to_string(k) + ".png")));
     }
+}
+
+// The overlay the HMI draws on the plain frame (docs/daemon.md, "Archived parts"; docs/hmi.md, "Reject
+// views"): a 16-bit frame gets an 8-bit frame_<k>.png, an 8-bit captured one is its own plain frame; the
+// outline's polylines and every landmark inside the frame with its outcome.
+TEST(ImageArchive, EveryViewHasItsOverlayAndPlainFrame)
+{
+    hgtest::TempDir dir;
+    ImageArchive archive(dir / "images", {});
+    ViewEvidence wide = capturedView("v0", 0.0);
+    wide.outline = {{{{10.0, 10.0}, {50.0, 10.0}, {50.0, 40.0}}, true}};
+    wide.seatMeasured = true;
+    station::LandmarkOutcome low{"step-top", inspect::LandmarkStatus::OutOfTolerance, 0.6, 0.8, 0.7, 0.4};
+    low.deviationMm = -0.699;
+    low.uncertaintyMm = 0.02;
+    wide.landmarks = {{cv::Point2d(12.5, 20.25), "step-top", low.status, cv::Point2d(0, -1), low},
+                      {cv::Point2d(70, 20), "outside", inspect::LandmarkStatus::Ok}};
+    ViewEvidence narrow = capturedView("v1", 10.0);
+    narrow.image.convertTo(narrow.image, CV_8U, 1.0 / 256);
+    const auto folder = archive.save(1'700'000'000'000, "SN-7", {wide, narrow});
+    ASSERT_FALSE(folder.empty());
+    std::ifstream in0(folder / "view_0.json"), in1(folder / "view_1.json");
+    const auto v0 = nlohmann::json::parse(in0), v1 = nlohmann::json::parse(in1);
+    EXPECT_EQ(v0["frame"], "frame_0.png");
+    EXPECT_EQ(v1["frame"], "v1.png");
+    EXPECT_FALSE(std::filesystem::exists(folder / "frame_1.png"));
+    const cv::Mat plain = cv::imread((folder / "frame_0.png").string(), cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(plain.type(), CV_8UC1);
+    EXPECT_EQ(plain.size(), wide.image.size());
+    EXPECT_EQ(v0["image_size"], nlohmann::json({64, 48}));
+    EXPECT_EQ(v0["seat"], "measured");
+    EXPECT_EQ(v1["seat"], "nominal");
+    ASSERT_EQ(v0["outline"].size(), 1u);
+    EXPECT_EQ(v0["outline"][0]["closed"], true);
+    EXPECT_EQ(v0["outline"][0]["points"][1], nlohmann::json({50.0, 10.0}));
+    ASSERT_EQ(v0["landmarks"].size(), 1u) << "a landmark outside the frame is not in its overlay";
+    const auto& l = v0["landmarks"][0];
+    EXPECT_EQ(l["id"], "step-top");
+    EXPECT_EQ(l["status"], "out_of_tolerance");
+    EXPECT_EQ(l["pixel"], nlohmann::json({12.5, 20.25}));
+    EXPECT_EQ(l["direction"], nlohmann::json({0.0, -1.0}));
+    EXPECT_EQ(l["deviation_mm"], -0.699);
+    EXPECT_EQ(l["tolerance_mm"], 0.4);
+    EXPECT_EQ(l["error_min_mm"], 0.6);
 }
 
 TEST(ImageArchive, AFolderThatCannotBeWrittenWholeLeavesNothing)

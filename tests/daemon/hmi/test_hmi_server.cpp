@@ -205,6 +205,37 @@ TEST_F(HmiServerTest, TheApiAnswersFromTheStoreAndTheMainLoop)
     EXPECT_EQ(png->body.substr(1, 3), "PNG");
 }
 
+// The reject views' files (docs/hmi.md, "Reject views"): each view's overlay and the plain frame it
+// names, from the part's folder only; 404 for a part archived without them.
+TEST_F(HmiServerTest, TheOverlayAndPlainFrameOfAViewAreServedFromThePartsFolderOnly)
+{
+    start();
+    const auto overlay = getJson("/api/results/1/views/0.json");
+    EXPECT_EQ(overlay["image_size"], json::array({16, 12}));
+    EXPECT_EQ(overlay["frame"], "frame_0.png");
+    EXPECT_TRUE(overlay["outline"].is_array());
+    auto png = client->Get("/api/results/1/images/frame_1.png");
+    ASSERT_TRUE(png);
+    EXPECT_EQ(png->status, 200);
+    EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
+    EXPECT_EQ(png->body.substr(1, 3), "PNG");
+    getJson("/api/results/1/views/2.json", 404);
+    getJson("/api/results/1/images/frame_2.png", 404);
+    getJson("/api/results/4/views/0.json", 404);
+    getJson("/api/results/4/images/frame_0.png", 404);
+    const std::filesystem::path folder = getJson("/api/results/1")["image_files"].empty()
+                                             ? std::filesystem::path()
+                                             : *std::filesystem::directory_iterator(dir / "images");
+    ASSERT_FALSE(folder.empty());
+    // An overlay naming a frame outside its folder is not followed.
+    hgtest::writeFile(folder / "view_1.json", R"({"frame": "../../results.db"})");
+    getJson("/api/results/1/images/frame_1.png", 404);
+    // A part archived before the overlays: no view_<k>.json, the page shows the annotated picture.
+    std::filesystem::remove(folder / "view_0.json");
+    EXPECT_NE(getJson("/api/results/1/views/0.json", 404)["error"].get<std::string>().find("overlay of view 0"),
+              std::string::npos);
+}
+
 // The line view's words and counts (docs/hmi.md, "Line view"): the fault with
 // its sentence and action from the daemon's one table, the PLC status by its
 // name, and the current shift's production cycles counted from the store — in

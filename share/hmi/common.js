@@ -139,11 +139,4 @@ const hg = {
     }
     return table;
   },
-  images(result) {
-    const box = hg.el("div", { class: "images" });
-    for (const name of result.image_files || [])
-      box.append(hg.el("img", { src: `/api/results/${result.id}/images/${name}`, alt: name, title: name }));
-    if (!box.children.length) box.append(hg.el("p", { class: "muted", text: "No images archived for this part." }));
-    return box;
-  },
 };

@@ -58,16 +58,23 @@ def encode_serial(text):
     return [(raw[i] << 8) | raw[i + 1] for i in range(0, 16, 2)]
 
 
-def browser():
+def browser(window=(1400, 1100), flags=()):
+    """Debian's chromium, headless, through chromium-driver; `window` its size, `flags` more switches
+    (the Parts page's 3D view needs --enable-unsafe-swiftshader for WebGL without a GPU)."""
     options = webdriver.ChromeOptions()
     options.binary_location = "/usr/bin/chromium"
     for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1400,1100", "--disable-extensions", "--no-first-run"):
+                 f"--window-size={window[0]},{window[1]}", "--disable-extensions", "--no-first-run", *flags):
         options.add_argument(flag)
     driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
     driver.set_page_load_timeout(60)
     driver.set_script_timeout(60)
     return driver
+
+
+def until(driver, script, timeout_s=60, *args):
+    """Polls a script in the page (every 50 ms, at most timeout_s) until it answers something true; that answer."""
+    return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: d.execute_script(script, *args))
 
 
 def texts(driver, css, attribute=None):

@@ -21,7 +21,6 @@ is the PLC (pymodbus); it runs a nominal part and defective ones and checks:
 """
 import argparse
 import json
-import sqlite3
 import sys
 import tempfile
 import time
@@ -29,11 +28,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
-from hmi_browser import plc_cycle, stored  # noqa: E402
+from hmi_browser import browser as chromium, plc_cycle, stored  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
-from selenium import webdriver  # noqa: E402
-from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
@@ -93,14 +90,8 @@ Promise.all([...document.querySelectorAll('#images .vv-view')].map(async (f) => 
 
 
 def browser():
-    options = webdriver.ChromeOptions()
-    options.binary_location = "/usr/bin/chromium"
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1920,1080", "--disable-extensions", "--no-first-run"):
-        options.add_argument(flag)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    driver.set_page_load_timeout(60)
-    driver.set_script_timeout(60)
+    """Chromium whose page is exactly 1920 x 1080 CSS px (the window's chrome takes none of it)."""
+    driver = chromium(window=(1920, 1080))
     driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
                            {"width": 1920, "height": 1080, "deviceScaleFactor": 1, "mobile": False})
     return driver

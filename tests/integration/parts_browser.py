@@ -43,7 +43,6 @@ import http.client
 import json
 import math
 import struct
-import sqlite3
 import subprocess
 import sys
 import tempfile
@@ -53,12 +52,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from hmi_browser import browser as chromium, stored, until  # noqa: E402
 
-from selenium import webdriver  # noqa: E402
-from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
 PASSWORD = "parts-test-password"
 ENGINEER = "Jane Doe"
@@ -84,18 +81,6 @@ PUBLIC, PUBLIC_CAD = "rounded-block", Path("tests") / "data" / "cad" / "mcad-rou
 PUBLIC_CLICKS = [([-20, 5, 4], [-1, 0, 0], [-1, 0.3, 0.5]),
                  ([20, -4, 4], [1, 0, 0], [1, -0.3, 0.5]),
                  ([6, -15, 4], [0, -1, 0], [0.3, -1, 0.5])]
-
-
-def browser():
-    options = webdriver.ChromeOptions()
-    options.binary_location = "/usr/bin/chromium"
-    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--enable-unsafe-swiftshader", "--window-size=1400,1100", "--disable-extensions", "--no-first-run"):
-        options.add_argument(flag)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    driver.set_page_load_timeout(60)
-    driver.set_script_timeout(60)
-    return driver
 
 
 class Api:
@@ -132,10 +117,6 @@ class Api:
 
     def part(self, name=PART):
         return self.call("GET", f"/api/parts/{name}")[1]
-
-
-def until(driver, script, timeout_s=60, *args):
-    return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: d.execute_script(script, *args))
 
 
 def settled(driver, timeout_s=60):
@@ -373,14 +354,6 @@ def release(driver, number):
     return text(driver, "release-result")
 
 
-def stored(db, serial):
-    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True)
-    con.row_factory = sqlite3.Row
-    row = con.execute("SELECT * FROM inspections WHERE serial = ?", (serial,)).fetchone()
-    con.close()
-    return row
-
-
 def released_runs(driver, api, sock, db):
     said = release(driver, 2)
     check("version 1" in said and "PLC program 2" in said, f"the release was said as {said!r}")
@@ -571,7 +544,7 @@ def main():
                               ["--http-port", str(http_port), "--hmi-password-hash", digest])
     url, api = f"http://127.0.0.1:{http_port}", Api(http_port)
     sock, db = str(workdir / "hullgauged.sock"), workdir / "results.db"
-    driver = browser()
+    driver = chromium(flags=("--enable-unsafe-swiftshader",))
     try:
         sign_in_on_page(driver, url, api)
         uploads(driver, args.source, api)

@@ -27,23 +27,18 @@ import json
 import sqlite3
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
-from hmi_browser import browser, plc_cycle  # noqa: E402
+from hmi_browser import browser, plc_cycle, until  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
-from selenium.webdriver.support.ui import Select, WebDriverWait  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 
 # Nominal parts, and a part with its corner missing at cycles 5 and 9 (1-based).
 PLAN = ["nominal"] * 4 + ["corner-missing"] + ["nominal"] * 3 + ["corner-missing"] + ["nominal"] * 3
-
-
-def until(driver, script, timeout_s=60, *args):
-    return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: d.execute_script(script, *args))
 
 
 def settled(driver):
@@ -123,8 +118,8 @@ def rules_in_words(driver, port_url, landmark):
     check(len(items) >= len(violations), f"{len(violations)} violations, {len(items)} listed")
     width = charted(driver)["width"]
     for v, text in zip(violations, items):
-        first, last = s["points"][v["points"][0]], s["points"][v["points"][-1]]
-        check(text.startswith(("Nelson ", "Western Electric ")) and f"cycle" in text and str(last["cycle"] + 1) in text
+        last = s["points"][v["points"][-1]]
+        check(text.startswith(("Nelson ", "Western Electric ")) and "cycle" in text and str(last["cycle"] + 1) in text
               and "_" not in text.split(":")[0], f"{v} said as {text!r}")
         check(all(width[i] == 3 for i in v["points"]), f"the points of {v['rule']} are not marked: {width}")
 

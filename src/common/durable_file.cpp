@@ -1,6 +1,7 @@
 #include "hullgauge/common/durable_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -71,6 +72,20 @@ void replaceFileDurably(const std::filesystem::path& file, std::string_view byte
         throw FaultError(file.string() + ": cannot replace it: " + why);
     }
     syncFolder(folder);
+}
+
+} // namespace hg
+
+namespace hg {
+
+void giveToFolderOwner(const std::filesystem::path& file)
+{
+    if (::geteuid() != 0) return;
+    const auto folder = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
+    struct stat st {};
+    if (::stat(folder.c_str(), &st) != 0) throw FaultError(folder.string() + ": " + std::strerror(errno));
+    if (::chown(file.c_str(), st.st_uid, st.st_gid) != 0)
+        throw FaultError("chown " + file.string() + ": " + std::strerror(errno));
 }
 
 } // namespace hg

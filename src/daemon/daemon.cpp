@@ -1,4 +1,5 @@
 #include "daemon.h"
+#include "config_audit.h"
 #include "config_reload.h"
 
 #include "command_mailbox.h"
@@ -115,9 +116,9 @@ int blockSignals()
 class MainLoop {
   public:
     MainLoop(ConfigPtr config, ProgramCheck checkProgram, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner,
-             Notifier& notifier, int sigFd, Clock& clock)
+             Notifier& notifier, int sigFd, Clock& clock, store::AuditLog& audit)
         : config_(std::move(config)), checkProgram_(std::move(checkProgram)), registers_(registers), plc_(plc),
-          runner_(runner), notifier_(notifier), sigFd_(sigFd), clock_(clock)
+          runner_(runner), notifier_(notifier), sigFd_(sigFd), clock_(clock), audit_(audit)
     {
     }
     const ConfigPtr& config() const { return config_; }
@@ -149,6 +150,7 @@ class MainLoop {
     Notifier& notifier_;
     int sigFd_;
     Clock& clock_; ///< the PLC server's and the runner's: the watchdog compares their times with it
+    store::AuditLog& audit_;
     HmiServer* hmi_ = nullptr;
     bool wasHealthy_ = true;
     ConfigReload reload_{[this](const std::filesystem::path& file) { return loadConfig(file, checkProgram_); }};
@@ -244,6 +246,7 @@ void MainLoop::applyReload()
         config_ = fresh;
         log->info("configuration reloaded from {} ({} part programs)", config_->file.string(),
                   config_->programs.size());
+        recordConfigurationFiles(audit_, *config_, "reload", clock_.wallMs());
     }
     // READY once the last reload asked for is applied (a SIGHUP during one asked for another).
     if (!reload_.busy()) notifier_.ready(std::string(enumName(runner_.state())));
@@ -256,6 +259,9 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     // One clock for every part (docs/daemon.md, "Threads and the clock").
     Clock& clock = Clock::steady();
     store::ResultStore store(config->results.database);
+    // The audit trail (docs/audit.md): the files the daemon starts with, then every change it is told of.
+    const auto audit = std::make_shared<store::AuditLog>(station::auditFile(*config));
+    recordConfigurationFiles(*audit, *config, "start", clock.wallMs());
     PlcRegisters registers;
     registers.setKnownPrograms(programNumbers(*config));
     StationHardware hardware = makeDevices(*config, clock);
@@ -264,11 +270,12 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     plc.start();
     CycleRunner runner(registers, *hardware.devices, *inspector, store, config, clock);
     runner.setSimulation(hardware.simulation);
-    MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd, clock);
+    MainLoop loop(config, checkProgram, registers, plc, runner, notifier, sigFd, clock, *audit);
     CommandMailbox mailbox;
     std::unique_ptr<HmiServer> hmi;
     if (config->http.enabled)
-        hmi = std::make_unique<HmiServer>(config, mailbox, clock, [&runner] { return runner.snapshot().png(); });
+        hmi = std::make_unique<HmiServer>(
+            config, mailbox, clock, [&runner] { return runner.snapshot().png(); }, station::UtcOffset{}, audit);
     loop.setHmi(hmi.get());
     // The plant link reads the outbox on its own thread and connection (docs/mqtt.md).
     std::unique_ptr<MqttPublisher> mqtt;
@@ -285,6 +292,14 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
         registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};
     if (mqtt) context.mqttStatus = [&mqtt] { return mqtt->status(); };
     context.requestReload = [&loop] { loop.requestReload(); };
+    context.audit = [&audit, &clock](store::AuditEntry entry) {
+        entry.atMs = clock.wallMs();
+        try {
+            audit->record(std::move(entry));
+        } catch (const std::exception& e) {
+            hg::log::category("daemon")->error("audit trail: {}", e.what());
+        }
+    };
     const auto commands = maintenanceCommands(context);
     MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands, clock);
     notifier.status("starting devices");

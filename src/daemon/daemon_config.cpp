@@ -71,8 +71,9 @@ void parsePlc(const ConfigNode& node, PlcConfig& plc)
 
 void parseResults(const ConfigNode& node, const fs::path& base, ResultsConfig& results)
 {
-    node.allowOnlyKeys({"database", "images", "save_failed_images", "archive_all", "retention"});
+    node.allowOnlyKeys({"database", "images", "save_failed_images", "archive_all", "retention", "audit"});
     results.database = resolve(node["database"], base);
+    if (auto n = node.optional("audit")) results.audit = resolve(*n, base);
     results.imageDir = resolve(node["images"], base);
     if (auto n = node.optional("save_failed_images")) results.saveFailedImages = n->asBool();
     if (auto n = node.optional("archive_all")) results.archiveAll = n->asBool();
@@ -108,8 +109,9 @@ void parseHmi(const ConfigNode& node, const fs::path& base, HmiConfig& http)
 {
     node.allowOnlyKeys({"bind", "port", "assets", "javascript", "password_hash", "password_hash_credential",
                         "max_request_bytes", "requests_per_s", "burst", "threads", "session_idle_s", "allowed_hosts",
-                        "request_timeout_s", "max_pending_requests"});
+                        "request_timeout_s", "max_pending_requests", "users_file"});
     http.enabled = true;
+    if (auto n = node.optional("users_file")) http.usersFile = resolve(*n, base);
     if (auto n = node.optional("bind")) {
         http.bindAddress = n->asString();
         in_addr tmp{};
@@ -347,6 +349,16 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
 // the PC's host name and every address of its interfaces, so the default
 // serves the plant network and still refuses a name that is none of the
 // station's (DNS rebinding, docs/hmi.md "Bounded").
+fs::path auditFile(const DaemonConfig& config)
+{
+    return config.results.audit.empty() ? config.results.database.parent_path() / "audit.sqlite" : config.results.audit;
+}
+
+fs::path usersFile(const DaemonConfig& config)
+{
+    return config.http.usersFile.empty() ? config.results.database.parent_path() / "users.yaml" : config.http.usersFile;
+}
+
 std::vector<std::string> allowedHostsFor(const HmiConfig& http)
 {
     if (!http.allowedHosts.empty()) return http.allowedHosts;

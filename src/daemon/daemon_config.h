@@ -93,6 +93,8 @@ struct ResultsConfig {
     bool saveFailedImages = true;
     /// Archive every part, passed or failed, as a re-inspectable capture (audits).
     bool archiveAll = false;
+    /// The audit trail (docs/audit.md); empty: `audit.sqlite` beside the database (auditFile).
+    std::filesystem::path audit;
     RetentionConfig retention;
 };
 
@@ -123,6 +125,8 @@ struct HmiConfig {
     /// crypt(3) hash of the maintenance password (yescrypt `$y$`, SHA-512 `$6$`);
     /// empty: no maintenance actions over HTTP.
     std::string passwordHash;
+    /// The accounts with their roles (docs/audit.md, "Roles"); empty: `users.yaml` beside the result store (usersFile).
+    std::filesystem::path usersFile;
     std::size_t maxRequestBytes = 64 * 1024;
     double requestsPerSecond = 50.0; ///< per client address, sustained
     int burst = 200;                 ///< per client address, at once
@@ -136,6 +140,11 @@ struct HmiConfig {
     std::size_t maxPendingRequests = 64;            ///< requests being received at once
 };
 
+struct DaemonConfig;
+/// `results.audit`, or `audit.sqlite` beside the result store when not given (docs/audit.md).
+std::filesystem::path auditFile(const DaemonConfig& config);
+/// `http.users_file`, or `users.yaml` beside the result store when not given (docs/audit.md, "Roles").
+std::filesystem::path usersFile(const DaemonConfig& config);
 /// `http.allowed_hosts` as given, or its default for `bindAddress`.
 std::vector<std::string> allowedHostsFor(const HmiConfig& http);
 

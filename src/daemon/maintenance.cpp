@@ -6,15 +6,18 @@
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/store/audit_log.h"
 #include "hullgauge/store/result_store.h"
 #include "plant/plc_server.h"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
 #include <grp.h>
 #include <map>
+#include <pwd.h>
 #include <spdlog/fmt/fmt.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -22,6 +25,24 @@
 #include <unistd.h>
 
 namespace hg::daemon {
+
+namespace {
+
+/// `unix:<user>` of the process at the other end of `fd` (SO_PEERCRED), `unix:uid <n>` without a name.
+std::string peerName(int fd)
+{
+    ucred cred{};
+    socklen_t size = sizeof cred;
+    if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &size) != 0) return "unix:?";
+    passwd entry{};
+    passwd* found = nullptr;
+    std::array<char, 1024> buffer{};
+    if (getpwuid_r(cred.uid, &entry, buffer.data(), buffer.size(), &found) == 0 && found)
+        return std::string("unix:") + found->pw_name;
+    return "unix:uid " + std::to_string(cred.uid);
+}
+
+} // namespace
 
 MaintenanceServer::MaintenanceServer(std::filesystem::path path, const std::string& group, Handler handler,
                                      Clock& clock)
@@ -105,7 +126,7 @@ void MaintenanceServer::acceptAll()
             close(clients_.front().fd);
             clients_.erase(clients_.begin());
         }
-        clients_.push_back({fd, clock_.now(), {}});
+        clients_.push_back({fd, clock_.now(), {}, peerName(fd)});
     }
 }
 
@@ -129,7 +150,8 @@ bool MaintenanceServer::readFrom(Client& client)
     return true;
 }
 
-std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler)
+std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler,
+                                     const std::string& peer)
 {
     nlohmann::json answer;
     const auto end = request.find('\n');
@@ -138,6 +160,9 @@ std::string answerMaintenanceRequest(const std::string& request, const Maintenan
         auto parsed = parseJson(request.substr(0, end), "request");
         if (!parsed.is_object() || !parsed.contains("command"))
             throw InputError("request", "command", "expected one JSON object with a \"command\" on one line");
+        // Who asked is what the kernel says, never what the request claims (docs/audit.md).
+        parsed.erase("caller");
+        if (!peer.empty()) parsed["caller"] = {{"who", peer}, {"source", "socket"}};
         answer = handler(parsed);
     } catch (const std::exception& e) {
         answer = {{"ok", false}, {"error", e.what()}};
@@ -163,7 +188,7 @@ void MaintenanceServer::refuseUnfinished(const Client& client)
 
 void MaintenanceServer::answer(const Client& client)
 {
-    const std::string text = answerMaintenanceRequest(client.request, handler_);
+    const std::string text = answerMaintenanceRequest(client.request, handler_, client.peer);
     // The answer is small (a status or a page of results); a client that does
     // not read it gets one second before it is dropped.
     timeval tv{1, 0};
@@ -437,6 +462,51 @@ const std::map<std::string, Command, std::less<>> kCommands{
 
 } // namespace
 
+namespace {
+
+/// The value a recorded command changes, read before and after it (empty: the command changes nothing here).
+std::string changedValue(const MaintenanceContext& c, const std::string& command, const json& request)
+{
+    if (command == "purpose" && request.contains("purpose")) return std::string(enumName(c.registers.purpose()));
+    if (command == "sim-part" && request.contains("name") && c.simulation) return "part: " + c.simulation->part();
+    return {};
+}
+
+// The changes among the commands go into the audit trail with who asked (docs/audit.md): a new cycle
+// purpose, another simulated part, a calibration queued (its station file is recorded when the daemon
+// loads it), a reload asked for. Questions (status, results, calibration) and operations (trigger,
+// abort, snapshot) are not changes.
+void recordChange(const MaintenanceContext& c, const std::string& command, const json& request,
+                  const std::string& before, const json& answer)
+{
+    static const std::map<std::string, std::string> kActions{{"purpose", "setting.purpose"},
+                                                             {"sim-part", "setting.sim-part"},
+                                                             {"calibrate", "calibration.run"},
+                                                             {"reload", "setting.reload"}};
+    const auto action = kActions.find(command);
+    if (!c.audit || action == kActions.end()) return;
+    if ((command == "purpose" || command == "sim-part") && before.empty()) return;
+    const json caller = request.value("caller", json::object());
+    store::AuditEntry entry;
+    entry.who = caller.value("who", "unix:?");
+    entry.role = caller.value("role", "");
+    entry.source = caller.value("source", "socket");
+    entry.action = action->second;
+    entry.object =
+        command == "calibrate" ? answer.value("calibration", json::object()).value("out", std::string()) : command;
+    const bool ok = answer.value("ok", false);
+    entry.outcome = ok ? "done" : "failed";
+    entry.detail = ok ? std::string() : answer.value("error", std::string());
+    if (command == "calibrate")
+        entry.detail = "pattern " + request.value("pattern", std::string()) + ", poses " +
+                       request.value("poses", std::string()) + (ok ? "" : ": " + entry.detail);
+    entry.before = before;
+    entry.after = before.empty() ? std::string() : changedValue(c, command, request);
+    c.audit(std::move(entry));
+}
+
+} // namespace
+
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context)
 {
     return [context](const json& request) -> json {
@@ -445,7 +515,10 @@ MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context)
         const auto& command = named.value();
         const auto it = kCommands.find(command);
         if (it == kCommands.end()) return {{"ok", false}, {"error", "unknown command '" + command + "'"}};
-        return it->second(context, request);
+        const auto before = changedValue(context, command, request);
+        auto answer = it->second(context, request);
+        recordChange(context, command, request, before, answer);
+        return answer;
     };
 }
 

@@ -22,7 +22,8 @@
 
 namespace hg::store {
 class ResultStore;
-}
+struct AuditEntry;
+} // namespace hg::store
 
 namespace hg::daemon {
 
@@ -60,6 +61,7 @@ class MaintenanceServer {
         int fd;
         Clock::time_point since;
         std::string request;
+        std::string peer; ///< `unix:<user>` from the socket's peer credentials (the audit trail's who)
     };
     void acceptAll();
     /// Reads once; true when the client is done with (answered or gone).
@@ -79,7 +81,11 @@ class MaintenanceServer {
 /// {"ok": false, "error": ...} for a line that is not one JSON object with a
 /// "command" or a handler that throws. Pure but for the handler; the fuzzing
 /// harness calls it (docs/fuzzing.md).
-std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler);
+/// The request is handed on with `"caller": {"who": peer, "source": "socket"}` in place of any
+/// caller it names (only the HMI names its signed-in person, through the mailbox); without a peer
+/// the caller is removed.
+std::string answerMaintenanceRequest(const std::string& request, const MaintenanceServer::Handler& handler,
+                                     const std::string& peer = {});
 
 /// What the maintenance commands act on; all of it lives as long as the server.
 struct MaintenanceContext {
@@ -99,6 +105,9 @@ struct MaintenanceContext {
     /// Reads the configuration and its programs again, as SIGHUP does (the
     /// workbench's release, docs/workbench.md); empty: `reload` is refused.
     std::function<void()> requestReload = {};
+    /// Records a change (cycle purpose, simulated part, calibration, reload) in the audit trail
+    /// (docs/audit.md) with the request's caller; empty: not recorded.
+    std::function<void(store::AuditEntry)> audit = {};
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,

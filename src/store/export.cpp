@@ -52,6 +52,15 @@ std::string_view fileExtension(ExportFormat format)
     return "json";
 }
 
+/// A field quoted when it holds a comma, a quote, CR or LF; quotes doubled (RFC 4180, 2.6–2.7).
+std::string csvField(const std::string& text)
+{
+    if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+    std::string quoted = "\"";
+    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return quoted + "\"";
+}
+
 namespace {
 
 // ---------------------------------------------------------------- the rows
@@ -139,15 +148,6 @@ constexpr const char* kCsvColumns[] = {"result_id",      "time",     "serial",  
                                        "uncertainty_mm", "error_mm", "lower_mm",         "upper_mm",
                                        "decision",       "excluded", "exclusion_reason", "program_version",
                                        "program_sha256"};
-
-/// A field quoted when it holds a comma, a quote, CR or LF; quotes doubled (RFC 4180, 2.6–2.7).
-std::string csvField(const std::string& text)
-{
-    if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return quoted + "\"";
-}
 
 /// A number as JSON writes it: the shortest text that reads back as the same double.
 std::string csvNumber(const json& v)

@@ -24,4 +24,9 @@ void syncFolder(const std::filesystem::path& folder);
 /// the file.
 void replaceFileDurably(const std::filesystem::path& file, std::string_view bytes);
 
+/// Run as root, gives `file` to the owner and group of its folder, so a file a root shell creates in
+/// the daemon's state folder (an account, the audit trail: docs/audit.md) stays the daemon's. Nothing
+/// for anyone else. Throws FaultError naming the file.
+void giveToFolderOwner(const std::filesystem::path& file);
+
 } // namespace hg

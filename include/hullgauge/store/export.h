@@ -33,6 +33,8 @@ constexpr auto nameTable(ExportFormat)
 /// "aqdef", "csv" or "json"; anything else is hg::InputError (field "format")
 /// naming the text and the formats there are.
 ExportFormat parseExportFormat(std::string_view text);
+/// One CSV field: quoted when it holds a comma, a quote, CR or LF, quotes doubled (RFC 4180, 2.6–2.7).
+std::string csvField(const std::string& text);
 /// The HTTP Content-Type of a download: text/plain; charset=ISO-8859-1 for
 /// AQDEF (8-bit text, docs/export.md), text/csv; charset=utf-8, application/json.
 std::string_view contentType(ExportFormat format);

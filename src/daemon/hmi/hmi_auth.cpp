@@ -4,38 +4,11 @@
 
 #include <algorithm>
 #include <array>
-#include <crypt.h>
 #include <cstring>
 #include <memory>
 #include <sys/random.h>
 
 namespace hg::daemon {
-
-bool validPasswordHash(const std::string& hash)
-{
-    static constexpr std::array<const char*, 6> kPrefixes{"$y$", "$gy$", "$7$", "$6$", "$5$", "$2b$"};
-    const bool known =
-        std::any_of(kPrefixes.begin(), kPrefixes.end(), [&](const char* p) { return hash.rfind(p, 0) == 0; });
-    // A whole hash: method, salt and the hashed password ("$6$salt$hash"), not a setting alone;
-    // crypt_checksalt says whether this libcrypt supports the method and the setting is well formed.
-    const auto fields = std::count(hash.begin(), hash.end(), '$');
-    return known && fields >= 3 && hash.back() != '$' && hash.size() >= 20 &&
-           crypt_checksalt(hash.c_str()) == CRYPT_SALT_OK;
-}
-
-bool verifyPassword(const std::string& password, const std::string& hash)
-{
-    if (!validPasswordHash(hash)) return false;
-    auto data = std::make_unique<crypt_data>();
-    const char* out = crypt_r(password.c_str(), hash.c_str(), data.get());
-    // A failed crypt_r returns a string starting with '*', never the hash itself.
-    if (!out || out[0] == '*') return false;
-    const std::size_t n = std::strlen(out);
-    if (n != hash.size()) return false;
-    unsigned char diff = 0;
-    for (std::size_t i = 0; i < n; ++i) diff |= static_cast<unsigned char>(out[i] ^ hash[i]);
-    return diff == 0;
-}
 
 std::string randomToken(std::size_t bytes)
 {
@@ -69,7 +42,7 @@ void Sessions::expire()
     std::erase_if(sessions_, [&](const auto& kv) { return now - kv.second.last > idle_; });
 }
 
-Sessions::Session Sessions::open(std::string name)
+Sessions::Session Sessions::open(std::string name, store::Role role, bool shared)
 {
     std::lock_guard lock(mutex_);
     expire();
@@ -79,8 +52,8 @@ Sessions::Session Sessions::open(std::string name)
                                        [](const auto& a, const auto& b) { return a.second.last < b.second.last; });
         sessions_.erase(oldest);
     }
-    Session s{randomToken(), randomToken(), std::move(name)};
-    sessions_[s.id] = {s.csrf, s.name, clock_.now()};
+    Session s{randomToken(), randomToken(), std::move(name), role, shared};
+    sessions_[s.id] = {s, clock_.now()};
     return s;
 }
 
@@ -91,7 +64,7 @@ std::optional<Sessions::Session> Sessions::touch(const std::string& id)
     auto it = sessions_.find(id);
     if (it == sessions_.end()) return std::nullopt;
     it->second.last = clock_.now();
-    return Session{id, it->second.csrf, it->second.name};
+    return it->second.session;
 }
 
 void Sessions::close(const std::string& id)

@@ -1,11 +1,11 @@
-// The web HMI's guards (docs/hmi.md, "Security"): the maintenance password
-// checked against its crypt(3) hash (libxcrypt: yescrypt, SHA-crypt), the
-// signed-in engineers' sessions with their CSRF tokens, and a token-bucket
+// The web HMI's guards (docs/hmi.md, "Security"): the signed-in people's
+// sessions (their account and role, docs/audit.md) with their CSRF tokens, and a token-bucket
 // rate limit per client address. No HTTP here: the server asks these and
 // answers 401/403/429 itself; the clock is injected so the tests move it.
 #pragma once
 
 #include "hullgauge/common/clock.h"
+#include "hullgauge/store/accounts.h"
 
 #include <cstddef>
 #include <map>
@@ -15,11 +15,10 @@
 
 namespace hg::daemon {
 
-/// True when `hash` is a crypt(3) setting this libcrypt can verify (the
-/// prefixes `$y$`, `$gy$`, `$7$`, `$6$`, `$5$`, `$2b$`): never a plain password.
-bool validPasswordHash(const std::string& hash);
-/// Whether `password` hashes to `hash` (crypt_r; compared in constant time).
-bool verifyPassword(const std::string& password, const std::string& hash);
+// The password checks live with the accounts (hullgauge/store/accounts.h), one implementation for the
+// daemon and the tool.
+using store::validPasswordHash;
+using store::verifyPassword;
 
 /// Signed-in maintenance sessions: an unguessable id (the HttpOnly cookie)
 /// and its CSRF token (sent back in the X-CSRF-Token header of every
@@ -31,11 +30,13 @@ class Sessions {
     struct Session {
         std::string id;
         std::string csrf;
-        /// The name the engineer signed in with (docs/workbench.md: who released
-        /// what); one shared password, so it is what they said, not a proof.
+        /// The account signed in (docs/audit.md, "Roles"); with the shared maintenance
+        /// password, the name given, which is what they said, not a proof.
         std::string name;
+        store::Role role = store::Role::Engineer;
+        bool shared = false; ///< signed in with the shared maintenance password, not an account's own
     };
-    Session open(std::string name = {});
+    Session open(std::string name = {}, store::Role role = store::Role::Engineer, bool shared = false);
     /// The session when `id` is live (its idle time restarts), else nothing.
     std::optional<Session> touch(const std::string& id);
     void close(const std::string& id);
@@ -46,8 +47,7 @@ class Sessions {
     void expire();
 
     struct Entry {
-        std::string csrf;
-        std::string name;
+        Session session;
         Clock::time_point last;
     };
     Clock::duration idle_;

@@ -367,18 +367,6 @@ class GatedStream : public httplib::Stream {
 
 /// The name an engineer signs in with (`name`, optional): who released what
 /// on the workbench (docs/workbench.md). Printable, at most 64 bytes.
-std::string signInName(const json& body)
-{
-    if (!body.contains("name")) return "engineer";
-    if (!body["name"].is_string()) throw HttpError(400, "name: not a string");
-    const auto name = body["name"].get<std::string>();
-    if (name.empty() || name.size() > 64 || !std::all_of(name.begin(), name.end(), [](char c) {
-            return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
-        }))
-        throw HttpError(400, "name: 1 to 64 printable characters");
-    return name;
-}
-
 } // namespace
 
 /// cpp-httplib's server answering requests the gate read (GateListener): its
@@ -394,13 +382,13 @@ class GatedHttpServer : public httplib::Server {
 };
 
 HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox, Clock& clock,
-                     SnapshotSource snapshots, station::UtcOffset utcOffset)
+                     SnapshotSource snapshots, station::UtcOffset utcOffset, std::shared_ptr<store::AuditLog> audit)
     : config_(std::move(config)), mailbox_(mailbox), clock_(clock), snapshots_(std::move(snapshots)),
       utcOffset_(utcOffset ? std::move(utcOffset) : station::UtcOffset(station::localUtcOffset)),
-      sessions_(config_->http.sessionIdle, clock),
       limiter_(config_->http.requestsPerSecond, config_->http.burst, clock),
-      // Guessing the password: five tries at once, then one every 12 s per address.
-      signIns_(1.0 / 12.0, 5.0, clock), server_(std::make_unique<GatedHttpServer>())
+      audit_(audit ? std::move(audit) : std::make_shared<store::AuditLog>(station::auditFile(*config_))),
+      access_(std::make_unique<Access>([this] { return this->config(); }, audit_, clock)),
+      server_(std::make_unique<GatedHttpServer>())
 {
     const auto& http = config_->http;
     // The gate holds each request to its own limit (the CAD upload to workbench.max_upload_bytes).
@@ -430,11 +418,11 @@ HmiServer::HmiServer(std::shared_ptr<const station::DaemonConfig> config, Comman
     });
     routePages();
     routeApi();
+    access_->route(*server_);
     routeMaintenance();
     if (config_->workbench.enabled())
         parts_ = std::make_unique<PartsRoutes>(
-            *server_, config_->workbench, [this] { return this->config(); },
-            [this](const httplib::Request& req) { return signedIn(req); }, mailbox_, files_);
+            *server_, config_->workbench, [this] { return this->config(); }, *access_, mailbox_, files_);
     port_ = http.port == 0 ? server_->bind_to_any_port(http.bindAddress)
                            : (server_->bind_to_port(http.bindAddress, http.port) ? http.port : -1);
     if (port_ < 0) throw FaultError("web HMI: cannot listen on " + http.bindAddress + ":" + std::to_string(http.port));
@@ -648,64 +636,39 @@ void HmiServer::routeApi()
                  }));
 }
 
-// Sign-in and the maintenance actions: the maintenance socket's commands a
-// signed-in engineer may send (docs/hmi.md, "Maintenance").
+// The maintenance actions (docs/hmi.md, "Maintenance"): the maintenance socket's commands a signed-in
+// engineer may send, each under the right it needs (docs/audit.md); the command table records the
+// changes among them with the person who asked.
 void HmiServer::routeMaintenance()
 {
-    server_->Post("/api/login", api([this](const httplib::Request& req, httplib::Response& res) {
-                      const auto& hash = config()->http.passwordHash;
-                      if (hash.empty()) throw HttpError(403, "maintenance over HTTP is not configured");
-                      if (!signIns_.allow(req.remote_addr)) throw HttpError(429, "too many sign-in attempts");
-                      const auto body = json::parse(req.body, nullptr, false);
-                      if (!body.is_object() || !body.contains("password") || !body["password"].is_string())
-                          throw HttpError(400, "expected {\"password\": \"...\"}");
-                      const auto name = signInName(body);
-                      if (!verifyPassword(body["password"].get<std::string>(), hash))
-                          throw HttpError(401, "wrong password");
-                      const auto session = sessions_.open(name);
-                      res.set_header("Set-Cookie", "hg_session=" + session.id + "; Path=/; HttpOnly; SameSite=Strict");
-                      hg::log::category("hmi")->info("maintenance sign-in from {} as '{}'", req.remote_addr, name);
-                      sendJson(res, {{"csrf", session.csrf}});
-                  }));
-    server_->Post("/api/logout", api([this](const httplib::Request& req, httplib::Response& res) {
-                      sessions_.close(sessionCookie(req));
-                      res.set_header("Set-Cookie", "hg_session=; Path=/; HttpOnly; SameSite=Strict; Max-Age=0");
-                      sendJson(res, {{"ok", true}});
-                  }));
-    server_->Get(
-        "/api/session", api([this](const httplib::Request& req, httplib::Response& res) {
-            const auto session = sessions_.touch(sessionCookie(req));
-            json body{{"signed_in", session.has_value()}, {"configured", !config()->http.passwordHash.empty()}};
-            if (session) {
-                body["csrf"] = session->csrf;
-                body["name"] = session->name;
-            }
-            sendJson(res, body);
-        }));
     server_->Post(
         "/api/maintenance", api([this](const httplib::Request& req, httplib::Response& res) {
-            signedIn(req);
             auto body = json::parse(req.body, nullptr, false);
             if (!body.is_object() || !body.contains("command") || !body["command"].is_string())
                 throw HttpError(400, "expected {\"command\": \"...\", ...}");
-            static const std::set<std::string> kAllowed{"trigger", "abort", "purpose", "sim-part", "snapshot"};
+            using store::Permission;
+            static const std::map<std::string, std::pair<Permission, const char*>> kOffered{
+                {"trigger", {Permission::Operate, "maintenance.trigger"}},
+                {"abort", {Permission::Operate, "maintenance.abort"}},
+                {"snapshot", {Permission::Operate, "maintenance.snapshot"}},
+                {"sim-part", {Permission::Operate, "setting.sim-part"}},
+                {"purpose", {Permission::Operate, "setting.purpose"}},
+                {"calibrate", {Permission::Calibration, "calibration.run"}},
+                {"reload", {Permission::Settings, "setting.reload"}}};
             const auto command = body["command"].get<std::string>();
-            if (!kAllowed.count(command)) throw HttpError(400, "command '" + command + "' is not offered");
-            hg::log::category("hmi")->info("maintenance '{}' from {}", command, req.remote_addr);
+            const auto offered = kOffered.find(command);
+            if (offered == kOffered.end()) throw HttpError(400, "command '" + command + "' is not offered");
+            const auto [permission, action] = offered->second;
+            const auto actor = access_->authorize(req, permission, action, command);
+            // The HMI's calibration writes the station's own file, nowhere else.
+            if (command == "calibrate" && body.contains("out"))
+                throw HttpError(400, "out: the HMI's calibration writes the station file the daemon runs with");
+            body["caller"] = {{"who", actor.name}, {"role", enumName(actor.role)}, {"source", actor.source}};
+            hg::log::category("hmi")->info("maintenance '{}' from {} by '{}'", command, req.remote_addr, actor.name);
             auto answer = mailbox_.call(std::move(body), std::chrono::milliseconds(2000));
             if (!answer) throw HttpError(503, "the daemon did not answer in time");
             sendJson(res, *answer, answer->value("ok", false) ? 200 : 409);
         }));
-}
-
-Sessions::Session HmiServer::signedIn(const httplib::Request& req)
-{
-    auto session = sessions_.touch(sessionCookie(req));
-    if (!session) throw HttpError(401, "sign in first");
-    if (!req.has_header("X-CSRF-Token")) throw HttpError(403, "CSRF token missing (header X-CSRF-Token)");
-    if (req.get_header_value("X-CSRF-Token") != session->csrf)
-        throw HttpError(403, "CSRF token does not match the session's (sign in again)");
-    return *session;
 }
 
 // The line view's data: the daemon's status (at most ten asks a second of the

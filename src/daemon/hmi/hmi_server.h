@@ -8,13 +8,14 @@
 //
 // Security (docs/hmi.md, "Security"): read-only pages for whoever reaches the
 // configured address (default 127.0.0.1); state-changing requests only in a
-// signed-in session (password checked against a crypt(3) hash), with its CSRF
+// signed-in session whose role allows them (docs/audit.md), with its CSRF
 // token in a header, a JSON body and a same-origin Origin; no CORS; request
 // size and a rate limit per address; every bad request is a 4xx.
 #pragma once
 
 #include "command_mailbox.h"
 #include "daemon_config.h"
+#include "hmi/access.h"
 #include "hmi/gate_listener.h"
 #include "hmi/hmi_auth.h"
 #include "hmi/static_files.h"
@@ -46,9 +47,11 @@ class HmiServer {
     /// Binds the configured address (throws hg::FaultError naming it when it
     /// cannot) and starts serving. `config` is the running configuration;
     /// `snapshots` gives the maintenance page its camera frame (none: 404);
-    /// `utcOffset` the station's zone for the shifts (none: the machine's, station::localUtcOffset).
+    /// `utcOffset` the station's zone for the shifts (none: the machine's, station::localUtcOffset);
+    /// `audit` the daemon's audit trail (none: `results.audit` opened here).
     HmiServer(std::shared_ptr<const station::DaemonConfig> config, CommandMailbox& mailbox,
-              Clock& clock = Clock::steady(), SnapshotSource snapshots = {}, station::UtcOffset utcOffset = {});
+              Clock& clock = Clock::steady(), SnapshotSource snapshots = {}, station::UtcOffset utcOffset = {},
+              std::shared_ptr<store::AuditLog> audit = {});
     ~HmiServer();
     HmiServer(const HmiServer&) = delete;
     HmiServer& operator=(const HmiServer&) = delete;
@@ -65,8 +68,6 @@ class HmiServer {
     void routeApi();
     void routeMaintenance();
     bool guard(const httplib::Request& req, httplib::Response& res);
-    /// The signed-in session of a state-changing request, with its CSRF token checked (401/403 otherwise).
-    Sessions::Session signedIn(const httplib::Request& req);
     nlohmann::json status();
     nlohmann::json disk(const station::DaemonConfig& cfg);
 
@@ -76,9 +77,9 @@ class HmiServer {
     Clock& clock_;
     SnapshotSource snapshots_;
     station::UtcOffset utcOffset_;
-    Sessions sessions_;
     RateLimiter limiter_;
-    RateLimiter signIns_;
+    std::shared_ptr<store::AuditLog> audit_;
+    std::unique_ptr<Access> access_; ///< sign-in, roles, accounts and the audit trail (docs/audit.md)
     std::unique_ptr<GatedHttpServer> server_;
     StaticFiles files_;                  ///< the pages, libraries and images, validated and compressed once
     std::unique_ptr<PartsRoutes> parts_; ///< with `workbench` configured

@@ -120,8 +120,8 @@ json rowJson(const workbench::PartState& s)
 } // namespace
 
 PartsRoutes::PartsRoutes(httplib::Server& server, const station::WorkbenchConfig& workbench, ConfigSource config,
-                         SignedIn signedIn, CommandMailbox& mailbox, StaticFiles& files)
-    : workbench_(workbench), workspace_(workbench.folder), config_(std::move(config)), signedIn_(std::move(signedIn)),
+                         Access& access, CommandMailbox& mailbox, StaticFiles& files)
+    : workbench_(workbench), workspace_(workbench.folder), config_(std::move(config)), access_(access),
       mailbox_(mailbox), files_(files),
       jobs_(std::make_unique<PartJobs>(workbench.cli, workbench.folder, workbench.maxJobs))
 {
@@ -148,6 +148,34 @@ json PartsRoutes::partJson(const std::string& part) const
     const auto job = jobs_->job(part);
     j["job"] = job ? toJson(*job) : json(nullptr);
     return j;
+}
+
+Actor PartsRoutes::engineer(const httplib::Request& req, const std::string& action, const std::string& part)
+{
+    return access_.authorize(req, store::Permission::Programs, action, part);
+}
+
+std::string PartsRoutes::auditState(const std::string& part) const
+{
+    try {
+        const json j = workbench::toJson(workspace_.read(part));
+        return json{{"revision", j["revision"]},
+                    {"draft", j["draft"]},
+                    {"plc_program", j["plc_program"]},
+                    {"released", j["released"]}}
+            .dump(2);
+    } catch (const InputError&) {
+        return {}; // not there (yet, or any more)
+    }
+}
+
+template <class Change>
+auto PartsRoutes::audited(const Actor& by, const std::string& action, const std::string& part, Change&& change)
+{
+    const auto before = auditState(part);
+    auto result = change();
+    access_.record(by, action, part, "done", {}, before, auditState(part));
+    return result;
 }
 
 void PartsRoutes::routeReads(httplib::Server& server)
@@ -233,7 +261,7 @@ void PartsRoutes::routeLandmarks(httplib::Server& server)
 {
     const std::string parts = std::string("/api/parts/") + kPart;
     server.Post("/api/parts", api([this](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
+                    const auto session = engineer(req, "program.add", req.get_param_value("name"));
                     if (!req.has_param("file")) throw HttpError(400, "file: missing (the CAD file's name)");
                     workbench::AddOptions options;
                     if (req.has_param("name")) options.name = req.get_param_value("name");
@@ -248,6 +276,8 @@ void PartsRoutes::routeLandmarks(httplib::Server& server)
                     const auto state = refusing([&] {
                         return workspace_.addUpload(req.get_param_value("file"), req.body, options, {session.name});
                     });
+                    access_.record(session, "program.add", state.record.part, "done",
+                                   "CAD file " + req.get_param_value("file"), {}, auditState(state.record.part));
                     hg::log::category("workbench")->info("part {} added by {}", state.record.part, session.name);
                     sendJson(res, partJson(state.record.part), 201);
                 }));
@@ -257,7 +287,8 @@ void PartsRoutes::routeLandmarks(httplib::Server& server)
         return answer;
     };
     server.Post(parts + "/landmarks", api([this, placedAnswer](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
+                    const std::string part = req.matches[1].str();
+                    const auto session = engineer(req, "program.landmark.add", part);
                     const auto body = jsonBody(req, "{\"revision\": N, \"position\": [x, y, z], ...}");
                     if (!body.contains("position")) throw HttpError(400, "position: missing");
                     std::optional<std::string> id;
@@ -265,33 +296,38 @@ void PartsRoutes::routeLandmarks(httplib::Server& server)
                         if (!body["id"].is_string()) throw HttpError(400, "id: not a string");
                         id = body["id"].get<std::string>();
                     }
-                    const std::string part = req.matches[1].str();
-                    const auto placed = refusing([&] {
-                        return workspace_.addLandmark(part, revisionOf(body), id, editOf(body), {session.name});
+                    const auto placed = audited(session, "program.landmark.add", part, [&] {
+                        return refusing([&] {
+                            return workspace_.addLandmark(part, revisionOf(body), id, editOf(body), {session.name});
+                        });
                     });
                     sendJson(res, placedAnswer(part, placed));
                 }));
     server.Post(parts + "/landmarks/([^/]{1,64})",
                 api([this, placedAnswer](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
-                    const auto body = jsonBody(req, "{\"revision\": N, ...}");
                     const std::string part = req.matches[1].str();
-                    const auto placed = refusing([&] {
-                        return workspace_.changeLandmark(part, revisionOf(body), req.matches[2].str(), editOf(body),
-                                                         {session.name});
+                    const auto session = engineer(req, "program.landmark.change", part);
+                    const auto body = jsonBody(req, "{\"revision\": N, ...}");
+                    const auto placed = audited(session, "program.landmark.change", part, [&] {
+                        return refusing([&] {
+                            return workspace_.changeLandmark(part, revisionOf(body), req.matches[2].str(), editOf(body),
+                                                             {session.name});
+                        });
                     });
                     sendJson(res, placedAnswer(part, placed));
                 }));
-    server.Post(parts + "/landmarks/([^/]{1,64})/remove",
-                api([this](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
-                    const auto body = jsonBody(req, "{\"revision\": N}");
-                    const std::string part = req.matches[1].str();
-                    refusing([&] {
-                        return workspace_.removeLandmark(part, revisionOf(body), req.matches[2].str(), {session.name});
-                    });
-                    sendJson(res, partJson(part));
-                }));
+    server.Post(
+        parts + "/landmarks/([^/]{1,64})/remove", api([this](const httplib::Request& req, httplib::Response& res) {
+            const std::string part = req.matches[1].str();
+            const auto session = engineer(req, "program.landmark.remove", part);
+            const auto body = jsonBody(req, "{\"revision\": N}");
+            audited(session, "program.landmark.remove", part, [&] {
+                return refusing([&] {
+                    return workspace_.removeLandmark(part, revisionOf(body), req.matches[2].str(), {session.name});
+                });
+            });
+            sendJson(res, partJson(part));
+        }));
 }
 
 void PartsRoutes::routeJobs(httplib::Server& server)
@@ -299,9 +335,9 @@ void PartsRoutes::routeJobs(httplib::Server& server)
     const std::string parts = std::string("/api/parts/") + kPart;
     for (const std::string kind : {"suggest", "plan", "commission"})
         server.Post(parts + "/" + kind, api([this, kind](const httplib::Request& req, httplib::Response& res) {
-                        const auto session = signedIn_(req);
-                        const auto body = jsonBody(req, "{...}");
                         const std::string part = req.matches[1].str();
+                        const auto session = engineer(req, "program." + kind, part);
+                        const auto body = jsonBody(req, "{...}");
                         refusing([&] { return workspace_.partFolder(part); });
                         std::vector<std::string> args{"--station", config_()->stationFile.string()};
                         if (kind == "commission") {
@@ -315,12 +351,14 @@ void PartsRoutes::routeJobs(httplib::Server& server)
                         }
                         if (auto started = jobs_->start(part, kind, args, session.name); !started)
                             throw HttpError(409, started.message());
+                        access_.record(session, "program." + kind, part, "done", kind + " started");
                         sendJson(res, toJson(*jobs_->job(part)), 202);
                     }));
     server.Post(parts + "/job/cancel", api([this](const httplib::Request& req, httplib::Response& res) {
-                    (void)signedIn_(req);
+                    const auto session = engineer(req, "program.job.cancel", req.matches[1].str());
                     if (!jobs_->cancel(req.matches[1].str()))
                         throw HttpError(409, "part " + req.matches[1].str() + " has no job running");
+                    access_.record(session, "program.job.cancel", req.matches[1].str(), "done");
                     sendJson(res, toJson(*jobs_->job(req.matches[1].str())));
                 }));
 }
@@ -339,9 +377,9 @@ void PartsRoutes::routeVersions(httplib::Server& server)
 {
     const std::string parts = std::string("/api/parts/") + kPart;
     server.Post(parts + "/release", api([this](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
-                    const auto body = jsonBody(req, "{\"revision\": N, \"plc_program\": P}");
                     const std::string part = req.matches[1].str();
+                    const auto session = engineer(req, "program.release", part);
+                    const auto body = jsonBody(req, "{\"revision\": N, \"plc_program\": P}");
                     std::optional<int> number;
                     if (body.contains("plc_program") && !body["plc_program"].is_null()) {
                         if (!body["plc_program"].is_number_integer() || body["plc_program"].get<int>() < 1 ||
@@ -354,23 +392,27 @@ void PartsRoutes::routeVersions(httplib::Server& server)
                     std::vector<int> taken;
                     for (const auto& [n, ref] : cfg->programs)
                         if (ref.workbenchPart != part) taken.push_back(n);
-                    const auto version = refusing([&] {
-                        return workspace_.release(part, revisionOf(body), cfg->stationFile, number, taken,
-                                                  {session.name});
+                    const auto version = audited(session, "program.release", part, [&] {
+                        return refusing([&] {
+                            return workspace_.release(part, revisionOf(body), cfg->stationFile, number, taken,
+                                                      {session.name});
+                        });
                     });
                     hg::log::category("workbench")
                         ->info("part {} version {} released by {}", part, version.version, session.name);
                     sendJson(res, reloaded(part));
                 }));
     server.Post(parts + "/rollback", api([this](const httplib::Request& req, httplib::Response& res) {
-                    const auto session = signedIn_(req);
+                    const std::string part = req.matches[1].str();
+                    const auto session = engineer(req, "program.rollback", part);
                     const auto body = jsonBody(req, "{\"version\": V}");
                     if (!body.contains("version") || !body["version"].is_number_integer())
                         throw HttpError(400, "version: the version to make the one in force again");
-                    const std::string part = req.matches[1].str();
                     if (jobs_->running(part)) throw HttpError(409, "part " + part + " has a job running");
-                    const auto version =
-                        refusing([&] { return workspace_.rollback(part, body["version"].get<int>(), {session.name}); });
+                    const auto version = audited(session, "program.rollback", part, [&] {
+                        return refusing(
+                            [&] { return workspace_.rollback(part, body["version"].get<int>(), {session.name}); });
+                    });
                     hg::log::category("workbench")
                         ->info("part {} rolled back to version {} as version {} by {}", part,
                                body["version"].get<int>(), version.version, session.name);

@@ -7,6 +7,7 @@
 #include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
+#include "hmi/fake_loop.h"
 #include "hmi/hmi_auth.h"
 #include "hmi/hmi_server.h"
 #include "hullgauge/station/sequencer.h"
@@ -56,56 +57,6 @@ station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict, co
                     bad ? 0.625 : 0.125, bad ? 0.5625 : 0.0625, 0.2}};
     return r;
 }
-
-/// The daemon's main loop as far as the HMI sees it: answers the mailbox
-/// with a status and records every maintenance command it was handed.
-class FakeLoop {
-  public:
-    explicit FakeLoop(CommandMailbox& mailbox) : mailbox_(mailbox), thread_([this] { run(); }) {}
-    ~FakeLoop()
-    {
-        stop_ = true;
-        thread_.join();
-    }
-    std::vector<json> commands()
-    {
-        std::lock_guard lock(mutex_);
-        return commands_;
-    }
-    /// What `status` answers from now on.
-    void setStatus(json status)
-    {
-        std::lock_guard lock(mutex_);
-        status_ = std::move(status);
-    }
-
-  private:
-    void run()
-    {
-        while (!stop_) {
-            pollfd fd{mailbox_.fd(), POLLIN, 0};
-            if (poll(&fd, 1, 20) > 0) mailbox_.serve([this](const json& request) { return answer(request); });
-        }
-    }
-    json answer(const json& request)
-    {
-        std::lock_guard lock(mutex_);
-        commands_.push_back(request);
-        if (request.at("command") == "status") return status_;
-        return {{"ok", true}, {"did", request.at("command")}};
-    }
-
-    CommandMailbox& mailbox_;
-    std::atomic<bool> stop_{false};
-    std::mutex mutex_;
-    std::vector<json> commands_;
-    json status_{{"ok", true},
-                 {"pid", 1},
-                 {"sequencer", {{"state", "ready"}, {"cycles", 3}, {"faults", 0}}},
-                 {"plc", {{"status", 1}, {"done_seq", 3}}},
-                 {"lamps", {{"green", "on"}, {"amber", "off"}, {"red", "off"}}}};
-    std::thread thread_;
-};
 
 class HmiServerTest : public ::testing::Test {
   protected:
@@ -589,7 +540,7 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
     ASSERT_TRUE(crossSite);
     EXPECT_EQ(crossSite->status, 403);
     auto notOffered = client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}},
-                                   R"({"command": "calibrate"})", "application/json");
+                                   R"({"command": "results"})", "application/json");
     ASSERT_TRUE(notOffered);
     EXPECT_EQ(notOffered->status, 400);
     for (const auto& c : loop->commands()) EXPECT_NE(c.at("command"), "purpose") << "refused requests reached the loop";
@@ -599,7 +550,11 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
     EXPECT_EQ(ok->status, 200) << ok->body;
     const auto seen = loop->commands();
     ASSERT_FALSE(seen.empty());
-    EXPECT_EQ(seen.back(), json::parse(body));
+    // Handed on with who asked (docs/audit.md): the name signed in with the shared password, an engineer.
+    auto handed = seen.back();
+    EXPECT_EQ(handed["caller"], json({{"who", "engineer"}, {"role", "engineer"}, {"source", "hmi 127.0.0.1"}}));
+    handed.erase("caller");
+    EXPECT_EQ(handed, json::parse(body));
 
     // The session ends when it has been idle too long.
     clock.advance(std::chrono::duration_cast<std::chrono::milliseconds>(config->http.sessionIdle) + 1s);
@@ -628,7 +583,9 @@ TEST_F(HmiServerTest, TheCameraSnapshotIsAskedForSignedInAndServedAsPng)
         client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
     ASSERT_TRUE(asked);
     EXPECT_EQ(asked->status, 200) << asked->body;
-    EXPECT_EQ(loop->commands().back(), json::parse(body));
+    auto handed = loop->commands().back();
+    handed.erase("caller"); // who asked: tests/daemon/hmi/test_access.cpp
+    EXPECT_EQ(handed, json::parse(body));
     EXPECT_EQ(getJson("/api/snapshot").at("did"), "snapshot");
 
     std::vector<unsigned char> encoded;

@@ -43,10 +43,48 @@ const hg = {
     return n.toFixed(i ? 1 : 0) + " " + units[i];
   },
   nav(active) {
-    const pages = [["/", "Line"], ["/results", "Results"], ["/spc", "SPC"], ["/parts", "Parts"], ["/maintenance", "Maintenance"]];
+    const pages = [["/", "Line"], ["/results", "Results"], ["/spc", "SPC"], ["/parts", "Parts"], ["/maintenance", "Maintenance"],
+      ["/audit", "Audit"], ["/users", "Users"]];
     const nav = document.querySelector("nav");
     for (const [href, label] of pages)
       nav.append(hg.el("a", { href, class: href === active ? "active" : "", text: label }));
+  },
+  // Signing in with one's own account (docs/audit.md): the answer carries the session's CSRF token and role.
+  signIn(name, password) {
+    const body = { password };
+    if (name) body.name = name;
+    return hg.post("/api/login", body);
+  },
+  // "anna (administrator)", or the shared password's name marked as such.
+  who(s) { return `${s.name} (${s.role}${s.shared ? ", shared password" : ""})`; },
+  // The lines of `before` and `after` as rows of a side-by-side view, each {kind: same|del|add|change,
+  // left, right}: the common head and tail kept, the middle matched by its longest common subsequence
+  // when small enough (else shown as replaced whole).
+  lineDiff(before, after) {
+    const a = before ? before.split("\n") : [], b = after ? after.split("\n") : [];
+    let head = 0;
+    while (head < a.length && head < b.length && a[head] === b[head]) head++;
+    let tail = 0;
+    while (tail < a.length - head && tail < b.length - head && a[a.length - 1 - tail] === b[b.length - 1 - tail]) tail++;
+    const rows = a.slice(0, head).map((l) => ({ kind: "same", left: l, right: l }));
+    const x = a.slice(head, a.length - tail), y = b.slice(head, b.length - tail);
+    if (x.length * y.length <= 4e6) {
+      const L = Array.from({ length: x.length + 1 }, () => new Uint32Array(y.length + 1));
+      for (let i = x.length - 1; i >= 0; i--)
+        for (let j = y.length - 1; j >= 0; j--)
+          L[i][j] = x[i] === y[j] ? L[i + 1][j + 1] + 1 : Math.max(L[i + 1][j], L[i][j + 1]);
+      let i = 0, j = 0;
+      while (i < x.length || j < y.length) {
+        if (i < x.length && j < y.length && x[i] === y[j]) { rows.push({ kind: "same", left: x[i], right: y[j] }); i++; j++; }
+        else if (j < y.length && (i === x.length || L[i][j + 1] >= L[i + 1][j])) rows.push({ kind: "add", left: "", right: y[j++] });
+        else rows.push({ kind: "del", left: x[i++], right: "" });
+      }
+    } else {
+      for (let k = 0; k < Math.max(x.length, y.length); k++)
+        rows.push({ kind: "change", left: x[k] ?? "", right: y[k] ?? "" });
+    }
+    for (let k = a.length - tail; k < a.length; k++) rows.push({ kind: "same", left: a[k], right: a[k] });
+    return rows;
   },
   // A time for the operator: the browser's local time with its zone ("14:03:12 CET"), the date
   // in front when it is not today; `utc` (the store's ISO text or ms since 1970) goes in the tooltip.

@@ -1,7 +1,9 @@
 // The line engineer's page (docs/hmi.md, "Maintenance"): calibration status
 // and history, the last camera snapshot, the part programs and their view
 // plans for everyone; the state-changing actions (a snapshot among them) only
-// in a signed-in session, each carrying its CSRF token.
+// in a signed-in session whose role allows them (docs/audit.md), each carrying
+// its CSRF token. The server checks every request; the page only leaves out
+// what the role may not do.
 "use strict";
 hg.nav("/maintenance");
 
@@ -12,11 +14,16 @@ function say(id, text) { document.getElementById(id).textContent = text; }
 async function session() {
   const s = await hg.get("/api/session");
   csrf = s.csrf || null;
+  const may = s.signed_in ? s.may : {};
   document.getElementById("login").hidden = !s.configured || s.signed_in;
-  document.getElementById("actions").hidden = !s.signed_in;
-  document.getElementById("snapshot-actions").hidden = !s.signed_in;
+  document.getElementById("actions").hidden = !may.operate;
+  document.getElementById("snapshot-actions").hidden = !may.operate;
+  document.getElementById("calibrate-actions").hidden = !may.calibration;
+  document.getElementById("settings-actions").hidden = !may.settings;
+  document.getElementById("logout-line").hidden = !s.signed_in;
   say("session", !s.configured ? "Maintenance over HTTP is not configured on this station."
-    : s.signed_in ? "Signed in." : "Read-only: sign in for maintenance actions.");
+    : !s.signed_in ? "Read-only: sign in for maintenance actions."
+    : "Signed in as " + hg.who(s) + "." + (may.operate ? "" : " An operator watches: no maintenance actions."));
 }
 
 async function act(body) {
@@ -112,7 +119,7 @@ async function show() {
 document.getElementById("login").addEventListener("submit", async (ev) => {
   ev.preventDefault();
   try {
-    const answer = await hg.post("/api/login", { password: document.getElementById("password").value });
+    const answer = await hg.signIn(document.getElementById("login-name").value.trim(), document.getElementById("password").value);
     csrf = answer.csrf;
     document.getElementById("password").value = "";
     await session();
@@ -124,6 +131,9 @@ document.getElementById("set-purpose").addEventListener("click", () => act({ com
 document.getElementById("trigger").addEventListener("click", () => act({ command: "trigger",
   program: Number(document.getElementById("trigger-program").value), serial: document.getElementById("trigger-serial").value }));
 document.getElementById("abort").addEventListener("click", () => act({ command: "abort" }));
+document.getElementById("calibrate").addEventListener("click", () => act({ command: "calibrate",
+  pattern: document.getElementById("cal-pattern").value.trim(), poses: document.getElementById("cal-poses").value.trim() }));
+document.getElementById("reload").addEventListener("click", () => act({ command: "reload" }));
 document.getElementById("grab").addEventListener("click", grab);
 document.getElementById("logout").addEventListener("click", async () => { await hg.post("/api/logout", {}, csrf); await session(); });
 show();

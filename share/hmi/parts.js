@@ -105,14 +105,16 @@ async function change(path, body, where) {
 async function session() {
   const s = await get("/api/session");
   state.csrf = s.csrf || null;
-  state.signedIn = !!s.signed_in;
+  // Changes need the right to change part programs (docs/audit.md); an operator signed in only reads.
+  state.mayChange = !!s.signed_in && !!s.may && !!s.may.programs;
   state.who = s.name || null;
   $("login").hidden = !s.configured || s.signed_in;
   $("logout").hidden = !s.signed_in;
   say("session", !s.configured ? "Changes over HTTP are not configured on this station."
-    : s.signed_in ? `Signed in as ${s.name || "engineer"}.` : "Read-only: sign in to change parts.");
+    : !s.signed_in ? "Read-only: sign in to change parts."
+    : `Signed in as ${hg.who(s)}.` + (state.mayChange ? "" : " Only an engineer or administrator changes parts."));
   say("who", s.signed_in ? s.name || "" : "");
-  for (const e of document.querySelectorAll(".needs-sign-in")) e.disabled = !s.signed_in;
+  for (const e of document.querySelectorAll(".needs-sign-in")) e.disabled = !state.mayChange;
 }
 
 $("login").addEventListener("submit", async (ev) => {
@@ -312,7 +314,7 @@ function placedText(placed, verb) {
 // sharp edge within the snap distance) and says where it landed.
 async function addLandmark(hit) {
   if (!$("click-adds").checked) return;
-  if (!state.signedIn) return say("landmark-result", "Sign in to add landmarks.", "error");
+  if (!state.mayChange) return say("landmark-result", "Sign in as an engineer to add landmarks.", "error");
   const position = hit.point.toArray();
   hook.lastPick = position;
   const answer = await change(base() + "/landmarks", { revision: state.part.revision, position }, "landmark-result");
@@ -384,7 +386,7 @@ function showSuggestions() {
   tbody.replaceChildren();
   state.suggestions.forEach((c, k) => {
     const adopt = hg.el("button", { class: "needs-sign-in", text: "Adopt" });
-    adopt.disabled = !state.signedIn;
+    adopt.disabled = !state.mayChange;
     adopt.addEventListener("click", (ev) => { ev.stopPropagation(); adoptSuggestion(c); });
     const tr = hg.el("tr", { "data-suggestion": String(k), title: [featureOf(c), whyOf(c)].filter(Boolean).join(": "),
       class: [refused(c) ? "refused" : "chosen", k === state.selectedSuggestion ? "selected" : ""].join(" ") },
@@ -522,8 +524,8 @@ function watchJob() {
 function showJob(job) {
   const running = !!job && job.state === "running";
   $("cancel").hidden = !running;
-  $("commission").disabled = running || !state.signedIn;
-  $("suggest").disabled = running || !state.signedIn;
+  $("commission").disabled = running || !state.mayChange;
+  $("suggest").disabled = running || !state.mayChange;
   hook.job = job;
   if (!job) return;
   // A verification that does not release the draft: the report says why, not a fault.
@@ -587,7 +589,7 @@ async function loadVersions() {
   state.versions = versions;
   const tbody = document.querySelector("#versions tbody");
   tbody.replaceChildren(...PartsReport.versionRows(versions, { rollback }));
-  for (const b of tbody.querySelectorAll(".needs-sign-in")) b.disabled = !state.signedIn;
+  for (const b of tbody.querySelectorAll(".needs-sign-in")) b.disabled = !state.mayChange;
 }
 
 async function rollback(version) {
@@ -659,7 +661,7 @@ function initView() {
     select: onSelect,
     surface: addLandmark,
     dragPin: moveLandmark,
-    canDrag: () => state.signedIn,
+    canDrag: () => state.mayChange,
     loaded: (level) => { hook.state = level; },
   });
   $("fit").addEventListener("click", () => hook.view.fit(false));

@@ -36,34 +36,39 @@ class Demo:
     def __init__(self, source, bin_dir, tmp, *args):
         env = dict(os.environ, HULLGAUGE_BIN=str(bin_dir), TMPDIR=str(tmp))
         self.process = subprocess.Popen([str(source / "tools" / "demo"), "--no-build", *args], cwd=source, env=env,
-                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                        start_new_session=True)
+                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
         self.lines = []
+        self.rest = b""
 
     def until(self, pattern, timeout_s):
         """Reads lines until one matches `pattern` (the match) or the demo ends or the deadline passes (None)."""
         deadline = time.monotonic() + timeout_s
-        os.set_blocking(self.process.stdout.fileno(), False)
-        buffer = ""
+        fd = self.process.stdout.fileno()
+        os.set_blocking(fd, False)
         while time.monotonic() < deadline:
-            chunk = self.process.stdout.read()
+            try:
+                chunk = os.read(fd, 65536)
+            except BlockingIOError:
+                chunk = None
             if chunk:
-                buffer += chunk
-                *done, buffer = buffer.split("\n")
-                for line in done:
+                *done, self.rest = (self.rest + chunk).split(b"\n")
+                for raw in done:
+                    line = raw.decode(errors="replace")
                     self.lines.append(line)
                     if m := re.search(pattern, line):
                         return m
-            elif self.process.poll() is not None:
+            elif chunk == b"" and self.process.poll() is not None:
                 return None
-            time.sleep(0.05)
+            else:
+                time.sleep(0.05)
         return None
 
     def finish(self, timeout_s):
         """The exit status within `timeout_s` (the rest of its output kept), else SIGKILL and None."""
         try:
+            os.set_blocking(self.process.stdout.fileno(), True)
             out, _ = self.process.communicate(timeout=timeout_s)
-            self.lines += out.splitlines()
+            self.lines += (self.rest + out).decode(errors="replace").splitlines()
             return self.process.returncode
         except subprocess.TimeoutExpired:
             os.killpg(self.process.pid, signal.SIGKILL)

@@ -324,8 +324,10 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
         if (!options.logSpec.empty()) hg::log::configure(options.logSpec);
         // The folders come from the configuration read as started; everything
         // else, the part programs first, is read as the user the daemon runs as.
-        if (options.foreground && !options.checkOnly)
-            log->info("{}", enterForeground(station::loadDaemonConfig(options.configFile), options.user));
+        if (options.foreground)
+            log->info("{}",
+                      enterForeground(station::loadDaemonConfig(options.configFile, station::WorkspaceUse::LeaveBe),
+                                      options.user));
         config = loadConfig(options.configFile, checkProgram);
     } catch (const InputError& e) {
         std::cerr << "hullgauged: " << e.what() << '\n';

@@ -22,7 +22,8 @@ namespace fs = std::filesystem;
 /// The daemon's configuration with its socket in DIR/run and its store in DIR/state.
 fs::path writeFolderConfig(const hgtest::TempDir& dir)
 {
-    auto config = hgdaemon::writeConfig(dir, hgdaemon::freePort());
+    // The workspace in the state folder too, as installed (the daemon makes it as its user).
+    auto config = hgdaemon::writeConfig(dir, hgdaemon::freePort(), "workbench: {folder: state/parts}\n");
     auto text = hgdaemon::readText(config);
     for (auto [from, to] : {std::pair<std::string, std::string>{"{database: results.db, images: images}",
                                                                 "{database: state/results.db, images: state/images}"},
@@ -64,7 +65,7 @@ TEST(Foreground, CreatesItsFoldersAndRunsAsTheUnitsUserWithItsOneCapability)
     const gid_t gid = root ? nobody->pw_gid : getegid();
     DaemonProcess daemon(writeFolderConfig(dir), {}, {"--foreground", "--user", "nobody"});
     ASSERT_TRUE(hgdaemon::waitForState(dir / "run/hg.sock", "ready", 10s)) << daemon.logText();
-    for (const char* folder : {"run", "state"}) {
+    for (const char* folder : {"run", "state", "state/parts"}) {
         auto st = statOf(dir / folder);
         EXPECT_EQ(st.st_mode & 07777, 0750u) << folder;
         EXPECT_EQ(st.st_uid, uid) << folder;

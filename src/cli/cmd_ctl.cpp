@@ -131,6 +131,10 @@ void printStatus(const nlohmann::json& s)
         if (m.contains("last_error")) std::cout << " (last error: " << m["last_error"].get<std::string>() << ")";
         std::cout << "\n";
     }
+    // The web HMI's address when the daemon serves it (docs/hmi.md).
+    if (s.contains("http") && s["http"].is_object())
+        std::cout << "web HMI:      http://" << s["http"].value("address", std::string("?")) << ":"
+                  << s["http"].value("port", 0) << "/\n";
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
     if (s.contains("lamps") && s["lamps"].is_object()) {
@@ -211,6 +215,9 @@ std::function<int()> factory(CLI::App& app)
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
     ctl->require_subcommand(1);
+    // ctl's options (and hullgauge's --log) are accepted after the subcommand too, `ctl status --json` as
+    // `ctl --json status` (docs/daemon.md, "Maintenance socket"): every subcommand below inherits this.
+    ctl->fallthrough();
     auto* status = ctl->add_subcommand("status", "print the daemon state");
     auto* results = ctl->add_subcommand("results", "print the most recent results");
     results->add_option("-n,--limit", opts->limit, "how many (1..1000)")->check(CLI::Range(1, 1000));

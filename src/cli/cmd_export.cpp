@@ -19,9 +19,8 @@ namespace {
 struct ExportOptions {
     std::string store;
     std::string format;
-    int program = 0;
-    std::string since, until;
-    std::string purpose = "any";
+    store::SelectionFilters filters; ///< the web HMI's download filters (docs/hmi.md), same names and refusals
+    store::ExportSettings settings;
     std::string out;
 };
 
@@ -37,12 +36,8 @@ store::ExportFormat formatOf(const std::string& text)
 /// The cycles the export takes, oldest first (docs/export.md, "Selection").
 store::ResultQuery queryOf(const ExportOptions& o)
 {
-    store::ResultQuery q;
+    auto q = store::parseSelection(o.filters, "--");
     q.newestFirst = false;
-    if (o.program) q.program = o.program;
-    if (o.purpose != "any") q.purpose = o.purpose;
-    if (!o.since.empty()) q.sinceMs = store::parseUtc(o.since, "--since");
-    if (!o.until.empty()) q.untilMs = store::parseUtc(o.until, "--until");
     return q;
 }
 
@@ -57,7 +52,7 @@ int run(const ExportOptions& o)
     const store::ResultReader reader(o.store);
     const auto rows = reader.select(query);
     std::ostringstream text;
-    store::writeExport(text, format, rows);
+    store::writeExport(text, format, rows, o.settings);
     replaceFileDurably(o.out, text.str());
     hg::log::category("store")->info("export: {} cycles of {} as {} to {}", rows.size(), o.store, enumName(format),
                                      o.out);
@@ -72,12 +67,20 @@ std::function<int()> factory(CLI::App& app)
     sub->add_option("--store", o->store, "the result store (SQLite, read read-only)")->required();
     sub->add_option("--format", o->format, "aqdef, csv or json")->required();
     sub->add_option("--out", o->out, "the file to write (replaced whole, or left as it was on any error)")->required();
-    sub->add_option("--program", o->program, "only the cycles of this part program (default: every program)")
-        ->check(CLI::Range(1, 65535));
-    sub->add_option("--since", o->since, "only cycles started at or after this UTC time (YYYY-MM-DD[THH:MM[:SS]])");
-    sub->add_option("--until", o->until, "only cycles started before this UTC time");
-    sub->add_option("--purpose", o->purpose, "only cycles tagged production, master or study (default: any)")
-        ->check(CLI::IsMember({"production", "master", "study", "any"}));
+    // The filters as text, checked by the parser the HMI's download uses (store::parseSelection).
+    const auto filter = [&](const char* name, std::optional<std::string>& field, const char* help) {
+        sub->add_option_function<std::string>(
+            name, [&field](const std::string& v) { field = v; }, help);
+    };
+    auto& f = o->filters;
+    filter("--program", f.program, "only the cycles of this part program 1..65535 (default: every program)");
+    filter("--serial", f.serial, "only cycles whose serial contains this text (at most 64 characters)");
+    filter("--verdict", f.verdict, "only cycles that ended pass, fail, aborted or error (default: any)");
+    filter("--purpose", f.purpose, "only cycles tagged production, master or study (default: any)");
+    filter("--since", f.since, "only cycles started at or after this UTC time (YYYY-MM-DD[THH:MM[:SS]])");
+    filter("--until", f.until, "only cycles started before this UTC time");
+    sub->add_flag("--include-simulated", o->settings.includeSimulated,
+                  "count the simulated line's cycles as measurements (marked in the file; default: excluded)");
     return [=]() { return run(*o); };
 }
 

@@ -1,6 +1,7 @@
 #include "daemon.h"
 #include "config_audit.h"
 #include "config_reload.h"
+#include "foreground.h"
 
 #include "command_mailbox.h"
 #include "cycle/cycle_runner.h"
@@ -83,6 +84,8 @@ struct Options {
     std::string configFile = "/etc/hullgauge/hullgauged.yaml";
     std::string logSpec;
     bool checkOnly = false;
+    bool foreground = false;
+    std::string user = "hullgauge";
 };
 
 /// The command line; an exit status when the program ends here (help, bad arguments).
@@ -92,6 +95,10 @@ std::optional<int> parseArguments(int argc, char** argv, Options& options)
     app.add_option("--config", options.configFile, "daemon configuration (YAML)")->capture_default_str();
     app.add_option("--log", options.logSpec, "log levels, e.g. 'info' or 'warn,plc=debug' (also $HULLGAUGE_LOG)");
     app.add_flag("--check", options.checkOnly, "validate the configuration and exit (0 valid, 2 invalid)");
+    app.add_flag("--foreground", options.foreground,
+                 "run without systemd as the unit would: create or check the folders of maintenance.socket and "
+                 "results.database, as root become --user keeping only the unit's capability, log to stderr");
+    app.add_option("--user", options.user, "the user --foreground becomes when started as root")->capture_default_str();
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -323,16 +330,26 @@ int runDaemon(int argc, char** argv, const DevicesFactory& makeDevices, const In
 {
     Options options;
     if (auto exit = parseArguments(argc, argv, options)) return *exit;
-    // Under systemd (INVOCATION_ID is set for every unit) stderr is the journal.
-    if (std::getenv("INVOCATION_ID")) hg::log::useJournal();
+    // Under systemd (INVOCATION_ID is set for every unit) stderr is the journal;
+    // in the foreground it is the terminal's, whatever the environment says.
+    if (std::getenv("INVOCATION_ID") && !options.foreground) hg::log::useJournal();
     auto log = hg::log::category("daemon");
     ConfigPtr config;
     try {
         if (!options.logSpec.empty()) hg::log::configure(options.logSpec);
+        // The folders come from the configuration read as started; everything
+        // else, the part programs first, is read as the user the daemon runs as.
+        if (options.foreground)
+            log->info("{}",
+                      enterForeground(station::loadDaemonConfig(options.configFile, station::WorkspaceUse::LeaveBe),
+                                      options.user));
         config = loadConfig(options.configFile, checkProgram);
     } catch (const InputError& e) {
         std::cerr << "hullgauged: " << e.what() << '\n';
         return static_cast<int>(ExitStatus::BadInput);
+    } catch (const FaultError& e) {
+        std::cerr << "hullgauged: " << e.what() << '\n';
+        return static_cast<int>(ExitStatus::Fault);
     }
     if (options.checkOnly) {
         std::cout << options.configFile << ": valid (" << config->programs.size() << " part programs)\n";

@@ -194,7 +194,7 @@ PartProgramRef parseProgram(const std::string& key, const ConfigNode& node, cons
     return ref;
 }
 
-void parseWorkbench(const ConfigNode& node, const fs::path& base, WorkbenchConfig& workbench)
+void parseWorkbench(const ConfigNode& node, const fs::path& base, WorkbenchConfig& workbench, WorkspaceUse workspace)
 {
     node.allowOnlyKeys({"folder", "cli", "max_upload_bytes", "max_jobs"});
     workbench.folder = resolve(node["folder"], base);
@@ -202,6 +202,7 @@ void parseWorkbench(const ConfigNode& node, const fs::path& base, WorkbenchConfi
     if (auto n = node.optional("max_upload_bytes"))
         workbench.maxUploadBytes = static_cast<std::size_t>(n->asIntIn(1024, std::int64_t{1} << 30));
     if (auto n = node.optional("max_jobs")) workbench.maxJobs = static_cast<int>(n->asIntIn(1, 4));
+    if (workspace == WorkspaceUse::LeaveBe) return;
     std::error_code ec;
     fs::create_directories(workbench.folder, ec);
     if (ec || !fs::is_directory(workbench.folder))
@@ -280,7 +281,7 @@ DaemonConfig::Seating parseSeating(const ConfigNode& node)
 
 } // namespace
 
-DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse workspace)
 {
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
@@ -324,8 +325,8 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file)
     }
     if (auto n = root.optional("http")) parseHmi(*n, base, cfg.http);
     if (auto n = root.optional("workbench")) {
-        parseWorkbench(*n, base, cfg.workbench);
-        addWorkbenchPrograms(*n, cfg);
+        parseWorkbench(*n, base, cfg.workbench, workspace);
+        if (workspace == WorkspaceUse::Open) addWorkbenchPrograms(*n, cfg);
     }
     if (auto n = root.optional("mqtt")) parseMqtt(*n, base, cfg.mqtt);
     if (auto n = root.optional("watchdog")) {

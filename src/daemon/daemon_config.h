@@ -202,9 +202,16 @@ struct DaemonConfig {
     std::optional<Seating> simulatedSeating;
 };
 
+/// What loading a configuration does with the workbench's workspace.
+enum class WorkspaceUse {
+    Open,    ///< created when missing, its released parts added to the programs
+    LeaveBe, ///< neither created nor read: the foreground mode's first reading as root
+             ///< (docs/daemon.md, "Without systemd") must not make the state folder root's
+};
+
 /// Loads and validates a daemon configuration. Relative paths are relative to
 /// the configuration file. Throws hg::InputError (file:line: key: problem).
-DaemonConfig loadDaemonConfig(const std::filesystem::path& file);
+DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse workspace = WorkspaceUse::Open);
 
 } // namespace hg::station
 

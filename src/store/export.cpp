@@ -118,10 +118,15 @@ std::vector<Measurement> measurementsOf(const json& row)
     return out;
 }
 
+bool isSimulated(const json& row)
+{
+    return row.contains("simulation") && !row["simulation"].is_null();
+}
+
 /// Why a cycle stays out of quality statistics (docs/export.md), empty when it counts:
 /// aborted and error verdicts, master and study cycles (docs/study.md), the simulated
-/// line and maintenance-triggered cycles.
-std::string exclusionReason(const json& row)
+/// line (unless the settings include it) and maintenance-triggered cycles.
+std::string exclusionReason(const json& row, const ExportSettings& settings)
 {
     std::string reasons;
     auto add = [&](const std::string& r) { reasons += (reasons.empty() ? "" : ", ") + r; };
@@ -129,7 +134,7 @@ std::string exclusionReason(const json& row)
     if (verdict != "pass" && verdict != "fail") add("verdict " + verdict);
     const auto purpose = row.value("purpose", std::string("production"));
     if (purpose != "production") add("purpose " + purpose);
-    if (row.contains("simulation") && !row["simulation"].is_null()) add("simulated");
+    if (isSimulated(row) && !settings.includeSimulated) add("simulated");
     if (row.value("manual", false)) add("manual trigger");
     return reasons;
 }
@@ -166,11 +171,11 @@ void writeCsvLine(std::ostream& out, const std::vector<std::string>& cells)
     out << "\r\n";
 }
 
-void writeCsv(std::ostream& out, const std::vector<json>& rows)
+void writeCsv(std::ostream& out, const std::vector<json>& rows, const ExportSettings& settings)
 {
     writeCsvLine(out, {std::begin(kCsvColumns), std::end(kCsvColumns)});
     for (const auto& row : rows) {
-        const auto reason = exclusionReason(row);
+        const auto reason = exclusionReason(row, settings);
         const std::vector<std::string> cycle{std::to_string(row.value("id", std::int64_t{0})),
                                              formatUtc(startedMs(row)),
                                              row.value("serial", std::string()),
@@ -295,11 +300,11 @@ void kLine(std::ostream& out, const char* key, std::size_t index, const std::str
     out << key << '/' << index << ' ' << value << "\r\n";
 }
 
-/// One characteristic: a landmark with one tolerance zone and one source of its values.
+/// One characteristic: a landmark with one tolerance zone. Its values come from
+/// either method, the method recorded with each value (K0009).
 struct Characteristic {
     std::string landmark;
     study::Zone zone;
-    study::ValueSource source = study::ValueSource::Deviation;
     std::string number; ///< K2001
 };
 
@@ -314,12 +319,12 @@ struct Part {
 
 bool sameCharacteristic(const Characteristic& c, const Measurement& m)
 {
-    return c.landmark == m.id && c.zone == m.zone && c.source == m.source;
+    return c.landmark == m.id && c.zone == m.zone;
 }
 
 /// Per landmark, in the order the landmarks first appear, one characteristic
-/// for each tolerance zone and value source its values come with; a landmark
-/// never measured gets one of its first zone, all placeholders.
+/// for each tolerance zone its values come with (whatever their method); a
+/// landmark never measured gets one of its first zone, all placeholders.
 std::vector<Characteristic> characteristicsOf(const Part& part)
 {
     std::vector<std::string> ids;
@@ -333,15 +338,15 @@ std::vector<Characteristic> characteristicsOf(const Part& part)
             }
             if (!m.value) continue;
             const auto same = [&](const Characteristic& c) { return sameCharacteristic(c, m); };
-            if (std::none_of(found.begin(), found.end(), same)) found.push_back({m.id, m.zone, m.source, m.id});
+            if (std::none_of(found.begin(), found.end(), same)) found.push_back({m.id, m.zone, m.id});
         }
     std::vector<Characteristic> out;
     for (std::size_t i = 0; i < ids.size(); ++i) {
         std::vector<Characteristic> mine;
         for (const auto& c : found)
             if (c.landmark == ids[i]) mine.push_back(c);
-        if (mine.empty()) mine.push_back({ids[i], firstZone[i].second, study::ValueSource::Deviation, ids[i]});
-        // Several zones or sources of one landmark: "id~1", "id~2", ... (the number must be unique).
+        if (mine.empty()) mine.push_back({ids[i], firstZone[i].second, ids[i]});
+        // Several zones of one landmark (an edited program): "id~1", "id~2", ... (the number must be unique).
         for (std::size_t k = 0; mine.size() > 1 && k < mine.size(); ++k)
             mine[k].number = ids[i] + "~" + std::to_string(k + 1);
         out.insert(out.end(), mine.begin(), mine.end());
@@ -368,9 +373,21 @@ std::vector<Part> partsOf(const std::vector<json>& rows)
 
 std::string describe(const Characteristic& c)
 {
-    return c.landmark + (c.source == study::ValueSource::Deviation
-                             ? ": deviation_mm, signed sub-voxel deviation along the outward normal"
-                             : ": error_mm, middle of the voxel bracket (resolution one voxel)");
+    return c.landmark + ": deviation along the outward normal; each value's method in K0009";
+}
+
+/// K0009 of a value: its method (docs/export.md), why the cycle is excluded, and
+/// that a simulated cycle was included on request; empty when there is nothing to say.
+std::string valueText(const json& row, const Measurement* m, const ExportSettings& settings)
+{
+    std::string text;
+    const auto add = [&](const std::string& part) { text += (text.empty() ? "" : "; ") + part; };
+    if (m)
+        add(m->source == study::ValueSource::Deviation ? "method deviation_mm (sub-voxel)"
+                                                       : "method error_mm (middle of the voxel bracket)");
+    if (const auto reason = exclusionReason(row, settings); !reason.empty()) add("excluded: " + reason);
+    if (isSimulated(row) && settings.includeSimulated) add("simulated, included (--include-simulated)");
+    return text;
 }
 
 void writeCharacteristic(std::ostream& out, const Characteristic& c, std::size_t i)
@@ -385,13 +402,13 @@ void writeCharacteristic(std::ostream& out, const Characteristic& c, std::size_t
 }
 
 /// One cycle's value of characteristic `i`: its measurement when the cycle has
-/// one in this characteristic's zone and source, else a placeholder.
+/// one in this characteristic's zone, else a placeholder.
 void writeValue(std::ostream& out, const json& row, const std::vector<Measurement>& measurements,
-                const Characteristic& c, std::size_t i)
+                const Characteristic& c, std::size_t i, const ExportSettings& settings)
 {
     const auto it = std::find_if(measurements.begin(), measurements.end(),
                                  [&](const Measurement& m) { return m.value && sameCharacteristic(c, m); });
-    const auto reason = exclusionReason(row);
+    const auto reason = exclusionReason(row, settings);
     const int attribute =
         it == measurements.end() ? kAttributePlaceholder : (reason.empty() ? kAttributeValid : kAttributeExcluded);
     kLine(out, "K0001", i, it == measurements.end() ? "0" : dfqNumber(*it->value));
@@ -401,13 +418,14 @@ void writeValue(std::ostream& out, const json& row, const std::vector<Measuremen
     if (!serial.empty()) kLine(out, "K0014", i, serial);
     const bool production = row.value("purpose", std::string("production")) == "production";
     kLine(out, "K0015", i, std::to_string(production ? kReasonProduction : kReasonSpecial));
-    if (!reason.empty()) kLine(out, "K0009", i, dfqText("excluded: " + reason, kTextChars));
+    const auto text = valueText(row, it == measurements.end() ? nullptr : &*it, settings);
+    if (!text.empty()) kLine(out, "K0009", i, dfqText(text, kTextChars));
 }
 
 /// The K-field form of a DFQ file: K0100, then per part its part fields, its
 /// characteristics and the values of its cycles, oldest first; characteristic
 /// indices run over the whole file.
-void writeAqdef(std::ostream& out, const std::vector<json>& rows)
+void writeAqdef(std::ostream& out, const std::vector<json>& rows, const ExportSettings& settings)
 {
     const auto parts = partsOf(rows);
     std::size_t total = 0;
@@ -422,21 +440,22 @@ void writeAqdef(std::ostream& out, const std::vector<json>& rows)
             writeCharacteristic(out, part.characteristics[k], first + k);
         for (std::size_t r = 0; r < part.rows.size(); ++r)
             for (std::size_t k = 0; k < part.characteristics.size(); ++k)
-                writeValue(out, *part.rows[r], part.measurements[r], part.characteristics[k], first + k);
+                writeValue(out, *part.rows[r], part.measurements[r], part.characteristics[k], first + k, settings);
         first += part.characteristics.size();
     }
 }
 
 } // namespace
 
-void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>& rows, std::int64_t exportedUnixMs)
+void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>& rows, std::int64_t exportedUnixMs,
+                 const ExportSettings& settings)
 {
     switch (format) {
     case ExportFormat::Aqdef:
-        writeAqdef(out, rows);
+        writeAqdef(out, rows, settings);
         return;
     case ExportFormat::Csv:
-        writeCsv(out, rows);
+        writeCsv(out, rows, settings);
         return;
     case ExportFormat::Json:
         writeJson(out, rows, exportedUnixMs);
@@ -444,9 +463,9 @@ void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>
     }
 }
 
-void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>& rows)
+void writeExport(std::ostream& out, ExportFormat format, const std::vector<json>& rows, const ExportSettings& settings)
 {
-    writeExport(out, format, rows, Clock::steady().wallMs());
+    writeExport(out, format, rows, Clock::steady().wallMs(), settings);
 }
 
 } // namespace hg::store

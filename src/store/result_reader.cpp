@@ -4,7 +4,9 @@
 #include "hullgauge/common/file_kind.h"
 #include "result_rows.h"
 
+#include <algorithm>
 #include <array>
+#include <charconv>
 #include <cstdio>
 #include <ctime>
 #include <set>
@@ -155,6 +157,44 @@ std::int64_t parseUtc(const std::string& text, const std::string& field)
                        tm.tm_min == asWritten.tm_min && tm.tm_sec == asWritten.tm_sec;
     if (!valid) throw InputError("", field, "'" + text + "' is not a UTC time YYYY-MM-DD[THH:MM[:SS]][Z]");
     return static_cast<std::int64_t>(t) * 1000;
+}
+
+namespace {
+
+/// `value` when it is one of `allowed`, else InputError naming the field and the allowed values.
+const std::string& oneOf(const std::string& value, const std::vector<std::string>& allowed, const std::string& field)
+{
+    if (std::find(allowed.begin(), allowed.end(), value) != allowed.end()) return value;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    throw InputError("", field, "'" + value + "' is not one of " + list);
+}
+
+} // namespace
+
+ResultQuery parseSelection(const SelectionFilters& filters, const std::string& prefix)
+{
+    ResultQuery q;
+    if (const auto& text = filters.program) {
+        int number = 0;
+        const auto [end, ec] = std::from_chars(text->data(), text->data() + text->size(), number);
+        if (ec != std::errc() || end != text->data() + text->size() || number < 1 || number > 65535)
+            throw InputError("", prefix + "program", "'" + *text + "' is not a whole number in 1..65535");
+        q.program = number;
+    }
+    if (filters.serial) {
+        if (filters.serial->size() > 64) throw InputError("", prefix + "serial", "longer than 64 characters");
+        q.serialContains = *filters.serial;
+    }
+    if (filters.verdict &&
+        oneOf(*filters.verdict, {"any", "pass", "fail", "aborted", "error"}, prefix + "verdict") != "any")
+        q.verdicts = {*filters.verdict};
+    if (filters.purpose &&
+        oneOf(*filters.purpose, {"any", "production", "master", "study"}, prefix + "purpose") != "any")
+        q.purpose = *filters.purpose;
+    if (filters.since) q.sinceMs = parseUtc(*filters.since, prefix + "since");
+    if (filters.until) q.untilMs = parseUtc(*filters.until, prefix + "until");
+    return q;
 }
 
 std::string formatUtc(std::int64_t unixMs)

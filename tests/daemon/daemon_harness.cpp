@@ -50,7 +50,8 @@ std::filesystem::path writeConfig(const hgtest::TempDir& dir, int port, const st
                                                           extra);
 }
 
-DaemonProcess::DaemonProcess(const std::filesystem::path& config, std::map<std::string, std::string> env)
+DaemonProcess::DaemonProcess(const std::filesystem::path& config, std::map<std::string, std::string> env,
+                             std::vector<std::string> args)
 {
     log_ = config.parent_path() / "daemon.log";
     auto program = hgtest::binaryDir() / "tests" / "hullgauged-fake";
@@ -60,7 +61,12 @@ DaemonProcess::DaemonProcess(const std::filesystem::path& config, std::map<std::
         dup2(fd, 1);
         dup2(fd, 2);
         for (auto& [k, v] : env) setenv(k.c_str(), v == "$PID" ? std::to_string(getpid()).c_str() : v.c_str(), 1);
-        execl(program.c_str(), program.c_str(), "--config", config.c_str(), "--log", "info", nullptr);
+        std::vector<std::string> words{program, "--config", config, "--log", "info"};
+        words.insert(words.end(), args.begin(), args.end());
+        std::vector<char*> argv;
+        for (auto& w : words) argv.push_back(w.data());
+        argv.push_back(nullptr);
+        execv(program.c_str(), argv.data());
         _exit(127);
     }
 }

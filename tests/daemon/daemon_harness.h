@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <sys/types.h>
+#include <vector>
 
 namespace hgdaemon {
 
@@ -32,7 +33,9 @@ std::filesystem::path writeConfig(const hgtest::TempDir& dir, int port, const st
 /// The fake daemon (tests/hullgauged-fake) as a child process.
 class DaemonProcess {
   public:
-    DaemonProcess(const std::filesystem::path& config, std::map<std::string, std::string> env = {});
+    /// `args` follow `--config FILE --log info` on the command line.
+    DaemonProcess(const std::filesystem::path& config, std::map<std::string, std::string> env = {},
+                  std::vector<std::string> args = {});
     ~DaemonProcess();
     pid_t pid() const { return pid_; }
     /// Sends `sig`; for SIGTERM/SIGKILL waits for the exit and returns the wait status.

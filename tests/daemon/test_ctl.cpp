@@ -3,6 +3,8 @@
 #include "daemon_harness.h"
 
 #include <gtest/gtest.h>
+#include <httplib.h>
+#include <regex>
 #include <thread>
 
 namespace {
@@ -93,6 +95,65 @@ TEST(Ctl, ShowsTheReleaseOfTheProgramTheResultsWereJudgedWith)
     EXPECT_EQ(answer["program"]["number"], 1);
     EXPECT_EQ(answer["program"]["version"], 3);
     EXPECT_EQ(answer["program"]["verification_sha256"], std::string(64, 'a'));
+}
+
+// ctl's options go before or after the subcommand alike, and hullgauge's --log after it too.
+TEST(Ctl, TakesItsOptionsBeforeOrAfterTheSubcommand)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    hgdaemon::DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    auto sock = (dir / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+
+    for (const auto* args :
+         {"--json --socket SOCK status", "status --json --socket SOCK", "--socket SOCK status --json",
+          "--json status --socket SOCK", "status --socket SOCK --json --log warn"}) {
+        auto line = std::regex_replace(args, std::regex("SOCK"), sock);
+        auto r = hgtest::run(ctl(line));
+        ASSERT_EQ(r.status, 0) << line << ": " << r.err;
+        auto answer = nlohmann::json::parse(r.out, nullptr, false);
+        ASSERT_TRUE(answer.is_object()) << line << ": " << r.out;
+        EXPECT_EQ(answer["plc"]["port"], port) << line;
+    }
+    // A subcommand's own options stay its own, in any order with ctl's.
+    auto rows = hgtest::run(ctl("results -n 3 --json --socket " + sock));
+    ASSERT_EQ(rows.status, 0) << rows.err;
+    EXPECT_TRUE(nlohmann::json::parse(rows.out).is_array()) << rows.out;
+    // An option nobody has is still refused, naming it.
+    auto unknown = hgtest::run(ctl("status --jsn --socket " + sock));
+    EXPECT_EQ(unknown.status, 2);
+    EXPECT_NE(unknown.err.find("--jsn"), std::string::npos) << unknown.err;
+}
+
+// `ctl status` prints where the web HMI answers (docs/hmi.md); without an `http` section, no such line.
+TEST(Ctl, StatusPrintsTheAddressOfTheWebHmi)
+{
+    hgtest::TempDir dir;
+    const auto assets = (hgtest::sourceDir() / "share" / "hmi").string();
+    hgdaemon::DaemonProcess daemon(hgdaemon::writeConfig(
+        dir, hgdaemon::freePort(), "http:\n  bind: 127.0.0.1\n  port: 0\n  assets: " + assets + "\n"));
+    auto sock = (dir / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+
+    auto status = hgtest::run(ctl("status --socket " + sock));
+    ASSERT_EQ(status.status, 0) << status.err;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(status.out, m, std::regex("\nweb HMI: +http://127\\.0\\.0\\.1:([0-9]+)/\n")))
+        << status.out;
+    // The port the kernel chose, where the HMI's JSON API answers.
+    httplib::Client client("127.0.0.1", std::stoi(m[1].str()));
+    auto page = client.Get("/api/status");
+    ASSERT_TRUE(page) << "nothing answers on " << m[1].str();
+    EXPECT_EQ(page->status, 200) << page->body;
+
+    hgtest::TempDir plain;
+    hgdaemon::DaemonProcess without(hgdaemon::writeConfig(plain, hgdaemon::freePort()));
+    auto plainSock = (plain / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(plainSock, "ready", 10s)) << without.logText();
+    auto none = hgtest::run(ctl("status --socket " + plainSock));
+    ASSERT_EQ(none.status, 0) << none.err;
+    EXPECT_EQ(none.out.find("web HMI"), std::string::npos) << none.out;
 }
 
 TEST(Ctl, NoDaemonIsAFaultNamingTheSocket)

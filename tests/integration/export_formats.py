@@ -14,16 +14,20 @@ back here by a reader of its own, not the writer's code:
 - the DFQ file by a parser written from the Q-DAS ASCII transfer format's
   field definitions (K-field lines `Kxxxx/i value`, CR LF, ISO 8859-1;
   K0001 opens a value of characteristic i, the K00xx fields after it belong
-  to it): every stored measurement must be there, in the characteristic of
-  its landmark with its tolerance zone as K2110/K2111, its value, K0002 0
-  (129 for an excluded cycle), the cycle's start as K0004 (UTC), its serial
-  as K0014, K0015 0 or 10 (master and study cycles); a landmark without a
-  value only as a placeholder (K0002 255);
+  to it): one characteristic per landmark (its id as K2001: the store's
+  landmarks keep their zones), landmark a holding values of both methods;
+  every stored measurement must be there, in the characteristic of its
+  landmark with its tolerance zone as K2110/K2111, its value, its method in
+  K0009, K0002 0 (129 for an excluded cycle), the cycle's start as K0004
+  (UTC), its serial as K0014, K0015 0 or 10 (master and study cycles); a
+  landmark without a value only as a placeholder (K0002 255); with
+  --include-simulated the simulated cycle's values count (K0002 0) and say so;
 - the CSV file by Python's csv module (RFC 4180): one row per landmark
   measurement, a serial with comma, quote and line break read back whole;
 - the JSON file by json: the stored rows, oldest first.
-The selection options (--program, --purpose, --since, --until) and the
-refusals (a bad --format, a bad --since, no store: exit 2 naming it, the
+The selection options (--program, --serial, --verdict, --purpose, --since,
+--until: the HMI's download filters) and the refusals (a bad --format,
+--since, --verdict, --program or --serial, no store: exit 2 naming it, the
 --out file not created) are checked on the same store.
 """
 import argparse
@@ -94,7 +98,8 @@ def cycles():
         (5, "SIM-6", 7, "bracket-42", "pass", "production", 0, {"part": "nominal", "seat": None},
          bracket_landmarks(0.0007, 0.0625)),
         (6, "SN-7", 7, "bracket-42", "pass", "production", 1, None, bracket_landmarks(-0.0111, 0.0625)),
-        (7, "Prüf-8", 7, "bracket-42", "pass", "production", 0, None, bracket_landmarks(0.02, 0.0625)),
+        # Landmark a on the bracket only here: one characteristic holds both methods' values.
+        (7, "Prüf-8", 7, "bracket-42", "pass", "production", 0, None, bracket_landmarks(None, 0.0625)),
         (8, "CAP-1", 9, "cap", "pass", "production", 0, None,
          [landmark("rim", "ok", 0.0625, 0.3, deviation=0.05), landmark("lip", "not_found", 0.0, 0.3)]),
         (9, "CAP-2", 9, "cap", "error", "production", 0, None, [landmark("rim", "ok", 0.0625, 0.3, deviation=-0.04)]),
@@ -131,10 +136,11 @@ def stored_rows(path):
     return rows
 
 
-def excluded(row):
-    """docs/export.md: aborted and error verdicts, master and study cycles, simulated, maintenance-triggered."""
+def excluded(row, include_simulated=False):
+    """docs/export.md: aborted and error verdicts, master and study cycles, simulated (unless included),
+    maintenance-triggered."""
     return (row["verdict"] not in ("pass", "fail") or row["purpose"] != "production"
-            or row["simulation"] is not None or row["manual"])
+            or (row["simulation"] is not None and not include_simulated) or row["manual"])
 
 
 def zone(entry):
@@ -208,7 +214,7 @@ def parse_dfq(raw):
     return k0100, parts
 
 
-def check_dfq(raw, rows):
+def check_dfq(raw, rows, include_simulated=False):
     _, parts = parse_dfq(raw)
     programs = []
     for r in rows:
@@ -227,15 +233,23 @@ def check_dfq(raw, rows):
                   f"characteristic {c['index']}: unit {f.get('K2142')}, nominal {f.get('K2101')}")
             check(len(c["values"]) == len(mine),
                   f"characteristic {f.get('K2001')}: {len(c['values'])} values for {len(mine)} cycles")
+        # One characteristic per landmark: the store's landmarks keep their zones, whatever the method.
+        ids = list(dict.fromkeys(e["id"] for r in mine for e in r["landmarks"]))
+        check([c["fields"].get("K2001") for c in part["chars"]] == ids,
+              f"program {program}: characteristics {[c['fields'].get('K2001') for c in part['chars']]}, landmarks {ids}")
         for n, row in enumerate(mine):
             for entry in row["landmarks"]:
-                measured += check_measurement(part, n, row, entry)
+                measured += check_measurement(part, n, row, entry, include_simulated)
+        if program == 7:
+            a_methods = {m for c in part["chars"] if c["fields"].get("K2001") == "a" for v in c["values"]
+                         for m in ("deviation_mm", "error_mm") if f"method {m} " in v.get("K0009", "")}
+            check(a_methods == {"deviation_mm", "error_mm"}, f"landmark a's one characteristic holds {a_methods}")
     written = sum(1 for p in parts for c in p["chars"] for v in c["values"] if v.get("K0002") != "255")
     check(written == measured, f"{written} values in the DFQ file, {measured} measurements stored")
     return measured
 
 
-def check_measurement(part, n, row, entry):
+def check_measurement(part, n, row, entry, include_simulated):
     """The n-th value of the characteristics of `entry`'s landmark: the measurement once, else placeholders."""
     lid = entry["id"]
     mine = [c for c in part["chars"] if c["fields"]["K2001"] == lid or c["fields"]["K2001"].startswith(lid + "~")]
@@ -254,14 +268,16 @@ def check_measurement(part, n, row, entry):
     lo, hi = zone(entry)
     check(abs(float(c["fields"]["K2110"]) - lo) < 1e-9 and abs(float(c["fields"]["K2111"]) - hi) < 1e-9,
           f"{name}: limits {c['fields']['K2110']} {c['fields']['K2111']}, stored {lo} {hi}")
-    check(expected[1] in c["fields"].get("K2002", ""), f"{name}: K2002 {c['fields'].get('K2002')} for {expected[1]}")
+    check(f"method {expected[1]} " in v.get("K0009", ""), f"{name}: K0009 {v.get('K0009')!r} for {expected[1]}")
     check(abs(float(v["K0001"]) - expected[0]) <= 5e-7, f"{name}: K0001 {v['K0001']}, stored {expected[0]}")
-    check(v["K0002"] == ("129" if excluded(row) else "0"), f"{name}: K0002 {v['K0002']}")
+    check(v["K0002"] == ("129" if excluded(row, include_simulated) else "0"), f"{name}: K0002 {v['K0002']}")
     when = datetime.datetime.fromtimestamp(row["ms"] / 1000, datetime.timezone.utc).strftime("%d.%m.%Y/%H:%M:%S")
     check(v.get("K0004") == when, f"{name}: K0004 {v.get('K0004')}, started {when} UTC")
     check(v.get("K0014") == latin1_text(row["serial"], 40), f"{name}: K0014 {v.get('K0014')!r}")
     check(v.get("K0015") == ("0" if row["purpose"] == "production" else "10"), f"{name}: K0015 {v.get('K0015')}")
-    check(("K0009" in v) == excluded(row), f"{name}: K0009 {v.get('K0009')!r}")
+    check(("excluded: " in v["K0009"]) == excluded(row, include_simulated), f"{name}: K0009 {v['K0009']!r}")
+    sim_included = row["simulation"] is not None and include_simulated
+    check(("simulated, included" in v["K0009"]) == sim_included, f"{name}: K0009 {v['K0009']!r}")
     return 1
 
 
@@ -331,6 +347,10 @@ def export(hullgauge, store, fmt, out, *options):
 def check_selection(hullgauge, store, rows, work):
     out = work / "sel.json"
     for options, keep in [(["--program", "9"], lambda r: r["program"] == 9),
+                          (["--verdict", "fail"], lambda r: r["verdict"] == "fail"),
+                          (["--serial", "SN-"], lambda r: "SN-" in r["serial"]),
+                          (["--verdict", "pass", "--program", "7", "--purpose", "production"],
+                           lambda r: r["verdict"] == "pass" and r["program"] == 7 and r["purpose"] == "production"),
                           (["--purpose", "master"], lambda r: r["purpose"] == "master"),
                           (["--since", "2026-05-28T20:29:40", "--until", "2026-05-28T20:31"],
                            lambda r: T0_MS + 3 * 60_000 <= r["ms"] < T0_MS + 4 * 60_000 + 20_000)]:
@@ -344,6 +364,12 @@ def check_refusals(hullgauge, store, work):
     out = work / "refused.dfq"
     for fmt, options, store_file, named in [("xml", [], store, ["--format", "'xml'"]),
                                             ("aqdef", ["--since", "2026-02-30"], store, ["--since", "2026-02-30"]),
+                                            ("csv", ["--verdict", "good"], store,
+                                             ["--verdict: 'good' is not one of any, pass, fail, aborted, error"]),
+                                            ("csv", ["--program", "0"], store,
+                                             ["--program: '0' is not a whole number in 1..65535"]),
+                                            ("csv", ["--serial", "x" * 65], store,
+                                             ["--serial: longer than 64 characters"]),
                                             ("aqdef", [], work / "none.db", ["no database at", "none.db"])]:
         run = export(hullgauge, store_file, fmt, out, *options)
         err = run.stderr.decode("utf-8", "replace")
@@ -369,13 +395,18 @@ def main():
             if check(run.returncode == 0, f"export --format {fmt}: exit {run.returncode} {run.stderr!r}"):
                 files[fmt] = out.read_bytes()
         measured = check_dfq(files["aqdef"], rows) if "aqdef" in files else 0
+        # The demo's data tried in a statistics program: the simulated cycle counts, and says so.
+        run = export(args.hullgauge, store, "aqdef", work / "sim.dfq", "--include-simulated")
+        if check(run.returncode == 0, f"export --include-simulated: exit {run.returncode} {run.stderr!r}"):
+            check_dfq((work / "sim.dfq").read_bytes(), rows, include_simulated=True)
         if "csv" in files:
             check_csv(files["csv"], rows)
         if "json" in files:
             check_json(files["json"], rows)
         check_selection(args.hullgauge, store, rows, work)
         check_refusals(args.hullgauge, store, work)
-        check(sorted(p.name for p in work.iterdir()) == ["all.aqdef", "all.csv", "all.json", "results.db", "sel.json"],
+        check(sorted(p.name for p in work.iterdir()) == ["all.aqdef", "all.csv", "all.json", "results.db", "sel.json",
+                                                            "sim.dfq"],
               f"files left in the folder: {sorted(p.name for p in work.iterdir())}")
     if failures:
         print(f"{len(failures)} checks failed", file=sys.stderr)

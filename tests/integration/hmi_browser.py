@@ -33,14 +33,13 @@ import io
 import json
 import sqlite3
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, failures, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium import webdriver  # noqa: E402
@@ -313,10 +312,9 @@ def main():
         args.screenshots.mkdir(parents=True, exist_ok=True)
     workdir = Path(tempfile.mkdtemp(prefix="hg-hmi-"))
     plc_port, http_port = free_port(), free_port()
-    password_hash = subprocess.run(["openssl", "passwd", "-6", PASSWORD], capture_output=True, text=True,
-                                   check=True).stdout.strip()
     line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
-                              ["--http-port", str(http_port), "--hmi-password-hash", password_hash,
+                              ["--http-port", str(http_port),
+                               "--hmi-password-hash-file", str(password_hash_file(workdir, PASSWORD)),
                                "--config", str(args.source / "config" / "sim-fast")])
     url = f"http://127.0.0.1:{http_port}"
     sock = str(workdir / "hullgauged.sock")

@@ -9,17 +9,23 @@
 # PID and network namespaces (its own loopback, so port 502 and 8080 are its
 # own). apt and dpkg in it are Debian's own: they resolve the package's
 # Depends against the dpkg database, unpack, register the conffiles and run the
-# maintainer scripts. Then, as the unit would (User=hullgauge,
-# AmbientCapabilities=CAP_NET_BIND_SERVICE, RuntimeDirectory, StateDirectory,
-# UMask 0027):
+# maintainer scripts. Then, as the unit's user would:
 #   - hullgauged --check on the installed /etc/hullgauge/hullgauged.yaml;
-#   - hullgauged started, ready on its maintenance socket (hullgauge ctl status);
+#   - hullgauged started as root without systemd, `--foreground`
+#     (docs/daemon.md, "Without systemd"): it makes /run/hullgauge and
+#     /var/lib/hullgauge (hullgauge:hullgauge 0750), runs as user hullgauge in
+#     video and dialout with CAP_NET_BIND_SERVICE alone and no new privileges
+#     (read from /proc), logs to stderr, is ready on its maintenance socket
+#     (hullgauge ctl status);
 #   - the packaged example PLC client (python3-pymodbus) runs cycles on port 502,
 #     nominal and defective parts: every verdict right and consistent;
 #   - the web HMI answers on 127.0.0.1:8080 from the installed assets and
 #     Debian's Chart.js; the result store holds every cycle;
-#   - SIGTERM stops it cleanly; `apt-get purge` removes the files and the
-#     conffiles.
+#   - SIGTERM stops it cleanly; `apt-get purge` removes the programs, the
+#     conffiles, the HMI's password hash, /etc/hullgauge and /run/hullgauge and
+#     keeps the result store (its 4 cycles) and the user hullgauge; installed
+#     again the user keeps its uid and the store; purged with
+#     HULLGAUGE_PURGE_RESULTS=yes the store, the user and the group go.
 #
 #   install_package.sh BUILD_DIR
 # Exit 0 when every check passed, 1 on a failure, 77 (skipped) when not run as

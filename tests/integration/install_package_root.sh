@@ -67,13 +67,11 @@ done
 man_renders() { in_root man -l /usr/share/man/man8/hullgauged.8.gz 2>/dev/null | grep -q -- '--config'; }
 check "man hullgauged does not render its options" man_renders
 
-# As the unit runs it: the service user, port 502 by the one capability, its directories.
-as_service() {
-  in_root setpriv --reuid=hullgauge --regid=hullgauge --init-groups \
-    --inh-caps=+net_bind_service --ambient-caps=+net_bind_service "$@"
-}
-in_root install -d -o hullgauge -g hullgauge -m 0750 /run/hullgauge /var/lib/hullgauge
-if ! as_service /usr/sbin/hullgauged --check --config /etc/hullgauge/hullgauged.yaml >"$scratch/check.log" 2>&1; then
+# Without systemd (docs/daemon.md, "Without systemd"): started as root in the
+# foreground, the daemon makes its folders and becomes the unit's user itself;
+# its --check reads the configuration as that user.
+check "the root already holds the daemon's folders" test ! -e "$root/run/hullgauge" -a ! -e "$root/var/lib/hullgauge"
+if ! in_root /usr/sbin/hullgauged --foreground --check --config /etc/hullgauge/hullgauged.yaml >"$scratch/check.log" 2>&1; then
   cat "$scratch/check.log" >&2
   die "hullgauged --check refused the installed configuration"
 fi
@@ -94,9 +92,8 @@ if ! in_root env CREDENTIALS_DIRECTORY=/etc/hullgauge-template/credentials \
   fail=1
 fi
 
-(umask 0027 && exec chroot "$root" env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 setpriv --reuid=hullgauge --regid=hullgauge --init-groups \
-  --inh-caps=+net_bind_service --ambient-caps=+net_bind_service \
-  /usr/sbin/hullgauged --config /etc/hullgauge/hullgauged.yaml) >"$scratch/daemon.log" 2>&1 &
+(exec chroot "$root" env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 \
+  /usr/sbin/hullgauged --foreground --config /etc/hullgauge/hullgauged.yaml) >"$scratch/daemon.log" 2>&1 &
 daemon=$!
 ready=0
 deadline=$((SECONDS + 120)) # the first start prepares the program's map and outlines
@@ -113,6 +110,32 @@ if ((ready == 0)); then
   die "the installed daemon did not become ready within 120 s"
 fi
 echo "install_package: the installed daemon is ready"
+echo "install_package: $(grep -o 'foreground: .*' "$scratch/daemon.log" | head -1)"
+
+# What the unit would give it, as the kernel and the file system see it: user and group
+# hullgauge, the groups video and dialout (the sysusers file), CAP_NET_BIND_SERVICE
+# (capability 10: mask 0x400) alone in every set, no new privileges, its two folders.
+uid=$(in_root id -u hullgauge)
+gid=$(in_root id -g hullgauge)
+proc() { sed -n "s/^$1:[[:space:]]*//p" "$root/proc/$daemon/status" | tr -s '[:space:]' ' ' | sed 's/ $//'; }
+check "the daemon runs as uid $(proc Uid), not hullgauge's $uid" test "$(proc Uid)" = "$uid $uid $uid $uid"
+check "the daemon runs as gid $(proc Gid), not hullgauge's $gid" test "$(proc Gid)" = "$gid $gid $gid $gid"
+for group in video dialout; do
+  check "the daemon is not in group $group (its groups: $(proc Groups))" \
+    grep -qw "$(in_root getent group "$group" | cut -d: -f3)" <<<"$(proc Groups)"
+done
+for set in CapEff CapPrm CapInh CapBnd CapAmb; do
+  check "$set of the daemon is $(proc "$set"), not CAP_NET_BIND_SERVICE alone" test "$(proc "$set")" = 0000000000000400
+done
+check "the daemon may gain privileges (NoNewPrivs $(proc NoNewPrivs))" test "$(proc NoNewPrivs)" = 1
+for folder in /run/hullgauge /var/lib/hullgauge; do
+  made=$(in_root stat -c '%U:%G %a' "$folder")
+  echo "install_package: $folder $made"
+  check "$folder is $made, not hullgauge:hullgauge 750 as the unit makes it" test "$made" = "hullgauge:hullgauge 750"
+done
+check "the daemon did not log to stderr" grep -q 'foreground: user hullgauge' "$scratch/daemon.log"
+parts=$(in_root stat -c '%U:%G' /var/lib/hullgauge/parts)
+check "the workbench's workspace is $parts, not the user's" test "$parts" = hullgauge:hullgauge
 
 in_root /usr/share/doc/hullgauge/examples/plc-client --port 502 cycles 4 --bad-every 2 \
   --sim-socket /run/hullgauge/hullgauged.sock >"$scratch/plc.log" 2>&1 || {
@@ -157,12 +180,41 @@ code=0
 wait "$daemon" || code=$?
 check "hullgauged ended with $code after SIGTERM" test "$code" = 0
 
-if ! in_root env DEBIAN_FRONTEND=noninteractive apt-get purge -y hullgauge >"$scratch/purge.log" 2>&1; then
-  cat "$scratch/purge.log" >&2
-  die "apt-get purge hullgauge"
-fi
+# Purge as docs/daemon.md ("Installing the package") says: programs, conffiles, the
+# HMI's password hash and the runtime folder go; the result store and its user stay.
+echo '$6$x$y' >"$root/etc/hullgauge/hmi-password-hash"
+purge() { # log [VAR=value...]
+  local log=$1
+  shift
+  if ! in_root env DEBIAN_FRONTEND=noninteractive "$@" apt-get purge -y hullgauge >"$scratch/$log" 2>&1; then
+    cat "$scratch/$log" >&2
+    die "apt-get purge hullgauge $*"
+  fi
+}
+purge purge.log
 check "the daemon is still there after the purge" test ! -e "$root/usr/sbin/hullgauged"
 check "conffiles are still there after the purge" test ! -e "$root/etc/hullgauge/hullgauged.yaml"
+check "/etc/hullgauge is still there after the purge" test ! -e "$root/etc/hullgauge"
+check "/run/hullgauge is still there after the purge" test ! -e "$root/run/hullgauge"
+check "the purge did not keep the result store" test -s "$root/var/lib/hullgauge/results.db"
+check "the purge did not keep the user hullgauge" in_root getent passwd hullgauge
+check "the purge did not say what it kept" grep -q 'kept the result store /var/lib/hullgauge' "$scratch/purge.log"
+kept=$(in_root python3 -c "import sqlite3; print(sqlite3.connect('file:/var/lib/hullgauge/results.db?mode=ro', uri=True).execute('SELECT COUNT(*) FROM inspections').fetchone()[0])")
+echo "install_package: purged; kept /var/lib/hullgauge ($kept cycles) and user hullgauge (uid $(in_root id -u hullgauge))"
+check "the kept result store holds $kept cycles, not the 4 run" test "$kept" = 4
+
+# Installed again, the station finds its store and its user; purged with
+# HULLGAUGE_PURGE_RESULTS=yes, both go.
+if ! in_root env DEBIAN_FRONTEND=noninteractive apt-get install -y "$pkg" >"$scratch/apt2.log" 2>&1; then
+  cat "$scratch/apt2.log" >&2
+  die "apt-get install of the package over the kept result store"
+fi
+check "the user hullgauge changed its uid on the second install" test "$(in_root id -u hullgauge)" = "$uid"
+check "the kept store is no longer hullgauge's" test "$(in_root stat -c %U /var/lib/hullgauge/results.db)" = hullgauge
+purge purge-results.log HULLGAUGE_PURGE_RESULTS=yes
+check "/var/lib/hullgauge is still there after the purge with HULLGAUGE_PURGE_RESULTS=yes" test ! -e "$root/var/lib/hullgauge"
+check "the user hullgauge is still there after the purge with HULLGAUGE_PURGE_RESULTS=yes" \
+  bash -c '! grep -q "^hullgauge:" "$1/etc/passwd" "$1/etc/group"' _ "$root"
 
 ((fail == 0)) || exit 1
-echo "install_package: installed with apt, the simulated line ran from the installed files, purged"
+echo "install_package: installed with apt, the simulated line ran from the installed files in the foreground, purged keeping its results, purged with them"

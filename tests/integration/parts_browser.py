@@ -43,7 +43,6 @@ import http.client
 import json
 import math
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -51,7 +50,7 @@ import urllib.parse
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, failures, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
 from hmi_browser import browser as chromium, stored, until  # noqa: E402
 
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
@@ -538,10 +537,9 @@ def main():
     args = ap.parse_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-parts-"))
     http_port = free_port()
-    digest = subprocess.run(["openssl", "passwd", "-6", PASSWORD], capture_output=True, text=True,
-                            check=True).stdout.strip()
     line, out, _ = start_line(args.source, args.bin, workdir, free_port(),
-                              ["--http-port", str(http_port), "--hmi-password-hash", digest])
+                              ["--http-port", str(http_port),
+                               "--hmi-password-hash-file", str(password_hash_file(workdir, PASSWORD))])
     url, api = f"http://127.0.0.1:{http_port}", Api(http_port)
     sock, db = str(workdir / "hullgauged.sock"), workdir / "results.db"
     driver = chromium(flags=("--enable-unsafe-swiftshader",))

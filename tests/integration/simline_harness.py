@@ -67,6 +67,17 @@ def stop_line(line, out):
         out.close()
 
 
+def password_hash_file(folder, password):
+    """The crypt(3) hash of `password` in folder/hmi-password-hash (mode 0600), for tools/simline
+    --hmi-password-hash-file; openssl reads the password on stdin, so neither is on a command line."""
+    digest = subprocess.run(["openssl", "passwd", "-6", "-stdin"], input=password + "\n", capture_output=True,
+                            text=True, check=True).stdout.strip()
+    path = folder / "hmi-password-hash"
+    path.touch(mode=0o600)
+    path.write_text(digest + "\n")
+    return path
+
+
 def maintenance(path, request, timeout_s=10):
     """One request on the daemon's maintenance socket (docs/daemon.md); the answer as a dict."""
     import json

@@ -190,19 +190,20 @@ TEST(ExportAqdef, KFieldLinesOfPartsCharacteristicsAndValues)
     // of characteristics; per part K1001/K1002; per characteristic K2001 ...
     // K2142; per value K0001 value, K0002 attribute (0 valid, 129 excluded, 255
     // no value), K0004 dd.mm.yyyy/hh:mm:ss, K0014 part ident, K0015 reason for
-    // test (0 production, 10 special), K0009 the text of an exclusion.
+    // test (0 production, 10 special), K0009 the value's text: its method (a value
+    // from the deviation or from the bracket in one characteristic) and why its cycle is excluded.
     const std::string expected = "K0100 3\r\n"
                                  "K1001/1 5\r\n"
                                  "K1002/1 bracket\r\n"
                                  "K2001/1 a\r\n"
-                                 "K2002/1 a: deviation_mm, signed sub-voxel deviation along the outward normal\r\n"
+                                 "K2002/1 a: deviation along the outward normal; each value's method in K0009\r\n"
                                  "K2004/1 0\r\n"
                                  "K2101/1 0\r\n"
                                  "K2110/1 -0.1\r\n"
                                  "K2111/1 0.1\r\n"
                                  "K2142/1 mm\r\n"
                                  "K2001/2 b\r\n"
-                                 "K2002/2 b: error_mm, middle of the voxel bracket (resolution one voxel)\r\n"
+                                 "K2002/2 b: deviation along the outward normal; each value's method in K0009\r\n"
                                  "K2004/2 0\r\n"
                                  "K2101/2 0\r\n"
                                  "K2110/2 -0.05\r\n"
@@ -213,17 +214,20 @@ TEST(ExportAqdef, KFieldLinesOfPartsCharacteristicsAndValues)
                                  "K0004/1 28.05.2026/20:26:40\r\n"
                                  "K0014/1 P-1\r\n"
                                  "K0015/1 0\r\n"
+                                 "K0009/1 method deviation_mm (sub-voxel)\r\n"
                                  "K0001/2 0.0625\r\n"
                                  "K0002/2 0\r\n"
                                  "K0004/2 28.05.2026/20:26:40\r\n"
                                  "K0014/2 P-1\r\n"
                                  "K0015/2 0\r\n"
+                                 "K0009/2 method error_mm (middle of the voxel bracket)\r\n"
                                  "K0001/1 0.1504\r\n"
                                  "K0002/1 0\r\n"
                                  "K0004/1 28.05.2026/20:27:40\r\n"
                                  "K0014/1 Pr\xFC"
                                  "f-2\r\n"
                                  "K0015/1 0\r\n"
+                                 "K0009/1 method deviation_mm (sub-voxel)\r\n"
                                  "K0001/2 0\r\n"
                                  "K0002/2 255\r\n"
                                  "K0004/2 28.05.2026/20:27:40\r\n"
@@ -235,17 +239,17 @@ TEST(ExportAqdef, KFieldLinesOfPartsCharacteristicsAndValues)
                                  "K0004/1 28.05.2026/20:28:40\r\n"
                                  "K0014/1 M\r\n"
                                  "K0015/1 10\r\n"
-                                 "K0009/1 excluded: purpose master\r\n"
+                                 "K0009/1 method deviation_mm (sub-voxel); excluded: purpose master\r\n"
                                  "K0001/2 0.0625\r\n"
                                  "K0002/2 129\r\n"
                                  "K0004/2 28.05.2026/20:28:40\r\n"
                                  "K0014/2 M\r\n"
                                  "K0015/2 10\r\n"
-                                 "K0009/2 excluded: purpose master\r\n"
+                                 "K0009/2 method error_mm (middle of the voxel bracket); excluded: purpose master\r\n"
                                  "K1001/2 6\r\n"
                                  "K1002/2 cap\r\n"
                                  "K2001/3 z\r\n"
-                                 "K2002/3 z: deviation_mm, signed sub-voxel deviation along the outward normal\r\n"
+                                 "K2002/3 z: deviation along the outward normal; each value's method in K0009\r\n"
                                  "K2004/3 0\r\n"
                                  "K2101/3 0\r\n"
                                  "K2110/3 -0.3\r\n"
@@ -272,7 +276,7 @@ std::vector<std::string> linesOf(const std::string& text, const std::vector<std:
     return out;
 }
 
-TEST(ExportAqdef, AChangedZoneOrValueSourceIsACharacteristicOfItsOwn)
+TEST(ExportAqdef, OneCharacteristicPerLandmarkAndZoneWhateverTheMethodOfItsValues)
 {
     // Landmark a: ±0.1 with a deviation, ±0.1 on the bracket only, then ±0.2 with a deviation.
     const auto entry = [](double tol, std::optional<double> deviation) {
@@ -285,20 +289,44 @@ TEST(ExportAqdef, AChangedZoneOrValueSourceIsACharacteristicOfItsOwn)
                                  row(11, kT0 + 1000, "T", entry(0.1, std::nullopt)),
                                  row(12, kT0 + 2000, longSerial, entry(0.2, 0.02))};
     const auto text = written(ExportFormat::Aqdef, rows);
+    // ±0.1 holds the deviation of cycle 10 and the bracket middle of cycle 11; the edited zone ±0.2 is another.
     EXPECT_EQ(linesOf(text, {"K0100", "K2001", "K2110", "K2111"}),
-              (std::vector<std::string>{"K0100 3", "K2001/1 a~1", "K2110/1 -0.1", "K2111/1 0.1", "K2001/2 a~2",
-                                        "K2110/2 -0.1", "K2111/2 0.1", "K2001/3 a~3", "K2110/3 -0.2", "K2111/3 0.2"}));
-    EXPECT_EQ(linesOf(text, {"K0001", "K0002"}),
-              (std::vector<std::string>{"K0001/1 0.01", "K0002/1 0", "K0001/2 0", "K0002/2 255", "K0001/3 0",
-                                        "K0002/3 255", "K0001/1 0", "K0002/1 255", "K0001/2 0.0625", "K0002/2 0",
-                                        "K0001/3 0", "K0002/3 255", "K0001/1 0", "K0002/1 255", "K0001/2 0",
-                                        "K0002/2 255", "K0001/3 0.02", "K0002/3 0"}));
+              (std::vector<std::string>{"K0100 2", "K2001/1 a~1", "K2110/1 -0.1", "K2111/1 0.1", "K2001/2 a~2",
+                                        "K2110/2 -0.2", "K2111/2 0.2"}));
+    EXPECT_EQ(linesOf(text, {"K0001", "K0002", "K0009"}),
+              (std::vector<std::string>{"K0001/1 0.01", "K0002/1 0", "K0009/1 method deviation_mm (sub-voxel)",
+                                        "K0001/2 0", "K0002/2 255", "K0001/1 0.0625", "K0002/1 0",
+                                        "K0009/1 method error_mm (middle of the voxel bracket)", "K0001/2 0",
+                                        "K0002/2 255", "K0001/1 0", "K0002/1 255", "K0001/2 0.02", "K0002/2 0",
+                                        "K0009/2 method deviation_mm (sub-voxel)"}));
     // A line break in a serial would end the K-field line: a space; a character
     // outside ISO 8859-1 is '?'; K0014 holds 40 characters.
     const auto idents = linesOf(text, {"K0014/1"});
     ASSERT_EQ(idents.size(), 3u);
     EXPECT_EQ(idents[0], "K0014/1 S 1?");
     EXPECT_EQ(idents[2], "K0014/1 " + std::string(40, 'x'));
+}
+
+TEST(ExportAqdef, TheSimulatedLineIsExcludedUnlessIncludedAndThenMarked)
+{
+    auto sim =
+        row(20, kT0, "SIM-1",
+            json::array(
+                {{{"id", "a"}, {"status", "ok"}, {"error_mm", 0.0}, {"tolerance_mm", 0.1}, {"deviation_mm", 0.003}}}));
+    sim["simulation"] = {{"part", "nominal"}};
+    EXPECT_EQ(
+        linesOf(written(ExportFormat::Aqdef, {sim}), {"K0002", "K0009"}),
+        (std::vector<std::string>{"K0002/1 129", "K0009/1 method deviation_mm (sub-voxel); excluded: simulated"}));
+    std::ostringstream out;
+    hg::store::writeExport(out, ExportFormat::Aqdef, {sim}, kT0, {.includeSimulated = true});
+    EXPECT_EQ(linesOf(out.str(), {"K0002", "K0009"}),
+              (std::vector<std::string>{
+                  "K0002/1 0", "K0009/1 method deviation_mm (sub-voxel); simulated, included (--include-simulated)"}));
+    // Another reason still excludes it.
+    sim["purpose"] = "master";
+    std::ostringstream master;
+    hg::store::writeExport(master, ExportFormat::Aqdef, {sim}, kT0, {.includeSimulated = true});
+    EXPECT_EQ(linesOf(master.str(), {"K0002"}), (std::vector<std::string>{"K0002/1 129"}));
 }
 
 TEST(ExportAqdef, MalformedLandmarksAreBadInputNamingTheResult)

@@ -41,6 +41,14 @@ std::string_view contentType(ExportFormat format);
 /// "dfq", "csv", "json".
 std::string_view fileExtension(ExportFormat format);
 
+/// What the writers decide beyond the rows (docs/export.md).
+struct ExportSettings {
+    /// Cycles of the simulated line count as measurements (the demo's data tried in an SPC
+    /// program): not excluded for being simulated, and marked so in AQDEF's value text
+    /// (K0009). Off by default: the simulated line is no production.
+    bool includeSimulated = false;
+};
+
 /// Writes `rows` in `format`, in their order. AQDEF is written in ISO 8859-1,
 /// CSV and JSON in UTF-8 (docs/export.md). JSON's `exported` is
 /// `exportedUnixMs`; the overload without it takes the system clock. Throws
@@ -48,8 +56,9 @@ std::string_view fileExtension(ExportFormat format);
 /// malformed (no id, no tolerance zone); `out` then holds a part of the export,
 /// so write to a buffer (std::ostringstream) and copy it to the file or the
 /// response once this returns.
-void writeExport(std::ostream& out, ExportFormat format, const std::vector<nlohmann::json>& rows);
 void writeExport(std::ostream& out, ExportFormat format, const std::vector<nlohmann::json>& rows,
-                 std::int64_t exportedUnixMs);
+                 const ExportSettings& settings = {});
+void writeExport(std::ostream& out, ExportFormat format, const std::vector<nlohmann::json>& rows,
+                 std::int64_t exportedUnixMs, const ExportSettings& settings = {});
 
 } // namespace hg::store

@@ -45,6 +45,24 @@ struct ResultQuery {
 /// hg::InputError naming `field` otherwise (a date that does not exist too).
 std::int64_t parseUtc(const std::string& text, const std::string& field);
 
+/// The filters of a result selection as the user writes them: the web HMI's
+/// query parameters (docs/hmi.md, "JSON API") and `hullgauge export`'s options
+/// (docs/export.md, "The command") — the same names, values and refusals. An
+/// absent filter selects every row.
+struct SelectionFilters {
+    std::optional<std::string> program; ///< a part program number 1..65535
+    std::optional<std::string> serial;  ///< a part of the serial, at most 64 characters
+    std::optional<std::string> verdict; ///< any, pass, fail, aborted or error
+    std::optional<std::string> purpose; ///< any, production, master or study
+    std::optional<std::string> since;   ///< parseUtc's forms
+    std::optional<std::string> until;
+};
+
+/// The query of `filters`. A value that is none of the above is hg::InputError
+/// naming the filter as `prefix` + its name ("verdict" for the HMI, "--verdict"
+/// on the command line) and the value.
+ResultQuery parseSelection(const SelectionFilters& filters, const std::string& prefix);
+
 /// ms since 1970 as the store writes `started_utc`: "2026-12-02T10:30:05.250Z"
 /// (ISO 8601, UTC, milliseconds).
 std::string formatUtc(std::int64_t unixMs);

@@ -37,16 +37,18 @@ using nlohmann::json;
 /// The selection of /api/results and the exports (docs/hmi.md, "JSON API").
 store::ResultQuery resultQuery(const httplib::Request& req)
 {
-    store::ResultQuery q;
-    if (auto p = intParam(req, "program", 1, 65535)) q.program = static_cast<int>(*p);
-    if (req.has_param("serial")) q.serialContains = req.get_param_value("serial");
-    if (q.serialContains.size() > 64) throw HttpError(400, "serial: longer than 64 characters");
-    const auto verdict = oneOf(req, "verdict", {"any", "pass", "fail", "aborted", "error"}, "any");
-    if (verdict != "any") q.verdicts = {verdict};
-    const auto purpose = oneOf(req, "purpose", {"any", "production", "master", "study"}, "any");
-    if (purpose != "any") q.purpose = purpose;
-    if (req.has_param("since")) q.sinceMs = store::parseUtc(req.get_param_value("since"), "since");
-    if (req.has_param("until")) q.untilMs = store::parseUtc(req.get_param_value("until"), "until");
+    // The filters are `hullgauge export`'s too (docs/export.md): one parser for both.
+    store::SelectionFilters filters;
+    const auto param = [&req](const char* name) {
+        return req.has_param(name) ? std::optional<std::string>(req.get_param_value(name)) : std::nullopt;
+    };
+    filters.program = param("program");
+    filters.serial = param("serial");
+    filters.verdict = param("verdict");
+    filters.purpose = param("purpose");
+    filters.since = param("since");
+    filters.until = param("until");
+    auto q = store::parseSelection(filters, "");
     q.beforeId = intParam(req, "before", 1, std::numeric_limits<std::int64_t>::max());
     q.limit = static_cast<int>(intParam(req, "limit", 1, 500).value_or(50));
     return q;

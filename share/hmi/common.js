@@ -76,8 +76,8 @@ const hg = {
       let i = 0, j = 0;
       while (i < x.length || j < y.length) {
         if (i < x.length && j < y.length && x[i] === y[j]) { rows.push({ kind: "same", left: x[i], right: y[j] }); i++; j++; }
-        else if (j < y.length && (i === x.length || L[i][j + 1] >= L[i + 1][j])) rows.push({ kind: "add", left: "", right: y[j++] });
-        else rows.push({ kind: "del", left: x[i++], right: "" });
+        else if (i < x.length && (j === y.length || L[i + 1][j] >= L[i][j + 1])) rows.push({ kind: "del", left: x[i++], right: "" });
+        else rows.push({ kind: "add", left: "", right: y[j++] });
       }
     } else {
       for (let k = 0; k < Math.max(x.length, y.length); k++)

@@ -6,6 +6,7 @@
 #include "command.h"
 #include "hullgauge/common/durable_file.h"
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/file_kind.h"
 #include "hullgauge/store/audit_log.h"
 #include "hullgauge/store/result_reader.h"
 
@@ -37,6 +38,19 @@ std::string table(const std::vector<store::AuditEntry>& entries)
     return out.str();
 }
 
+/// The trail named by --audit, read-only. It is the user's file: one that is missing or no audit trail is
+/// bad input naming it (exit status 2, docs/contracts.md §5), as the result store of `hullgauge export`.
+store::AuditLog openTrail(const std::string& file)
+{
+    if (auto problem = notARegularFile(file); !problem.empty())
+        throw InputError(file, "--audit", "no audit trail at " + file + ": " + problem);
+    try {
+        return store::AuditLog(file, true);
+    } catch (const store::sqlite::Error& e) {
+        throw InputError(file, "--audit", e.reason());
+    }
+}
+
 int run(const AuditOptions& o)
 {
     store::AuditQuery q;
@@ -45,7 +59,7 @@ int run(const AuditOptions& o)
     q.who = o.who;
     q.actionPrefix = o.action;
     q.outcome = o.outcome;
-    const store::AuditLog audit(o.audit, true);
+    const auto audit = openTrail(o.audit);
     const auto entries = audit.select(q);
     std::string text;
     if (o.format == "csv") {

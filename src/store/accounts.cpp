@@ -72,9 +72,12 @@ bool validPasswordHash(const std::string& hash)
         std::any_of(kPrefixes.begin(), kPrefixes.end(), [&](const char* p) { return hash.rfind(p, 0) == 0; });
     // A whole hash: method, salt and the hashed password ("$6$salt$hash"), not a setting alone;
     // crypt_checksalt says whether this libcrypt supports the method and the setting is well formed.
+    // It calls sha256crypt ($5$) legacy; docs/audit.md reads it all the same (the methods weaker still
+    // are not among the prefixes).
     const auto fields = std::count(hash.begin(), hash.end(), '$');
+    const int check = crypt_checksalt(hash.c_str());
     return known && fields >= 3 && hash.back() != '$' && hash.size() >= 20 &&
-           crypt_checksalt(hash.c_str()) == CRYPT_SALT_OK;
+           (check == CRYPT_SALT_OK || check == CRYPT_SALT_METHOD_LEGACY);
 }
 
 bool verifyPassword(const std::string& password, const std::string& hash)
@@ -157,11 +160,18 @@ std::vector<Account>::iterator named(std::vector<Account>& accounts, const std::
     return it;
 }
 
-void keepAnAdministrator(const std::vector<Account>& accounts, const std::string& name)
+bool anyAdministrator(const std::vector<Account>& accounts)
 {
-    const bool any =
-        std::any_of(accounts.begin(), accounts.end(), [](const Account& a) { return a.role == Role::Administrator; });
-    if (!any)
+    return std::any_of(accounts.begin(), accounts.end(),
+                       [](const Account& a) { return a.role == Role::Administrator; });
+}
+
+/// A change that would leave no administrator where there was one is refused, even of the only account:
+/// without one nobody can manage the accounts (docs/audit.md). A file written by hand without any
+/// administrator can still be changed.
+void keepAnAdministrator(const std::vector<Account>& before, const std::vector<Account>& after, const std::string& name)
+{
+    if (anyAdministrator(before) && !anyAdministrator(after))
         throw InputError("", "name",
                          "'" + name + "' is the last administrator: make another account administrator first");
 }
@@ -230,8 +240,9 @@ void AccountsFile::add(const Account& account) const
 void AccountsFile::setRole(const std::string& name, Role role) const
 {
     change([&](std::vector<Account>& list) {
+        const auto before = list;
         named(list, name)->role = role;
-        keepAnAdministrator(list, name);
+        keepAnAdministrator(before, list, name);
     });
 }
 
@@ -244,8 +255,9 @@ void AccountsFile::setPasswordHash(const std::string& name, const std::string& h
 void AccountsFile::remove(const std::string& name) const
 {
     change([&](std::vector<Account>& list) {
+        const auto before = list;
         list.erase(named(list, name));
-        if (!list.empty()) keepAnAdministrator(list, name);
+        keepAnAdministrator(before, list, name);
     });
 }
 

@@ -1,5 +1,6 @@
 // The maintenance socket's answer to a request line (answerMaintenanceRequest):
-// malformed requests are answered as errors, never fail the daemon.
+// malformed requests are answered as errors, never fail the daemon; who asked
+// is the socket's peer, never what the request says (docs/audit.md).
 #include "maintenance.h"
 
 #include <gtest/gtest.h>
@@ -46,6 +47,40 @@ TEST(MaintenanceRequest, BytesThatAreNotUtf8InAnErrorComeBackAsReplacementCharac
     const std::string error = answer["error"];
     EXPECT_NE(error.find("request"), std::string::npos) << error;
     EXPECT_NE(error.find("\xEF\xBF\xBD"), std::string::npos) << error; // U+FFFD
+}
+
+/// The request as the command table receives it.
+json handedOn(const std::string& request, const std::string& peer)
+{
+    json seen;
+    const auto line = answerMaintenanceRequest(
+        request,
+        [&seen](const json& r) {
+            seen = r;
+            return json{{"ok", true}};
+        },
+        peer);
+    EXPECT_EQ(json::parse(line)["ok"], true) << line;
+    return seen;
+}
+
+TEST(MaintenanceRequest, TheCallerIsTheSocketsPeerNeverWhatTheRequestClaims)
+{
+    const json plain = handedOn("{\"command\": \"purpose\", \"purpose\": \"master\"}\n", "unix:olga");
+    EXPECT_EQ(plain, (json{{"command", "purpose"},
+                           {"purpose", "master"},
+                           {"caller", {{"who", "unix:olga"}, {"source", "socket"}}}}));
+    // A caller the request names is replaced whole: no role or source of its own survives.
+    const json claimed = handedOn(
+        R"({"command": "reload", "caller": {"who": "anna", "role": "administrator", "source": "hmi 10.0.0.1"}})"
+        "\n",
+        "unix:olga");
+    EXPECT_EQ(claimed, (json{{"command", "reload"}, {"caller", {{"who", "unix:olga"}, {"source", "socket"}}}}));
+    // Without a peer (the peer's credentials unknown) the request names no caller at all.
+    const json anonymous = handedOn(R"({"command": "reload", "caller": {"who": "anna", "role": "administrator"}})"
+                                    "\n",
+                                    "");
+    EXPECT_EQ(anonymous, (json{{"command", "reload"}}));
 }
 
 } // namespace

@@ -70,7 +70,7 @@ $("add").addEventListener("submit", (ev) => {
   ev.preventDefault();
   const name = $("add-name").value.trim();
   change("/api/users", { name, role: $("add-role").value, password: $("add-password").value }, `${name} added.`)
-    .then(() => { $("add-password").value = ""; });
+    .then(() => { $("add-password").value = ""; $("add-name").value = ""; });
 });
 $("own").addEventListener("submit", (ev) => {
   ev.preventDefault();

@@ -486,20 +486,26 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
     const auto action = kActions.find(command);
     if (!c.audit || action == kActions.end()) return;
     if ((command == "purpose" || command == "sim-part") && before.empty()) return;
+    // The caller is set by the socket server or the HMI, never by the client (answerMaintenanceRequest).
     const json caller = request.value("caller", json::object());
     store::AuditEntry entry;
     entry.who = caller.value("who", "unix:?");
     entry.role = caller.value("role", "");
     entry.source = caller.value("source", "socket");
     entry.action = action->second;
-    entry.object =
-        command == "calibrate" ? answer.value("calibration", json::object()).value("out", std::string()) : command;
+    entry.object = command == "calibrate" && answer.contains("calibration") && answer["calibration"].is_object()
+                       ? answer["calibration"].value("out", std::string())
+                       : command;
     const bool ok = answer.value("ok", false);
     entry.outcome = ok ? "done" : "failed";
     entry.detail = ok ? std::string() : answer.value("error", std::string());
+    // The request's own words, whatever their type (a refused request may carry a number there).
+    const auto words = [&request](const char* key) {
+        return request.contains(key) && request[key].is_string() ? request[key].get<std::string>()
+                                                                 : request.value(key, json()).dump();
+    };
     if (command == "calibrate")
-        entry.detail = "pattern " + request.value("pattern", std::string()) + ", poses " +
-                       request.value("poses", std::string()) + (ok ? "" : ": " + entry.detail);
+        entry.detail = "pattern " + words("pattern") + ", poses " + words("poses") + (ok ? "" : ": " + entry.detail);
     entry.before = before;
     entry.after = before.empty() ? std::string() : changedValue(c, command, request);
     c.audit(std::move(entry));

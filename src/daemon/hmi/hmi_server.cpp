@@ -520,10 +520,15 @@ bool HmiServer::guard(const httplib::Request& req, httplib::Response& res)
 void HmiServer::routePages()
 {
     // The pages: one HTML file each, their scripts and styles beside them.
-    static const std::map<std::string, std::string> kPages{
-        {"/", "line.html"},        {"/results", "results.html"},         {"/result", "result.html"},
-        {"/spc", "spc.html"},      {"/maintenance", "maintenance.html"}, {"/parts", "parts.html"},
-        {"/record", "record.html"}, {"/audit", "audit.html"},         {"/users", "users.html"}};
+    static const std::map<std::string, std::string> kPages{{"/", "line.html"},
+                                                           {"/results", "results.html"},
+                                                           {"/result", "result.html"},
+                                                           {"/spc", "spc.html"},
+                                                           {"/maintenance", "maintenance.html"},
+                                                           {"/parts", "parts.html"},
+                                                           {"/record", "record.html"},
+                                                           {"/audit", "audit.html"},
+                                                           {"/users", "users.html"}};
     for (const auto& [path, file] : kPages)
         server_->Get(path, [this, file = file](const httplib::Request& req, httplib::Response& res) {
             files_.serve(req, res, config()->http.assets / file);

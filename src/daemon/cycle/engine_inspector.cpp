@@ -197,6 +197,7 @@ class EngineInspector : public Inspector {
                 }
                 o.decision = l.decision;
                 o.limitsMm = l.limitsMm;
+                o.referral = l.referral;
                 out.landmarks.push_back(std::move(o));
             }
             out.evidence = evidence(result, out.landmarks);

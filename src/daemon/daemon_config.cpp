@@ -5,6 +5,7 @@
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/file_kind.h"
+#include "hullgauge/inspect/correction.h"
 #include "hullgauge/workbench/workspace.h"
 
 #include <algorithm>
@@ -279,6 +280,30 @@ DaemonConfig::Seating parseSeating(const ConfigNode& node)
     return s;
 }
 
+// `mastering`: the correction set of each program, when its folder holds one
+// (docs/mastering.md, "In the daemon"). A file that is not a correction set,
+// or is another program's, is refused here as any bad file of the
+// configuration is; a set for another version or material of the right
+// program is not bad input but an outdated one, found where the program is
+// loaded (engine_inspector.cpp).
+void parseMastering(const ConfigNode& node, const fs::path& base, DaemonConfig& cfg)
+{
+    node.allowOnlyKeys({"folder"});
+    cfg.mastering.folder = resolve(node["folder"], base);
+    if (!fs::is_directory(cfg.mastering.folder)) node["folder"].fail("not a folder: " + cfg.mastering.folder.string());
+    for (auto& [number, ref] : cfg.programs) {
+        const fs::path file = cfg.mastering.folder / ("program-" + std::to_string(number) + ".json");
+        if (!fs::exists(file)) continue;
+        const inspect::CorrectionSet set = inspect::loadCorrectionSet(file);
+        if (set.program != number)
+            throw InputError(file.string(), "program",
+                             "the correction set of program " + std::to_string(set.program) +
+                                 ", in the file of program " + std::to_string(number));
+        ref.correctionFile = file;
+        ref.correctionSha256 = sha256OfFile(file);
+    }
+}
+
 } // namespace
 
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse workspace)
@@ -286,7 +311,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "mqtt", "watchdog", "simulation", "workbench", "shifts"});
+                        "mqtt", "watchdog", "simulation", "workbench", "shifts", "mastering"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -334,6 +359,8 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
         if (auto m = n->optional("max_cycle_s")) cfg.watchdog.maxCycle = seconds(*m, 1.0, 3600.0);
     }
     if (auto n = root.optional("shifts")) cfg.shifts = parseShifts(*n);
+    // After `programs` and `workbench`: every program may have its set.
+    if (auto n = root.optional("mastering")) parseMastering(*n, base, cfg);
     if (auto n = root.optional("simulation")) {
         n->allowOnlyKeys({"parts", "seating"});
         auto parts = (*n)["parts"];

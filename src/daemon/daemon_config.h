@@ -52,6 +52,15 @@ struct PartProgramRef {
     /// The CAD model a workbench part's program names: what the simulated
     /// camera renders as its nominal part (docs/workbench.md).
     std::filesystem::path simulatedNominal;
+    /// The master's correction set in force for this program
+    /// (`<mastering.folder>/program-<N>.json`, docs/mastering.md "In the
+    /// daemon"), absolute; empty: none. Checked to be a correction set of this
+    /// program; whether it fits the program's version and material is decided
+    /// where the program is loaded (the engine inspector).
+    std::filesystem::path correctionFile;
+    /// Its SHA-256 as this configuration read it: a reload that finds a new set
+    /// (a new mastering) applies it from the next cycle.
+    std::string correctionSha256;
     /// Run the program although the capability check finds a tolerance this
     /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
     bool force = false;
@@ -157,6 +166,12 @@ struct WorkbenchConfig {
     bool enabled() const { return !folder.empty(); }
 };
 
+/// Mastering (docs/mastering.md, "In the daemon").
+struct MasteringConfig {
+    /// The folder of the correction sets, one per program (`program-<N>.json`); empty: none applied.
+    std::filesystem::path folder;
+};
+
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer
     /// than this (the sequencer is stuck) or the PLC server loop stalls.
@@ -185,6 +200,7 @@ struct DaemonConfig {
     /// The plant link (docs/mqtt.md): results, state and counters published to a broker.
     MqttConfig mqtt;
     WatchdogConfig watchdog;
+    MasteringConfig mastering;
     /// The station's shifts in the order of the day (docs/daemon.md, `shifts`): the line view's shift counters.
     std::vector<Shift> shifts = defaultShifts();
     /// Simulated line only (`camera.driver.backend: sim`): the parts the

@@ -212,7 +212,8 @@ SilhouetteView Inspector::prepareView(const CapturedView& v, const vision::Segme
 }
 
 InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
-                                    const vision::SegmentationSettings& segmentation) const
+                                    const vision::SegmentationSettings& segmentation,
+                                    const DeviationReferral& referral) const
 {
     const Stopwatch watch;
     std::vector<SilhouetteView> silhouettes;
@@ -223,13 +224,14 @@ InspectionResult Inspector::inspect(const std::vector<CapturedView>& views,
         ids.push_back(v.id);
     }
     const Milliseconds segmentationTime = watch.elapsed();
-    InspectionResult r = inspect(std::move(silhouettes), ids);
+    InspectionResult r = inspect(std::move(silhouettes), ids, referral);
     r.segmentationTime = segmentationTime;
     r.totalTime = watch.elapsed();
     return r;
 }
 
-InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const
+InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds,
+                                    const DeviationReferral& referral) const
 {
     const Stopwatch watch;
     InspectionResult seatFault;
@@ -240,18 +242,55 @@ InspectionResult Inspector::inspect(std::vector<SilhouetteView> views, const std
     VoxelTester tester(&views, options_.method);
     InspectionResult r = run([&](const Box3& b) { return tester.classify(b); }, &views, &viewIds);
     r.alignment = std::move(seatFault.alignment);
-    if (gauge_) measureDeviations(r, views, viewIds);
+    if (gauge_) measureDeviations(r, views, viewIds, referral);
     markUnproven(r);
     r.totalTime = watch.elapsed();
     return r;
 }
 
+// docs/mastering.md: the reading referred to 20 °C (the expansion taken
+// out), then corrected by the master; U grows by root-sum-square with the
+// temperature's share and the correction's, the reading's own U scaled by
+// the gain.
+std::optional<AppliedReferral> Inspector::refer(Deviation& d, const MapLandmark& lm,
+                                                const DeviationReferral& referral) const
+{
+    const LandmarkCorrection* correction = referral.correction ? referral.correction->find(lm.id) : nullptr;
+    const bool thermal = referral.temperatureC && options_.expansionPerK != 0.0;
+    if (!correction && !thermal) return std::nullopt;
+    AppliedReferral a;
+    a.rawDeviationMm = d.deviationMm;
+    a.rawUncertaintyMm = d.uncertaintyMm;
+    if (thermal) {
+        a.thermalMm = thermalOffsetMm(options_.expansionPerK, *referral.temperatureC, lm.position, lm.normal,
+                                      options_.expansionCentre);
+        a.thermalUncertaintyMm =
+            2.0 *
+            std::abs(thermalOffsetMm(options_.expansionPerK, 21.0, lm.position, lm.normal, options_.expansionCentre)) *
+            referral.temperatureSigmaC;
+    }
+    const double reading = d.deviationMm - a.thermalMm;
+    const double readingU = std::hypot(d.uncertaintyMm, a.thermalUncertaintyMm);
+    d.deviationMm = reading;
+    d.uncertaintyMm = readingU;
+    if (correction) {
+        a.correctionId = referral.correction->id;
+        a.correctionGain = correction->gain();
+        a.correctionOffsetMm = correction->offsetMm();
+        a.correctionUncertaintyMm = correction->uncertaintyAt(reading);
+        d.deviationMm = correction->correct(reading);
+        d.uncertaintyMm = std::hypot(a.correctionGain * readingU, a.correctionUncertaintyMm);
+    }
+    return a;
+}
+
 // The sub-voxel step (docs/inspection.md, "Sub-voxel deviation",
 // "Decisions"): each landmark's edge in the views that see it on their
-// outline; where the bracket found the surface (ok or out of tolerance) the
-// decision on the deviation, its uncertainty and the limits sets the status.
+// outline, referred and corrected (docs/mastering.md); where the bracket found
+// the surface (ok or out of tolerance) the decision on the deviation, its
+// uncertainty and the limits sets the status.
 void Inspector::measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
-                                  const std::vector<std::string>& viewIds) const
+                                  const std::vector<std::string>& viewIds, const DeviationReferral& referral) const
 {
     for (LandmarkResult& lr : r.landmarks) {
         const auto index = map_->landmarkIndex(lr.id);
@@ -259,6 +298,7 @@ void Inspector::measureDeviations(InspectionResult& r, const std::vector<Silhoue
         const MapLandmark& lm = map_->landmarks()[*index];
         lr.deviation = gauge_->measure(*index, lm, views, viewIds, r.alignment ? &*r.alignment : nullptr);
         if (!lr.deviation->measured) continue;
+        lr.referral = refer(*lr.deviation, lm, referral);
         if (lr.status != LandmarkStatus::Ok && lr.status != LandmarkStatus::OutOfTolerance) continue;
         const Deviation& d = *lr.deviation;
         lr.decision = decide(d.deviationMm, d.uncertaintyMm, lm.lowerMm(), lm.upperMm(), options_.decisionRule);

@@ -51,6 +51,11 @@ InspectionSetup setUpInspection(const model::PartProgram& program, const Inspect
                                 const std::vector<std::string>& masked)
 {
     InspectionSetup setup = setUpInspection(program.inspection, station.capability, masked, program.file.string());
+    // Deviations referred to 20 °C when a temperature comes with the cycle (docs/mastering.md).
+    if (program.material) {
+        setup.options.expansionPerK = program.material->expansionPerK;
+        setup.options.expansionCentre = program.material->expansionCentre;
+    }
     setup.aligner = makeAligner(program);
     setup.gauge = makeDeviationGauge(program, station.calibration);
     // The seat of the first views corrects the poses of the rest (docs/alignment.md,

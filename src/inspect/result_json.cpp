@@ -65,6 +65,7 @@ nlohmann::json toJson(const InspectionResult& r)
             l["deviation_mm"] = lr.deviation->measured ? json(lr.deviation->deviationMm) : json(nullptr);
             l["uncertainty_mm"] = lr.deviation->measured ? json(lr.deviation->uncertaintyMm) : json(nullptr);
             l["deviation"] = toJson(*lr.deviation);
+            if (lr.referral) addReferral(l, *lr.referral);
             if (lr.decision) l["decision"] = enumName(*lr.decision);
         }
         if (!lr.views.empty()) {

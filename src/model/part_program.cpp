@@ -437,6 +437,21 @@ ReleaseRecord parseRelease(const ConfigNode& node)
     return r;
 }
 
+// docs/part-program.md, "Material"; docs/mastering.md, "Temperature".
+Material parseMaterial(const ConfigNode& node, const Solid& solid)
+{
+    node.allowOnlyKeys({"name", "expansion_per_k", "expansion_centre"});
+    Material m;
+    m.name = node["name"].asString();
+    const bool plain = !m.name.empty() && m.name.find_first_of("/\\ \t") == std::string::npos;
+    if (!plain) node["name"].fail("expected a material name without spaces or slashes (it names correction sets)");
+    if (auto n = node.optional("expansion_per_k")) m.expansionPerK = n->asDoubleIn(0.0, 1e-3);
+    const auto bounds = solid.mesh().bounds();
+    m.expansionCentre = 0.5 * (bounds.min() + bounds.max());
+    if (auto n = node.optional("expansion_centre")) m.expansionCentre = n->asVector3();
+    return m;
+}
+
 } // namespace
 
 PartProgram loadPartProgram(const std::filesystem::path& file)
@@ -444,7 +459,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys part, mesh, octree, landmarks");
     root.allowOnlyKeys({"part", "mesh", "mesh_solid", "mesh_repair", "mesh_gap_mm", "octree", "landmarks", "parameters",
-                        "inspection", "alignment", "decision_rule", "release"});
+                        "inspection", "alignment", "decision_rule", "release", "material"});
 
     PartProgram program;
     program.file = file;
@@ -493,6 +508,7 @@ PartProgram loadPartProgram(const std::filesystem::path& file)
     }
     if (auto n = root.optional("alignment")) program.alignment = parseAlignment(*n, index);
     if (auto n = root.optional("release")) program.release = parseRelease(*n);
+    if (auto n = root.optional("material")) program.material = parseMaterial(*n, *program.solid);
     return program;
 }
 

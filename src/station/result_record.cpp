@@ -23,6 +23,7 @@ nlohmann::json toJson(const LandmarkOutcome& l)
     if (l.uncertaintyMm) j["uncertainty_mm"] = *l.uncertaintyMm;
     if (l.decision) j["decision"] = enumName(*l.decision);
     if (l.limitsMm) j["limits_mm"] = {l.limitsMm->first, l.limitsMm->second};
+    if (l.referral) inspect::addReferral(j, *l.referral);
     return j;
 }
 

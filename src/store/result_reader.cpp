@@ -30,7 +30,7 @@ std::set<std::string> columnsOf(const sqlite::Connection& db, const std::string&
 std::string selectList(const std::set<std::string>& columns)
 {
     // In rowJson's order, each with what a store without the column reads.
-    static constexpr std::array<std::pair<const char*, const char*>, 21> kColumns{{
+    static constexpr std::array<std::pair<const char*, const char*>, 23> kColumns{{
         {"id", "0"},
         {"started_utc", "''"},
         {"started_unix_ms", "0"},
@@ -52,6 +52,8 @@ std::string selectList(const std::set<std::string>& columns)
         {"purpose", "'production'"},
         {"program_version", "NULL"},
         {"program_sha256", "''"},
+        {"correction_id", "''"},
+        {"temperature_c", "NULL"},
     }};
     std::string list;
     for (const auto& [column, fallback] : kColumns)
@@ -128,7 +130,9 @@ json rowJson(const sqlite::Statement& s, const std::string& file)
             {"simulation", parsed(s, 17, file, "simulation_json")},
             {"purpose", s.text(18)},
             {"program_version", s.isNull(19) ? json() : json(s.integer(19))},
-            {"program_sha256", s.text(20).empty() ? json() : json(s.text(20))}};
+            {"program_sha256", s.text(20).empty() ? json() : json(s.text(20))},
+            {"correction_id", s.text(21).empty() ? json() : json(s.text(21))},
+            {"temperature_c", s.isNull(22) ? json() : json(s.real(22))}};
 }
 
 } // namespace

@@ -51,8 +51,8 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         db_.prepare("INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
                     "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
                     "landmarks_json, timing_json, images_dir, alignment_json, simulation_json, purpose, cycle_id, "
-                    "program_version, program_sha256) "
-                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                    "program_version, program_sha256, correction_id, temperature_c) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     insert.bind(1, formatUtc(r.startedUnixMs))
         .bind(2, r.startedUnixMs)
         .bind(3, r.triggerSeq)
@@ -78,6 +78,11 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
     else
         insert.bindNull(20);
     insert.bind(21, r.programRelease ? r.programRelease->verificationSha256 : std::string());
+    insert.bind(22, r.correctionId);
+    if (r.temperatureC)
+        insert.bindReal(23, *r.temperatureC);
+    else
+        insert.bindNull(23);
     // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
     insert.step();
     return db_.lastInsertRowId();

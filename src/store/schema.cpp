@@ -30,7 +30,9 @@ CREATE TABLE IF NOT EXISTS inspections (
     cycle_id         TEXT    NOT NULL DEFAULT '',
     published_unix_ms INTEGER,
     program_version  INTEGER,
-    program_sha256   TEXT    NOT NULL DEFAULT ''
+    program_sha256   TEXT    NOT NULL DEFAULT '',
+    correction_id    TEXT    NOT NULL DEFAULT '',
+    temperature_c    REAL
 );
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
@@ -71,6 +73,12 @@ void createOrMigrate(const sqlite::Connection& db)
     if (found >= 1 && found <= 4) {
         db.exec("ALTER TABLE inspections ADD COLUMN program_version INTEGER");
         db.exec("ALTER TABLE inspections ADD COLUMN program_sha256 TEXT NOT NULL DEFAULT ''");
+    }
+    // A version 1 to 5 database gains the master's correction and the part's temperature
+    // (docs/mastering.md); its rows were neither corrected nor referred ('' and NULL).
+    if (found >= 1 && found <= 5) {
+        db.exec("ALTER TABLE inspections ADD COLUMN correction_id TEXT NOT NULL DEFAULT ''");
+        db.exec("ALTER TABLE inspections ADD COLUMN temperature_c REAL");
     }
     // The outbox: the rows still to publish, in id order, without scanning the published ones.
     db.exec("CREATE INDEX IF NOT EXISTS inspections_outbox ON inspections (id) WHERE published_unix_ms IS NULL");

@@ -13,7 +13,7 @@ namespace hg::store {
 // 3: purpose (production, master, study: docs/study.md).
 // 4: cycle_id and published_unix_ms, the plant link's outbox (docs/mqtt.md).
 // 5: program_version and program_sha256, the release the part was judged with (docs/commissioning.md).
-constexpr int kSchemaVersion = 5;
+constexpr int kSchemaVersion = 6;
 
 /// Creates the schema in a new database, or brings one of an older version to kSchemaVersion
 /// keeping its rows; a database of a newer version is refused (sqlite::Error naming it).

@@ -111,6 +111,12 @@ Statement& Statement::bind(int index, std::int64_t value)
     return *this;
 }
 
+Statement& Statement::bindReal(int index, double value)
+{
+    sqlite3_bind_double(stmt_, index, value);
+    return *this;
+}
+
 Statement& Statement::bind(int index, const std::string& text)
 {
     sqlite3_bind_text(stmt_, index, text.c_str(), static_cast<int>(text.size()), SQLITE_TRANSIENT);
@@ -145,6 +151,11 @@ int Statement::integer(int column) const
 std::int64_t Statement::int64(int column) const
 {
     return sqlite3_column_int64(stmt_, column);
+}
+
+double Statement::real(int column) const
+{
+    return sqlite3_column_double(stmt_, column);
 }
 
 std::string Statement::text(int column) const

@@ -130,7 +130,7 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
     EXPECT_EQ(recent[1]["purpose"], "production");
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
 }
 
 TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
@@ -158,13 +158,13 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
         EXPECT_EQ(recent[1]["purpose"], "production");
         EXPECT_EQ(recent[1]["serial"], "OLD");
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
               "OLD|production\nSN-4|master\n");
     // Only the three purposes are stored, also in a migrated table.
     auto bad = hgtest::run("sqlite3 " + file.string() + " \"UPDATE inspections SET purpose = 'golden' WHERE id = 1\"");
     EXPECT_NE(bad.status, 0);
-    ResultStore again(file); // reopening a version 5 database changes nothing
+    ResultStore again(file); // reopening a migrated database changes nothing
     EXPECT_EQ(again.count(), 2);
 }
 
@@ -274,7 +274,7 @@ TEST(ResultOutbox, RowsOfAVersionThreeStorePredateThePlantLink)
     store.commit(record(4, station::Verdict::Pass));
     ResultOutbox outbox(file);
     EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
                           " \"SELECT serial, published_unix_ms, cycle_id = '' FROM inspections ORDER BY id\"")
                   .out,
@@ -383,15 +383,47 @@ TEST(ResultStore, AVersionFourDatabaseGainsTheReleaseColumnsAndKeepsItsRows)
         EXPECT_TRUE(recent[1]["program_version"].is_null());
         EXPECT_TRUE(recent[1]["program_sha256"].is_null());
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "5\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
     // Its outbox state too: published at 42 with its cycle id, not sent again.
     EXPECT_EQ(sql(file, "SELECT id, cycle_id, published_unix_ms, program_version IS NULL, program_sha256 FROM "
                         "inspections ORDER BY id LIMIT 1"),
               "1|c0ffee00-0000-4000-8000-000000000001|42|1|\n");
     ResultOutbox outbox(file);
     EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
-    ResultStore again(file); // reopening a version 5 database changes nothing
+    ResultStore again(file); // reopening a migrated database changes nothing
     EXPECT_EQ(again.count(), 2);
+}
+
+TEST(ResultStore, AVersionFiveDatabaseGainsTheCorrectionAndTemperatureColumns)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v5.db";
+    {
+        ResultStore store(file);
+        store.commit(record(1, station::Verdict::Pass));
+    }
+    // Back to version 5 as that daemon wrote it: without the two columns (SQLite 3.35 drops columns).
+    hgtest::run("sqlite3 " + file.string() +
+                " 'ALTER TABLE inspections DROP COLUMN correction_id; ALTER TABLE inspections DROP COLUMN "
+                "temperature_c; PRAGMA user_version=5;'");
+    ASSERT_EQ(sql(file, "SELECT count(*) FROM pragma_table_info('inspections') WHERE name = 'temperature_c'"), "0\n");
+    {
+        ResultStore store(file);
+        auto r = record(2, station::Verdict::Pass);
+        r.correctionId = "p1-v3-steel-20260412T081500Z";
+        r.temperatureC = 23.25;
+        store.commit(r);
+        auto recent = store.recent(2);
+        ASSERT_EQ(recent.size(), 2u);
+        EXPECT_EQ(recent[0]["correction_id"], "p1-v3-steel-20260412T081500Z");
+        EXPECT_EQ(recent[0]["temperature_c"], 23.25);
+        // The old row: neither corrected nor referred.
+        EXPECT_TRUE(recent[1]["correction_id"].is_null());
+        EXPECT_TRUE(recent[1]["temperature_c"].is_null());
+    }
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(sql(file, "SELECT id, correction_id, temperature_c FROM inspections ORDER BY id"),
+              "1||\n2|p1-v3-steel-20260412T081500Z|23.25\n");
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
@@ -435,12 +467,12 @@ TEST(ResultStore, AVersionOneStoreOpensAndMigratesToTheSchemaOfANewStore)
     ASSERT_EQ(before.size(), 2u);
     EXPECT_EQ(sql(old, "PRAGMA user_version"), "1\n");
 
-    // The writer opens it: version 5, the rows kept, and they read as the reader read them before.
+    // The writer opens it: version 6, the rows kept, and they read as the reader read them before.
     {
         ResultStore store(old);
         EXPECT_EQ(store.count(), 2);
     }
-    EXPECT_EQ(sql(old, "PRAGMA user_version"), "5\n");
+    EXPECT_EQ(sql(old, "PRAGMA user_version"), "6\n");
     EXPECT_EQ(ResultReader(old).select(all), before);
     EXPECT_EQ(before[1]["serial"], "OLD-2");
     EXPECT_EQ(before[1]["timing"]["move"], 5);

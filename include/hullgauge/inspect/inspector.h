@@ -31,6 +31,7 @@
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/geometry/camera.h"
+#include "hullgauge/inspect/correction.h"
 #include "hullgauge/inspect/deviation.h"
 #include "hullgauge/inspect/inspection_map.h"
 #include "hullgauge/inspect/measures.h"
@@ -67,6 +68,11 @@ struct InspectionOptions {
     /// (docs/inspection.md, "Pixels in proportion to the goal"): the
     /// reference the regions are tested against. Never on the line.
     bool wholeFrame = false;
+    /// The material's linear expansion coefficient (1/K, the part program's
+    /// `material.expansion_per_k`) and the point the part grows about (mm):
+    /// with a temperature, deviations are referred to 20 °C (docs/mastering.md).
+    double expansionPerK = 0.0;
+    Eigen::Vector3d expansionCentre = Eigen::Vector3d::Zero();
 };
 
 struct ViewReport {
@@ -98,6 +104,10 @@ struct LandmarkResult {
     std::optional<Decision> decision;
     /// The part program's asymmetric limits, when it gives them.
     std::optional<std::pair<double, double>> limitsMm;
+    /// How the measured deviation was referred to 20 °C and corrected by the
+    /// master (docs/mastering.md); `deviation` then holds the corrected value
+    /// and its enlarged U, this the raw ones. Absent: neither applied.
+    std::optional<AppliedReferral> referral;
 };
 
 struct ParameterResult {
@@ -174,8 +184,8 @@ class Inspector {
     /// (ArgumentError naming the view); pixels of the sensor the frame
     /// does not hold are unknown, never read (docs/inspection.md, "Frames
     /// that are regions").
-    InspectionResult inspect(const std::vector<CapturedView>& views,
-                             const vision::SegmentationSettings& segmentation) const;
+    InspectionResult inspect(const std::vector<CapturedView>& views, const vision::SegmentationSettings& segmentation,
+                             const DeviationReferral& referral = {}) const;
     /// Segments one view's regions of interest into its silhouette index: the
     /// per-view half of `inspect`, so a caller can prepare view k while the
     /// fixture moves to view k+1 (docs/daemon.md, "The pipeline"). Const and free of shared
@@ -184,8 +194,11 @@ class Inspector {
     SilhouetteView prepareView(const CapturedView& view, const vision::SegmentationSettings& segmentation) const;
     /// Inspects prepared silhouettes (ids name the views in the result): aligns
     /// first when the inspector has an aligner (the views' cameras are the
-    /// nominal ones; the seated ones are used from then on).
-    InspectionResult inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds) const;
+    /// nominal ones; the seated ones are used from then on). `referral`: the
+    /// part's temperature and the master's correction (docs/mastering.md),
+    /// applied to every measured deviation before it is decided.
+    InspectionResult inspect(std::vector<SilhouetteView> views, const std::vector<std::string>& viewIds,
+                             const DeviationReferral& referral = {}) const;
     /// The seat measured on prepared views (their nominal cameras), e.g. on
     /// the first views of a cycle while the fixture moves on, to correct the
     /// remaining poses (docs/alignment.md, "Poses corrected for the seat").
@@ -220,8 +233,10 @@ class Inspector {
     /// `result` the seating fault) when the part is not seated within the limits.
     bool seat(std::vector<SilhouetteView>& views, InspectionResult& result) const;
     /// The sub-voxel step after the traversal: deviations and the decisions on them.
+    /// The deviation referred to 20 °C and corrected (docs/mastering.md); nullopt when nothing applies.
+    std::optional<AppliedReferral> refer(Deviation& d, const MapLandmark& lm, const DeviationReferral& referral) const;
     void measureDeviations(InspectionResult& r, const std::vector<SilhouetteView>& views,
-                           const std::vector<std::string>& viewIds) const;
+                           const std::vector<std::string>& viewIds, const DeviationReferral& referral) const;
     void markUnproven(InspectionResult& r) const;
     std::shared_ptr<const ViewOutlines> cachedOutlines(const geometry::CameraModel& camera) const;
     std::shared_ptr<const ViewOutlines> outlinesFor(const geometry::CameraModel& camera) const;

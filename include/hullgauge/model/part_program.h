@@ -150,6 +150,16 @@ struct ReleaseRecord {
     std::optional<int> rolledBackFrom;
 };
 
+/// The part's material (the optional `material` section, docs/part-program.md):
+/// its name keeps the master's correction sets apart (docs/mastering.md) and
+/// its linear expansion coefficient refers the deviations to 20 °C (ISO 1).
+struct Material {
+    std::string name;
+    double expansionPerK = 0.0; ///< α, 1/K (steel about 11.5e-6, aluminium about 23e-6)
+    /// The point the part grows about, part frame (mm); default the centre of the mesh's bounding box.
+    geometry::Vec3 expansionCentre = geometry::Vec3::Zero();
+};
+
 struct PartProgram {
     std::filesystem::path file;     // the YAML file
     std::string part;               // free-text name
@@ -173,6 +183,8 @@ struct PartProgram {
     std::optional<geometry::FixtureType> bestViewFixture;
     /// `release`: present in a program `hullgauge commission` released.
     std::optional<ReleaseRecord> release;
+    /// `material`, when the program names one.
+    std::optional<Material> material;
 
     /// How far a landmark may lie from the mesh surface: max(0.01 mm, ΔV/4).
     /// Tessellation of curved CAD faces moves the mesh off the designer's

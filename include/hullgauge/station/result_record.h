@@ -5,6 +5,7 @@
 
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/enum_names.h"
+#include "hullgauge/inspect/correction.h"
 #include "hullgauge/inspect/outcome.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
@@ -34,6 +35,9 @@ struct LandmarkOutcome {
     std::optional<inspect::Decision> decision{};
     /// The part program's asymmetric limits [lower, upper], when it gives them.
     std::optional<std::pair<double, double>> limitsMm{};
+    /// The raw deviation, the temperature's share and the master's correction
+    /// behind `deviationMm` (docs/mastering.md, "In the result").
+    std::optional<inspect::AppliedReferral> referral{};
     bool ok() const { return status == inspect::LandmarkStatus::Ok; }
 };
 
@@ -114,6 +118,10 @@ struct InspectionRecord {
     FaultCode faultCode = FaultCode::None;
     std::uint32_t cycleMs = 0; ///< trigger accepted -> verdict
     std::vector<LandmarkOutcome> landmarks;
+    /// The correction set the deviations were corrected with (docs/mastering.md); empty: none.
+    std::string correctionId;
+    /// The part's temperature at the trigger (°C), when the station reads one (docs/mastering.md).
+    std::optional<double> temperatureC;
     /// Cycle-time breakdown (move, settle, grab, processing, ...).
     CycleTimings timings;
     /// The measured seat: the result's `alignment` object (docs/alignment.md,

@@ -88,6 +88,7 @@ class Statement {
     Statement& bind(int index, std::int64_t value);
     Statement& bind(int index, const std::string& text);
     Statement& bindNull(int index);
+    Statement& bindReal(int index, double value);
     /// The next row: true while there is one, false when the statement is done; throws Error.
     bool step();
     /// Back to before the first step, the bindings kept, for the next run with new ones.
@@ -95,6 +96,7 @@ class Statement {
 
     int integer(int column) const;
     std::int64_t int64(int column) const;
+    double real(int column) const;
     /// The column's text; "" for NULL.
     std::string text(int column) const;
     bool isNull(int column) const;

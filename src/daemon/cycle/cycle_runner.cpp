@@ -628,7 +628,10 @@ void CycleRunner::recordOutcome(Cycle& cycle)
         record.simulation = {{"part", simulation_->part()}};
         if (auto seat = simulation_->trueSeat()) record.simulation["seat"] = align::seatJson(seat->seat, seat->centre);
     }
-    if (how == station::CycleOutcome::Inspected) record.landmarks = outcome.landmarks;
+    if (how == station::CycleOutcome::Inspected) {
+        record.landmarks = outcome.landmarks;
+        record.correctionId = outcome.correctionId;
+    }
     record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
     // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
     // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.

@@ -4,6 +4,7 @@
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/inspect/correction.h"
 #include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/vision/segmentation.h"
@@ -58,6 +59,24 @@ std::string describeRelease(const model::PartProgram& program)
            program.release->verificationSha256.substr(0, 8) + "…";
 }
 
+/// Why `set` does not fit `program` (docs/mastering.md, "In the daemon"): a
+/// master measured on another release or for another material corrects a bias
+/// that is not this program's; empty when it fits.
+std::string correctionMismatch(const inspect::CorrectionSet& set, const model::PartProgram& program)
+{
+    const std::optional<int> version =
+        program.release ? std::optional<int>(program.release->version) : std::optional<int>();
+    const auto describe = [](std::optional<int> v) {
+        return v ? "version " + std::to_string(*v) : std::string("draft");
+    };
+    if (set.programVersion != version)
+        return "it was mastered on " + describe(set.programVersion) + ", the program is " + describe(version);
+    const std::string material = program.material ? program.material->name : std::string();
+    if (set.material != material)
+        return "it is for material '" + set.material + "', the program's is '" + material + "'";
+    return {};
+}
+
 struct LoadedProgram {
     std::filesystem::path file;
     /// The file's SHA-256 as the configuration it was loaded for validated it
@@ -71,7 +90,36 @@ struct LoadedProgram {
     /// `camera.regions: false`; docs/daemon.md, "Regions per view").
     std::vector<geometry::FixturePose> poses;
     std::vector<cv::Rect> regions;
+    /// The correction set file and digest the configuration named
+    /// (PartProgramRef::correctionFile), and the set when it fits the program.
+    std::filesystem::path correctionFile;
+    std::string correctionSha256;
+    std::optional<inspect::CorrectionSet> correction;
 };
+
+/// Reads the correction set the configuration names for `p` and keeps it when
+/// it fits the program. One that does not is left out with a journal warning
+/// rather than refused: a new release of the program outdates the set without
+/// making the configuration wrong, and the line runs on uncorrected (the
+/// results say so: no correction id) until the master is measured again.
+/// Throws InputError when the file is no longer a correction set.
+void applyCorrection(LoadedProgram& p, const station::PartProgramRef& ref)
+{
+    p.correctionFile = ref.correctionFile;
+    p.correctionSha256 = ref.correctionSha256;
+    p.correction.reset();
+    if (ref.correctionFile.empty()) return;
+    inspect::CorrectionSet set = inspect::loadCorrectionSet(ref.correctionFile);
+    if (const std::string why = correctionMismatch(set, p.program); !why.empty()) {
+        hg::log::category("inspect")->warn("part program {}: correction set {} ({}) not applied: {}; deviations "
+                                           "are uncorrected until the master is measured again",
+                                           ref.number, set.id, ref.correctionFile.string(), why);
+        return;
+    }
+    hg::log::category("inspect")->info("part program {}: correction set {} applied ({} landmarks)", ref.number, set.id,
+                                       set.landmarks.size());
+    p.correction = std::move(set);
+}
 
 /// The bounds of every pixel the inspection reads through `camera`; empty
 /// when it reads none (the camera then sends whole frames).
@@ -105,7 +153,7 @@ class EngineInspector : public Inspector {
     // loaded anew may replace the one the last cycle used.
     Status prepare(const station::PartProgramRef& ref) override
     {
-        if (loadedAsConfigured(ref)) return Status::success();
+        if (loadedAsConfigured(ref) && correctedAsConfigured(ref)) return Status::success();
         idle();
         return load(ref).status();
     }
@@ -180,8 +228,11 @@ class EngineInspector : public Inspector {
                 return out;
             }
             // Only the traversal is left once the last frame is in (dissertation 3.3.8).
-            auto result = current_->inspection.inspector->inspect(std::move(prepared.views), prepared.ids);
+            inspect::DeviationReferral referral;
+            referral.correction = current_->correction ? &*current_->correction : nullptr;
+            auto result = current_->inspection.inspector->inspect(std::move(prepared.views), prepared.ids, referral);
             out.ok = true;
+            if (current_->correction) out.correctionId = current_->correction->id;
             out.part = result.part;
             out.release = releaseOf(current_->program);
             out.pass = result.pass;
@@ -197,6 +248,7 @@ class EngineInspector : public Inspector {
                 }
                 o.decision = l.decision;
                 o.limitsMm = l.limitsMm;
+                o.referral = l.referral;
                 out.landmarks.push_back(std::move(o));
             }
             out.evidence = evidence(result, out.landmarks);
@@ -229,13 +281,25 @@ class EngineInspector : public Inspector {
         return it != loaded_.end() && it->second.file == ref.partFile && it->second.configuredSha256 == ref.partSha256;
     }
 
+    /// The loaded program holds the correction set the configuration names (a reload may name a new one).
+    bool correctedAsConfigured(const station::PartProgramRef& ref) const
+    {
+        auto it = loaded_.find(ref.number);
+        return it != loaded_.end() && it->second.correctionFile == ref.correctionFile &&
+               it->second.correctionSha256 == ref.correctionSha256;
+    }
+
     /// The program, loaded unless it is loaded from the same file already (a
     /// reload may point the number at another file, or find a new version in
     /// the same one: rebuilt then); a failure with the reason when it cannot be loaded.
     Result<LoadedProgram*> load(const station::PartProgramRef& ref)
     {
-        if (loadedAsConfigured(ref)) return &loaded_.at(ref.number);
         try {
+            if (loadedAsConfigured(ref)) {
+                LoadedProgram& loaded = loaded_.at(ref.number);
+                if (!correctedAsConfigured(ref)) applyCorrection(loaded, ref);
+                return &loaded;
+            }
             const Stopwatch watch;
             LoadedProgram p;
             p.file = ref.partFile;
@@ -251,6 +315,7 @@ class EngineInspector : public Inspector {
             p.poses = ref.views;
             for (const geometry::CameraModel& c : cameras)
                 p.regions.push_back(regions_ ? viewBounds(*p.inspection.inspector, c) : cv::Rect());
+            applyCorrection(p, ref);
             // The version loaded, and the one it replaces (a reload, docs/daemon.md).
             const auto before = loaded_.find(ref.number);
             hg::log::category("inspect")->info(

@@ -67,6 +67,8 @@ struct InspectionOutcome {
     std::optional<station::ProgramRelease> release;
     bool pass = false;
     std::vector<station::LandmarkOutcome> landmarks;
+    /// The correction set the deviations were corrected with (docs/mastering.md); empty: none.
+    std::string correctionId;
     /// An inspected part's views for its archive: either `views` (ready) or `evidence`,
     /// which builds them (whole-frame segmentation) when the cycle writes the archive, after
     /// the result is shown — that work is not on the path from the last frame to the verdict.

@@ -18,6 +18,7 @@
 #include "hullgauge/sim/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <fstream>
 #include <gtest/gtest.h>
@@ -1087,80 +1088,123 @@ TEST_F(CameraRegions, TheCameraSendsEachViewsBoundsAndTheVerdictsAreThoseOfWhole
 
 // docs/camera.md, "A camera that cannot": it sends whole frames; the
 // inspection, told so by each frame's origin and size, judges the same.
+/// The daemon's cycle runner and engine inspector on a copy of the simulated
+/// line (config/sim), its nominal part rendered at the poses commanded. The
+/// configuration is loaded as the daemon loads it at start and at every
+/// reload (daemon.cpp, loadConfig): every part program checked in full.
+class SimulatedLine {
+  public:
+    SimulatedLine()
+    {
+        fs::copy(hgtest::sourceDir() / "config" / "sim", folder(), fs::copy_options::recursive);
+        std::ifstream in(programFile());
+        draft_.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (!draft_.empty() && draft_.back() != '\n') draft_ += '\n';
+    }
+    ~SimulatedLine() { runner_.reset(); }
+
+    fs::path folder() const { return dir_.path() / "sim"; }
+    fs::path daemonFile() const { return folder() / "hullgauged.yaml"; }
+    fs::path programFile() const { return folder() / "stepped-block.yaml"; }
+    /// The simulated line's program as config/sim has it (a draft), ending in a newline.
+    const std::string& draft() const { return draft_; }
+    /// `program` with the record of docs/commissioning.md, "Release".
+    static std::string released(const std::string& program, int version, const std::string& digest)
+    {
+        return program + "release:\n  version: " + std::to_string(version) + "\n  verification_sha256: " + digest +
+               "\n  released_by: jdoe\n  released_at: 2026-12-06T13:05:12+01:00\n";
+    }
+
+    /// Loads the configuration and starts the runner; false when it does not become ready.
+    bool start()
+    {
+        config_ = loadConfig();
+        station_ = config_->station;
+        const ConfigNode driver = (*station_.document)["camera"]["driver"];
+        options_.backgroundLevel = driver["background_level"].asDouble();
+        options_.objectLevel = driver["object_level"].asDouble();
+        options_.blurSigmaPx = driver["blur_sigma_px"].asDouble();
+        options_.noiseSigma = driver["noise_sigma"].asDouble();
+        options_.seed = 7;
+        const std::map<std::string, fs::path> meshes(config_->simulatedParts.begin(), config_->simulatedParts.end());
+        renderer_ = std::make_unique<sim::SilhouetteRenderer>(
+            std::vector<model::TriangleMesh>{model::loadMesh(meshes.at("nominal"))});
+        devices_.render = [this](const geometry::FixturePose& pose) {
+            return renderer_->render(station_.cameraAt(pose), options_);
+        };
+        inspector_ = makeEngineInspector(*config_);
+        store_ = std::make_unique<store::ResultStore>(dir_ / "results.db");
+        registers_.setKnownPrograms({1});
+        runner_ = std::make_unique<CycleRunner>(registers_, devices_, *inspector_, *store_, config_, clock_);
+        runner_->start([] {});
+        return eventually([&] { return registers_.snapshot()[reg::Status] == 0; }, 60s);
+    }
+    /// A PLC trigger of program 1; the row it stored.
+    nlohmann::json cycle()
+    {
+        std::array<std::uint16_t, 2> block{++seq_, 1};
+        EXPECT_EQ(registers_.write(reg::TriggerSeq, block), station::ModbusException::None);
+        EXPECT_TRUE(eventually([&] { return registers_.snapshot()[reg::DoneSeq] == seq_; }, 120s)) << seq_;
+        return store_->recent(1).at(0);
+    }
+    /// SIGHUP as the main loop takes it (daemon.cpp, MainLoop::reload): a configuration
+    /// that does not validate is refused (false) and the running one stays.
+    bool reload()
+    {
+        try {
+            runner_->setConfig(loadConfig());
+            registers_.setKnownPrograms({1});
+            return true;
+        } catch (const InputError&) {
+            return false;
+        }
+    }
+    CycleRunner& runner() { return *runner_; }
+    store::ResultStore& store() { return *store_; }
+
+  private:
+    std::shared_ptr<const station::DaemonConfig> loadConfig() const
+    {
+        auto cfg = std::make_shared<station::DaemonConfig>(station::loadDaemonConfig(daemonFile()));
+        for (const auto& [number, ref] : cfg->programs) checkEngineProgram(ref, cfg->station);
+        cfg->results.saveFailedImages = false;
+        return cfg;
+    }
+
+    hgtest::TempDir dir_;
+    std::string draft_;
+    std::shared_ptr<const station::DaemonConfig> config_;
+    geometry::Station station_;
+    sim::RenderOptions options_;
+    std::unique_ptr<sim::SilhouetteRenderer> renderer_;
+    ManualClock clock_;
+    ScriptedDevices devices_{clock_};
+    std::unique_ptr<Inspector> inspector_;
+    std::unique_ptr<store::ResultStore> store_;
+    PlcRegisters registers_;
+    std::uint16_t seq_ = 0;
+    std::unique_ptr<CycleRunner> runner_;
+};
+
 // A new version of a part program goes in by a reload (docs/daemon.md,
 // "Configuration reference"): `hullgauge commission` writes the new release
 // over the old file, the reload validates the configuration as the daemon's
 // does (every part program loaded in full) and the next result names the new
 // version; a reload that refuses the new file leaves the version loaded
-// before serving. The daemon's engine inspector on a copy of the simulated
-// line (config/sim), its nominal part rendered at the poses commanded.
+// before serving.
 TEST(ProgramReload, TheNextResultNamesTheNewVersionAndARefusedFileLeavesThePreviousServing)
 {
-    hgtest::TempDir dir;
-    fs::copy(hgtest::sourceDir() / "config" / "sim", dir.path() / "sim", fs::copy_options::recursive);
-    const fs::path daemonFile = dir.path() / "sim" / "hullgauged.yaml";
-    const fs::path programFile = dir.path() / "sim" / "stepped-block.yaml";
-    std::ifstream in(programFile);
-    std::string draft((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!draft.empty() && draft.back() != '\n') draft += '\n';
-    // The record of docs/commissioning.md, "Release".
+    SimulatedLine line;
     const auto released = [&](int version, const std::string& digest) {
-        return draft + "release:\n  version: " + std::to_string(version) + "\n  verification_sha256: " + digest +
-               "\n  released_by: jdoe\n  released_at: 2026-12-06T13:05:12+01:00\n";
+        return SimulatedLine::released(line.draft(), version, digest);
     };
     const std::string v1(64, '1');
     const std::string v2(64, '2');
-    // The configuration as the daemon loads it at start and at every reload
-    // (daemon.cpp, loadConfig): every part program checked in full.
-    const auto loadConfig = [&] {
-        auto cfg = std::make_shared<station::DaemonConfig>(station::loadDaemonConfig(daemonFile));
-        for (const auto& [number, ref] : cfg->programs) checkEngineProgram(ref, cfg->station);
-        cfg->results.saveFailedImages = false;
-        return std::shared_ptr<const station::DaemonConfig>(std::move(cfg));
-    };
-    auto config = loadConfig();
-    const geometry::Station station = config->station;
-    const ConfigNode driver = (*station.document)["camera"]["driver"];
-    sim::RenderOptions options;
-    options.backgroundLevel = driver["background_level"].asDouble();
-    options.objectLevel = driver["object_level"].asDouble();
-    options.blurSigmaPx = driver["blur_sigma_px"].asDouble();
-    options.noiseSigma = driver["noise_sigma"].asDouble();
-    options.seed = 7;
-    const std::map<std::string, fs::path> meshes(config->simulatedParts.begin(), config->simulatedParts.end());
-    const sim::SilhouetteRenderer renderer({model::loadMesh(meshes.at("nominal"))});
-
-    ManualClock clock;
-    ScriptedDevices devices(clock);
-    devices.render = [&](const geometry::FixturePose& pose) {
-        return renderer.render(station.cameraAt(pose), options);
-    };
-    auto inspector = makeEngineInspector(*config);
-    store::ResultStore store(dir / "results.db");
-    PlcRegisters registers;
-    registers.setKnownPrograms({1});
-    CycleRunner runner(registers, devices, *inspector, store, config, clock);
-    runner.start([] {});
-    ASSERT_TRUE(eventually([&] { return registers.snapshot()[reg::Status] == 0; }, 60s));
-    std::uint16_t seq = 0;
-    const auto cycle = [&] {
-        std::array<std::uint16_t, 2> block{++seq, 1};
-        EXPECT_EQ(registers.write(reg::TriggerSeq, block), station::ModbusException::None);
-        EXPECT_TRUE(eventually([&] { return registers.snapshot()[reg::DoneSeq] == seq; }, 120s)) << seq;
-        return store.recent(1).at(0);
-    };
-    // SIGHUP as the main loop takes it (daemon.cpp, MainLoop::reload): a configuration
-    // that does not validate is refused and the running one stays.
-    const auto reload = [&] {
-        try {
-            auto fresh = loadConfig();
-            runner.setConfig(fresh);
-            registers.setKnownPrograms({1});
-            return true;
-        } catch (const InputError&) {
-            return false;
-        }
-    };
+    ASSERT_TRUE(line.start());
+    CycleRunner& runner = line.runner();
+    const fs::path programFile = line.programFile();
+    const auto cycle = [&] { return line.cycle(); };
+    const auto reload = [&] { return line.reload(); };
 
     // The simulated line's program is a draft: its result names no release.
     auto record = cycle();
@@ -1195,7 +1239,112 @@ TEST(ProgramReload, TheNextResultNamesTheNewVersionAndARefusedFileLeavesThePrevi
     EXPECT_EQ(record["program_sha256"], v2);
     EXPECT_EQ(runner.program()["version"], 2);
     EXPECT_EQ(runner.program()["verification_sha256"], v2);
-    EXPECT_EQ(store.count(), 4);
+    EXPECT_EQ(line.store().count(), 4);
+}
+
+// The correction set in force (docs/mastering.md, "In the daemon"): the
+// daemon applies `<mastering.folder>/program-1.json` to every production
+// result of the release it was mastered on, and the stored row keeps the raw
+// deviation, the corrected one and the set's id. The set is written by hand:
+// one master certified at +0.010 mm (U 0.002 mm) read at −0.010 mm (s 0.002 mm
+// over 4 cycles) on two landmarks, so the offset is +0.020 mm and
+// U_corr = 2·sqrt(0.001² + (0.002/√4)²) = 0.0028284 mm. A new release outdates
+// it (uncorrected results, no id); a set mastered on the new release, read by
+// the next reload, applies again.
+TEST(Mastering, AProductionResultIsStoredWithItsRawAndCorrectedDeviationAndTheCorrectionId)
+{
+    SimulatedLine line;
+    const std::string program = line.draft() + "inspection: {deviation: true}\n";
+    hgtest::writeFile(line.programFile(), SimulatedLine::released(program, 1, std::string(64, '1')));
+    std::ofstream(line.daemonFile(), std::ios::app) << "mastering: {folder: masters}\n";
+    fs::create_directories(line.folder() / "masters");
+    const auto writeSet = [&](int version, const std::string& id) {
+        nlohmann::json point = {{"master", "MASTER-1"},  {"certified_mm", 0.010}, {"certified_uncertainty_mm", 0.002},
+                                {"measured_mm", -0.010}, {"spread_mm", 0.002},    {"cycles", 4}};
+        nlohmann::json set = {{"id", id},
+                              {"program", 1},
+                              {"program_version", version},
+                              {"material", ""},
+                              {"created_unix_ms", 1000},
+                              {"landmarks", nlohmann::json::array()}};
+        for (const char* landmark : {"step-top", "tall-top"})
+            set["landmarks"].push_back({{"id", landmark}, {"points", {point}}});
+        hgtest::writeFile(line.folder() / "masters" / "program-1.json", set.dump());
+    };
+    writeSet(1, "p1-v1-20261207T080000Z");
+    ASSERT_TRUE(line.start());
+
+    const double correctionU = 2.0 * std::sqrt(0.001 * 0.001 + 0.001 * 0.001);
+    // Every corrected landmark: corrected = raw + 0.020 mm, U' = sqrt(U² + U_corr²); the others as measured.
+    const auto expectCorrected = [&](const nlohmann::json& record, const std::string& id) {
+        EXPECT_EQ(record["purpose"], "production");
+        EXPECT_EQ(record["correction_id"], id);
+        int corrected = 0;
+        for (const auto& l : record["landmarks"]) {
+            SCOPED_TRACE(l.dump());
+            const std::string landmark = l["id"];
+            if (landmark != "step-top" && landmark != "tall-top") {
+                EXPECT_FALSE(l.contains("raw_deviation_mm"));
+                continue;
+            }
+            ASSERT_TRUE(l.contains("raw_deviation_mm"));
+            ++corrected;
+            const double raw = l["raw_deviation_mm"], rawU = l["raw_uncertainty_mm"];
+            EXPECT_NEAR(l["deviation_mm"].get<double>(), raw + 0.020, 1e-12);
+            EXPECT_NEAR(l["uncertainty_mm"].get<double>(), std::hypot(rawU, correctionU), 1e-12);
+            EXPECT_EQ(l["correction"]["id"], id);
+            EXPECT_NEAR(l["correction"]["offset_mm"].get<double>(), 0.020, 1e-12);
+            EXPECT_NEAR(l["correction"]["uncertainty_mm"].get<double>(), correctionU, 1e-12);
+            // The nominal part: its raw reading is near zero (the simulated line's own bias is small).
+            EXPECT_NEAR(raw, 0.0, std::max(rawU, 0.02));
+        }
+        EXPECT_EQ(corrected, 2);
+    };
+    expectCorrected(line.cycle(), "p1-v1-20261207T080000Z");
+
+    // Released as version 2: the set mastered on version 1 is not applied.
+    hgtest::writeFile(line.programFile(), SimulatedLine::released(program, 2, std::string(64, '2')));
+    ASSERT_TRUE(line.reload());
+    const nlohmann::json record = line.cycle();
+    EXPECT_EQ(record["program_version"], 2);
+    EXPECT_TRUE(record["correction_id"].is_null());
+    for (const auto& l : record["landmarks"]) EXPECT_FALSE(l.contains("raw_deviation_mm")) << l.dump();
+
+    // The master measured on version 2: the next reload applies its set.
+    writeSet(2, "p1-v2-20261207T090000Z");
+    ASSERT_TRUE(line.reload());
+    expectCorrected(line.cycle(), "p1-v2-20261207T090000Z");
+    EXPECT_EQ(line.store().count(), 3);
+}
+
+// A correction set file that is not one, or is another program's, is refused
+// with the configuration, naming the file and the field.
+TEST(Mastering, ACorrectionSetOfAnotherProgramOrMalformedIsRefusedNamingTheFileAndField)
+{
+    SimulatedLine line;
+    const fs::path daemonFile = line.daemonFile();
+    std::ofstream(daemonFile, std::ios::app) << "mastering: {folder: masters}\n";
+    const auto refusal = [&] {
+        try {
+            station::loadDaemonConfig(daemonFile);
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    EXPECT_NE(refusal().find("mastering.folder"), std::string::npos) << refusal();
+    fs::create_directories(line.folder() / "masters");
+    const fs::path setFile = line.folder() / "masters" / "program-1.json";
+    hgtest::writeFile(setFile, R"({"id": "p2-draft-x", "program": 2, "program_version": null, "material": "",
+                                   "created_unix_ms": 0, "landmarks": []})");
+    std::string error = refusal();
+    EXPECT_NE(error.find(setFile.string()), std::string::npos) << error;
+    EXPECT_NE(error.find("the correction set of program 2"), std::string::npos) << error;
+    hgtest::writeFile(setFile, R"({"id": "p1-draft-x", "program": 1, "program_version": null, "material": "",
+                                   "created_unix_ms": 0, "landmarks": [{"id": "step-top", "points": []}]})");
+    error = refusal();
+    EXPECT_NE(error.find("landmarks[0].points"), std::string::npos) << error;
+    EXPECT_NE(error.find(setFile.string()), std::string::npos) << error;
 }
 
 TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)

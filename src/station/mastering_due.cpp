@@ -1,0 +1,76 @@
+#include "hullgauge/station/mastering_due.h"
+
+#include <utility>
+
+namespace hg::station {
+
+MasteringDue::MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::string calibration)
+    : policy_(policy), clock_(&clock), calibration_(std::move(calibration))
+{
+}
+
+void MasteringDue::mastered(MasteringInForce set)
+{
+    set_ = std::move(set);
+    parts_ = 0;
+    cyclesWhileDue_ = 0;
+    latched_ = MasteringDueCause::None;
+    latch();
+}
+
+void MasteringDue::programIs(std::optional<int> version)
+{
+    programVersion_ = version;
+    latch();
+}
+
+void MasteringDue::calibrationIs(std::string calibration)
+{
+    calibration_ = std::move(calibration);
+    latch();
+}
+
+void MasteringDue::judged(CyclePurpose purpose)
+{
+    if (purpose != CyclePurpose::Production) return;
+    // A part judged while due uses the grace; the part that makes the count due does not.
+    if (due()) ++cyclesWhileDue_;
+    ++parts_;
+    latch();
+}
+
+MasteringDueCause MasteringDue::cause() const
+{
+    return latched_ != MasteringDueCause::None ? latched_ : causeNow();
+}
+
+bool MasteringDue::admits(CyclePurpose purpose) const
+{
+    return purpose != CyclePurpose::Production || graceLeft() > 0 || !due();
+}
+
+std::uint64_t MasteringDue::graceLeft() const
+{
+    if (!due()) return policy_.graceCycles;
+    return cyclesWhileDue_ >= policy_.graceCycles ? 0 : policy_.graceCycles - cyclesWhileDue_;
+}
+
+MasteringDueCause MasteringDue::causeNow() const
+{
+    using enum MasteringDueCause;
+    if (!set_) return NotMastered;
+    if (policy_.onProgramChange && programVersion_ != set_->programVersion) return Program;
+    if (policy_.onCalibrationChange && calibration_ != set_->calibration) return Calibration;
+    if (policy_.maxAge && clock_->wallMs() - set_->createdUnixMs >= policy_.maxAge->count()) return Age;
+    if (policy_.maxParts && parts_ >= *policy_.maxParts) return Parts;
+    return None;
+}
+
+// A cause seen once holds until the next set: a calibration or a release
+// undone does not make the old set valid again without the master saying so.
+void MasteringDue::latch()
+{
+    if (latched_ == MasteringDueCause::None) latched_ = causeNow();
+}
+
+} // namespace hg::station

@@ -1,0 +1,134 @@
+// Re-mastering due (docs/mastering.md, "Re-mastering due"), each cause on a
+// clock moved by hand: the age of the set, the production parts judged with
+// it, a new calibration and a new release of the program; production refused
+// past the grace count while master and study cycles run on; a new set clears it.
+#include "hgtest/manual_clock.h"
+#include "hullgauge/station/mastering_due.h"
+
+#include <gtest/gtest.h>
+
+namespace hg::station {
+namespace {
+
+using namespace std::chrono_literals;
+using Cause = MasteringDueCause;
+using P = CyclePurpose;
+
+/// The set in force: computed now on release 3 with the station's calibration "cal-A".
+MasteringInForce setNow(const Clock& clock, const std::string& id = "p1-v3-a")
+{
+    return {id, clock.wallMs(), 3, "cal-A"};
+}
+
+TEST(MasteringDue, DueByAgeOnceTheSetIsEightHoursOld)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxAge = 8h}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock));
+    clock.advance(8h - 1ms);
+    EXPECT_EQ(due.cause(), Cause::None);
+    clock.advance(1ms);
+    EXPECT_EQ(due.cause(), Cause::Age);
+    EXPECT_EQ(enumName(due.cause()), "age");
+}
+
+TEST(MasteringDue, DueByCountAfterTheThousandthProductionPart)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxParts = 1000}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock));
+    for (int i = 0; i < 999; ++i) due.judged(P::Production);
+    // Master and study cycles are not production parts.
+    for (int i = 0; i < 50; ++i) due.judged(P::Master), due.judged(P::Study);
+    EXPECT_EQ(due.cause(), Cause::None);
+    due.judged(P::Production);
+    EXPECT_EQ(due.cause(), Cause::Parts);
+}
+
+TEST(MasteringDue, DueByANewCalibrationAndItStaysDueIfTheOldOneIsRestored)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock));
+    EXPECT_FALSE(due.due());
+    due.calibrationIs("cal-B");
+    EXPECT_EQ(due.cause(), Cause::Calibration);
+    due.calibrationIs("cal-A");
+    EXPECT_EQ(due.cause(), Cause::Calibration);
+    // Off in the policy: a new calibration alone does not make it due.
+    MasteringDue off({.onCalibrationChange = false}, clock, "cal-A");
+    off.programIs(3);
+    off.mastered(setNow(clock));
+    off.calibrationIs("cal-B");
+    EXPECT_FALSE(off.due());
+}
+
+TEST(MasteringDue, DueByANewReleaseOfTheProgramAndWithoutAnySet)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({}, clock, "cal-A");
+    due.programIs(3);
+    EXPECT_EQ(due.cause(), Cause::NotMastered);
+    due.mastered(setNow(clock));
+    EXPECT_FALSE(due.due());
+    due.programIs(4);
+    EXPECT_EQ(due.cause(), Cause::Program);
+    EXPECT_EQ(enumName(due.cause()), "program_changed");
+    // A set mastered on release 4 clears it.
+    due.mastered({"p1-v4-a", clock.wallMs(), 4, "cal-A"});
+    EXPECT_FALSE(due.due());
+}
+
+TEST(MasteringDue, ProductionRefusedPastTheGraceCountMasterAndStudyCyclesStillAccepted)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxAge = 24h, .graceCycles = 3}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock));
+    for (int i = 0; i < 10; ++i) {
+        EXPECT_TRUE(due.admits(P::Production));
+        due.judged(P::Production);
+    }
+    EXPECT_EQ(due.graceLeft(), 3u);
+    clock.advance(24h);
+    ASSERT_TRUE(due.due());
+    // Three production cycles of grace, then refused.
+    for (std::uint64_t left = 3; left > 0; --left) {
+        EXPECT_EQ(due.graceLeft(), left);
+        EXPECT_TRUE(due.admits(P::Production));
+        due.judged(P::Production);
+    }
+    EXPECT_EQ(due.graceLeft(), 0u);
+    EXPECT_FALSE(due.admits(P::Production));
+    EXPECT_TRUE(due.admits(P::Master));
+    EXPECT_TRUE(due.admits(P::Study));
+    // The master measured again: its set clears the due and production runs.
+    for (int i = 0; i < 5; ++i) due.judged(P::Master);
+    due.mastered(setNow(clock, "p1-v3-b"));
+    EXPECT_FALSE(due.due());
+    EXPECT_TRUE(due.admits(P::Production));
+    EXPECT_EQ(due.graceLeft(), 3u);
+    // Its age counts from its own time.
+    clock.advance(24h - 1ms);
+    EXPECT_FALSE(due.due());
+}
+
+TEST(MasteringDue, WithoutGraceTheFirstProductionTriggerAfterTheDueIsRefused)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxParts = 2}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock));
+    due.judged(P::Production);
+    EXPECT_TRUE(due.admits(P::Production));
+    due.judged(P::Production);
+    EXPECT_EQ(due.cause(), Cause::Parts);
+    EXPECT_FALSE(due.admits(P::Production));
+    EXPECT_TRUE(due.admits(P::Master));
+}
+
+} // namespace
+} // namespace hg::station

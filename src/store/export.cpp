@@ -152,7 +152,7 @@ constexpr const char* kCsvColumns[] = {"result_id",      "time",     "serial",  
                                        "status",         "value_mm", "value_source",     "deviation_mm",
                                        "uncertainty_mm", "error_mm", "lower_mm",         "upper_mm",
                                        "decision",       "excluded", "exclusion_reason", "program_version",
-                                       "program_sha256"};
+                                       "program_sha256", "simulated"};
 
 /// A number as JSON writes it: the shortest text that reads back as the same double.
 std::string csvNumber(const json& v)
@@ -188,7 +188,9 @@ void writeCsv(std::ostream& out, const std::vector<json>& rows, const ExportSett
         const json digest = row.value("program_sha256", json());
         const std::vector<std::string> tail{reason.empty() ? "false" : "true", reason,
                                             version.is_number_integer() ? version.dump() : std::string(),
-                                            digest.is_string() ? digest.get<std::string>() : std::string()};
+                                            digest.is_string() ? digest.get<std::string>() : std::string(),
+                                            // Whatever the selection: a simulated cycle included is marked as such.
+                                            isSimulated(row) ? "true" : "false"};
         const auto measurements = measurementsOf(row);
         // A cycle without landmarks (an aborted one, mostly) still has its row,
         // the ten landmark cells (landmark ... decision) empty.

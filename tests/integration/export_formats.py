@@ -285,7 +285,7 @@ def check_measurement(part, n, row, entry, include_simulated):
 
 COLUMNS = ["result_id", "time", "serial", "program", "part", "purpose", "verdict", "landmark", "status", "value_mm",
            "value_source", "deviation_mm", "uncertainty_mm", "error_mm", "lower_mm", "upper_mm", "decision",
-           "excluded", "exclusion_reason", "program_version", "program_sha256"]
+           "excluded", "exclusion_reason", "program_version", "program_sha256", "simulated"]
 
 
 def check_csv(raw, rows):
@@ -310,6 +310,8 @@ def check_csv(raw, rows):
         # A store of schema version 3 recorded no program release: the last two cells are empty.
         check(got["program_version"] == "" and got["program_sha256"] == "",
               f"{name}: release {got['program_version']!r} {got['program_sha256']!r}")
+        check(got["simulated"] == ("true" if r["simulation"] is not None else "false"),
+              f"{name}: simulated {got['simulated']!r}, stored simulation {r['simulation']!r}")
         if e is None:
             check(all(got[k] == "" for k in COLUMNS[7:17]), f"{name}: landmark cells of a cycle without landmarks")
             continue

@@ -106,21 +106,21 @@ TEST(ExportCsv, OneQuotedRowPerLandmarkWithCrlf)
     const std::string expected =
         "result_id,time,serial,program,part,purpose,verdict,landmark,status,value_mm,value_source,deviation_mm,"
         "uncertainty_mm,error_mm,lower_mm,upper_mm,decision,excluded,exclusion_reason,program_version,program_"
-        "sha256\r\n"
+        "sha256,simulated\r\n"
         "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,a,ok,0.012,deviation_mm,0.012,0.004,"
         "0.0625,-0.2,0.2,conforms,false,,2," +
         kDigest +
-        "\r\n"
+        ",false\r\n"
         "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,b,out_of_tolerance,0.1875,error_mm,,,"
         "0.1875,-0.05,0.15,,false,,2," +
         kDigest +
-        "\r\n"
+        ",false\r\n"
         "7,2026-05-28T20:26:40.000Z,\"A,\"\"b\"\"\nc\",3,block,production,fail,c,not_found,,,,,0.0,-0.2,0.2,,false,,"
         "2," +
         kDigest +
-        "\r\n"
+        ",false\r\n"
         "8,2026-05-28T20:27:40.000Z,M-1,3,block,master,aborted,,,,,,,,,,,true,\"verdict aborted, purpose master, "
-        "simulated, manual trigger\",,\r\n";
+        "simulated, manual trigger\",,,true\r\n";
     EXPECT_EQ(written(ExportFormat::Csv, {fail, aborted}), expected);
 }
 

@@ -142,8 +142,11 @@ void sendExport(const fs::path& database, const httplib::Request& req, httplib::
         throw HttpError(400, "the selection holds " + std::to_string(cycles) + " cycles, a download at most " +
                                  std::to_string(kMaxExportCycles) +
                                  ": narrow it (since/until, program) or use hullgauge export");
+    // As `hullgauge export --include-simulated` (docs/export.md): the demo's cycles tried in an SPC program.
+    store::ExportSettings settings;
+    settings.includeSimulated = oneOf(req, "include_simulated", {"true", "false"}, "false") == "true";
     std::ostringstream out;
-    store::writeExport(out, format, reader.select(q));
+    store::writeExport(out, format, reader.select(q), settings);
     res.set_header("Cache-Control", "no-store");
     res.set_header("Content-Disposition",
                    "attachment; filename=\"hullgauge-results." + std::string(store::fileExtension(format)) + "\"");

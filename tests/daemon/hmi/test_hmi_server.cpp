@@ -360,6 +360,24 @@ TEST_F(HmiServerTest, TheResultsPageDownloadsItsSelection)
     EXPECT_EQ(dfq->get_header_value("Content-Disposition"), "attachment; filename=\"hullgauge-results.dfq\"");
     EXPECT_EQ(dfq->body.rfind("K0100 2", 0), 0u) << dfq->body.substr(0, 80);
 
+    // A cycle of the simulated line: excluded (K0002 129) unless the download includes it, then said so.
+    {
+        store::ResultStore store(config->results.database);
+        auto simulated = record(5, station::Verdict::Pass, "SIM-5");
+        simulated.simulation = {{"part", "nominal"}};
+        store.commit(simulated);
+    }
+    auto kept = client->Get("/api/export?format=aqdef&serial=SIM-5");
+    auto tried = client->Get("/api/export?format=aqdef&serial=SIM-5&include_simulated=true");
+    ASSERT_TRUE(kept && tried);
+    EXPECT_NE(kept->body.find("K0002/1 129"), std::string::npos) << kept->body;
+    EXPECT_EQ(kept->body.find("simulated, included"), std::string::npos) << kept->body;
+    EXPECT_EQ(tried->body.find("K0002/1 129"), std::string::npos) << tried->body;
+    EXPECT_NE(tried->body.find("simulated, included"), std::string::npos) << tried->body;
+    EXPECT_NE(getJson("/api/export?format=csv&include_simulated=yes", 400)["error"].get<std::string>().find(
+                  "include_simulated"),
+              std::string::npos);
+
     EXPECT_NE(getJson("/api/export?format=xml", 400)["error"].get<std::string>().find("xml"), std::string::npos);
     EXPECT_NE(getJson("/api/export?format=csv&since=yesterday", 400)["error"].get<std::string>().find("since"),
               std::string::npos);

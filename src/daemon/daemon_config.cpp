@@ -286,9 +286,30 @@ DaemonConfig::Seating parseSeating(const ConfigNode& node)
 // configuration is; a set for another version or material of the right
 // program is not bad input but an outdated one, found where the program is
 // loaded (engine_inspector.cpp).
+// `mastering.due`: when the master must be measured again (docs/mastering.md,
+// "Re-mastering due"); a cause left out is off, the switches default on.
+MasteringDuePolicy parseMasteringDue(const ConfigNode& node)
+{
+    if (!node.isMap())
+        node.fail("expected a map of max_age_h, max_parts, on_calibration_change, "
+                  "on_program_change, grace_cycles");
+    node.allowOnlyKeys({"max_age_h", "max_parts", "on_calibration_change", "on_program_change", "grace_cycles"});
+    MasteringDuePolicy policy;
+    // A year bounds the age: a longer one is a typo of the unit, not a mastering interval.
+    if (auto h = node.optional("max_age_h"))
+        policy.maxAge = std::chrono::milliseconds(std::llround(h->asDoubleIn(0.001, 24.0 * 366) * 3'600'000.0));
+    if (auto n = node.optional("max_parts")) policy.maxParts = static_cast<std::uint64_t>(n->asIntIn(1, 1LL << 40));
+    if (auto b = node.optional("on_calibration_change")) policy.onCalibrationChange = b->asBool();
+    if (auto b = node.optional("on_program_change")) policy.onProgramChange = b->asBool();
+    if (auto n = node.optional("grace_cycles"))
+        policy.graceCycles = static_cast<std::uint64_t>(n->asIntIn(0, 1'000'000));
+    return policy;
+}
+
 void parseMastering(const ConfigNode& node, const fs::path& base, DaemonConfig& cfg)
 {
-    node.allowOnlyKeys({"folder"});
+    node.allowOnlyKeys({"folder", "due"});
+    if (auto due = node.optional("due")) cfg.mastering.due = parseMasteringDue(*due);
     cfg.mastering.folder = resolve(node["folder"], base);
     if (!fs::is_directory(cfg.mastering.folder)) node["folder"].fail("not a folder: " + cfg.mastering.folder.string());
     for (auto& [number, ref] : cfg.programs) {
@@ -301,6 +322,9 @@ void parseMastering(const ConfigNode& node, const fs::path& base, DaemonConfig& 
                                  ", in the file of program " + std::to_string(number));
         ref.correctionFile = file;
         ref.correctionSha256 = sha256OfFile(file);
+        ref.correctionId = set.id;
+        ref.correctionCreatedUnixMs = set.createdUnixMs;
+        ref.correctionProgramVersion = set.programVersion;
     }
 }
 

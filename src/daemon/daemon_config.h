@@ -12,6 +12,7 @@
 
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
+#include "hullgauge/station/mastering_due.h"
 #include "hullgauge/vision/segmentation.h"
 #include "plant/mqtt_config.h"
 #include "shifts.h"
@@ -61,6 +62,11 @@ struct PartProgramRef {
     /// Its SHA-256 as this configuration read it: a reload that finds a new set
     /// (a new mastering) applies it from the next cycle.
     std::string correctionSha256;
+    /// The set's identity, computed time and release as read with it: what
+    /// re-mastering due judges it by (docs/mastering.md, "Re-mastering due").
+    std::string correctionId;
+    std::int64_t correctionCreatedUnixMs = 0;
+    std::optional<int> correctionProgramVersion;
     /// Run the program although the capability check finds a tolerance this
     /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
     bool force = false;
@@ -170,6 +176,8 @@ struct WorkbenchConfig {
 struct MasteringConfig {
     /// The folder of the correction sets, one per program (`program-<N>.json`); empty: none applied.
     std::filesystem::path folder;
+    /// `mastering.due` (docs/mastering.md, "Re-mastering due"); absent: never due, nothing signalled.
+    std::optional<MasteringDuePolicy> due;
 };
 
 struct WatchdogConfig {

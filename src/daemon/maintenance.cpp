@@ -243,6 +243,8 @@ json status(const MaintenanceContext& c, const json&)
               {"active_program", regs[station::reg::ActiveProgram]},
               {"program_state",
                std::string(enumName(static_cast<station::ProgramState>(regs[station::reg::ProgramState])))},
+              {"master_due", regs[station::reg::MasterDue]},
+              {"master_grace_left", regs[station::reg::MasterGraceLeft]},
               {"counters", plcCounters(regs)},
               {"clients", counters.clients},
               {"requests", counters.requests},
@@ -337,7 +339,9 @@ json trigger(const MaintenanceContext& c, const json& request)
                     {"error", fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte)}};
     const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program.value()), serial);
     if (reason == station::RejectReason::None) return {{"ok", true}};
-    static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)"};
+    static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)",
+                                          "re-mastering is due and its grace is used up: run the master (purpose "
+                                          "master), then reload its correction set"};
     return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
 }
 

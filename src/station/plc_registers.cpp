@@ -131,6 +131,10 @@ RejectReason RegisterMap::accept(TriggerRequest request)
         reason = RejectReason::NotReady;
     else if (!knownPrograms_.contains(request.program))
         reason = RejectReason::UnknownProgram;
+    // Master and study cycles run on, so the master can be measured (docs/mastering.md).
+    else if (request.purpose == CyclePurpose::Production &&
+             masterDueOf(request.program).due == MasterDue::ProductionRefused)
+        reason = RejectReason::MasteringDue;
 
     if (!request.manual) regs_[reg::TriggerSeq] = request.seq;
     if (reason != RejectReason::None) {
@@ -174,6 +178,7 @@ void RegisterMap::selectProgram(std::uint16_t program, bool recheck)
     if (!recheck && program == regs_[reg::ActiveProgram] && state != ProgramState::LoadFailed) return;
     regs_[reg::ActiveProgram] = program;
     changeover_.reset();
+    writeMasterDue();
     if (program == 0) {
         regs_[reg::ProgramState] = u16(ProgramState::None);
     } else if (!knownPrograms_.contains(program)) {
@@ -196,6 +201,25 @@ void RegisterMap::programPrepared(std::uint16_t program, ProgramState state)
     const auto now = static_cast<ProgramState>(regs_[reg::ProgramState]);
     if (now == ProgramState::None || now == ProgramState::UnknownProgram) return;
     regs_[reg::ProgramState] = u16(state);
+}
+
+void RegisterMap::setMasterDue(std::map<std::uint16_t, MasterDueState> due)
+{
+    masterDue_ = std::move(due);
+    writeMasterDue();
+}
+
+MasterDueState RegisterMap::masterDueOf(std::uint16_t program) const
+{
+    const auto it = masterDue_.find(program);
+    return it == masterDue_.end() ? MasterDueState{} : it->second;
+}
+
+void RegisterMap::writeMasterDue()
+{
+    const auto state = masterDueOf(regs_[reg::ActiveProgram]);
+    regs_[reg::MasterDue] = u16(state.due);
+    regs_[reg::MasterGraceLeft] = u16(std::min<std::uint64_t>(state.graceLeft, 0xFFFF));
 }
 
 void RegisterMap::setU32(std::uint16_t address, std::uint32_t value)

@@ -29,6 +29,7 @@ struct MasteringDuePolicy {
     bool onCalibrationChange = true;                   ///< the station calibrated anew since
     bool onProgramChange = true;                       ///< the program is another release than the set's
     std::uint64_t graceCycles = 0;                     ///< production cycles still judged once due
+    bool operator==(const MasteringDuePolicy&) const = default;
 };
 
 /// Why mastering is due; None: it is not. The first that holds, in this order.

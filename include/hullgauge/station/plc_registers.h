@@ -25,6 +25,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <map>
 #include <optional>
 #include <set>
 #include <span>
@@ -66,8 +67,11 @@ inline constexpr std::uint16_t AcqDoneSeq = 114;
 inline constexpr std::uint16_t ResultSeq = 115;
 /// Extension: the recipe changeover, the PART_PROGRAM value PROGRAM_STATE speaks of.
 inline constexpr std::uint16_t ActiveProgram = 116;
-inline constexpr std::uint16_t ProgramState = 117;   ///< extension, station::ProgramState
-inline constexpr std::uint16_t LandmarkOkBits = 120; ///< 120..135
+inline constexpr std::uint16_t ProgramState = 117; ///< extension, station::ProgramState
+/// Extension: re-mastering due of ACTIVE_PROGRAM (MasterDue, docs/plc.md, docs/mastering.md).
+inline constexpr std::uint16_t MasterDue = 118;
+inline constexpr std::uint16_t MasterGraceLeft = 119; ///< production cycles still judged, saturating at 65535
+inline constexpr std::uint16_t LandmarkOkBits = 120;  ///< 120..135
 inline constexpr std::uint16_t LandmarkOkWords = 16;
 /// Extension: the counters, u32 each, high word first (PlcCounters).
 inline constexpr std::uint16_t TriggerCount = 136; ///< 136..137, triggers accepted
@@ -164,7 +168,17 @@ struct PlcCommands {
     bool any() const { return abort || resetFault; }
 };
 /// LAST_REJECT_REASON register values (extension).
-enum class RejectReason : std::uint16_t { None = 0, Busy = 1, UnknownProgram = 2, NotReady = 3 };
+/// MasteringDue (4): a production trigger of a program whose re-mastering is
+/// due and its grace used up (docs/mastering.md, "Re-mastering due").
+enum class RejectReason : std::uint16_t { None = 0, Busy = 1, UnknownProgram = 2, NotReady = 3, MasteringDue = 4 };
+/// MASTER_DUE register values (extension, docs/plc.md): of ACTIVE_PROGRAM.
+enum class MasterDue : std::uint16_t { No = 0, Due = 1, ProductionRefused = 2 };
+/// A program's re-mastering due as the register map shows and applies it.
+struct MasterDueState {
+    MasterDue due = MasterDue::No;
+    std::uint64_t graceLeft = 0; ///< production cycles still judged (MASTER_GRACE_LEFT)
+    bool operator==(const MasterDueState&) const = default;
+};
 
 /// Modbus exception codes the map answers with (Modbus application protocol §7).
 enum class ModbusException : std::uint8_t {
@@ -240,6 +254,10 @@ class RegisterMap {
     /// The daemon prepared `program` (Ready or LoadFailed): PROGRAM_STATE shows
     /// it while ACTIVE_PROGRAM is still `program` and no newer changeover waits.
     void programPrepared(std::uint16_t program, ProgramState state);
+    /// Re-mastering due per program (a program not named: not due): MASTER_DUE
+    /// and MASTER_GRACE_LEFT show ACTIVE_PROGRAM's, and a production trigger of
+    /// a program whose production is refused is rejected (RejectReason::MasteringDue).
+    void setMasterDue(std::map<std::uint16_t, MasterDueState> due);
     PlcCounters counters() const { return counters_; }
     /// CYCLE_PURPOSE as the maintenance socket sets it: the same register the
     /// PLC writes, so whichever was written last applies to the next trigger.
@@ -271,9 +289,12 @@ class RegisterMap {
     void writeCounters();
     void resetCounters();
     void writeRingEntry(const PublishedResult& r, std::uint16_t resultSeq);
+    MasterDueState masterDueOf(std::uint16_t program) const;
+    void writeMasterDue();
 
     std::array<std::uint16_t, reg::Count> regs_{};
     std::set<std::uint16_t> knownPrograms_;
+    std::map<std::uint16_t, MasterDueState> masterDue_;
     std::deque<TriggerRequest> pending_;
     PlcCommands commands_;
     std::optional<std::uint16_t> changeover_;

@@ -29,6 +29,31 @@ void putRelease(nlohmann::json& j, const std::optional<station::ProgramRelease>&
     j["program_sha256"] = release ? nlohmann::json(release->verificationSha256) : nlohmann::json();
 }
 
+/// The station's calibration as re-mastering due compares it (docs/mastering.md,
+/// "Re-mastering due"): every calibration writes its date into the station file
+/// (docs/calibration.md), so a new date is a new calibration.
+std::string calibrationIdentity(const station::DaemonConfig& cfg)
+{
+    std::string identity;
+    for (const char* section : {"camera", "fixture"}) {
+        std::string date = "none";
+        if (cfg.station.document)
+            if (auto s = cfg.station.document->optional(section); s && s->isMap())
+                if (auto c = s->optional("calibration"); c && c->isMap())
+                    if (auto d = c->optional("date")) date = d->asString();
+        identity += std::string(identity.empty() ? "" : ", ") + section + " " + date;
+    }
+    return identity;
+}
+
+station::MasterDueState dueState(const station::MasteringDue& due)
+{
+    using station::MasterDue;
+    if (!due.due()) return {MasterDue::No, due.graceLeft()};
+    return {due.admits(station::CyclePurpose::Production) ? MasterDue::Due : MasterDue::ProductionRefused,
+            due.graceLeft()};
+}
+
 } // namespace
 
 /// One cycle's working state, from the trigger to the published record.
@@ -60,6 +85,7 @@ CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspe
     : registers_(registers), devices_(devices), inspector_(inspector), store_(store), clock_(clock),
       config_(std::move(config)), sequencer_(config_->sequencer.retries)
 {
+    masteringConfigured(*config_);
 }
 
 CycleRunner::~CycleRunner()
@@ -86,6 +112,7 @@ void CycleRunner::setConfig(std::shared_ptr<const station::DaemonConfig> config)
 {
     std::lock_guard lock(mutex_);
     config_ = std::move(config);
+    masteringConfigured(*config_);
 }
 
 station::SequencerState CycleRunner::state() const
@@ -124,6 +151,7 @@ nlohmann::json CycleRunner::describe() const
     if (lastImagesMs_ && lastImagesMs_->load() >= 0) last["timing_ms"]["images"] = lastImagesMs_->load();
     nlohmann::json j{
         {"state", std::string(enumName(shown))}, {"cycles", cycles_}, {"faults", faults_}, {"last_cycle", last}};
+    j["mastering"] = masteringJson();
     if (station::isBusy(sequencer_.state())) {
         j["view"] = sequencer_.view();
         j["views"] = sequencer_.viewCount();
@@ -224,6 +252,11 @@ void CycleRunner::serveBetweenCycles()
 {
     lastLoopNs_ = clock_.nowNs();
     takeCommands();
+    {
+        // The age runs on between events: looked at every turn (at least every 200 ms).
+        std::lock_guard lock(mutex_);
+        if (!mastering_.empty()) signalMastering();
+    }
     // An abort outside a cycle has nothing to abort (a queued calibration clears it when it starts).
     if (!calibration_.queued()) abortRequested_ = false;
     auto recoverIfDue = [this] {
@@ -282,7 +315,7 @@ void CycleRunner::prepareProgram(std::uint16_t number)
     }
     registers_.programPrepared(number, state);
     if (state == station::ProgramState::Ready) {
-        noteLoaded(number);
+        noteLoaded(it->second);
         log->info("part program {} ready", number);
     } else {
         log->error("part program {}: {}: {}", number, enumName(state),
@@ -291,9 +324,9 @@ void CycleRunner::prepareProgram(std::uint16_t number)
 }
 
 // What `ctl status` shows of the program the inspection serves (docs/daemon.md).
-void CycleRunner::noteLoaded(std::uint16_t number)
+void CycleRunner::noteLoaded(const station::PartProgramRef& ref)
 {
-    const auto info = inspector_.loaded(number);
+    const auto info = inspector_.loaded(ref.number);
     nlohmann::json program = nullptr;
     if (info) {
         program = {{"number", info->number}, {"part", info->part}};
@@ -303,6 +336,118 @@ void CycleRunner::noteLoaded(std::uint16_t number)
     }
     std::lock_guard lock(mutex_);
     program_ = std::move(program);
+    if (info) masteringLoaded(ref, info->release ? std::optional<int>(info->release->version) : std::nullopt);
+}
+
+// ---- re-mastering due (docs/mastering.md, "Re-mastering due") -----------------
+// Under mutex_: the configuration (reload), the program loads and the judged
+// cycles feed one MasteringDue per program, and signalMastering() shows the
+// outcome on the PLC registers, where a refused production trigger is rejected.
+
+void CycleRunner::masteringConfigured(const station::DaemonConfig& cfg)
+{
+    calibrationIdentity_ = calibrationIdentity(cfg);
+    // New rules start every count again, from the program's next load.
+    if (cfg.mastering.due != duePolicy_) mastering_.clear();
+    duePolicy_ = cfg.mastering.due;
+    for (auto it = mastering_.begin(); it != mastering_.end();) {
+        const auto ref = cfg.programs.find(it->first);
+        if (ref == cfg.programs.end()) {
+            it = mastering_.erase(it);
+            continue;
+        }
+        it->second.due.calibrationIs(calibrationIdentity_);
+        // A new set for the same program file applies now; with a new release it waits
+        // for the load that says which version the program is.
+        if (ref->second.partSha256 == it->second.partSha256 && ref->second.correctionSha256 != it->second.setSha256)
+            applyCorrectionSet(it->first, ref->second);
+        ++it;
+    }
+    signalMastering();
+}
+
+void CycleRunner::masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version)
+{
+    if (!duePolicy_) return;
+    auto [it, added] = mastering_.try_emplace(
+        ref.number, ProgramMastering{station::MasteringDue(*duePolicy_, clock_, calibrationIdentity_),
+                                     version,
+                                     ref.partSha256,
+                                     std::string(),
+                                     {}});
+    auto& pm = it->second;
+    pm.version = version;
+    pm.partSha256 = ref.partSha256;
+    pm.due.programIs(version);
+    if (added || ref.correctionSha256 != pm.setSha256) applyCorrectionSet(ref.number, ref);
+    signalMastering();
+}
+
+// The set the configuration names for the program comes into force, measured
+// on the station as it is calibrated now; none: the program is not mastered.
+void CycleRunner::applyCorrectionSet(std::uint16_t number, const station::PartProgramRef& ref)
+{
+    auto& pm = mastering_.at(number);
+    if (ref.correctionId.empty()) {
+        pm.due = station::MasteringDue(*duePolicy_, clock_, calibrationIdentity_);
+        pm.due.programIs(pm.version);
+    } else {
+        pm.due.mastered(
+            {ref.correctionId, ref.correctionCreatedUnixMs, ref.correctionProgramVersion, calibrationIdentity_});
+    }
+    pm.setSha256 = ref.correctionSha256;
+}
+
+// A pass or a fail is a judged part; an aborted or faulted cycle is not.
+void CycleRunner::masteringJudged(const station::InspectionRecord& record)
+{
+    if (record.verdict != station::Verdict::Pass && record.verdict != station::Verdict::Fail) return;
+    std::lock_guard lock(mutex_);
+    const auto it = mastering_.find(record.program);
+    if (it == mastering_.end()) return;
+    it->second.due.judged(record.purpose);
+    signalMastering();
+}
+
+// The registers get every program's state; the journal says when one becomes
+// due, when its production is refused and when a new set clears it.
+void CycleRunner::signalMastering()
+{
+    auto log = hg::log::category("inspect");
+    std::map<std::uint16_t, station::MasterDueState> states;
+    for (auto& [number, pm] : mastering_) {
+        const auto now = dueState(pm.due);
+        states[number] = now;
+        if (now.due == pm.shown.due) {
+            pm.shown = now;
+            continue;
+        }
+        const auto cause = enumName(pm.due.cause());
+        if (now.due == station::MasterDue::No)
+            log->info("part program {}: re-mastering no longer due: correction set in force", number);
+        else if (now.due == station::MasterDue::Due)
+            log->warn("part program {}: re-mastering due ({}): production judged for {} more cycles", number, cause,
+                      now.graceLeft);
+        else
+            log->warn("part program {}: re-mastering due ({}): production triggers refused until the master is "
+                      "measured and its correction set reloaded; master and study cycles run",
+                      number, cause);
+        pm.shown = now;
+    }
+    registers_.setMasterDue(std::move(states));
+}
+
+nlohmann::json CycleRunner::masteringJson() const
+{
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& [number, pm] : mastering_) {
+        const auto state = dueState(pm.due);
+        j[std::to_string(number)] = {{"due", pm.due.due()},
+                                     {"cause", std::string(enumName(pm.due.cause()))},
+                                     {"production_refused", state.due == station::MasterDue::ProductionRefused},
+                                     {"grace_left", state.graceLeft}};
+    }
+    return j;
 }
 
 nlohmann::json CycleRunner::program() const
@@ -429,7 +574,7 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
         registers_.programPrepared(r.program,
                                    error.empty() ? station::ProgramState::Ready : station::ProgramState::LoadFailed);
     if (error.empty()) {
-        noteLoaded(r.program);
+        noteLoaded(*cycle.program);
         return action;
     }
     log->error("{}", error);
@@ -595,6 +740,8 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
 {
     if (stopMotion) devices_.stopMotion();
     recordOutcome(cycle);
+    // Before DONE_SEQ: a PLC that sees the result and triggers again meets the refusal it earned.
+    masteringJudged(cycle.record);
     commitAndPublish(cycle);
     report(cycle);
     if (cycle.saveImages) archivePart(cycle);

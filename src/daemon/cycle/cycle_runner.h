@@ -21,6 +21,7 @@
 #include "daemon_config.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
+#include "hullgauge/station/mastering_due.h"
 #include "hullgauge/station/sequencer.h"
 #include "hullgauge/store/result_store.h"
 #include "plant/plc_registers.h"
@@ -28,6 +29,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -99,7 +101,13 @@ class CycleRunner {
     void showState(station::Verdict lastVerdict = station::Verdict::Error);
     void recover();
     void prepareProgram(std::uint16_t number);
-    void noteLoaded(std::uint16_t number);
+    void noteLoaded(const station::PartProgramRef& ref);
+    void masteringConfigured(const station::DaemonConfig& cfg);
+    void masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version);
+    void masteringJudged(const station::InspectionRecord& record);
+    void applyCorrectionSet(std::uint16_t number, const station::PartProgramRef& ref);
+    void signalMastering();
+    nlohmann::json masteringJson() const;
     void runCalibration(CalibrationJob job);
     void runSnapshot(SnapshotJob job);
     bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);
@@ -140,6 +148,18 @@ class CycleRunner {
     std::uint64_t faults_ = 0;
     nlohmann::json lastCycle_ = nullptr;
     nlohmann::json program_ = nullptr; ///< program()
+    /// Re-mastering due per program once loaded (docs/mastering.md, "Re-mastering due"):
+    /// the rules, the set and program file they were last told of, and what was last signalled.
+    struct ProgramMastering {
+        station::MasteringDue due;
+        std::optional<int> version;
+        std::string partSha256;
+        std::string setSha256;
+        station::MasterDueState shown{};
+    };
+    std::optional<station::MasteringDuePolicy> duePolicy_;
+    std::string calibrationIdentity_; ///< the station's calibration as the configuration names it
+    std::map<std::uint16_t, ProgramMastering> mastering_;
     /// Written by the last failed part's image job when it is done (ms; < 0 until then).
     std::shared_ptr<std::atomic<double>> lastImagesMs_;
 

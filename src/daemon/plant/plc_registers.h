@@ -103,6 +103,11 @@ class PlcRegisters {
         std::lock_guard lock(mutex_);
         map_.programPrepared(program, state);
     }
+    void setMasterDue(std::map<std::uint16_t, station::MasterDueState> due)
+    {
+        std::lock_guard lock(mutex_);
+        map_.setMasterDue(std::move(due));
+    }
     station::PlcCounters counters() const
     {
         std::lock_guard lock(mutex_);

@@ -1161,6 +1161,10 @@ class SimulatedLine {
     }
     CycleRunner& runner() { return *runner_; }
     store::ResultStore& store() { return *store_; }
+    PlcRegisters& registers() { return registers_; }
+    ManualClock& clock() { return clock_; }
+    /// The TRIGGER_SEQ the next trigger writes.
+    std::uint16_t nextSeq() { return ++seq_; }
 
   private:
     std::shared_ptr<const station::DaemonConfig> loadConfig() const
@@ -1345,6 +1349,119 @@ TEST(Mastering, ACorrectionSetOfAnotherProgramOrMalformedIsRefusedNamingTheFileA
     error = refusal();
     EXPECT_NE(error.find("landmarks[0].points"), std::string::npos) << error;
     EXPECT_NE(error.find(setFile.string()), std::string::npos) << error;
+}
+
+// Re-mastering due in the daemon (docs/mastering.md, "Re-mastering due"):
+// program 1, released as version 1, with a set mastered on it at the clock's
+// wall time; `mastering.due` gives 8 h and a grace of 2 production cycles.
+// 8 h less 1 ms after the set: not due; at 8 h MASTER_DUE reads 1 with a grace of 2;
+// two production parts later it reads 2 and a production trigger is refused
+// with LAST_REJECT_REASON 4 (nothing acknowledged); a master cycle is
+// accepted and judged; a new set read by a reload clears it and production
+// is accepted again.
+TEST(MasteringDue, PastItsAgeSignalledThenProductionRefusedPastTheGraceMasterAcceptedNewSetClears)
+{
+    SimulatedLine line;
+    hgtest::writeFile(line.programFile(), SimulatedLine::released(line.draft(), 1, std::string(64, '1')));
+    std::ofstream(line.daemonFile(), std::ios::app)
+        << "mastering: {folder: masters, due: {max_age_h: 8, grace_cycles: 2}}\n";
+    fs::create_directories(line.folder() / "masters");
+    const auto writeSet = [&](const std::string& id, std::int64_t createdUnixMs) {
+        const nlohmann::json set = {{"id", id},
+                                    {"program", 1},
+                                    {"program_version", 1},
+                                    {"material", ""},
+                                    {"created_unix_ms", createdUnixMs},
+                                    {"landmarks", nlohmann::json::array()}};
+        hgtest::writeFile(line.folder() / "masters" / "program-1.json", set.dump());
+    };
+    const std::int64_t createdUnixMs = line.clock().wallMs();
+    writeSet("p1-v1-20260302T080000Z", createdUnixMs);
+    ASSERT_TRUE(line.start());
+    PlcRegisters& registers = line.registers();
+    const auto reg = [&](std::uint16_t address) { return registers.snapshot()[address]; };
+    const auto status = [&] { return line.runner().describe()["mastering"]["1"]; };
+
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(reg(reg::ActiveProgram), 1);
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(status()["due"], false);
+
+    // The cycle's moves and settles took the hand-moved time on: to 8 h less 1 ms after the set.
+    line.clock().advance(8h - 1ms - std::chrono::milliseconds(line.clock().wallMs() - createdUnixMs));
+    EXPECT_EQ(status()["due"], false);
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+
+    // At 8 h to the millisecond: due, and the registers say so between cycles without a trigger.
+    line.clock().advance(1ms);
+    EXPECT_EQ(status()["due"], true);
+    ASSERT_TRUE(eventually([&] { return reg(reg::MasterDue) == 1; })) << status().dump();
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(status()["cause"], "age");
+    EXPECT_EQ(status()["production_refused"], false);
+
+    // The grace: two production parts still judged, the second uses it up.
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(reg(reg::MasterDue), 1);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 1);
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(reg(reg::MasterDue), 2);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 0);
+    EXPECT_EQ(status()["production_refused"], true);
+
+    // A production trigger is refused in the write itself: ACK_SEQ stays, the reason is 4.
+    const auto ackBefore = reg(reg::AckSeq);
+    const auto rejectedBefore = reg(reg::RejectedTriggers);
+    std::array<std::uint16_t, 2> block{line.nextSeq(), 1};
+    ASSERT_EQ(registers.write(reg::TriggerSeq, block), station::ModbusException::None);
+    EXPECT_EQ(reg(reg::AckSeq), ackBefore);
+    EXPECT_EQ(reg(reg::RejectedTriggers), rejectedBefore + 1);
+    EXPECT_EQ(reg(reg::LastRejectReason), 4);
+    EXPECT_EQ(line.store().count(), 3);
+
+    // A master cycle (CYCLE_PURPOSE 1) is accepted and judged.
+    const std::array<std::uint16_t, 1> master{1};
+    ASSERT_EQ(registers.write(reg::CyclePurpose, master), station::ModbusException::None);
+    const auto masterRecord = line.cycle();
+    EXPECT_EQ(masterRecord["purpose"], "master");
+    EXPECT_EQ(masterRecord["verdict"], "pass");
+    EXPECT_EQ(reg(reg::MasterDue), 2);
+
+    // The new set, read by a reload, clears it: production is accepted again.
+    writeSet("p1-v1-20260302T160000Z", line.clock().wallMs());
+    ASSERT_TRUE(line.reload());
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(status()["due"], false);
+    const std::array<std::uint16_t, 1> production{0};
+    ASSERT_EQ(registers.write(reg::CyclePurpose, production), station::ModbusException::None);
+    const auto record = line.cycle();
+    EXPECT_EQ(record["purpose"], "production");
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(line.store().count(), 5);
+}
+
+// `mastering.due` is read strictly (docs/daemon.md): a value out of range or
+// an unknown key is refused naming its key path.
+TEST(MasteringDue, AKeyOutOfRangeOrUnknownIsRefusedNamingIt)
+{
+    for (const auto& [due, key] : std::vector<std::pair<std::string, std::string>>{
+             {"{max_age_h: 0}", "mastering.due.max_age_h"},
+             {"{max_parts: 0}", "mastering.due.max_parts"},
+             {"{grace_cycles: -1}", "mastering.due.grace_cycles"},
+             {"{on_program_change: maybe}", "mastering.due.on_program_change"},
+             {"{grace: 3}", "grace"}}) {
+        SimulatedLine line;
+        fs::create_directories(line.folder() / "masters");
+        std::ofstream(line.daemonFile(), std::ios::app) << "mastering: {folder: masters, due: " << due << "}\n";
+        try {
+            station::loadDaemonConfig(line.daemonFile());
+            ADD_FAILURE() << due << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+        }
+    }
 }
 
 TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)

@@ -339,9 +339,10 @@ json trigger(const MaintenanceContext& c, const json& request)
                     {"error", fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte)}};
     const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program.value()), serial);
     if (reason == station::RejectReason::None) return {{"ok", true}};
+    static constexpr const char* kMasteringDue =
+        "re-mastering is due and its grace is used up: run the master (purpose master), then reload its correction set";
     static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)",
-                                          "re-mastering is due and its grace is used up: run the master (purpose "
-                                          "master), then reload its correction set"};
+                                          kMasteringDue};
     return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
 }
 

@@ -6,15 +6,14 @@
 // from the command line. Every change goes into the audit trail as
 // `unix:<user>` before it is made: a change that cannot be recorded is not made.
 #include "command.h"
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/store/accounts.h"
 #include "hullgauge/store/audit_log.h"
 
-#include <chrono>
 #include <fstream>
 #include <iostream>
 #include <memory>
-#include <pwd.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -71,22 +70,6 @@ std::string password(const UsersOptions& o)
     return first;
 }
 
-std::string unixUser()
-{
-    passwd entry{};
-    passwd* found = nullptr;
-    char buffer[1024];
-    if (getpwuid_r(geteuid(), &entry, buffer, sizeof buffer, &found) == 0 && found)
-        return std::string("unix:") + found->pw_name;
-    return "unix:uid " + std::to_string(geteuid());
-}
-
-std::int64_t nowMs()
-{
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-}
-
 store::Role roleNamed(const std::string& text)
 {
     const auto role = parseEnum<store::Role>(text);
@@ -105,7 +88,17 @@ int change(const UsersOptions& o)
     const store::AccountsFile file(o.file);
     // The trail first: a change it cannot record is not made.
     store::AuditLog audit(o.audit);
-    store::AuditEntry entry{0, nowMs(), unixUser(), "", "tool", "user." + o.action, o.name, "done", {}, {}, {}};
+    store::AuditEntry entry{0,
+                            Clock::steady().wallMs(),
+                            store::unixUserName(geteuid()),
+                            "",
+                            "tool",
+                            "user." + o.action,
+                            o.name,
+                            "done",
+                            {},
+                            {},
+                            {}};
     const auto before = file.find(o.name);
     if (o.action == "add") {
         const auto role = roleNamed(o.role);

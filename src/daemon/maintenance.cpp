@@ -11,13 +11,11 @@
 #include "plant/plc_server.h"
 
 #include <algorithm>
-#include <array>
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
 #include <grp.h>
 #include <map>
-#include <pwd.h>
 #include <spdlog/fmt/fmt.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -34,12 +32,7 @@ std::string peerName(int fd)
     ucred cred{};
     socklen_t size = sizeof cred;
     if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &size) != 0) return "unix:?";
-    passwd entry{};
-    passwd* found = nullptr;
-    std::array<char, 1024> buffer{};
-    if (getpwuid_r(cred.uid, &entry, buffer.data(), buffer.size(), &found) == 0 && found)
-        return std::string("unix:") + found->pw_name;
-    return "unix:uid " + std::to_string(cred.uid);
+    return store::unixUserName(cred.uid);
 }
 
 } // namespace

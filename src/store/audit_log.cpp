@@ -4,6 +4,8 @@
 #include "hullgauge/store/export.h"
 #include "hullgauge/store/result_reader.h"
 
+#include <array>
+#include <pwd.h>
 #include <sstream>
 
 namespace hg::store {
@@ -127,6 +129,16 @@ std::int64_t AuditLog::recordFileChange(const std::string& path, const Watched& 
     keep.bind(1, path).bind(2, now.sha256).bind(3, now.content).step();
     transaction.commit();
     return id;
+}
+
+std::string unixUserName(unsigned uid)
+{
+    passwd entry{};
+    passwd* found = nullptr;
+    std::array<char, 1024> buffer{};
+    if (getpwuid_r(uid, &entry, buffer.data(), buffer.size(), &found) == 0 && found)
+        return std::string("unix:") + found->pw_name;
+    return "unix:uid " + std::to_string(uid);
 }
 
 nlohmann::json toJson(const AuditEntry& e)

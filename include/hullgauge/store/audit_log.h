@@ -75,6 +75,9 @@ class AuditLog {
     sqlite::Connection db_;
 };
 
+/// How the trail names a Unix user: `unix:<name>`, `unix:uid <n>` when the uid has no name.
+std::string unixUserName(unsigned uid);
+
 nlohmann::json toJson(const AuditEntry& entry);
 /// RFC 4180 CSV with a header row: id, time (UTC, ISO 8601), who, role, source, action, object, outcome,
 /// detail, before, after.

@@ -111,12 +111,18 @@ std::pair<Actor, Sessions::Session> Access::current(const httplib::Request& req)
 Actor Access::reader(const httplib::Request& req, Permission permission)
 {
     auto actor = current(req).first;
-    if (!store::allows(actor.role, permission)) {
-        const auto why = refusal(actor, permission);
-        record(actor, "read " + req.path, {}, "refused", why);
-        throw HttpError(403, why);
-    }
+    requireRight(actor, permission, "read " + req.path, {});
     return actor;
+}
+
+void Access::requireRight(const Actor& actor, Permission permission, const std::string& action,
+                          const std::string& object)
+{
+    if (store::allows(actor.role, permission)) return;
+    const auto why = refusal(actor, permission);
+    record(actor, action, object, "refused", why);
+    hg::log::category("hmi")->warn("refused {} on '{}' from {}: {}", action, object, actor.source, why);
+    throw HttpError(403, why);
 }
 
 Actor Access::authorize(const httplib::Request& req, Permission permission, const std::string& action,
@@ -126,12 +132,7 @@ Actor Access::authorize(const httplib::Request& req, Permission permission, cons
     if (!req.has_header("X-CSRF-Token")) throw HttpError(403, "CSRF token missing (header X-CSRF-Token)");
     if (req.get_header_value("X-CSRF-Token") != session.csrf)
         throw HttpError(403, "CSRF token does not match the session's (sign in again)");
-    if (!store::allows(actor.role, permission)) {
-        const auto why = refusal(actor, permission);
-        record(actor, action, object, "refused", why);
-        hg::log::category("hmi")->warn("refused {} on '{}' from {}: {}", action, object, actor.source, why);
-        throw HttpError(403, why);
-    }
+    requireRight(actor, permission, action, object);
     return actor;
 }
 

@@ -59,6 +59,9 @@ class Access {
     /// The session's person with their role as the accounts file says now (a removed account's session
     /// ends, a changed role applies at once); 401 without one.
     std::pair<Actor, Sessions::Session> current(const httplib::Request& req);
+    /// Nothing when the role holds `permission`; else the refusal recorded and thrown as 403.
+    void requireRight(const Actor& actor, store::Permission permission, const std::string& action,
+                      const std::string& object);
     /// The accounts file, read again only when it changed on disk (the tool writes it too).
     std::vector<store::Account> accounts();
 

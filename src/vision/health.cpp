@@ -1,0 +1,697 @@
+// Station health from the frames a cycle already grabbed (docs/health.md;
+// dissertation 4.4.2 on what the grey levels across an edge carry, 4.4.1 on
+// the depth of field a lens out of focus leaves).
+#include "hullgauge/vision/health.h"
+
+#include "hullgauge/common/error.h"
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+namespace hg::vision {
+namespace {
+
+using Vec2 = Eigen::Vector2d;
+
+// 2·Φ⁻¹(0.9): the 10–90 % width of a step blurred by a Gaussian of σ = 1 px.
+constexpr double kTenNinety = 2.5631031310892007;
+// A profile read by bilinear interpolation is the pixels' profile smoothed by
+// the unit triangle, variance 1/6 px² (docs/health.md, "Figures").
+constexpr double kInterpolationVariance = 1.0 / 6.0;
+// 1.4826 · MAD is σ for a Gaussian; a difference of two pixels has √2 σ.
+constexpr double kMadToSigma = 1.4826;
+
+// Background samples per view, each with the pixels kClearPx either side in
+// its row also on the background side of the threshold; kept above
+// kRatioCut of the view's median (docs/health.md, "Figures").
+constexpr int kSamplesPerView = 512, kClearPx = 4;
+constexpr double kRatioCut = 0.6;
+// Uniformity zones about kZonePx square; a zone with fewer samples in a cycle is not judged.
+constexpr int kZonePx = 128, kMinZoneSamples = 8;
+
+// The dust survey: the bands' height, the margin read around what is
+// examined, the largest speck, how far below the local backlight a speck
+// lies, and how near a speck of the reference must be to be the same.
+constexpr int kBandRows = 32, kSpeckMargin = 8, kSpeckMaxArea = 30, kSpeckMaxSide = 8;
+constexpr double kSpeckMinDepth = 0.10, kSpeckNoiseK = 6.0, kSpeckMatchPx = 2.0;
+
+// The edge profile: the threshold crossing searched over ±kSearchPx in whole
+// steps, the profile read ±kProfilePx about it every kProfileStep, the two
+// levels from the outer kLevelSpan of either side; as vision::findEdge, a step
+// under 3 % of full scale is no edge.
+constexpr int kSearchPx = 4;
+constexpr double kProfilePx = 7.0, kProfileStep = 0.25, kLevelSpan = 1.5, kMinContrast = 0.03;
+// findEdge's integral window is 6 px wide (edge.h): half of it.
+constexpr double kFindEdgeHalfWindow = 3.0;
+
+double fullScale(const cv::Mat& grey)
+{
+    return grey.depth() == CV_8U ? 255.0 : 65535.0;
+}
+
+int greyAt(const cv::Mat& grey, int row, int col)
+{
+    return grey.depth() == CV_8U ? grey.at<std::uint8_t>(row, col) : grey.at<std::uint16_t>(row, col);
+}
+
+double medianOf(std::vector<double>& values)
+{
+    if (values.empty()) return kNoFigure;
+    const std::size_t half = values.size() / 2;
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half), values.end());
+    if (values.size() % 2 == 1) return values[half];
+    const double below = *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half));
+    return 0.5 * (below + values[half]);
+}
+
+// The median of non-negative whole numbers read as rounded values of a
+// continuous quantity: placed within the median's bin ([k − ½, k + ½), and
+// [0, ½) for 0) by the share of the values below it. The plain median of
+// |differences| of 8-bit grey levels jumps by whole levels; this one follows
+// σ smoothly down to the quantisation.
+double groupedMedian(std::vector<int>& values)
+{
+    if (values.empty()) return kNoFigure;
+    const std::size_t half = values.size() / 2;
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half), values.end());
+    const int m = values[half];
+    std::size_t below = 0, at = 0;
+    for (int v : values) {
+        below += v < m ? 1 : 0;
+        at += v == m ? 1 : 0;
+    }
+    const double lower = m == 0 ? 0.0 : m - 0.5, width = m == 0 ? 0.5 : 1.0;
+    return lower +
+           width * (0.5 * static_cast<double>(values.size()) - static_cast<double>(below)) / static_cast<double>(at);
+}
+
+// Grey-level σ from |differences| of neighbouring pixels (robust: a speck or
+// an edge among them moves the median little), never below the quantisation's 1/√12.
+double noiseFromSteps(std::vector<int>& steps)
+{
+    const double mad = groupedMedian(steps);
+    if (std::isnan(mad)) return kNoFigure;
+    return std::max(kMadToSigma * mad / std::sqrt(2.0), 1.0 / std::sqrt(12.0));
+}
+
+// --- Dark specks -------------------------------------------------------------
+
+// A run of dark pixels in one row (sensor pixels, x1 inclusive); `parent`
+// links runs of one connected set, the root being its first run in raster order.
+struct DarkRun {
+    int row = 0, x0 = 0, x1 = 0;
+    int parent = 0;
+};
+
+// A connected set (8-neighbourhood) of dark pixels.
+struct DarkSet {
+    int area = 0, firstRun = 0;
+    int x0 = INT_MAX, x1 = INT_MIN, y0 = INT_MAX, y1 = INT_MIN;
+    double sumX = 0.0, sumY = 0.0;
+    bool cut = false; ///< touches an edge of what was read that is not the sensor's
+
+    // Small and compact, whole: a speck rather than the part's silhouette or a
+    // piece of something cut off by the read.
+    bool speck() const { return !cut && area <= kSpeckMaxArea && x1 - x0 < kSpeckMaxSide && y1 - y0 < kSpeckMaxSide; }
+    cv::Point2f centroid() const { return {static_cast<float>(sumX / area), static_cast<float>(sumY / area)}; }
+};
+
+int rootOf(std::vector<DarkRun>& runs, int i)
+{
+    while (runs[static_cast<std::size_t>(i)].parent != i) {
+        auto& r = runs[static_cast<std::size_t>(i)];
+        r.parent = runs[static_cast<std::size_t>(r.parent)].parent;
+        i = r.parent;
+    }
+    return i;
+}
+
+void unite(std::vector<DarkRun>& runs, int a, int b)
+{
+    a = rootOf(runs, a);
+    b = rootOf(runs, b);
+    // The earlier run becomes the root: a set's root is its first pixel in raster order.
+    if (a < b) runs[static_cast<std::size_t>(b)].parent = a;
+    if (b < a) runs[static_cast<std::size_t>(a)].parent = b;
+}
+
+// Where the blocks' darkness limits are: the blocks `blocks` covers (block
+// units), the limit of block (bx, by) at limits[(by − blocks.y)·blocks.width + bx − blocks.x].
+template <class Limit> struct DarkLimits {
+    int cell = 32;
+    cv::Rect blocks;
+    std::vector<Limit> limits;
+};
+
+// The connected sets of the pixels of `scan` (sensor pixels, inside the frame
+// at `origin`) darker than their block's limit: runs per row, joined to the
+// runs of the row above that touch them (docs/health.md, "Figures": dust).
+template <class Pixel, class Limit>
+std::vector<DarkSet> darkSets(const cv::Mat& grey, cv::Point origin, const cv::Rect& scan, cv::Size sensor,
+                              const DarkLimits<Limit>& dark, std::vector<DarkRun>& runs)
+{
+    runs.clear();
+    std::size_t previous = 0; // the first run of the row above
+    for (int y = scan.y; y < scan.y + scan.height; ++y) {
+        const Pixel* row = grey.ptr<Pixel>(y - origin.y);
+        const Limit* limits =
+            &dark.limits[static_cast<std::size_t>((y / dark.cell - dark.blocks.y) * dark.blocks.width)];
+        const std::size_t current = runs.size();
+        std::size_t above = previous;
+        auto close = [&](int x0, int x1) {
+            const int index = static_cast<int>(runs.size());
+            runs.push_back({y, x0, x1, index});
+            while (above < current && runs[above].x1 < x0 - 1) ++above;
+            for (std::size_t q = above; q < current && runs[q].x0 <= x1 + 1; ++q)
+                unite(runs, static_cast<int>(q), index);
+        };
+        int start = -1;
+        for (int x = scan.x; x < scan.x + scan.width;) {
+            const int blockEnd = std::min(scan.x + scan.width, (x / dark.cell + 1) * dark.cell);
+            const Limit limit = limits[x / dark.cell - dark.blocks.x];
+            for (; x < blockEnd; ++x) {
+                const bool isDark = row[x - origin.x] < limit;
+                if (isDark && start < 0) start = x;
+                if (!isDark && start >= 0) {
+                    close(start, x - 1);
+                    start = -1;
+                }
+            }
+        }
+        if (start >= 0) close(start, scan.x + scan.width - 1);
+        previous = current;
+    }
+    std::vector<int> setOf(runs.size(), -1);
+    std::vector<DarkSet> sets;
+    const int right = scan.x + scan.width - 1, bottom = scan.y + scan.height - 1;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        const auto root = static_cast<std::size_t>(rootOf(runs, static_cast<int>(i)));
+        if (setOf[root] < 0) {
+            setOf[root] = static_cast<int>(sets.size());
+            sets.emplace_back().firstRun = static_cast<int>(root);
+        }
+        DarkSet& s = sets[static_cast<std::size_t>(setOf[root])];
+        const DarkRun& r = runs[i];
+        const int length = r.x1 - r.x0 + 1;
+        s.area += length;
+        s.sumX += length * 0.5 * (r.x0 + r.x1);
+        s.sumY += static_cast<double>(length) * r.row;
+        s.x0 = std::min(s.x0, r.x0);
+        s.x1 = std::max(s.x1, r.x1);
+        s.y0 = std::min(s.y0, r.row);
+        s.y1 = std::max(s.y1, r.row);
+        s.cut = s.cut || (r.x0 == scan.x && scan.x > 0) || (r.x1 == right && right < sensor.width - 1) ||
+                (r.row == scan.y && scan.y > 0) || (r.row == bottom && bottom < sensor.height - 1);
+        runs[i].parent = setOf[root]; // from here on: the run's set
+    }
+    return sets;
+}
+
+// The blocks a rectangle of sensor pixels covers.
+cv::Rect blocksOf(const cv::Rect& pixels, int cell)
+{
+    const int bx0 = pixels.x / cell, by0 = pixels.y / cell;
+    const int bx1 = (pixels.x + pixels.width - 1) / cell, by1 = (pixels.y + pixels.height - 1) / cell;
+    return {bx0, by0, bx1 - bx0 + 1, by1 - by0 + 1};
+}
+
+// How far below its local backlight `background` (grey levels) a pixel must
+// lie to be a speck: 10 %, more where the noise would reach that.
+double speckLimit(double background, double noiseGrey)
+{
+    return background * (1.0 - std::max(kSpeckMinDepth, kSpeckNoiseK * noiseGrey / background));
+}
+
+// --- Edge profiles -----------------------------------------------------------
+
+// Bilinear grey levels at sensor positions of a frame that may be a region
+// of the sensor; a read off the sensor or outside the region fails (a pixel
+// the camera did not send is never guessed: docs/inspection.md, "Frames that are regions").
+class FrameReader {
+  public:
+    FrameReader(const cv::Mat& grey, cv::Point origin, cv::Size sensor) : grey_(grey), origin_(origin), sensor_(sensor)
+    {
+    }
+
+    bool sample(const Vec2& at, double& value) const
+    {
+        const double x = at.x(), y = at.y();
+        if (!(x >= 0.0 && y >= 0.0 && x <= sensor_.width - 1.0 && y <= sensor_.height - 1.0)) return false;
+        const int c = std::min(static_cast<int>(x), sensor_.width - 2),
+                  r = std::min(static_cast<int>(y), sensor_.height - 2);
+        const int u = c - origin_.x, v = r - origin_.y;
+        if (u < 0 || v < 0 || u + 1 >= grey_.cols || v + 1 >= grey_.rows) return false;
+        const double fx = x - c, fy = y - r;
+        value = (1 - fy) * ((1 - fx) * greyAt(grey_, v, u) + fx * greyAt(grey_, v, u + 1)) +
+                fy * ((1 - fx) * greyAt(grey_, v + 1, u) + fx * greyAt(grey_, v + 1, u + 1));
+        return true;
+    }
+
+  private:
+    const cv::Mat& grey_;
+    cv::Point origin_;
+    cv::Size sensor_;
+};
+
+struct ProfileRead {
+    double widthPx = 0.0;  ///< 10–90 % width of the edge's own profile
+    double contrast = 0.0; ///< |background − object|, grey levels
+};
+
+// The threshold crossing (object → background going along the normal)
+// nearest the probe, from whole steps; NaN without one or off the frame.
+double nearestCrossing(const EdgeImage& image, const FrameReader& reader, const Vec2& pixel, const Vec2& normal)
+{
+    double best = kNoFigure, previous = 0.0;
+    for (int k = -kSearchPx; k <= kSearchPx; ++k) {
+        double v = 0.0;
+        if (!reader.sample(pixel + k * normal, v)) return kNoFigure;
+        const double side = image.objectIsDark ? v - image.threshold : image.threshold - v;
+        if (k > -kSearchPx && previous <= 0.0 && side > 0.0) {
+            const double s = (k - 1) + (-previous) / (side - previous);
+            if (!(std::abs(s) >= std::abs(best))) best = s;
+        }
+        previous = side;
+    }
+    return best;
+}
+
+// The edge profile across a probe (docs/health.md, "Figures": focus,
+// contrast): read along the normal, normalised between the object's and the
+// background's levels, its 10–90 % width with the interpolation's share taken out.
+std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader& reader, const EdgeProbe& probe)
+{
+    const double length = probe.normal.norm();
+    if (!probe.pixel.allFinite() || !std::isfinite(length) || length < 1e-9) return std::nullopt;
+    const Vec2 normal = probe.normal / length;
+    const double crossing = nearestCrossing(image, reader, probe.pixel, normal);
+    if (std::isnan(crossing)) return std::nullopt;
+    constexpr int kSamples = static_cast<int>(2.0 * kProfilePx / kProfileStep) + 1;
+    constexpr int kLevelSamples = static_cast<int>(kLevelSpan / kProfileStep) + 1;
+    std::array<double, kSamples> v{};
+    for (int i = 0; i < kSamples; ++i)
+        if (!reader.sample(probe.pixel + (crossing - kProfilePx + i * kProfileStep) * normal, v[i]))
+            return std::nullopt;
+    double object = 0.0, background = 0.0;
+    for (int i = 0; i < kLevelSamples; ++i) {
+        object += v[i];
+        background += v[kSamples - 1 - i];
+    }
+    object /= kLevelSamples;
+    background /= kLevelSamples;
+    const double step = background - object, contrast = std::abs(step);
+    const auto side = [&](double level) {
+        return image.objectIsDark ? level - image.threshold : image.threshold - level;
+    };
+    // A real step with both levels clearly on their side of the threshold (as findEdge asks).
+    if ((image.objectIsDark ? step : -step) < kMinContrast * fullScale(image.grey)) return std::nullopt;
+    if (side(object) > -0.25 * contrast || side(background) < 0.25 * contrast) return std::nullopt;
+    std::array<double, kSamples> u{}; // 0 on the object, 1 on the background
+    for (int i = 0; i < kSamples; ++i) u[i] = (v[i] - object) / step;
+    // The 50 % crossing nearest the middle, then outward to 10 % and 90 %.
+    int mid = -1;
+    for (int i = 0; i + 1 < kSamples; ++i)
+        if (u[i] < 0.5 && u[i + 1] >= 0.5 &&
+            (mid < 0 || std::abs(2 * i + 1 - kSamples + 1) < std::abs(2 * mid + 1 - kSamples + 1)))
+            mid = i;
+    if (mid < 0) return std::nullopt;
+    int lo = mid;
+    while (lo > 0 && u[lo] > 0.1) --lo;
+    const double s10 = u[lo] > 0.1 ? 0.0 : lo + (0.1 - u[lo]) / (u[lo + 1] - u[lo]);
+    int hi = mid + 1;
+    while (hi < kSamples - 1 && u[hi] < 0.9) ++hi;
+    const double s90 = u[hi] < 0.9 ? hi : hi - 1 + (0.9 - u[hi - 1]) / (u[hi] - u[hi - 1]);
+    const double read = (s90 - s10) * kProfileStep / kTenNinety;
+    return ProfileRead{kTenNinety * std::sqrt(std::max(read * read - kInterpolationVariance, 0.0)), contrast};
+}
+
+} // namespace
+
+// --- The reference -----------------------------------------------------------
+
+FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnixMs, int cell)
+{
+    if (cell < 1) throw ArgumentError("buildFlatField: cell must be at least 1 px, found " + std::to_string(cell));
+    if (frames.empty()) throw InputError("", "flat field", "no frames of the empty fixture");
+    const cv::Mat& first = frames[0];
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const cv::Mat& f = frames[i];
+        const std::string field = "flat field frame " + std::to_string(i + 1);
+        if (f.empty()) throw InputError("", field, "empty");
+        if (f.type() != CV_8UC1 && f.type() != CV_16UC1)
+            throw InputError("", field, "expected an 8- or 16-bit grey frame, found " + cv::typeToString(f.type()));
+        if (f.size() != first.size() || f.type() != first.type())
+            throw InputError("", field,
+                             std::to_string(f.cols) + "x" + std::to_string(f.rows) + " " + cv::typeToString(f.type()) +
+                                 ", the first frame is " + std::to_string(first.cols) + "x" +
+                                 std::to_string(first.rows) + " " + cv::typeToString(first.type()));
+    }
+    const double full = fullScale(first);
+    cv::Mat sum(first.size(), CV_64FC1, cv::Scalar(0.0));
+    std::vector<int> steps;
+    for (const cv::Mat& f : frames) {
+        cv::Mat grey;
+        f.convertTo(grey, CV_64FC1);
+        sum += grey;
+        // Each frame's own noise, from disjoint horizontal pairs of every second row.
+        for (int r = 0; r < f.rows; r += 2)
+            for (int c = 0; c + 1 < f.cols; c += 2) steps.push_back(std::abs(greyAt(f, r, c + 1) - greyAt(f, r, c)));
+    }
+    cv::Mat mean;
+    sum.convertTo(mean, CV_32FC1, 1.0 / static_cast<double>(frames.size()));
+
+    FlatField out;
+    out.sensor = first.size();
+    out.cell = cell;
+    out.takenUnixMs = takenUnixMs;
+    const cv::Rect blocks = blocksOf({{0, 0}, out.sensor}, cell);
+    out.level.create(blocks.height, blocks.width, CV_32FC1);
+    for (int by = 0; by < blocks.height; ++by)
+        for (int bx = 0; bx < blocks.width; ++bx) {
+            const cv::Rect block = cv::Rect(bx * cell, by * cell, cell, cell) & cv::Rect({0, 0}, out.sensor);
+            out.level.at<float>(by, bx) = static_cast<float>(cv::mean(mean(block))[0] / full);
+        }
+    std::vector<double> levels(out.level.begin<float>(), out.level.end<float>());
+    const double median = medianOf(levels);
+    if (!(median * full >= 1.0)) throw InputError("", "flat field", "the frames are black: is the backlight on?");
+    for (int by = 0; by < blocks.height; ++by)
+        for (int bx = 0; bx < blocks.width; ++bx)
+            if (out.level.at<float>(by, bx) < 0.5 * median)
+                throw InputError(
+                    "",
+                    "flat field block at pixel (" + std::to_string(bx * cell) + ", " + std::to_string(by * cell) + ")",
+                    "its level " + std::to_string(out.level.at<float>(by, bx)) + " is below half the median level " +
+                        std::to_string(median) + ": something is in the fixture");
+    out.noise = noiseFromSteps(steps) / full;
+
+    // The reference's own specks, found as the monitor finds them (on the mean of the frames).
+    DarkLimits<float> dark{cell, blocks, {}};
+    for (int by = 0; by < blocks.height; ++by)
+        for (int bx = 0; bx < blocks.width; ++bx) {
+            const double background = out.level.at<float>(by, bx) * full;
+            dark.limits.push_back(static_cast<float>(speckLimit(background, out.noise * full)));
+        }
+    std::vector<DarkRun> runs;
+    for (const DarkSet& s : darkSets<float>(mean, {0, 0}, {{0, 0}, out.sensor}, out.sensor, dark, runs))
+        if (s.speck()) out.dustAt.push_back(s.centroid());
+    out.dustSpecks = static_cast<int>(out.dustAt.size());
+    return out;
+}
+
+// --- The monitor -------------------------------------------------------------
+
+struct HealthMonitor::ViewContext {
+    std::size_t index = 0;
+    const EdgeImage* image = nullptr;
+    cv::Rect frame; ///< the sensor pixels the frame holds
+    cv::Size sensor;
+    double full = 255.0;
+    bool referenced = false;        ///< the reference applies: its sensor, a dark object on the backlight
+    double medianRatio = kNoFigure; ///< of the view's background samples
+    double noise = kNoFigure;       ///< grey levels
+};
+
+HealthMonitor::HealthMonitor(FlatField reference) : reference_(std::move(reference))
+{
+    if (!reference_.empty()) {
+        const cv::Rect blocks = blocksOf({{0, 0}, reference_.sensor}, std::max(reference_.cell, 1));
+        if (reference_.cell < 1 || reference_.level.type() != CV_32FC1 || reference_.level.cols != blocks.width ||
+            reference_.level.rows != blocks.height)
+            throw ArgumentError("HealthMonitor: the reference's level must be CV_32FC1 of ceil(sensor / cell) blocks");
+        zoneSide_ = reference_.cell * std::max(1, static_cast<int>(std::lround(double(kZonePx) / reference_.cell)));
+        zones_ = {(reference_.sensor.width + zoneSide_ - 1) / zoneSide_,
+                  (reference_.sensor.height + zoneSide_ - 1) / zoneSide_};
+        zoneSum_.assign(static_cast<std::size_t>(zones_.area()), 0.0);
+        zoneCount_.assign(zoneSum_.size(), 0);
+        viewZoneSum_ = zoneSum_;
+        viewZoneCount_ = zoneCount_;
+        bands_ = (reference_.sensor.height + kBandRows - 1) / kBandRows;
+        bandSeen_.assign(static_cast<std::size_t>(kBandRows) * static_cast<std::size_t>(reference_.sensor.width), 0);
+        referenceSpecks_ = reference_.dustAt;
+        std::sort(referenceSpecks_.begin(), referenceSpecks_.end(),
+                  [](const cv::Point2f& a, const cv::Point2f& b) { return a.y < b.y; });
+    }
+    beginCycle();
+    cycle_ = 0;
+}
+
+void HealthMonitor::beginCycle()
+{
+    band_ = bands_ > 0 ? static_cast<int>(cycle_ % static_cast<std::uint64_t>(bands_)) : 0;
+    ++cycle_;
+    views_ = 0;
+    ratios_.clear();
+    std::fill(zoneSum_.begin(), zoneSum_.end(), 0.0);
+    std::fill(zoneCount_.begin(), zoneCount_.end(), 0);
+    widths_.clear();
+    contrasts_.clear();
+    noises_.clear();
+    bandExamined_ = false;
+    bandFound_ = 0;
+    std::fill(bandSeen_.begin(), bandSeen_.end(), std::uint8_t{0});
+}
+
+void HealthMonitor::addView(std::size_t view, const EdgeImage& image, std::span<const EdgeProbe> probes)
+{
+    const cv::Mat& grey = image.grey;
+    const std::string name = "health: view " + std::to_string(view);
+    if (grey.empty() || (grey.type() != CV_8UC1 && grey.type() != CV_16UC1))
+        throw ArgumentError(name + ": expected an 8- or 16-bit grey frame, found " +
+                            (grey.empty() ? std::string("an empty one") : cv::typeToString(grey.type())));
+    ViewContext ctx;
+    ctx.index = view;
+    ctx.image = &image;
+    ctx.frame = {image.origin, grey.size()};
+    ctx.sensor = image.sensor.empty() ? cv::Size(image.origin.x + grey.cols, image.origin.y + grey.rows) : image.sensor;
+    if (image.origin.x < 0 || image.origin.y < 0 || ctx.frame.br().x > ctx.sensor.width ||
+        ctx.frame.br().y > ctx.sensor.height)
+        throw ArgumentError(name + ": the " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
+                            " frame at (" + std::to_string(image.origin.x) + ", " + std::to_string(image.origin.y) +
+                            ") leaves the " + std::to_string(ctx.sensor.width) + "x" +
+                            std::to_string(ctx.sensor.height) + " sensor");
+    ctx.full = fullScale(grey);
+    ctx.referenced = !reference_.empty() && ctx.sensor == reference_.sensor && image.objectIsDark;
+    ++views_;
+
+    const FrameReader reader(grey, image.origin, ctx.sensor);
+    for (const EdgeProbe& probe : probes)
+        if (const auto read = readProfile(image, reader, probe)) {
+            widths_.push_back(read->widthPx);
+            contrasts_.push_back(read->contrast / ctx.full);
+        }
+    sampleBackground(ctx);
+    if (ctx.referenced && bands_ > 0 && !std::isnan(ctx.medianRatio)) surveyBand(ctx);
+}
+
+// A sparse grid of background pixels (docs/health.md, "Figures"): each
+// against its block's reference level, its difference to the next pixel for
+// the noise.
+void HealthMonitor::sampleBackground(ViewContext& ctx)
+{
+    const EdgeImage& image = *ctx.image;
+    const cv::Rect& f = ctx.frame;
+    const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(double(f.area()) / kSamplesPerView))));
+    // Each view and each cycle samples other pixels of the grid's cells.
+    const int ox = static_cast<int>((ctx.index * 5 + cycle_ * 3) % static_cast<std::uint64_t>(step));
+    const int oy = static_cast<int>((ctx.index * 3 + cycle_ * 7) % static_cast<std::uint64_t>(step));
+    const auto background = [&](int v) { return image.objectIsDark ? v > image.threshold : v < image.threshold; };
+    struct Sample {
+        float ratio;
+        int zone;
+        int step;
+    };
+    std::vector<Sample> samples;
+    samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
+    for (int y = f.y + oy; y < f.y + f.height; y += step) {
+        const int v = y - f.y;
+        for (int x = f.x + kClearPx + ox; x + kClearPx < f.x + f.width; x += step) {
+            const int u = x - f.x;
+            const int p = greyAt(image.grey, v, u);
+            if (!background(p) || !background(greyAt(image.grey, v, u - kClearPx)) ||
+                !background(greyAt(image.grey, v, u + kClearPx)))
+                continue;
+            double expected = ctx.full;
+            int zone = -1;
+            if (ctx.referenced) {
+                const float level = reference_.level.at<float>(y / reference_.cell, x / reference_.cell);
+                if (!(level > 0.0f)) continue;
+                expected *= level;
+                zone = (y / zoneSide_) * zones_.width + x / zoneSide_;
+            }
+            samples.push_back({static_cast<float>(p / expected), zone, std::abs(greyAt(image.grey, v, u + 1) - p)});
+        }
+    }
+    if (samples.empty()) return;
+    std::vector<double> order(samples.size());
+    std::transform(samples.begin(), samples.end(), order.begin(), [](const Sample& s) { return s.ratio; });
+    ctx.medianRatio = medianOf(order);
+    const double cut = kRatioCut * ctx.medianRatio;
+    std::vector<int> steps;
+    steps.reserve(samples.size());
+    if (ctx.referenced) {
+        std::fill(viewZoneSum_.begin(), viewZoneSum_.end(), 0.0);
+        std::fill(viewZoneCount_.begin(), viewZoneCount_.end(), 0);
+    }
+    for (const Sample& s : samples) {
+        if (s.ratio < cut) continue;
+        steps.push_back(s.step);
+        if (!ctx.referenced) continue;
+        ratios_.push_back(s.ratio);
+        const auto z = static_cast<std::size_t>(s.zone);
+        zoneSum_[z] += s.ratio;
+        ++zoneCount_[z];
+        viewZoneSum_[z] += s.ratio;
+        ++viewZoneCount_[z];
+    }
+    ctx.noise = noiseFromSteps(steps);
+    noises_.push_back(ctx.noise / ctx.full);
+}
+
+// One band of the dust survey in this view (docs/health.md, "Figures": dust):
+// the part of the band the frame holds and no earlier view of the cycle
+// showed as backlight, read with a margin so that a speck near its edge is
+// seen whole. A speck is counted in the band of its first pixel.
+void HealthMonitor::surveyBand(const ViewContext& ctx)
+{
+    const cv::Rect& f = ctx.frame;
+    const auto width = static_cast<std::size_t>(reference_.sensor.width);
+    const int bandTop = band_ * kBandRows, bandBottom = std::min(bandTop + kBandRows, reference_.sensor.height);
+    const int top = std::max(bandTop, f.y), bottom = std::min(bandBottom, f.y + f.height);
+    const auto seenAt = [&](int x, int y) -> std::uint8_t& {
+        return bandSeen_[static_cast<std::size_t>(y - bandTop) * width + static_cast<std::size_t>(x)];
+    };
+    int x0 = INT_MAX, x1 = -1, y0 = INT_MAX, y1 = -1;
+    for (int y = top; y < bottom; ++y) {
+        const auto* hole =
+            static_cast<const std::uint8_t*>(std::memchr(&seenAt(f.x, y), 0, static_cast<std::size_t>(f.width)));
+        if (hole == nullptr) continue;
+        int last = f.x + f.width - 1;
+        while (seenAt(last, y) != 0) --last;
+        x0 = std::min(x0, f.x + static_cast<int>(hole - &seenAt(f.x, y)));
+        x1 = std::max(x1, last);
+        y0 = std::min(y0, y);
+        y1 = y;
+    }
+    if (x1 < 0) return;
+    bandExamined_ = true;
+    const cv::Rect scan = cv::Rect(cv::Point(x0 - kSpeckMargin, y0 - kSpeckMargin),
+                                   cv::Point(x1 + kSpeckMargin + 1, y1 + kSpeckMargin + 1)) &
+                          f;
+    // Each block's limit: its reference level times the view's backlight in
+    // its zone (the view's median where the zone had few samples), less the depth.
+    const int cell = reference_.cell;
+    DarkLimits<int> dark{cell, blocksOf(scan, cell), {}};
+    const double noise = std::max(reference_.noise * ctx.full, ctx.noise);
+    for (int by = dark.blocks.y; by < dark.blocks.y + dark.blocks.height; ++by)
+        for (int bx = dark.blocks.x; bx < dark.blocks.x + dark.blocks.width; ++bx) {
+            const auto z = static_cast<std::size_t>((by * cell / zoneSide_) * zones_.width + bx * cell / zoneSide_);
+            const double local =
+                viewZoneCount_[z] >= kMinZoneSamples ? viewZoneSum_[z] / viewZoneCount_[z] : ctx.medianRatio;
+            const double background = reference_.level.at<float>(by, bx) * ctx.full * local;
+            dark.limits.push_back(static_cast<int>(std::ceil(speckLimit(background, noise))));
+        }
+    std::vector<DarkRun> runs;
+    const cv::Mat& grey = ctx.image->grey;
+    const std::vector<DarkSet> sets = grey.depth() == CV_8U
+                                          ? darkSets<std::uint8_t>(grey, f.tl(), scan, ctx.sensor, dark, runs)
+                                          : darkSets<std::uint16_t>(grey, f.tl(), scan, ctx.sensor, dark, runs);
+    for (const DarkSet& s : sets) {
+        if (!s.speck()) continue;
+        const DarkRun& first = runs[static_cast<std::size_t>(s.firstRun)];
+        if (first.row < top || first.row >= bottom || seenAt(first.x0, first.row) != 0) continue;
+        const cv::Point2f at = s.centroid();
+        auto near = std::lower_bound(referenceSpecks_.begin(), referenceSpecks_.end(), at.y - kSpeckMatchPx,
+                                     [](const cv::Point2f& p, double y) { return p.y < y; });
+        bool known = false;
+        for (; near != referenceSpecks_.end() && near->y <= at.y + kSpeckMatchPx && !known; ++near)
+            known = std::hypot(near->x - at.x, near->y - at.y) <= kSpeckMatchPx;
+        if (!known) ++bandFound_;
+    }
+    // Surveyed: the band's pixels read here and not seen before, but those of
+    // a dark set that hides the backlight (the part, or what the read cut off):
+    // a later view of the cycle may show the backlight there.
+    const int rowTop = std::max(top, scan.y), rowBottom = std::min(bottom, scan.y + scan.height);
+    for (int y = rowTop; y < rowBottom; ++y)
+        for (int x = scan.x; x < scan.x + scan.width; ++x)
+            if (seenAt(x, y) == 0) seenAt(x, y) = 2;
+    for (const DarkRun& r : runs)
+        if (r.row >= rowTop && r.row < rowBottom && !sets[static_cast<std::size_t>(r.parent)].speck())
+            for (int x = r.x0; x <= r.x1; ++x)
+                if (seenAt(x, r.row) == 2) seenAt(x, r.row) = 0;
+    for (int y = rowTop; y < rowBottom; ++y)
+        for (int x = scan.x; x < scan.x + scan.width; ++x)
+            if (seenAt(x, y) == 2) seenAt(x, y) = 1;
+}
+
+HealthFigures HealthMonitor::endCycle()
+{
+    HealthFigures out;
+    out.views = views_;
+    out.probes = static_cast<int>(widths_.size());
+    if (!ratios_.empty()) {
+        out.backlight = medianOf(ratios_);
+        double worst = -1.0;
+        for (std::size_t z = 0; z < zoneSum_.size(); ++z)
+            if (zoneCount_[z] >= kMinZoneSamples)
+                worst = std::max(worst, std::abs(zoneSum_[z] / zoneCount_[z] / out.backlight - 1.0));
+        if (worst >= 0.0) out.uniformity = worst;
+    }
+    if (bandExamined_) bandSpecks_[band_] = bandFound_;
+    out.dustBandsSurveyed = static_cast<int>(bandSpecks_.size());
+    if (!reference_.empty() && !bandSpecks_.empty()) {
+        int found = 0;
+        for (const auto& [band, specks] : bandSpecks_) found += specks;
+        // A reference that counts specks it does not place has its count taken off the whole.
+        const int unplaced = std::max(0, reference_.dustSpecks - static_cast<int>(reference_.dustAt.size()));
+        out.dustSpecks = std::max(0, found - unplaced);
+    }
+    out.edgeWidthPx = medianOf(widths_);
+    out.contrast = medianOf(contrasts_);
+    out.noise = medianOf(noises_);
+    out.predictedSigmaPx = predictedEdgeSigmaPx(out.noise, out.contrast, out.edgeWidthPx);
+    return out;
+}
+
+// docs/health.md, "Prediction": findEdge places its 6-px window at the
+// threshold crossing, read from whole steps; noise moves that crossing by
+// σ_c = noise·√(2/3) / rise (rise: the profile's climb over the step at the
+// edge), and a window that moves by δ moves the located edge by δ times the
+// share of the transition outside the window, 2·Q(3 px / σ_edge). Both
+// independent of the integral's own noise (edgeSigmaPx).
+double predictedEdgeSigmaPx(double noise, double contrast, double edgeWidthPx)
+{
+    if (!(noise >= 0.0) || !(std::abs(contrast) > 0.0)) return kNoFigure;
+    const double integral = edgeSigmaPx(noise, contrast);
+    if (!(edgeWidthPx >= 0.0)) return integral;
+    const double blur = edgeWidthPx / kTenNinety; // σ of the edge's profile, px
+    const double outside = std::erfc(kFindEdgeHalfWindow / (blur * std::sqrt(2.0)));
+    const double rise = std::abs(contrast) * std::erf(0.5 / (blur * std::sqrt(2.0)));
+    const double crossing = noise * std::sqrt(2.0 / 3.0) / rise;
+    return std::hypot(integral, outside * crossing);
+}
+
+std::vector<HealthFigure> healthWarnings(const HealthFigures& figures, const HealthLimits& limits)
+{
+    // Comparisons with NaN are false: a figure not measured never warns.
+    std::vector<HealthFigure> out;
+    if (figures.backlight < limits.minBacklight) out.push_back(HealthFigure::Backlight);
+    if (figures.uniformity > limits.maxUniformity) out.push_back(HealthFigure::Uniformity);
+    if (figures.dustSpecks > limits.maxDustSpecks) out.push_back(HealthFigure::Dust);
+    if (figures.edgeWidthPx > limits.maxEdgeWidthPx) out.push_back(HealthFigure::Focus);
+    if (figures.contrast < limits.minContrast) out.push_back(HealthFigure::Contrast);
+    if (figures.noise > limits.maxNoise) out.push_back(HealthFigure::Noise);
+    return out;
+}
+
+std::uint16_t healthWarningBits(std::span<const HealthFigure> warnings)
+{
+    unsigned bits = 0;
+    for (HealthFigure w : warnings) bits |= 1u << static_cast<unsigned>(w);
+    return static_cast<std::uint16_t>(bits);
+}
+
+} // namespace hg::vision

@@ -45,8 +45,10 @@ constexpr double kSpeckMinDepth = 0.10, kSpeckNoiseK = 6.0, kSpeckMatchPx = 2.0;
 // under 3 % of full scale is no edge.
 constexpr int kSearchPx = 4;
 constexpr double kProfilePx = 7.0, kProfileStep = 0.25, kLevelSpan = 1.5, kMinContrast = 0.03;
-// findEdge's integral window is 6 px wide (edge.h): half of it.
+// findEdge's integral window is 6 px wide, its levels the means of reads 3,
+// 3.5, 4 and 4.5 px beyond the crossing (edge.h, edge.cpp).
 constexpr double kFindEdgeHalfWindow = 3.0;
+constexpr std::array<double, 4> kFindEdgeLevelsAt = {3.0, 3.5, 4.0, 4.5};
 
 double fullScale(const cv::Mat& grey)
 {
@@ -185,11 +187,12 @@ std::vector<DarkSet> darkSets(const cv::Mat& grey, cv::Point origin, const cv::R
         if (start >= 0) close(start, scan.x + scan.width - 1);
         previous = current;
     }
-    std::vector<int> setOf(runs.size(), -1);
+    std::vector<int> roots(runs.size()), setOf(runs.size(), -1);
+    for (std::size_t i = 0; i < runs.size(); ++i) roots[i] = rootOf(runs, static_cast<int>(i));
     std::vector<DarkSet> sets;
     const int right = scan.x + scan.width - 1, bottom = scan.y + scan.height - 1;
     for (std::size_t i = 0; i < runs.size(); ++i) {
-        const auto root = static_cast<std::size_t>(rootOf(runs, static_cast<int>(i)));
+        const auto root = static_cast<std::size_t>(roots[i]);
         if (setOf[root] < 0) {
             setOf[root] = static_cast<int>(sets.size());
             sets.emplace_back().firstRun = static_cast<int>(root);
@@ -449,7 +452,8 @@ void HealthMonitor::beginCycle()
     std::fill(zoneCount_.begin(), zoneCount_.end(), 0);
     widths_.clear();
     contrasts_.clear();
-    noises_.clear();
+    steps_.clear();
+    stepsFull_ = 0.0;
     bandExamined_ = false;
     bandFound_ = 0;
     std::fill(bandSeen_.begin(), bandSeen_.end(), std::uint8_t{0});
@@ -502,7 +506,7 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
     struct Sample {
         float ratio;
         int zone;
-        int step;
+        std::array<int, 2> steps; ///< |differences| of the disjoint pairs (x, x + 1), (x + 2, x + 3)
     };
     std::vector<Sample> samples;
     samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
@@ -522,7 +526,11 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
                 expected *= level;
                 zone = (y / zoneSide_) * zones_.width + x / zoneSide_;
             }
-            samples.push_back({static_cast<float>(p / expected), zone, std::abs(greyAt(image.grey, v, u + 1) - p)});
+            const int p2 = greyAt(image.grey, v, u + 2);
+            samples.push_back(
+                {static_cast<float>(p / expected),
+                 zone,
+                 {std::abs(greyAt(image.grey, v, u + 1) - p), std::abs(greyAt(image.grey, v, u + 3) - p2)}});
         }
     }
     if (samples.empty()) return;
@@ -531,14 +539,14 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
     ctx.medianRatio = medianOf(order);
     const double cut = kRatioCut * ctx.medianRatio;
     std::vector<int> steps;
-    steps.reserve(samples.size());
+    steps.reserve(2 * samples.size());
     if (ctx.referenced) {
         std::fill(viewZoneSum_.begin(), viewZoneSum_.end(), 0.0);
         std::fill(viewZoneCount_.begin(), viewZoneCount_.end(), 0);
     }
     for (const Sample& s : samples) {
         if (s.ratio < cut) continue;
-        steps.push_back(s.step);
+        steps.insert(steps.end(), s.steps.begin(), s.steps.end());
         if (!ctx.referenced) continue;
         ratios_.push_back(s.ratio);
         const auto z = static_cast<std::size_t>(s.zone);
@@ -547,8 +555,11 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
         viewZoneSum_[z] += s.ratio;
         ++viewZoneCount_[z];
     }
+    // The cycle's noise from the differences of all its views (a view's
+    // few hundred give σ to ±5 %); a view of another depth than the first is left out of it.
+    if (stepsFull_ == 0.0) stepsFull_ = ctx.full;
+    if (stepsFull_ == ctx.full) steps_.insert(steps_.end(), steps.begin(), steps.end());
     ctx.noise = noiseFromSteps(steps);
-    noises_.push_back(ctx.noise / ctx.full);
 }
 
 // One band of the dust survey in this view (docs/health.md, "Figures": dust):
@@ -651,27 +662,34 @@ HealthFigures HealthMonitor::endCycle()
     }
     out.edgeWidthPx = medianOf(widths_);
     out.contrast = medianOf(contrasts_);
-    out.noise = medianOf(noises_);
+    if (!steps_.empty()) out.noise = noiseFromSteps(steps_) / stepsFull_;
     out.predictedSigmaPx = predictedEdgeSigmaPx(out.noise, out.contrast, out.edgeWidthPx);
     return out;
 }
 
-// docs/health.md, "Prediction": findEdge places its 6-px window at the
-// threshold crossing, read from whole steps; noise moves that crossing by
-// σ_c = noise·√(2/3) / rise (rise: the profile's climb over the step at the
-// edge), and a window that moves by δ moves the located edge by δ times the
-// share of the transition outside the window, 2·Q(3 px / σ_edge). Both
-// independent of the integral's own noise (edgeSigmaPx).
+// docs/health.md, "Prediction". findEdge (edge.cpp) places its 6-px window at
+// the threshold crossing read from whole steps and takes the two levels over
+// 3–4.5 px beyond the crossing either side. Noise moves that crossing by
+// σ_c = noise·√(2/3) / rise (rise: the profile's climb over one step at the
+// edge, linear interpolation between two pixels). Once the edge is blurred, a
+// crossing moved by δ moves the located edge by k·δ: the transition's share
+// outside the window, 2·Q(3 px / σ), and the two levels read on its tails,
+// W·(their mean slope)/C. The crossing's pixels are pixels of the integral
+// too, so the two moves are correlated: + 2·k·noise²/(C·rise).
 double predictedEdgeSigmaPx(double noise, double contrast, double edgeWidthPx)
 {
     if (!(noise >= 0.0) || !(std::abs(contrast) > 0.0)) return kNoFigure;
     const double integral = edgeSigmaPx(noise, contrast);
-    if (!(edgeWidthPx >= 0.0)) return integral;
+    if (!(edgeWidthPx > 0.0)) return integral;
     const double blur = edgeWidthPx / kTenNinety; // σ of the edge's profile, px
-    const double outside = std::erfc(kFindEdgeHalfWindow / (blur * std::sqrt(2.0)));
-    const double rise = std::abs(contrast) * std::erf(0.5 / (blur * std::sqrt(2.0)));
-    const double crossing = noise * std::sqrt(2.0 / 3.0) / rise;
-    return std::hypot(integral, outside * crossing);
+    double slope = 0.0;                           // of the normalised profile where findEdge reads the levels, 1/px
+    for (double s : kFindEdgeLevelsAt)
+        slope += std::exp(-0.5 * (s / blur) * (s / blur)) / (std::sqrt(2.0 * M_PI) * blur);
+    slope /= static_cast<double>(kFindEdgeLevelsAt.size());
+    const double k = std::erfc(kFindEdgeHalfWindow / (blur * std::sqrt(2.0))) + 2.0 * kFindEdgeHalfWindow * slope;
+    const double rise = std::erf(0.5 / (blur * std::sqrt(2.0)));
+    const double r = noise / std::abs(contrast);
+    return std::sqrt(integral * integral + r * r * (2.0 / 3.0 * k * k / (rise * rise) + 2.0 * k / rise));
 }
 
 std::vector<HealthFigure> healthWarnings(const HealthFigures& figures, const HealthLimits& limits)

@@ -168,7 +168,11 @@ class HealthMonitor {
     std::vector<double> ratios_;
     std::vector<double> zoneSum_;
     std::vector<int> zoneCount_;
-    std::vector<double> widths_, contrasts_, noises_;
+    std::vector<double> widths_, contrasts_;
+    /// |differences| of neighbouring background pixels, grey levels of the
+    /// cycle's first frame's depth (full scale stepsFull_).
+    std::vector<int> steps_;
+    double stepsFull_ = 0.0;
 
     /// The last view's zones (for its dust thresholds): the sum of its samples' ratios and their count.
     std::vector<double> viewZoneSum_;

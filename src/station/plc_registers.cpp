@@ -279,6 +279,7 @@ PlcStatus RegisterMap::status() const
 void RegisterMap::publishResult(const PublishedResult& r)
 {
     regs_[reg::Status] = u16(r.statusAfter);
+    if (r.healthWarnings) regs_[reg::HealthWarnings] = *r.healthWarnings;
     if (r.manual) return;
     regs_[reg::Result] = u16(r.result);
     regs_[reg::FaultCode] = r.faultCode;

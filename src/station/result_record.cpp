@@ -83,6 +83,7 @@ PublishedResult InspectionRecord::toPublished(PlcStatus statusAfter) const
     }
     r.landmarkOk.reserve(landmarks.size());
     for (const auto& l : landmarks) r.landmarkOk.push_back(l.ok());
+    if (health) r.healthWarnings = vision::healthWarningBits(health->warnings);
     return r;
 }
 

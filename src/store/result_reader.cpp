@@ -252,6 +252,64 @@ ResultReader::ResultReader(const std::filesystem::path& file) : file_(file)
     }
 }
 
+namespace {
+
+/// A figure of the table `health`: null where it was not measured.
+json figure(const sqlite::Statement& s, int i)
+{
+    return s.isNull(i) ? json() : json(s.real(i));
+}
+
+} // namespace
+
+std::vector<json> selectHealth(const sqlite::Connection& db, const std::string& file, const HealthQuery& query)
+{
+    // A store before schema version 7 has no health table: nothing was watched.
+    auto table = db.prepare("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'health'");
+    if (!table.step() || table.integer(0) == 0) return {};
+    std::string sql = "SELECT inspection_id, unix_ms, backlight, uniformity, dust_specks, edge_width_px, contrast, "
+                      "noise, predicted_sigma_px, warnings FROM health WHERE 1";
+    std::vector<std::string> params;
+    if (query.sinceMs) {
+        sql += " AND unix_ms >= CAST(? AS INTEGER)";
+        params.push_back(std::to_string(*query.sinceMs));
+    }
+    if (query.untilMs) {
+        sql += " AND unix_ms < CAST(? AS INTEGER)";
+        params.push_back(std::to_string(*query.untilMs));
+    }
+    // The newest `limit` of the window, then turned oldest first (a chart's order).
+    sql += " ORDER BY unix_ms DESC, inspection_id DESC";
+    if (query.limit > 0) sql += " LIMIT " + std::to_string(query.limit);
+    auto select = db.prepare(sql);
+    bindText(select, params);
+    std::vector<json> rows;
+    while (select.step()) {
+        auto warnings = json::parse(select.text(9), nullptr, false);
+        if (!warnings.is_array())
+            throw InputError(file, "health " + std::to_string(select.int64(0)) + ".warnings", "not a JSON list");
+        const std::int64_t unixMs = select.int64(1);
+        rows.push_back({{"inspection_id", select.int64(0)},
+                        {"time", formatUtc(unixMs)},
+                        {"unix_ms", unixMs},
+                        {"backlight", figure(select, 2)},
+                        {"uniformity", figure(select, 3)},
+                        {"dust_specks", figure(select, 4)},
+                        {"edge_width_px", figure(select, 5)},
+                        {"contrast", figure(select, 6)},
+                        {"noise", figure(select, 7)},
+                        {"predicted_sigma_px", figure(select, 8)},
+                        {"warnings", std::move(warnings)}});
+    }
+    std::reverse(rows.begin(), rows.end());
+    return rows;
+}
+
+std::vector<json> ResultReader::health(const HealthQuery& query) const
+{
+    return selectHealth(db_, file_.string(), query);
+}
+
 std::vector<json> ResultReader::select(const ResultQuery& query) const
 {
     return selectResults(db_, file_.string(), query);

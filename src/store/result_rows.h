@@ -19,5 +19,8 @@ namespace hg::store {
 std::vector<nlohmann::json> selectResults(const sqlite::Connection& db, const std::string& file,
                                           const ResultQuery& query);
 std::int64_t countResults(const sqlite::Connection& db, const std::string& file, const ResultQuery& query);
+/// The health rows of `query` (ResultReader::health), oldest first.
+std::vector<nlohmann::json> selectHealth(const sqlite::Connection& db, const std::string& file,
+                                         const HealthQuery& query);
 
 } // namespace hg::store

@@ -7,6 +7,8 @@
 #include "schema.h"
 
 #include <array>
+#include <cmath>
+#include <optional>
 #include <random>
 
 namespace hg::store {
@@ -45,8 +47,43 @@ ResultStore::ResultStore(const std::filesystem::path& file) : file_(file)
     hg::log::category("store")->info("result store {} ({} records)", file.string(), count());
 }
 
+namespace {
+
+/// A figure as the table `health` keeps it: NULL where it was not measured (NaN).
+void bindFigure(sqlite::Statement& s, int index, double value)
+{
+    if (std::isfinite(value))
+        s.bindReal(index, value);
+    else
+        s.bindNull(index);
+}
+
+/// The cycle's health row (docs/health.md, "In the daemon"), beside its inspection `id`.
+void insertHealth(const sqlite::Connection& db, std::int64_t id, std::int64_t unixMs,
+                  const station::HealthRecord& health)
+{
+    auto insert = db.prepare("INSERT INTO health (inspection_id, unix_ms, backlight, uniformity, dust_specks, "
+                             "edge_width_px, contrast, noise, predicted_sigma_px, warnings) "
+                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    insert.bind(1, id).bind(2, unixMs);
+    const auto& f = health.figures;
+    int index = 3;
+    for (const double v :
+         {f.backlight, f.uniformity, f.dustSpecks, f.edgeWidthPx, f.contrast, f.noise, f.predictedSigmaPx})
+        bindFigure(insert, index++, v);
+    nlohmann::json warnings = nlohmann::json::array();
+    for (const auto w : health.warnings) warnings.push_back(std::string(enumName(w)));
+    insert.bind(10, dumpJson(warnings));
+    insert.step();
+}
+
+} // namespace
+
 std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::string& imagesDir)
 {
+    // The health row goes in the inspection's transaction: one fsync, both or neither.
+    std::optional<sqlite::Transaction> transaction;
+    if (r.health) transaction.emplace(db_);
     auto insert =
         db_.prepare("INSERT INTO inspections (started_utc, started_unix_ms, trigger_seq, manual, serial, "
                     "program, part, verdict, fault_code, cycle_ms, landmarks_failed, landmarks_total, "
@@ -71,7 +108,7 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         .bind(16, dumpJson(r.alignment))
         .bind(17, dumpJson(r.simulation))
         .bind(18, std::string(enumName(r.purpose)))
-        .bind(19, newCycleId());
+        .bind(19, r.cycleId.empty() ? newCycleId() : r.cycleId);
     // The program's release: NULL and '' for a draft (docs/daemon.md, "Result store").
     if (r.programRelease)
         insert.bind(20, r.programRelease->version);
@@ -83,9 +120,15 @@ std::int64_t ResultStore::commit(const station::InspectionRecord& r, const std::
         insert.bindReal(23, *r.temperatureC);
     else
         insert.bindNull(23);
-    // A single INSERT in autocommit mode is its own transaction: durable when step() returns.
+    // Alone, the INSERT in autocommit mode is its own transaction: durable when step() returns;
+    // with the health row, durable when the transaction's commit returns.
     insert.step();
-    return db_.lastInsertRowId();
+    const std::int64_t id = db_.lastInsertRowId();
+    if (transaction) {
+        insertHealth(db_, id, r.startedUnixMs, *r.health);
+        transaction->commit();
+    }
+    return id;
 }
 
 nlohmann::json ResultStore::recent(int limit) const

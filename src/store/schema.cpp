@@ -36,6 +36,19 @@ CREATE TABLE IF NOT EXISTS inspections (
 );
 CREATE INDEX IF NOT EXISTS inspections_serial ON inspections (serial);
 CREATE INDEX IF NOT EXISTS inspections_started ON inspections (started_unix_ms);
+CREATE TABLE IF NOT EXISTS health (
+    inspection_id      INTEGER PRIMARY KEY REFERENCES inspections (id),
+    unix_ms            INTEGER NOT NULL,
+    backlight          REAL,
+    uniformity         REAL,
+    dust_specks        REAL,
+    edge_width_px      REAL,
+    contrast           REAL,
+    noise              REAL,
+    predicted_sigma_px REAL,
+    warnings           TEXT    NOT NULL DEFAULT '[]'
+);
+CREATE INDEX IF NOT EXISTS health_time ON health (unix_ms);
 )";
 
 int userVersion(const sqlite::Connection& db)
@@ -80,6 +93,8 @@ void createOrMigrate(const sqlite::Connection& db)
         db.exec("ALTER TABLE inspections ADD COLUMN correction_id TEXT NOT NULL DEFAULT ''");
         db.exec("ALTER TABLE inspections ADD COLUMN temperature_c REAL");
     }
+    // A version 1 to 6 database gains the table `health` (docs/health.md, "In the daemon") from
+    // kSchema above, empty: the station's health was not watched before.
     // The outbox: the rows still to publish, in id order, without scanning the published ones.
     db.exec("CREATE INDEX IF NOT EXISTS inspections_outbox ON inspections (id) WHERE published_unix_ms IS NULL");
     db.exec("PRAGMA user_version=" + std::to_string(kSchemaVersion));

@@ -1,6 +1,6 @@
 // The result store's schema and its migrations (docs/daemon.md, "Result
-// store"): the table `inspections` of the current version, and the columns an
-// older database gains when the daemon's writer opens it. Private to the store
+// store"): the tables `inspections` and `health` of the current version, and
+// the columns and tables an older database gains when the daemon's writer opens it. Private to the store
 // module: only the writer creates or migrates a database.
 #pragma once
 
@@ -13,7 +13,9 @@ namespace hg::store {
 // 3: purpose (production, master, study: docs/study.md).
 // 4: cycle_id and published_unix_ms, the plant link's outbox (docs/mqtt.md).
 // 5: program_version and program_sha256, the release the part was judged with (docs/commissioning.md).
-constexpr int kSchemaVersion = 6;
+// 6: correction_id and temperature_c, the master's correction and the part's temperature (docs/mastering.md).
+// 7: the table `health`, the station's health figures of each cycle (docs/health.md, "In the daemon").
+constexpr int kSchemaVersion = 7;
 
 /// Creates the schema in a new database, or brings one of an older version to kSchemaVersion
 /// keeping its rows; a database of a newer version is refused (sqlite::Error naming it).

@@ -233,6 +233,51 @@ TEST(InspectionRecordToPublished, TheSeatInMicrometresAndMillidegreesSaturating)
     EXPECT_EQ(record.toPublished(PlcStatus::Done).seatShiftUm, 0);
 }
 
+// HEALTH_WARNINGS (146, docs/plc.md): bit k for the k-th figure of
+// vision::HealthFigure beyond its limit — backlight 0, uniformity 1, dust 2,
+// focus 3, contrast 4, noise 5 — written with the result, a manual cycle's too
+// (the station's health is not the PLC's handshake); a cycle that examined
+// nothing leaves it as it was.
+TEST(PlcRegisterMap, HealthWarningsAreABitPerFigureWrittenWithTheResult)
+{
+    RegisterMap r;
+    makeReady(r);
+    InspectionRecord record;
+    record.triggerSeq = 4;
+    record.verdict = Verdict::Pass;
+    record.health = HealthRecord{};
+    record.health->warnings = {vision::HealthFigure::Dust, vision::HealthFigure::Focus};
+    r.publishResult(record.toPublished(PlcStatus::Done));
+    std::vector<std::uint16_t> v;
+    ASSERT_EQ(r.read(100, 124, v), ModbusException::None);
+    EXPECT_EQ(v[46], 0b001100); // 146: dust (bit 2) and focus (bit 3)
+    EXPECT_EQ(v[1], 4);         // in the block of DONE_SEQ
+    EXPECT_EQ(v[45], 0);        // 145, the missed triggers' low word, untouched
+    EXPECT_EQ(v[47], 0);        // 147 stays free
+
+    // A manual cycle: the station's health changes, the PLC's result registers do not.
+    record.manual = true;
+    record.triggerSeq = 9;
+    record.health->warnings = {vision::HealthFigure::Backlight, vision::HealthFigure::Noise};
+    r.publishResult(record.toPublished(PlcStatus::Done));
+    EXPECT_EQ(readOne(r, 146), 0b100001); // backlight (bit 0) and noise (bit 5)
+    EXPECT_EQ(readOne(r, 101), 4);
+
+    // No view examined (an abort before the first grab): the warnings stand.
+    InspectionRecord aborted;
+    aborted.triggerSeq = 10;
+    aborted.verdict = Verdict::Aborted;
+    r.publishResult(aborted.toPublished(PlcStatus::Done));
+    EXPECT_EQ(readOne(r, 101), 10);
+    EXPECT_EQ(readOne(r, 146), 0b100001);
+    // Every figure back within: 0.
+    record.health->warnings.clear();
+    r.publishResult(record.toPublished(PlcStatus::Done));
+    EXPECT_EQ(readOne(r, 146), 0);
+    // The PLC cannot write it.
+    EXPECT_EQ(writeOne(r, 146, 1), ModbusException::IllegalDataAddress);
+}
+
 TEST(PlcRegisterMap, ManualTriggerLeavesThePlcHandshakeAlone)
 {
     RegisterMap r;

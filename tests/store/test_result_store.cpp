@@ -130,7 +130,7 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
     EXPECT_EQ(recent[1]["purpose"], "production");
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
 }
 
 TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
@@ -158,7 +158,7 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
         EXPECT_EQ(recent[1]["purpose"], "production");
         EXPECT_EQ(recent[1]["serial"], "OLD");
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
               "OLD|production\nSN-4|master\n");
     // Only the three purposes are stored, also in a migrated table.
@@ -274,7 +274,7 @@ TEST(ResultOutbox, RowsOfAVersionThreeStorePredateThePlantLink)
     store.commit(record(4, station::Verdict::Pass));
     ResultOutbox outbox(file);
     EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
                           " \"SELECT serial, published_unix_ms, cycle_id = '' FROM inspections ORDER BY id\"")
                   .out,
@@ -383,7 +383,7 @@ TEST(ResultStore, AVersionFourDatabaseGainsTheReleaseColumnsAndKeepsItsRows)
         EXPECT_TRUE(recent[1]["program_version"].is_null());
         EXPECT_TRUE(recent[1]["program_sha256"].is_null());
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
     // Its outbox state too: published at 42 with its cycle id, not sent again.
     EXPECT_EQ(sql(file, "SELECT id, cycle_id, published_unix_ms, program_version IS NULL, program_sha256 FROM "
                         "inspections ORDER BY id LIMIT 1"),
@@ -421,9 +421,118 @@ TEST(ResultStore, AVersionFiveDatabaseGainsTheCorrectionAndTemperatureColumns)
         EXPECT_TRUE(recent[1]["correction_id"].is_null());
         EXPECT_TRUE(recent[1]["temperature_c"].is_null());
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "6\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
     EXPECT_EQ(sql(file, "SELECT id, correction_id, temperature_c FROM inspections ORDER BY id"),
               "1||\n2|p1-v3-steel-20260412T081500Z|23.25\n");
+}
+
+/// A cycle's health as the runner records it: the figures given, NaN where not measured.
+station::HealthRecord health(double backlight, double dust, std::vector<vision::HealthFigure> warnings)
+{
+    station::HealthRecord h;
+    h.figures.backlight = backlight;
+    h.figures.uniformity = 0.03125;
+    h.figures.dustSpecks = dust;
+    h.figures.edgeWidthPx = 1.5;
+    h.figures.contrast = 0.875;
+    h.figures.noise = 0.0078125;
+    h.figures.predictedSigmaPx = 0.046875;
+    h.figures.views = 8;
+    h.figures.probes = 12;
+    h.warnings = std::move(warnings);
+    return h;
+}
+
+// docs/health.md, "In the daemon": a cycle's health row goes in with its
+// inspection (the same id), a figure not measured as NULL, the warnings by
+// name; the reader gives the rows of a time window oldest first, the newest
+// `limit` of it.
+TEST(ResultStore, KeepsEachCyclesHealthBesideItsInspectionAndReadsATimeWindow)
+{
+    hgtest::TempDir dir;
+    const auto file = dir / "results.db";
+    {
+        ResultStore store(file);
+        for (std::uint16_t seq = 1; seq <= 5; ++seq) {
+            auto r = record(seq, station::Verdict::Pass);
+            r.startedUnixMs = 1'800'000'000'000 + seq * 60'000; // one a minute
+            if (seq == 2) r.health = health(0.75, 7.0, {vision::HealthFigure::Backlight, vision::HealthFigure::Dust});
+            if (seq == 3) r.health = health(vision::kNoFigure, vision::kNoFigure, {});
+            if (seq == 4 || seq == 5) r.health = health(0.96875, 0.0, {});
+            store.commit(r);
+        }
+    }
+    // The sqlite3 program reads what was written: NULL for the figures cycle 3 could not measure.
+    EXPECT_EQ(sql(file, "SELECT inspection_id, unix_ms, backlight, dust_specks, edge_width_px, warnings FROM health "
+                        "ORDER BY inspection_id"),
+              "2|1800000120000|0.75|7.0|1.5|[\"backlight\",\"dust\"]\n"
+              "3|1800000180000|||1.5|[]\n"
+              "4|1800000240000|0.96875|0.0|1.5|[]\n"
+              "5|1800000300000|0.96875|0.0|1.5|[]\n");
+    const ResultReader reader(file);
+    HealthQuery all;
+    const auto rows = reader.health(all);
+    ASSERT_EQ(rows.size(), 4u);
+    EXPECT_EQ(rows[0]["inspection_id"], 2);
+    EXPECT_EQ(rows[0]["time"], "2027-01-15T08:02:00.000Z");
+    EXPECT_EQ(rows[0]["backlight"], 0.75);
+    EXPECT_EQ(rows[0]["uniformity"], 0.03125);
+    EXPECT_EQ(rows[0]["contrast"], 0.875);
+    EXPECT_EQ(rows[0]["noise"], 0.0078125);
+    EXPECT_EQ(rows[0]["predicted_sigma_px"], 0.046875);
+    EXPECT_EQ(rows[0]["warnings"], nlohmann::json::array({"backlight", "dust"}));
+    EXPECT_TRUE(rows[1]["backlight"].is_null());
+    EXPECT_TRUE(rows[1]["dust_specks"].is_null());
+    EXPECT_EQ(rows[1]["edge_width_px"], 1.5);
+    // [minute 3, minute 5): cycles 3 and 4.
+    HealthQuery window;
+    window.sinceMs = 1'800'000'180'000;
+    window.untilMs = 1'800'000'300'000;
+    const auto inWindow = reader.health(window);
+    ASSERT_EQ(inWindow.size(), 2u);
+    EXPECT_EQ(inWindow[0]["inspection_id"], 3);
+    EXPECT_EQ(inWindow[1]["inspection_id"], 4);
+    // The newest two of everything, oldest first.
+    HealthQuery newest;
+    newest.limit = 2;
+    const auto last = reader.health(newest);
+    ASSERT_EQ(last.size(), 2u);
+    EXPECT_EQ(last[0]["inspection_id"], 4);
+    EXPECT_EQ(last[1]["inspection_id"], 5);
+}
+
+// Schema 7 adds the table `health`: a version 6 store gains it, empty, its rows kept; a
+// reader of a version 6 store (read-only, never migrating) finds no health rows.
+TEST(ResultStore, AVersionSixDatabaseGainsTheHealthTable)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v6.db";
+    {
+        ResultStore store(file);
+        store.commit(record(1, station::Verdict::Pass));
+    }
+    // Back to version 6 as that daemon wrote it.
+    hgtest::run("sqlite3 " + file.string() + " 'DROP INDEX health_time; DROP TABLE health; PRAGMA user_version=6;'");
+    ASSERT_EQ(sql(file, "SELECT count(*) FROM sqlite_master WHERE name LIKE 'health%'"), "0\n");
+    EXPECT_TRUE(ResultReader(file).health({}).empty());
+    EXPECT_EQ(sql(file, "PRAGMA user_version"), "6\n");
+    {
+        ResultStore store(file);
+        auto r = record(2, station::Verdict::Fail);
+        r.health = health(0.5, 1.0, {vision::HealthFigure::Backlight});
+        EXPECT_EQ(store.commit(r), 2);
+    }
+    EXPECT_EQ(sql(file, "PRAGMA user_version"), "7\n");
+    EXPECT_EQ(sql(file, "SELECT id, serial FROM inspections ORDER BY id"), "1|SN-1\n2|SN-2\n");
+    EXPECT_EQ(sql(file, "SELECT inspection_id, backlight, warnings FROM health"), "2|0.5|[\"backlight\"]\n");
+    // The migrated table and its index are a new store's.
+    const auto fresh = dir / "new.db";
+    {
+        ResultStore created(fresh);
+    }
+    for (const char* query :
+         {"PRAGMA table_info(health)", "SELECT name, sql FROM sqlite_master WHERE name LIKE 'health%' ORDER BY name"})
+        EXPECT_EQ(sql(file, query), sql(fresh, query)) << query;
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)
@@ -467,12 +576,12 @@ TEST(ResultStore, AVersionOneStoreOpensAndMigratesToTheSchemaOfANewStore)
     ASSERT_EQ(before.size(), 2u);
     EXPECT_EQ(sql(old, "PRAGMA user_version"), "1\n");
 
-    // The writer opens it: version 6, the rows kept, and they read as the reader read them before.
+    // The writer opens it: version 7, the rows kept, and they read as the reader read them before.
     {
         ResultStore store(old);
         EXPECT_EQ(store.count(), 2);
     }
-    EXPECT_EQ(sql(old, "PRAGMA user_version"), "6\n");
+    EXPECT_EQ(sql(old, "PRAGMA user_version"), "7\n");
     EXPECT_EQ(ResultReader(old).select(all), before);
     EXPECT_EQ(before[1]["serial"], "OLD-2");
     EXPECT_EQ(before[1]["timing"]["move"], 5);
@@ -485,10 +594,10 @@ TEST(ResultStore, AVersionOneStoreOpensAndMigratesToTheSchemaOfANewStore)
     {
         ResultStore created(fresh);
     }
-    for (const char* query :
-         {"PRAGMA table_info(inspections)", "SELECT name, sql FROM sqlite_master WHERE type = 'index' ORDER BY name"})
+    for (const char* query : {"PRAGMA table_info(inspections)", "PRAGMA table_info(health)",
+                              "SELECT name, sql FROM sqlite_master WHERE type = 'index' ORDER BY name"})
         EXPECT_EQ(sql(old, query), sql(fresh, query)) << query;
-    EXPECT_EQ(sql(old, "SELECT count(*) FROM sqlite_master WHERE type = 'index'"), "3\n");
+    EXPECT_EQ(sql(old, "SELECT count(*) FROM sqlite_master WHERE type = 'index'"), "4\n");
 
     // The outbox opens it too: the old rows predate the plant link, a new result waits.
     ResultStore store(old);

@@ -79,6 +79,9 @@ inline constexpr std::uint16_t PassCount = 138;    ///< 138..139, results RESULT
 inline constexpr std::uint16_t FailCount = 140;    ///< 140..141, results RESULT 2
 inline constexpr std::uint16_t FaultCount = 142;   ///< 142..143, results RESULT 3
 inline constexpr std::uint16_t MissedCount = 144;  ///< 144..145, triggers refused
+/// Extension: the station's health (docs/health.md, "In the daemon"): bit k set while the
+/// k-th vision::HealthFigure is beyond its limit, written with the result of every cycle that examined it.
+inline constexpr std::uint16_t HealthWarnings = 146;
 /// Extension: the last RingEntries results, entry k = RESULT_SEQ mod RingEntries at
 /// ResultRing + k · RingEntryWords; the words of an entry are in namespace ring.
 inline constexpr std::uint16_t ResultRing = 160; ///< 160..223
@@ -216,8 +219,12 @@ struct PublishedResult {
     std::uint16_t seatRotationMdeg = 0;
     /// STATUS after publishing: Done normally, Fault when the station needs recovery.
     PlcStatus statusAfter = PlcStatus::Done;
-    /// A manual cycle's result only changes STATUS (see TriggerRequest::manual).
+    /// A manual cycle's result only changes STATUS (see TriggerRequest::manual)
+    /// and the station's health: HEALTH_WARNINGS is the station's, not the
+    /// PLC's handshake, so every cycle that examined it writes it.
     bool manual = false;
+    /// HEALTH_WARNINGS (extension); absent: the cycle examined no view, the register keeps its value.
+    std::optional<std::uint16_t> healthWarnings;
 };
 
 class RegisterMap {
@@ -241,7 +248,7 @@ class RegisterMap {
     bool enterMaintenance();
     PlcStatus status() const;
     /// Writes RESULT, FAULT_CODE, counts, CYCLE_MS, the seat, LANDMARK_OK_BITS,
-    /// DONE_SEQ and STATUS together.
+    /// HEALTH_WARNINGS, DONE_SEQ and STATUS together.
     void publishResult(const PublishedResult& r);
     /// HEARTBEAT += 1 (wraps at 65536).
     void beat();

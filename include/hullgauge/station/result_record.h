@@ -9,6 +9,7 @@
 #include "hullgauge/inspect/outcome.h"
 #include "hullgauge/station/plc_registers.h"
 #include "hullgauge/station/sequencer.h"
+#include "hullgauge/vision/health.h"
 
 #include <cstdint>
 #include <map>
@@ -95,6 +96,15 @@ struct ProgramRelease {
     bool operator==(const ProgramRelease&) const = default;
 };
 
+/// The station's health as one cycle's views showed it (docs/health.md, "In
+/// the daemon"): the figures and those beyond the configured limits. The
+/// result store keeps it in its table `health`, the PLC reads the warnings in
+/// HEALTH_WARNINGS.
+struct HealthRecord {
+    vision::HealthFigures figures;
+    std::vector<vision::HealthFigure> warnings; ///< in the enum's order (vision::healthWarnings)
+};
+
 enum class Verdict { Pass, Fail, Aborted, Error };
 constexpr auto nameTable(Verdict)
 {
@@ -130,12 +140,19 @@ struct InspectionRecord {
     /// The simulated line only (docs/daemon.md, "Seating"): the part shown and
     /// its true seat, {"part": name, "seat": {...}}; null on real hardware.
     nlohmann::json simulation = nullptr;
+    /// The station's health the cycle's views showed; absent when none was
+    /// examined (health off, a cycle that ended before its views were prepared).
+    std::optional<HealthRecord> health;
+    /// The result's id at the plant (a random UUID, docs/mqtt.md); empty: the
+    /// store gives one at the commit.
+    std::string cycleId;
 
     std::size_t landmarksFailed() const;
     /// The landmark errors as stored in the result database.
     nlohmann::json landmarksJson() const;
     /// RESULT, FAULT_CODE, counts, CYCLE_MS, the seat (from `alignment`:
-    /// shift_mm, rotation_deg) and LANDMARK_OK_BITS for the PLC.
+    /// shift_mm, rotation_deg), LANDMARK_OK_BITS and, when the cycle examined
+    /// the station's health, HEALTH_WARNINGS for the PLC.
     PublishedResult toPublished(PlcStatus statusAfter) const;
 };
 

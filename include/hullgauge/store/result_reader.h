@@ -9,7 +9,7 @@
 //
 // Stores of every schema version are read: a column an older version lacks
 // reads as its default (alignment and simulation null, purpose production,
-// program_version and program_sha256 null).
+// program_version and program_sha256 null), a table it lacks as empty (health).
 #pragma once
 
 #include "hullgauge/store/sqlite.h"
@@ -37,6 +37,14 @@ struct ResultQuery {
     std::optional<std::int64_t> afterId;  ///< paging: rows with a larger id
     int limit = 0;                        ///< at most this many rows; 0 = all
     bool newestFirst = true;              ///< order by id descending (else ascending)
+};
+
+/// Which rows of the table `health` (docs/health.md, "In the daemon"): the
+/// station's health figures per cycle, by the cycle's start time.
+struct HealthQuery {
+    std::optional<std::int64_t> sinceMs; ///< cycles started at or after (Unix ms, UTC)
+    std::optional<std::int64_t> untilMs; ///< started before
+    int limit = 0;                       ///< the newest this many of the window; 0 = all
 };
 
 /// "2026-12-02", "2026-12-02T10:30", "2026-12-02T10:30:05" (optionally with
@@ -83,6 +91,12 @@ class ResultReader {
     std::int64_t count(const ResultQuery& query) const;
     /// The row with this id, if any.
     std::optional<nlohmann::json> byId(std::int64_t id) const;
+    /// The health rows of `query`, oldest first: `inspection_id`, `time` (the
+    /// cycle's start, as `started_utc`), `unix_ms`, `backlight`, `uniformity`,
+    /// `dust_specks`, `edge_width_px`, `contrast`, `noise`,
+    /// `predicted_sigma_px` (null where not measured) and `warnings` (the
+    /// figures' names). None from a store older than schema version 7.
+    std::vector<nlohmann::json> health(const HealthQuery& query) const;
     const std::filesystem::path& file() const { return file_; }
 
   private:

@@ -1,6 +1,7 @@
 // The line engineer's page (docs/hmi.md, "Maintenance"): calibration status
-// and history, the last camera snapshot, the part programs and their view
-// plans for everyone; the state-changing actions (a snapshot among them) only
+// and history, the last camera snapshot, the station's health (a chart per
+// figure with its limit, the latest figures in words, docs/health.md), the
+// part programs and their view plans for everyone; the state-changing actions (a snapshot among them) only
 // in a signed-in session whose role allows them (docs/audit.md), each carrying
 // its CSRF token. The server checks every request; the page only leaves out
 // what the role may not do.
@@ -19,6 +20,7 @@ async function session() {
   document.getElementById("actions").hidden = !may.operate;
   document.getElementById("snapshot-actions").hidden = !may.operate;
   document.getElementById("calibrate-actions").hidden = !may.calibration;
+  document.getElementById("flat-field-actions").hidden = !may.calibration;
   document.getElementById("settings-actions").hidden = !may.settings;
   document.getElementById("logout-line").hidden = !s.signed_in;
   say("session", !s.configured ? "Maintenance over HTTP is not configured on this station."
@@ -56,7 +58,7 @@ function pose(v) {
 
 // The snapshot's figures and picture; `shownSnapshot` keeps the picture from reloading on every look.
 let shownSnapshot = null;
-window.hgMaintenance = { snapshotShown: null };
+window.hgMaintenance = { snapshotShown: null, health: null };
 function showSnapshot(s) {
   if (!s || s.state === undefined) return;
   say("snapshot-error", s.state === "failed" ? "Snapshot failed: " + s.error : "");
@@ -97,6 +99,107 @@ async function grab() {
   }
 }
 
+// ---- the station's health (docs/health.md, "In the daemon") ----
+
+const healthCharts = {};
+const RED = "#c62828", BLUE = "#4a78a8", GREY = "#8a949c";
+
+function capitalised(text) { return text ? text[0].toUpperCase() + text.slice(1) : text; }
+
+// The latest figures in words with their state, the warnings highlighted.
+function showHealthNow(now) {
+  const list = document.getElementById("health-latest");
+  list.replaceChildren();
+  if (!now || !now.enabled) { say("health-reference", "The station's health is not watched (health.enabled: false)."); return; }
+  const r = now.reference;
+  say("health-reference", r ? `Flat-field reference taken ${hg.localTime(r.time).text} (mean level ${r.level_mean.toFixed(3)} of full scale, ${r.dust_specks} specks of its own), ${r.file}.`
+    : `No flat-field reference yet (${now.reference_file}): the backlight, its uniformity and dust are not measured until one is taken.`);
+  if (!now.states) { list.append(hg.el("li", { class: "unmeasured", text: "No cycle examined since the daemon started." })); return; }
+  for (const st of now.states)
+    list.append(hg.el("li", { "data-figure": st.figure, class: st.within === false ? "beyond" : st.within === null ? "unmeasured" : "within",
+      text: (st.within === false ? "⚠ " : "") + capitalised(st.sentence) }));
+}
+
+function showFlatField(f) {
+  if (!f || !f.state) { say("flat-field-state", ""); return; }
+  const grabbed = f.grabbed !== undefined ? `, ${f.grabbed} of ${f.frames} frames` : "";
+  say("flat-field-state", `Flat-field reference: ${f.state}${grabbed}` + (f.error ? ` — ${f.error}` : "")
+    + (f.state === "done" && f.reference ? ` (taken ${hg.localTime(f.reference.time).text}, written to ${f.file})` : ""));
+}
+
+// One chart per figure: its values over the window, the limit as a line, the values beyond it in red.
+function healthChart(state, rows) {
+  const id = "health-chart-" + state.key;
+  const points = rows.filter((r) => r[state.key] !== null).map((r) => ({ x: r.unix_ms, y: r[state.key], id: r.inspection_id }));
+  const beyond = (y) => (state.minimum ? y < state.limit : y > state.limit);
+  let box = document.getElementById("health-box-" + state.key);
+  if (!box) {
+    box = hg.el("div", { id: "health-box-" + state.key, "data-figure": state.figure },
+      hg.el("h3", { text: capitalised(state.figure) }), hg.el("canvas", { id, height: "130" }));
+    document.getElementById("health-charts").append(box);
+  }
+  box.querySelector("h3").className = state.within === false ? "beyond" : "";
+  box.querySelector("h3").textContent = capitalised(state.figure) + (points.length ? "" : ": no values in the window");
+  if (healthCharts[id]) healthCharts[id].destroy();
+  const xs = points.map((p) => p.x);
+  const x0 = xs.length ? Math.min(...xs) : Date.now() - 3600e3, x1 = xs.length ? Math.max(...xs, x0 + 1) : Date.now();
+  const datasets = [{ label: state.figure, data: points, type: "line", borderColor: BLUE, borderWidth: 1,
+      pointRadius: points.map((p) => (beyond(p.y) ? 4 : 2)), pointBackgroundColor: points.map((p) => (beyond(p.y) ? RED : BLUE)) },
+    { label: "limit", data: [{ x: x0, y: state.limit }, { x: x1, y: state.limit }], type: "line", borderColor: RED,
+      borderDash: [6, 4], pointRadius: 0, borderWidth: 1.5 }];
+  healthCharts[id] = new Chart(document.getElementById(id), { type: "line", data: { datasets },
+    options: { animation: false, parsing: false, plugins: { legend: { display: false } },
+      scales: { x: { type: "linear", min: x0, max: x1, ticks: { maxTicksLimit: 6, callback: (v) => hg.localTime(v).text } },
+        y: { type: "linear", title: { display: true, text: state.key } } } } });
+  return { figure: state.figure, points: points.length, limit: state.limit, beyond: points.filter((p) => beyond(p.y)).length };
+}
+
+async function showHealth() {
+  const params = new URLSearchParams();
+  const since = document.getElementById("health-since").value.trim(), until = document.getElementById("health-until").value.trim();
+  if (since) params.set("since", since);
+  if (until) params.set("until", until);
+  try {
+    const h = await hg.get("/api/health" + (params.toString() ? "?" + params : ""));
+    say("health-error", "");
+    showHealthNow(h.now);
+    showFlatField(h.now && h.now.flat_field);
+    const shown = [];
+    for (const st of (h.now && h.now.states) || (h.now ? defaultStates(h.now.limits) : [])) shown.push(healthChart(st, h.rows));
+    window.hgMaintenance.health = { cycles: h.cycles, charts: shown, warnings: h.now ? h.now.warnings : [] };
+  } catch (e) {
+    for (const id of Object.keys(healthCharts)) { healthCharts[id].destroy(); delete healthCharts[id]; }
+    document.getElementById("health-charts").replaceChildren();
+    document.getElementById("health-latest").replaceChildren();
+    say("health-error", "Station health: " + e.message);
+    window.hgMaintenance.health = { error: e.message };
+  }
+}
+
+// Before the first examined cycle the charts still show the stored figures with the configured limits.
+function defaultStates(limits) {
+  const rules = [["backlight", "backlight", true], ["uniformity", "uniformity", false], ["dust", "dust_specks", false],
+    ["focus", "edge_width_px", false], ["contrast", "contrast", true], ["noise", "noise", false]];
+  return rules.map(([figure, key, minimum]) => ({ figure, key, minimum, limit: limits[key], within: null }));
+}
+
+async function takeFlatField() {
+  const frames = Number(document.getElementById("ff-frames").value);
+  try {
+    let f = (await hg.post("/api/maintenance", { command: "flat-field", take: true, frames }, csrf)).flat_field;
+    showFlatField(f);
+    // The grabs run between cycles: look again until it is done (bounded: a stuck station shows its state).
+    for (let i = 0; i < 240 && (f.state === "queued" || f.state === "running"); ++i) {
+      await new Promise((resolve) => setTimeout(resolve, 250));
+      f = (await hg.get("/api/health")).now.flat_field;
+      showFlatField(f);
+    }
+    await showHealth();
+  } catch (e) {
+    say("flat-field-state", "Refused: " + e.message);
+  }
+}
+
 async function show() {
   try {
     const c = await hg.get("/api/calibration");
@@ -104,6 +207,7 @@ async function show() {
       : "No calibration has run since the daemon started; the history below holds the station file's.");
     showHistory(c.history);
     showSnapshot((await hg.get("/api/snapshot")).snapshot);
+    await showHealth();
     const p = await hg.get("/api/programs");
     const tbody = document.querySelector("#programs tbody");
     for (const prog of p.programs)
@@ -135,5 +239,7 @@ document.getElementById("calibrate").addEventListener("click", () => act({ comma
   pattern: document.getElementById("cal-pattern").value.trim(), poses: document.getElementById("cal-poses").value.trim() }));
 document.getElementById("reload").addEventListener("click", () => act({ command: "reload" }));
 document.getElementById("grab").addEventListener("click", grab);
+document.getElementById("flat-field").addEventListener("click", takeFlatField);
+document.getElementById("health-window").addEventListener("submit", (ev) => { ev.preventDefault(); showHealth(); });
 document.getElementById("logout").addEventListener("click", async () => { await hg.post("/api/logout", {}, csrf); await session(); });
 show();

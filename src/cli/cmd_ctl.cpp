@@ -38,6 +38,7 @@ struct CtlOptions {
     std::string purpose;
     bool noWait = false;
     double waitS = 900.0;
+    int frames = 8;
 };
 
 std::string socketPath(const CtlOptions& o)
@@ -97,6 +98,31 @@ std::string loadedVersion(const nlohmann::json& s, const nlohmann::json& plc)
     return version.empty() ? ", draft" : "," + version;
 }
 
+/// The station's health (docs/health.md, "In the daemon"): the warnings of the last examined cycle and the
+/// reference it was judged against.
+void printHealth(const nlohmann::json& h)
+{
+    std::cout << "health:       ";
+    if (!h.value("enabled", false)) {
+        std::cout << "not watched\n";
+        return;
+    }
+    std::string text;
+    if (h["figures"].is_null())
+        text = "no cycle examined yet";
+    else if (h["warnings"].empty())
+        text = "every figure within its limit";
+    else
+        for (const auto& state : h["states"])
+            if (state.value("within", true) == false)
+                text += (text.empty() ? "" : "; ") + state["sentence"].get<std::string>();
+    const auto& reference = h["reference"];
+    std::cout << text
+              << (reference.is_object() ? "; reference taken " + reference.value("time", std::string())
+                                        : std::string("; no flat-field reference (hullgauge ctl flat-field)"))
+              << "\n";
+}
+
 void printStatus(const nlohmann::json& s)
 {
     const auto& seq = s["sequencer"];
@@ -152,6 +178,7 @@ void printStatus(const nlohmann::json& s)
         if (c.contains("error")) std::cout << " — " << c["error"].get<std::string>();
         std::cout << "\n";
     }
+    if (s.contains("health") && s["health"].is_object()) printHealth(s["health"]);
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];
         std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"
@@ -205,12 +232,41 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
     }
 }
 
+/// Queues the flat-field reference and follows it until it ends (docs/health.md, "In the daemon"):
+/// exit 0 when it was taken and written, 3 when it failed (the daemon's reason).
+int runFlatField(const std::string& path, const CtlOptions& o)
+{
+    request(path, {{"command", "flat-field"}, {"take", true}, {"frames", o.frames}});
+    std::cerr << "flat-field reference queued: empty the fixture; production pauses for the grabs" << std::endl;
+    if (o.noWait) return 0;
+    Clock& clock = Clock::steady();
+    const auto deadline =
+        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
+    while (true) {
+        const auto f = request(path, {{"command", "flat-field"}})["flat_field"];
+        const auto state = f.value("state", std::string());
+        if (state == "done") {
+            const auto& r = f["reference"];
+            std::cout << "flat-field reference taken " << r.value("time", std::string()) << " from "
+                      << f.value("frames", 0) << " frames: mean level " << formatNumber(r.value("level_mean", 0.0), 3)
+                      << " of full scale, noise " << formatNumber(r.value("noise", 0.0), 4) << ", "
+                      << r.value("dust_specks", 0) << " dark specks\nwritten: " << f.value("file", std::string())
+                      << "\nthe station's health is judged against it from the next cycle\n";
+            return 0;
+        }
+        if (state == "failed") throw FaultError(f.value("error", std::string("the flat-field reference failed")));
+        if (clock.now() > deadline)
+            throw FaultError("flat-field still " + state + " after --wait-timeout; follow it with ctl status");
+        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
+    }
+}
+
 std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
     auto* ctl =
         app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, purpose, "
-                                  "calibrate)");
+                                  "calibrate, flat-field)");
     ctl->add_option("--socket", opts->socket,
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
@@ -244,6 +300,12 @@ std::function<int()> factory(CLI::App& app)
     calibrate->add_flag("--no-wait", opts->noWait, "return once the daemon has queued it");
     calibrate->add_option("--wait-timeout", opts->waitS, "seconds to follow the progress")
         ->check(CLI::Range(1.0, 86400.0));
+    auto* flatField = ctl->add_subcommand(
+        "flat-field", "take the flat-field reference of the empty fixture while production is paused; the station's "
+                      "health is judged against it from the next cycle (docs/health.md)");
+    flatField->add_option("--frames", opts->frames, "frames averaged (1..64)")->check(CLI::Range(1, 64));
+    flatField->add_flag("--no-wait", opts->noWait, "return once the daemon has queued it");
+    flatField->add_option("--wait-timeout", opts->waitS, "seconds to wait for it")->check(CLI::Range(1.0, 86400.0));
 
     return [=]() -> int {
         auto path = socketPath(*opts);
@@ -280,6 +342,8 @@ std::function<int()> factory(CLI::App& app)
             std::cout << "purpose: " << answer["purpose"].get<std::string>() << "\n";
         } else if (calibrate->parsed()) {
             return runCalibrate(path, *opts);
+        } else if (flatField->parsed()) {
+            return runFlatField(path, *opts);
         } else if (simPart->parsed()) {
             if (opts->list) {
                 answer = request(path, {{"command", "sim-part"}, {"list", true}});

@@ -285,9 +285,10 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
             config, mailbox, clock, [&runner] { return runner.snapshot().png(); }, station::UtcOffset{}, audit);
     loop.setHmi(hmi.get());
     // The plant link reads the outbox on its own thread and connection (docs/mqtt.md).
-    std::unique_ptr<MqttPublisher> mqtt;
+    // Shared with the runner's health sink: the publisher outlives the runner's thread, whatever ends first.
+    std::shared_ptr<MqttPublisher> mqtt;
     if (config->mqtt.enabled)
-        mqtt = std::make_unique<MqttPublisher>(
+        mqtt = std::make_shared<MqttPublisher>(
             config->mqtt, config->results.database,
             [&runner] {
                 // The plant sees the PLC's view (docs/mqtt.md): a cycle's steps are one state, busy.
@@ -297,7 +298,11 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
             clock);
     MaintenanceContext context{
         registers, plc, runner, store, *hardware.devices, hardware.simulation, loop.config(), hmi ? hmi->port() : 0};
-    if (mqtt) context.mqttStatus = [&mqtt] { return mqtt->status(); };
+    if (mqtt) {
+        context.mqttStatus = [&mqtt] { return mqtt->status(); };
+        // Each cycle's health on the topic `health` (docs/mqtt.md).
+        runner.setHealthSink([mqtt](const nlohmann::json& health) { mqtt->publishHealth(health); });
+    }
     context.requestReload = [&loop] { loop.requestReload(); };
     context.audit = [&audit, &clock](store::AuditEntry entry) {
         entry.atMs = clock.wallMs();

@@ -1,6 +1,7 @@
 #include "daemon_config.h"
 
 #include "hmi/hmi_auth.h"
+#include "hullgauge/calib/flat_field.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
@@ -328,6 +329,52 @@ void parseMastering(const ConfigNode& node, const fs::path& base, DaemonConfig& 
     }
 }
 
+// `health` (docs/health.md, "In the daemon"): the limits of the figures and
+// the flat-field reference. A reference file that is there must be one, of
+// this station's sensor; a missing one is no error — the station is watched
+// without it until the maintenance action `flat-field` takes it.
+void parseHealth(const ConfigNode& node, DaemonConfig& cfg)
+{
+    if (!node.isMap()) node.fail("expected a map of enabled, reference, limits");
+    node.allowOnlyKeys({"enabled", "reference", "limits"});
+    auto& health = cfg.health;
+    if (auto n = node.optional("enabled")) health.enabled = n->asBool();
+    if (auto n = node.optional("reference")) health.reference = resolve(*n, cfg.file.parent_path());
+    if (auto limits = node.optional("limits")) {
+        if (!limits->isMap())
+            limits->fail("expected a map of min_backlight, max_uniformity, max_dust_specks, max_edge_width_px, "
+                         "min_contrast, max_noise");
+        limits->allowOnlyKeys(
+            {"min_backlight", "max_uniformity", "max_dust_specks", "max_edge_width_px", "min_contrast", "max_noise"});
+        auto& l = health.limits;
+        if (auto n = limits->optional("min_backlight")) l.minBacklight = n->asDoubleIn(0.0, 1.0);
+        if (auto n = limits->optional("max_uniformity")) l.maxUniformity = n->asDoubleIn(0.0, 1.0);
+        if (auto n = limits->optional("max_dust_specks")) l.maxDustSpecks = n->asDoubleIn(0.0, 1e6);
+        if (auto n = limits->optional("max_edge_width_px")) l.maxEdgeWidthPx = n->asDoubleIn(0.1, 100.0);
+        if (auto n = limits->optional("min_contrast")) l.minContrast = n->asDoubleIn(0.0, 1.0);
+        if (auto n = limits->optional("max_noise")) l.maxNoise = n->asDoubleIn(0.0, 1.0);
+    }
+}
+
+/// The reference file the configuration names, read when it is there (InputError naming it when it is
+/// not a flat-field reference or covers another sensor than the station's camera).
+void readHealthReference(DaemonConfig& cfg)
+{
+    auto& health = cfg.health;
+    if (health.reference.empty()) health.reference = cfg.stationFile.parent_path() / "flat-field.json";
+    if (!health.enabled || !fs::exists(health.reference)) return;
+    vision::FlatField reference = calib::readFlatField(health.reference);
+    const cv::Size sensor = cfg.station.camera.imageSize;
+    if (reference.sensor != sensor)
+        throw InputError(health.reference.string(), "sensor",
+                         "the reference covers " + std::to_string(reference.sensor.width) + " x " +
+                             std::to_string(reference.sensor.height) + " px, the station's camera " +
+                             std::to_string(sensor.width) + " x " + std::to_string(sensor.height) +
+                             ": take the reference again (hullgauge ctl flat-field)");
+    health.referenceSha256 = sha256OfFile(health.reference);
+    health.referenceRead = std::move(reference);
+}
+
 } // namespace
 
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse workspace)
@@ -335,7 +382,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "mqtt", "watchdog", "simulation", "workbench", "shifts", "mastering"});
+                        "mqtt", "watchdog", "simulation", "workbench", "shifts", "mastering", "health"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -385,6 +432,8 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
     if (auto n = root.optional("shifts")) cfg.shifts = parseShifts(*n);
     // After `programs` and `workbench`: every program may have its set.
     if (auto n = root.optional("mastering")) parseMastering(*n, base, cfg);
+    if (auto n = root.optional("health")) parseHealth(*n, cfg);
+    readHealthReference(cfg);
     if (auto n = root.optional("simulation")) {
         n->allowOnlyKeys({"parts", "seating"});
         auto parts = (*n)["parts"];

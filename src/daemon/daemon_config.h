@@ -13,6 +13,7 @@
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/station/mastering_due.h"
+#include "hullgauge/vision/health.h"
 #include "hullgauge/vision/segmentation.h"
 #include "plant/mqtt_config.h"
 #include "shifts.h"
@@ -180,6 +181,22 @@ struct MasteringConfig {
     std::optional<MasteringDuePolicy> due;
 };
 
+/// Station health (docs/health.md, "In the daemon"): every cycle's frames
+/// examined against the flat-field reference and the limits.
+struct HealthConfig {
+    bool enabled = true;
+    /// The flat-field reference (`health.reference`, default `flat-field.json`
+    /// beside the station file), absolute: read here when it exists, written by
+    /// the maintenance action `flat-field`.
+    std::filesystem::path reference;
+    vision::HealthLimits limits;
+    /// The reference as this configuration read it (absent: no file there yet)
+    /// and the file's SHA-256: a reload that finds another file uses it from the
+    /// next cycle, one that finds the same keeps the reference in use.
+    std::optional<vision::FlatField> referenceRead;
+    std::string referenceSha256;
+};
+
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer
     /// than this (the sequencer is stuck) or the PLC server loop stalls.
@@ -209,6 +226,7 @@ struct DaemonConfig {
     MqttConfig mqtt;
     WatchdogConfig watchdog;
     MasteringConfig mastering;
+    HealthConfig health;
     /// The station's shifts in the order of the day (docs/daemon.md, `shifts`): the line view's shift counters.
     std::vector<Shift> shifts = defaultShifts();
     /// Simulated line only (`camera.driver.backend: sim`): the parts the

@@ -238,6 +238,7 @@ json status(const MaintenanceContext& c, const json&)
                std::string(enumName(static_cast<station::ProgramState>(regs[station::reg::ProgramState])))},
               {"master_due", regs[station::reg::MasterDue]},
               {"master_grace_left", regs[station::reg::MasterGraceLeft]},
+              {"health_warnings", regs[station::reg::HealthWarnings]},
               {"counters", plcCounters(regs)},
               {"clients", counters.clients},
               {"requests", counters.requests},
@@ -252,6 +253,7 @@ json status(const MaintenanceContext& c, const json&)
             {"mqtt", c.mqttStatus ? c.mqttStatus() : json()},
             {"lamps", c.devices.lampStatus()},
             {"calibration", c.runner.calibration()},
+            {"health", c.runner.health()},
             {"purpose", std::string(enumName(c.registers.purpose()))},
             {"program", c.runner.program()},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
@@ -428,6 +430,21 @@ json snapshot(const MaintenanceContext& c, const json& request)
     return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
 }
 
+// The flat-field reference (docs/health.md, "In the daemon"): `take` queues it
+// (`frames` 1..64, default 8), grabbed by the runner between cycles; without
+// `take` the last one's status is answered.
+json flatField(const MaintenanceContext& c, const json& request)
+{
+    const auto take = flagField(request, "take");
+    if (!take) return refusal(take.status().prefixed("flat-field: "));
+    if (!take.value()) return {{"ok", true}, {"flat_field", c.runner.flatField()}};
+    const auto frames = wholeNumber(request, "frames", 1, 64, 8);
+    if (!frames) return refusal(frames.status().prefixed("flat-field: "));
+    if (const Status queued = c.runner.requestFlatField({static_cast<int>(frames.value())}); !queued.ok())
+        return {{"ok", false}, {"error", "flat-field: " + queued.message()}};
+    return {{"ok", true}, {"flat_field", c.runner.flatField()}};
+}
+
 json simPart(const MaintenanceContext& c, const json& request)
 {
     auto parts = c.simulation ? c.simulation->parts() : std::vector<std::string>{};
@@ -453,9 +470,9 @@ json reload(const MaintenanceContext& c, const json&)
 
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
-    {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
-    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
-    {"snapshot", snapshot},   {"reload", reload},
+    {"status", status},       {"results", results},         {"trigger", trigger},      {"abort", abortCycle},
+    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart},     {"purpose", purpose},
+    {"snapshot", snapshot},   {"reload", reload},           {"flat-field", flatField},
 };
 
 } // namespace
@@ -472,17 +489,19 @@ std::string changedValue(const MaintenanceContext& c, const std::string& command
 
 // The changes among the commands go into the audit trail with who asked (docs/audit.md): a new cycle
 // purpose, another simulated part, a calibration queued (its station file is recorded when the daemon
-// loads it), a reload asked for. Questions (status, results, calibration) and operations (trigger,
-// abort, snapshot) are not changes.
+// loads it), a flat-field reference taken, a reload asked for. Questions (status, results, calibration,
+// flat-field without `take`) and operations (trigger, abort, snapshot) are not changes.
 void recordChange(const MaintenanceContext& c, const std::string& command, const json& request,
                   const std::string& before, const json& answer)
 {
     static const std::map<std::string, std::string> kActions{{"purpose", "setting.purpose"},
                                                              {"sim-part", "setting.sim-part"},
                                                              {"calibrate", "calibration.run"},
+                                                             {"flat-field", "calibration.flat-field"},
                                                              {"reload", "setting.reload"}};
     const auto action = kActions.find(command);
     if (!c.audit || action == kActions.end()) return;
+    if (command == "flat-field" && !(request.contains("take") && request["take"] == true)) return;
     if ((command == "purpose" || command == "sim-part") && before.empty()) return;
     // The caller is set by the socket server or the HMI, never by the client (answerMaintenanceRequest).
     const json caller = request.value("caller", json::object());
@@ -493,7 +512,8 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
     entry.action = action->second;
     entry.object = command == "calibrate" && answer.contains("calibration") && answer["calibration"].is_object()
                        ? answer["calibration"].value("out", std::string())
-                       : command;
+                   : command == "flat-field" ? c.config->health.reference.string()
+                                             : command;
     const bool ok = answer.value("ok", false);
     entry.outcome = ok ? "done" : "failed";
     entry.detail = ok ? std::string() : answer.value("error", std::string());
@@ -504,6 +524,9 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
     };
     if (command == "calibrate")
         entry.detail = "pattern " + words("pattern") + ", poses " + words("poses") + (ok ? "" : ": " + entry.detail);
+    if (command == "flat-field")
+        entry.detail = "frames " + (request.contains("frames") ? words("frames") : std::string("8")) +
+                       (ok ? "" : ": " + entry.detail);
     entry.before = before;
     entry.after = before.empty() ? std::string() : changedValue(c, command, request);
     c.audit(std::move(entry));

@@ -105,14 +105,14 @@ struct MaintenanceContext {
     /// Reads the configuration and its programs again, as SIGHUP does (the
     /// workbench's release, docs/workbench.md); empty: `reload` is refused.
     std::function<void()> requestReload = {};
-    /// Records a change (cycle purpose, simulated part, calibration, reload) in the audit trail
+    /// Records a change (cycle purpose, simulated part, calibration, flat-field reference, reload) in the audit trail
     /// (docs/audit.md) with the request's caller; empty: not recorded.
     std::function<void(store::AuditEntry)> audit = {};
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,
-/// results, trigger, abort, calibrate, calibration, sim-part, purpose; any other
-/// command is answered as unknown.
+/// results, trigger, abort, calibrate, calibration, sim-part, purpose,
+/// snapshot, reload, flat-field; any other command is answered as unknown.
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context);
 
 } // namespace hg::daemon

@@ -3,6 +3,7 @@
 #include "daemon_config.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
+#include "hullgauge/calib/flat_field.h"
 #include "hullgauge/common/error.h"
 
 #include <gtest/gtest.h>
@@ -150,6 +151,73 @@ TEST(DaemonConfig, BadValuesNameFileLineAndKey)
         EXPECT_NE(message.find(c.expect), std::string::npos) << c.to << " -> " << message;
         EXPECT_NE(message.find("hullgauged.yaml"), std::string::npos) << message;
     }
+}
+
+// docs/health.md, "In the daemon": the `health` section, its defaults (vision::HealthLimits),
+// every bad value named with file, line and key, and the reference file beside the station file.
+TEST(DaemonConfig, TheHealthSectionItsDefaultsAndItsRefusals)
+{
+    Fixture f;
+    auto defaults = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", kDaemon));
+    EXPECT_TRUE(defaults.health.enabled);
+    EXPECT_EQ(defaults.health.reference, f.dir.path() / "flat-field.json");
+    EXPECT_FALSE(defaults.health.referenceRead);
+    EXPECT_EQ(defaults.health.limits.minBacklight, 0.80);
+    EXPECT_EQ(defaults.health.limits.maxNoise, 0.02);
+
+    const std::string text = kDaemon + std::string("health:\n"
+                                                   "  enabled: false\n"
+                                                   "  reference: refs/ff.json\n"
+                                                   "  limits: {min_backlight: 0.7, max_uniformity: 0.2, "
+                                                   "max_dust_specks: 12, max_edge_width_px: 2.5, min_contrast: 0.3, "
+                                                   "max_noise: 0.03}\n");
+    auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", text));
+    EXPECT_FALSE(cfg.health.enabled);
+    EXPECT_EQ(cfg.health.reference, f.dir.path() / "refs/ff.json");
+    const auto& l = cfg.health.limits;
+    EXPECT_EQ(l.minBacklight, 0.7);
+    EXPECT_EQ(l.maxUniformity, 0.2);
+    EXPECT_EQ(l.maxDustSpecks, 12.0);
+    EXPECT_EQ(l.maxEdgeWidthPx, 2.5);
+    EXPECT_EQ(l.minContrast, 0.3);
+    EXPECT_EQ(l.maxNoise, 0.03);
+
+    const int line = hgtest::lineOf(text, "  limits:");
+    struct Case {
+        std::string from, to, expect;
+    };
+    const Case cases[] = {
+        {"min_backlight: 0.7", "min_backlight: 1.5",
+         "hullgauged.yaml:" + std::to_string(line) + ": health.limits.min_backlight"},
+        {"max_noise: 0.03", "max_noise: loud", "health.limits.max_noise"},
+        {"max_edge_width_px: 2.5", "max_edge_width_px: 0", "health.limits.max_edge_width_px"},
+        {"max_dust_specks: 12", "max_dust: 12", "max_dust"},
+        {"enabled: false", "enabled: perhaps", "health.enabled"},
+        {"  reference: refs/ff.json", "  referense: refs/ff.json", "referense"},
+    };
+    for (const auto& c : cases) {
+        auto message = f.error(replaced(text, c.from, c.to));
+        EXPECT_NE(message.find(c.expect), std::string::npos) << c.to << " -> " << message;
+        EXPECT_NE(message.find("hullgauged.yaml"), std::string::npos) << message;
+    }
+
+    // A reference there is read; one of another sensor than the station's camera (640 x 480) is refused.
+    const std::vector<cv::Mat> frames(2, cv::Mat(480, 640, CV_8UC1, cv::Scalar(230)));
+    calib::writeFlatField(f.dir / "flat-field.json", vision::buildFlatField(frames, 1'800'000'000'000));
+    auto read = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", kDaemon));
+    ASSERT_TRUE(read.health.referenceRead);
+    EXPECT_EQ(read.health.referenceRead->takenUnixMs, 1'800'000'000'000);
+    EXPECT_EQ(read.health.referenceSha256.size(), 64u);
+    const std::vector<cv::Mat> small(2, cv::Mat(240, 320, CV_8UC1, cv::Scalar(230)));
+    calib::writeFlatField(f.dir / "flat-field.json", vision::buildFlatField(small, 1'800'000'000'000));
+    auto message = f.error(kDaemon);
+    EXPECT_NE(message.find("flat-field.json"), std::string::npos) << message;
+    EXPECT_NE(message.find("320 x 240"), std::string::npos) << message;
+    EXPECT_NE(message.find("640 x 480"), std::string::npos) << message;
+    // A file that is no reference at all is refused naming it.
+    hgtest::writeFile(f.dir / "flat-field.json", "not a reference\n");
+    message = f.error(kDaemon);
+    EXPECT_NE(message.find("flat-field.json"), std::string::npos) << message;
 }
 
 TEST(DaemonConfig, ViewPlanIsCheckedAgainstTheFixture)

@@ -205,6 +205,10 @@ TEST(DaemonProcess, WrongTypesAndUnendedRequestsAreAnsweredNamingWhat)
         {{{"command", "snapshot"}, {"grab", 1}}, "snapshot: grab: 1 is not true or false"},
         {{{"command", "calibrate"}, {"poses", 3}}, "poses: 3 is not a string"},
         {{{"command", "calibrate"}, {"poses", "p.yaml"}, {"out", false}}, "out: false is not a string"},
+        {{{"command", "flat-field"}, {"take", "yes"}}, "flat-field: take: \"yes\" is not true or false"},
+        {{{"command", "flat-field"}, {"take", true}, {"frames", 0}}, "flat-field: frames: 0 is outside 1..64"},
+        {{{"command", "flat-field"}, {"take", true}, {"frames", 2.5}},
+         "flat-field: frames: 2.5 is not a whole number 1..64"},
     };
     for (const auto& [request, error] : refused) {
         const json answer = hgdaemon::maintenance(sock, request);

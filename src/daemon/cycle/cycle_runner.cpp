@@ -3,9 +3,11 @@
 #include "cycle/image_archive.h"
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/align/pose_correction.h"
+#include "hullgauge/common/digest.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/station/cycle_rules.h"
+#include "hullgauge/store/result_reader.h"
 
 #include <cmath>
 
@@ -44,6 +46,23 @@ std::string calibrationIdentity(const station::DaemonConfig& cfg)
         identity += std::string(identity.empty() ? "" : ", ") + section + " " + date;
     }
     return identity;
+}
+
+/// A cycle's health as the plant link publishes it (docs/mqtt.md, topic `health`; the station is added there).
+nlohmann::json healthMessage(const station::InspectionRecord& record, const nlohmann::json& reference)
+{
+    const auto& health = *record.health;
+    return {{"time", store::formatUtc(record.startedUnixMs)},
+            {"cycle_id", record.cycleId},
+            {"serial", record.serial},
+            {"program", record.program},
+            {"purpose", std::string(enumName(record.purpose))},
+            {"figures", healthFiguresJson(health.figures)},
+            {"warnings", healthWarningsJson(health.warnings)},
+            {"warning_bits", vision::healthWarningBits(health.warnings)},
+            {"reference", reference.is_null() ? reference
+                                              : nlohmann::json{{"taken_unix_ms", reference["taken_unix_ms"]},
+                                                               {"time", reference["time"]}}}};
 }
 
 station::MasterDueState dueState(const station::MasteringDue& due)
@@ -86,6 +105,7 @@ CycleRunner::CycleRunner(PlcRegisters& registers, StationDevices& devices, Inspe
       config_(std::move(config)), sequencer_(config_->sequencer.retries)
 {
     masteringConfigured(*config_);
+    healthConfigured(*config_);
 }
 
 CycleRunner::~CycleRunner()
@@ -113,6 +133,7 @@ void CycleRunner::setConfig(std::shared_ptr<const station::DaemonConfig> config)
     std::lock_guard lock(mutex_);
     config_ = std::move(config);
     masteringConfigured(*config_);
+    healthConfigured(*config_);
 }
 
 station::SequencerState CycleRunner::state() const
@@ -225,6 +246,7 @@ void CycleRunner::showState(station::Verdict lastVerdict)
 void CycleRunner::run(std::stop_token stop)
 {
     stop_ = stop;
+    watchHealth();
     startDevices();
     while (!stop_.stop_requested()) serveBetweenCycles();
     devices_.showLamps(LampPattern::Off);
@@ -270,7 +292,7 @@ void CycleRunner::serveBetweenCycles()
         schedule(feed(SequencerEvent::FaultReset));
         recoverIfDue();
     }
-    const bool maintenanceQueued = calibration_.queued() || snapshot_.queued();
+    const bool maintenanceQueued = calibration_.queued() || snapshot_.queued() || flatField_.queued();
     auto wait = std::chrono::milliseconds(maintenanceQueued ? 0 : 200);
     if (recoverAt_)
         wait = std::clamp(std::chrono::duration_cast<std::chrono::milliseconds>(*recoverAt_ - clock_.now()),
@@ -284,6 +306,11 @@ void CycleRunner::serveBetweenCycles()
         if (state() == SequencerState::Fault)
             return snapshot_.refuse("the station went into fault before the snapshot was grabbed");
         return runSnapshot(std::move(*shot));
+    }
+    if (auto job = flatField_.take()) {
+        if (state() == SequencerState::Fault)
+            return flatField_.refuse("the station went into fault before the frames were grabbed");
+        return runFlatField(*job);
     }
     auto job = calibration_.take();
     if (!job) return;
@@ -518,10 +545,158 @@ void CycleRunner::runSnapshot(SnapshotJob job)
     if (!ran) snapshot_.requeue(std::move(job));
 }
 
+// ---- the station's health (docs/health.md, "In the daemon") ------------------
+
+// Under mutex_: a configuration whose reference file or switch differs from
+// what is watched replaces the monitor before the next cycle; the same file
+// (a reload after the flat-field action wrote it) keeps the one in use.
+void CycleRunner::healthConfigured(const station::DaemonConfig& cfg)
+{
+    auto& w = healthWatch_;
+    const auto& h = cfg.health;
+    if (w.configured && w.enabled == h.enabled && w.file == h.reference && w.sha256 == h.referenceSha256) return;
+    w.configured = true;
+    w.enabled = h.enabled;
+    w.file = h.reference;
+    w.sha256 = h.referenceSha256;
+    w.reference = h.referenceRead;
+    w.changed = true;
+}
+
+// Runner thread, between cycles: the inspection examines the next cycle's views with a monitor of the
+// reference in use (a new monitor: the dust survey starts again against the reference's own specks).
+void CycleRunner::watchHealth()
+{
+    bool enabled = false;
+    std::optional<vision::FlatField> reference;
+    std::filesystem::path file;
+    {
+        std::lock_guard lock(mutex_);
+        if (!healthWatch_.changed) return;
+        healthWatch_.changed = false;
+        enabled = healthWatch_.enabled;
+        reference = healthWatch_.reference;
+        file = healthWatch_.file;
+    }
+    auto log = hg::log::category("health");
+    if (!enabled) {
+        inspector_.watchHealth(nullptr);
+        healthAttention_ = false;
+        log->info("station health not watched (health.enabled: false)");
+        return;
+    }
+    inspector_.watchHealth(std::make_unique<vision::HealthMonitor>(reference.value_or(vision::FlatField{})));
+    if (reference)
+        log->info("station health watched against the flat-field reference {} taken {}", file.string(),
+                  store::formatUtc(reference->takenUnixMs));
+    else
+        log->info("station health watched without a flat-field reference ({} does not exist): the backlight, its "
+                  "uniformity and dust are not measured until one is taken (hullgauge ctl flat-field)",
+                  file.string());
+}
+
+// After the result is published: the journal, the lamps' attention, the status and the plant link.
+void CycleRunner::reportHealth(const Cycle& cycle)
+{
+    const auto& record = cycle.record;
+    if (!record.health) return;
+    const auto& limits = cycle.cfg->health.limits;
+    healthJournal_.report(*record.health, limits);
+    healthAttention_ = !record.health->warnings.empty();
+    nlohmann::json reference;
+    {
+        std::lock_guard lock(mutex_);
+        lastHealth_ = record.health;
+        lastHealthUnixMs_ = record.startedUnixMs;
+        lastHealthLimits_ = limits;
+        reference = referenceJson(healthWatch_.reference, healthWatch_.file);
+    }
+    if (healthSink_) healthSink_(healthMessage(record, reference));
+}
+
+nlohmann::json CycleRunner::health() const
+{
+    std::lock_guard lock(mutex_);
+    const auto& limits = lastHealth_ ? lastHealthLimits_ : config_->health.limits;
+    nlohmann::json limitsJson;
+    for (const auto& rule : healthFigureRules()) limitsJson[rule.key] = limits.*rule.limit;
+    nlohmann::json j{{"enabled", healthWatch_.enabled},
+                     {"limits", limitsJson},
+                     {"reference", referenceJson(healthWatch_.reference, healthWatch_.file)},
+                     {"reference_file", healthWatch_.file.string()},
+                     {"flat_field", flatField_.status()}};
+    if (!lastHealth_) {
+        j["figures"] = nullptr;
+        j["warnings"] = nlohmann::json::array();
+        j["states"] = nullptr;
+        j["time"] = nullptr;
+        return j;
+    }
+    j["figures"] = healthFiguresJson(lastHealth_->figures);
+    j["warnings"] = healthWarningsJson(lastHealth_->warnings);
+    j["states"] = healthStatesJson(lastHealth_->figures, limits);
+    j["time"] = store::formatUtc(lastHealthUnixMs_);
+    return j;
+}
+
+// The simulated line empties its nest for the flat-field's grabs (`sim-part none`, the part switch of
+// docs/daemon.md) and puts the part back after them; a simulation without it cannot.
+FlatFieldAction::Simulation CycleRunner::emptyFixture()
+{
+    FlatFieldAction::Simulation sim;
+    if (!simulation_) return sim;
+    auto shown = std::make_shared<std::string>();
+    sim.showEmpty = [this, shown] {
+        const auto parts = simulation_->parts();
+        if (std::find(parts.begin(), parts.end(), "none") == parts.end()) return false;
+        *shown = simulation_->part();
+        return simulation_->selectPart("none");
+    };
+    sim.restore = [this, shown] {
+        if (!shown->empty()) (void)simulation_->selectPart(*shown);
+    };
+    return sim;
+}
+
+// The flat-field reference (docs/health.md, "In the daemon"): frames of the empty fixture, production paused.
+void CycleRunner::runFlatField(FlatFieldJob job)
+{
+    FlatFieldAction::Taken taken;
+    const bool ran = runMaintenance([&](const station::DaemonConfig& cfg) {
+        // Between the frames: an abort ends it, and the runner counts as turning (the watchdog).
+        const auto cancelled = [this] {
+            lastLoopNs_ = clock_.nowNs();
+            return abortRequested_.load() || stop_.stop_requested();
+        };
+        taken = flatField_.run(job, devices_, cfg, clock_, emptyFixture(), cancelled);
+        return !taken.deviceFailed;
+    });
+    if (!ran) return flatField_.requeue(job);
+    if (taken.reference) {
+        std::string sha256;
+        try {
+            sha256 = sha256OfFile(taken.file);
+        } catch (const std::exception& e) {
+            hg::log::category("health")->warn("flat-field reference {}: {}", taken.file.string(), e.what());
+        }
+        {
+            std::lock_guard lock(mutex_);
+            healthWatch_.reference = taken.reference;
+            healthWatch_.file = taken.file;
+            healthWatch_.sha256 = sha256;
+            healthWatch_.changed = true;
+        }
+        watchHealth();
+    }
+    flatField_.finish(taken);
+}
+
 // ---- a cycle ----------------------------------------------------------------
 
 void CycleRunner::runCycle(const station::TriggerRequest& trigger)
 {
+    // A new reference or configuration is watched from this cycle on (the worker is idle now).
+    watchHealth();
     Cycle cycle;
     cycle.started = clock_.now();
     cycleStartNs_ = clock_.nowNs();
@@ -744,6 +919,7 @@ void CycleRunner::endCycle(Cycle& cycle, bool stopMotion)
     masteringJudged(cycle.record);
     commitAndPublish(cycle);
     report(cycle);
+    reportHealth(cycle);
     if (cycle.saveImages) archivePart(cycle);
     if (cycle.archiveFull) {
         images_.post([archive = archiveOf(cycle)]() mutable { archive.makeRoom(); });
@@ -779,6 +955,11 @@ void CycleRunner::recordOutcome(Cycle& cycle)
         record.landmarks = outcome.landmarks;
         record.correctionId = outcome.correctionId;
     }
+    // The station's health the views showed, whatever the verdict (docs/health.md, "In the daemon").
+    if (outcome.health)
+        record.health =
+            station::HealthRecord{*outcome.health, vision::healthWarnings(*outcome.health, cycle.cfg->health.limits)};
+    record.cycleId = store::newCycleId();
     record.cycleMs = static_cast<std::uint32_t>(std::lround(clock_.msSince(cycle.started)));
     // The cycle-time breakdown (docs/daemon.md): prepare runs on the pipeline's worker, mostly
     // while the fixture moves, so move + settle + grab + wait_for_verdict is the cycle, not the sum.

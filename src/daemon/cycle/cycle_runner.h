@@ -18,6 +18,7 @@
 #include "cycle/image_archive.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
+#include "cycle/station_health.h"
 #include "daemon_config.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
@@ -77,6 +78,26 @@ class CycleRunner {
     Status requestSnapshot(SnapshotJob job) { return snapshot_.request(std::move(job), state()); }
     /// The last snapshot: its status and its overlay (CameraSnapshot).
     const CameraSnapshot& snapshot() const { return snapshot_; }
+    /// Queues the flat-field reference (docs/health.md, "In the daemon"): like
+    /// a calibration, between cycles with production paused for the grabs; the
+    /// station's health is judged against it from the next cycle.
+    Status requestFlatField(FlatFieldJob job) { return flatField_.request(job, state()); }
+    /// The last flat-field action's status (FlatFieldAction::status).
+    nlohmann::json flatField() const { return flatField_.status(); }
+
+    /// The station's health for the maintenance status (docs/health.md, "In the
+    /// daemon"): `enabled`, the last examined cycle's `figures`, `warnings`,
+    /// `states` (each figure against its limit, in words) and `time`, the
+    /// `limits`, the `reference` in use (null without one), its file, and the
+    /// last `flat_field` action.
+    nlohmann::json health() const;
+    /// True while the last examined cycle showed a figure beyond its limit: the
+    /// lamps ask for attention (docs/lamps.md, docs/health.md).
+    bool healthAttention() const { return healthAttention_.load(); }
+    /// Called from the runner's thread with each examined cycle's health once
+    /// its result is published (the plant link's topic `health`, docs/mqtt.md).
+    /// Before start().
+    void setHealthSink(std::function<void(const nlohmann::json&)> sink) { healthSink_ = std::move(sink); }
 
     station::SequencerState state() const;
     /// True while the runner thread turns and no cycle runs longer than `watchdog.max_cycle_s`.
@@ -110,6 +131,11 @@ class CycleRunner {
     nlohmann::json masteringJson() const;
     void runCalibration(CalibrationJob job);
     void runSnapshot(SnapshotJob job);
+    void runFlatField(FlatFieldJob job);
+    FlatFieldAction::Simulation emptyFixture();
+    void healthConfigured(const station::DaemonConfig& cfg);
+    void watchHealth();
+    void reportHealth(const Cycle& cycle);
     bool runMaintenance(const std::function<bool(const station::DaemonConfig&)>& work);
 
     void runCycle(const station::TriggerRequest& trigger);
@@ -140,8 +166,10 @@ class CycleRunner {
     Clock& clock_;
     FixtureCalibration calibration_;
     CameraSnapshot snapshot_;
+    FlatFieldAction flatField_;
 
-    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_, program_
+    mutable std::mutex mutex_; // guards config_, sequencer_ reads from other threads, counters, lastCycle_, program_,
+                               // healthWatch_ and lastHealth_
     std::shared_ptr<const station::DaemonConfig> config_;
     station::CaptureSequencer sequencer_;
     std::uint64_t cycles_ = 0;
@@ -160,6 +188,21 @@ class CycleRunner {
     std::optional<station::MasteringDuePolicy> duePolicy_;
     std::string calibrationIdentity_; ///< the station's calibration as the configuration names it
     std::map<std::uint16_t, ProgramMastering> mastering_;
+    /// The station's health as it is watched (docs/health.md, "In the daemon"): from
+    /// the configuration, or the reference the flat-field action just took; the
+    /// monitor is replaced before the next cycle when `changed`.
+    struct HealthWatch {
+        bool configured = false;
+        bool enabled = false;
+        std::optional<vision::FlatField> reference;
+        std::filesystem::path file;
+        std::string sha256; ///< of the file the reference came from ('' none)
+        bool changed = true;
+    } healthWatch_;
+    /// The last examined cycle's health, its start time and the limits it was judged by.
+    std::optional<station::HealthRecord> lastHealth_;
+    std::int64_t lastHealthUnixMs_ = 0;
+    vision::HealthLimits lastHealthLimits_;
     /// Written by the last failed part's image job when it is done (ms; < 0 until then).
     std::shared_ptr<std::atomic<double>> lastImagesMs_;
 
@@ -167,6 +210,8 @@ class CycleRunner {
     bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
     std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
     bool archiveHadRoom_ = true;                 ///< the last part found min_free_mb free (logged on change)
+    HealthJournal healthJournal_;
+    std::function<void(const nlohmann::json&)> healthSink_;
 
     std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;
@@ -174,6 +219,7 @@ class CycleRunner {
     std::atomic<bool> abortRequested_{false};
     std::atomic<std::int64_t> lastLoopNs_{0};
     std::atomic<std::int64_t> cycleStartNs_{0}; ///< 0 when idle
+    std::atomic<bool> healthAttention_{false};
     ImageWriter images_;
     Worker worker_; ///< run(); last, so it ends before what it uses
 };

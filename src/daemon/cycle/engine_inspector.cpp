@@ -121,6 +121,46 @@ void applyCorrection(LoadedProgram& p, const station::PartProgramRef& ref)
     p.correction = std::move(set);
 }
 
+/// A landmark's surface forms the silhouette in a view whose line of sight
+/// grazes it: its normal within about 3° of the image plane there.
+bool grazes(const geometry::CameraModel& camera, const inspect::MapLandmark& lm)
+{
+    const geometry::Vec3 sight = (lm.position - camera.centre()).normalized();
+    return std::abs(sight.dot(lm.normal)) < 0.05;
+}
+
+/// The landmarks' silhouette edges in a prepared view, where the station's
+/// health reads the edge profile (docs/health.md, "In the daemon"): where the
+/// CAD outline runs beside each landmark in this camera when the inspection
+/// measures deviations (the outline points of docs/inspection.md, "Sub-voxel
+/// deviation"), else the landmark itself where the line of sight grazes it;
+/// the normal is the image of the landmark's outward normal there, as the
+/// sub-voxel step and the archive's marks take it. Projected at the nominal
+/// seat: a seated part's edge lies a few pixels along the normal, where the
+/// profile read finds it.
+std::vector<vision::EdgeProbe> edgeProbes(const inspect::SilhouetteView& view,
+                                          const std::vector<inspect::MapLandmark>& landmarks)
+{
+    std::vector<vision::EdgeProbe> probes;
+    for (std::size_t i = 0; i < landmarks.size(); ++i) {
+        const auto& lm = landmarks[i];
+        geometry::Vec3 at = lm.position;
+        if (view.outlines) {
+            if (i >= view.outlines->landmarks.size() || !view.outlines->landmarks[i]) continue;
+            at = view.outlines->landmarks[i]->graze;
+        } else if (!grazes(view.camera, lm)) {
+            continue;
+        }
+        const auto pixel = view.camera.project(at);
+        const auto tip = view.camera.project(at + 0.01 * lm.normal);
+        if (!pixel || !tip) continue;
+        const Eigen::Vector2d direction = *tip - *pixel;
+        if (direction.norm() < 1e-6) continue;
+        probes.push_back({*pixel, direction.normalized()});
+    }
+    return probes;
+}
+
 /// The bounds of every pixel the inspection reads through `camera`; empty
 /// when it reads none (the camera then sends whole frames).
 cv::Rect viewBounds(const inspect::Inspector& inspector, const geometry::CameraModel& camera)
@@ -143,9 +183,10 @@ class EngineInspector : public Inspector {
         current_ = program.ok() ? program.value() : nullptr;
         if (!current_) return program.status();
         const inspect::Inspector* inspector = current_->inspection.inspector.get();
-        pipeline_.begin([inspector, settings = segmentation_](const inspect::CapturedView& view) {
-            return inspector->prepareView(view, settings);
-        });
+        pipeline_.begin([inspector, settings = segmentation_](
+                            const inspect::CapturedView& view) { return inspector->prepareView(view, settings); },
+                        examination());
+        if (health_) health_->beginCycle();
         return Status::success();
     }
 
@@ -195,6 +236,13 @@ class EngineInspector : public Inspector {
 
     std::size_t seatViews() const override { return current_ ? current_->inspection.setup.seatViews : 0; }
 
+    // Between cycles: the worker is idle once the last cycle's views are examined.
+    void watchHealth(std::unique_ptr<vision::HealthMonitor> monitor) override
+    {
+        pipeline_.waitExamined();
+        health_ = std::move(monitor);
+    }
+
     // On the runner's thread, between a grab and the next move: waits for the
     // first views' preparation (started as each frame came in) and solves.
     std::optional<align::AlignmentResult> provisionalSeat() override
@@ -224,6 +272,7 @@ class EngineInspector : public Inspector {
             out.prepareTime = prepared.prepareTime;
             if (!prepared.error.empty()) {
                 out.error = prepared.error;
+                out.health = healthOfCycle();
                 views_.clear();
                 return out;
             }
@@ -257,6 +306,7 @@ class EngineInspector : public Inspector {
         } catch (...) {
             out.error = "the inspection failed";
         }
+        out.health = healthOfCycle();
         views_.clear();
         return out;
     }
@@ -268,6 +318,29 @@ class EngineInspector : public Inspector {
     }
 
   private:
+    /// The examination of the cycle's views for the station's health (docs/health.md,
+    /// "In the daemon"): on the pipeline's worker, after each view is prepared.
+    ViewPipeline::ExamineFn examination()
+    {
+        if (!health_) return nullptr;
+        return [monitor = health_.get(), landmarks = &current_->inspection.map->landmarks()](
+                   std::size_t index, const inspect::SilhouetteView& view) {
+            const vision::EdgeImage image{view.grey, view.threshold, view.objectIsDark, view.origin,
+                                          view.camera.imageSize()};
+            monitor->addView(index, image, edgeProbes(view, *landmarks));
+        };
+    }
+
+    /// The cycle's figures once its last view is examined (beside the traversal, so rarely waited for).
+    std::optional<vision::HealthFigures> healthOfCycle()
+    {
+        if (!health_) return std::nullopt;
+        pipeline_.waitExamined();
+        const vision::HealthFigures figures = health_->endCycle();
+        if (figures.views == 0) return std::nullopt;
+        return figures;
+    }
+
     void idle()
     {
         pipeline_.begin(nullptr);
@@ -397,6 +470,8 @@ class EngineInspector : public Inspector {
     std::map<std::uint16_t, LoadedProgram> loaded_;
     LoadedProgram* current_ = nullptr;
     std::vector<ViewEvidence> views_;
+    /// The station's health monitor (watchHealth); null: not watched.
+    std::unique_ptr<vision::HealthMonitor> health_;
     // Declared last: destroyed first, so its worker has stopped before the programs it prepares with go.
     ViewPipeline pipeline_;
 };

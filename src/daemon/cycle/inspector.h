@@ -10,12 +10,14 @@
 #include "hullgauge/common/status.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/station/result_record.h"
+#include "hullgauge/vision/health.h"
 #include "hullgauge/vision/manifest.h"
 #include "hullgauge/vision/outline.h"
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
@@ -79,6 +81,10 @@ struct InspectionOutcome {
     /// The seat is beyond the program's limits: nothing was inspected, the
     /// cycle ends with FAULT_CODE 32 (part-not-seated, docs/plc.md).
     bool seatingFault = false;
+    /// The station's health the cycle's views showed (docs/health.md, "In the
+    /// daemon"), examined beside the inspection; absent when the health is not
+    /// watched or no view was examined.
+    std::optional<vision::HealthFigures> health;
     Milliseconds processingTime{}; ///< preparation of every view plus the traversal
     Milliseconds prepareTime{};    ///< segmentation of the views (mostly while the fixture moved)
     Milliseconds traversalTime{};  ///< the goal-driven traversal after the last frame
@@ -126,6 +132,11 @@ class Inspector {
     virtual std::optional<align::AlignmentResult> provisionalSeat() { return std::nullopt; }
     /// Waits for every view to be processed and returns the verdict.
     virtual InspectionOutcome finish() = 0;
+    /// Examines every view of the next cycles with `monitor`, after its
+    /// preparation and off the path to the verdict, with the landmarks' edges
+    /// in it as probes (docs/health.md, "In the daemon"); null: not watched.
+    /// Between cycles only.
+    virtual void watchHealth(std::unique_ptr<vision::HealthMonitor> monitor) { (void)monitor; }
     /// Drops the cycle (abort).
     virtual void cancel() = 0;
 };

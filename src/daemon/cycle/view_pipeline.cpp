@@ -1,11 +1,25 @@
 #include "cycle/view_pipeline.h"
 
 #include "hullgauge/common/error.h"
+#include "hullgauge/common/log.h"
 
 #include <algorithm>
 #include <utility>
 
 namespace hg::daemon {
+namespace {
+
+/// A prepared view without its silhouette index: the camera, the frame's grey levels, the alignment's
+/// and the deviation's shares (shared, not copied) — what measuring the seat and examining the view read.
+inspect::SilhouetteView withoutIndex(const inspect::SilhouetteView& v)
+{
+    inspect::SilhouetteView out{v.camera, {}, v.grey, v.threshold, v.objectIsDark, v.alignment};
+    out.outlines = v.outlines;
+    out.origin = v.origin; // a region of the sensor: where its grey levels lie
+    return out;
+}
+
+} // namespace
 
 ViewPipeline::ViewPipeline(std::size_t capacity, Clock& clock) : capacity_(capacity), clock_(clock)
 {
@@ -27,15 +41,22 @@ void ViewPipeline::dropLocked(std::unique_lock<std::mutex>& lock)
     queue_.clear();
     ++cycle_;
     changed_.notify_all(); // a submit() waiting for room has room now
-    changed_.wait(lock, [this] { return !busy_; });
+    changed_.wait(lock, [this] { return !busy_ && !examining_; });
     slots_.clear();
 }
 
-void ViewPipeline::begin(PrepareFn prepare)
+void ViewPipeline::begin(PrepareFn prepare, ExamineFn examine)
 {
     std::unique_lock lock(mutex_);
     dropLocked(lock);
     prepare_ = std::move(prepare);
+    examine_ = std::move(examine);
+}
+
+void ViewPipeline::waitExamined()
+{
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [this] { return queue_.empty() && !busy_ && !examining_; });
 }
 
 void ViewPipeline::submit(inspect::CapturedView view)
@@ -91,8 +112,7 @@ std::optional<std::vector<inspect::SilhouetteView>> ViewPipeline::firstPrepared(
     for (std::size_t k = 0; k < count; ++k) {
         const Slot& s = slots_[k];
         if (!s.error.empty() || !s.view) return std::nullopt;
-        out.push_back({s.view->camera, {}, s.view->grey, s.view->threshold, s.view->objectIsDark, s.view->alignment});
-        out.back().origin = s.view->origin; // a region of the sensor: where its grey levels lie
+        out.push_back(withoutIndex(*s.view));
     }
     return out;
 }
@@ -142,7 +162,10 @@ void ViewPipeline::work(std::stop_token stop)
 
         lock.lock();
         busy_ = false;
+        std::optional<inspect::SilhouetteView> examined;
+        const ExamineFn examine = examine_;
         if (job.cycle == cycle_ && job.slot < slots_.size()) {
+            if (examine && prepared) examined = withoutIndex(*prepared);
             Slot& slot = slots_[job.slot];
             slot.view = std::move(prepared);
             slot.error = std::move(error);
@@ -150,6 +173,20 @@ void ViewPipeline::work(std::stop_token stop)
             slot.timing.finished = finished;
             slot.done = true;
         }
+        // Marked prepared before it is examined: the verdict's wait() is free to go.
+        examining_ = examined.has_value();
+        changed_.notify_all();
+        if (!examined) continue;
+        lock.unlock();
+        try {
+            examine(job.slot, *examined);
+        } catch (const std::exception& e) {
+            hg::log::category("inspect")->warn("view '{}' not examined for the station's health: {}", job.view.id,
+                                               e.what());
+        }
+        examined.reset();
+        lock.lock();
+        examining_ = false;
         changed_.notify_all();
     }
 }

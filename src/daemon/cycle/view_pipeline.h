@@ -12,9 +12,16 @@
 // the caller passes the preparation with begin() (the daemon passes
 // hg::inspect::Inspector::prepareView, tests a slow stand-in).
 //
-// Thread safety: begin/submit/wait/cancel are called by one thread (the cycle
-// runner); the worker runs the preparation function, which must be safe to run
-// beside that thread (prepareView is const and free of shared state).
+// Beside the preparation a cycle may examine each prepared view (the station's
+// health, docs/health.md "In the daemon"): the worker runs the examination
+// after it has marked the view prepared, so wait() — the verdict — never waits
+// for it; waitExamined() does, once the verdict is in.
+//
+// Thread safety: begin/submit/wait/waitExamined/cancel are called by one
+// thread (the cycle runner); the worker runs the preparation and examination
+// functions, which must be safe to run beside that thread (prepareView is const
+// and free of shared state; the examination's state is the caller's, read by it
+// only after waitExamined()).
 #pragma once
 
 #include "hullgauge/common/clock.h"
@@ -38,6 +45,10 @@ namespace hg::daemon {
 class ViewPipeline {
   public:
     using PrepareFn = std::function<inspect::SilhouetteView(const inspect::CapturedView&)>;
+    /// Examines view `index` (submission order) once prepared; the view comes
+    /// without its silhouette index (camera, grey levels, threshold, origin,
+    /// outlines: shared, not copied). What it throws is logged and dropped.
+    using ExamineFn = std::function<void(std::size_t index, const inspect::SilhouetteView& view)>;
 
     /// When a view went through the pipeline (for the latency breakdown and the tests).
     struct ViewTiming {
@@ -66,8 +77,9 @@ class ViewPipeline {
     ViewPipeline(const ViewPipeline&) = delete;
     ViewPipeline& operator=(const ViewPipeline&) = delete;
 
-    /// A new cycle prepared with `prepare`; whatever an earlier cycle left is dropped.
-    void begin(PrepareFn prepare);
+    /// A new cycle prepared with `prepare` and its views examined with
+    /// `examine` (none: not examined); whatever an earlier cycle left is dropped.
+    void begin(PrepareFn prepare, ExamineFn examine = nullptr);
     /// Queues a view of the current cycle. Returns at once while fewer than
     /// `capacity` views wait, else waits for the worker to take one.
     void submit(inspect::CapturedView view);
@@ -80,8 +92,12 @@ class ViewPipeline {
     /// nullopt when fewer were submitted or one of them failed; the cycle's
     /// views stay for wait().
     std::optional<std::vector<inspect::SilhouetteView>> firstPrepared(std::size_t count);
-    /// Drops the queued views and waits for the one in preparation to end (its
-    /// result is discarded), so the preparation function is no longer in use.
+    /// Waits until every view submitted is prepared and examined: after
+    /// wait(), the examination of the last view may still run beside the verdict.
+    void waitExamined();
+    /// Drops the queued views and waits for the one in preparation or
+    /// examination to end (its result is discarded), so the preparation and
+    /// examination functions are no longer in use.
     void cancel();
 
     std::size_t capacity() const { return capacity_; }
@@ -112,8 +128,10 @@ class ViewPipeline {
     std::deque<Job> queue_;
     std::vector<Slot> slots_;
     PrepareFn prepare_;
+    ExamineFn examine_;
     std::uint64_t cycle_ = 0; ///< increases on begin() and cancel(): stale results are discarded
     bool busy_ = false;       ///< the worker is preparing a view (outside the lock)
+    bool examining_ = false;  ///< the worker is examining a prepared view (outside the lock)
     Worker worker_;           ///< work(); last, so it ends before what it uses
 };
 

@@ -125,6 +125,25 @@ json paretoSeries(const fs::path& database, const httplib::Request& req)
     return answer;
 }
 
+/// The window of the health charts when the page names none: the last week.
+constexpr std::int64_t kHealthWindowMs = 7LL * 24 * 3600 * 1000;
+
+/// The station's health figures of a window (docs/hmi.md, "JSON API"; docs/health.md, "In the daemon"):
+/// the store's rows, oldest first, the newest `limit` of them.
+json healthSeries(const fs::path& database, const httplib::Request& req, std::int64_t nowMs)
+{
+    store::HealthQuery q;
+    q.sinceMs =
+        req.has_param("since") ? store::parseUtc(req.get_param_value("since"), "since") : nowMs - kHealthWindowMs;
+    if (req.has_param("until")) q.untilMs = store::parseUtc(req.get_param_value("until"), "until");
+    q.limit = static_cast<int>(intParam(req, "limit", 1, 20000).value_or(5000));
+    const auto rows = store::ResultReader(database).health(q);
+    return {{"since", store::formatUtc(*q.sinceMs)},
+            {"until", q.untilMs ? json(store::formatUtc(*q.untilMs)) : json()},
+            {"cycles", rows.size()},
+            {"rows", rows}};
+}
+
 /// A download holds at most this many cycles; `hullgauge export` has no limit.
 constexpr std::int64_t kMaxExportCycles = 20000;
 
@@ -608,6 +627,13 @@ void HmiServer::routeApi()
     server_->Get("/api/pareto", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendJson(res, paretoSeries(config()->results.database, req));
                  }));
+    // The maintenance page's health charts: the stored figures and the station's health now (its status).
+    server_->Get("/api/health", api([this](const httplib::Request& req, httplib::Response& res) {
+                     json answer = healthSeries(config()->results.database, req, clock_.wallMs());
+                     const json now = status();
+                     answer["now"] = now.contains("health") ? now["health"] : json();
+                     sendJson(res, answer);
+                 }));
     server_->Get("/api/export", api([this](const httplib::Request& req, httplib::Response& res) {
                      sendExport(config()->results.database, req, res);
                  }));
@@ -664,6 +690,7 @@ void HmiServer::routeMaintenance()
                 {"sim-part", {Permission::Operate, "setting.sim-part"}},
                 {"purpose", {Permission::Operate, "setting.purpose"}},
                 {"calibrate", {Permission::Calibration, "calibration.run"}},
+                {"flat-field", {Permission::Calibration, "calibration.flat-field"}},
                 {"reload", {Permission::Settings, "setting.reload"}}};
             const auto command = body["command"].get<std::string>();
             const auto offered = kOffered.find(command);

@@ -70,6 +70,13 @@ json countersMessage(const std::string& stationId, const ResultCounters& c, std:
             {"faults", c.faults}};
 }
 
+json healthMessage(const json& health, const std::string& stationId)
+{
+    json message = health;
+    message["station"] = stationId;
+    return message;
+}
+
 namespace {
 
 /// One connection to the broker: a libmosquitto client made for it and
@@ -300,6 +307,27 @@ json MqttPublisher::status() const
     return j;
 }
 
+void MqttPublisher::publishHealth(json health)
+{
+    std::lock_guard lock(healthMutex_);
+    health_ = std::move(health);
+}
+
+std::optional<json> MqttPublisher::takeHealth()
+{
+    std::lock_guard lock(healthMutex_);
+    std::optional<json> health;
+    health.swap(health_);
+    return health;
+}
+
+// A health message the broker did not take goes out with the next session, unless a newer one came.
+void MqttPublisher::keepHealth(json health)
+{
+    std::lock_guard lock(healthMutex_);
+    if (!health_) health_ = std::move(health);
+}
+
 void MqttPublisher::setStatus(bool connected, const std::string& error)
 {
     std::lock_guard lock(statusMutex_);
@@ -383,6 +411,11 @@ void MqttPublisher::serve(ResultOutbox& outbox, std::stop_token stop)
         marks.mark(outbox, session);
         counters_ += outbox.countAfter(counted_, counted_);
         ok = publishLatest(session, state_(), counters_) && sendWaiting(session, outbox);
+        // The station's health: retained, the newest only (docs/mqtt.md, topic `health`).
+        if (auto health = ok ? takeHealth() : std::nullopt) {
+            ok = session.publish(config_.topic("health"), healthMessage(*health, config_.stationId), true);
+            if (!ok) keepHealth(std::move(*health));
+        }
         // For `ctl status`: counted twice a second, not at every turn (a long backlog costs a scan).
         if (clock_.now() - countedPendingAt > std::chrono::milliseconds(500)) {
             pending_ = outbox.pendingCount();

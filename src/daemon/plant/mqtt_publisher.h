@@ -21,6 +21,7 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 namespace hg::daemon {
@@ -30,6 +31,8 @@ nlohmann::json resultMessage(const store::OutboxEntry& entry, const std::string&
 nlohmann::json stateMessage(const std::string& stationId, const std::string& state, std::int64_t unixMs);
 nlohmann::json countersMessage(const std::string& stationId, const store::ResultCounters& counters,
                                std::int64_t unixMs);
+/// A cycle's health as the cycle runner reports it, with the station (docs/mqtt.md, topic `health`).
+nlohmann::json healthMessage(const nlohmann::json& health, const std::string& stationId);
 
 class MqttPublisher {
   public:
@@ -49,6 +52,10 @@ class MqttPublisher {
     void stop();
     /// For `ctl status`: connected, results waiting, the last error.
     nlohmann::json status() const;
+    /// A cycle's health (docs/mqtt.md, topic `health`), sent retained with the
+    /// configured QoS as soon as the broker is connected; while it is not, only
+    /// the newest waits (the figures' history is in the store). Thread-safe.
+    void publishHealth(nlohmann::json health);
     /// Connection attempts since the start: one at once, then one after every
     /// back-off (docs/mqtt.md, "Failures").
     std::int64_t connectionAttempts() const { return attempts_.load(); }
@@ -58,6 +65,8 @@ class MqttPublisher {
     void serve(store::ResultOutbox& outbox, std::stop_token stop);
     void waitBeforeRetry(store::ResultOutbox* outbox, std::stop_token stop);
     void setStatus(bool connected, const std::string& error);
+    std::optional<nlohmann::json> takeHealth();
+    void keepHealth(nlohmann::json health);
 
     const station::MqttConfig config_;
     const std::filesystem::path database_;
@@ -75,6 +84,9 @@ class MqttPublisher {
     std::string lastError_;
     std::atomic<std::int64_t> pending_{0};
     std::atomic<std::int64_t> attempts_{0};
+
+    std::mutex healthMutex_;
+    std::optional<nlohmann::json> health_; ///< the newest health not yet sent
 
     Worker worker_; ///< run(); last, so it ends before what it uses
 };

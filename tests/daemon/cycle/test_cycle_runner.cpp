@@ -6,16 +6,20 @@
 // clock passes only when the test moves it (settle times pass at once).
 #include "cycle/cycle_runner.h"
 #include "cycle/engine_inspector.h"
+#include "hgtest/log_capture.h"
 #include "hgtest/manual_clock.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hullgauge/align/alignment.h"
+#include "hullgauge/calib/flat_field.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/inspect/inspector.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/model/part_program.h"
 #include "hullgauge/sim/renderer.h"
+#include "hullgauge/store/result_outbox.h"
+#include "hullgauge/store/result_reader.h"
 
 #include <algorithm>
 #include <cmath>
@@ -182,6 +186,7 @@ class PassingInspector : public Inspector {
         out.alignment = alignment;
         out.seatingFault = seatingFault;
         out.pass = !seatingFault;
+        out.health = health;
         for (const char* id : {"A", "B", "C"})
             out.landmarks.push_back({id,
                                      seatingFault ? inspect::LandmarkStatus::NotInspected : inspect::LandmarkStatus::Ok,
@@ -201,6 +206,8 @@ class PassingInspector : public Inspector {
     }
 
     std::optional<align::AlignmentResult> alignment;
+    /// The station's health the views "showed" (none: not watched).
+    std::optional<vision::HealthFigures> health;
     /// The release of the program "loaded" (none: a draft).
     std::optional<station::ProgramRelease> release;
     bool seatingFault = false;
@@ -321,6 +328,104 @@ class CycleRunnerTest : public ::testing::Test {
     std::unique_ptr<CycleRunner> runner;
     std::atomic<int> readyCalls{0};
 };
+
+/// Figures a station in good order shows: every one within the default limits (vision::HealthLimits).
+vision::HealthFigures goodFigures()
+{
+    vision::HealthFigures f;
+    f.backlight = 0.97;
+    f.uniformity = 0.02;
+    f.dustSpecks = 1;
+    f.edgeWidthPx = 1.4;
+    f.contrast = 0.85;
+    f.noise = 0.006;
+    f.predictedSigmaPx = 0.05;
+    f.views = 3;
+    f.probes = 6;
+    return f;
+}
+
+// docs/health.md, "In the daemon", with figures built by hand: each cycle's
+// health is stored beside its inspection, its warnings are HEALTH_WARNINGS
+// (146, a bit per figure) with the result, the journal warns when a figure
+// crosses its limit and says when it is back, the plant link gets each
+// cycle's message, the status shows it and the lamps are asked for attention
+// while a warning stands.
+TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAtItsLimits)
+{
+    std::mutex sinkMutex;
+    std::vector<nlohmann::json> published;
+    hgtest::LogCapture journal("health");
+    const auto publishedCount = [&] {
+        std::lock_guard lock(sinkMutex);
+        return published.size();
+    };
+    inspector.health = goodFigures();
+    runner = std::make_unique<CycleRunner>(registers, devices, inspector, store, config, clock);
+    runner->setHealthSink([&](const nlohmann::json& m) {
+        std::lock_guard lock(sinkMutex);
+        published.push_back(m);
+    });
+    runner->start([] {});
+    ASSERT_TRUE(eventually([&] { return at(reg::Status) == 0; }));
+    trigger(1);
+    ASSERT_TRUE(eventually([&] { return done(1); }));
+    EXPECT_EQ(at(reg::HealthWarnings), 0);
+    // The journal, the attention and the plant link follow the result's publication.
+    ASSERT_TRUE(eventually([&] { return publishedCount() == 1; }));
+    EXPECT_FALSE(runner->healthAttention());
+
+    // A dimmer backlight (below 0.80 of the reference) and a blurred edge (wider than 3 px).
+    auto worn = goodFigures();
+    worn.backlight = 0.75;
+    worn.edgeWidthPx = 3.5;
+    worn.dustSpecks = vision::kNoFigure; // not measured this cycle
+    inspector.health = worn;
+    trigger(2);
+    ASSERT_TRUE(eventually([&] { return done(2); }));
+    EXPECT_EQ(at(reg::HealthWarnings), (1 << 0) | (1 << 3)); // backlight, focus
+    ASSERT_TRUE(eventually([&] { return publishedCount() == 2; }));
+    EXPECT_TRUE(runner->healthAttention());
+    EXPECT_EQ(journal.count(spdlog::level::warn, "backlight 0.75 of the reference — below limit 0.80"), 1)
+        << journal.text();
+    EXPECT_EQ(journal.count(spdlog::level::warn, "focus: edge width 3.50 px (10-90 %) — above limit 3.00"), 1)
+        << journal.text();
+    const auto status = runner->health();
+    EXPECT_EQ(status["warnings"], nlohmann::json::array({"backlight", "focus"}));
+    EXPECT_EQ(status["figures"]["backlight"], 0.75);
+    EXPECT_TRUE(status["figures"]["dust_specks"].is_null());
+    EXPECT_EQ(status["states"][2]["sentence"], "dust not measured");
+    EXPECT_TRUE(status["states"][2]["within"].is_null());
+    EXPECT_EQ(status["states"][4]["within"], true);
+
+    // The same again warns no more; back within, the journal says so once.
+    trigger(3);
+    ASSERT_TRUE(eventually([&] { return done(3) && publishedCount() == 3; }));
+    inspector.health = goodFigures();
+    trigger(4);
+    ASSERT_TRUE(eventually([&] { return done(4); }));
+    EXPECT_EQ(at(reg::HealthWarnings), 0);
+    ASSERT_TRUE(eventually([&] { return publishedCount() == 4; }));
+    EXPECT_FALSE(runner->healthAttention());
+    EXPECT_EQ(journal.count(spdlog::level::warn, "backlight"), 1) << journal.text();
+    EXPECT_EQ(journal.count(spdlog::level::info, "back within its limit"), 2) << journal.text();
+
+    // The store: one health row per cycle, with its inspection's id.
+    const auto rows = store::ResultReader(dir / "results.db").health({});
+    ASSERT_EQ(rows.size(), 4u);
+    EXPECT_EQ(rows[1]["inspection_id"], 2);
+    EXPECT_EQ(rows[1]["backlight"], 0.75);
+    EXPECT_EQ(rows[1]["warnings"], nlohmann::json::array({"backlight", "focus"}));
+    EXPECT_EQ(rows[3]["warnings"], nlohmann::json::array());
+    // The plant link's messages, one per cycle, with the result's cycle id.
+    std::lock_guard lock(sinkMutex);
+    EXPECT_EQ(published[1]["warnings"], nlohmann::json::array({"backlight", "focus"}));
+    EXPECT_EQ(published[1]["warning_bits"], 9);
+    EXPECT_EQ(published[1]["serial"], "");
+    auto outbox = store::ResultOutbox(dir / "results.db").pending(1, 1);
+    ASSERT_EQ(outbox.size(), 1u);
+    EXPECT_EQ(published[1]["cycle_id"], outbox[0].cycleId);
+}
 
 TEST_F(CycleRunnerTest, FailTheFirstMovePassTheRetry)
 {
@@ -1130,12 +1235,14 @@ class SimulatedLine {
         renderer_ = std::make_unique<sim::SilhouetteRenderer>(
             std::vector<model::TriangleMesh>{model::loadMesh(meshes.at("nominal"))});
         devices_.render = [this](const geometry::FixturePose& pose) {
-            return renderer_->render(station_.cameraAt(pose), options_);
+            // The empty nest shows the bare backlight (`sim-part none`).
+            return (nest_.empty ? backlight_ : *renderer_).render(station_.cameraAt(pose), options_);
         };
         inspector_ = makeEngineInspector(*config_);
         store_ = std::make_unique<store::ResultStore>(dir_ / "results.db");
         registers_.setKnownPrograms({1});
         runner_ = std::make_unique<CycleRunner>(registers_, devices_, *inspector_, *store_, config_, clock_);
+        runner_->setSimulation(&nest_);
         runner_->start([] {});
         return eventually([&] { return registers_.snapshot()[reg::Status] == 0; }, 60s);
     }
@@ -1159,7 +1266,27 @@ class SimulatedLine {
             return false;
         }
     }
+    /// The simulated line's nest: the nominal part or, when it can (`canEmpty`), nothing (`sim-part none`).
+    class Nest : public SimulationControl {
+      public:
+        std::vector<std::string> parts() const override
+        {
+            return canEmpty ? std::vector<std::string>{"nominal", "none"} : std::vector<std::string>{"nominal"};
+        }
+        std::string part() const override { return empty ? "none" : "nominal"; }
+        bool selectPart(const std::string& name) override
+        {
+            if (name != "nominal" && !(name == "none" && canEmpty)) return false;
+            empty = name == "none";
+            return true;
+        }
+        std::atomic<bool> canEmpty{true};
+        std::atomic<bool> empty{false};
+    };
+
     CycleRunner& runner() { return *runner_; }
+    Nest& nest() { return nest_; }
+    const sim::RenderOptions& renderOptions() const { return options_; }
     store::ResultStore& store() { return *store_; }
     PlcRegisters& registers() { return registers_; }
     ManualClock& clock() { return clock_; }
@@ -1181,6 +1308,8 @@ class SimulatedLine {
     geometry::Station station_;
     sim::RenderOptions options_;
     std::unique_ptr<sim::SilhouetteRenderer> renderer_;
+    const sim::SilhouetteRenderer backlight_{}; ///< nothing in front of the backlight
+    Nest nest_;
     ManualClock clock_;
     ScriptedDevices devices_{clock_};
     std::unique_ptr<Inspector> inspector_;
@@ -1473,6 +1602,101 @@ TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)
     ASSERT_EQ(refused.records.size(), 1u);
     EXPECT_EQ(judged(refused.records[0]), judged(whole.records[0]));
     EXPECT_EQ(refused.records[0]["verdict"], "fail");
+}
+
+/// The flat-field action's end: done or failed (its status).
+nlohmann::json flatFieldEnded(SimulatedLine& line)
+{
+    nlohmann::json status;
+    EXPECT_TRUE(eventually(
+        [&] {
+            status = line.runner().flatField();
+            return status.value("state", "") == "done" || status.value("state", "") == "failed";
+        },
+        60s));
+    return status;
+}
+
+// docs/health.md, "In the daemon", on the simulated line (config/sim): the
+// maintenance action `flat-field` grabs whole frames of the empty nest (the
+// simulation shows none while it grabs and puts the part back after), writes
+// the reference beside the station file — its levels the backlight the
+// simulated camera renders, background_level of full scale, within one grey
+// level — and the cycles after it are judged against it: their backlight
+// 1.0 of the reference, every figure within its limit, one health row each.
+TEST(StationHealth, TheFlatFieldIsTakenOfTheEmptyNestAndTheNextCyclesAreJudgedAgainstIt)
+{
+    SimulatedLine line;
+    ASSERT_TRUE(line.start());
+    const auto before = line.cycle();
+    EXPECT_EQ(before["verdict"], "pass");
+    // Without a reference the backlight is not measured; the edges are.
+    auto rows = store::ResultReader(line.store().file()).health({});
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_TRUE(rows[0]["backlight"].is_null()) << rows[0].dump();
+    EXPECT_TRUE(line.runner().health()["reference"].is_null());
+
+    ASSERT_TRUE(line.runner().requestFlatField({4}).ok());
+    const auto status = flatFieldEnded(line);
+    ASSERT_EQ(status.value("state", ""), "done") << status.dump();
+    EXPECT_EQ(line.nest().part(), "nominal") << "the part is back in the nest after the grabs";
+    const auto file = line.folder() / "flat-field.json";
+    EXPECT_EQ(status["file"], file.string());
+    ASSERT_TRUE(fs::exists(file));
+    const vision::FlatField reference = calib::readFlatField(file);
+    EXPECT_EQ(reference.sensor, cv::Size(1280, 960));
+    double darkest = 0, brightest = 0;
+    cv::minMaxLoc(reference.level, &darkest, &brightest);
+    const double background = line.renderOptions().backgroundLevel * 255.0;
+    EXPECT_NEAR(darkest * 255.0, background, 1.0);
+    EXPECT_NEAR(brightest * 255.0, background, 1.0);
+    EXPECT_EQ(line.runner().health()["reference"]["taken_unix_ms"], reference.takenUnixMs);
+
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(line.cycle()["verdict"], "pass");
+    rows = store::ResultReader(line.store().file()).health({});
+    ASSERT_EQ(rows.size(), 4u);
+    // What the simulated camera renders (config/sim's camera.driver): the contrast is
+    // background_level − object_level, the noise noise_sigma grey levels, and the edge a step
+    // blurred by σ = blur_sigma_px and integrated over the pixel (variance 1/12 px²), whose
+    // 10–90 % width is 2·Φ⁻¹(0.9)·σ_total.
+    const auto& render = line.renderOptions();
+    const double width = 2.5631031310892007 * std::sqrt(render.blurSigmaPx * render.blurSigmaPx + 1.0 / 12.0);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        SCOPED_TRACE(rows[k].dump());
+        if (k > 0) {
+            ASSERT_TRUE(rows[k]["backlight"].is_number());
+            EXPECT_NEAR(rows[k]["backlight"].get<double>(), 1.0, 0.01);
+            EXPECT_LT(rows[k]["uniformity"].get<double>(), 0.03);
+        }
+        EXPECT_EQ(rows[k]["warnings"], nlohmann::json::array());
+        EXPECT_NEAR(rows[k]["contrast"].get<double>(), render.backgroundLevel - render.objectLevel, 0.01);
+        EXPECT_NEAR(rows[k]["noise"].get<double>(), render.noiseSigma / 255.0, 0.15 * render.noiseSigma / 255.0);
+        EXPECT_NEAR(rows[k]["edge_width_px"].get<double>(), width, 0.2);
+    }
+    EXPECT_EQ(line.registers().snapshot()[reg::HealthWarnings], 0);
+    EXPECT_FALSE(line.runner().healthAttention());
+}
+
+// A nest that cannot be emptied (on a station: the operator left the part in):
+// the reference is refused with buildFlatField's reason, nothing is written,
+// and production goes on as before.
+TEST(StationHealth, AFlatFieldOfANestThatIsNotEmptyIsRefusedWithTheReasonAndNothingWritten)
+{
+    SimulatedLine line;
+    ASSERT_TRUE(line.start());
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    line.nest().canEmpty = false;
+    ASSERT_TRUE(line.runner().requestFlatField({2}).ok());
+    const auto status = flatFieldEnded(line);
+    ASSERT_EQ(status.value("state", ""), "failed") << status.dump();
+    EXPECT_NE(status.value("error", "").find("the reference was refused"), std::string::npos) << status.dump();
+    EXPECT_FALSE(fs::exists(line.folder() / "flat-field.json"));
+    EXPECT_TRUE(line.runner().health()["reference"].is_null());
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    // A request out of range is refused at once, naming it.
+    const Status refused = line.runner().requestFlatField({65});
+    EXPECT_FALSE(refused.ok());
+    EXPECT_NE(refused.message().find("frames: 65 is outside 1..64"), std::string::npos) << refused.message();
 }
 
 } // namespace

@@ -7,6 +7,7 @@
 #include "cycle/view_pipeline.h"
 #include "daemon_config.h"
 #include "hgtest/paths.h"
+#include "hullgauge/common/error.h"
 #include "hullgauge/model/mesh_io.h"
 #include "hullgauge/sim/renderer.h"
 
@@ -14,6 +15,7 @@
 #include <chrono>
 #include <future>
 #include <gtest/gtest.h>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <thread>
@@ -194,6 +196,70 @@ TEST(ViewPipeline, CancelDropsQueuedViewsAndTheNextCycleSeesOnlyItsOwn)
     EXPECT_EQ(prepared.ids, std::vector<std::string>{"v9"});
     EXPECT_EQ(fresh.load(), 1);
     EXPECT_LE(calls.load(), 1);
+}
+
+// The station's health (docs/health.md, "In the daemon"): each view is
+// examined after it is marked prepared, so the verdict's wait() returns while
+// the last view's examination still runs; waitExamined() waits for it. The
+// examination gets the prepared view's camera and grey levels, in submission order.
+TEST(ViewPipeline, EachViewIsExaminedAfterItIsPreparedAndTheVerdictDoesNotWaitForIt)
+{
+    std::atomic<int> calls{0};
+    std::promise<void> lastStarted, releaseLast;
+    auto lastReleased = releaseLast.get_future().share();
+    std::mutex mutex;
+    std::vector<std::size_t> examined;
+    std::vector<int> greyWidths;
+    ViewPipeline pipeline(2);
+    pipeline.begin(
+        [&calls](const CapturedView& v) {
+            ++calls;
+            SilhouetteView s{v.camera, hg::inspect::SilhouetteIndex(v.frame.size())};
+            s.grey = v.frame;
+            return s;
+        },
+        [&](std::size_t index, const SilhouetteView& v) {
+            if (index == 2) {
+                lastStarted.set_value();
+                lastReleased.wait();
+            }
+            std::lock_guard lock(mutex);
+            examined.push_back(index);
+            greyWidths.push_back(v.grey.cols);
+        });
+    for (int k = 0; k < 3; ++k) pipeline.submit(view(k));
+    lastStarted.get_future().wait();
+    // The last view's examination holds: the verdict's wait is free all the same.
+    auto prepared = pipeline.wait();
+    EXPECT_EQ(prepared.views.size(), 3u);
+    EXPECT_TRUE(prepared.error.empty());
+    {
+        std::lock_guard lock(mutex);
+        EXPECT_EQ(examined, (std::vector<std::size_t>{0, 1}));
+    }
+    auto examinedAll = std::async(std::launch::async, [&] { pipeline.waitExamined(); });
+    EXPECT_EQ(examinedAll.wait_for(50ms), std::future_status::timeout) << "waitExamined waits for the last view";
+    releaseLast.set_value();
+    examinedAll.get();
+    std::lock_guard lock(mutex);
+    EXPECT_EQ(examined, (std::vector<std::size_t>{0, 1, 2}));
+    EXPECT_EQ(greyWidths, (std::vector<int>{64, 64, 64}));
+    EXPECT_EQ(calls, 3);
+}
+
+// An examination that throws is logged and dropped: the cycle's verdict is not its business.
+TEST(ViewPipeline, AnExaminationThatThrowsLeavesTheCycleAsItWas)
+{
+    std::atomic<int> calls{0};
+    ViewPipeline pipeline(2);
+    pipeline.begin(countingPreparation(calls),
+                   [](std::size_t, const SilhouetteView&) { throw hg::ArgumentError("scripted examination failure"); });
+    pipeline.submit(view(0));
+    pipeline.submit(view(1));
+    const auto prepared = pipeline.wait();
+    pipeline.waitExamined();
+    EXPECT_EQ(prepared.views.size(), 2u);
+    EXPECT_TRUE(prepared.error.empty());
 }
 
 TEST(ViewPipeline, QueueIsBounded)

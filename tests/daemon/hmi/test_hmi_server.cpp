@@ -582,6 +582,72 @@ TEST_F(HmiServerTest, MaintenanceNeedsASignedInSessionAndItsCsrfToken)
     EXPECT_EQ(stale->status, 401);
 }
 
+// The maintenance page's health charts (docs/hmi.md, "JSON API"; docs/health.md):
+// the store's health rows of the window, oldest first, read by whoever reaches
+// the page (no sign-in, as every reading); the station's health now from the
+// main loop's status; the flat-field reference asked for by a signed-in engineer.
+TEST_F(HmiServerTest, TheHealthChartsReadTheStoredFiguresOfAWindowAndTheStationsHealthNow)
+{
+    {
+        store::ResultStore store(config->results.database);
+        const auto commit = [&](std::uint16_t seq, const char* utc, double backlight,
+                                std::vector<vision::HealthFigure> warnings) {
+            auto r = record(seq, station::Verdict::Pass, "H-" + std::to_string(seq));
+            r.startedUnixMs = store::parseUtc(utc, "test");
+            r.health = station::HealthRecord{};
+            r.health->figures.backlight = backlight;
+            r.health->figures.edgeWidthPx = 1.25;
+            r.health->warnings = std::move(warnings);
+            return store.commit(r);
+        };
+        // Before the default window (the last 7 days before the clock's 2026-03-02T08:00Z), and in it.
+        commit(10, "2026-02-20T12:00:00", 0.99, {});
+        commit(11, "2026-03-01T12:00:00", 0.5, {vision::HealthFigure::Backlight});
+        commit(12, "2026-03-01T12:01:00", 0.98, {});
+    }
+    start();
+    const json now{{"enabled", true}, {"warnings", json::array()}, {"reference", nullptr}, {"flat_field", nullptr}};
+    auto status = json{{"ok", true}, {"sequencer", {{"state", "ready"}}}, {"plc", {{"status", 0}}}, {"health", now}};
+    loop->setStatus(status);
+
+    const auto week = getJson("/api/health");
+    EXPECT_EQ(week["since"], "2026-02-23T08:00:00.000Z");
+    EXPECT_TRUE(week["until"].is_null());
+    EXPECT_EQ(week["cycles"], 2);
+    ASSERT_EQ(week["rows"].size(), 2u);
+    EXPECT_EQ(week["rows"][0]["time"], "2026-03-01T12:00:00.000Z");
+    EXPECT_EQ(week["rows"][0]["backlight"], 0.5);
+    EXPECT_EQ(week["rows"][0]["warnings"], json::array({"backlight"}));
+    EXPECT_TRUE(week["rows"][0]["dust_specks"].is_null());
+    EXPECT_EQ(week["rows"][1]["backlight"], 0.98);
+    EXPECT_EQ(week["rows"][1]["edge_width_px"], 1.25);
+    EXPECT_EQ(week["now"], now);
+
+    const auto all = getJson("/api/health?since=2026-01-01&until=2026-03-01T12:00:30Z");
+    ASSERT_EQ(all["rows"].size(), 2u);
+    EXPECT_EQ(all["rows"][0]["backlight"], 0.99);
+    EXPECT_EQ(all["rows"][1]["backlight"], 0.5);
+    EXPECT_EQ(all["until"], "2026-03-01T12:00:30.000Z");
+    EXPECT_EQ(getJson("/api/health?since=2026-01-01&limit=1")["rows"][0]["backlight"], 0.98);
+    EXPECT_NE(getJson("/api/health?since=yesterday", 400)["error"].get<std::string>().find("since"), std::string::npos);
+    EXPECT_NE(getJson("/api/health?limit=0", 400)["error"].get<std::string>().find("limit"), std::string::npos);
+
+    // The flat-field reference: a signed-in engineer's maintenance command, handed on with who asked.
+    const std::string body = R"({"command": "flat-field", "take": true, "frames": 4})";
+    auto anonymous = client->Post("/api/maintenance", body, "application/json");
+    ASSERT_TRUE(anonymous);
+    EXPECT_EQ(anonymous->status, 401);
+    const auto [cookie, csrf] = signIn();
+    auto taken =
+        client->Post("/api/maintenance", {{"Cookie", cookie}, {"X-CSRF-Token", csrf}}, body, "application/json");
+    ASSERT_TRUE(taken);
+    EXPECT_EQ(taken->status, 200) << taken->body;
+    auto handed = loop->commands().back();
+    EXPECT_EQ(handed["caller"]["role"], "engineer");
+    handed.erase("caller");
+    EXPECT_EQ(handed, json::parse(body));
+}
+
 // The maintenance page's camera frame (docs/hmi.md, "Maintenance"): asked for
 // by a signed-in engineer through the loop, shown to whoever reads the page.
 TEST_F(HmiServerTest, TheCameraSnapshotIsAskedForSignedInAndServedAsPng)

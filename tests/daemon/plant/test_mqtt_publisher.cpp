@@ -250,5 +250,65 @@ TEST(MqttPublisher, AStoreThatTakesNoWritesKeepsTheSessionAndSendsNothingTwice)
     EXPECT_EQ(publisher.connectionAttempts(), 1);
 }
 
+// docs/mqtt.md, topic `health`: each cycle's health goes to
+// hullgauge/<station>/health with the station added, retained, with the
+// configured QoS. While the broker is away only the newest waits (the history
+// is the store's): started after two messages, the broker gets the second
+// alone, a subscriber that comes later gets it as the retained message, and a
+// message published while connected follows at once.
+TEST(MqttPublisher, TheHealthGoesOutRetainedTheNewestWhenTheBrokerComesBack)
+{
+    hgtest::TempDir dir;
+    const auto database = dir / "results.db";
+    {
+        store::ResultStore created(database);
+    }
+    const int port = hgdaemon::freePort();
+    station::MqttConfig config;
+    const auto yaml = "mqtt: {url: 'mqtt://127.0.0.1:" + std::to_string(port) +
+                      "', station_id: gauge-7, qos: 1, retry_min_s: 0.2, retry_max_s: 0.5}\n";
+    station::parseMqtt(ConfigNode::parse(yaml, (dir / "hullgauged.yaml").string())["mqtt"], dir.path(), config);
+    MqttPublisher publisher(
+        config, database, [] { return std::string("ready"); }, Clock::steady());
+    const auto health = [](const char* serial, const char* warning) {
+        return nlohmann::json{{"serial", serial},
+                              {"figures", {{"backlight", 0.5}, {"dust_specks", nullptr}}},
+                              {"warnings", nlohmann::json::array({warning})}};
+    };
+    publisher.publishHealth(health("OLDER", "backlight"));
+    publisher.publishHealth(health("NEWEST", "dust"));
+
+    const auto conf = hgtest::writeFile(dir / "mosquitto.conf", "listener " + std::to_string(port) +
+                                                                    " 127.0.0.1\nallow_anonymous true\n"
+                                                                    "persistence false\nuser root\n");
+    Spawned broker({"mosquitto", "-c", conf.string()}, dir / "broker.log");
+    ASSERT_TRUE(eventually([&] { return accepts(port); }, 10s)) << readText(dir / "broker.log");
+    ASSERT_TRUE(eventually([&] { return publisher.status().value("connected", false); }, 20s))
+        << publisher.status().dump();
+    // The retained message, read by a subscriber that came after it was sent: -v prints the topic first.
+    const auto retained = dir / "retained.txt";
+    const auto received = [](const std::filesystem::path& file, const std::string& serial) {
+        return readText(file).find("\"serial\":\"" + serial + "\"") != std::string::npos;
+    };
+    {
+        Spawned subscriber({"stdbuf", "-oL", "mosquitto_sub", "-d", "-v", "-q", "1", "-h", "127.0.0.1", "-p",
+                            std::to_string(port), "-t", "hullgauge/gauge-7/health"},
+                           retained);
+        ASSERT_TRUE(eventually([&] { return received(retained, "NEWEST"); }, 20s)) << readText(retained);
+        publisher.publishHealth(health("WHILE-CONNECTED", "focus"));
+        ASSERT_TRUE(eventually([&] { return received(retained, "WHILE-CONNECTED"); }, 20s)) << readText(retained);
+    }
+    const auto text = readText(retained);
+    EXPECT_EQ(text.find("OLDER"), std::string::npos) << text;
+    const auto line = text.substr(text.find("hullgauge/gauge-7/health {"));
+    const auto message = nlohmann::json::parse(line.substr(line.find('{'), line.find('\n') - line.find('{')));
+    EXPECT_EQ(message["station"], "gauge-7");
+    EXPECT_EQ(message["serial"], "NEWEST");
+    EXPECT_EQ(message["warnings"], nlohmann::json::array({"dust"}));
+    EXPECT_TRUE(message["figures"]["dust_specks"].is_null());
+    // Retained: the broker flagged the first as such to the late subscriber (mosquitto_sub -d: "r1").
+    EXPECT_NE(text.find("r1, m"), std::string::npos) << text;
+}
+
 } // namespace
 } // namespace hg::daemon

@@ -1,6 +1,8 @@
 // `hullgauge ctl` against a running daemon (docs/contracts.md §7): socket selection,
 // status, sim-part, trigger, results, and the exit status when no daemon runs.
 #include "daemon_harness.h"
+#include "hullgauge/calib/flat_field.h"
+#include "hullgauge/store/audit_log.h"
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -154,6 +156,49 @@ TEST(Ctl, StatusPrintsTheAddressOfTheWebHmi)
     auto none = hgtest::run(ctl("status --socket " + plainSock));
     ASSERT_EQ(none.status, 0) << none.err;
     EXPECT_EQ(none.out.find("web HMI"), std::string::npos) << none.out;
+}
+
+// docs/health.md, "The flat-field reference": `ctl flat-field` queues it and follows it to its end,
+// printing the reference; the file is written beside the station file with the frames' level
+// (the fake camera's 200 of 255), `ctl status` names it, and the audit trail records who took it.
+TEST(Ctl, TakesTheFlatFieldReferenceAndStatusShowsIt)
+{
+    hgtest::TempDir dir;
+    hgdaemon::DaemonProcess daemon(hgdaemon::writeConfig(dir, hgdaemon::freePort()));
+    auto sock = (dir / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    auto before = hgtest::run(ctl("--socket " + sock + " status"));
+    EXPECT_NE(before.out.find("health:       no cycle examined yet; no flat-field reference"), std::string::npos)
+        << before.out;
+
+    auto taken = hgtest::run(ctl("--socket " + sock + " flat-field --frames 3"));
+    ASSERT_EQ(taken.status, 0) << taken.err << daemon.logText();
+    EXPECT_NE(taken.err.find("flat-field reference queued"), std::string::npos) << taken.err;
+    EXPECT_NE(taken.out.find("from 3 frames: mean level 0.784 of full scale"), std::string::npos) << taken.out;
+    const auto file = dir / "flat-field.json";
+    EXPECT_NE(taken.out.find("written: " + file.string()), std::string::npos) << taken.out;
+    const auto reference = hg::calib::readFlatField(file);
+    EXPECT_EQ(reference.sensor, cv::Size(64, 48));
+    double darkest = 0, brightest = 0;
+    cv::minMaxLoc(reference.level, &darkest, &brightest);
+    EXPECT_NEAR(darkest, 200.0 / 255.0, 1e-6);
+    EXPECT_NEAR(brightest, 200.0 / 255.0, 1e-6);
+    EXPECT_NE(hgtest::run(ctl("--socket " + sock + " status")).out.find("; reference taken "), std::string::npos);
+
+    hg::store::AuditLog audit(dir / "audit.sqlite");
+    bool recorded = false;
+    for (const auto& e : audit.select({}))
+        if (e.action == "calibration.flat-field") {
+            recorded = true;
+            EXPECT_EQ(e.object, file.string());
+            EXPECT_EQ(e.outcome, "done");
+            EXPECT_EQ(e.source, "socket");
+            EXPECT_EQ(e.detail, "frames 3");
+            EXPECT_EQ(e.who.rfind("unix:", 0), 0u) << e.who;
+        }
+    EXPECT_TRUE(recorded);
+    // Out of range: refused by ctl's own check before anything is asked of the daemon.
+    EXPECT_EQ(hgtest::run(ctl("--socket " + sock + " flat-field --frames 65")).status, 2);
 }
 
 TEST(Ctl, NoDaemonIsAFaultNamingTheSocket)

@@ -35,11 +35,11 @@ namespace hg::vision {
 /// The empty fixture's backlight as calibration saw it (docs/health.md,
 /// "Reference"): the level per cell × cell block of the sensor.
 struct FlatField {
-    cv::Size sensor{};   ///< the sensor the reference covers
-    int cell = 32;       ///< px: side of the blocks `level` keeps
-    cv::Mat level;       ///< CV_32FC1, ceil(sensor / cell): mean grey per block, fraction of full scale
-    double noise = 0.0;  ///< the empty frame's grey-level σ, fraction of full scale
-    int dustSpecks = 0;  ///< dark specks the reference already shows (the baseline of the dust count)
+    cv::Size sensor{};  ///< the sensor the reference covers
+    int cell = 32;      ///< px: side of the blocks `level` keeps
+    cv::Mat level;      ///< CV_32FC1, ceil(sensor / cell): mean grey per block, fraction of full scale
+    double noise = 0.0; ///< the empty frame's grey-level σ, fraction of full scale
+    int dustSpecks = 0; ///< dark specks the reference already shows (the baseline of the dust count)
     std::int64_t takenUnixMs = 0;
 
     bool empty() const { return level.empty(); }

@@ -545,14 +545,19 @@ cv::Mat erodeCoverage(const cv::Mat& coverage, double haloPx)
     coverage.convertTo(blurred, CV_64FC1);
     cv::GaussianBlur(blurred, blurred, cv::Size(2 * reach + 1, 2 * reach + 1), probe, probe, cv::BORDER_REPLICATE);
     const double sigma = std::sqrt(probe * probe + 1.0 / 12.0);
+    // Only pixels within half a pixel of the shrunk edge, d in (h - 0.5, h + 0.5), are partly
+    // covered: the blurred coverage of that band, Φ(d / σ), bounds the pixels that need Φ⁻¹.
+    const auto normalCdf = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+    const double outside = normalCdf((haloPx - 0.5) / sigma);
+    const double inside = normalCdf((haloPx + 0.5) / sigma);
     cv::Mat out(coverage.size(), CV_32FC1);
     for (int r = 0; r < coverage.rows; ++r) {
         const double* in = blurred.ptr<double>(r);
         float* row = out.ptr<float>(r);
         for (int c = 0; c < coverage.cols; ++c) {
             const double s = in[c];
-            if (s <= 0.0 || s >= 1.0) {
-                row[c] = s >= 1.0 ? 1.0f : 0.0f; // far from any edge: all object, or all background
+            if (!(s > outside && s < inside)) {
+                row[c] = s >= inside ? 1.0f : 0.0f;
                 continue;
             }
             // Signed distance from the edge into the object, then the coverage of the shrunk silhouette.

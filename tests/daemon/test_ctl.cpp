@@ -1,6 +1,7 @@
 // `hullgauge ctl` against a running daemon (docs/contracts.md §7): socket selection,
 // status, sim-part, trigger, results, and the exit status when no daemon runs.
 #include "daemon_harness.h"
+#include "hullgauge/store/audit_log.h"
 
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -90,6 +91,15 @@ TEST(Ctl, ShowsAndResetsTheSimulatedCamerasAging)
     auto reset = hgtest::run(ctl("--socket " + sock + " sim-age --reset"));
     ASSERT_EQ(reset.status, 0) << reset.err;
     EXPECT_NE(reset.out.find("(0 aging steps in 0 cycles)"), std::string::npos) << reset.out;
+    // The reset is a change, in the audit trail beside the result store (docs/audit.md); asking is not.
+    hg::store::AuditQuery query;
+    query.actionPrefix = "setting.sim-age";
+    const auto entries = hg::store::AuditLog(dir / "audit.sqlite", true).select(query);
+    ASSERT_EQ(entries.size(), 1u);
+    EXPECT_EQ(entries[0].before, "aging: 3 cycles, 1 steps");
+    EXPECT_EQ(entries[0].after, "aging: 0 cycles, 0 steps");
+    EXPECT_EQ(entries[0].outcome, "done");
+    EXPECT_EQ(entries[0].source, "socket");
 }
 
 // The release of the program a result was judged with (docs/daemon.md): in the

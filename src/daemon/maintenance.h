@@ -111,7 +111,7 @@ struct MaintenanceContext {
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,
-/// results, trigger, abort, calibrate, calibration, sim-part, purpose; any other
+/// results, trigger, abort, calibrate, calibration, sim-part, sim-age, purpose, snapshot, reload; any other
 /// command is answered as unknown.
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context);
 

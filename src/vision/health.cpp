@@ -27,8 +27,10 @@ constexpr double kMadToSigma = 1.4826;
 
 // Background samples per view, each with the pixels kClearPx either side in
 // its row also on the background side of the threshold; kept above
-// kRatioCut of the view's median (docs/health.md, "Figures").
-constexpr int kSamplesPerView = 512, kClearPx = 4;
+// kRatioCut of the view's median (docs/health.md, "Figures"). The grid's rows
+// lie kRowsApart times further apart than its columns: a frame is read by
+// rows, and a row's samples share its cache lines (docs/health.md, "Cost").
+constexpr int kSamplesPerView = 256, kRowsApart = 4, kClearPx = 4;
 constexpr double kRatioCut = 0.6;
 // Uniformity zones about kZonePx square; a zone with fewer samples in a cycle is not judged.
 constexpr int kZonePx = 128, kMinZoneSamples = 8;
@@ -70,32 +72,61 @@ double medianOf(std::vector<double>& values)
     return 0.5 * (below + values[half]);
 }
 
-// The median of non-negative whole numbers read as rounded values of a
-// continuous quantity: placed within the median's bin ([k − ½, k + ½), and
-// [0, ½) for 0) by the share of the values below it. The plain median of
-// |differences| of 8-bit grey levels jumps by whole levels; this one follows
-// σ smoothly down to the quantisation.
-double groupedMedian(std::vector<int>& values)
+// Ratios to the reference are counted in bins of 1/1024 up to 4 (the last bin
+// holds anything brighter); |differences| of grey levels in bins of one level
+// (8-bit) or of 16 (16-bit frames: a 12-bit sensor's step), the whole range.
+// Medians from counts cost one pass and no sorting (docs/health.md, "Cost").
+constexpr int kRatioBins = 4096;
+constexpr double kRatioBinWidth = 1.0 / 1024.0;
+
+int stepQuantum(double full)
 {
-    if (values.empty()) return kNoFigure;
-    const std::size_t half = values.size() / 2;
-    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half), values.end());
-    const int m = values[half];
-    std::size_t below = 0, at = 0;
-    for (int v : values) {
-        below += v < m ? 1 : 0;
-        at += v == m ? 1 : 0;
-    }
-    const double lower = m == 0 ? 0.0 : m - 0.5, width = m == 0 ? 0.5 : 1.0;
-    return lower +
-           width * (0.5 * static_cast<double>(values.size()) - static_cast<double>(below)) / static_cast<double>(at);
+    return full > 255.0 ? 16 : 1;
 }
 
-// Grey-level σ from |differences| of neighbouring pixels (robust: a speck or
-// an edge among them moves the median little), never below the quantisation's 1/√12.
-double noiseFromSteps(std::vector<int>& steps)
+std::size_t stepBinCount(double full)
 {
-    const double mad = groupedMedian(steps);
+    return static_cast<std::size_t>(full) / static_cast<std::size_t>(stepQuantum(full)) + 1;
+}
+
+std::size_t ratioBin(double ratio)
+{
+    return static_cast<std::size_t>(std::min(ratio / kRatioBinWidth, kRatioBins - 1.0));
+}
+
+// A |difference| of grey levels to its bin: rounded, bins centred on whole quanta.
+std::size_t stepBin(int step, int quantum)
+{
+    return static_cast<std::size_t>((step + quantum / 2) / quantum);
+}
+
+// The median of the `total` values counted in `bins`, in bin units, placed
+// within its bin by the share of the values below it. Bin k spans [k, k + 1)
+// or, `centred` on whole numbers, [k − ½, k + ½) and the first [0, ½): the
+// plain median of |differences| of 8-bit grey levels jumps by whole levels,
+// this one follows σ smoothly down to the quantisation.
+double binnedMedian(const std::vector<int>& bins, long total, bool centred)
+{
+    if (total <= 0) return kNoFigure;
+    const double half = 0.5 * static_cast<double>(total);
+    long below = 0;
+    for (std::size_t k = 0; k < bins.size(); ++k) {
+        if (static_cast<double>(below + bins[k]) > half) {
+            const double lower = !centred ? static_cast<double>(k) : k == 0 ? 0.0 : k - 0.5;
+            const double width = centred && k == 0 ? 0.5 : 1.0;
+            return lower + width * (half - static_cast<double>(below)) / bins[k];
+        }
+        below += bins[k];
+    }
+    return static_cast<double>(bins.size());
+}
+
+// Grey-level σ from the |differences| of disjoint pairs of neighbouring pixels
+// (robust: a speck or an edge among them moves the median little), never
+// below the quantisation's 1/√12.
+double noiseOf(const std::vector<int>& stepBins, long total, int quantum)
+{
+    const double mad = binnedMedian(stepBins, total, true) * quantum;
     if (std::isnan(mad)) return kNoFigure;
     return std::max(kMadToSigma * mad / std::sqrt(2.0), 1.0 / std::sqrt(12.0));
 }
@@ -175,6 +206,15 @@ std::vector<DarkSet> darkSets(const cv::Mat& grey, cv::Point origin, const cv::R
         for (int x = scan.x; x < scan.x + scan.width;) {
             const int blockEnd = std::min(scan.x + scan.width, (x / dark.cell + 1) * dark.cell);
             const Limit limit = limits[x / dark.cell - dark.blocks.x];
+            // Most of a band is bright backlight: a block's row without a dark pixel is passed at once.
+            Pixel lowest = row[x - origin.x];
+            for (int i = x - origin.x; i < blockEnd - origin.x; ++i) lowest = std::min(lowest, row[i]);
+            if (!(lowest < limit)) {
+                if (start >= 0) close(start, x - 1);
+                start = -1;
+                x = blockEnd;
+                continue;
+            }
             for (; x < blockEnd; ++x) {
                 const bool isDark = row[x - origin.x] < limit;
                 if (isDark && start < 0) start = x;
@@ -332,6 +372,73 @@ std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader
     return ProfileRead{kTenNinety * std::sqrt(std::max(read * read - kInterpolationVariance, 0.0)), contrast};
 }
 
+// --- Background samples ------------------------------------------------------
+
+// A background pixel of the grid: its level against the reference (or full
+// scale without one), its uniformity zone (-1 without a reference), the
+// |differences| of the disjoint pairs (x, x + 1) and (x + 2, x + 3) for the noise.
+struct BackgroundSample {
+    float ratio = 0.0f;
+    int zone = -1;
+    std::array<int, 2> steps{};
+};
+
+// Where a view's grid lies and what its samples are compared with.
+struct BackgroundGrid {
+    cv::Rect frame;  ///< the sensor pixels the frame holds
+    int step = 2;    ///< px between samples
+    cv::Point first; ///< the first sample (sensor px)
+    double threshold = 0.0;
+    bool objectIsDark = true;
+    double full = 255.0;
+    const cv::Mat* level = nullptr; ///< the reference's levels, or none
+    int cell = 32, zoneSide = 128, zonesAcross = 1;
+};
+
+// The grid's background pixels: each and the pixels kClearPx either side in
+// its row on the background side of the threshold.
+template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid& g, std::vector<BackgroundSample>& out)
+{
+    const auto background = [&](int v) { return g.objectIsDark ? v > g.threshold : v < g.threshold; };
+    const int right = g.frame.x + g.frame.width - kClearPx;
+    for (int y = g.first.y; y < g.frame.y + g.frame.height; y += kRowsApart * g.step) {
+        const Pixel* row = grey.ptr<Pixel>(y - g.frame.y);
+        const int zoneRow = (y / g.zoneSide) * g.zonesAcross;
+        // The reference's level between the centres of the blocks above and below.
+        const float* above = nullptr;
+        const float* below = nullptr;
+        float down = 0.0f;
+        if (g.level != nullptr) {
+            const float by = std::clamp((y + 0.5f) / g.cell - 0.5f, 0.0f, g.level->rows - 1.0f);
+            const int b0 = std::min(static_cast<int>(by), g.level->rows - 1);
+            above = g.level->ptr<float>(b0);
+            below = g.level->ptr<float>(std::min(b0 + 1, g.level->rows - 1));
+            down = by - b0;
+        }
+        for (int x = g.first.x; x < right; x += g.step) {
+            const Pixel* at = row + (x - g.frame.x);
+            const int p = at[0];
+            if (!background(p) || !background(at[-kClearPx]) || !background(at[kClearPx])) continue;
+            BackgroundSample s;
+            s.steps = {std::abs(int(at[1]) - p), std::abs(int(at[3]) - int(at[2]))};
+            if (above == nullptr) {
+                s.ratio = static_cast<float>(p / g.full);
+            } else {
+                const float bx = std::clamp((x + 0.5f) / g.cell - 0.5f, 0.0f, g.level->cols - 1.0f);
+                const int b0 = std::min(static_cast<int>(bx), g.level->cols - 1),
+                          b1 = std::min(b0 + 1, g.level->cols - 1);
+                const float across = bx - b0;
+                const float level = (1.0f - down) * ((1.0f - across) * above[b0] + across * above[b1]) +
+                                    down * ((1.0f - across) * below[b0] + across * below[b1]);
+                if (!(level > 0.0f)) continue;
+                s.ratio = static_cast<float>(p / (g.full * level));
+                s.zone = zoneRow + x / g.zoneSide;
+            }
+            out.push_back(s);
+        }
+    }
+}
+
 } // namespace
 
 // --- The reference -----------------------------------------------------------
@@ -355,14 +462,17 @@ FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnix
     }
     const double full = fullScale(first);
     cv::Mat sum(first.size(), CV_64FC1, cv::Scalar(0.0));
-    std::vector<int> steps;
+    const int quantum = stepQuantum(full);
+    std::vector<int> steps(stepBinCount(full), 0);
+    long pairs = 0;
     for (const cv::Mat& f : frames) {
         cv::Mat grey;
         f.convertTo(grey, CV_64FC1);
         sum += grey;
         // Each frame's own noise, from disjoint horizontal pairs of every second row.
         for (int r = 0; r < f.rows; r += 2)
-            for (int c = 0; c + 1 < f.cols; c += 2) steps.push_back(std::abs(greyAt(f, r, c + 1) - greyAt(f, r, c)));
+            for (int c = 0; c + 1 < f.cols; c += 2, ++pairs)
+                ++steps[stepBin(std::abs(greyAt(f, r, c + 1) - greyAt(f, r, c)), quantum)];
     }
     cv::Mat mean;
     sum.convertTo(mean, CV_32FC1, 1.0 / static_cast<double>(frames.size()));
@@ -389,7 +499,7 @@ FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnix
                     "flat field block at pixel (" + std::to_string(bx * cell) + ", " + std::to_string(by * cell) + ")",
                     "its level " + std::to_string(out.level.at<float>(by, bx)) + " is below half the median level " +
                         std::to_string(median) + ": something is in the fixture");
-    out.noise = noiseFromSteps(steps) / full;
+    out.noise = noiseOf(steps, pairs, quantum) / full;
 
     // The reference's own specks, found as the monitor finds them (on the mean of the frames).
     DarkLimits<float> dark{cell, blocks, {}};
@@ -447,12 +557,14 @@ void HealthMonitor::beginCycle()
     band_ = bands_ > 0 ? static_cast<int>(cycle_ % static_cast<std::uint64_t>(bands_)) : 0;
     ++cycle_;
     views_ = 0;
-    ratios_.clear();
+    ratioBins_.assign(static_cast<std::size_t>(kRatioBins), 0);
+    ratioCount_ = 0;
     std::fill(zoneSum_.begin(), zoneSum_.end(), 0.0);
     std::fill(zoneCount_.begin(), zoneCount_.end(), 0);
     widths_.clear();
     contrasts_.clear();
-    steps_.clear();
+    stepBins_.clear();
+    stepCount_ = 0;
     stepsFull_ = 0.0;
     bandExamined_ = false;
     bandFound_ = 0;
@@ -498,68 +610,67 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
 {
     const EdgeImage& image = *ctx.image;
     const cv::Rect& f = ctx.frame;
-    const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(double(f.area()) / kSamplesPerView))));
+    const int step =
+        std::max(2, static_cast<int>(std::ceil(std::sqrt(double(f.area()) / (kSamplesPerView * kRowsApart)))));
     // Each view and each cycle samples other pixels of the grid's cells.
     const int ox = static_cast<int>((ctx.index * 5 + cycle_ * 3) % static_cast<std::uint64_t>(step));
-    const int oy = static_cast<int>((ctx.index * 3 + cycle_ * 7) % static_cast<std::uint64_t>(step));
-    const auto background = [&](int v) { return image.objectIsDark ? v > image.threshold : v < image.threshold; };
-    struct Sample {
-        float ratio;
-        int zone;
-        std::array<int, 2> steps; ///< |differences| of the disjoint pairs (x, x + 1), (x + 2, x + 3)
-    };
-    std::vector<Sample> samples;
-    samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
-    for (int y = f.y + oy; y < f.y + f.height; y += step) {
-        const int v = y - f.y;
-        for (int x = f.x + kClearPx + ox; x + kClearPx < f.x + f.width; x += step) {
-            const int u = x - f.x;
-            const int p = greyAt(image.grey, v, u);
-            if (!background(p) || !background(greyAt(image.grey, v, u - kClearPx)) ||
-                !background(greyAt(image.grey, v, u + kClearPx)))
-                continue;
-            double expected = ctx.full;
-            int zone = -1;
-            if (ctx.referenced) {
-                const float level = reference_.level.at<float>(y / reference_.cell, x / reference_.cell);
-                if (!(level > 0.0f)) continue;
-                expected *= level;
-                zone = (y / zoneSide_) * zones_.width + x / zoneSide_;
-            }
-            const int p2 = greyAt(image.grey, v, u + 2);
-            samples.push_back(
-                {static_cast<float>(p / expected),
-                 zone,
-                 {std::abs(greyAt(image.grey, v, u + 1) - p), std::abs(greyAt(image.grey, v, u + 3) - p2)}});
-        }
+    const int oy = static_cast<int>((ctx.index * 37 + cycle_ * 7) % static_cast<std::uint64_t>(kRowsApart * step));
+    BackgroundGrid grid;
+    grid.frame = f;
+    grid.step = step;
+    grid.first = {f.x + kClearPx + ox, f.y + oy};
+    grid.threshold = image.threshold;
+    grid.objectIsDark = image.objectIsDark;
+    grid.full = ctx.full;
+    if (ctx.referenced) {
+        grid.level = &reference_.level;
+        grid.cell = reference_.cell;
+        grid.zoneSide = zoneSide_;
+        grid.zonesAcross = zones_.width;
     }
+    std::vector<BackgroundSample> samples;
+    samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
+    if (image.grey.depth() == CV_8U)
+        sampleGrid<std::uint8_t>(image.grey, grid, samples);
+    else
+        sampleGrid<std::uint16_t>(image.grey, grid, samples);
     if (samples.empty()) return;
-    std::vector<double> order(samples.size());
-    std::transform(samples.begin(), samples.end(), order.begin(), [](const Sample& s) { return s.ratio; });
-    ctx.medianRatio = medianOf(order);
+    std::vector<int> ratios(static_cast<std::size_t>(kRatioBins), 0), steps(stepBinCount(ctx.full), 0);
+    for (const BackgroundSample& s : samples) ++ratios[ratioBin(s.ratio)];
+    ctx.medianRatio = binnedMedian(ratios, static_cast<long>(samples.size()), false) * kRatioBinWidth;
     const double cut = kRatioCut * ctx.medianRatio;
-    std::vector<int> steps;
-    steps.reserve(2 * samples.size());
+    // The cycle's noise from the differences of all its views (a view's few
+    // hundred give σ to ±5 %); a view of another depth than the first is left out of it.
+    if (stepsFull_ == 0.0) {
+        stepsFull_ = ctx.full;
+        stepBins_.assign(steps.size(), 0);
+    }
+    const bool pooled = stepsFull_ == ctx.full;
+    const int quantum = stepQuantum(ctx.full);
+    long pairs = 0;
     if (ctx.referenced) {
         std::fill(viewZoneSum_.begin(), viewZoneSum_.end(), 0.0);
         std::fill(viewZoneCount_.begin(), viewZoneCount_.end(), 0);
     }
-    for (const Sample& s : samples) {
+    for (const BackgroundSample& s : samples) {
         if (s.ratio < cut) continue;
-        steps.insert(steps.end(), s.steps.begin(), s.steps.end());
+        for (int difference : s.steps) {
+            const std::size_t bin = stepBin(difference, quantum);
+            ++steps[bin];
+            if (pooled) ++stepBins_[bin];
+        }
+        pairs += 2;
         if (!ctx.referenced) continue;
-        ratios_.push_back(s.ratio);
+        ++ratioBins_[ratioBin(s.ratio)];
+        ++ratioCount_;
         const auto z = static_cast<std::size_t>(s.zone);
         zoneSum_[z] += s.ratio;
         ++zoneCount_[z];
         viewZoneSum_[z] += s.ratio;
         ++viewZoneCount_[z];
     }
-    // The cycle's noise from the differences of all its views (a view's
-    // few hundred give σ to ±5 %); a view of another depth than the first is left out of it.
-    if (stepsFull_ == 0.0) stepsFull_ = ctx.full;
-    if (stepsFull_ == ctx.full) steps_.insert(steps_.end(), steps.begin(), steps.end());
-    ctx.noise = noiseFromSteps(steps);
+    if (pooled) stepCount_ += pairs;
+    ctx.noise = noiseOf(steps, pairs, quantum);
 }
 
 // One band of the dust survey in this view (docs/health.md, "Figures": dust):
@@ -626,16 +737,19 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
     // a dark set that hides the backlight (the part, or what the read cut off):
     // a later view of the cycle may show the backlight there.
     const int rowTop = std::max(top, scan.y), rowBottom = std::min(bottom, scan.y + scan.height);
-    for (int y = rowTop; y < rowBottom; ++y)
-        for (int x = scan.x; x < scan.x + scan.width; ++x)
-            if (seenAt(x, y) == 0) seenAt(x, y) = 2;
+    for (int y = rowTop; y < rowBottom; ++y) {
+        std::uint8_t* seen = &seenAt(scan.x, y);
+        for (int i = 0; i < scan.width; ++i) seen[i] = seen[i] == 0 ? 2 : seen[i];
+    }
     for (const DarkRun& r : runs)
-        if (r.row >= rowTop && r.row < rowBottom && !sets[static_cast<std::size_t>(r.parent)].speck())
-            for (int x = r.x0; x <= r.x1; ++x)
-                if (seenAt(x, r.row) == 2) seenAt(x, r.row) = 0;
-    for (int y = rowTop; y < rowBottom; ++y)
-        for (int x = scan.x; x < scan.x + scan.width; ++x)
-            if (seenAt(x, y) == 2) seenAt(x, y) = 1;
+        if (r.row >= rowTop && r.row < rowBottom && !sets[static_cast<std::size_t>(r.parent)].speck()) {
+            std::uint8_t* seen = &seenAt(r.x0, r.row);
+            for (int i = 0; i <= r.x1 - r.x0; ++i) seen[i] = seen[i] == 2 ? 0 : seen[i];
+        }
+    for (int y = rowTop; y < rowBottom; ++y) {
+        std::uint8_t* seen = &seenAt(scan.x, y);
+        for (int i = 0; i < scan.width; ++i) seen[i] = seen[i] == 2 ? 1 : seen[i];
+    }
 }
 
 HealthFigures HealthMonitor::endCycle()
@@ -643,8 +757,8 @@ HealthFigures HealthMonitor::endCycle()
     HealthFigures out;
     out.views = views_;
     out.probes = static_cast<int>(widths_.size());
-    if (!ratios_.empty()) {
-        out.backlight = medianOf(ratios_);
+    if (ratioCount_ > 0) {
+        out.backlight = binnedMedian(ratioBins_, ratioCount_, false) * kRatioBinWidth;
         double worst = -1.0;
         for (std::size_t z = 0; z < zoneSum_.size(); ++z)
             if (zoneCount_[z] >= kMinZoneSamples)
@@ -662,7 +776,7 @@ HealthFigures HealthMonitor::endCycle()
     }
     out.edgeWidthPx = medianOf(widths_);
     out.contrast = medianOf(contrasts_);
-    if (!steps_.empty()) out.noise = noiseFromSteps(steps_) / stepsFull_;
+    if (stepCount_ > 0) out.noise = noiseOf(stepBins_, stepCount_, stepQuantum(stepsFull_)) / stepsFull_;
     out.predictedSigmaPx = predictedEdgeSigmaPx(out.noise, out.contrast, out.edgeWidthPx);
     return out;
 }

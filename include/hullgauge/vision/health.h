@@ -165,13 +165,15 @@ class HealthMonitor {
 
     // The cycle's pools.
     int views_ = 0;
-    std::vector<double> ratios_;
+    std::vector<int> ratioBins_; ///< the background samples' ratios to the reference, counted in bins
+    long ratioCount_ = 0;
     std::vector<double> zoneSum_;
     std::vector<int> zoneCount_;
     std::vector<double> widths_, contrasts_;
-    /// |differences| of neighbouring background pixels, grey levels of the
-    /// cycle's first frame's depth (full scale stepsFull_).
-    std::vector<int> steps_;
+    /// |differences| of neighbouring background pixels counted in bins of grey
+    /// levels of the cycle's first frame's depth (full scale stepsFull_).
+    std::vector<int> stepBins_;
+    long stepCount_ = 0;
     double stepsFull_ = 0.0;
 
     /// The last view's zones (for its dust thresholds): the sum of its samples' ratios and their count.

@@ -180,6 +180,14 @@ template <class Limit> struct DarkLimits {
     std::vector<Limit> limits;
 };
 
+// Whether any of `count` pixels lies below `limit` (a loop the compiler vectorises).
+template <class Pixel, class Limit> bool anyBelow(const Pixel* pixels, int count, Limit limit)
+{
+    unsigned below = 0;
+    for (int i = 0; i < count; ++i) below |= pixels[i] < limit ? 1u : 0u;
+    return below != 0;
+}
+
 // The connected sets of the pixels of `scan` (sensor pixels, inside the frame
 // at `origin`) darker than their block's limit: runs per row, joined to the
 // runs of the row above that touch them (docs/health.md, "Figures": dust).
@@ -207,9 +215,7 @@ std::vector<DarkSet> darkSets(const cv::Mat& grey, cv::Point origin, const cv::R
             const int blockEnd = std::min(scan.x + scan.width, (x / dark.cell + 1) * dark.cell);
             const Limit limit = limits[x / dark.cell - dark.blocks.x];
             // Most of a band is bright backlight: a block's row without a dark pixel is passed at once.
-            Pixel lowest = row[x - origin.x];
-            for (int i = x - origin.x; i < blockEnd - origin.x; ++i) lowest = std::min(lowest, row[i]);
-            if (!(lowest < limit)) {
+            if (!anyBelow(row + (x - origin.x), blockEnd - x, limit)) {
                 if (start >= 0) close(start, x - 1);
                 start = -1;
                 x = blockEnd;
@@ -274,7 +280,7 @@ double speckLimit(double background, double noiseGrey)
 // Bilinear grey levels at sensor positions of a frame that may be a region
 // of the sensor; a read off the sensor or outside the region fails (a pixel
 // the camera did not send is never guessed: docs/inspection.md, "Frames that are regions").
-class FrameReader {
+template <class Pixel> class FrameReader {
   public:
     FrameReader(const cv::Mat& grey, cv::Point origin, cv::Size sensor) : grey_(grey), origin_(origin), sensor_(sensor)
     {
@@ -289,8 +295,9 @@ class FrameReader {
         const int u = c - origin_.x, v = r - origin_.y;
         if (u < 0 || v < 0 || u + 1 >= grey_.cols || v + 1 >= grey_.rows) return false;
         const double fx = x - c, fy = y - r;
-        value = (1 - fy) * ((1 - fx) * greyAt(grey_, v, u) + fx * greyAt(grey_, v, u + 1)) +
-                fy * ((1 - fx) * greyAt(grey_, v + 1, u) + fx * greyAt(grey_, v + 1, u + 1));
+        const Pixel* top = grey_.ptr<Pixel>(v) + u;
+        const Pixel* bottom = grey_.ptr<Pixel>(v + 1) + u;
+        value = (1 - fy) * ((1 - fx) * top[0] + fx * top[1]) + fy * ((1 - fx) * bottom[0] + fx * bottom[1]);
         return true;
     }
 
@@ -307,7 +314,8 @@ struct ProfileRead {
 
 // The threshold crossing (object → background going along the normal)
 // nearest the probe, from whole steps; NaN without one or off the frame.
-double nearestCrossing(const EdgeImage& image, const FrameReader& reader, const Vec2& pixel, const Vec2& normal)
+template <class Pixel>
+double nearestCrossing(const EdgeImage& image, const FrameReader<Pixel>& reader, const Vec2& pixel, const Vec2& normal)
 {
     double best = kNoFigure, previous = 0.0;
     for (int k = -kSearchPx; k <= kSearchPx; ++k) {
@@ -326,7 +334,8 @@ double nearestCrossing(const EdgeImage& image, const FrameReader& reader, const 
 // The edge profile across a probe (docs/health.md, "Figures": focus,
 // contrast): read along the normal, normalised between the object's and the
 // background's levels, its 10–90 % width with the interpolation's share taken out.
-std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader& reader, const EdgeProbe& probe)
+template <class Pixel>
+std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader<Pixel>& reader, const EdgeProbe& probe)
 {
     const double length = probe.normal.norm();
     if (!probe.pixel.allFinite() || !std::isfinite(length) || length < 1e-9) return std::nullopt;
@@ -593,12 +602,17 @@ void HealthMonitor::addView(std::size_t view, const EdgeImage& image, std::span<
     ctx.referenced = !reference_.empty() && ctx.sensor == reference_.sensor && image.objectIsDark;
     ++views_;
 
-    const FrameReader reader(grey, image.origin, ctx.sensor);
-    for (const EdgeProbe& probe : probes)
-        if (const auto read = readProfile(image, reader, probe)) {
-            widths_.push_back(read->widthPx);
-            contrasts_.push_back(read->contrast / ctx.full);
-        }
+    const auto readProfiles = [&](const auto& reader) {
+        for (const EdgeProbe& probe : probes)
+            if (const auto read = readProfile(image, reader, probe)) {
+                widths_.push_back(read->widthPx);
+                contrasts_.push_back(read->contrast / ctx.full);
+            }
+    };
+    if (grey.depth() == CV_8U)
+        readProfiles(FrameReader<std::uint8_t>(grey, image.origin, ctx.sensor));
+    else
+        readProfiles(FrameReader<std::uint16_t>(grey, image.origin, ctx.sensor));
     sampleBackground(ctx);
     if (ctx.referenced && bands_ > 0 && !std::isnan(ctx.medianRatio)) surveyBand(ctx);
 }
@@ -691,10 +705,10 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
         const auto* hole =
             static_cast<const std::uint8_t*>(std::memchr(&seenAt(f.x, y), 0, static_cast<std::size_t>(f.width)));
         if (hole == nullptr) continue;
-        int last = f.x + f.width - 1;
-        while (seenAt(last, y) != 0) --last;
+        const auto* last =
+            static_cast<const std::uint8_t*>(memrchr(&seenAt(f.x, y), 0, static_cast<std::size_t>(f.width)));
         x0 = std::min(x0, f.x + static_cast<int>(hole - &seenAt(f.x, y)));
-        x1 = std::max(x1, last);
+        x1 = std::max(x1, f.x + static_cast<int>(last - &seenAt(f.x, y)));
         y0 = std::min(y0, y);
         y1 = y;
     }

@@ -10,7 +10,9 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
+#include <utility>
 
 namespace hg::vision {
 namespace {
@@ -32,8 +34,11 @@ constexpr double kMadToSigma = 1.4826;
 // rows, and a row's samples share its cache lines (docs/health.md, "Cost").
 constexpr int kSamplesPerView = 256, kRowsApart = 4, kClearPx = 4;
 constexpr double kRatioCut = 0.6;
-// Uniformity zones about kZonePx square; a zone with fewer samples in a cycle is not judged.
-constexpr int kZonePx = 128, kMinZoneSamples = 8;
+// Uniformity zones about kZonePx square; a zone with fewer samples in a cycle
+// is not judged (the worst of many zones of few samples would measure the
+// noise). The dust survey takes a zone's level from kMinLocalSamples of the
+// view, else of the cycle so far, else the view's median.
+constexpr int kZonePx = 128, kMinZoneSamples = 16, kMinLocalSamples = 3;
 
 // The dust survey: the bands' height, the margin read around what is
 // examined, the largest speck, how far below the local backlight a speck
@@ -129,6 +134,44 @@ double noiseOf(const std::vector<int>& stepBins, long total, int quantum)
     const double mad = binnedMedian(stepBins, total, true) * quantum;
     if (std::isnan(mad)) return kNoFigure;
     return std::max(kMadToSigma * mad / std::sqrt(2.0), 1.0 / std::sqrt(12.0));
+}
+
+// --- The reference's level ---------------------------------------------------
+
+// One axis of the interpolation between block centres: the first block of
+// the pair and the weight of the second, extrapolated linearly half a block
+// beyond the outer centres (a vignetted panel keeps falling towards the border).
+std::pair<int, double> blockPair(double px, int cell, int blocks)
+{
+    if (blocks < 2) return {0, 0.0};
+    const double at = (px + 0.5) / cell - 0.5;
+    const int first = std::clamp(static_cast<int>(std::floor(at)), 0, blocks - 2);
+    return {first, at - first};
+}
+
+// The reference's level at sensor pixel (x, y) (fraction of full scale):
+// bilinear between the centres of its blocks, whose levels are their means.
+double levelAt(const cv::Mat& level, int cell, double x, double y)
+{
+    const auto [c, across] = blockPair(x, cell, level.cols);
+    const auto [r, down] = blockPair(y, cell, level.rows);
+    const int c1 = std::min(c + 1, level.cols - 1), r1 = std::min(r + 1, level.rows - 1);
+    const double top = (1.0 - across) * level.at<float>(r, c) + across * level.at<float>(r, c1);
+    const double bottom = (1.0 - across) * level.at<float>(r1, c) + across * level.at<float>(r1, c1);
+    return (1.0 - down) * top + down * bottom;
+}
+
+// The lowest level the interpolation gives within block (bx, by): at one of
+// its corners or where it crosses a line through the block centres.
+double lowestLevelIn(const cv::Mat& level, int cell, cv::Size sensor, int bx, int by)
+{
+    const int x0 = bx * cell, y0 = by * cell;
+    const int x1 = std::min(x0 + cell, sensor.width) - 1, y1 = std::min(y0 + cell, sensor.height) - 1;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (double x : {double(x0), 0.5 * (x0 + x1), double(x1)})
+        for (double y : {double(y0), 0.5 * (y0 + y1), double(y1)})
+            lowest = std::min(lowest, levelAt(level, cell, x, y));
+    return lowest;
 }
 
 // --- Dark specks -------------------------------------------------------------
@@ -413,33 +456,17 @@ template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid
     for (int y = g.first.y; y < g.frame.y + g.frame.height; y += kRowsApart * g.step) {
         const Pixel* row = grey.ptr<Pixel>(y - g.frame.y);
         const int zoneRow = (y / g.zoneSide) * g.zonesAcross;
-        // The reference's level between the centres of the blocks above and below.
-        const float* above = nullptr;
-        const float* below = nullptr;
-        float down = 0.0f;
-        if (g.level != nullptr) {
-            const float by = std::clamp((y + 0.5f) / g.cell - 0.5f, 0.0f, g.level->rows - 1.0f);
-            const int b0 = std::min(static_cast<int>(by), g.level->rows - 1);
-            above = g.level->ptr<float>(b0);
-            below = g.level->ptr<float>(std::min(b0 + 1, g.level->rows - 1));
-            down = by - b0;
-        }
         for (int x = g.first.x; x < right; x += g.step) {
             const Pixel* at = row + (x - g.frame.x);
             const int p = at[0];
             if (!background(p) || !background(at[-kClearPx]) || !background(at[kClearPx])) continue;
             BackgroundSample s;
             s.steps = {std::abs(int(at[1]) - p), std::abs(int(at[3]) - int(at[2]))};
-            if (above == nullptr) {
+            if (g.level == nullptr) {
                 s.ratio = static_cast<float>(p / g.full);
             } else {
-                const float bx = std::clamp((x + 0.5f) / g.cell - 0.5f, 0.0f, g.level->cols - 1.0f);
-                const int b0 = std::min(static_cast<int>(bx), g.level->cols - 1),
-                          b1 = std::min(b0 + 1, g.level->cols - 1);
-                const float across = bx - b0;
-                const float level = (1.0f - down) * ((1.0f - across) * above[b0] + across * above[b1]) +
-                                    down * ((1.0f - across) * below[b0] + across * below[b1]);
-                if (!(level > 0.0f)) continue;
+                const double level = levelAt(*g.level, g.cell, x, y);
+                if (!(level > 0.0)) continue;
                 s.ratio = static_cast<float>(p / (g.full * level));
                 s.zone = zoneRow + x / g.zoneSide;
             }
@@ -514,7 +541,7 @@ FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnix
     DarkLimits<float> dark{cell, blocks, {}};
     for (int by = 0; by < blocks.height; ++by)
         for (int bx = 0; bx < blocks.width; ++bx) {
-            const double background = out.level.at<float>(by, bx) * full;
+            const double background = lowestLevelIn(out.level, cell, out.sensor, bx, by) * full;
             dark.limits.push_back(static_cast<float>(speckLimit(background, out.noise * full)));
         }
     std::vector<DarkRun> runs;
@@ -717,17 +744,19 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
     const cv::Rect scan = cv::Rect(cv::Point(x0 - kSpeckMargin, y0 - kSpeckMargin),
                                    cv::Point(x1 + kSpeckMargin + 1, y1 + kSpeckMargin + 1)) &
                           f;
-    // Each block's limit: its reference level times the view's backlight in
-    // its zone (the view's median where the zone had few samples), less the depth.
+    // Each block's limit: the lowest reference level within it times the
+    // backlight of its zone (kMinLocalSamples), less the depth.
     const int cell = reference_.cell;
     DarkLimits<int> dark{cell, blocksOf(scan, cell), {}};
     const double noise = std::max(reference_.noise * ctx.full, ctx.noise);
     for (int by = dark.blocks.y; by < dark.blocks.y + dark.blocks.height; ++by)
         for (int bx = dark.blocks.x; bx < dark.blocks.x + dark.blocks.width; ++bx) {
             const auto z = static_cast<std::size_t>((by * cell / zoneSide_) * zones_.width + bx * cell / zoneSide_);
-            const double local =
-                viewZoneCount_[z] >= kMinZoneSamples ? viewZoneSum_[z] / viewZoneCount_[z] : ctx.medianRatio;
-            const double background = reference_.level.at<float>(by, bx) * ctx.full * local;
+            const double local = viewZoneCount_[z] >= kMinLocalSamples ? viewZoneSum_[z] / viewZoneCount_[z]
+                                 : zoneCount_[z] >= kMinLocalSamples   ? zoneSum_[z] / zoneCount_[z]
+                                                                       : ctx.medianRatio;
+            const double background =
+                lowestLevelIn(reference_.level, cell, reference_.sensor, bx, by) * ctx.full * local;
             dark.limits.push_back(static_cast<int>(std::ceil(speckLimit(background, noise))));
         }
     std::vector<DarkRun> runs;

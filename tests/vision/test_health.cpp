@@ -259,6 +259,7 @@ TEST(HealthMonitor, UniformityOfALinearGradient)
     const double expected = 0.30 * (575.5 - 319.5) / 640.0;
     EXPECT_NEAR(f.uniformity, expected, 0.1 * expected);
     EXPECT_NEAR(f.backlight, 1.0, 0.01);
+    EXPECT_EQ(f.dustSpecks, 0.0); // the first band surveyed: a gradient is no dust
 }
 
 // --- Dust --------------------------------------------------------------------
@@ -479,6 +480,55 @@ TEST(HealthMonitor, RegionsOfTheSensor)
     EXPECT_NEAR(p.edgeWidthPx, 2.5631 * std::sqrt(1.0 + 1.0 / 12.0), 0.1 * 2.78);
     EXPECT_DOUBLE_EQ(p.edgeWidthPx, w.edgeWidthPx); // the same pixels, the same profiles
     EXPECT_DOUBLE_EQ(p.contrast, w.contrast);
+}
+
+// 16-bit frames: the same figures, in fractions of 65535.
+TEST(HealthMonitor, SixteenBitFrames)
+{
+    Scene empty;
+    empty.depth = CV_16U;
+    empty.backlight = [](double x, double y) { return 250.0 * vignetted(x, y); };
+    empty.noiseSigma = 200.0;
+    HealthMonitor monitor(referenceOf(empty));
+    Scene scene = empty;
+    scene.backlight = [](double x, double y) { return 0.8 * 250.0 * vignetted(x, y); };
+    scene.object = 5000.0;
+    scene.blurSigma = 1.0;
+    const Edge edge{{200.0, 240.0}, unit(180.0 + 12.0)};
+    scene.edges = {edge};
+    const std::vector<EdgeProbe> probes = probesAlong(edge, 6, 12.0, -30.0);
+    monitor.beginCycle();
+    for (std::size_t view = 0; view < 4; ++view) {
+        EdgeImage image = imageOf(scene.render(80 + view), scene);
+        image.threshold = 20000.0;
+        monitor.addView(view, image, probes);
+    }
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_NEAR(f.backlight, 0.8, 0.008);
+    EXPECT_NEAR(f.noise, 200.0 / 65535.0, 0.1 * 200.0 / 65535.0);
+    EXPECT_EQ(f.probes, 24);
+    // The backlight beside the probes (the part lies on their right), within the 7 px the levels are read at.
+    const double background = 0.8 * 250.0 * vignetted(190.0, 240.0);
+    EXPECT_NEAR(f.contrast, (background - 5000.0) / 65535.0, 0.02 * (background - 5000.0) / 65535.0);
+    EXPECT_NEAR(f.edgeWidthPx, 2.5631 * std::sqrt(1.0 + 1.0 / 12.0), 0.1 * 2.78);
+}
+
+// The reference is the backlight of one sensor: the frames of another are
+// judged without it (noise and edges only).
+TEST(HealthMonitor, AReferenceOfAnotherSensorIsNotApplied)
+{
+    Scene empty;
+    HealthMonitor monitor(referenceOf(empty));
+    Scene other = empty;
+    other.sensor = {320, 240};
+    monitor.beginCycle();
+    monitor.addView(0, imageOf(other.render(90), other), {});
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_EQ(f.views, 1);
+    EXPECT_TRUE(std::isnan(f.backlight));
+    EXPECT_TRUE(std::isnan(f.uniformity));
+    EXPECT_TRUE(std::isnan(f.dustSpecks));
+    EXPECT_NEAR(f.noise, std::sqrt(1.0 + 1.0 / 12.0) / 255.0, 0.1 / 255.0);
 }
 
 TEST(HealthMonitor, RefusesFramesItCannotRead)

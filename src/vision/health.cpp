@@ -568,9 +568,13 @@ HealthMonitor::HealthMonitor(FlatField reference) : reference_(std::move(referen
 {
     if (!reference_.empty()) {
         const cv::Rect blocks = blocksOf({{0, 0}, reference_.sensor}, std::max(reference_.cell, 1));
-        if (reference_.cell < 1 || reference_.level.type() != CV_32FC1 || reference_.level.cols != blocks.width ||
+        if (reference_.sensor.width < 1 || reference_.sensor.height < 1 || reference_.cell < 1 ||
+            reference_.level.type() != CV_32FC1 || reference_.level.cols != blocks.width ||
             reference_.level.rows != blocks.height)
             throw ArgumentError("HealthMonitor: the reference's level must be CV_32FC1 of ceil(sensor / cell) blocks");
+        if (!(reference_.noise >= 0.0 && reference_.noise < 1.0))
+            throw ArgumentError("HealthMonitor: the reference's noise must lie in [0, 1), found " +
+                                std::to_string(reference_.noise));
         zoneSide_ = reference_.cell * std::max(1, static_cast<int>(std::lround(double(kZonePx) / reference_.cell)));
         zones_ = {(reference_.sensor.width + zoneSide_ - 1) / zoneSide_,
                   (reference_.sensor.height + zoneSide_ - 1) / zoneSide_};
@@ -580,6 +584,11 @@ HealthMonitor::HealthMonitor(FlatField reference) : reference_(std::move(referen
         viewZoneCount_ = zoneCount_;
         bands_ = (reference_.sensor.height + kBandRows - 1) / kBandRows;
         bandSeen_.assign(static_cast<std::size_t>(kBandRows) * static_cast<std::size_t>(reference_.sensor.width), 0);
+        lowestLevel_.create(blocks.height, blocks.width, CV_32FC1);
+        for (int by = 0; by < blocks.height; ++by)
+            for (int bx = 0; bx < blocks.width; ++bx)
+                lowestLevel_.at<float>(by, bx) =
+                    static_cast<float>(lowestLevelIn(reference_.level, reference_.cell, reference_.sensor, bx, by));
         referenceSpecks_ = reference_.dustAt;
         std::sort(referenceSpecks_.begin(), referenceSpecks_.end(),
                   [](const cv::Point2f& a, const cv::Point2f& b) { return a.y < b.y; });
@@ -755,8 +764,7 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
             const double local = viewZoneCount_[z] >= kMinLocalSamples ? viewZoneSum_[z] / viewZoneCount_[z]
                                  : zoneCount_[z] >= kMinLocalSamples   ? zoneSum_[z] / zoneCount_[z]
                                                                        : ctx.medianRatio;
-            const double background =
-                lowestLevelIn(reference_.level, cell, reference_.sensor, bx, by) * ctx.full * local;
+            const double background = lowestLevel_.at<float>(by, bx) * ctx.full * local;
             dark.limits.push_back(static_cast<int>(std::ceil(speckLimit(background, noise))));
         }
     std::vector<DarkRun> runs;

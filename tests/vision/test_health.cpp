@@ -549,6 +549,11 @@ TEST(HealthMonitor, RefusesFramesItCannotRead)
     off.sensor = {640, 480};
     EXPECT_THROW(monitor.addView(4, off, {}), hg::ArgumentError);
     EXPECT_EQ(monitor.endCycle().views, 0);
+    // A reference whose levels do not cover its sensor in its cells.
+    FlatField odd;
+    odd.sensor = {640, 480};
+    odd.level = cv::Mat(14, 20, CV_32FC1, cv::Scalar(0.8)); // 480 / 32 = 15 rows of blocks
+    EXPECT_THROW(HealthMonitor{odd}, hg::ArgumentError);
 }
 
 TEST(HealthMonitor, WarningsAndTheirBits)

@@ -130,7 +130,10 @@ std::uint16_t healthWarningBits(std::span<const HealthFigure> warnings);
 /// Watches a station's frames cycle after cycle (docs/health.md).
 class HealthMonitor {
   public:
-    /// Without a reference (empty) the backlight, uniformity and dust are not measured.
+    /// Without a reference (empty) the backlight, uniformity and dust are not
+    /// measured. Throws hg::ArgumentError when a reference is not one
+    /// buildFlatField could have made (levels not ceil(sensor / cell) blocks
+    /// of CV_32FC1, noise outside [0, 1)).
     explicit HealthMonitor(FlatField reference = {});
 
     const FlatField& reference() const { return reference_; }
@@ -158,6 +161,7 @@ class HealthMonitor {
 
     FlatField reference_;
     std::vector<cv::Point2f> referenceSpecks_; ///< reference_.dustAt sorted by y
+    cv::Mat lowestLevel_;                      ///< per block: the lowest level within it (the dust limits)
     cv::Size zones_{};                         ///< uniformity zones across the sensor
     int zoneSide_ = 0;                         ///< px
     int bands_ = 0;

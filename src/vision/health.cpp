@@ -149,17 +149,33 @@ std::pair<int, double> blockPair(double px, int cell, int blocks)
     return {first, at - first};
 }
 
-// The reference's level at sensor pixel (x, y) (fraction of full scale):
-// bilinear between the centres of its blocks, whose levels are their means.
-double levelAt(const cv::Mat& level, int cell, double x, double y)
-{
-    const auto [c, across] = blockPair(x, cell, level.cols);
-    const auto [r, down] = blockPair(y, cell, level.rows);
-    const int c1 = std::min(c + 1, level.cols - 1), r1 = std::min(r + 1, level.rows - 1);
-    const double top = (1.0 - across) * level.at<float>(r, c) + across * level.at<float>(r, c1);
-    const double bottom = (1.0 - across) * level.at<float>(r1, c) + across * level.at<float>(r1, c1);
-    return (1.0 - down) * top + down * bottom;
-}
+// The reference's level along sensor row y (fraction of full scale): bilinear
+// between the centres of its blocks, whose levels are their means.
+class LevelRow {
+  public:
+    LevelRow() = default;
+    LevelRow(const cv::Mat& level, int cell, double y) : cell_(cell), cols_(level.cols)
+    {
+        const auto [r, down] = blockPair(y, cell, level.rows);
+        top_ = level.ptr<float>(r);
+        bottom_ = level.ptr<float>(std::min(r + 1, level.rows - 1));
+        down_ = down;
+    }
+
+    double at(double x) const
+    {
+        const auto [c, across] = blockPair(x, cell_, cols_);
+        const int c1 = std::min(c + 1, cols_ - 1);
+        return (1.0 - down_) * ((1.0 - across) * top_[c] + across * top_[c1]) +
+               down_ * ((1.0 - across) * bottom_[c] + across * bottom_[c1]);
+    }
+
+  private:
+    int cell_ = 1, cols_ = 1;
+    const float* top_ = nullptr;
+    const float* bottom_ = nullptr;
+    double down_ = 0.0;
+};
 
 // The lowest level the interpolation gives within block (bx, by): at one of
 // its corners or where it crosses a line through the block centres.
@@ -170,7 +186,7 @@ double lowestLevelIn(const cv::Mat& level, int cell, cv::Size sensor, int bx, in
     double lowest = std::numeric_limits<double>::infinity();
     for (double x : {double(x0), 0.5 * (x0 + x1), double(x1)})
         for (double y : {double(y0), 0.5 * (y0 + y1), double(y1)})
-            lowest = std::min(lowest, levelAt(level, cell, x, y));
+            lowest = std::min(lowest, LevelRow(level, cell, y).at(x));
     return lowest;
 }
 
@@ -456,6 +472,7 @@ template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid
     for (int y = g.first.y; y < g.frame.y + g.frame.height; y += kRowsApart * g.step) {
         const Pixel* row = grey.ptr<Pixel>(y - g.frame.y);
         const int zoneRow = (y / g.zoneSide) * g.zonesAcross;
+        const LevelRow levels = g.level != nullptr ? LevelRow(*g.level, g.cell, y) : LevelRow();
         for (int x = g.first.x; x < right; x += g.step) {
             const Pixel* at = row + (x - g.frame.x);
             const int p = at[0];
@@ -465,7 +482,7 @@ template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid
             if (g.level == nullptr) {
                 s.ratio = static_cast<float>(p / g.full);
             } else {
-                const double level = levelAt(*g.level, g.cell, x, y);
+                const double level = levels.at(x);
                 if (!(level > 0.0)) continue;
                 s.ratio = static_cast<float>(p / (g.full * level));
                 s.zone = zoneRow + x / g.zoneSide;

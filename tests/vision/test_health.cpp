@@ -341,8 +341,8 @@ TEST(HealthMonitor, DustSurveyOfRegionFrames)
 // The 10–90 % width of a straight edge blurred by a Gaussian σ and integrated
 // over the pixel's area: 2.563·√(σ² + 1/12) px. Below half a pixel of blur a
 // profile cannot tell the blur from where the edge lies within its pixel: a
-// sharp edge reads between 0 and 1.6 times that, about 1.25 times over many
-// probes (docs/health.md, "Limits") — sharp, far below any limit.
+// sharp edge reads between 0 and 1.6 times that, the median over these probes
+// about 1.3 times (docs/health.md, "Limits") — sharp, far below any limit.
 TEST(HealthMonitor, EdgeWidthFollowsTheBlur)
 {
     double sharp = 0.0;
@@ -396,7 +396,7 @@ TEST(HealthMonitor, ContrastAndNoise)
 // its standard error about 2.5 %). The integral's own part, edgeSigmaPx, is
 // an upper estimate (docs/inspection.md, "Uncertainty budget": here 1.5 times
 // the scatter of a sharp edge); the blur's part keeps the prediction above
-// the scatter as the scatter doubles (σ = 3 px; edgeSigmaPx alone falls 18 % short).
+// the scatter as the scatter doubles (σ = 3 px: edgeSigmaPx alone falls 23 % short).
 TEST(HealthMonitor, PredictionBoundsTheEdgeScatterUnderBlur)
 {
     for (double sigma : {0.0, 1.0, 2.0, 2.5, 3.0}) {

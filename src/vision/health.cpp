@@ -671,8 +671,7 @@ void HealthMonitor::addView(std::size_t view, const EdgeImage& image, std::span<
 }
 
 // A sparse grid of background pixels (docs/health.md, "Figures"): each
-// against its block's reference level, its difference to the next pixel for
-// the noise.
+// against the reference's level there, its neighbours' differences for the noise.
 void HealthMonitor::sampleBackground(ViewContext& ctx)
 {
     const EdgeImage& image = *ctx.image;

@@ -10,7 +10,7 @@
 // The cost is a budget, not an afterthought: a cycle's views are examined on
 // a sparse sample of the background and a few profile reads per landmark, and
 // the dust search covers the frame in bands over successive cycles, so a
-// cycle of 8 views costs well under 0.2 ms (tools/bench, docs/health.md).
+// cycle of 8 views costs about 0.1 ms of CPU (tools/bench, docs/health.md).
 //
 // Pure computation on values: no I/O, no threads, no clock. The monitor keeps
 // state between cycles (the dust survey's bands); one thread at a time.

@@ -141,22 +141,23 @@ void writeFlatField(const std::filesystem::path& file, const vision::FlatField& 
     const cv::Size blocks = reference.cell >= 1 ? blocksOf(reference.sensor, reference.cell) : cv::Size();
     if (reference.empty() || reference.level.type() != CV_32FC1 || reference.level.size() != blocks)
         throw ArgumentError("writeFlatField: the reference's level must be CV_32FC1 of ceil(sensor / cell) blocks");
-    json level = json::array();
+    nlohmann::ordered_json level = nlohmann::ordered_json::array();
     for (int by = 0; by < blocks.height; ++by)
         for (int bx = 0; bx < blocks.width; ++bx)
             level.push_back(static_cast<double>(reference.level.at<float>(by, bx)));
-    json specks = json::array();
+    nlohmann::ordered_json specks = nlohmann::ordered_json::array();
     for (const cv::Point2f& p : reference.dustAt)
         specks.push_back({static_cast<double>(p.x), static_cast<double>(p.y)});
-    const json document = {{"format", kFormat},
-                           {"version", kVersion},
-                           {"sensor", {reference.sensor.width, reference.sensor.height}},
-                           {"cell", reference.cell},
-                           {"blocks", {blocks.width, blocks.height}},
-                           {"level", level},
-                           {"noise", reference.noise},
-                           {"dust_specks", specks},
-                           {"taken_unix_ms", reference.takenUnixMs}};
+    // The keys in the documented order (docs/health.md), for a person reading the file.
+    const nlohmann::ordered_json document = {{"format", kFormat},
+                                             {"version", kVersion},
+                                             {"sensor", {reference.sensor.width, reference.sensor.height}},
+                                             {"cell", reference.cell},
+                                             {"blocks", {blocks.width, blocks.height}},
+                                             {"level", level},
+                                             {"noise", reference.noise},
+                                             {"dust_specks", specks},
+                                             {"taken_unix_ms", reference.takenUnixMs}};
     replaceFileDurably(file, document.dump(1) + "\n");
 }
 

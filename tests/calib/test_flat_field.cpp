@@ -97,7 +97,7 @@ TEST(FlatFieldFile, RoundTripKeepsEveryFigure)
     EXPECT_EQ(back.takenUnixMs, 1'790'123'456'789);
     // The documented layout (docs/health.md): the blocks' rows one after the other.
     const std::string text = readText(file);
-    EXPECT_NE(text.find("\"format\": \"hullgauge flat field\""), std::string::npos);
+    EXPECT_EQ(text.rfind("{\n \"format\": \"hullgauge flat field\",\n \"version\": 1,", 0), 0u) << text.substr(0, 80);
     EXPECT_NE(text.find("\"blocks\": [\n  3,\n  3\n ]"), std::string::npos) << text.substr(0, 200);
     // Rewritten in place: replaced whole.
     FlatField other = ref;

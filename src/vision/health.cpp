@@ -91,7 +91,8 @@ int stepQuantum(double full)
 
 std::size_t stepBinCount(double full)
 {
-    return static_cast<std::size_t>(full) / static_cast<std::size_t>(stepQuantum(full)) + 1;
+    // Rounded to the nearest quantum, the largest difference falls one bin beyond full / quantum.
+    return static_cast<std::size_t>(full) / static_cast<std::size_t>(stepQuantum(full)) + 2;
 }
 
 std::size_t ratioBin(double ratio)
@@ -331,6 +332,7 @@ cv::Rect blocksOf(const cv::Rect& pixels, int cell)
 // lie to be a speck: 10 %, more where the noise would reach that.
 double speckLimit(double background, double noiseGrey)
 {
+    if (!(background > 0.0)) return 0.0; // no backlight there: nothing is darker
     return background * (1.0 - std::max(kSpeckMinDepth, kSpeckNoiseK * noiseGrey / background));
 }
 

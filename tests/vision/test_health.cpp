@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include "hullgauge/common/error.h"
@@ -554,6 +555,39 @@ TEST(HealthMonitor, RefusesFramesItCannotRead)
     odd.sensor = {640, 480};
     odd.level = cv::Mat(14, 20, CV_32FC1, cv::Scalar(0.8)); // 480 / 32 = 15 rows of blocks
     EXPECT_THROW(HealthMonitor{odd}, hg::ArgumentError);
+}
+
+// Whatever the frames and probes, a figure is read or is NaN: probes with no
+// place, no direction or far off the sensor; black, saturated and
+// checkerboard frames (every difference the largest a 16-bit frame holds).
+TEST(HealthMonitor, OddFramesAndProbesAreReadOrLeftOut)
+{
+    Scene empty;
+    HealthMonitor monitor(referenceOf(empty));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::vector<EdgeProbe> odd = {{{nan, 10.0}, {1.0, 0.0}},
+                                        {{100.0, 100.0}, {0.0, 0.0}},
+                                        {{1e12, -1e12}, {0.0, 1.0}},
+                                        {{100.0, 100.0}, {nan, 1.0}}};
+    monitor.beginCycle();
+    EdgeImage black = imageOf(cv::Mat(480, 640, CV_8UC1, cv::Scalar(0)), empty);
+    EdgeImage white = imageOf(cv::Mat(480, 640, CV_8UC1, cv::Scalar(255)), empty);
+    cv::Mat board(480, 640, CV_16UC1);
+    for (int y = 0; y < board.rows; ++y)
+        for (int x = 0; x < board.cols; ++x) board.at<std::uint16_t>(y, x) = (x + y) % 2 == 0 ? 65535 : 0;
+    EdgeImage checker = imageOf(board, empty);
+    checker.threshold = 100.0;
+    EdgeImage unknown = imageOf(empty.render(95), empty);
+    unknown.threshold = nan;
+    const std::array<const EdgeImage*, 4> images = {&black, &white, &checker, &unknown};
+    for (std::size_t view = 0; view < images.size(); ++view) monitor.addView(view, *images[view], odd);
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_EQ(f.views, 4);
+    EXPECT_EQ(f.probes, 0);
+    EXPECT_TRUE(std::isnan(f.edgeWidthPx));
+    EXPECT_TRUE(std::isnan(f.predictedSigmaPx));
+    // The saturated frame and the checkerboard's white squares: all background, at full scale.
+    EXPECT_NEAR(f.backlight, 255.0 / 200.0, 0.01);
 }
 
 TEST(HealthMonitor, WarningsAndTheirBits)

@@ -10,7 +10,7 @@
 // The cost is a budget, not an afterthought: a cycle's views are examined on
 // a sparse sample of the background and a few profile reads per landmark, and
 // the dust search covers the frame in bands over successive cycles, so a
-// cycle of 8 views costs well under 0.2 ms (tools/bench, docs/health.md).
+// cycle of 8 views costs about 0.1 ms of CPU (tools/bench, docs/health.md).
 //
 // Pure computation on values: no I/O, no threads, no clock. The monitor keeps
 // state between cycles (the dust survey's bands); one thread at a time.
@@ -40,6 +40,10 @@ struct FlatField {
     cv::Mat level;      ///< CV_32FC1, ceil(sensor / cell): mean grey per block, fraction of full scale
     double noise = 0.0; ///< the empty frame's grey-level σ, fraction of full scale
     int dustSpecks = 0; ///< dark specks the reference already shows (the baseline of the dust count)
+    /// Where those specks are (sensor pixels, their centroids): a speck the
+    /// monitor finds within 2 px of one of them is not new (docs/health.md,
+    /// "Reference"). buildFlatField lists every speck it counts.
+    std::vector<cv::Point2f> dustAt;
     std::int64_t takenUnixMs = 0;
 
     bool empty() const { return level.empty(); }
@@ -96,6 +100,9 @@ struct HealthFigures {
     double predictedSigmaPx = kNoFigure;
     int views = 0;  ///< views examined
     int probes = 0; ///< edge profiles measured
+    /// Bands of the dust survey examined since the monitor began (of
+    /// HealthMonitor::dustSurveyBands()): the dust figure covers these.
+    int dustBandsSurveyed = 0;
 };
 
 /// Limits per figure (docs/health.md, "Limits"); a figure beyond its limit is a warning.
@@ -108,6 +115,13 @@ struct HealthLimits {
     double maxNoise = 0.02;
 };
 
+/// The edge-location standard uncertainty (px) that noise and contrast (both
+/// in one unit: fractions of full scale, or grey levels) and the edge profile's
+/// 10–90 % width predict for vision::findEdge: edgeSigmaPx(noise, contrast)
+/// and the window's jitter a blurred edge adds (docs/health.md, "Prediction").
+/// NaN when noise or contrast is; edgeSigmaPx alone when the width is NaN.
+double predictedEdgeSigmaPx(double noise, double contrast, double edgeWidthPx);
+
 /// The figures beyond their limits, in the enum's order; NaN figures never warn.
 std::vector<HealthFigure> healthWarnings(const HealthFigures& figures, const HealthLimits& limits);
 /// Bit k set for the k-th figure of HealthFigure among `warnings` (PLC HEALTH_WARNINGS).
@@ -116,7 +130,10 @@ std::uint16_t healthWarningBits(std::span<const HealthFigure> warnings);
 /// Watches a station's frames cycle after cycle (docs/health.md).
 class HealthMonitor {
   public:
-    /// Without a reference (empty) the backlight, uniformity and dust are not measured.
+    /// Without a reference (empty) the backlight, uniformity and dust are not
+    /// measured. Throws hg::ArgumentError when a reference is not one
+    /// buildFlatField could have made (levels not ceil(sensor / cell) blocks
+    /// of CV_32FC1, noise outside [0, 1)).
     explicit HealthMonitor(FlatField reference = {});
 
     const FlatField& reference() const { return reference_; }
@@ -125,24 +142,55 @@ class HealthMonitor {
     void beginCycle();
     /// View `view` of the cycle: its frame (the whole sensor or a region of it,
     /// EdgeImage's origin) and the landmarks' edges in it. Cheap by design (the
-    /// file comment); the frame is read, never kept.
+    /// file comment); the frame is read, never kept. Throws hg::ArgumentError
+    /// naming the view when its frame is not 8- or 16-bit grey or, placed at
+    /// its origin, leaves the sensor.
     void addView(std::size_t view, const EdgeImage& image, std::span<const EdgeProbe> probes);
     /// The cycle's figures.
     HealthFigures endCycle();
 
+    /// How many horizontal bands of the sensor the dust survey goes through,
+    /// one per cycle (docs/health.md, "Figures"); 0 without a reference.
+    int dustSurveyBands() const { return bands_; }
+
   private:
-    struct ViewFigures {
-        double backlight = kNoFigure;
-        double uniformity = kNoFigure;
-        double edgeWidthPx = kNoFigure;
-        double contrast = kNoFigure;
-        double noise = kNoFigure;
-        int probes = 0;
-    };
+    struct ViewContext; // one view's frame as health.cpp reads it
+
+    void sampleBackground(ViewContext& view);
+    void surveyBand(const ViewContext& view);
+
     FlatField reference_;
+    std::vector<cv::Point2f> referenceSpecks_; ///< reference_.dustAt sorted by y
+    cv::Mat lowestLevel_;                      ///< per block: the lowest level within it (the dust limits)
+    cv::Size zones_{};                         ///< uniformity zones across the sensor
+    int zoneSide_ = 0;                         ///< px
+    int bands_ = 0;
     std::uint64_t cycle_ = 0;
-    std::vector<ViewFigures> views_;
-    /// The dust survey: specks found in each band of the sensor when it was last examined.
+
+    // The cycle's pools.
+    int views_ = 0;
+    std::vector<int> ratioBins_; ///< the background samples' ratios to the reference, counted in bins
+    long ratioCount_ = 0;
+    std::vector<double> zoneSum_;
+    std::vector<int> zoneCount_;
+    std::vector<double> widths_, contrasts_;
+    /// |differences| of neighbouring background pixels counted in bins of grey
+    /// levels of the cycle's first frame's depth (full scale stepsFull_).
+    std::vector<int> stepBins_;
+    long stepCount_ = 0;
+    double stepsFull_ = 0.0;
+
+    /// The last view's zones (for its dust thresholds): the sum of its samples' ratios and their count.
+    std::vector<double> viewZoneSum_;
+    std::vector<int> viewZoneCount_;
+
+    /// The dust survey: this cycle's band, which of its pixels a view of the
+    /// cycle showed as backlight (0 not yet, 1 surveyed), the new specks found
+    /// in it, and the specks found in each band when it was last examined.
+    int band_ = 0;
+    bool bandExamined_ = false;
+    int bandFound_ = 0;
+    std::vector<std::uint8_t> bandSeen_;
     std::map<int, int> bandSpecks_;
 };
 

@@ -149,7 +149,7 @@ function healthChart(state, rows) {
       borderDash: [6, 4], pointRadius: 0, borderWidth: 1.5 }];
   healthCharts[id] = new Chart(document.getElementById(id), { type: "line", data: { datasets },
     options: { animation: false, parsing: false, plugins: { legend: { display: false } },
-      scales: { x: { type: "linear", min: x0, max: x1, ticks: { maxTicksLimit: 6, callback: (v) => hg.localTime(v).text } },
+      scales: { x: { type: "linear", min: x0, max: x1, ticks: { maxTicksLimit: 4, callback: (v) => hg.localTime(v).text } },
         y: { type: "linear", title: { display: true, text: state.key } } } } });
   return { figure: state.figure, points: points.length, limit: state.limit, beyond: points.filter((p) => beyond(p.y)).length };
 }

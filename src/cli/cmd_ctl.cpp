@@ -39,6 +39,7 @@ struct CtlOptions {
     bool noWait = false;
     double waitS = 900.0;
     int frames = 8;
+    bool reset = false;
 };
 
 std::string socketPath(const CtlOptions& o)
@@ -123,6 +124,16 @@ void printHealth(const nlohmann::json& h)
               << "\n";
 }
 
+/// The simulated camera's optics as they have aged (docs/camera.md, "Aging"), on one line.
+std::string opticsLine(const nlohmann::json& o)
+{
+    return "back light " + formatNumber(o.value("background_level", 0.0), 4) + ", vignetting " +
+           formatNumber(o.value("vignetting", 0.0), 3) + ", blur " + formatNumber(o.value("blur_sigma_px", 0.0), 3) +
+           " px, halo " + formatNumber(o.value("halo_px", 0.0), 3) + " px, " +
+           std::to_string(o.value("dust_specks", 0)) + " dust specks (" + std::to_string(o.value("aging_steps", 0)) +
+           " aging steps in " + std::to_string(o.value("cycles", 0)) + " cycles)";
+}
+
 void printStatus(const nlohmann::json& s)
 {
     const auto& seq = s["sequencer"];
@@ -163,6 +174,8 @@ void printStatus(const nlohmann::json& s)
                   << s["http"].value("port", 0) << "/\n";
     if (!s["simulated_part"].get<std::string>().empty())
         std::cout << "sim part:     " << s["simulated_part"].get<std::string>() << "\n";
+    if (s.contains("simulated_optics") && s["simulated_optics"].is_object())
+        std::cout << "sim optics:   " << opticsLine(s["simulated_optics"]) << "\n";
     if (s.contains("lamps") && s["lamps"].is_object()) {
         // Commanded state per lamp (off, on, blinking), and the backend.
         const auto& l = s["lamps"];
@@ -265,8 +278,8 @@ std::function<int()> factory(CLI::App& app)
 {
     auto opts = std::make_shared<CtlOptions>();
     auto* ctl =
-        app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, purpose, "
-                                  "calibrate, flat-field)");
+        app.add_subcommand("ctl", "talk to the running daemon (status, results, trigger, abort, sim-part, sim-age, "
+                                  "purpose, calibrate, flat-field)");
     ctl->add_option("--socket", opts->socket,
                     "maintenance socket (default $HULLGAUGE_SOCKET, else " + std::string(kDefaultSocket) + ")");
     ctl->add_flag("--json", opts->json, "print the daemon's answer as JSON");
@@ -283,7 +296,9 @@ std::function<int()> factory(CLI::App& app)
     auto* abort = ctl->add_subcommand("abort", "abort the running cycle");
     auto* simPart = ctl->add_subcommand("sim-part", "switch the simulated part under test");
     simPart->add_flag("--list", opts->list, "list the parts the simulated line offers");
-    simPart->add_option("name", opts->part, "nominal or a variant name");
+    simPart->add_option("name", opts->part, "nominal, a variant name, or none (the empty fixture)");
+    auto* simAge = ctl->add_subcommand("sim-age", "print the simulated camera's aged optics (docs/camera.md, Aging)");
+    simAge->add_flag("--reset", opts->reset, "set the optics back as configured, the cycle count at 0");
     auto* purpose = ctl->add_subcommand(
         "purpose", "print or set the purpose of the next cycles: production, master or study (docs/study.md)");
     purpose->add_option("purpose", opts->purpose, "production | master | study (none: print the current one)")
@@ -344,6 +359,14 @@ std::function<int()> factory(CLI::App& app)
             return runCalibrate(path, *opts);
         } else if (flatField->parsed()) {
             return runFlatField(path, *opts);
+        } else if (simAge->parsed()) {
+            nlohmann::json req{{"command", "sim-age"}};
+            if (opts->reset) req["reset"] = true;
+            answer = request(path, req);
+            if (opts->json)
+                std::cout << answer["optics"].dump(2) << "\n";
+            else
+                std::cout << "simulated optics: " << opticsLine(answer["optics"]) << "\n";
         } else if (simPart->parsed()) {
             if (opts->list) {
                 answer = request(path, {{"command", "sim-part"}, {"list", true}});

@@ -6,6 +6,7 @@
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/file_kind.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/inspect/correction.h"
 #include "hullgauge/workbench/workspace.h"
 
@@ -438,7 +439,12 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
         n->allowOnlyKeys({"parts", "seating"});
         auto parts = (*n)["parts"];
         if (!parts.isMap()) parts.fail("expected a map of part names to mesh files (nominal and defect variants)");
-        for (const auto& name : parts.keys()) cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
+        for (const auto& name : parts.keys()) {
+            // `sim-part none` shows the empty fixture (docs/camera.md, "The empty fixture").
+            if (name == drivers::kEmptyFixture)
+                parts[name].fail("'none' names the empty fixture (sim-part none): give the part another name");
+            cfg.simulatedParts.emplace_back(name, existingFile(parts[name], base));
+        }
         if (parts.keys().empty() || !parts.has("nominal")) parts.fail("the simulated parts must include 'nominal'");
         if (auto s = n->optional("seating")) cfg.simulatedSeating = parseSeating(*s);
     }

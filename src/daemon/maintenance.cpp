@@ -256,7 +256,8 @@ json status(const MaintenanceContext& c, const json&)
             {"health", c.runner.health()},
             {"purpose", std::string(enumName(c.registers.purpose()))},
             {"program", c.runner.program()},
-            {"simulated_part", c.simulation ? c.simulation->part() : std::string()}};
+            {"simulated_part", c.simulation ? c.simulation->part() : std::string()},
+            {"simulated_optics", c.simulation ? c.simulation->optics() : json()}};
 }
 
 /// A whole-number field of a request within [lo, hi], `fallback` when it is
@@ -460,6 +461,18 @@ json simPart(const MaintenanceContext& c, const json& request)
     return {{"ok", true}, {"current", name}};
 }
 
+// The simulated camera's optics as they have aged (docs/camera.md, "Aging");
+// `"reset": true` sets them back as configured, the cycle count at 0.
+json simAge(const MaintenanceContext& c, const json& request)
+{
+    if (!c.simulation || c.simulation->optics().is_null())
+        return {{"ok", false}, {"error", "the camera is not simulated"}};
+    const auto reset = flagField(request, "reset");
+    if (!reset) return refusal(reset.status());
+    if (reset.value()) c.simulation->resetAging();
+    return {{"ok", true}, {"optics", c.simulation->optics()}};
+}
+
 // As SIGHUP (docs/daemon.md, "Reload"): answered at once, applied when read and checked.
 json reload(const MaintenanceContext& c, const json&)
 {
@@ -470,9 +483,9 @@ json reload(const MaintenanceContext& c, const json&)
 
 using Command = json (*)(const MaintenanceContext&, const json&);
 const std::map<std::string, Command, std::less<>> kCommands{
-    {"status", status},       {"results", results},         {"trigger", trigger},      {"abort", abortCycle},
-    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart},     {"purpose", purpose},
-    {"snapshot", snapshot},   {"reload", reload},           {"flat-field", flatField},
+    {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
+    {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
+    {"snapshot", snapshot},   {"reload", reload},           {"sim-age", simAge},   {"flat-field", flatField},
 };
 
 } // namespace
@@ -484,25 +497,29 @@ std::string changedValue(const MaintenanceContext& c, const std::string& command
 {
     if (command == "purpose" && request.contains("purpose")) return std::string(enumName(c.registers.purpose()));
     if (command == "sim-part" && request.contains("name") && c.simulation) return "part: " + c.simulation->part();
+    if (command == "sim-age" && request.value("reset", json()) == json(true) && c.simulation) {
+        const json optics = c.simulation->optics();
+        if (optics.is_null()) return {};
+        return fmt::format("aging: {} cycles, {} steps", optics.value("cycles", 0), optics.value("aging_steps", 0));
+    }
     return {};
 }
 
 // The changes among the commands go into the audit trail with who asked (docs/audit.md): a new cycle
-// purpose, another simulated part, a calibration queued (its station file is recorded when the daemon
-// loads it), a flat-field reference taken, a reload asked for. Questions (status, results, calibration,
-// flat-field without `take`) and operations (trigger, abort, snapshot) are not changes.
+// purpose, another simulated part, the simulated optics' aging reset, a calibration queued (its station
+// file is recorded when the daemon loads it), a flat-field reference taken, a reload asked for. Questions
+// (status, results, calibration, flat-field without `take`) and operations (trigger, abort, snapshot) are
+// not changes.
 void recordChange(const MaintenanceContext& c, const std::string& command, const json& request,
                   const std::string& before, const json& answer)
 {
-    static const std::map<std::string, std::string> kActions{{"purpose", "setting.purpose"},
-                                                             {"sim-part", "setting.sim-part"},
-                                                             {"calibrate", "calibration.run"},
-                                                             {"flat-field", "calibration.flat-field"},
-                                                             {"reload", "setting.reload"}};
+    static const std::map<std::string, std::string> kActions{
+        {"purpose", "setting.purpose"},   {"sim-part", "setting.sim-part"},         {"sim-age", "setting.sim-age"},
+        {"calibrate", "calibration.run"}, {"flat-field", "calibration.flat-field"}, {"reload", "setting.reload"}};
     const auto action = kActions.find(command);
     if (!c.audit || action == kActions.end()) return;
     if (command == "flat-field" && !(request.contains("take") && request["take"] == true)) return;
-    if ((command == "purpose" || command == "sim-part") && before.empty()) return;
+    if ((command == "purpose" || command == "sim-part" || command == "sim-age") && before.empty()) return;
     // The caller is set by the socket server or the HMI, never by the client (answerMaintenanceRequest).
     const json caller = request.value("caller", json::object());
     store::AuditEntry entry;

@@ -111,8 +111,8 @@ struct MaintenanceContext {
 };
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,
-/// results, trigger, abort, calibrate, calibration, sim-part, purpose,
-/// snapshot, reload, flat-field; any other command is answered as unknown.
+/// results, trigger, abort, calibrate, calibration, sim-part, sim-age, purpose, snapshot, reload,
+/// flat-field; any other command is answered as unknown.
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context);
 
 } // namespace hg::daemon

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
@@ -313,6 +314,101 @@ class DistortedProjector {
     double limit2_;
 };
 
+/// Φ⁻¹(p) for p in (0, 1): Acklam's rational approximation, refined by one
+/// Halley step on erfc (then accurate to about 1e-15 relative).
+double inverseNormalCdf(double p)
+{
+    static constexpr std::array<double, 6> a{-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
+                                             1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
+    static constexpr std::array<double, 5> b{-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
+                                             6.680131188771972e+01, -1.328068155288572e+01};
+    static constexpr std::array<double, 6> c{-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
+                                             -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
+    static constexpr std::array<double, 4> d{7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
+                                             3.754408661907416e+00};
+    auto tail = [&](double q) {
+        return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+               ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+    };
+    constexpr double low = 0.02425;
+    double x = 0.0;
+    if (p < low) {
+        x = tail(std::sqrt(-2.0 * std::log(p)));
+    } else if (p > 1.0 - low) {
+        x = -tail(std::sqrt(-2.0 * std::log1p(-p)));
+    } else {
+        const double q = p - 0.5;
+        const double r = q * q;
+        x = (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+            (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0);
+    }
+    // Halley's step on the residual in the smaller tail, where it keeps its precision.
+    const double e =
+        p < 0.5 ? 0.5 * std::erfc(-x / std::sqrt(2.0)) - p : (1.0 - p) - 0.5 * std::erfc(x / std::sqrt(2.0));
+    const double u = e * std::sqrt(2.0 * std::numbers::pi) * std::exp(0.5 * x * x);
+    return x - u / (1.0 + 0.5 * x * u);
+}
+
+/// σ_h of erodeCoverage's probe: at least 1 px, so the blurred edge is
+/// Gaussian to well under 0.01 px, and a third of the reach it reads distances
+/// out to, so they lie within 3σ, where the blurred coverage keeps its precision.
+double haloProbeSigma(double haloPx)
+{
+    return std::max(1.0, (haloPx + 0.5) / 3.0);
+}
+
+/// Pixels beyond which erodeCoverage does not look (the probe's kernel radius, 6σ_h).
+int haloReach(double haloPx)
+{
+    return haloPx > 0.0 ? static_cast<int>(std::ceil(6.0 * haloProbeSigma(haloPx))) : 0;
+}
+
+/// Pixels around a window whose coverage reaches the window's grey values:
+/// the halo's probe, then the optics blur (OpenCV's kernel for a float image
+/// reaches 4σ from its centre).
+int renderMargin(const RenderOptions& options)
+{
+    const int blur = options.blurSigmaPx > 0.0 ? static_cast<int>(std::ceil(4.0 * options.blurSigmaPx)) + 1 : 0;
+    return blur + haloReach(options.haloPx);
+}
+
+/// The back light's level (grey levels) over the window of `sensor` at
+/// `origin` of `size`: `level` · V · D (renderer.h, RenderOptions).
+cv::Mat backLight(cv::Size size, const RenderOptions& options, cv::Point origin, cv::Size sensor, double level)
+{
+    cv::Mat light(size, CV_32FC1, cv::Scalar(level));
+    const double cx = (sensor.width - 1) / 2.0;
+    const double cy = (sensor.height - 1) / 2.0;
+    const double corner2 = cx * cx + cy * cy; // ρ = 1 at a corner pixel's centre
+    if (options.vignetting > 0.0 && corner2 > 0.0) {
+        for (int r = 0; r < size.height; ++r) {
+            float* row = light.ptr<float>(r);
+            const double dy = origin.y + r - cy;
+            for (int c = 0; c < size.width; ++c) {
+                const double dx = origin.x + c - cx;
+                row[c] = static_cast<float>(level * (1.0 - options.vignetting * (dx * dx + dy * dy) / corner2));
+            }
+        }
+    }
+    const cv::Rect window(origin, size);
+    for (const DustSpeck& speck : options.dust) {
+        // Pixels whose centre lies within radius + 0.5 of the speck's centre (the anti-aliased rim).
+        const double reach = speck.radiusPx + 0.5;
+        const cv::Rect box =
+            cv::Rect(static_cast<int>(std::floor(speck.x - reach)), static_cast<int>(std::floor(speck.y - reach)),
+                     static_cast<int>(std::ceil(2.0 * reach)) + 2, static_cast<int>(std::ceil(2.0 * reach)) + 2) &
+            window;
+        for (int y = box.y; y < box.y + box.height; ++y) {
+            float* row = light.ptr<float>(y - origin.y);
+            for (int x = box.x; x < box.x + box.width; ++x) {
+                const double cover = std::clamp(reach - std::hypot(x - speck.x, y - speck.y), 0.0, 1.0);
+                row[x - origin.x] *= static_cast<float>(1.0 - speck.depth * cover);
+            }
+        }
+    }
+    return light;
+}
+
 } // namespace
 
 void RenderOptions::validate() const
@@ -329,6 +425,16 @@ void RenderOptions::validate() const
     if (bitDepth != 8 && bitDepth != 16) fail("bitDepth", "8 or 16", bitDepth);
     if (!(blurSigmaPx >= 0.0) || !std::isfinite(blurSigmaPx)) fail("blurSigmaPx", ">= 0", blurSigmaPx);
     if (!(noiseSigma >= 0.0) || !std::isfinite(noiseSigma)) fail("noiseSigma", ">= 0", noiseSigma);
+    if (!(vignetting >= 0.0 && vignetting <= 0.95)) fail("vignetting", "within [0, 0.95]", vignetting);
+    if (!(haloPx >= 0.0 && haloPx <= 10.0)) fail("haloPx", "within [0, 10]", haloPx);
+    for (std::size_t i = 0; i < dust.size(); ++i) {
+        const DustSpeck& d = dust[i];
+        const std::string name = "dust[" + std::to_string(i) + "].";
+        if (!std::isfinite(d.x) || std::abs(d.x) > 1e6) fail(name + "x", "within ±1e6", d.x);
+        if (!std::isfinite(d.y) || std::abs(d.y) > 1e6) fail(name + "y", "within ±1e6", d.y);
+        if (!(d.radiusPx >= 0.5 && d.radiusPx <= 500.0)) fail(name + "radiusPx", "within [0.5, 500]", d.radiusPx);
+        if (!(d.depth >= 0.0 && d.depth <= 1.0)) fail(name + "depth", "within [0, 1]", d.depth);
+    }
 }
 
 SilhouetteRenderer::SilhouetteRenderer(std::vector<model::TriangleMesh> meshes) : meshes_(std::move(meshes))
@@ -412,8 +518,7 @@ cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const Re
     if (window.empty() || (window & sensor) != window)
         throw ArgumentError(fmt::format("render window {}x{}+{}+{} is not within the {}x{} sensor", window.width,
                                         window.height, window.x, window.y, sensor.width, sensor.height));
-    // OpenCV's Gaussian kernel for a float image reaches 4σ from its centre.
-    const int margin = options.blurSigmaPx > 0.0 ? static_cast<int>(std::ceil(4.0 * options.blurSigmaPx)) + 1 : 0;
+    const int margin = renderMargin(options);
     const cv::Rect padded =
         cv::Rect(window.x - margin, window.y - margin, window.width + 2 * margin, window.height + 2 * margin) & sensor;
     // A crop is the same camera with its principal point moved by the crop's corner.
@@ -421,21 +526,66 @@ cv::Mat SilhouetteRenderer::render(const geometry::CameraModel& camera, const Re
     cropped.K(0, 2) -= padded.x;
     cropped.K(1, 2) -= padded.y;
     cropped.imageSize = padded.size();
-    const cv::Mat image = render(geometry::CameraModel(cropped, camera.cameraFromPart()), options);
+    // The back light's fall-off and dust are the sensor's: shaded at the crop's place on it.
+    const cv::Mat image = shadeCoverage(coverage(geometry::CameraModel(cropped, camera.cameraFromPart()), options),
+                                        options, padded.tl(), sensor.size());
     return image(window - padded.tl());
 }
 
-cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options)
+cv::Mat erodeCoverage(const cv::Mat& coverage, double haloPx)
+{
+    if (coverage.type() != CV_32FC1)
+        throw ArgumentError("coverage image must be CV_32FC1, found " + cv::typeToString(coverage.type()));
+    if (!(haloPx > 0.0 && haloPx <= 10.0))
+        throw ArgumentError("haloPx must be within (0, 10], found " + formatNumber(haloPx));
+    const double probe = haloProbeSigma(haloPx);
+    const int reach = haloReach(haloPx);
+    // Doubles: a distance of 3σ leaves 1e-3 of the blurred coverage to read it from.
+    cv::Mat blurred;
+    coverage.convertTo(blurred, CV_64FC1);
+    cv::GaussianBlur(blurred, blurred, cv::Size(2 * reach + 1, 2 * reach + 1), probe, probe, cv::BORDER_REPLICATE);
+    const double sigma = std::sqrt(probe * probe + 1.0 / 12.0);
+    // Only pixels within half a pixel of the shrunk edge, d in (h - 0.5, h + 0.5), are partly
+    // covered: the blurred coverage of that band, Φ(d / σ), bounds the pixels that need Φ⁻¹.
+    const auto normalCdf = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+    const double outside = normalCdf((haloPx - 0.5) / sigma);
+    const double inside = normalCdf((haloPx + 0.5) / sigma);
+    cv::Mat out(coverage.size(), CV_32FC1);
+    for (int r = 0; r < coverage.rows; ++r) {
+        const double* in = blurred.ptr<double>(r);
+        float* row = out.ptr<float>(r);
+        for (int c = 0; c < coverage.cols; ++c) {
+            const double s = in[c];
+            if (!(s > outside && s < inside)) {
+                row[c] = s >= inside ? 1.0f : 0.0f;
+                continue;
+            }
+            // Signed distance from the edge into the object, then the coverage of the shrunk silhouette.
+            const double distance = sigma * inverseNormalCdf(s);
+            row[c] = static_cast<float>(std::clamp(distance - haloPx + 0.5, 0.0, 1.0));
+        }
+    }
+    return out;
+}
+
+cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options, cv::Point origin, cv::Size sensor)
 {
     options.validate();
     if (coverage.type() != CV_32FC1)
         throw ArgumentError("coverage image must be CV_32FC1, found " + cv::typeToString(coverage.type()));
+    if (sensor.width <= 0 || sensor.height <= 0) sensor = coverage.size();
     const double full = options.bitDepth == 8 ? 255.0 : 65535.0;
     const double background = options.backgroundLevel * full;
     const double object = options.objectLevel * full;
-    // Backlit model: value = background + (object - background) * coverage.
+    const cv::Mat covered = options.haloPx > 0.0 ? erodeCoverage(coverage, options.haloPx) : coverage;
+    // Backlit model: value = B + (object - B) * coverage, B the back light's level at the pixel.
     cv::Mat grey;
-    coverage.convertTo(grey, CV_32FC1, object - background, background);
+    if (options.vignetting > 0.0 || !options.dust.empty()) {
+        const cv::Mat light = backLight(coverage.size(), options, origin, sensor, background);
+        grey = light + (object - light).mul(covered);
+    } else {
+        covered.convertTo(grey, CV_32FC1, object - background, background);
+    }
     if (options.blurSigmaPx > 0.0) {
         // The back light continues beyond the sensor edge: replicate the border.
         cv::GaussianBlur(grey, grey, cv::Size(0, 0), options.blurSigmaPx, options.blurSigmaPx, cv::BORDER_REPLICATE);

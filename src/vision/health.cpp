@@ -10,7 +10,9 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
+#include <utility>
 
 namespace hg::vision {
 namespace {
@@ -27,11 +29,16 @@ constexpr double kMadToSigma = 1.4826;
 
 // Background samples per view, each with the pixels kClearPx either side in
 // its row also on the background side of the threshold; kept above
-// kRatioCut of the view's median (docs/health.md, "Figures").
-constexpr int kSamplesPerView = 512, kClearPx = 4;
+// kRatioCut of the view's median (docs/health.md, "Figures"). The grid's rows
+// lie kRowsApart times further apart than its columns: a frame is read by
+// rows, and a row's samples share its cache lines (docs/health.md, "Cost").
+constexpr int kSamplesPerView = 256, kRowsApart = 4, kClearPx = 4;
 constexpr double kRatioCut = 0.6;
-// Uniformity zones about kZonePx square; a zone with fewer samples in a cycle is not judged.
-constexpr int kZonePx = 128, kMinZoneSamples = 8;
+// Uniformity zones about kZonePx square; a zone with fewer samples in a cycle
+// is not judged (the worst of many zones of few samples would measure the
+// noise). The dust survey takes a zone's level from kMinLocalSamples of the
+// view, else of the cycle so far, else the view's median.
+constexpr int kZonePx = 128, kMinZoneSamples = 16, kMinLocalSamples = 3;
 
 // The dust survey: the bands' height, the margin read around what is
 // examined, the largest speck, how far below the local backlight a speck
@@ -70,34 +77,118 @@ double medianOf(std::vector<double>& values)
     return 0.5 * (below + values[half]);
 }
 
-// The median of non-negative whole numbers read as rounded values of a
-// continuous quantity: placed within the median's bin ([k − ½, k + ½), and
-// [0, ½) for 0) by the share of the values below it. The plain median of
-// |differences| of 8-bit grey levels jumps by whole levels; this one follows
-// σ smoothly down to the quantisation.
-double groupedMedian(std::vector<int>& values)
+// Ratios to the reference are counted in bins of 1/1024 up to 4 (the last bin
+// holds anything brighter); |differences| of grey levels in bins of one level
+// (8-bit) or of 16 (16-bit frames: a 12-bit sensor's step), the whole range.
+// Medians from counts cost one pass and no sorting (docs/health.md, "Cost").
+constexpr int kRatioBins = 4096;
+constexpr double kRatioBinWidth = 1.0 / 1024.0;
+
+int stepQuantum(double full)
 {
-    if (values.empty()) return kNoFigure;
-    const std::size_t half = values.size() / 2;
-    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(half), values.end());
-    const int m = values[half];
-    std::size_t below = 0, at = 0;
-    for (int v : values) {
-        below += v < m ? 1 : 0;
-        at += v == m ? 1 : 0;
-    }
-    const double lower = m == 0 ? 0.0 : m - 0.5, width = m == 0 ? 0.5 : 1.0;
-    return lower +
-           width * (0.5 * static_cast<double>(values.size()) - static_cast<double>(below)) / static_cast<double>(at);
+    return full > 255.0 ? 16 : 1;
 }
 
-// Grey-level σ from |differences| of neighbouring pixels (robust: a speck or
-// an edge among them moves the median little), never below the quantisation's 1/√12.
-double noiseFromSteps(std::vector<int>& steps)
+std::size_t stepBinCount(double full)
 {
-    const double mad = groupedMedian(steps);
+    // Rounded to the nearest quantum, the largest difference falls one bin beyond full / quantum.
+    return static_cast<std::size_t>(full) / static_cast<std::size_t>(stepQuantum(full)) + 2;
+}
+
+std::size_t ratioBin(double ratio)
+{
+    return static_cast<std::size_t>(std::min(ratio / kRatioBinWidth, kRatioBins - 1.0));
+}
+
+// A |difference| of grey levels to its bin: rounded, bins centred on whole quanta.
+std::size_t stepBin(int step, int quantum)
+{
+    return static_cast<std::size_t>((step + quantum / 2) / quantum);
+}
+
+// The median of the `total` values counted in `bins`, in bin units, placed
+// within its bin by the share of the values below it. Bin k spans [k, k + 1)
+// or, `centred` on whole numbers, [k − ½, k + ½) and the first [0, ½): the
+// plain median of |differences| of 8-bit grey levels jumps by whole levels,
+// this one follows σ smoothly down to the quantisation.
+double binnedMedian(const std::vector<int>& bins, long total, bool centred)
+{
+    if (total <= 0) return kNoFigure;
+    const double half = 0.5 * static_cast<double>(total);
+    long below = 0;
+    for (std::size_t k = 0; k < bins.size(); ++k) {
+        if (static_cast<double>(below + bins[k]) > half) {
+            const double lower = !centred ? static_cast<double>(k) : k == 0 ? 0.0 : k - 0.5;
+            const double width = centred && k == 0 ? 0.5 : 1.0;
+            return lower + width * (half - static_cast<double>(below)) / bins[k];
+        }
+        below += bins[k];
+    }
+    return static_cast<double>(bins.size());
+}
+
+// Grey-level σ from the |differences| of disjoint pairs of neighbouring pixels
+// (robust: a speck or an edge among them moves the median little), never
+// below the quantisation's 1/√12.
+double noiseOf(const std::vector<int>& stepBins, long total, int quantum)
+{
+    const double mad = binnedMedian(stepBins, total, true) * quantum;
     if (std::isnan(mad)) return kNoFigure;
     return std::max(kMadToSigma * mad / std::sqrt(2.0), 1.0 / std::sqrt(12.0));
+}
+
+// --- The reference's level ---------------------------------------------------
+
+// One axis of the interpolation between block centres: the first block of
+// the pair and the weight of the second, extrapolated linearly half a block
+// beyond the outer centres (a vignetted panel keeps falling towards the border).
+std::pair<int, double> blockPair(double px, int cell, int blocks)
+{
+    if (blocks < 2) return {0, 0.0};
+    const double at = (px + 0.5) / cell - 0.5;
+    const int first = std::clamp(static_cast<int>(std::floor(at)), 0, blocks - 2);
+    return {first, at - first};
+}
+
+// The reference's level along sensor row y (fraction of full scale): bilinear
+// between the centres of its blocks, whose levels are their means.
+class LevelRow {
+  public:
+    LevelRow() = default;
+    LevelRow(const cv::Mat& level, int cell, double y) : cell_(cell), cols_(level.cols)
+    {
+        const auto [r, down] = blockPair(y, cell, level.rows);
+        top_ = level.ptr<float>(r);
+        bottom_ = level.ptr<float>(std::min(r + 1, level.rows - 1));
+        down_ = down;
+    }
+
+    double at(double x) const
+    {
+        const auto [c, across] = blockPair(x, cell_, cols_);
+        const int c1 = std::min(c + 1, cols_ - 1);
+        return (1.0 - down_) * ((1.0 - across) * top_[c] + across * top_[c1]) +
+               down_ * ((1.0 - across) * bottom_[c] + across * bottom_[c1]);
+    }
+
+  private:
+    int cell_ = 1, cols_ = 1;
+    const float* top_ = nullptr;
+    const float* bottom_ = nullptr;
+    double down_ = 0.0;
+};
+
+// The lowest level the interpolation gives within block (bx, by): at one of
+// its corners or where it crosses a line through the block centres.
+double lowestLevelIn(const cv::Mat& level, int cell, cv::Size sensor, int bx, int by)
+{
+    const int x0 = bx * cell, y0 = by * cell;
+    const int x1 = std::min(x0 + cell, sensor.width) - 1, y1 = std::min(y0 + cell, sensor.height) - 1;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (double x : {double(x0), 0.5 * (x0 + x1), double(x1)})
+        for (double y : {double(y0), 0.5 * (y0 + y1), double(y1)})
+            lowest = std::min(lowest, LevelRow(level, cell, y).at(x));
+    return lowest;
 }
 
 // --- Dark specks -------------------------------------------------------------
@@ -149,6 +240,14 @@ template <class Limit> struct DarkLimits {
     std::vector<Limit> limits;
 };
 
+// Whether any of `count` pixels lies below `limit` (a loop the compiler vectorises).
+template <class Pixel, class Limit> bool anyBelow(const Pixel* pixels, int count, Limit limit)
+{
+    unsigned below = 0;
+    for (int i = 0; i < count; ++i) below |= pixels[i] < limit ? 1u : 0u;
+    return below != 0;
+}
+
 // The connected sets of the pixels of `scan` (sensor pixels, inside the frame
 // at `origin`) darker than their block's limit: runs per row, joined to the
 // runs of the row above that touch them (docs/health.md, "Figures": dust).
@@ -175,6 +274,13 @@ std::vector<DarkSet> darkSets(const cv::Mat& grey, cv::Point origin, const cv::R
         for (int x = scan.x; x < scan.x + scan.width;) {
             const int blockEnd = std::min(scan.x + scan.width, (x / dark.cell + 1) * dark.cell);
             const Limit limit = limits[x / dark.cell - dark.blocks.x];
+            // Most of a band is bright backlight: a block's row without a dark pixel is passed at once.
+            if (!anyBelow(row + (x - origin.x), blockEnd - x, limit)) {
+                if (start >= 0) close(start, x - 1);
+                start = -1;
+                x = blockEnd;
+                continue;
+            }
             for (; x < blockEnd; ++x) {
                 const bool isDark = row[x - origin.x] < limit;
                 if (isDark && start < 0) start = x;
@@ -226,6 +332,7 @@ cv::Rect blocksOf(const cv::Rect& pixels, int cell)
 // lie to be a speck: 10 %, more where the noise would reach that.
 double speckLimit(double background, double noiseGrey)
 {
+    if (!(background > 0.0)) return 0.0; // no backlight there: nothing is darker
     return background * (1.0 - std::max(kSpeckMinDepth, kSpeckNoiseK * noiseGrey / background));
 }
 
@@ -234,7 +341,7 @@ double speckLimit(double background, double noiseGrey)
 // Bilinear grey levels at sensor positions of a frame that may be a region
 // of the sensor; a read off the sensor or outside the region fails (a pixel
 // the camera did not send is never guessed: docs/inspection.md, "Frames that are regions").
-class FrameReader {
+template <class Pixel> class FrameReader {
   public:
     FrameReader(const cv::Mat& grey, cv::Point origin, cv::Size sensor) : grey_(grey), origin_(origin), sensor_(sensor)
     {
@@ -249,8 +356,9 @@ class FrameReader {
         const int u = c - origin_.x, v = r - origin_.y;
         if (u < 0 || v < 0 || u + 1 >= grey_.cols || v + 1 >= grey_.rows) return false;
         const double fx = x - c, fy = y - r;
-        value = (1 - fy) * ((1 - fx) * greyAt(grey_, v, u) + fx * greyAt(grey_, v, u + 1)) +
-                fy * ((1 - fx) * greyAt(grey_, v + 1, u) + fx * greyAt(grey_, v + 1, u + 1));
+        const Pixel* top = grey_.ptr<Pixel>(v) + u;
+        const Pixel* bottom = grey_.ptr<Pixel>(v + 1) + u;
+        value = (1 - fy) * ((1 - fx) * top[0] + fx * top[1]) + fy * ((1 - fx) * bottom[0] + fx * bottom[1]);
         return true;
     }
 
@@ -267,7 +375,8 @@ struct ProfileRead {
 
 // The threshold crossing (object → background going along the normal)
 // nearest the probe, from whole steps; NaN without one or off the frame.
-double nearestCrossing(const EdgeImage& image, const FrameReader& reader, const Vec2& pixel, const Vec2& normal)
+template <class Pixel>
+double nearestCrossing(const EdgeImage& image, const FrameReader<Pixel>& reader, const Vec2& pixel, const Vec2& normal)
 {
     double best = kNoFigure, previous = 0.0;
     for (int k = -kSearchPx; k <= kSearchPx; ++k) {
@@ -286,7 +395,8 @@ double nearestCrossing(const EdgeImage& image, const FrameReader& reader, const 
 // The edge profile across a probe (docs/health.md, "Figures": focus,
 // contrast): read along the normal, normalised between the object's and the
 // background's levels, its 10–90 % width with the interpolation's share taken out.
-std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader& reader, const EdgeProbe& probe)
+template <class Pixel>
+std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader<Pixel>& reader, const EdgeProbe& probe)
 {
     const double length = probe.normal.norm();
     if (!probe.pixel.allFinite() || !std::isfinite(length) || length < 1e-9) return std::nullopt;
@@ -332,6 +442,58 @@ std::optional<ProfileRead> readProfile(const EdgeImage& image, const FrameReader
     return ProfileRead{kTenNinety * std::sqrt(std::max(read * read - kInterpolationVariance, 0.0)), contrast};
 }
 
+// --- Background samples ------------------------------------------------------
+
+// A background pixel of the grid: its level against the reference (or full
+// scale without one), its uniformity zone (-1 without a reference), the
+// |differences| of the disjoint pairs (x, x + 1) and (x + 2, x + 3) for the noise.
+struct BackgroundSample {
+    float ratio = 0.0f;
+    int zone = -1;
+    std::array<int, 2> steps{};
+};
+
+// Where a view's grid lies and what its samples are compared with.
+struct BackgroundGrid {
+    cv::Rect frame;  ///< the sensor pixels the frame holds
+    int step = 2;    ///< px between samples
+    cv::Point first; ///< the first sample (sensor px)
+    double threshold = 0.0;
+    bool objectIsDark = true;
+    double full = 255.0;
+    const cv::Mat* level = nullptr; ///< the reference's levels, or none
+    int cell = 32, zoneSide = 128, zonesAcross = 1;
+};
+
+// The grid's background pixels: each and the pixels kClearPx either side in
+// its row on the background side of the threshold.
+template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid& g, std::vector<BackgroundSample>& out)
+{
+    const auto background = [&](int v) { return g.objectIsDark ? v > g.threshold : v < g.threshold; };
+    const int right = g.frame.x + g.frame.width - kClearPx;
+    for (int y = g.first.y; y < g.frame.y + g.frame.height; y += kRowsApart * g.step) {
+        const Pixel* row = grey.ptr<Pixel>(y - g.frame.y);
+        const int zoneRow = (y / g.zoneSide) * g.zonesAcross;
+        const LevelRow levels = g.level != nullptr ? LevelRow(*g.level, g.cell, y) : LevelRow();
+        for (int x = g.first.x; x < right; x += g.step) {
+            const Pixel* at = row + (x - g.frame.x);
+            const int p = at[0];
+            if (!background(p) || !background(at[-kClearPx]) || !background(at[kClearPx])) continue;
+            BackgroundSample s;
+            s.steps = {std::abs(int(at[1]) - p), std::abs(int(at[3]) - int(at[2]))};
+            if (g.level == nullptr) {
+                s.ratio = static_cast<float>(p / g.full);
+            } else {
+                const double level = levels.at(x);
+                if (!(level > 0.0)) continue;
+                s.ratio = static_cast<float>(p / (g.full * level));
+                s.zone = zoneRow + x / g.zoneSide;
+            }
+            out.push_back(s);
+        }
+    }
+}
+
 } // namespace
 
 // --- The reference -----------------------------------------------------------
@@ -355,14 +517,17 @@ FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnix
     }
     const double full = fullScale(first);
     cv::Mat sum(first.size(), CV_64FC1, cv::Scalar(0.0));
-    std::vector<int> steps;
+    const int quantum = stepQuantum(full);
+    std::vector<int> steps(stepBinCount(full), 0);
+    long pairs = 0;
     for (const cv::Mat& f : frames) {
         cv::Mat grey;
         f.convertTo(grey, CV_64FC1);
         sum += grey;
         // Each frame's own noise, from disjoint horizontal pairs of every second row.
         for (int r = 0; r < f.rows; r += 2)
-            for (int c = 0; c + 1 < f.cols; c += 2) steps.push_back(std::abs(greyAt(f, r, c + 1) - greyAt(f, r, c)));
+            for (int c = 0; c + 1 < f.cols; c += 2, ++pairs)
+                ++steps[stepBin(std::abs(greyAt(f, r, c + 1) - greyAt(f, r, c)), quantum)];
     }
     cv::Mat mean;
     sum.convertTo(mean, CV_32FC1, 1.0 / static_cast<double>(frames.size()));
@@ -389,13 +554,13 @@ FlatField buildFlatField(std::span<const cv::Mat> frames, std::int64_t takenUnix
                     "flat field block at pixel (" + std::to_string(bx * cell) + ", " + std::to_string(by * cell) + ")",
                     "its level " + std::to_string(out.level.at<float>(by, bx)) + " is below half the median level " +
                         std::to_string(median) + ": something is in the fixture");
-    out.noise = noiseFromSteps(steps) / full;
+    out.noise = noiseOf(steps, pairs, quantum) / full;
 
     // The reference's own specks, found as the monitor finds them (on the mean of the frames).
     DarkLimits<float> dark{cell, blocks, {}};
     for (int by = 0; by < blocks.height; ++by)
         for (int bx = 0; bx < blocks.width; ++bx) {
-            const double background = out.level.at<float>(by, bx) * full;
+            const double background = lowestLevelIn(out.level, cell, out.sensor, bx, by) * full;
             dark.limits.push_back(static_cast<float>(speckLimit(background, out.noise * full)));
         }
     std::vector<DarkRun> runs;
@@ -422,9 +587,13 @@ HealthMonitor::HealthMonitor(FlatField reference) : reference_(std::move(referen
 {
     if (!reference_.empty()) {
         const cv::Rect blocks = blocksOf({{0, 0}, reference_.sensor}, std::max(reference_.cell, 1));
-        if (reference_.cell < 1 || reference_.level.type() != CV_32FC1 || reference_.level.cols != blocks.width ||
+        if (reference_.sensor.width < 1 || reference_.sensor.height < 1 || reference_.cell < 1 ||
+            reference_.level.type() != CV_32FC1 || reference_.level.cols != blocks.width ||
             reference_.level.rows != blocks.height)
             throw ArgumentError("HealthMonitor: the reference's level must be CV_32FC1 of ceil(sensor / cell) blocks");
+        if (!(reference_.noise >= 0.0 && reference_.noise < 1.0))
+            throw ArgumentError("HealthMonitor: the reference's noise must lie in [0, 1), found " +
+                                std::to_string(reference_.noise));
         zoneSide_ = reference_.cell * std::max(1, static_cast<int>(std::lround(double(kZonePx) / reference_.cell)));
         zones_ = {(reference_.sensor.width + zoneSide_ - 1) / zoneSide_,
                   (reference_.sensor.height + zoneSide_ - 1) / zoneSide_};
@@ -434,6 +603,11 @@ HealthMonitor::HealthMonitor(FlatField reference) : reference_(std::move(referen
         viewZoneCount_ = zoneCount_;
         bands_ = (reference_.sensor.height + kBandRows - 1) / kBandRows;
         bandSeen_.assign(static_cast<std::size_t>(kBandRows) * static_cast<std::size_t>(reference_.sensor.width), 0);
+        lowestLevel_.create(blocks.height, blocks.width, CV_32FC1);
+        for (int by = 0; by < blocks.height; ++by)
+            for (int bx = 0; bx < blocks.width; ++bx)
+                lowestLevel_.at<float>(by, bx) =
+                    static_cast<float>(lowestLevelIn(reference_.level, reference_.cell, reference_.sensor, bx, by));
         referenceSpecks_ = reference_.dustAt;
         std::sort(referenceSpecks_.begin(), referenceSpecks_.end(),
                   [](const cv::Point2f& a, const cv::Point2f& b) { return a.y < b.y; });
@@ -447,12 +621,14 @@ void HealthMonitor::beginCycle()
     band_ = bands_ > 0 ? static_cast<int>(cycle_ % static_cast<std::uint64_t>(bands_)) : 0;
     ++cycle_;
     views_ = 0;
-    ratios_.clear();
+    ratioBins_.assign(static_cast<std::size_t>(kRatioBins), 0);
+    ratioCount_ = 0;
     std::fill(zoneSum_.begin(), zoneSum_.end(), 0.0);
     std::fill(zoneCount_.begin(), zoneCount_.end(), 0);
     widths_.clear();
     contrasts_.clear();
-    steps_.clear();
+    stepBins_.clear();
+    stepCount_ = 0;
     stepsFull_ = 0.0;
     bandExamined_ = false;
     bandFound_ = 0;
@@ -481,85 +657,88 @@ void HealthMonitor::addView(std::size_t view, const EdgeImage& image, std::span<
     ctx.referenced = !reference_.empty() && ctx.sensor == reference_.sensor && image.objectIsDark;
     ++views_;
 
-    const FrameReader reader(grey, image.origin, ctx.sensor);
-    for (const EdgeProbe& probe : probes)
-        if (const auto read = readProfile(image, reader, probe)) {
-            widths_.push_back(read->widthPx);
-            contrasts_.push_back(read->contrast / ctx.full);
-        }
+    const auto readProfiles = [&](const auto& reader) {
+        for (const EdgeProbe& probe : probes)
+            if (const auto read = readProfile(image, reader, probe)) {
+                widths_.push_back(read->widthPx);
+                contrasts_.push_back(read->contrast / ctx.full);
+            }
+    };
+    if (grey.depth() == CV_8U)
+        readProfiles(FrameReader<std::uint8_t>(grey, image.origin, ctx.sensor));
+    else
+        readProfiles(FrameReader<std::uint16_t>(grey, image.origin, ctx.sensor));
     sampleBackground(ctx);
     if (ctx.referenced && bands_ > 0 && !std::isnan(ctx.medianRatio)) surveyBand(ctx);
 }
 
 // A sparse grid of background pixels (docs/health.md, "Figures"): each
-// against its block's reference level, its difference to the next pixel for
-// the noise.
+// against the reference's level there, its neighbours' differences for the noise.
 void HealthMonitor::sampleBackground(ViewContext& ctx)
 {
     const EdgeImage& image = *ctx.image;
     const cv::Rect& f = ctx.frame;
-    const int step = std::max(2, static_cast<int>(std::ceil(std::sqrt(double(f.area()) / kSamplesPerView))));
+    const int step =
+        std::max(2, static_cast<int>(std::ceil(std::sqrt(double(f.area()) / (kSamplesPerView * kRowsApart)))));
     // Each view and each cycle samples other pixels of the grid's cells.
     const int ox = static_cast<int>((ctx.index * 5 + cycle_ * 3) % static_cast<std::uint64_t>(step));
-    const int oy = static_cast<int>((ctx.index * 3 + cycle_ * 7) % static_cast<std::uint64_t>(step));
-    const auto background = [&](int v) { return image.objectIsDark ? v > image.threshold : v < image.threshold; };
-    struct Sample {
-        float ratio;
-        int zone;
-        std::array<int, 2> steps; ///< |differences| of the disjoint pairs (x, x + 1), (x + 2, x + 3)
-    };
-    std::vector<Sample> samples;
-    samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
-    for (int y = f.y + oy; y < f.y + f.height; y += step) {
-        const int v = y - f.y;
-        for (int x = f.x + kClearPx + ox; x + kClearPx < f.x + f.width; x += step) {
-            const int u = x - f.x;
-            const int p = greyAt(image.grey, v, u);
-            if (!background(p) || !background(greyAt(image.grey, v, u - kClearPx)) ||
-                !background(greyAt(image.grey, v, u + kClearPx)))
-                continue;
-            double expected = ctx.full;
-            int zone = -1;
-            if (ctx.referenced) {
-                const float level = reference_.level.at<float>(y / reference_.cell, x / reference_.cell);
-                if (!(level > 0.0f)) continue;
-                expected *= level;
-                zone = (y / zoneSide_) * zones_.width + x / zoneSide_;
-            }
-            const int p2 = greyAt(image.grey, v, u + 2);
-            samples.push_back(
-                {static_cast<float>(p / expected),
-                 zone,
-                 {std::abs(greyAt(image.grey, v, u + 1) - p), std::abs(greyAt(image.grey, v, u + 3) - p2)}});
-        }
+    const int oy = static_cast<int>((ctx.index * 37 + cycle_ * 7) % static_cast<std::uint64_t>(kRowsApart * step));
+    BackgroundGrid grid;
+    grid.frame = f;
+    grid.step = step;
+    grid.first = {f.x + kClearPx + ox, f.y + oy};
+    grid.threshold = image.threshold;
+    grid.objectIsDark = image.objectIsDark;
+    grid.full = ctx.full;
+    if (ctx.referenced) {
+        grid.level = &reference_.level;
+        grid.cell = reference_.cell;
+        grid.zoneSide = zoneSide_;
+        grid.zonesAcross = zones_.width;
     }
+    std::vector<BackgroundSample> samples;
+    samples.reserve(static_cast<std::size_t>(2 * kSamplesPerView));
+    if (image.grey.depth() == CV_8U)
+        sampleGrid<std::uint8_t>(image.grey, grid, samples);
+    else
+        sampleGrid<std::uint16_t>(image.grey, grid, samples);
     if (samples.empty()) return;
-    std::vector<double> order(samples.size());
-    std::transform(samples.begin(), samples.end(), order.begin(), [](const Sample& s) { return s.ratio; });
-    ctx.medianRatio = medianOf(order);
+    std::vector<int> ratios(static_cast<std::size_t>(kRatioBins), 0), steps(stepBinCount(ctx.full), 0);
+    for (const BackgroundSample& s : samples) ++ratios[ratioBin(s.ratio)];
+    ctx.medianRatio = binnedMedian(ratios, static_cast<long>(samples.size()), false) * kRatioBinWidth;
     const double cut = kRatioCut * ctx.medianRatio;
-    std::vector<int> steps;
-    steps.reserve(2 * samples.size());
+    // The cycle's noise from the differences of all its views (a view's few
+    // hundred give σ to ±5 %); a view of another depth than the first is left out of it.
+    if (stepsFull_ == 0.0) {
+        stepsFull_ = ctx.full;
+        stepBins_.assign(steps.size(), 0);
+    }
+    const bool pooled = stepsFull_ == ctx.full;
+    const int quantum = stepQuantum(ctx.full);
+    long pairs = 0;
     if (ctx.referenced) {
         std::fill(viewZoneSum_.begin(), viewZoneSum_.end(), 0.0);
         std::fill(viewZoneCount_.begin(), viewZoneCount_.end(), 0);
     }
-    for (const Sample& s : samples) {
+    for (const BackgroundSample& s : samples) {
         if (s.ratio < cut) continue;
-        steps.insert(steps.end(), s.steps.begin(), s.steps.end());
+        for (int difference : s.steps) {
+            const std::size_t bin = stepBin(difference, quantum);
+            ++steps[bin];
+            if (pooled) ++stepBins_[bin];
+        }
+        pairs += 2;
         if (!ctx.referenced) continue;
-        ratios_.push_back(s.ratio);
+        ++ratioBins_[ratioBin(s.ratio)];
+        ++ratioCount_;
         const auto z = static_cast<std::size_t>(s.zone);
         zoneSum_[z] += s.ratio;
         ++zoneCount_[z];
         viewZoneSum_[z] += s.ratio;
         ++viewZoneCount_[z];
     }
-    // The cycle's noise from the differences of all its views (a view's
-    // few hundred give σ to ±5 %); a view of another depth than the first is left out of it.
-    if (stepsFull_ == 0.0) stepsFull_ = ctx.full;
-    if (stepsFull_ == ctx.full) steps_.insert(steps_.end(), steps.begin(), steps.end());
-    ctx.noise = noiseFromSteps(steps);
+    if (pooled) stepCount_ += pairs;
+    ctx.noise = noiseOf(steps, pairs, quantum);
 }
 
 // One band of the dust survey in this view (docs/health.md, "Figures": dust):
@@ -580,10 +759,10 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
         const auto* hole =
             static_cast<const std::uint8_t*>(std::memchr(&seenAt(f.x, y), 0, static_cast<std::size_t>(f.width)));
         if (hole == nullptr) continue;
-        int last = f.x + f.width - 1;
-        while (seenAt(last, y) != 0) --last;
+        const auto* last =
+            static_cast<const std::uint8_t*>(memrchr(&seenAt(f.x, y), 0, static_cast<std::size_t>(f.width)));
         x0 = std::min(x0, f.x + static_cast<int>(hole - &seenAt(f.x, y)));
-        x1 = std::max(x1, last);
+        x1 = std::max(x1, f.x + static_cast<int>(last - &seenAt(f.x, y)));
         y0 = std::min(y0, y);
         y1 = y;
     }
@@ -592,17 +771,18 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
     const cv::Rect scan = cv::Rect(cv::Point(x0 - kSpeckMargin, y0 - kSpeckMargin),
                                    cv::Point(x1 + kSpeckMargin + 1, y1 + kSpeckMargin + 1)) &
                           f;
-    // Each block's limit: its reference level times the view's backlight in
-    // its zone (the view's median where the zone had few samples), less the depth.
+    // Each block's limit: the lowest reference level within it times the
+    // backlight of its zone (kMinLocalSamples), less the depth.
     const int cell = reference_.cell;
     DarkLimits<int> dark{cell, blocksOf(scan, cell), {}};
     const double noise = std::max(reference_.noise * ctx.full, ctx.noise);
     for (int by = dark.blocks.y; by < dark.blocks.y + dark.blocks.height; ++by)
         for (int bx = dark.blocks.x; bx < dark.blocks.x + dark.blocks.width; ++bx) {
             const auto z = static_cast<std::size_t>((by * cell / zoneSide_) * zones_.width + bx * cell / zoneSide_);
-            const double local =
-                viewZoneCount_[z] >= kMinZoneSamples ? viewZoneSum_[z] / viewZoneCount_[z] : ctx.medianRatio;
-            const double background = reference_.level.at<float>(by, bx) * ctx.full * local;
+            const double local = viewZoneCount_[z] >= kMinLocalSamples ? viewZoneSum_[z] / viewZoneCount_[z]
+                                 : zoneCount_[z] >= kMinLocalSamples   ? zoneSum_[z] / zoneCount_[z]
+                                                                       : ctx.medianRatio;
+            const double background = lowestLevel_.at<float>(by, bx) * ctx.full * local;
             dark.limits.push_back(static_cast<int>(std::ceil(speckLimit(background, noise))));
         }
     std::vector<DarkRun> runs;
@@ -626,16 +806,19 @@ void HealthMonitor::surveyBand(const ViewContext& ctx)
     // a dark set that hides the backlight (the part, or what the read cut off):
     // a later view of the cycle may show the backlight there.
     const int rowTop = std::max(top, scan.y), rowBottom = std::min(bottom, scan.y + scan.height);
-    for (int y = rowTop; y < rowBottom; ++y)
-        for (int x = scan.x; x < scan.x + scan.width; ++x)
-            if (seenAt(x, y) == 0) seenAt(x, y) = 2;
+    for (int y = rowTop; y < rowBottom; ++y) {
+        std::uint8_t* seen = &seenAt(scan.x, y);
+        for (int i = 0; i < scan.width; ++i) seen[i] = seen[i] == 0 ? 2 : seen[i];
+    }
     for (const DarkRun& r : runs)
-        if (r.row >= rowTop && r.row < rowBottom && !sets[static_cast<std::size_t>(r.parent)].speck())
-            for (int x = r.x0; x <= r.x1; ++x)
-                if (seenAt(x, r.row) == 2) seenAt(x, r.row) = 0;
-    for (int y = rowTop; y < rowBottom; ++y)
-        for (int x = scan.x; x < scan.x + scan.width; ++x)
-            if (seenAt(x, y) == 2) seenAt(x, y) = 1;
+        if (r.row >= rowTop && r.row < rowBottom && !sets[static_cast<std::size_t>(r.parent)].speck()) {
+            std::uint8_t* seen = &seenAt(r.x0, r.row);
+            for (int i = 0; i <= r.x1 - r.x0; ++i) seen[i] = seen[i] == 2 ? 0 : seen[i];
+        }
+    for (int y = rowTop; y < rowBottom; ++y) {
+        std::uint8_t* seen = &seenAt(scan.x, y);
+        for (int i = 0; i < scan.width; ++i) seen[i] = seen[i] == 2 ? 1 : seen[i];
+    }
 }
 
 HealthFigures HealthMonitor::endCycle()
@@ -643,8 +826,8 @@ HealthFigures HealthMonitor::endCycle()
     HealthFigures out;
     out.views = views_;
     out.probes = static_cast<int>(widths_.size());
-    if (!ratios_.empty()) {
-        out.backlight = medianOf(ratios_);
+    if (ratioCount_ > 0) {
+        out.backlight = binnedMedian(ratioBins_, ratioCount_, false) * kRatioBinWidth;
         double worst = -1.0;
         for (std::size_t z = 0; z < zoneSum_.size(); ++z)
             if (zoneCount_[z] >= kMinZoneSamples)
@@ -662,7 +845,7 @@ HealthFigures HealthMonitor::endCycle()
     }
     out.edgeWidthPx = medianOf(widths_);
     out.contrast = medianOf(contrasts_);
-    if (!steps_.empty()) out.noise = noiseFromSteps(steps_) / stepsFull_;
+    if (stepCount_ > 0) out.noise = noiseOf(stepBins_, stepCount_, stepQuantum(stepsFull_)) / stepsFull_;
     out.predictedSigmaPx = predictedEdgeSigmaPx(out.noise, out.contrast, out.edgeWidthPx);
     return out;
 }

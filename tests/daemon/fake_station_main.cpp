@@ -13,7 +13,9 @@
 //   HG_FAKE_RELEASE        a version number: the program is released as that
 //                          version (verification digest 64 × 'a'); else a draft
 // The fake camera has two simulated parts (`hullgauge ctl sim-part`):
-// "nominal" grabs bright frames, "dented" dark ones; the fake inspection
+// "nominal" grabs bright frames, "dented" dark ones, and optics that count
+// every new part as a cycle of their aging, a step every 2 (`ctl sim-age`);
+// the fake inspection
 // reports 20 landmarks and fails landmarks 3 and 17 (out_of_tolerance) when a
 // frame is dark.
 #include "daemon.h"
@@ -87,8 +89,19 @@ class FakeDevices : public StationDevices, public SimulationControl {
         return true;
     }
 
+    void newPart() override { ++cycles_; }
+    nlohmann::json optics() const override
+    {
+        const int cycles = cycles_;
+        return {{"cycles", cycles},         {"aging_steps", cycles / 2}, {"background_level", 0.85},
+                {"vignetting", 0.0},        {"blur_sigma_px", 0.5},      {"halo_px", 0.0},
+                {"dust_specks", cycles / 2}};
+    }
+    void resetAging() override { cycles_ = 0; }
+
   private:
     std::atomic<bool> dented_{false};
+    std::atomic<int> cycles_{0};
 };
 
 /// The release HG_FAKE_RELEASE names; none (a draft) without it.

@@ -68,6 +68,41 @@ TEST(Ctl, DrivesTheDaemonThroughItsMaintenanceSocket)
     EXPECT_NE(refused.err.find("unknown part program"), std::string::npos) << refused.err;
 }
 
+// The simulated camera's aging (docs/camera.md, "Aging"): every cycle's new part counts (the fake
+// station's optics take a step every 2 cycles); `sim-age --reset` makes them new.
+TEST(Ctl, ShowsAndResetsTheSimulatedCamerasAging)
+{
+    hgtest::TempDir dir;
+    int port = hgdaemon::freePort();
+    hgdaemon::DaemonProcess daemon(hgdaemon::writeConfig(dir, port));
+    auto sock = (dir / "hg.sock").string();
+    ASSERT_TRUE(hgdaemon::waitForState(sock, "ready", 10s)) << daemon.logText();
+    for (const char* serial : {"AGE-1", "AGE-2", "AGE-3"}) {
+        ASSERT_EQ(hgtest::run(ctl("--socket " + sock + " trigger --program 1 --serial " + serial)).status, 0);
+        ASSERT_TRUE(hgdaemon::waitForState(sock, "done", 10s));
+    }
+    auto aged = hgtest::run(ctl("--socket " + sock + " sim-age"));
+    ASSERT_EQ(aged.status, 0) << aged.err;
+    EXPECT_EQ(aged.out, "simulated optics: back light 0.85, vignetting 0, blur 0.5 px, halo 0 px, 1 dust specks (1 "
+                        "aging steps in 3 cycles)\n");
+    EXPECT_NE(hgtest::run(ctl("--socket " + sock + " status")).out.find("sim optics:   back light 0.85"),
+              std::string::npos);
+    auto json = nlohmann::json::parse(hgtest::run(ctl("--socket " + sock + " --json sim-age")).out);
+    EXPECT_EQ(json["cycles"], 3);
+    auto reset = hgtest::run(ctl("--socket " + sock + " sim-age --reset"));
+    ASSERT_EQ(reset.status, 0) << reset.err;
+    EXPECT_NE(reset.out.find("(0 aging steps in 0 cycles)"), std::string::npos) << reset.out;
+    // The reset is a change, in the audit trail beside the result store (docs/audit.md); asking is not.
+    hg::store::AuditQuery query;
+    query.actionPrefix = "setting.sim-age";
+    const auto entries = hg::store::AuditLog(dir / "audit.sqlite", true).select(query);
+    ASSERT_EQ(entries.size(), 1u);
+    EXPECT_EQ(entries[0].before, "aging: 3 cycles, 1 steps");
+    EXPECT_EQ(entries[0].after, "aging: 0 cycles, 0 steps");
+    EXPECT_EQ(entries[0].outcome, "done");
+    EXPECT_EQ(entries[0].source, "socket");
+}
+
 // The release of the program a result was judged with (docs/daemon.md): in the
 // results, the last cycle and the PLC's active program once it is loaded.
 TEST(Ctl, ShowsTheReleaseOfTheProgramTheResultsWereJudgedWith)

@@ -244,6 +244,9 @@ TEST(DaemonConfig, SimulatedPartsNeedNominalAndExistingMeshes)
     EXPECT_NE(noNominal.find("nominal"), std::string::npos) << noNominal;
     auto missing = f.error(std::string(kDaemon) + "simulation: {parts: {nominal: gone.stl}}\n");
     EXPECT_NE(missing.find("simulation.parts.nominal"), std::string::npos) << missing;
+    // `none` is the empty fixture's name (docs/camera.md, "The empty fixture").
+    auto none = f.error(std::string(kDaemon) + "simulation: {parts: {nominal: nominal.stl, none: nominal.stl}}\n");
+    EXPECT_NE(none.find("simulation.parts.none: 'none' names the empty fixture"), std::string::npos) << none;
 }
 
 TEST(DaemonConfig, SimulatedSeatingIsOptionalAndBounded)

@@ -202,6 +202,7 @@ TEST(DaemonProcess, WrongTypesAndUnendedRequestsAreAnsweredNamingWhat)
         {{{"command", 5}}, "command: 5 is not a string"},
         {{{"command", "sim-part"}, {"name", 7}}, "name: 7 is not a string"},
         {{{"command", "sim-part"}, {"list", "yes"}}, "list: \"yes\" is not true or false"},
+        {{{"command", "sim-age"}, {"reset", 1}}, "reset: 1 is not true or false"},
         {{{"command", "snapshot"}, {"grab", 1}}, "snapshot: grab: 1 is not true or false"},
         {{{"command", "calibrate"}, {"poses", 3}}, "poses: 3 is not a string"},
         {{{"command", "calibrate"}, {"poses", "p.yaml"}, {"out", false}}, "out: false is not a string"},

@@ -26,7 +26,6 @@ against the result store read here with sqlite3:
 
   hmi_browser.py --source DIR --bin DIR [--cycles N] [--screenshots DIR]
 """
-import argparse
 import csv
 import http.client
 import io
@@ -39,7 +38,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium import webdriver  # noqa: E402
@@ -302,14 +301,7 @@ def snapshot(driver):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--cycles", type=int, default=6)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
-    if args.screenshots:
-        args.screenshots.mkdir(parents=True, exist_ok=True)
+    args = test_args(lambda ap: ap.add_argument("--cycles", type=int, default=6))
     workdir = Path(tempfile.mkdtemp(prefix="hg-hmi-"))
     plc_port, http_port = free_port(), free_port()
     line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
@@ -342,11 +334,7 @@ def main():
         client.close()
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("web HMI: every check passed")
-    return 0
+    return outcome("web HMI", workdir)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,6 @@ Screenshots of the line view (normal and kiosk, both sizes) with --screenshots D
 
   hmi_line_view.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import datetime
 import json
 import os
@@ -39,7 +38,7 @@ from pathlib import Path
 from zoneinfo import ZoneInfo
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
 from hmi_browser import browser, plc_cycle, stored, texts  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
@@ -277,13 +276,7 @@ def line_view(driver, url, client, db, screenshots):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
-    if args.screenshots:
-        args.screenshots.mkdir(parents=True, exist_ok=True)
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-line-"))
     plc_port, http_port = free_port(), free_port()
     os.environ["TZ"] = DAEMON_ZONE  # the daemon's local time, for its shifts
@@ -303,11 +296,7 @@ def main():
         client.close()
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("line view: every check passed")
-    return 0
+    return outcome("line view", workdir)
 
 
 if __name__ == "__main__":

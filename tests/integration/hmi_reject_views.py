@@ -19,7 +19,6 @@ is the PLC (pymodbus); it runs a nominal part and defective ones and checks:
 
   hmi_reject_views.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import json
 import sys
 import tempfile
@@ -27,7 +26,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
 from hmi_browser import browser as chromium, plc_cycle, stored  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
@@ -226,11 +225,7 @@ def cycles(client, sock, db):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-rejects-"))
     plc_port, http_port = free_port(), free_port()
     line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
@@ -252,7 +247,6 @@ def main():
                 wait_for_views(driver, url, rows[serial]["id"])
                 check_labels(driver, "#images", rows[serial], serial)
             if args.screenshots:
-                args.screenshots.mkdir(parents=True, exist_ok=True)
                 driver.execute_script("document.querySelector('#images .vv-view').scrollIntoView()")
                 driver.save_screenshot(str(args.screenshots / "hmi-reject-view.png"))
             pan_and_zoom(driver)
@@ -264,11 +258,7 @@ def main():
         client.close()
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("reject views: every check passed")
-    return 0
+    return outcome("reject views", workdir)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ password). The trail is read here with sqlite3 and Python's csv module:
 
   hmi_roles_browser.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import csv
 import io
 import json
@@ -35,7 +34,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
 from hmi_browser import browser, texts, until  # noqa: E402
 
 from selenium.webdriver.common.by import By  # noqa: E402
@@ -203,13 +202,7 @@ def shots(driver, folder, name):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
-    if args.screenshots:
-        args.screenshots.mkdir(parents=True, exist_ok=True)
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-roles-"))
     first_administrator(args.bin, workdir)
     http_port = free_port()
@@ -235,11 +228,7 @@ def main():
     finally:
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("roles and audit trail: every check passed")
-    return 0
+    return outcome("roles and audit trail", workdir)
 
 
 if __name__ == "__main__":

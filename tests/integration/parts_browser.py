@@ -38,7 +38,6 @@ shows and does against the HTTP API read here:
 
   parts_browser.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import http.client
 import json
 import math
@@ -50,7 +49,7 @@ import urllib.parse
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, password_hash_file, start_line, stop_line  # noqa: E402
 from hmi_browser import browser as chromium, stored, until  # noqa: E402
 
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
@@ -530,11 +529,7 @@ def screenshot(driver, folder):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-parts-"))
     http_port = free_port()
     line, out, _ = start_line(args.source, args.bin, workdir, free_port(),
@@ -560,11 +555,7 @@ def main():
     finally:
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("Parts page: every check passed")
-    return 0
+    return outcome("Parts page", workdir)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,6 @@ against the result store read here with sqlite3:
 
   record_browser.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import base64
 import http.client
 import json
@@ -29,7 +28,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
 from hmi_browser import browser, plc_cycle, request, stored, texts  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
@@ -180,13 +179,7 @@ def screenshots_of(driver, url, row, folder):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
-    if args.screenshots:
-        args.screenshots.mkdir(parents=True, exist_ok=True)
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-record-"))
     plc_port, http_port = free_port(), free_port()
     line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
@@ -207,11 +200,7 @@ def main():
         client.close()
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("part record: every check passed")
-    return 0
+    return outcome("part record", workdir)
 
 
 if __name__ == "__main__":

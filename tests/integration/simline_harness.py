@@ -1,6 +1,7 @@
 """The simulated line for the end-to-end tests (docs/contracts.md §7): start
 tools/simline in a work folder, wait for its ready file under a deadline,
 stop it; the checks collect failures instead of stopping at the first."""
+import argparse
 import ctypes
 import os
 import signal
@@ -8,6 +9,7 @@ import socket
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 failures = []
 
@@ -92,3 +94,26 @@ def maintenance(path, request, timeout_s=10):
                 break
             data += chunk
     return json.loads(data)
+
+
+def test_args(extra=None):
+    """The options every end-to-end test takes: --source, --bin, --screenshots (a folder, made here)."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--source", required=True, type=Path)
+    ap.add_argument("--bin", required=True, type=Path)
+    ap.add_argument("--screenshots", type=Path)
+    if extra:
+        extra(ap)
+    args = ap.parse_args()
+    if args.screenshots:
+        args.screenshots.mkdir(parents=True, exist_ok=True)
+    return args
+
+
+def outcome(what, workdir):
+    """The exit status of a test: 1 naming how many checks failed and where its files are, else 0."""
+    if failures:
+        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
+        return 1
+    print(f"{what}: every check passed")
+    return 0

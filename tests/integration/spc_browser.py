@@ -22,7 +22,6 @@ store read here with sqlite3:
 
   spc_browser.py --source DIR --bin DIR [--screenshots DIR]
 """
-import argparse
 import json
 import sqlite3
 import sys
@@ -30,7 +29,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from simline_harness import check, failures, free_port, maintenance, start_line, stop_line  # noqa: E402
+from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
 from hmi_browser import browser, plc_cycle, until  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
@@ -203,11 +202,7 @@ def screenshots(driver, folder, landmark):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--source", required=True, type=Path)
-    ap.add_argument("--bin", required=True, type=Path)
-    ap.add_argument("--screenshots", type=Path)
-    args = ap.parse_args()
+    args = test_args()
     workdir = Path(tempfile.mkdtemp(prefix="hg-spc-"))
     plc_port, http_port = free_port(), free_port()
     line, out, _ = start_line(args.source, args.bin, workdir, plc_port,
@@ -234,11 +229,7 @@ def main():
         client.close()
         driver.quit()
         stop_line(line, out)
-    if failures:
-        print(f"{len(failures)} checks failed (work folder {workdir})", file=sys.stderr)
-        return 1
-    print("SPC page: every check passed")
-    return 0
+    return outcome("SPC page", workdir)
 
 
 if __name__ == "__main__":

@@ -486,6 +486,45 @@ TEST(Renderer, RejectsBadOptions)
     opt = {};
     opt.noiseSigma = -1;
     EXPECT_THROW(renderer.render(cam, opt), std::invalid_argument);
+    opt = {};
+    opt.vignetting = 1.0;
+    EXPECT_THROW(renderer.render(cam, opt), std::invalid_argument);
+    opt = {};
+    opt.haloPx = 11.0;
+    EXPECT_THROW(renderer.render(cam, opt), std::invalid_argument);
+    opt = {};
+    opt.dust = {DustSpeck{10.0, 10.0, 2.0, 0.3}, DustSpeck{10.0, 10.0, 2.0, 1.5}};
+    try {
+        (void)renderer.render(cam, opt);
+        ADD_FAILURE() << "a speck darker than black was accepted";
+    } catch (const std::invalid_argument& e) {
+        EXPECT_EQ(std::string(e.what()), "dust[1].depth must be within [0, 1], found 1.5");
+    }
+}
+
+// The halo erodes a curved silhouette along its normals too: a disc of radius
+// R, its coverage taken by 16 x 16 point samples per pixel, keeps the area of
+// the disc of radius R - h (the curvature biases the distance by about σ_h² /
+// 2R = 0.0125 px here).
+TEST(Renderer, TheHaloErodesADiscToTheDiscOfItsRadiusLessTheHalo)
+{
+    constexpr double kR = 40.0;
+    const cv::Point2d centre(60.3, 57.8);
+    cv::Mat coverage(120, 120, CV_32FC1, cv::Scalar(0));
+    for (int y = 0; y < coverage.rows; ++y)
+        for (int x = 0; x < coverage.cols; ++x) {
+            int inside = 0;
+            for (int j = 0; j < 16; ++j)
+                for (int i = 0; i < 16; ++i)
+                    inside += std::hypot(x - 0.5 + (i + 0.5) / 16 - centre.x, y - 0.5 + (j + 0.5) / 16 - centre.y) < kR;
+            coverage.at<float>(y, x) = static_cast<float>(inside / 256.0);
+        }
+    for (const double halo : {0.5, 1.5, 4.0}) {
+        const double area = cv::sum(erodeCoverage(coverage, halo))[0];
+        const double r = kR - halo;
+        EXPECT_NEAR(area, std::numbers::pi * r * r, 2.0 * std::numbers::pi * r * 0.05) << "halo " << halo;
+    }
+    EXPECT_THROW(erodeCoverage(coverage, 0.0), std::invalid_argument);
 }
 
 } // namespace

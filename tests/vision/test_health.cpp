@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include "hullgauge/common/error.h"
@@ -259,6 +260,7 @@ TEST(HealthMonitor, UniformityOfALinearGradient)
     const double expected = 0.30 * (575.5 - 319.5) / 640.0;
     EXPECT_NEAR(f.uniformity, expected, 0.1 * expected);
     EXPECT_NEAR(f.backlight, 1.0, 0.01);
+    EXPECT_EQ(f.dustSpecks, 0.0); // the first band surveyed: a gradient is no dust
 }
 
 // --- Dust --------------------------------------------------------------------
@@ -340,8 +342,8 @@ TEST(HealthMonitor, DustSurveyOfRegionFrames)
 // The 10–90 % width of a straight edge blurred by a Gaussian σ and integrated
 // over the pixel's area: 2.563·√(σ² + 1/12) px. Below half a pixel of blur a
 // profile cannot tell the blur from where the edge lies within its pixel: a
-// sharp edge reads between 0 and 1.6 times that, about 1.25 times over many
-// probes (docs/health.md, "Limits") — sharp, far below any limit.
+// sharp edge reads between 0 and 1.6 times that, the median over these probes
+// about 1.3 times (docs/health.md, "Limits") — sharp, far below any limit.
 TEST(HealthMonitor, EdgeWidthFollowsTheBlur)
 {
     double sharp = 0.0;
@@ -395,7 +397,7 @@ TEST(HealthMonitor, ContrastAndNoise)
 // its standard error about 2.5 %). The integral's own part, edgeSigmaPx, is
 // an upper estimate (docs/inspection.md, "Uncertainty budget": here 1.5 times
 // the scatter of a sharp edge); the blur's part keeps the prediction above
-// the scatter as the scatter doubles (σ = 3 px; edgeSigmaPx alone falls 18 % short).
+// the scatter as the scatter doubles (σ = 3 px: edgeSigmaPx alone falls 23 % short).
 TEST(HealthMonitor, PredictionBoundsTheEdgeScatterUnderBlur)
 {
     for (double sigma : {0.0, 1.0, 2.0, 2.5, 3.0}) {
@@ -481,6 +483,55 @@ TEST(HealthMonitor, RegionsOfTheSensor)
     EXPECT_DOUBLE_EQ(p.contrast, w.contrast);
 }
 
+// 16-bit frames: the same figures, in fractions of 65535.
+TEST(HealthMonitor, SixteenBitFrames)
+{
+    Scene empty;
+    empty.depth = CV_16U;
+    empty.backlight = [](double x, double y) { return 250.0 * vignetted(x, y); };
+    empty.noiseSigma = 200.0;
+    HealthMonitor monitor(referenceOf(empty));
+    Scene scene = empty;
+    scene.backlight = [](double x, double y) { return 0.8 * 250.0 * vignetted(x, y); };
+    scene.object = 5000.0;
+    scene.blurSigma = 1.0;
+    const Edge edge{{200.0, 240.0}, unit(180.0 + 12.0)};
+    scene.edges = {edge};
+    const std::vector<EdgeProbe> probes = probesAlong(edge, 6, 12.0, -30.0);
+    monitor.beginCycle();
+    for (std::size_t view = 0; view < 4; ++view) {
+        EdgeImage image = imageOf(scene.render(80 + view), scene);
+        image.threshold = 20000.0;
+        monitor.addView(view, image, probes);
+    }
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_NEAR(f.backlight, 0.8, 0.008);
+    EXPECT_NEAR(f.noise, 200.0 / 65535.0, 0.1 * 200.0 / 65535.0);
+    EXPECT_EQ(f.probes, 24);
+    // The backlight beside the probes (the part lies on their right), within the 7 px the levels are read at.
+    const double background = 0.8 * 250.0 * vignetted(190.0, 240.0);
+    EXPECT_NEAR(f.contrast, (background - 5000.0) / 65535.0, 0.02 * (background - 5000.0) / 65535.0);
+    EXPECT_NEAR(f.edgeWidthPx, 2.5631 * std::sqrt(1.0 + 1.0 / 12.0), 0.1 * 2.78);
+}
+
+// The reference is the backlight of one sensor: the frames of another are
+// judged without it (noise and edges only).
+TEST(HealthMonitor, AReferenceOfAnotherSensorIsNotApplied)
+{
+    Scene empty;
+    HealthMonitor monitor(referenceOf(empty));
+    Scene other = empty;
+    other.sensor = {320, 240};
+    monitor.beginCycle();
+    monitor.addView(0, imageOf(other.render(90), other), {});
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_EQ(f.views, 1);
+    EXPECT_TRUE(std::isnan(f.backlight));
+    EXPECT_TRUE(std::isnan(f.uniformity));
+    EXPECT_TRUE(std::isnan(f.dustSpecks));
+    EXPECT_NEAR(f.noise, std::sqrt(1.0 + 1.0 / 12.0) / 255.0, 0.1 / 255.0);
+}
+
 TEST(HealthMonitor, RefusesFramesItCannotRead)
 {
     HealthMonitor monitor;
@@ -499,6 +550,44 @@ TEST(HealthMonitor, RefusesFramesItCannotRead)
     off.sensor = {640, 480};
     EXPECT_THROW(monitor.addView(4, off, {}), hg::ArgumentError);
     EXPECT_EQ(monitor.endCycle().views, 0);
+    // A reference whose levels do not cover its sensor in its cells.
+    FlatField odd;
+    odd.sensor = {640, 480};
+    odd.level = cv::Mat(14, 20, CV_32FC1, cv::Scalar(0.8)); // 480 / 32 = 15 rows of blocks
+    EXPECT_THROW(HealthMonitor{odd}, hg::ArgumentError);
+}
+
+// Whatever the frames and probes, a figure is read or is NaN: probes with no
+// place, no direction or far off the sensor; black, saturated and
+// checkerboard frames (every difference the largest a 16-bit frame holds).
+TEST(HealthMonitor, OddFramesAndProbesAreReadOrLeftOut)
+{
+    Scene empty;
+    HealthMonitor monitor(referenceOf(empty));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::vector<EdgeProbe> odd = {{{nan, 10.0}, {1.0, 0.0}},
+                                        {{100.0, 100.0}, {0.0, 0.0}},
+                                        {{1e12, -1e12}, {0.0, 1.0}},
+                                        {{100.0, 100.0}, {nan, 1.0}}};
+    monitor.beginCycle();
+    EdgeImage black = imageOf(cv::Mat(480, 640, CV_8UC1, cv::Scalar(0)), empty);
+    EdgeImage white = imageOf(cv::Mat(480, 640, CV_8UC1, cv::Scalar(255)), empty);
+    cv::Mat board(480, 640, CV_16UC1);
+    for (int y = 0; y < board.rows; ++y)
+        for (int x = 0; x < board.cols; ++x) board.at<std::uint16_t>(y, x) = (x + y) % 2 == 0 ? 65535 : 0;
+    EdgeImage checker = imageOf(board, empty);
+    checker.threshold = 100.0;
+    EdgeImage unknown = imageOf(empty.render(95), empty);
+    unknown.threshold = nan;
+    const std::array<const EdgeImage*, 4> images = {&black, &white, &checker, &unknown};
+    for (std::size_t view = 0; view < images.size(); ++view) monitor.addView(view, *images[view], odd);
+    const HealthFigures f = monitor.endCycle();
+    EXPECT_EQ(f.views, 4);
+    EXPECT_EQ(f.probes, 0);
+    EXPECT_TRUE(std::isnan(f.edgeWidthPx));
+    EXPECT_TRUE(std::isnan(f.predictedSigmaPx));
+    // The saturated frame and the checkerboard's white squares: all background, at full scale.
+    EXPECT_NEAR(f.backlight, 255.0 / 200.0, 0.01);
 }
 
 TEST(HealthMonitor, WarningsAndTheirBits)

@@ -15,6 +15,13 @@
 // camera` on a station file alone) the twin shows the bare back light, or the
 // `target`; without a pose source it renders at the zero pose.
 //
+// The twin's optics can be imperfect and age as a station does (docs/camera.md,
+// "Optics of the simulated camera", "Aging"): a back light falling off towards
+// the corners, dust specks on it, a halo eroding the silhouette, and, counted
+// in cycles (countCycle, a new part in the nest), a panel that dims, gathers
+// dust, a lens that defocuses and a halo that grows. The part `none` shows the
+// empty fixture, what a flat-field reference is taken from.
+//
 // Two optional keys make the twin stand for a physical rig in calibration:
 // `target` adds a backlit chessboard carried by the fixture as the part named
 // "target", and `truth_station` names a station file whose camera and fixture
@@ -24,6 +31,7 @@
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/file_kind.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/log.h"
 #include "hullgauge/drivers/simulation.h"
 #include "hullgauge/geometry/station.h"
@@ -35,10 +43,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <random>
 #include <sstream>
+#include <tuple>
 
 namespace hg::drivers {
 namespace {
@@ -109,12 +120,108 @@ geometry::Station loadTruthStation(const ConfigNode& node, const geometry::Stati
     return truth;
 }
 
+/// `camera.driver.aging` (docs/camera.md, "Aging"): every `perCycles` cycles
+/// the optics age by one step.
+struct AgingConfig {
+    std::uint64_t perCycles = 0; ///< 0: the optics never age
+    double dim = 0.0;            ///< fraction the back light loses per step (multiplicative)
+    int dustSpecks = 0;          ///< new specks per step
+    double defocusPx = 0.0;      ///< blur σ added per step
+    double haloPx = 0.0;         ///< halo added per step
+    std::uint64_t seed = 1;      ///< the specks' draws
+    double speckRadiusMin = 1.5, speckRadiusMax = 4.0;
+    double speckDepthMin = 0.2, speckDepthMax = 0.5;
+};
+
+/// The most dust specks the back light gathers by aging: beyond them the panel is
+/// long past cleaning, and every grab's shading stays cheap.
+constexpr std::size_t kMaxAgedSpecks = 4096;
+/// Aging stops growing the blur and the halo at the keys' upper bounds.
+constexpr double kMaxBlurSigmaPx = 50.0;
+constexpr double kMaxHaloPx = 10.0;
+
 struct SimConfig {
     sim::RenderOptions render;
+    AgingConfig aging;
     int bufferCount = 4;
     std::string initialPart;
     SimulatedCameraFault fault = SimulatedCameraFault::None;
 };
+
+/// `camera.driver.dust`: specks on the back light, centred on the sensor.
+std::vector<sim::DustSpeck> parseDust(const ConfigNode& node, cv::Size sensor)
+{
+    std::vector<sim::DustSpeck> out;
+    for (const auto& item : node.items()) {
+        require(item.isMap(), item, "expected a speck {x, y, radius_px, depth}");
+        item.allowOnlyKeys({"x", "y", "radius_px", "depth"});
+        sim::DustSpeck d;
+        d.x = item["x"].asDoubleIn(-0.5, sensor.width - 0.5);
+        d.y = item["y"].asDoubleIn(-0.5, sensor.height - 0.5);
+        d.radiusPx = item["radius_px"].asDoubleIn(0.5, 500.0);
+        d.depth = item["depth"].asDoubleIn(0.0, 1.0);
+        out.push_back(d);
+    }
+    return out;
+}
+
+/// A `[min, max]` within [lo, hi].
+std::pair<double, double> parseRange(const ConfigNode& node, double lo, double hi)
+{
+    const auto v = node.asDoubles(2);
+    if (!(v[0] >= lo && v[0] <= v[1] && v[1] <= hi))
+        node.fail("expected [min, max] with " + formatNumber(lo) + " <= min <= max <= " + formatNumber(hi) +
+                  ", found [" + formatNumber(v[0]) + ", " + formatNumber(v[1]) + "]");
+    return {v[0], v[1]};
+}
+
+/// `camera.driver.aging` (docs/camera.md, "Aging").
+AgingConfig parseAging(const ConfigNode& node)
+{
+    require(node.isMap(), node, "expected {per_cycles, dim, dust_specks, defocus_px, halo_px}");
+    node.allowOnlyKeys(
+        {"per_cycles", "dim", "dust_specks", "defocus_px", "halo_px", "seed", "speck_radius_px", "speck_depth"});
+    AgingConfig a;
+    a.perCycles = static_cast<std::uint64_t>(node["per_cycles"].asIntIn(1, 1000000000));
+    if (auto n = node.optional("dim")) a.dim = n->asDoubleIn(0.0, 0.5);
+    if (auto n = node.optional("dust_specks")) a.dustSpecks = static_cast<int>(n->asIntIn(0, 100));
+    if (auto n = node.optional("defocus_px")) a.defocusPx = n->asDoubleIn(0.0, 5.0);
+    if (auto n = node.optional("halo_px")) a.haloPx = n->asDoubleIn(0.0, 2.0);
+    if (auto n = node.optional("seed")) a.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
+    if (auto n = node.optional("speck_radius_px"))
+        std::tie(a.speckRadiusMin, a.speckRadiusMax) = parseRange(*n, 0.5, 500.0);
+    if (auto n = node.optional("speck_depth")) std::tie(a.speckDepthMin, a.speckDepthMax) = parseRange(*n, 0.0, 1.0);
+    return a;
+}
+
+/// A uniform draw in [lo, hi] from the generator's raw output: the same on every standard library.
+double uniform(std::mt19937_64& rng, double lo, double hi)
+{
+    const double u = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+    return lo + (hi - lo) * u;
+}
+
+/// The configured optics aged by `steps` (docs/camera.md, "Aging"); `drawn` holds the
+/// specks aging added so far, extended from `rng` to the specks `steps` call for.
+sim::RenderOptions agedOptics(const sim::RenderOptions& base, const AgingConfig& aging, std::uint64_t steps,
+                              cv::Size sensor, std::mt19937_64& rng, std::vector<sim::DustSpeck>& drawn)
+{
+    sim::RenderOptions o = base;
+    o.backgroundLevel = base.backgroundLevel * std::pow(1.0 - aging.dim, static_cast<double>(steps));
+    o.blurSigmaPx = std::min(kMaxBlurSigmaPx, base.blurSigmaPx + static_cast<double>(steps) * aging.defocusPx);
+    o.haloPx = std::min(kMaxHaloPx, base.haloPx + static_cast<double>(steps) * aging.haloPx);
+    const auto wanted = std::min<std::uint64_t>(kMaxAgedSpecks, steps * static_cast<std::uint64_t>(aging.dustSpecks));
+    while (drawn.size() < wanted) {
+        sim::DustSpeck speck;
+        speck.x = uniform(rng, 0.0, sensor.width - 1.0);
+        speck.y = uniform(rng, 0.0, sensor.height - 1.0);
+        speck.radiusPx = uniform(rng, aging.speckRadiusMin, aging.speckRadiusMax);
+        speck.depth = uniform(rng, aging.speckDepthMin, aging.speckDepthMax);
+        drawn.push_back(speck);
+    }
+    o.dust.insert(o.dust.end(), drawn.begin(), drawn.end());
+    return o;
+}
 
 /// Rows a frame with missing packets lacks: every fourth band of 8 rows reads 0.
 void dropPackets(cv::Mat& image)
@@ -150,7 +257,8 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     SimCameraImpl(std::string configPath, CameraSettings settings, SimConfig config, geometry::Station station,
                   CameraEnvironment& environment, Clock& clock)
         : Camera(std::move(configPath), std::move(settings), clock), config_(std::move(config)),
-          station_(std::move(station)), poseSource_(std::move(environment.poseSource)), fault_(config_.fault)
+          station_(std::move(station)), poseSource_(std::move(environment.poseSource)), fault_(config_.fault),
+          optics_(config_.render), agingRng_(config_.aging.seed)
     {
         for (auto& [name, mesh] : environment.parts)
             renderers_.emplace_back(name, std::make_shared<const sim::SilhouetteRenderer>(
@@ -162,9 +270,9 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     Status setPart(const std::string& name) override
     {
         auto r = find(name);
-        if (!r) {
+        if (!r && name != kEmptyFixture) {
             std::string known;
-            for (const auto& [n, _] : renderers_) known += (known.empty() ? "" : ", ") + n;
+            for (const auto& n : partNames()) known += (known.empty() ? "" : ", ") + n;
             return Status::failure("sim camera: no part named '" + name + "' (known: " + known + ")");
         }
         std::lock_guard lock(mutex_);
@@ -184,6 +292,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     {
         std::vector<std::string> out;
         for (const auto& [n, _] : renderers_) out.push_back(n);
+        out.emplace_back(kEmptyFixture);
         return out;
     }
 
@@ -210,6 +319,45 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         std::lock_guard lock(mutex_);
         fault_ = fault;
         log::category("camera")->info("sim camera: fault switch {}", enumName(fault));
+    }
+
+    void countCycle() override
+    {
+        std::lock_guard lock(mutex_);
+        ++cycles_;
+        const AgingConfig& aging = config_.aging;
+        if (aging.perCycles == 0 || cycles_ / aging.perCycles == agingSteps_) return;
+        agingSteps_ = cycles_ / aging.perCycles;
+        optics_ = agedOptics(config_.render, aging, agingSteps_, station_.camera.imageSize, agingRng_, agedDust_);
+        log::category("camera")->info("sim camera: aged {} steps in {} cycles: back light {:.4f}, blur {:.3f} px, "
+                                      "halo {:.3f} px, {} dust specks",
+                                      agingSteps_, cycles_, optics_.backgroundLevel, optics_.blurSigmaPx,
+                                      optics_.haloPx, optics_.dust.size());
+    }
+
+    SimulatedOptics optics() const override
+    {
+        std::lock_guard lock(mutex_);
+        SimulatedOptics out;
+        out.cycles = cycles_;
+        out.agingSteps = agingSteps_;
+        out.backgroundLevel = optics_.backgroundLevel;
+        out.vignetting = optics_.vignetting;
+        out.blurSigmaPx = optics_.blurSigmaPx;
+        out.haloPx = optics_.haloPx;
+        for (const auto& d : optics_.dust) out.dust.emplace_back(d.x, d.y, d.radiusPx, d.depth);
+        return out;
+    }
+
+    void resetAging() override
+    {
+        std::lock_guard lock(mutex_);
+        cycles_ = 0;
+        agingSteps_ = 0;
+        optics_ = config_.render;
+        agingRng_.seed(config_.aging.seed);
+        agedDust_.clear();
+        log::category("camera")->info("sim camera: aging reset, the optics as configured");
     }
 
   protected:
@@ -265,8 +413,10 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
         SimulatedCameraFault fault;
         geometry::RigidTransform seat;
         cv::Rect region;
+        sim::RenderOptions optics;
         {
             std::lock_guard lock(mutex_);
+            optics = optics_;
             region = region_;
             renderer = current_;
             seat = seat_;
@@ -291,7 +441,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
                                                            " buffers are held by the caller");
         // The region's image, continuous, in the front of the slot (which holds the configured ROI).
         cv::Mat out(region.size(), pool_->slots[*slot].type(), pool_->slots[*slot].data);
-        render(renderer.get(), *pose, seat, region, out);
+        render(renderer.get(), optics, *pose, seat, region, out);
         const auto id = ++frameCount_;
         const bool incomplete = fault == SimulatedCameraFault::Incomplete;
         if (incomplete) dropPackets(out);
@@ -326,11 +476,10 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     }
 
     /// The part at `pose`, seated so (or the bare back light without a part) into `out`, cropped to `region`.
-    void render(const sim::SilhouetteRenderer* renderer, const geometry::FixturePose& pose,
+    void render(const sim::SilhouetteRenderer* renderer, sim::RenderOptions options, const geometry::FixturePose& pose,
                 const geometry::RigidTransform& seat, const cv::Rect& region, cv::Mat& out) const
     {
         const PixelFormat format = settings().pixelFormat;
-        sim::RenderOptions options = config_.render;
         options.bitDepth = format == PixelFormat::Mono8 ? 8 : 16;
         options.seed = config_.render.seed + frameCount_; // fresh, reproducible noise per frame
         const geometry::CameraModel camera = align::seatedCamera(station_.cameraAt(pose), seat);
@@ -443,7 +592,7 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     geometry::Station station_;
     const sim::SilhouetteRenderer backlight_{}; ///< nothing in front of the back light
     std::vector<std::pair<std::string, std::shared_ptr<const sim::SilhouetteRenderer>>> renderers_;
-    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_, region_
+    mutable std::mutex mutex_; // guards current_, partName_, poseSource_, fault_, seat_, region_, the aging
     std::shared_ptr<const sim::SilhouetteRenderer> current_;
     std::string partName_;
     std::shared_ptr<const model::TriangleMesh> shownMesh_; ///< showMesh's last mesh and its renderer
@@ -457,6 +606,12 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
     double gainDb_ = 0.0;
     std::shared_ptr<SlotPool> pool_;
     std::uint64_t frameCount_ = 0;
+    // The aging (docs/camera.md, "Aging"): cycles counted, steps taken, the optics now.
+    std::uint64_t cycles_ = 0;
+    std::uint64_t agingSteps_ = 0;
+    sim::RenderOptions optics_; ///< config_.render aged by agingSteps_
+    std::mt19937_64 agingRng_;
+    std::vector<sim::DustSpeck> agedDust_; ///< the specks aging added, in the order drawn
 };
 
 } // namespace
@@ -464,9 +619,11 @@ class SimCameraImpl final : public Camera, public SimCameraControl {
 std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment& environment, Clock& clock)
 {
     const ConfigNode driver = root["camera"]["driver"];
-    driver.allowOnlyKeys({"backend", "pixel_format", "exposure_us", "gain_db", "roi", "trigger", "buffer_count", "part",
-                          "fault", "background_level", "object_level", "blur_sigma_px", "noise_sigma", "seed",
-                          "sub_scanlines", "target", "truth_station"});
+    driver.allowOnlyKeys({"backend",      "pixel_format",  "exposure_us", "gain_db", "roi",
+                          "trigger",      "buffer_count",  "part",        "fault",   "background_level",
+                          "object_level", "blur_sigma_px", "noise_sigma", "seed",    "sub_scanlines",
+                          "vignetting",   "dust",          "halo_px",     "aging",   "target",
+                          "truth_station"});
     // Initialised, never assigned: a Station's document shares its YAML nodes
     // with `root`, and assigning one over the other would overwrite `root`.
     const auto truthNode = driver.optional("truth_station");
@@ -481,6 +638,10 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
     if (auto n = driver.optional("noise_sigma")) c.render.noiseSigma = n->asDoubleIn(0.0, 65535.0);
     if (auto n = driver.optional("seed")) c.render.seed = static_cast<std::uint64_t>(n->asIntIn(0, 1LL << 62));
     if (auto n = driver.optional("sub_scanlines")) c.render.subScanlines = static_cast<int>(n->asIntIn(4, 256));
+    if (auto n = driver.optional("vignetting")) c.render.vignetting = n->asDoubleIn(0.0, 0.95);
+    if (auto n = driver.optional("dust")) c.render.dust = parseDust(*n, station.camera.imageSize);
+    if (auto n = driver.optional("halo_px")) c.render.haloPx = n->asDoubleIn(0.0, kMaxHaloPx);
+    if (auto n = driver.optional("aging")) c.aging = parseAging(*n);
     if (auto n = driver.optional("fault")) c.fault = n->asEnum<SimulatedCameraFault>("fault");
     if (auto n = driver.optional("target")) {
         const bool taken =
@@ -488,10 +649,14 @@ std::unique_ptr<Camera> makeSimCamera(const ConfigNode& root, CameraEnvironment&
         if (taken) n->fail("a part is already named 'target'");
         parts.emplace_back(kTargetPart, parseTarget(*n));
     }
+    for (const auto& [name, mesh] : parts)
+        if (name == kEmptyFixture)
+            throw ArgumentError("sim camera: a part is named '" + name + "', the name of the empty fixture");
     auto partNode = driver.optional("part");
     if (partNode || !parts.empty()) {
         c.initialPart = partNode ? partNode->asString() : parts.front().first;
         const bool known =
+            c.initialPart == kEmptyFixture ||
             std::any_of(parts.begin(), parts.end(), [&](const auto& p) { return p.first == c.initialPart; });
         if (!known) (partNode ? *partNode : driver).fail("no part named '" + c.initialPart + "' to render");
     }

@@ -19,9 +19,13 @@
 // `maxEdgeSagPx`. The split decision depends on an edge's end points only, so
 // neighbouring triangles split a shared edge identically and no cracks open.
 //
-// The grey image follows the backlit model: value = background + (object -
-// background) * coverage, then optional optics blur (Gaussian, σ in pixels) and
-// sensor noise (Gaussian, σ in grey levels), both reproducible from a seed.
+// The grey image follows the backlit model: value = B + (object - B) * coverage,
+// with B the back light's level at the pixel, then optional optics blur
+// (Gaussian, σ in pixels) and sensor noise (Gaussian, σ in grey levels), both
+// reproducible from a seed. The back light need not be even (docs/camera.md,
+// "Optics of the simulated camera"): B = background · V · D, a quadratic
+// radial fall-off V towards the sensor's corners and dark dust specks D on the
+// panel; a halo of light wrapping round the part's edge erodes the silhouette.
 #pragma once
 
 #include "hullgauge/geometry/camera.h"
@@ -32,6 +36,16 @@
 #include <vector>
 
 namespace hg::sim {
+
+/// A dark speck of dust on the back light, fixed on the sensor (pixels, the
+/// centre convention of camera.h): within `radiusPx` of its centre the back
+/// light is darkened by the fraction `depth`, the rim anti-aliased over one pixel.
+struct DustSpeck {
+    double x = 0.0;
+    double y = 0.0;
+    double radiusPx = 1.0;
+    double depth = 0.0;
+};
 
 struct RenderOptions {
     /// Sub-scanlines per pixel row (vertical anti-aliasing), >= 4.
@@ -54,6 +68,17 @@ struct RenderOptions {
     double noiseSigma = 0.0;
     /// Seed of the noise generator (cv::RNG); equal seeds give equal images.
     std::uint64_t seed = 0;
+
+    /// Back light fall-off at the sensor's corners, a fraction in [0, 0.95]:
+    /// V = 1 - vignetting · ρ², ρ the distance from the sensor's centre over
+    /// the distance of a corner pixel's centre from it (1 at the corners).
+    double vignetting = 0.0;
+    /// Dark specks on the back light (sensor pixels).
+    std::vector<DustSpeck> dust;
+    /// Light wrapping round the part's edge (px, 0–10): the silhouette is
+    /// eroded by this distance before shading, so a straight edge's 50 %
+    /// crossing moves `haloPx` into the object (erodeCoverage).
+    double haloPx = 0.0;
 
     /// Throws ArgumentError naming the offending option and its value.
     void validate() const;
@@ -89,9 +114,20 @@ class SilhouetteRenderer {
     std::vector<model::TriangleMesh> meshes_;
 };
 
-/// Turns a coverage image (CV_32FC1) into the backlit grey image: shading,
-/// blur, noise and quantisation of `options`.
-cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options);
+/// Turns a coverage image (CV_32FC1) into the backlit grey image: halo,
+/// shading, blur, noise and quantisation of `options`. The image is the
+/// window of `sensor` whose top-left pixel is `origin` (the whole sensor by
+/// default): the back light's fall-off and dust are the sensor's.
+cv::Mat shadeCoverage(const cv::Mat& coverage, const RenderOptions& options, cv::Point origin = {},
+                      cv::Size sensor = {});
+
+/// The silhouette shrunk by `haloPx` (> 0) along its normals: from the
+/// coverage blurred by a Gaussian of σ_h = max(1, (haloPx + 0.5) / 3) px a
+/// pixel's signed distance to the edge is read as d = σ Φ⁻¹(blurred), σ² =
+/// σ_h² + 1/12 (a pixel's box adds 1/12 along any normal), and its coverage
+/// becomes clamp(d - haloPx + 0.5, 0, 1). Exact for straight edges to well
+/// under 0.01 px; corners and features narrower than ≈ 2σ_h are approximated.
+cv::Mat erodeCoverage(const cv::Mat& coverage, double haloPx);
 
 /// Silhouette statistics of a coverage image.
 struct CoverageStats {

@@ -10,7 +10,7 @@
 // The cost is a budget, not an afterthought: a cycle's views are examined on
 // a sparse sample of the background and a few profile reads per landmark, and
 // the dust search covers the frame in bands over successive cycles, so a
-// cycle of 8 views costs well under 0.2 ms (tools/bench, docs/health.md).
+// cycle of 8 views costs about 0.1 ms of CPU (tools/bench, docs/health.md).
 //
 // Pure computation on values: no I/O, no threads, no clock. The monitor keeps
 // state between cycles (the dust survey's bands); one thread at a time.
@@ -130,7 +130,10 @@ std::uint16_t healthWarningBits(std::span<const HealthFigure> warnings);
 /// Watches a station's frames cycle after cycle (docs/health.md).
 class HealthMonitor {
   public:
-    /// Without a reference (empty) the backlight, uniformity and dust are not measured.
+    /// Without a reference (empty) the backlight, uniformity and dust are not
+    /// measured. Throws hg::ArgumentError when a reference is not one
+    /// buildFlatField could have made (levels not ceil(sensor / cell) blocks
+    /// of CV_32FC1, noise outside [0, 1)).
     explicit HealthMonitor(FlatField reference = {});
 
     const FlatField& reference() const { return reference_; }
@@ -158,6 +161,7 @@ class HealthMonitor {
 
     FlatField reference_;
     std::vector<cv::Point2f> referenceSpecks_; ///< reference_.dustAt sorted by y
+    cv::Mat lowestLevel_;                      ///< per block: the lowest level within it (the dust limits)
     cv::Size zones_{};                         ///< uniformity zones across the sensor
     int zoneSide_ = 0;                         ///< px
     int bands_ = 0;
@@ -165,13 +169,15 @@ class HealthMonitor {
 
     // The cycle's pools.
     int views_ = 0;
-    std::vector<double> ratios_;
+    std::vector<int> ratioBins_; ///< the background samples' ratios to the reference, counted in bins
+    long ratioCount_ = 0;
     std::vector<double> zoneSum_;
     std::vector<int> zoneCount_;
     std::vector<double> widths_, contrasts_;
-    /// |differences| of neighbouring background pixels, grey levels of the
-    /// cycle's first frame's depth (full scale stepsFull_).
-    std::vector<int> steps_;
+    /// |differences| of neighbouring background pixels counted in bins of grey
+    /// levels of the cycle's first frame's depth (full scale stepsFull_).
+    std::vector<int> stepBins_;
+    long stepCount_ = 0;
     double stepsFull_ = 0.0;
 
     /// The last view's zones (for its dust thresholds): the sum of its samples' ratios and their count.

@@ -5,6 +5,7 @@
 #include "hullgauge/align/pose_correction.h"
 #include "hullgauge/common/digest.h"
 #include "hullgauge/common/log.h"
+#include "hullgauge/drivers/simulation.h"
 #include "hullgauge/geometry/json.h"
 #include "hullgauge/station/cycle_rules.h"
 #include "hullgauge/store/result_reader.h"
@@ -648,9 +649,9 @@ FlatFieldAction::Simulation CycleRunner::emptyFixture()
     auto shown = std::make_shared<std::string>();
     sim.showEmpty = [this, shown] {
         const auto parts = simulation_->parts();
-        if (std::find(parts.begin(), parts.end(), "none") == parts.end()) return false;
+        if (std::find(parts.begin(), parts.end(), drivers::kEmptyFixture) == parts.end()) return false;
         *shown = simulation_->part();
-        return simulation_->selectPart("none");
+        return simulation_->selectPart(drivers::kEmptyFixture);
     };
     sim.restore = [this, shown] {
         if (!shown->empty()) (void)simulation_->selectPart(*shown);

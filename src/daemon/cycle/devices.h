@@ -101,6 +101,12 @@ class SimulationControl {
     /// The simulated fixture's fault switches (docs/fixture.md); null when the
     /// fixture is a real drive or the separate Modbus simulator.
     virtual drivers::SimFixtureControl* fixtureFaults() { return nullptr; }
+    /// The simulated camera's optics as they have aged (docs/camera.md,
+    /// "Aging"; `hullgauge ctl sim-age`): cycles, aging_steps, background_level,
+    /// vignetting, blur_sigma_px, halo_px, dust_specks; null when there are none.
+    virtual nlohmann::json optics() const { return nullptr; }
+    /// The optics as configured again, the cycle count at 0 (`ctl sim-age --reset`).
+    virtual void resetAging() {}
 };
 
 /// What the daemon's device factory returns: the production port and, on the

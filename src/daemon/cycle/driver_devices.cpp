@@ -173,8 +173,20 @@ class DriverDevices : public StationDevices, public SimulationControl {
     }
     drivers::SimFixtureControl* fixtureFaults() override { return sim_.fixture; }
 
+    nlohmann::json optics() const override
+    {
+        const drivers::SimulatedOptics o = sim_.camera->optics();
+        return {
+            {"cycles", o.cycles},          {"aging_steps", o.agingSteps},    {"background_level", o.backgroundLevel},
+            {"vignetting", o.vignetting},  {"blur_sigma_px", o.blurSigmaPx}, {"halo_px", o.haloPx},
+            {"dust_specks", o.dust.size()}};
+    }
+    void resetAging() override { sim_.camera->resetAging(); }
+
     void newPart() override
     {
+        // One more cycle of the camera's aging (docs/camera.md, "Aging"), seated or not.
+        sim_.camera->countCycle();
         if (!seating_) return;
         seat_ = drawSeat(seatRng_, *seating_, seatCentre_);
         sim_.camera->setSeat(seat_.seat);

@@ -226,9 +226,15 @@ void Access::routeAccounts(httplib::Server& server)
                    sendJson(res, {{"users", users}, {"file", station::usersFile(*config_()).string()}});
                }));
     server.Post("/api/users", api([this](const httplib::Request& req, httplib::Response& res) {
+                    // The right is checked before the body is judged: a refusal is a 403 whatever was sent,
+                    // recorded with the name asked for when there is one.
+                    const auto sent = json::parse(req.body, nullptr, false);
+                    const auto asked = sent.is_object() && sent.contains("name") && sent["name"].is_string()
+                                           ? sent["name"].get<std::string>()
+                                           : std::string();
+                    const auto actor = authorize(req, Permission::Users, "user.add", asked);
                     const auto body = jsonBody(req, "{\"name\": ..., \"role\": ..., \"password\": ...}");
                     const auto name = textOf(body, "name");
-                    const auto actor = authorize(req, Permission::Users, "user.add", name);
                     const store::Account account{name, roleOf(body), store::hashPassword(textOf(body, "password"))};
                     store::AccountsFile(station::usersFile(*config_())).add(account);
                     record(actor, "user.add", name, "done", {}, {}, "role: " + std::string(enumName(account.role)));
@@ -236,9 +242,9 @@ void Access::routeAccounts(httplib::Server& server)
                 }));
     server.Post(R"(/api/users/([A-Za-z0-9][A-Za-z0-9._-]{0,31}))",
                 api([this](const httplib::Request& req, httplib::Response& res) {
-                    const auto body = jsonBody(req, "{\"role\": ...} or {\"password\": ...}");
                     const auto name = req.matches[1].str();
                     const auto actor = authorize(req, Permission::Users, "user.change", name);
+                    const auto body = jsonBody(req, "{\"role\": ...} or {\"password\": ...}");
                     const store::AccountsFile file(station::usersFile(*config_()));
                     const auto before = file.find(name);
                     if (!before) throw HttpError(404, "no account '" + name + "'");

@@ -16,11 +16,15 @@ namespace {
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
 
-/// config/sim with the fixture's twin in the process (`backend: sim`, the
-/// one-word switch docs/fixture.md promises) instead of the Modbus simulator.
-station::DaemonConfig lineWithTwinFixture(const fs::path& dir)
+/// config/sim, with the files of `overlay` laid over it as tools/simline lays
+/// them, and the fixture's twin in the process (`backend: sim`, the one-word
+/// switch docs/fixture.md promises) instead of the Modbus simulator.
+station::DaemonConfig lineWithTwinFixture(const fs::path& dir, const std::string& overlay = {})
 {
     fs::copy(hgtest::sourceDir() / "config" / "sim", dir, fs::copy_options::recursive);
+    if (!overlay.empty())
+        fs::copy(hgtest::sourceDir() / "config" / overlay, dir,
+                 fs::copy_options::recursive | fs::copy_options::overwrite_existing);
     std::ifstream in(dir / "station.yaml");
     std::stringstream text;
     text << in.rdbuf();
@@ -86,6 +90,56 @@ TEST_F(TwinFixtureLine, ALatchedDriveFaultFailsTheNextMoveNotTheGrab)
     const Status moved = hardware_.devices->moveTo({-30.0, 10.0, 0.0}, 2s, false);
     ASSERT_FALSE(moved.ok());
     EXPECT_EQ(moved.code(), StatusCode::Fault) << moved.message();
+}
+
+// config/sim-aging: every new part is a cycle of the camera's aging, which
+// takes a step every 5 cycles (back light · 0.97, blur + 0.1 px, halo + 0.05
+// px, 2 specks more); the status shows it and a reset makes the optics new.
+TEST(SimulatedAging, EveryNewPartAgesTheCameraAndAResetMakesItNew)
+{
+    hgtest::TempDir dir;
+    StationHardware hardware = makeDriverDevices(lineWithTwinFixture(dir.path(), "sim-aging"));
+    ASSERT_NE(hardware.simulation, nullptr);
+    SimulationControl& sim = *hardware.simulation;
+    auto optics = sim.optics();
+    EXPECT_EQ(optics["cycles"], 0);
+    EXPECT_EQ(optics["dust_specks"], 2);
+    EXPECT_DOUBLE_EQ(optics["background_level"].get<double>(), 0.92);
+    EXPECT_DOUBLE_EQ(optics["vignetting"].get<double>(), 0.1);
+    for (int i = 0; i < 14; ++i) sim.newPart();
+    optics = sim.optics();
+    EXPECT_EQ(optics["cycles"], 14);
+    EXPECT_EQ(optics["aging_steps"], 2);
+    EXPECT_NEAR(optics["background_level"].get<double>(), 0.92 * 0.97 * 0.97, 1e-12);
+    EXPECT_NEAR(optics["blur_sigma_px"].get<double>(), 0.8, 1e-12);
+    EXPECT_NEAR(optics["halo_px"].get<double>(), 0.1, 1e-12);
+    EXPECT_EQ(optics["dust_specks"], 6);
+    sim.resetAging();
+    optics = sim.optics();
+    EXPECT_EQ(optics["cycles"], 0);
+    EXPECT_EQ(optics["aging_steps"], 0);
+    EXPECT_EQ(optics["dust_specks"], 2);
+    EXPECT_DOUBLE_EQ(optics["background_level"].get<double>(), 0.92);
+}
+
+// `sim-part none`: the camera grabs the empty fixture, the back light alone.
+TEST_F(TwinFixtureLine, ThePartNoneShowsTheEmptyFixture)
+{
+    SimulationControl& sim = *hardware_.simulation;
+    const auto parts = sim.parts();
+    EXPECT_EQ(parts.back(), "none");
+    GrabbedFrame withPart, empty;
+    ASSERT_TRUE(hardware_.devices->grab(2s, withPart).ok());
+    ASSERT_GT(cv::countNonZero(withPart.image < 128), 1000) << "the part is in view";
+    ASSERT_TRUE(sim.selectPart("none"));
+    EXPECT_EQ(sim.part(), "none");
+    ASSERT_TRUE(hardware_.devices->grab(2s, empty).ok());
+    EXPECT_EQ(cv::countNonZero(empty.image < 128), 0);
+    // config/sim's back light, 0.92 of full scale, with its noise of 1.5 grey levels.
+    EXPECT_NEAR(cv::mean(empty.image)[0], 0.92 * 255.0, 0.5);
+    ASSERT_TRUE(sim.selectPart("nominal"));
+    ASSERT_TRUE(hardware_.devices->grab(2s, withPart).ok());
+    EXPECT_GT(cv::countNonZero(withPart.image < 128), 1000);
 }
 
 } // namespace

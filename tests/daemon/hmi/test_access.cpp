@@ -4,13 +4,13 @@
 // in the trail; the administrator's accounts API; the trail read as JSON and
 // CSV. The daemon's main loop is played by a thread answering the mailbox.
 #include "hgtest/manual_clock.h"
+#include "hgtest/password_hash.h"
 #include "hgtest/paths.h"
 #include "hmi/fake_loop.h"
 #include "hmi/hmi_server.h"
 #include "hullgauge/store/accounts.h"
 #include "hullgauge/store/audit_log.h"
 
-#include <crypt.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
 
@@ -20,13 +20,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using store::Role;
-
-/// crypt(3) SHA-512 with a fixed salt: made by libcrypt, not by the code under test.
-std::string hashOf(const std::string& password)
-{
-    crypt_data data{};
-    return crypt_r(password.c_str(), "$6$accesstestsalt$", &data);
-}
 
 struct Signed {
     std::string cookie, csrf;
@@ -44,13 +37,13 @@ class AccessTest : public ::testing::Test {
         cfg->http.port = 0;
         cfg->http.assets = hgtest::sourceDir() / "share" / "hmi";
         cfg->http.burst = 1000;
-        cfg->http.passwordHash = hashOf("shared secret");
+        cfg->http.passwordHash = hgtest::sha512CryptOf("shared secret");
         cfg->workbench.folder = dir / "parts";
         fs::create_directories(cfg->workbench.folder);
         const store::AccountsFile accounts(dir / "users.yaml");
-        accounts.add({"anna", Role::Administrator, hashOf("anna's password")});
-        accounts.add({"erik", Role::Engineer, hashOf("erik's password")});
-        accounts.add({"olga", Role::Operator, hashOf("olga's password")});
+        accounts.add({"anna", Role::Administrator, hgtest::sha512CryptOf("anna's password")});
+        accounts.add({"erik", Role::Engineer, hgtest::sha512CryptOf("erik's password")});
+        accounts.add({"olga", Role::Operator, hgtest::sha512CryptOf("olga's password")});
         server = std::make_unique<HmiServer>(cfg, mailbox, clock);
         loop = std::make_unique<FakeLoop>(mailbox);
         client = std::make_unique<httplib::Client>("127.0.0.1", server->port());
@@ -238,6 +231,38 @@ TEST_F(AccessTest, TheAdministratorManagesAccountsAndEachChangeIsRecordedWithout
             for (const auto& secret :
                  std::vector<std::string>{"paul's first", "paul's second", "anna's password", hash})
                 EXPECT_EQ(text->find(secret), std::string::npos) << e.action << ": " << *text;
+}
+
+// The right is judged before the request's body: an engineer's malformed or nameless account request
+// is refused as theirs to make (403, recorded), not answered as a bad body (400) that would tell them
+// what the administrator's form expects.
+TEST_F(AccessTest, AnAccountRequestWithoutTheRightIsRefusedWhateverItsBody)
+{
+    const auto erik = signIn("erik", "erik's password");
+    auto nameless = client->Post("/api/users", erik.headers(), "{\"role\": \"administrator\"}", "application/json");
+    ASSERT_TRUE(nameless);
+    EXPECT_EQ(nameless->status, 403) << nameless->body;
+    auto malformed = client->Post("/api/users", erik.headers(), "{not json", "application/json");
+    ASSERT_TRUE(malformed);
+    EXPECT_EQ(malformed->status, 403) << malformed->body;
+    auto change = client->Post("/api/users/olga", erik.headers(), "[1, 2]", "application/json");
+    ASSERT_TRUE(change);
+    EXPECT_EQ(change->status, 403) << change->body;
+
+    store::AuditQuery refused;
+    refused.outcome = "refused";
+    const auto entries = trail(refused);
+    ASSERT_EQ(entries.size(), 3u);
+    EXPECT_EQ(entries[0].action, "user.change");
+    EXPECT_EQ(entries[0].object, "olga");
+    EXPECT_EQ(entries[1].action, "user.add");
+    EXPECT_EQ(entries[1].object, "");
+    for (const auto& e : entries) EXPECT_EQ(e.who, "erik");
+    // The administrator's malformed request is a bad body, said so.
+    const auto anna = signIn("anna", "anna's password");
+    auto bad = client->Post("/api/users", anna.headers(), "{\"role\": \"operator\"}", "application/json");
+    ASSERT_TRUE(bad);
+    EXPECT_EQ(bad->status, 400) << bad->body;
 }
 
 TEST_F(AccessTest, TheSharedPasswordSignsInAnEngineerButNeverAsAnAccount)

@@ -5,6 +5,7 @@
 #include "command_mailbox.h"
 #include "cycle/image_archive.h"
 #include "hgtest/manual_clock.h"
+#include "hgtest/password_hash.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hmi/fake_loop.h"
@@ -15,7 +16,6 @@
 #include "hullgauge/store/result_store.h"
 
 #include <arpa/inet.h>
-#include <crypt.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <netinet/in.h>
@@ -32,13 +32,6 @@ using hgtest::ManualClock;
 
 using nlohmann::json;
 using namespace std::chrono_literals;
-
-/// crypt(3) SHA-512 hash of `password` with a fixed salt (the server never sees the password in a file).
-std::string hashOf(const std::string& password)
-{
-    crypt_data data{};
-    return crypt_r(password.c_str(), "$6$hmitestsalt$", &data);
-}
 
 station::InspectionRecord record(std::uint16_t seq, station::Verdict verdict, const std::string& serial)
 {
@@ -68,7 +61,7 @@ class HmiServerTest : public ::testing::Test {
         cfg->http.enabled = true;
         cfg->http.port = 0;
         cfg->http.assets = hgtest::sourceDir() / "share" / "hmi";
-        cfg->http.passwordHash = hashOf("line-7 secret");
+        cfg->http.passwordHash = hgtest::sha512CryptOf("line-7 secret");
         cfg->http.burst = 1000;
         {
             store::ResultStore store(cfg->results.database);
@@ -740,7 +733,7 @@ TEST_F(HmiServerTest, SignInAttemptsAreLimitedPerAddress)
 
 TEST(HmiAuth, PasswordsAreCheckedAgainstCryptHashesOnly)
 {
-    const auto hash = hashOf("s3cret");
+    const auto hash = hgtest::sha512CryptOf("s3cret");
     EXPECT_TRUE(validPasswordHash(hash));
     EXPECT_TRUE(verifyPassword("s3cret", hash));
     EXPECT_FALSE(verifyPassword("s3cret ", hash));

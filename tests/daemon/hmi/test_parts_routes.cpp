@@ -8,11 +8,11 @@
 // thread that answers the mailbox.
 #include "command_mailbox.h"
 #include "hgtest/manual_clock.h"
+#include "hgtest/password_hash.h"
 #include "hgtest/paths.h"
 #include "hmi/hmi_server.h"
 
 #include <arpa/inet.h>
-#include <crypt.h>
 #include <fstream>
 #include <gtest/gtest.h>
 #include <httplib.h>
@@ -29,12 +29,6 @@ namespace {
 using nlohmann::json;
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
-
-std::string hashOf(const std::string& password)
-{
-    crypt_data data{};
-    return crypt_r(password.c_str(), "$6$partstestsalt$", &data);
-}
 
 std::string bytesOf(const fs::path& file)
 {
@@ -86,7 +80,7 @@ class PartsApi : public ::testing::Test {
         cfg->http.enabled = true;
         cfg->http.port = 0;
         cfg->http.assets = hgtest::sourceDir() / "share" / "hmi";
-        cfg->http.passwordHash = hashOf("bench secret");
+        cfg->http.passwordHash = hgtest::sha512CryptOf("bench secret");
         cfg->http.burst = 1000;
         cfg->workbench.folder = dir / "parts";
         cfg->workbench.cli = hgtest::binaryDir() / "bin" / "hullgauge";

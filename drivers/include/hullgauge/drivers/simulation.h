@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core/matx.hpp>
 #include <string>
 #include <vector>
 
@@ -37,14 +38,32 @@ constexpr auto nameTable(SimulatedCameraFault)
                                                           {RefuseRegion, "refuse_region"}});
 }
 
+/// The part name that shows the empty fixture: the bare back light, what a
+/// flat-field reference is taken from (docs/camera.md, "The empty fixture").
+inline constexpr const char* kEmptyFixture = "none";
+
+/// The simulated camera's optics as they are now: as configured, aged by the
+/// cycles counted (docs/camera.md, "Optics of the simulated camera", "Aging").
+struct SimulatedOptics {
+    std::uint64_t cycles = 0;     ///< cycles counted since the start or the last resetAging()
+    std::uint64_t agingSteps = 0; ///< times the optics aged: cycles / aging.per_cycles
+    double backgroundLevel = 0.0; ///< the back light at the sensor's centre, fraction of full scale
+    double vignetting = 0.0;      ///< fall-off at the sensor's corners (fraction)
+    double blurSigmaPx = 0.0;     ///< optics blur (Gaussian σ, px)
+    double haloPx = 0.0;          ///< the silhouette's erosion by light wrapping round the edge (px)
+    /// Every dust speck on the back light: x, y (sensor pixels), radius (px), depth (fraction).
+    std::vector<cv::Vec4d> dust;
+};
+
 /// The simulated camera's controls.
 class SimCameraControl {
   public:
     virtual ~SimCameraControl() = default;
     /// Switches the part under test (thread-safe, also while streaming);
-    /// fails for a name not among the parts.
+    /// fails for a name not among the parts. kEmptyFixture shows no part.
     virtual Status setPart(const std::string& name) = 0;
     virtual std::string part() const = 0;
+    /// The parts it renders, then kEmptyFixture.
     virtual std::vector<std::string> partNames() const = 0;
     /// Renders `mesh` as the part under test, named `name` (a released part of
     /// the workbench, docs/workbench.md: its own CAD model), until setPart
@@ -58,6 +77,12 @@ class SimCameraControl {
     virtual void setSeat(const geometry::RigidTransform& seat) = 0;
     /// Switches a fault on, or off with SimulatedCameraFault::None (thread-safe).
     virtual void injectFault(SimulatedCameraFault fault) = 0;
+    /// A new part was put in the nest: one more cycle for `camera.driver.aging`
+    /// (the daemon's simulated line calls it at the start of every cycle). Thread-safe.
+    virtual void countCycle() = 0;
+    virtual SimulatedOptics optics() const = 0;
+    /// The optics as configured again, the cycle count at 0, the aging's draws from its seed anew.
+    virtual void resetAging() = 0;
 };
 
 /// Fault switches of the simulated drive (the in-process twin and the Modbus

@@ -11,7 +11,8 @@ subscribed to hullgauge/#). Checked:
   docs/schemas/mqtt-result.schema.json and equal to the store's row (the
   maintenance socket's `results`) with the station and the row's cycle id;
   the state and counters messages valid against their schemas, the counters
-  those of the store;
+  those of the store; the health messages (one per cycle) valid against
+  theirs, each of a stored cycle with its stored figures;
 - the broker stopped for --outage-cycles cycles (default 20): the PLC gets
   every verdict, the results wait in the store (published_unix_ms NULL), and
   once the broker is back all of them arrive, in order;
@@ -237,6 +238,27 @@ def check_state_and_counters(station, subscriber, schemas):
                want, 60, f"{station.name}: counters {want}")
 
 
+def check_health(station, subscriber, schemas, expected):
+    """The station's health messages (docs/health.md, "In the daemon"): one per cycle while connected,
+    schema-valid, each naming a stored result's cycle id, its figures those of the store's health row."""
+    messages = subscriber.on(f"hullgauge/{station.name}/health")
+    check(len(messages) >= expected, f"{station.name}: {len(messages)} health messages, expected {expected}")
+    db = sqlite3.connect(f"file:{station.workdir / 'results.db'}?mode=ro", uri=True)
+    try:
+        rows = {c: (b, w) for c, b, w in db.execute(
+            "SELECT i.cycle_id, h.edge_width_px, h.warnings FROM health h JOIN inspections i ON i.id = h.inspection_id")}
+    finally:
+        db.close()
+    for m in messages:
+        errors = [e.message for e in schemas["health"].iter_errors(m)]
+        check(not errors, f"{station.name}: health message {m} does not follow its schema: {errors[:3]}")
+        stored = rows.get(m.get("cycle_id"))
+        check(stored is not None and m.get("station") == station.name, f"{station.name}: health message of no stored cycle {m}")
+        if stored:
+            check(m["figures"]["edge_width_px"] == stored[0] and m["warnings"] == json.loads(stored[1]),
+                  f"{station.name}: health message {m} is not the stored row {stored}")
+
+
 def plain_line(args, folder, schemas):
     """Results, the broker's outage, kill -9 of the daemon, the clean stop."""
     port = free_port()
@@ -252,6 +274,7 @@ def plain_line(args, folder, schemas):
         wait_until(lambda: station.waiting() == 0, 60, "every result marked published")
         check_results(station, subscriber, schemas, 6)
         check_state_and_counters(station, subscriber, schemas)
+        check_health(station, subscriber, schemas, 6)
 
         # The broker away: the PLC gets every verdict, the results wait on disk.
         broker.stop()
@@ -409,7 +432,7 @@ def main():
     args = ap.parse_args()
     schemas = {kind: jsonschema.Draft202012Validator(
         json.loads((args.source / "docs" / "schemas" / f"mqtt-{kind}.schema.json").read_text()))
-        for kind in ("result", "state", "counters")}
+        for kind in ("result", "state", "counters", "health")}
     folder = Path(tempfile.mkdtemp(prefix="hg-mqtt-"))
     started = time.monotonic()
     plain_line(args, folder, schemas)

@@ -208,7 +208,7 @@ struct TriggerRequest {
     /// CYCLE_PURPOSE at acceptance.
     CyclePurpose purpose = CyclePurpose::Production;
     /// PART_TEMPERATURE at acceptance (°C); none: the PLC gives no reading (docs/mastering.md, "Temperature").
-    std::optional<double> partTemperatureC;
+    std::optional<double> partTemperatureC{};
 };
 
 /// What the PLC sees of a finished (or aborted) cycle.

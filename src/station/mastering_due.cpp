@@ -1,5 +1,6 @@
 #include "hullgauge/station/mastering_due.h"
 
+#include <cmath>
 #include <utility>
 
 namespace hg::station {
@@ -12,6 +13,9 @@ MasteringDue::MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::s
 void MasteringDue::mastered(MasteringInForce set)
 {
     set_ = std::move(set);
+    // Only readings taken with the set in force count against it.
+    referenceC_ = set_->temperatureC;
+    temperatureC_.reset();
     parts_ = 0;
     cyclesWhileDue_ = 0;
     latched_ = MasteringDueCause::None;
@@ -39,6 +43,15 @@ void MasteringDue::judged(CyclePurpose purpose)
     latch();
 }
 
+void MasteringDue::temperatureIs(double temperatureC)
+{
+    if (!set_) return;
+    // A set without its masters' temperature is referred to the first part measured with it.
+    if (!referenceC_) referenceC_ = temperatureC;
+    temperatureC_ = temperatureC;
+    latch();
+}
+
 MasteringDueCause MasteringDue::cause() const
 {
     return latched_ != MasteringDueCause::None ? latched_ : causeNow();
@@ -63,6 +76,9 @@ MasteringDueCause MasteringDue::causeNow() const
     if (policy_.onCalibrationChange && calibration_ != set_->calibration) return Calibration;
     if (policy_.maxAge && clock_->wallMs() - set_->createdUnixMs >= policy_.maxAge->count()) return Age;
     if (policy_.maxParts && parts_ >= *policy_.maxParts) return Parts;
+    if (policy_.maxTemperatureStepC && referenceC_ && temperatureC_ &&
+        std::abs(*temperatureC_ - *referenceC_) > *policy_.maxTemperatureStepC)
+        return Temperature;
     return None;
 }
 

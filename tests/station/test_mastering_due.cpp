@@ -1,7 +1,8 @@
 // Re-mastering due (docs/mastering.md, "Re-mastering due"), each cause on a
 // clock moved by hand: the age of the set, the production parts judged with
-// it, a new calibration and a new release of the program; production refused
-// past the grace count while master and study cycles run on; a new set clears it.
+// it, a new calibration, a new release of the program and the part's
+// temperature moved from the master's; production refused past the grace
+// count while master and study cycles run on; a new set clears it.
 #include "hgtest/manual_clock.h"
 #include "hullgauge/station/mastering_due.h"
 
@@ -128,6 +129,76 @@ TEST(MasteringDue, WithoutGraceTheFirstProductionTriggerAfterTheDueIsRefused)
     EXPECT_EQ(due.cause(), Cause::Parts);
     EXPECT_FALSE(due.admits(P::Production));
     EXPECT_TRUE(due.admits(P::Master));
+}
+
+// The temperature step (docs/mastering.md, "Re-mastering due"): 2 °C from the
+// set's 20.0 °C. A part at 21.9 °C (a step of 1.9) is within it, at 22.1 °C
+// (2.1) it is due; back at 20.0 °C it stays due until a new set.
+TEST(MasteringDue, DueWhenThePartsTemperatureMovesMoreThanTheStepFromTheSets)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.graceCycles = 1, .maxTemperatureStepC = 2.0}, clock, "cal-A");
+    due.programIs(3);
+    MasteringInForce set = setNow(clock);
+    set.temperatureC = 20.0;
+    due.mastered(set);
+    due.judged(P::Production);
+    due.temperatureIs(21.9);
+    EXPECT_EQ(due.cause(), Cause::None);
+    due.judged(P::Production);
+    due.temperatureIs(18.1); // 1.9 below
+    EXPECT_EQ(due.cause(), Cause::None);
+    clock.advance(1h);
+    due.judged(P::Production);
+    due.temperatureIs(22.1);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+    EXPECT_EQ(enumName(due.cause()), "temperature");
+    // The part that made it due used none of the grace.
+    EXPECT_EQ(due.graceLeft(), 1u);
+    due.judged(P::Production);
+    due.temperatureIs(20.0);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+    EXPECT_FALSE(due.admits(P::Production));
+    EXPECT_TRUE(due.admits(P::Master));
+    // The master measured at 22.0 °C: its set clears the due and is the new reference.
+    MasteringInForce warm = setNow(clock, "p1-v3-b");
+    warm.temperatureC = 22.0;
+    due.mastered(warm);
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(23.9); // 1.9 above 22.0
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(19.9); // 2.1 below 22.0
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+}
+
+// A set without its masters' temperature takes the first reading after it came
+// into force as its reference; without a step the temperature never makes it due.
+TEST(MasteringDue, ASetWithoutATemperatureIsReferredToTheFirstReadingWithIt)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxTemperatureStepC = 2.0}, clock, "cal-A");
+    due.programIs(3);
+    due.temperatureIs(30.0); // no set yet: not a reference
+    due.mastered(setNow(clock));
+    EXPECT_FALSE(due.due());
+    due.judged(P::Study);
+    due.temperatureIs(24.0); // the reference: master and study cycles read the temperature too
+    due.judged(P::Production);
+    due.temperatureIs(25.9);
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(26.1);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+
+    MasteringDue off({}, clock, "cal-A");
+    off.programIs(3);
+    MasteringInForce set = setNow(clock);
+    set.temperatureC = 20.0;
+    off.mastered(set);
+    off.temperatureIs(35.0);
+    EXPECT_FALSE(off.due());
 }
 
 } // namespace

@@ -392,8 +392,8 @@ void CycleRunner::applyCorrectionSet(std::uint16_t number, const station::PartPr
         pm.due = station::MasteringDue(*duePolicy_, clock_, calibrationIdentity_);
         pm.due.programIs(pm.version);
     } else {
-        pm.due.mastered(
-            {ref.correctionId, ref.correctionCreatedUnixMs, ref.correctionProgramVersion, calibrationIdentity_});
+        pm.due.mastered({ref.correctionId, ref.correctionCreatedUnixMs, ref.correctionProgramVersion,
+                         calibrationIdentity_, ref.correctionTemperatureC});
     }
     pm.setSha256 = ref.correctionSha256;
 }
@@ -406,6 +406,7 @@ void CycleRunner::masteringJudged(const station::InspectionRecord& record)
     const auto it = mastering_.find(record.program);
     if (it == mastering_.end()) return;
     it->second.due.judged(record.purpose);
+    if (record.temperatureC) it->second.due.temperatureIs(*record.temperatureC);
     signalMastering();
 }
 
@@ -535,6 +536,10 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     cycle.record.serial = trigger.serial;
     cycle.record.program = trigger.program;
     cycle.record.purpose = trigger.purpose;
+    // The part's temperature at the trigger, recorded and referred to 20 °C (docs/mastering.md, "Temperature").
+    const auto& temperature = cycle.cfg->temperature;
+    cycle.record.temperatureC = temperature_.atTrigger(temperature, trigger.partTemperatureC);
+    inspector_.setPartTemperature(cycle.record.temperatureC, temperature ? temperature->sigmaC : 0.0);
     auto action = beginCycle(cycle);
     while (action.kind != Kind::Publish) {
         auto next = interruption(cycle);
@@ -922,6 +927,7 @@ void CycleRunner::report(Cycle& cycle)
                       {"timing_ms", station::toJson(timings)},
                       {"payload_bytes", cycle.payloadBytes}};
         putRelease(lastCycle_, record.programRelease);
+        lastCycle_["temperature_c"] = record.temperatureC ? nlohmann::json(*record.temperatureC) : nlohmann::json();
         if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
     }
     hg::log::category("seq")->info(

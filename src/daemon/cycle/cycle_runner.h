@@ -18,6 +18,7 @@
 #include "cycle/image_archive.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
+#include "cycle/part_temperature.h"
 #include "daemon_config.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/worker.h"
@@ -167,6 +168,7 @@ class CycleRunner {
     bool resetRequested_ = false;                ///< COMMAND = 2 not applied yet
     std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
     bool archiveHadRoom_ = true;                 ///< the last part found min_free_mb free (logged on change)
+    PartTemperature temperature_{clock_};        ///< the part's temperature at each trigger
 
     std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;

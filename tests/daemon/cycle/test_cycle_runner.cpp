@@ -23,9 +23,11 @@
 #include <fstream>
 #include <gtest/gtest.h>
 #include <iterator>
+#include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
+#include <tuple>
 
 namespace hg::daemon {
 namespace {
@@ -1462,6 +1464,138 @@ TEST(MasteringDue, AKeyOutOfRangeOrUnknownIsRefusedNamingIt)
             EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
         }
     }
+}
+
+// The part's temperature from the PLC (docs/mastering.md, "Temperature";
+// PART_TEMPERATURE, docs/plc.md): program 1 released as version 1 in aluminium,
+// α = 23e-6 /K about the origin, a set mastered on it at 20.0 °C (no landmark
+// corrected) and `temperature: {source: plc, sigma_c: 0.5, mastering_step_c: 2}`.
+// Without a write the register holds 0x8000: no temperature, nothing referred.
+// 2150 (21.50 °C): the row holds 21.5 and each landmark measured the expansion
+// α·(T − 20)·((p − c)·n) taken out, (p − c)·n worked from the stepped block's
+// faces (config/sim/make-meshes.py: x ∈ [−30, 30], y ∈ [−20, 20], the tall
+// block's top at z = 30, the step's at 15), U_T = 2·α·|(p − c)·n|·0.5; a step
+// of 1.5 °C is not due. 2210 (22.10 °C, a step of 2.1): MASTER_DUE reads 1,
+// cause `temperature`, the whole grace left.
+TEST(MasteringDue, ThePartsTemperatureFromThePlcIsRecordedReferredTo20CAndAStepMakesItDue)
+{
+    SimulatedLine line;
+    const std::string program =
+        line.draft() + "material: {name: aluminium, expansion_per_k: 23.0e-6, expansion_centre: [0, 0, 0]}\n";
+    hgtest::writeFile(line.programFile(), SimulatedLine::released(program, 1, std::string(64, '1')));
+    std::ofstream(line.daemonFile(), std::ios::app)
+        << "mastering: {folder: masters, due: {grace_cycles: 2}}\n"
+        << "temperature: {source: plc, sigma_c: 0.5, mastering_step_c: 2}\n";
+    fs::create_directories(line.folder() / "masters");
+    const nlohmann::json set = {{"id", "p1-v1-aluminium-20260302T070000Z"},
+                                {"program", 1},
+                                {"program_version", 1},
+                                {"material", "aluminium"},
+                                {"created_unix_ms", line.clock().wallMs()},
+                                {"temperature_c", 20.0},
+                                {"landmarks", nlohmann::json::array()}};
+    hgtest::writeFile(line.folder() / "masters" / "program-1.json", set.dump());
+    ASSERT_TRUE(line.start());
+    PlcRegisters& registers = line.registers();
+    const auto reg = [&](std::uint16_t address) { return registers.snapshot()[address]; };
+    const auto status = [&] { return line.runner().describe()["mastering"]["1"]; };
+    const auto writeTemperature = [&](std::uint16_t word) {
+        const std::array<std::uint16_t, 1> value{word};
+        ASSERT_EQ(registers.write(reg::PartTemperature, value), station::ModbusException::None);
+    };
+
+    auto record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_TRUE(record["temperature_c"].is_null());
+    for (const auto& l : record["landmarks"]) EXPECT_FALSE(l.contains("thermal_mm")) << l.dump();
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+
+    // (p − c)·n per landmark: its position on the face it lies on, along that face's outward normal.
+    const std::map<std::string, double> along = {
+        {"tall-top", 30.0}, {"tall-corner", 30.0}, {"tall-side", 30.0}, {"tall-foot", 30.0}, {"riser", 0.0},
+        {"step-top", 15.0}, {"step-side", 30.0},   {"end-front", 20.0}, {"end-back", 20.0},  {"step-top-back", 15.0}};
+    const double alpha = 23.0e-6;
+    writeTemperature(2150);
+    record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["temperature_c"], 21.5);
+    EXPECT_EQ(line.runner().describe()["last_cycle"]["temperature_c"], 21.5);
+    std::set<std::string> referred;
+    for (const auto& l : record["landmarks"]) {
+        SCOPED_TRACE(l.dump());
+        if (!l.contains("raw_deviation_mm")) continue;
+        const std::string id = l["id"];
+        referred.insert(id);
+        const double d = along.at(id);
+        EXPECT_NEAR(l["thermal_mm"].get<double>(), alpha * (21.5 - 20.0) * d, 1e-12);
+        EXPECT_NEAR(l["thermal_uncertainty_mm"].get<double>(), 2.0 * alpha * d * 0.5, 1e-12);
+        EXPECT_NEAR(l["deviation_mm"].get<double>(),
+                    l["raw_deviation_mm"].get<double>() - l["thermal_mm"].get<double>(), 1e-12);
+        EXPECT_NEAR(l["uncertainty_mm"].get<double>(),
+                    std::hypot(l["raw_uncertainty_mm"].get<double>(), 2.0 * alpha * d * 0.5), 1e-12);
+        EXPECT_TRUE(l["correction"].is_null());
+    }
+    // The nominal part's every landmark is measured on the simulated line, so every one is referred.
+    EXPECT_EQ(referred.size(), along.size()) << record["landmarks"].dump();
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+    EXPECT_EQ(status()["due"], false);
+
+    // 22.10 °C: 2.1 from the set's 20.0, beyond the step of 2.
+    writeTemperature(2210);
+    record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["temperature_c"], 22.1);
+    EXPECT_EQ(reg(reg::MasterDue), 1);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(status()["cause"], "temperature");
+    EXPECT_EQ(line.store().count(), 3);
+}
+
+// `temperature` is read strictly (docs/daemon.md): a bad value, a key of the
+// other source, an unknown key, or a mastering step without `mastering.due`
+// is refused naming its key path.
+TEST(MasteringDue, ATemperatureKeyOutOfRangeOrOutOfPlaceIsRefusedNamingIt)
+{
+    for (const auto& [temperature, mastering, key] : std::vector<std::tuple<std::string, std::string, std::string>>{
+             {"{source: thermocouple}", "", "temperature.source: unknown temperature source 'thermocouple'"},
+             {"{sigma_c: 0.5}", "", "missing required key 'source'"},
+             {"{source: plc, sigma_c: -1}", "", "temperature.sigma_c"},
+             {"{source: plc, scale: 0.001}", "", "temperature.scale: only with source: file"},
+             {"{source: file}", "", "missing required key 'file'"},
+             {"{source: file, file: nowhere/t}", "", "temperature.file: its folder does not exist"},
+             {"{source: file, file: t, max_age_s: 0}", "", "temperature.max_age_s"},
+             {"{source: plc, mastering_step_c: 2}", "", "temperature.mastering_step_c: re-mastering due is off"},
+             {"{source: plc, mastering_step_c: 0}", "mastering: {folder: masters, due: {}}\n",
+              "temperature.mastering_step_c"},
+             {"{source: plc, step_c: 2}", "", "temperature.step_c: unknown key"}}) {
+        SimulatedLine line;
+        fs::create_directories(line.folder() / "masters");
+        std::ofstream(line.daemonFile(), std::ios::app) << mastering << "temperature: " << temperature << "\n";
+        try {
+            station::loadDaemonConfig(line.daemonFile());
+            ADD_FAILURE() << temperature << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("hullgauged.yaml:"), std::string::npos) << e.what();
+        }
+    }
+    // Both sources as they are meant, the step joining the rules of mastering.due.
+    SimulatedLine line;
+    fs::create_directories(line.folder() / "masters");
+    std::ofstream(line.daemonFile(), std::ios::app)
+        << "mastering: {folder: masters, due: {max_parts: 100}}\n"
+        << "temperature: {source: file, file: sensor/temp1_input, scale: 0.001, sigma_c: 0.2, max_age_s: 30, "
+           "mastering_step_c: 1.5}\n";
+    fs::create_directories(line.folder() / "sensor");
+    const auto cfg = station::loadDaemonConfig(line.daemonFile());
+    ASSERT_TRUE(cfg.temperature);
+    EXPECT_EQ(cfg.temperature->source, station::TemperatureSource::File);
+    EXPECT_EQ(cfg.temperature->file, line.folder() / "sensor" / "temp1_input");
+    EXPECT_EQ(cfg.temperature->scale, 0.001);
+    EXPECT_EQ(cfg.temperature->sigmaC, 0.2);
+    EXPECT_EQ(cfg.temperature->maxAge, std::chrono::milliseconds(30'000));
+    EXPECT_EQ(cfg.mastering.due->maxTemperatureStepC, 1.5);
+    EXPECT_EQ(cfg.mastering.due->maxParts, 100u);
 }
 
 TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)

@@ -1,5 +1,6 @@
 #include "hullgauge/station/mastering_due.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace hg::station {
@@ -9,11 +10,15 @@ MasteringDue::MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::s
 {
 }
 
-void MasteringDue::mastered(MasteringInForce set)
+void MasteringDue::mastered(MasteringInForce set, MasteringHistory history)
 {
     set_ = std::move(set);
-    parts_ = 0;
+    parts_ = history.parts;
+    // The grace already used: the parts judged after the count made it due (the part
+    // that made it due is not one of them, as in judged()) or after the age did.
     cyclesWhileDue_ = 0;
+    if (policy_.maxParts && parts_ > *policy_.maxParts) cyclesWhileDue_ = parts_ - *policy_.maxParts;
+    if (policy_.maxAge) cyclesWhileDue_ = std::max(cyclesWhileDue_, history.partsPastAge);
     latched_ = MasteringDueCause::None;
     latch();
 }

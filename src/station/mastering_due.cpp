@@ -1,5 +1,6 @@
 #include "hullgauge/station/mastering_due.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -10,14 +11,18 @@ MasteringDue::MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::s
 {
 }
 
-void MasteringDue::mastered(MasteringInForce set)
+void MasteringDue::mastered(MasteringInForce set, MasteringHistory history)
 {
     set_ = std::move(set);
     // Only readings taken with the set in force count against it.
     referenceC_ = set_->temperatureC;
     temperatureC_.reset();
-    parts_ = 0;
+    parts_ = history.parts;
+    // The grace already used: the parts judged after the count made it due (the part
+    // that made it due is not one of them, as in judged()) or after the age did.
     cyclesWhileDue_ = 0;
+    if (policy_.maxParts && parts_ > *policy_.maxParts) cyclesWhileDue_ = parts_ - *policy_.maxParts;
+    if (policy_.maxAge) cyclesWhileDue_ = std::max(cyclesWhileDue_, history.partsPastAge);
     latched_ = MasteringDueCause::None;
     latch();
 }

@@ -80,6 +80,8 @@ void createOrMigrate(const sqlite::Connection& db)
         db.exec("ALTER TABLE inspections ADD COLUMN correction_id TEXT NOT NULL DEFAULT ''");
         db.exec("ALTER TABLE inspections ADD COLUMN temperature_c REAL");
     }
+    // Re-mastering due's counts at start: a correction set's production rows (docs/mastering.md).
+    db.exec("CREATE INDEX IF NOT EXISTS inspections_correction ON inspections (correction_id, program, purpose)");
     // The outbox: the rows still to publish, in id order, without scanning the published ones.
     db.exec("CREATE INDEX IF NOT EXISTS inspections_outbox ON inspections (id) WHERE published_unix_ms IS NULL");
     db.exec("PRAGMA user_version=" + std::to_string(kSchemaVersion));

@@ -201,5 +201,48 @@ TEST(MasteringDue, ASetWithoutATemperatureIsReferredToTheFirstReadingWithIt)
     EXPECT_FALSE(off.due());
 }
 
+// A set coming into force again with what the result store holds judged with
+// it (a restart): the count goes on from there, and the grace used is the
+// parts judged after the count made it due (the 5th of 5 is not one of them)
+// or after the age did, whichever is more.
+TEST(MasteringDue, TheCountsGoOnFromThePartsAlreadyJudgedWithTheSet)
+{
+    hgtest::ManualClock clock;
+    // 4 of 5 judged: the 5th makes it due with the whole grace of 2; 2 more use it up.
+    MasteringDue due({.maxParts = 5, .graceCycles = 2}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock), {.parts = 4});
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    EXPECT_EQ(due.cause(), Cause::Parts);
+    EXPECT_EQ(due.graceLeft(), 2u);
+    due.judged(P::Production);
+    due.judged(P::Production);
+    EXPECT_FALSE(due.admits(P::Production));
+
+    // 6 of 5 judged: due, one part of the grace used.
+    MasteringDue past({.maxParts = 5, .graceCycles = 2}, clock, "cal-A");
+    past.programIs(3);
+    past.mastered(setNow(clock), {.parts = 6});
+    EXPECT_EQ(past.cause(), Cause::Parts);
+    EXPECT_EQ(past.graceLeft(), 1u);
+
+    // Past the age with 3 parts started since then: a grace of 5 has 2 left.
+    MasteringDue aged({.maxAge = 8h, .graceCycles = 5}, clock, "cal-A");
+    aged.programIs(3);
+    const auto set = setNow(clock);
+    clock.advance(9h);
+    aged.mastered(set, {.parts = 40, .partsPastAge = 3});
+    EXPECT_EQ(aged.cause(), Cause::Age);
+    EXPECT_EQ(aged.graceLeft(), 2u);
+    // Both: the larger use of the grace holds (the earlier of the two made it due).
+    MasteringDue both({.maxAge = 8h, .maxParts = 38, .graceCycles = 5}, clock, "cal-A");
+    both.programIs(3);
+    both.mastered(set, {.parts = 40, .partsPastAge = 3});
+    EXPECT_EQ(both.graceLeft(), 2u);
+    both.mastered(set, {.parts = 40, .partsPastAge = 1});
+    EXPECT_EQ(both.graceLeft(), 3u);
+}
+
 } // namespace
 } // namespace hg::station

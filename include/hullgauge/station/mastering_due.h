@@ -60,13 +60,22 @@ struct MasteringInForce {
     std::optional<double> temperatureC{};
 };
 
+/// The production parts the result store holds judged with a set, read when
+/// the set comes into force, so a restart continues the count and the grace
+/// (docs/mastering.md, "Due in the daemon").
+struct MasteringHistory {
+    std::uint64_t parts = 0;        ///< production parts judged with the set
+    std::uint64_t partsPastAge = 0; ///< of them, started once the set was past its maximum age
+};
+
 class MasteringDue {
   public:
     /// `calibration`: the station's calibration now (the identity MasteringInForce names).
     MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::string calibration);
 
-    /// A new correction set in force: due cleared, the part and grace counts start again.
-    void mastered(MasteringInForce set);
+    /// A correction set in force: due cleared, the part and grace counts start
+    /// from what was judged with it before (`history`; none for a new set).
+    void mastered(MasteringInForce set, MasteringHistory history = {});
     /// The program now loaded is `version` (none: a draft).
     void programIs(std::optional<int> version);
     /// The station calibrated anew: `calibration` is its new identity.

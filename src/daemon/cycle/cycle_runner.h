@@ -99,14 +99,18 @@ class CycleRunner {
     station::SequencerAction feed(station::SequencerEvent event);
     station::SequencerAction transition(const std::function<station::SequencerAction()>& step);
     void schedule(const station::SequencerAction& action);
-    void showState(station::Verdict lastVerdict = station::Verdict::Error);
+    void showState();
+    void showLamps(LampPattern pattern);
+    void refreshLamps();
     void recover();
     void prepareProgram(std::uint16_t number);
     void noteLoaded(const station::PartProgramRef& ref);
     void masteringConfigured(const station::DaemonConfig& cfg);
+    void masteringStarted(const station::PartProgramRef& ref);
     void masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version);
     void masteringJudged(const station::InspectionRecord& record);
     void applyCorrectionSet(std::uint16_t number, const station::PartProgramRef& ref);
+    station::MasteringHistory judgedWith(const station::PartProgramRef& ref) const;
     void signalMastering();
     nlohmann::json masteringJson() const;
     void runCalibration(CalibrationJob job);
@@ -169,6 +173,13 @@ class CycleRunner {
     std::optional<Clock::time_point> recoverAt_; ///< when the sequencer's Recover is due
     bool archiveHadRoom_ = true;                 ///< the last part found min_free_mb free (logged on change)
     PartTemperature temperature_{clock_};        ///< the part's temperature at each trigger
+    /// The lamps between cycles (docs/lamps.md): the verdict and fault of the part in the
+    /// nest (until a production trigger is refused), the pattern last commanded, and
+    /// REJECTED_TRIGGERS as last looked at.
+    station::Verdict shownVerdict_ = station::Verdict::Error;
+    station::FaultCode shownFault_ = station::FaultCode::None;
+    std::optional<LampPattern> lamps_;
+    std::uint16_t refusalsSeen_ = 0;
 
     std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;

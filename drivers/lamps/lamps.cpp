@@ -121,7 +121,7 @@ std::array<LampState, 3> lampStatesFor(station::LampPattern pattern)
 {
     using S = LampState;
     using P = station::LampPattern;
-    // docs/contracts.md §6 and its re-seat extension; each row green, amber, red.
+    // docs/contracts.md §6 and its extensions (docs/lamps.md); each row green, amber, red.
     switch (pattern) {
     case P::Off:
         break;
@@ -135,6 +135,12 @@ std::array<LampState, 3> lampStatesFor(station::LampPattern pattern)
         return {S::Off, S::Blinking, S::Blinking};
     case P::Reseat:
         return {S::Off, S::Blinking, S::Off};
+    case P::PassAttention:
+        return {S::On, S::On, S::Off};
+    case P::FailAttention:
+        return {S::Off, S::On, S::On};
+    case P::Refused:
+        return {S::Off, S::On, S::Blinking};
     }
     return {S::Off, S::Off, S::Off};
 }

@@ -18,8 +18,11 @@ async function show() {
     // The release the part was judged with (docs/commissioning.md, "Release"); none for a draft.
     const release = r.program_version == null ? "none (draft)"
       : `version ${r.program_version}, verification ${String(r.program_sha256).slice(0, 12)}…`;
+    // The part's temperature at the trigger, its deviations referred to 20 °C with it (docs/mastering.md).
+    const temperature = r.temperature_c == null ? "none read" : `${r.temperature_c.toFixed(2)} °C`;
     const rows = [["Serial", r.serial || "(none)"], ["Time (UTC)", r.time], ["Program", r.program], ["Part", r.part],
-      ["Program release", release], ["Purpose", r.purpose], ["Cycle", r.cycle_ms + " ms"], ["Fault code", r.fault_code],
+      ["Program release", release], ["Purpose", r.purpose], ["Part temperature", temperature],
+      ["Cycle", r.cycle_ms + " ms"], ["Fault code", r.fault_code],
       ["Trigger", (r.manual ? "maintenance" : "PLC") + ", seq " + r.trigger_seq],
       ["Landmarks failed", `${r.landmarks_failed} of ${r.landmarks_total}`]];
     for (const [k, val] of rows) facts.append(hg.el("dt", { text: k }), hg.el("dd", { text: String(val) }));

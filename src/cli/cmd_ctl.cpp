@@ -2,27 +2,19 @@
 // (docs/contracts.md §7): --socket PATH, else $HULLGAUGE_SOCKET, else the installed
 // default. One JSON request per connection, one JSON answer (docs/daemon.md).
 #include "command.h"
+#include "daemon_socket.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/format.h"
 
-#include <cerrno>
 #include <chrono>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <thread>
-#include <unistd.h>
 
 namespace hg::cli {
 namespace {
-
-constexpr const char* kDefaultSocket = "/run/hullgauge/hullgauged.sock";
 
 struct CtlOptions {
     std::string socket;
@@ -41,45 +33,6 @@ struct CtlOptions {
     int frames = 8;
     bool reset = false;
 };
-
-std::string socketPath(const CtlOptions& o)
-{
-    if (!o.socket.empty()) return o.socket;
-    if (const char* env = std::getenv("HULLGAUGE_SOCKET"); env && *env) return env;
-    return kDefaultSocket;
-}
-
-nlohmann::json request(const std::string& path, const nlohmann::json& req)
-{
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    if (path.size() >= sizeof addr.sun_path) throw InputError("", "--socket", "path longer than 107 bytes");
-    std::strncpy(addr.sun_path, path.c_str(), sizeof addr.sun_path - 1);
-    int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (fd < 0) throw FaultError(std::string("socket: ") + std::strerror(errno));
-    timeval tv{10, 0};
-    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-    if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-        std::string why = std::strerror(errno);
-        close(fd);
-        throw FaultError("cannot reach the daemon at " + path + ": " + why +
-                         " (is hullgauged running? use --socket or $HULLGAUGE_SOCKET)");
-    }
-    auto text = req.dump() + "\n";
-    if (write(fd, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
-        close(fd);
-        throw FaultError("cannot send to the daemon at " + path);
-    }
-    std::string answer;
-    char buf[4096];
-    ssize_t n;
-    while ((n = read(fd, buf, sizeof buf)) > 0) answer.append(buf, static_cast<std::size_t>(n));
-    close(fd);
-    auto j = nlohmann::json::parse(answer, nullptr, false);
-    if (j.is_discarded() || !j.is_object()) throw FaultError("the daemon at " + path + " sent no valid answer");
-    if (!j.value("ok", false)) throw FaultError("daemon: " + j.value("error", std::string("request failed")));
-    return j;
-}
 
 /// " version N" of a part program's release (docs/commissioning.md, "Release"); empty without one.
 std::string versionText(const nlohmann::json& version)
@@ -218,7 +171,7 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
     nlohmann::json req{
         {"command", "calibrate"}, {"pattern", o.pattern}, {"poses", std::filesystem::absolute(o.poses).string()}};
     if (!o.out.empty()) req["out"] = std::filesystem::absolute(o.out).string();
-    request(path, req);
+    daemonRequest(path, req);
     std::cerr << "calibration queued" << std::endl;
     if (o.noWait) return 0;
     Clock& clock = Clock::steady();
@@ -226,7 +179,7 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
         clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
     std::size_t shown = 0;
     while (true) {
-        auto c = request(path, {{"command", "calibration"}})["calibration"];
+        auto c = daemonRequest(path, {{"command", "calibration"}})["calibration"];
         const auto& lines = c["progress"];
         for (; shown < lines.size(); ++shown) std::cerr << lines[shown].get<std::string>() << std::endl;
         const auto state = c.value("state", std::string());
@@ -249,14 +202,14 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
 /// exit 0 when it was taken and written, 3 when it failed (the daemon's reason).
 int runFlatField(const std::string& path, const CtlOptions& o)
 {
-    request(path, {{"command", "flat-field"}, {"take", true}, {"frames", o.frames}});
+    daemonRequest(path, {{"command", "flat-field"}, {"take", true}, {"frames", o.frames}});
     std::cerr << "flat-field reference queued: empty the fixture; production pauses for the grabs" << std::endl;
     if (o.noWait) return 0;
     Clock& clock = Clock::steady();
     const auto deadline =
         clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
     while (true) {
-        const auto f = request(path, {{"command", "flat-field"}})["flat_field"];
+        const auto f = daemonRequest(path, {{"command", "flat-field"}})["flat_field"];
         const auto state = f.value("state", std::string());
         if (state == "done") {
             const auto& r = f["reference"];
@@ -323,16 +276,16 @@ std::function<int()> factory(CLI::App& app)
     flatField->add_option("--wait-timeout", opts->waitS, "seconds to wait for it")->check(CLI::Range(1.0, 86400.0));
 
     return [=]() -> int {
-        auto path = socketPath(*opts);
+        auto path = daemonSocketPath(opts->socket);
         nlohmann::json answer;
         if (status->parsed()) {
-            answer = request(path, {{"command", "status"}});
+            answer = daemonRequest(path, {{"command", "status"}});
             if (opts->json)
                 std::cout << answer.dump(2) << "\n";
             else
                 printStatus(answer);
         } else if (results->parsed()) {
-            answer = request(path, {{"command", "results"}, {"limit", opts->limit}});
+            answer = daemonRequest(path, {{"command", "results"}, {"limit", opts->limit}});
             if (opts->json) {
                 std::cout << answer["results"].dump(2) << "\n";
             } else {
@@ -345,15 +298,15 @@ std::function<int()> factory(CLI::App& app)
                               << r["fault_code"] << "  " << r.value("purpose", std::string("production")) << "\n";
             }
         } else if (trigger->parsed()) {
-            request(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});
+            daemonRequest(path, {{"command", "trigger"}, {"program", opts->program}, {"serial", opts->serial}});
             std::cout << "triggered program " << opts->program << "\n";
         } else if (abort->parsed()) {
-            request(path, {{"command", "abort"}});
+            daemonRequest(path, {{"command", "abort"}});
             std::cout << "abort requested\n";
         } else if (purpose->parsed()) {
             nlohmann::json req{{"command", "purpose"}};
             if (!opts->purpose.empty()) req["purpose"] = opts->purpose;
-            answer = request(path, req);
+            answer = daemonRequest(path, req);
             std::cout << "purpose: " << answer["purpose"].get<std::string>() << "\n";
         } else if (calibrate->parsed()) {
             return runCalibrate(path, *opts);
@@ -362,19 +315,19 @@ std::function<int()> factory(CLI::App& app)
         } else if (simAge->parsed()) {
             nlohmann::json req{{"command", "sim-age"}};
             if (opts->reset) req["reset"] = true;
-            answer = request(path, req);
+            answer = daemonRequest(path, req);
             if (opts->json)
                 std::cout << answer["optics"].dump(2) << "\n";
             else
                 std::cout << "simulated optics: " << opticsLine(answer["optics"]) << "\n";
         } else if (simPart->parsed()) {
             if (opts->list) {
-                answer = request(path, {{"command", "sim-part"}, {"list", true}});
+                answer = daemonRequest(path, {{"command", "sim-part"}, {"list", true}});
                 for (const auto& p : answer["parts"])
                     std::cout << p.get<std::string>() << (p == answer["current"] ? "  (current)" : "") << "\n";
             } else {
                 if (opts->part.empty()) throw InputError("", "sim-part", "give a part name or --list");
-                answer = request(path, {{"command", "sim-part"}, {"name", opts->part}});
+                answer = daemonRequest(path, {{"command", "sim-part"}, {"name", opts->part}});
                 std::cout << "simulated part: " << answer["current"].get<std::string>() << "\n";
             }
         }

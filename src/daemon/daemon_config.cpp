@@ -327,6 +327,7 @@ void parseMastering(const ConfigNode& node, const fs::path& base, DaemonConfig& 
         ref.correctionId = set.id;
         ref.correctionCreatedUnixMs = set.createdUnixMs;
         ref.correctionProgramVersion = set.programVersion;
+        ref.correctionTemperatureC = set.temperatureC;
     }
 }
 
@@ -376,6 +377,35 @@ void readHealthReference(DaemonConfig& cfg)
     health.referenceRead = std::move(reference);
 }
 
+// `temperature`: the part's temperature input (docs/mastering.md, "Temperature").
+// The sensor file need not exist yet (a script may write it after the start);
+// a folder that does not is a typo. Its step of re-mastering belongs to the
+// rules of `mastering.due`, without which nothing is ever due.
+void parseTemperature(const ConfigNode& node, const fs::path& base, DaemonConfig& cfg)
+{
+    if (!node.isMap()) node.fail("expected a map of source, file, scale, sigma_c, max_age_s, mastering_step_c");
+    node.allowOnlyKeys({"source", "file", "scale", "sigma_c", "max_age_s", "mastering_step_c"});
+    TemperatureConfig t;
+    t.source = node["source"].asEnum<TemperatureSource>("temperature source");
+    if (t.source == TemperatureSource::File) {
+        t.file = resolve(node["file"], base);
+        if (!fs::is_directory(t.file.parent_path()))
+            node["file"].fail("its folder does not exist: " + t.file.parent_path().string());
+        if (auto n = node.optional("scale")) t.scale = n->asDoubleIn(1e-6, 1e3);
+        if (auto n = node.optional("max_age_s")) t.maxAge = seconds(*n, 0.1, 86400.0);
+    } else {
+        for (const char* key : {"file", "scale", "max_age_s"})
+            if (auto n = node.optional(key)) n->fail("only with source: file (the PLC writes PART_TEMPERATURE)");
+    }
+    if (auto n = node.optional("sigma_c")) t.sigmaC = n->asDoubleIn(0.0, 10.0);
+    if (auto n = node.optional("mastering_step_c")) {
+        if (!cfg.mastering.due)
+            n->fail("re-mastering due is off: it needs mastering.due (docs/mastering.md, \"Re-mastering due\")");
+        cfg.mastering.due->maxTemperatureStepC = n->asDoubleIn(0.01, 100.0);
+    }
+    cfg.temperature = std::move(t);
+}
+
 } // namespace
 
 DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse workspace)
@@ -383,7 +413,7 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
     auto root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map of sections (station, programs, plc, results, ...)");
     root.allowOnlyKeys({"station", "lamps_section", "programs", "plc", "results", "sequencer", "maintenance", "http",
-                        "mqtt", "watchdog", "simulation", "workbench", "shifts", "mastering", "health"});
+                        "mqtt", "watchdog", "simulation", "workbench", "shifts", "mastering", "temperature", "health"});
     DaemonConfig cfg;
     cfg.file = fs::absolute(file).lexically_normal();
     const auto base = cfg.file.parent_path();
@@ -433,6 +463,8 @@ DaemonConfig loadDaemonConfig(const std::filesystem::path& file, WorkspaceUse wo
     if (auto n = root.optional("shifts")) cfg.shifts = parseShifts(*n);
     // After `programs` and `workbench`: every program may have its set.
     if (auto n = root.optional("mastering")) parseMastering(*n, base, cfg);
+    // After `mastering`: its step joins the rules of `mastering.due`.
+    if (auto n = root.optional("temperature")) parseTemperature(*n, base, cfg);
     if (auto n = root.optional("health")) parseHealth(*n, cfg);
     readHealthReference(cfg);
     if (auto n = root.optional("simulation")) {

@@ -10,6 +10,7 @@
 // reload the daemon keeps the configuration it runs with.
 #pragma once
 
+#include "hullgauge/common/enum_names.h"
 #include "hullgauge/geometry/fixture.h"
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/station/mastering_due.h"
@@ -68,6 +69,8 @@ struct PartProgramRef {
     std::string correctionId;
     std::int64_t correctionCreatedUnixMs = 0;
     std::optional<int> correctionProgramVersion;
+    /// The mean temperature of its master cycles (°C), when they recorded one.
+    std::optional<double> correctionTemperatureC;
     /// Run the program although the capability check finds a tolerance this
     /// station cannot prove (those landmarks are then never ok; docs/inspection.md, "Capability").
     bool force = false;
@@ -197,6 +200,27 @@ struct HealthConfig {
     std::string referenceSha256;
 };
 
+/// Where the part's temperature comes from (docs/mastering.md, "Temperature").
+enum class TemperatureSource { Plc, File };
+constexpr auto nameTable(TemperatureSource)
+{
+    using enum TemperatureSource;
+    return std::to_array<EnumName<TemperatureSource>>({{Plc, "plc"}, {File, "file"}});
+}
+
+/// `temperature`: the part's temperature read at every trigger, recorded with
+/// the result and the deviations referred to 20 °C with it (docs/mastering.md,
+/// "Temperature"). Its `mastering_step_c` is MasteringDuePolicy::maxTemperatureStepC.
+struct TemperatureConfig {
+    TemperatureSource source = TemperatureSource::Plc;
+    /// File: the sensor file, one number; times `scale` it is °C (0.001: millidegrees).
+    std::filesystem::path file;
+    double scale = 1.0;
+    /// File: a file last written longer ago than this is stale (no reading); none: never stale.
+    std::optional<std::chrono::milliseconds> maxAge;
+    double sigmaC = 0.5; ///< the reading's standard uncertainty (°C)
+};
+
 struct WatchdogConfig {
     /// The daemon stops pinging the systemd watchdog when a cycle runs longer
     /// than this (the sequencer is stuck) or the PLC server loop stalls.
@@ -227,6 +251,8 @@ struct DaemonConfig {
     WatchdogConfig watchdog;
     MasteringConfig mastering;
     HealthConfig health;
+    /// The part's temperature input; absent: none (results without a temperature, nothing referred).
+    std::optional<TemperatureConfig> temperature;
     /// The station's shifts in the order of the day (docs/daemon.md, `shifts`): the line view's shift counters.
     std::vector<Shift> shifts = defaultShifts();
     /// Simulated line only (`camera.driver.backend: sim`): the parts the

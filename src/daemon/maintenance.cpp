@@ -214,6 +214,16 @@ json plcCounters(std::span<const std::uint16_t> regs)
             {"missed_triggers", n.missed}};
 }
 
+// The correction sets the running configuration names (docs/mastering.md, "In the
+// daemon"): `hullgauge master --run` writes into the folder and waits for its set here.
+json masteringStatus(const station::DaemonConfig& cfg)
+{
+    json sets = json::object();
+    for (const auto& [number, ref] : cfg.programs)
+        if (!ref.correctionId.empty()) sets[std::to_string(number)] = ref.correctionId;
+    return {{"folder", cfg.mastering.folder.empty() ? json() : json(cfg.mastering.folder.string())}, {"sets", sets}};
+}
+
 json status(const MaintenanceContext& c, const json&)
 {
     const auto regs = c.registers.snapshot();
@@ -256,6 +266,7 @@ json status(const MaintenanceContext& c, const json&)
             {"health", c.runner.health()},
             {"purpose", std::string(enumName(c.registers.purpose()))},
             {"program", c.runner.program()},
+            {"mastering", masteringStatus(*c.config)},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()},
             {"simulated_optics", c.simulation ? c.simulation->optics() : json()}};
 }

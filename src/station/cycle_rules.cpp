@@ -72,15 +72,21 @@ Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed)
     return Verdict::Error;
 }
 
-LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault)
+// docs/lamps.md: a fault, a running cycle and a part to re-seat say what the
+// operator must do now and come first; the verdict of the part in the nest is
+// never hidden (amber steady beside it asks for attention); the refusal shows
+// where no verdict is. Amber steady alone stays "busy".
+LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault, Attention attention)
 {
     if (state == SequencerState::Fault) return LampPattern::Fault;
     if (isBusy(state) || state == SequencerState::Calibrating) return LampPattern::Busy;
-    if (state != SequencerState::Done) return LampPattern::Off;
-    if (lastVerdict == Verdict::Pass) return LampPattern::Pass;
-    if (lastVerdict == Verdict::Fail) return LampPattern::Fail;
-    if (lastFault == FaultCode::PartNotSeated) return LampPattern::Reseat;
-    return LampPattern::Off;
+    if (state != SequencerState::Done && state != SequencerState::Ready) return LampPattern::Off;
+    const bool done = state == SequencerState::Done;
+    const bool amber = attention.wanted || attention.productionRefused;
+    if (done && lastVerdict == Verdict::Pass) return amber ? LampPattern::PassAttention : LampPattern::Pass;
+    if (done && lastVerdict == Verdict::Fail) return amber ? LampPattern::FailAttention : LampPattern::Fail;
+    if (done && lastFault == FaultCode::PartNotSeated) return LampPattern::Reseat;
+    return attention.productionRefused ? LampPattern::Refused : LampPattern::Off;
 }
 
 PlcStatus plcStatus(SequencerState state)

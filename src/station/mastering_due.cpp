@@ -1,5 +1,7 @@
 #include "hullgauge/station/mastering_due.h"
 
+#include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace hg::station {
@@ -9,11 +11,18 @@ MasteringDue::MasteringDue(MasteringDuePolicy policy, const Clock& clock, std::s
 {
 }
 
-void MasteringDue::mastered(MasteringInForce set)
+void MasteringDue::mastered(MasteringInForce set, MasteringHistory history)
 {
     set_ = std::move(set);
-    parts_ = 0;
+    // Only readings taken with the set in force count against it.
+    referenceC_ = set_->temperatureC;
+    temperatureC_.reset();
+    parts_ = history.parts;
+    // The grace already used: the parts judged after the count made it due (the part
+    // that made it due is not one of them, as in judged()) or after the age did.
     cyclesWhileDue_ = 0;
+    if (policy_.maxParts && parts_ > *policy_.maxParts) cyclesWhileDue_ = parts_ - *policy_.maxParts;
+    if (policy_.maxAge) cyclesWhileDue_ = std::max(cyclesWhileDue_, history.partsPastAge);
     latched_ = MasteringDueCause::None;
     latch();
 }
@@ -36,6 +45,15 @@ void MasteringDue::judged(CyclePurpose purpose)
     // A part judged while due uses the grace; the part that makes the count due does not.
     if (due()) ++cyclesWhileDue_;
     ++parts_;
+    latch();
+}
+
+void MasteringDue::temperatureIs(double temperatureC)
+{
+    if (!set_) return;
+    // A set without its masters' temperature is referred to the first part measured with it.
+    if (!referenceC_) referenceC_ = temperatureC;
+    temperatureC_ = temperatureC;
     latch();
 }
 
@@ -63,6 +81,9 @@ MasteringDueCause MasteringDue::causeNow() const
     if (policy_.onCalibrationChange && calibration_ != set_->calibration) return Calibration;
     if (policy_.maxAge && clock_->wallMs() - set_->createdUnixMs >= policy_.maxAge->count()) return Age;
     if (policy_.maxParts && parts_ >= *policy_.maxParts) return Parts;
+    if (policy_.maxTemperatureStepC && referenceC_ && temperatureC_ &&
+        std::abs(*temperatureC_ - *referenceC_) > *policy_.maxTemperatureStepC)
+        return Temperature;
     return None;
 }
 

@@ -24,6 +24,12 @@ PlcCounters readCounters(std::span<const std::uint16_t> regs)
             readU32(regs, reg::FaultCount), readU32(regs, reg::MissedCount)};
 }
 
+std::optional<double> decodeTemperature(std::uint16_t word)
+{
+    if (word == kNoTemperature) return std::nullopt;
+    return static_cast<std::int16_t>(word) / 100.0;
+}
+
 bool validSerialByte(unsigned byte)
 {
     return byte == 0 || (byte >= 0x20 && byte <= 0x7E);
@@ -55,13 +61,15 @@ std::array<std::uint16_t, reg::SerialWords> encodeSerial(const std::string& seri
 RegisterMap::RegisterMap()
 {
     regs_[reg::Status] = u16(PlcStatus::Starting);
+    // No temperature until the PLC writes one: 0 would read as a part at 0 °C.
+    regs_[reg::PartTemperature] = kNoTemperature;
 }
 
 bool RegisterMap::writable(std::uint16_t address)
 {
     return address == reg::TriggerSeq || address == reg::PartProgram ||
            (address >= reg::Serial && address < reg::Serial + reg::SerialWords) || address == reg::Command ||
-           address == reg::CyclePurpose;
+           address == reg::CyclePurpose || address == reg::PartTemperature;
 }
 
 ModbusException RegisterMap::read(std::uint16_t address, std::uint16_t count, std::vector<std::uint16_t>& out) const
@@ -116,6 +124,7 @@ ModbusException RegisterMap::write(std::uint16_t address, std::span<const std::u
                                decodeSerial(std::span<const std::uint16_t, reg::SerialWords>(regs_.data() + reg::Serial,
                                                                                              reg::SerialWords)),
                                false, purpose()};
+        request.partTemperatureC = decodeTemperature(regs_[reg::PartTemperature]);
         accept(std::move(request));
     }
     return ModbusException::None;
@@ -157,7 +166,7 @@ RejectReason RegisterMap::accept(TriggerRequest request)
 
 RejectReason RegisterMap::triggerManually(std::uint16_t program, const std::string& serial)
 {
-    return accept(TriggerRequest{0, program, serial, true, purpose()});
+    return accept(TriggerRequest{0, program, serial, true, purpose(), decodeTemperature(regs_[reg::PartTemperature])});
 }
 
 void RegisterMap::setKnownPrograms(std::set<std::uint16_t> programs)

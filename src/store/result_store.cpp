@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -141,6 +142,18 @@ nlohmann::json ResultStore::recent(int limit) const
 std::int64_t ResultStore::count() const
 {
     auto query = db_.prepare("SELECT COUNT(*) FROM inspections");
+    return query.step() ? query.int64(0) : 0;
+}
+
+std::int64_t ResultStore::productionJudged(int program, const std::string& correctionId,
+                                           std::optional<std::int64_t> sinceMs) const
+{
+    // On the index inspections_correction (schema.cpp): the set's rows only, never the whole store.
+    auto query = db_.prepare("SELECT COUNT(*) FROM inspections WHERE correction_id = ? AND program = ? AND "
+                             "purpose = 'production' AND verdict IN ('pass', 'fail') AND started_unix_ms >= ?");
+    query.bind(1, correctionId)
+        .bind(2, static_cast<std::int64_t>(program))
+        .bind(3, sinceMs.value_or(std::numeric_limits<std::int64_t>::min()));
     return query.step() ? query.int64(0) : 0;
 }
 

@@ -93,6 +93,8 @@ void createOrMigrate(const sqlite::Connection& db)
         db.exec("ALTER TABLE inspections ADD COLUMN correction_id TEXT NOT NULL DEFAULT ''");
         db.exec("ALTER TABLE inspections ADD COLUMN temperature_c REAL");
     }
+    // Re-mastering due's counts at start: a correction set's production rows (docs/mastering.md).
+    db.exec("CREATE INDEX IF NOT EXISTS inspections_correction ON inspections (correction_id, program, purpose)");
     // A version 1 to 6 database gains the table `health` (docs/health.md, "In the daemon") from
     // kSchema above, empty: the station's health was not watched before.
     // The outbox: the rows still to publish, in id order, without scanning the published ones.

@@ -54,6 +54,37 @@ TEST(CycleRules, LampsFollowTheStateAndInDoneTheVerdict)
     EXPECT_EQ(hg::enumName(LampPattern::Fault), "fault");
 }
 
+// docs/lamps.md, the station asking for attention between cycles: amber
+// steady beside the verdict; production refused: amber steady with red
+// blinking where no verdict is shown. Faults, running cycles and a part to
+// re-seat show as without attention; amber steady alone stays "busy".
+TEST(CycleRules, AttentionLightsAmberBesideTheVerdictAndRefusedWhereNoVerdictIsShown)
+{
+    const Attention wanted{.wanted = true};
+    const Attention refused{.wanted = true, .productionRefused = true};
+    const Attention refusedOnly{.productionRefused = true};
+    for (const Attention& a : {wanted, refused, refusedOnly}) {
+        EXPECT_EQ(lampPattern(S::Done, Verdict::Pass, FaultCode::None, a), LampPattern::PassAttention);
+        EXPECT_EQ(lampPattern(S::Done, Verdict::Fail, FaultCode::None, a), LampPattern::FailAttention);
+        EXPECT_EQ(lampPattern(S::Done, Verdict::Error, FaultCode::PartNotSeated, a), LampPattern::Reseat);
+        EXPECT_EQ(lampPattern(S::Fault, Verdict::Pass, FaultCode::None, a), LampPattern::Fault);
+        EXPECT_EQ(lampPattern(S::Starting, Verdict::Pass, FaultCode::None, a), LampPattern::Off);
+        for (auto busy : {S::Moving, S::Settling, S::Grabbing, S::Processing, S::Calibrating})
+            EXPECT_EQ(lampPattern(busy, Verdict::Pass, FaultCode::None, a), LampPattern::Busy);
+    }
+    // No verdict to show (ready, an aborted or faulted cycle): off while only attention is
+    // asked for (amber alone would read "busy"), refused while production is.
+    for (auto [state, verdict] : {std::pair{S::Ready, Verdict::Pass}, std::pair{S::Done, Verdict::Aborted},
+                                  std::pair{S::Done, Verdict::Error}}) {
+        EXPECT_EQ(lampPattern(state, verdict, FaultCode::None, wanted), LampPattern::Off);
+        EXPECT_EQ(lampPattern(state, verdict, FaultCode::None, refused), LampPattern::Refused);
+        EXPECT_EQ(lampPattern(state, verdict, FaultCode::InspectionError, refusedOnly), LampPattern::Refused);
+    }
+    EXPECT_EQ(hg::enumName(LampPattern::PassAttention), "pass_attention");
+    EXPECT_EQ(hg::enumName(LampPattern::FailAttention), "fail_attention");
+    EXPECT_EQ(hg::enumName(LampPattern::Refused), "refused");
+}
+
 TEST(CycleRules, StatusRegisterForEachState)
 {
     // STATUS values of docs/contracts.md §6 (and 5, maintenance, docs/plc.md).

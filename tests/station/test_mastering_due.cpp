@@ -1,7 +1,8 @@
 // Re-mastering due (docs/mastering.md, "Re-mastering due"), each cause on a
 // clock moved by hand: the age of the set, the production parts judged with
-// it, a new calibration and a new release of the program; production refused
-// past the grace count while master and study cycles run on; a new set clears it.
+// it, a new calibration, a new release of the program and the part's
+// temperature moved from the master's; production refused past the grace
+// count while master and study cycles run on; a new set clears it.
 #include "hgtest/manual_clock.h"
 #include "hullgauge/station/mastering_due.h"
 
@@ -128,6 +129,119 @@ TEST(MasteringDue, WithoutGraceTheFirstProductionTriggerAfterTheDueIsRefused)
     EXPECT_EQ(due.cause(), Cause::Parts);
     EXPECT_FALSE(due.admits(P::Production));
     EXPECT_TRUE(due.admits(P::Master));
+}
+
+// The temperature step (docs/mastering.md, "Re-mastering due"): 2 °C from the
+// set's 20.0 °C. A part at 21.9 °C (a step of 1.9) is within it, at 22.1 °C
+// (2.1) it is due; back at 20.0 °C it stays due until a new set.
+TEST(MasteringDue, DueWhenThePartsTemperatureMovesMoreThanTheStepFromTheSets)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.graceCycles = 1, .maxTemperatureStepC = 2.0}, clock, "cal-A");
+    due.programIs(3);
+    MasteringInForce set = setNow(clock);
+    set.temperatureC = 20.0;
+    due.mastered(set);
+    due.judged(P::Production);
+    due.temperatureIs(21.9);
+    EXPECT_EQ(due.cause(), Cause::None);
+    due.judged(P::Production);
+    due.temperatureIs(18.1); // 1.9 below
+    EXPECT_EQ(due.cause(), Cause::None);
+    clock.advance(1h);
+    due.judged(P::Production);
+    due.temperatureIs(22.1);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+    EXPECT_EQ(enumName(due.cause()), "temperature");
+    // The part that made it due used none of the grace.
+    EXPECT_EQ(due.graceLeft(), 1u);
+    due.judged(P::Production);
+    due.temperatureIs(20.0);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+    EXPECT_FALSE(due.admits(P::Production));
+    EXPECT_TRUE(due.admits(P::Master));
+    // The master measured at 22.0 °C: its set clears the due and is the new reference.
+    MasteringInForce warm = setNow(clock, "p1-v3-b");
+    warm.temperatureC = 22.0;
+    due.mastered(warm);
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(23.9); // 1.9 above 22.0
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(19.9); // 2.1 below 22.0
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+}
+
+// A set without its masters' temperature takes the first reading after it came
+// into force as its reference; without a step the temperature never makes it due.
+TEST(MasteringDue, ASetWithoutATemperatureIsReferredToTheFirstReadingWithIt)
+{
+    hgtest::ManualClock clock;
+    MasteringDue due({.maxTemperatureStepC = 2.0}, clock, "cal-A");
+    due.programIs(3);
+    due.temperatureIs(30.0); // no set yet: not a reference
+    due.mastered(setNow(clock));
+    EXPECT_FALSE(due.due());
+    due.judged(P::Study);
+    due.temperatureIs(24.0); // the reference: master and study cycles read the temperature too
+    due.judged(P::Production);
+    due.temperatureIs(25.9);
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    due.temperatureIs(26.1);
+    EXPECT_EQ(due.cause(), Cause::Temperature);
+
+    MasteringDue off({}, clock, "cal-A");
+    off.programIs(3);
+    MasteringInForce set = setNow(clock);
+    set.temperatureC = 20.0;
+    off.mastered(set);
+    off.temperatureIs(35.0);
+    EXPECT_FALSE(off.due());
+}
+
+// A set coming into force again with what the result store holds judged with
+// it (a restart): the count goes on from there, and the grace used is the
+// parts judged after the count made it due (the 5th of 5 is not one of them)
+// or after the age did, whichever is more.
+TEST(MasteringDue, TheCountsGoOnFromThePartsAlreadyJudgedWithTheSet)
+{
+    hgtest::ManualClock clock;
+    // 4 of 5 judged: the 5th makes it due with the whole grace of 2; 2 more use it up.
+    MasteringDue due({.maxParts = 5, .graceCycles = 2}, clock, "cal-A");
+    due.programIs(3);
+    due.mastered(setNow(clock), {.parts = 4});
+    EXPECT_FALSE(due.due());
+    due.judged(P::Production);
+    EXPECT_EQ(due.cause(), Cause::Parts);
+    EXPECT_EQ(due.graceLeft(), 2u);
+    due.judged(P::Production);
+    due.judged(P::Production);
+    EXPECT_FALSE(due.admits(P::Production));
+
+    // 6 of 5 judged: due, one part of the grace used.
+    MasteringDue past({.maxParts = 5, .graceCycles = 2}, clock, "cal-A");
+    past.programIs(3);
+    past.mastered(setNow(clock), {.parts = 6});
+    EXPECT_EQ(past.cause(), Cause::Parts);
+    EXPECT_EQ(past.graceLeft(), 1u);
+
+    // Past the age with 3 parts started since then: a grace of 5 has 2 left.
+    MasteringDue aged({.maxAge = 8h, .graceCycles = 5}, clock, "cal-A");
+    aged.programIs(3);
+    const auto set = setNow(clock);
+    clock.advance(9h);
+    aged.mastered(set, {.parts = 40, .partsPastAge = 3});
+    EXPECT_EQ(aged.cause(), Cause::Age);
+    EXPECT_EQ(aged.graceLeft(), 2u);
+    // Both: the larger use of the grace holds (the earlier of the two made it due).
+    MasteringDue both({.maxAge = 8h, .maxParts = 38, .graceCycles = 5}, clock, "cal-A");
+    both.programIs(3);
+    both.mastered(set, {.parts = 40, .partsPastAge = 3});
+    EXPECT_EQ(both.graceLeft(), 2u);
+    both.mastered(set, {.parts = 40, .partsPastAge = 1});
+    EXPECT_EQ(both.graceLeft(), 3u);
 }
 
 } // namespace

@@ -29,13 +29,14 @@ void makeReady(RegisterMap& r)
     r.setStatus(PlcStatus::Ready);
 }
 
-TEST(PlcRegisterMap, StartsInStartingWithEverythingElseZero)
+TEST(PlcRegisterMap, StartsInStartingWithNoTemperatureAndEverythingElseZero)
 {
     RegisterMap r;
     auto s = r.snapshot();
-    EXPECT_EQ(s[102], 4); // STATUS starting (docs/contracts.md §6)
+    EXPECT_EQ(s[102], 4);     // STATUS starting (docs/contracts.md §6)
+    EXPECT_EQ(s[12], 0x8000); // PART_TEMPERATURE: no reading until the PLC writes one (docs/plc.md)
     for (std::size_t a = 0; a < s.size(); ++a) {
-        if (a != 102) {
+        if (a != 102 && a != 12) {
             EXPECT_EQ(s[a], 0) << "address " << a;
         }
     }
@@ -48,10 +49,10 @@ TEST(PlcRegisterMap, ReadOnlyAndUnmappedWritesAnswerIllegalDataAddress)
     for (std::uint16_t a :
          {100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 114, 115, 116, 117, 120, 135, 136, 145, 160, 223})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "read-only " << a;
-    for (std::uint16_t a : {12, 50, 99, 112, 118, 119, 146, 159, 224, 1000, 65535})
+    for (std::uint16_t a : {13, 50, 99, 112, 118, 119, 146, 159, 224, 1000, 65535})
         EXPECT_EQ(writeOne(r, a, 1), ModbusException::IllegalDataAddress) << "unmapped " << a;
-    // A block that starts writable and runs into a read-only register changes nothing.
-    std::array<std::uint16_t, 13> block{};
+    // A block that starts writable and runs into an unmapped register changes nothing.
+    std::array<std::uint16_t, 14> block{};
     block.fill(0x4141);
     EXPECT_EQ(r.write(0, block), ModbusException::IllegalDataAddress);
     EXPECT_EQ(readOne(r, 0), 0);
@@ -395,6 +396,55 @@ TEST(PlcRegisterMap, ThePurposeIsLatchedWithTheTriggerAndTheLastWriterWins)
     ASSERT_EQ(writeOne(r, 11, 0), ModbusException::None);
     ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);
     EXPECT_EQ(r.takeTrigger()->purpose, CyclePurpose::Production);
+}
+
+// PART_TEMPERATURE (12, docs/plc.md): a signed 16-bit word in 0.01 °C, 0x8000
+// no reading; every value is taken and reads back, and the value in the
+// register when a trigger is accepted goes with it, as CYCLE_PURPOSE does.
+TEST(PlcRegisterMap, ThePartTemperatureIsSignedHundredthsOfADegreeLatchedWithTheTrigger)
+{
+    EXPECT_EQ(decodeTemperature(2150), 21.50);
+    EXPECT_EQ(decodeTemperature(0), 0.0);
+    EXPECT_EQ(decodeTemperature(65036), -5.00); // -500 as a 16-bit word: 65536 - 500
+    EXPECT_EQ(decodeTemperature(0x7FFF), 327.67);
+    EXPECT_EQ(decodeTemperature(0x8001), -327.67);
+    EXPECT_FALSE(decodeTemperature(0x8000)); // no reading
+
+    RegisterMap r;
+    makeReady(r);
+    for (std::uint16_t v : {2150, 65036, 0, 0x7FFF, 0x8001, 0x8000}) {
+        EXPECT_EQ(writeOne(r, 12, v), ModbusException::None) << v;
+        EXPECT_EQ(readOne(r, 12), v);
+    }
+    // One FC16 block from 0: program, serial, purpose and a part at 21.50 °C with the trigger.
+    std::array<std::uint16_t, 13> block{};
+    block[0] = 1;     // TRIGGER_SEQ
+    block[1] = 1;     // PART_PROGRAM
+    block[12] = 2150; // PART_TEMPERATURE
+    ASSERT_EQ(r.write(0, block), ModbusException::None);
+    auto first = r.takeTrigger();
+    ASSERT_TRUE(first);
+    ASSERT_TRUE(first->partTemperatureC);
+    EXPECT_EQ(*first->partTemperatureC, 21.50);
+    // Written before the next trigger: -5.00 °C goes with it; the first keeps its own.
+    r.setStatus(PlcStatus::Ready);
+    ASSERT_EQ(writeOne(r, 12, 65036), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 0, 2), ModbusException::None);
+    auto second = r.takeTrigger();
+    ASSERT_TRUE(second && second->partTemperatureC);
+    EXPECT_EQ(*second->partTemperatureC, -5.00);
+    EXPECT_EQ(*first->partTemperatureC, 21.50);
+    // 0x8000: the trigger carries no reading; a manual trigger takes the register's too.
+    r.setStatus(PlcStatus::Ready);
+    ASSERT_EQ(writeOne(r, 12, 0x8000), ModbusException::None);
+    ASSERT_EQ(writeOne(r, 0, 3), ModbusException::None);
+    auto third = r.takeTrigger();
+    ASSERT_TRUE(third);
+    EXPECT_FALSE(third->partTemperatureC);
+    r.setStatus(PlcStatus::Ready);
+    ASSERT_EQ(writeOne(r, 12, 2150), ModbusException::None);
+    EXPECT_EQ(r.triggerManually(1, "M"), RejectReason::None);
+    EXPECT_EQ(r.takeTrigger()->partTemperatureC, std::optional<double>(21.50));
 }
 
 } // namespace

@@ -402,9 +402,11 @@ TEST(ResultStore, AVersionFiveDatabaseGainsTheCorrectionAndTemperatureColumns)
         ResultStore store(file);
         store.commit(record(1, station::Verdict::Pass));
     }
-    // Back to version 5 as that daemon wrote it: without the two columns (SQLite 3.35 drops columns).
+    // Back to version 5 as that daemon wrote it: without the two columns (SQLite 3.35 drops columns)
+    // and the index on the first.
     hgtest::run("sqlite3 " + file.string() +
-                " 'ALTER TABLE inspections DROP COLUMN correction_id; ALTER TABLE inspections DROP COLUMN "
+                " 'DROP INDEX inspections_correction; ALTER TABLE inspections DROP COLUMN correction_id; "
+                "ALTER TABLE inspections DROP COLUMN "
                 "temperature_c; PRAGMA user_version=5;'");
     ASSERT_EQ(sql(file, "SELECT count(*) FROM pragma_table_info('inspections') WHERE name = 'temperature_c'"), "0\n");
     {
@@ -533,6 +535,46 @@ TEST(ResultStore, AVersionSixDatabaseGainsTheHealthTable)
     for (const char* query :
          {"PRAGMA table_info(health)", "SELECT name, sql FROM sqlite_master WHERE name LIKE 'health%' ORDER BY name"})
         EXPECT_EQ(sql(file, query), sql(fresh, query)) << query;
+}
+
+// Re-mastering due's counts at start (docs/mastering.md, "Due in the daemon"):
+// the production parts of one program judged with one set, from a given time.
+TEST(ResultStore, CountsTheProductionPartsJudgedWithACorrectionSet)
+{
+    hgtest::TempDir dir;
+    ResultStore store(dir / "r.db");
+    const auto add = [&](station::Verdict verdict, station::CyclePurpose purpose, int program, const std::string& id,
+                         std::int64_t startedUnixMs) {
+        auto r = record(1, verdict);
+        r.purpose = purpose;
+        r.program = static_cast<std::uint16_t>(program);
+        r.correctionId = id;
+        r.startedUnixMs = startedUnixMs;
+        store.commit(r);
+    };
+    using V = station::Verdict;
+    using P = station::CyclePurpose;
+    add(V::Pass, P::Production, 1, "set-a", 1000); // counted
+    add(V::Fail, P::Production, 1, "set-a", 2000); // counted
+    add(V::Pass, P::Production, 1, "set-a", 3000); // counted
+    add(V::Aborted, P::Production, 1, "set-a", 3500);
+    add(V::Error, P::Production, 1, "set-a", 3600);
+    add(V::Pass, P::Master, 1, "set-a", 4000);
+    add(V::Pass, P::Study, 1, "set-a", 4100);
+    add(V::Pass, P::Production, 2, "set-a", 4200);
+    add(V::Pass, P::Production, 1, "set-b", 4300);
+    add(V::Pass, P::Production, 1, "", 4400);
+    EXPECT_EQ(store.productionJudged(1, "set-a"), 3);
+    EXPECT_EQ(store.productionJudged(1, "set-a", 2000), 2);
+    EXPECT_EQ(store.productionJudged(1, "set-a", 3001), 0);
+    EXPECT_EQ(store.productionJudged(1, "set-b"), 1);
+    EXPECT_EQ(store.productionJudged(2, "set-a"), 1);
+    EXPECT_EQ(store.productionJudged(3, "set-a"), 0);
+    // SQLite's plan reads the index, not the whole table.
+    EXPECT_NE(sql(store.file(), "EXPLAIN QUERY PLAN SELECT COUNT(*) FROM inspections WHERE correction_id = 'x' AND "
+                                "program = 1 AND purpose = 'production'")
+                  .find("inspections_correction"),
+              std::string::npos);
 }
 
 TEST(ResultStore, RefusesADatabaseFromANewerDaemon)

@@ -220,3 +220,34 @@ TEST(StudyCli, AStoreBeforeCyclePurposesHoldsProductionCyclesOnly)
 }
 
 } // namespace
+
+// `hullgauge master`'s options (docs/mastering.md, "The command"): the store
+// and the file are needed without --run, --run measures one master and takes
+// no window, --socket and --timeout go with --run; with --run and no daemon
+// behind the socket, a fault naming it.
+TEST(MasterCli, TheOptionsWithAndWithoutRunAreRefusedNamingWhatIsWrong)
+{
+    hgtest::TempDir dir;
+    const auto one = hgtest::writeFile(dir / "m1.yaml", "master: M-1\ncertificate: r1\nlandmarks:\n"
+                                                        "  a: {value_mm: 0.01, uncertainty_mm: 0.002}\n");
+    const auto two = hgtest::writeFile(dir / "m2.yaml", "master: M-2\ncertificate: r2\nlandmarks:\n"
+                                                        "  a: {value_mm: 0.05, uncertainty_mm: 0.002}\n");
+    const std::string master = hullgauge() + " master --program 1 --master " + one.string();
+    const std::string socket = " --socket " + (dir / "none.sock").string();
+    struct Case {
+        std::string args;
+        int status;
+        std::string says;
+    };
+    for (const Case& c : {Case{" --out " + (dir / "set.json").string(), 2, "--store: required without --run"},
+                          Case{" --store " + (dir / "r.db").string(), 2, "--out: required without --run"},
+                          Case{" --master " + two.string() + " --run 5" + socket, 2, "--run: runs one master's cycles"},
+                          Case{" --run 5 --since 2026-05-28" + socket, 2, "--since excludes --run"},
+                          Case{" --run 1" + socket, 2, "--run: Value 1 not in range"},
+                          Case{socket + " --store x.db --out y.json", 2, "--socket requires --run"},
+                          Case{" --run 5" + socket, 3, "cannot reach the daemon at " + (dir / "none.sock").string()}}) {
+        const auto r = hgtest::run(master + c.args);
+        EXPECT_EQ(r.status, c.status) << c.args << ": " << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+    }
+}

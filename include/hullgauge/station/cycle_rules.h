@@ -21,9 +21,22 @@ SequencerEvent grabEvent(StatusCode code);
 /// A published cycle's verdict: pass or fail when it was inspected, aborted, else error.
 Verdict verdictOf(CycleOutcome outcome, bool inspectionPassed);
 
+/// What the station asks of the operator between cycles (docs/lamps.md). The
+/// daemon's cycle runner says when: re-mastering due of the active program
+/// (docs/mastering.md, "Due in the daemon"), and any other warning of the
+/// station's that wants a person to act.
+struct Attention {
+    bool wanted = false;            ///< amber steady beside the verdict lamp
+    bool productionRefused = false; ///< production triggers are refused: amber steady, red blinking
+};
+
 /// The lamps for the sequencer's state; in Done they show the last verdict
-/// (an aborted or failed cycle leaves them off, a part not seated blinks amber).
-LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault = FaultCode::None);
+/// (an aborted or failed cycle leaves them off, a part not seated blinks amber),
+/// with amber steady beside it while the station asks for attention. While
+/// production is refused, Refused shows where no verdict is shown. A fault, a
+/// running cycle and a part to re-seat show as they do without attention.
+LampPattern lampPattern(SequencerState state, Verdict lastVerdict, FaultCode lastFault = FaultCode::None,
+                        Attention attention = {});
 
 /// STATUS for the sequencer's state: busy while a cycle runs, maintenance while calibrating.
 PlcStatus plcStatus(SequencerState state);

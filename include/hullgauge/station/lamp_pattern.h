@@ -9,22 +9,34 @@
 namespace hg::station {
 
 /// Green pass, red fail, amber busy, red and amber blinking on fault;
-/// extension: amber blinking alone after a part not seated (FAULT_CODE 32:
-/// re-seat it, docs/plc.md).
+/// extensions: amber blinking alone after a part not seated (FAULT_CODE 32:
+/// re-seat it, docs/plc.md); amber steady beside the verdict while the
+/// station asks for attention (re-mastering due, docs/mastering.md); amber
+/// steady with red blinking while production triggers are refused.
 enum class LampPattern {
-    Off,    ///< every lamp off
-    Busy,   ///< amber
-    Pass,   ///< green
-    Fail,   ///< red
-    Fault,  ///< red and amber blinking
-    Reseat, ///< amber blinking alone: the part is not seated, re-seat it
+    Off,           ///< every lamp off
+    Busy,          ///< amber
+    Pass,          ///< green
+    Fail,          ///< red
+    Fault,         ///< red and amber blinking
+    Reseat,        ///< amber blinking alone: the part is not seated, re-seat it
+    PassAttention, ///< green and amber: pass, and the station asks for attention
+    FailAttention, ///< red and amber: fail, and the station asks for attention
+    Refused,       ///< amber, red blinking: production triggers are refused
 };
 
 constexpr auto nameTable(LampPattern)
 {
     using enum LampPattern;
-    return std::to_array<EnumName<LampPattern>>(
-        {{Off, "off"}, {Busy, "busy"}, {Pass, "pass"}, {Fail, "fail"}, {Fault, "fault"}, {Reseat, "reseat"}});
+    return std::to_array<EnumName<LampPattern>>({{Off, "off"},
+                                                 {Busy, "busy"},
+                                                 {Pass, "pass"},
+                                                 {Fail, "fail"},
+                                                 {Fault, "fault"},
+                                                 {Reseat, "reseat"},
+                                                 {PassAttention, "pass_attention"},
+                                                 {FailAttention, "fail_attention"},
+                                                 {Refused, "refused"}});
 }
 
 } // namespace hg::station

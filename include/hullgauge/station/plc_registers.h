@@ -47,6 +47,8 @@ inline constexpr std::uint16_t SerialWords = 8;
 inline constexpr std::uint16_t Command = 10; ///< extension: PlcCommand (1 abort, 2 reset fault, 3 reset counters)
 /// Extension: the purpose of the next cycles (CyclePurpose), latched with each trigger (docs/plc.md).
 inline constexpr std::uint16_t CyclePurpose = 11;
+/// Extension: the part's temperature, signed 0.01 °C (kNoTemperature: none), latched with each trigger (docs/plc.md).
+inline constexpr std::uint16_t PartTemperature = 12;
 inline constexpr std::uint16_t AckSeq = 100;
 inline constexpr std::uint16_t DoneSeq = 101;
 inline constexpr std::uint16_t Status = 102;
@@ -104,6 +106,13 @@ inline constexpr std::uint16_t LandmarksFailed = 4;
 inline constexpr std::uint16_t LandmarksTotal = 5;
 inline constexpr std::uint16_t CycleMs = 6; ///< 6..7, u32 high word first
 } // namespace ring
+
+/// PART_TEMPERATURE's "no reading" (0x8000, the int16 −32768 no temperature is); the register holds it
+/// until the PLC writes a temperature.
+inline constexpr std::uint16_t kNoTemperature = 0x8000;
+/// A PART_TEMPERATURE word as °C (two's complement int16 in 0.01 °C: 2150 is 21.50 °C, 0xFE0C −5.00 °C);
+/// none for kNoTemperature.
+std::optional<double> decodeTemperature(std::uint16_t word);
 
 /// Largest number of landmarks LANDMARK_OK_BITS can report.
 inline constexpr std::size_t kMaxReportedLandmarks = reg::LandmarkOkWords * 16;
@@ -201,6 +210,8 @@ struct TriggerRequest {
     bool manual = false;
     /// CYCLE_PURPOSE at acceptance.
     CyclePurpose purpose = CyclePurpose::Production;
+    /// PART_TEMPERATURE at acceptance (°C); none: the PLC gives no reading (docs/mastering.md, "Temperature").
+    std::optional<double> partTemperatureC{};
 };
 
 /// What the PLC sees of a finished (or aborted) cycle.

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 namespace hg::store {
@@ -31,6 +32,12 @@ class ResultStore {
     /// The newest `limit` records, newest first, as JSON objects.
     nlohmann::json recent(int limit) const;
     std::int64_t count() const;
+    /// The production parts of `program` judged (pass or fail) with the correction set
+    /// `correctionId`, those started at or after `sinceMs` when given: re-mastering
+    /// due's counts across a restart (docs/mastering.md, "Due in the daemon").
+    /// Throws hg::FaultError when SQLite fails.
+    std::int64_t productionJudged(int program, const std::string& correctionId,
+                                  std::optional<std::int64_t> sinceMs = std::nullopt) const;
     const std::filesystem::path& file() const { return file_; }
 
   private:

@@ -66,6 +66,16 @@ nlohmann::json healthMessage(const station::InspectionRecord& record, const nloh
                                                                {"time", reference["time"]}}}};
 }
 
+/// What the station asks of the operator (docs/lamps.md): re-mastering due of the
+/// active program, as MASTER_DUE tells the PLC (docs/mastering.md, "Due in the daemon"),
+/// or a health figure beyond its limit, as HEALTH_WARNINGS does (docs/health.md).
+station::Attention attentionOf(const std::array<std::uint16_t, station::reg::Count>& regs)
+{
+    const auto due = static_cast<station::MasterDue>(regs[station::reg::MasterDue]);
+    return {.wanted = due != station::MasterDue::No || regs[station::reg::HealthWarnings] != 0,
+            .productionRefused = due == station::MasterDue::ProductionRefused};
+}
+
 station::MasterDueState dueState(const station::MasteringDue& due)
 {
     using station::MasterDue;
@@ -235,11 +245,35 @@ void CycleRunner::schedule(const SequencerAction& action)
     if (action.kind == Kind::Recover) recoverAt_ = clock_.now() + action.delay;
 }
 
-void CycleRunner::showState(station::Verdict lastVerdict)
+void CycleRunner::showState()
 {
     const auto s = state();
-    devices_.showLamps(station::lampPattern(s, lastVerdict));
+    showLamps(station::lampPattern(s, shownVerdict_, shownFault_, attentionOf(registers_.snapshot())));
     registers_.setStatus(station::plcStatus(s));
+}
+
+void CycleRunner::showLamps(LampPattern pattern)
+{
+    devices_.showLamps(pattern);
+    lamps_ = pattern;
+}
+
+// Between cycles the lamps follow what the station asks for (docs/lamps.md):
+// a due that the time or a reload brings, and a production trigger refused
+// since the last result, which ends the showing of that part's verdict (the
+// part in the nest is another one, and the operator must see why it waits).
+void CycleRunner::refreshLamps()
+{
+    const auto regs = registers_.snapshot();
+    if (regs[station::reg::RejectedTriggers] != refusalsSeen_) {
+        refusalsSeen_ = regs[station::reg::RejectedTriggers];
+        if (regs[station::reg::LastRejectReason] == static_cast<std::uint16_t>(station::RejectReason::MasteringDue)) {
+            shownVerdict_ = station::Verdict::Error;
+            shownFault_ = station::FaultCode::None;
+        }
+    }
+    const auto pattern = station::lampPattern(state(), shownVerdict_, shownFault_, attentionOf(regs));
+    if (pattern != lamps_) showLamps(pattern);
 }
 
 // ---- between cycles ---------------------------------------------------------
@@ -250,7 +284,7 @@ void CycleRunner::run(std::stop_token stop)
     watchHealth();
     startDevices();
     while (!stop_.stop_requested()) serveBetweenCycles();
-    devices_.showLamps(LampPattern::Off);
+    showLamps(LampPattern::Off);
     devices_.shutdown();
     hg::log::category("seq")->info("devices shut down");
 }
@@ -280,6 +314,7 @@ void CycleRunner::serveBetweenCycles()
         std::lock_guard lock(mutex_);
         if (!mastering_.empty()) signalMastering();
     }
+    refreshLamps();
     // An abort outside a cycle has nothing to abort (a queued calibration clears it when it starts).
     if (!calibration_.queued()) abortRequested_ = false;
     auto recoverIfDue = [this] {
@@ -391,23 +426,38 @@ void CycleRunner::masteringConfigured(const station::DaemonConfig& cfg)
             applyCorrectionSet(it->first, ref->second);
         ++it;
     }
+    if (duePolicy_)
+        for (const auto& [number, ref] : cfg.programs) masteringStarted(ref);
     signalMastering();
 }
 
-void CycleRunner::masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version)
+// Every configured program has its rules from the start, so a restart refuses
+// production from the first trigger when the store's counts say so. The
+// program's release is known once it is loaded; until then it is taken to be
+// the one its set was mastered on (docs/mastering.md, "Due in the daemon").
+void CycleRunner::masteringStarted(const station::PartProgramRef& ref)
 {
-    if (!duePolicy_) return;
+    const auto version = ref.correctionId.empty() ? std::nullopt : ref.correctionProgramVersion;
     auto [it, added] = mastering_.try_emplace(
         ref.number, ProgramMastering{station::MasteringDue(*duePolicy_, clock_, calibrationIdentity_),
                                      version,
                                      ref.partSha256,
                                      std::string(),
                                      {}});
-    auto& pm = it->second;
+    if (!added) return;
+    it->second.due.programIs(version);
+    applyCorrectionSet(ref.number, ref);
+}
+
+void CycleRunner::masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version)
+{
+    if (!duePolicy_) return;
+    masteringStarted(ref);
+    auto& pm = mastering_.at(ref.number);
     pm.version = version;
     pm.partSha256 = ref.partSha256;
     pm.due.programIs(version);
-    if (added || ref.correctionSha256 != pm.setSha256) applyCorrectionSet(ref.number, ref);
+    if (ref.correctionSha256 != pm.setSha256) applyCorrectionSet(ref.number, ref);
     signalMastering();
 }
 
@@ -420,10 +470,34 @@ void CycleRunner::applyCorrectionSet(std::uint16_t number, const station::PartPr
         pm.due = station::MasteringDue(*duePolicy_, clock_, calibrationIdentity_);
         pm.due.programIs(pm.version);
     } else {
-        pm.due.mastered(
-            {ref.correctionId, ref.correctionCreatedUnixMs, ref.correctionProgramVersion, calibrationIdentity_});
+        pm.due.mastered({ref.correctionId, ref.correctionCreatedUnixMs, ref.correctionProgramVersion,
+                         calibrationIdentity_, ref.correctionTemperatureC},
+                        judgedWith(ref));
     }
     pm.setSha256 = ref.correctionSha256;
+}
+
+// The counts are the result store's (docs/mastering.md, "Due in the daemon"):
+// the production parts judged with the set before it came into force here
+// (none for a new set; after a restart, those of the daemon before).
+station::MasteringHistory CycleRunner::judgedWith(const station::PartProgramRef& ref) const
+{
+    station::MasteringHistory history;
+    try {
+        history.parts = static_cast<std::uint64_t>(store_.productionJudged(ref.number, ref.correctionId));
+        if (duePolicy_->maxAge)
+            history.partsPastAge = static_cast<std::uint64_t>(store_.productionJudged(
+                ref.number, ref.correctionId, ref.correctionCreatedUnixMs + duePolicy_->maxAge->count()));
+    } catch (const std::exception& e) {
+        hg::log::category("inspect")->error("part program {}: the parts judged with correction set {} could not be "
+                                            "counted ({}): its part count and grace start again",
+                                            ref.number, ref.correctionId, e.what());
+        return {};
+    }
+    if (history.parts > 0)
+        hg::log::category("inspect")->info("part program {}: {} production parts judged with correction set {} so far",
+                                           ref.number, history.parts, ref.correctionId);
+    return history;
 }
 
 // A pass or a fail is a judged part; an aborted or faulted cycle is not.
@@ -434,6 +508,7 @@ void CycleRunner::masteringJudged(const station::InspectionRecord& record)
     const auto it = mastering_.find(record.program);
     if (it == mastering_.end()) return;
     it->second.due.judged(record.purpose);
+    if (record.temperatureC) it->second.due.temperatureIs(*record.temperatureC);
     signalMastering();
 }
 
@@ -507,7 +582,7 @@ bool CycleRunner::runMaintenance(const std::function<bool(const station::DaemonC
 {
     if (!registers_.enterMaintenance()) return false;
     feed(SequencerEvent::CalibrationStart);
-    devices_.showLamps(LampPattern::Busy);
+    showLamps(LampPattern::Busy);
     abortRequested_ = false;
     std::shared_ptr<const station::DaemonConfig> cfg;
     {
@@ -711,6 +786,10 @@ void CycleRunner::runCycle(const station::TriggerRequest& trigger)
     cycle.record.serial = trigger.serial;
     cycle.record.program = trigger.program;
     cycle.record.purpose = trigger.purpose;
+    // The part's temperature at the trigger, recorded and referred to 20 °C (docs/mastering.md, "Temperature").
+    const auto& temperature = cycle.cfg->temperature;
+    cycle.record.temperatureC = temperature_.atTrigger(temperature, trigger.partTemperatureC);
+    inspector_.setPartTemperature(cycle.record.temperatureC, temperature ? temperature->sigmaC : 0.0);
     auto action = beginCycle(cycle);
     while (action.kind != Kind::Publish) {
         auto next = interruption(cycle);
@@ -726,7 +805,7 @@ SequencerAction CycleRunner::beginCycle(Cycle& cycle)
     log->info("cycle {}{}: program {}, serial '{}'{}", r.manual ? "manual" : "seq ",
               r.manual ? std::string() : std::to_string(r.triggerSeq), r.program, r.serial,
               r.purpose == station::CyclePurpose::Production ? std::string() : ", " + std::string(enumName(r.purpose)));
-    devices_.showLamps(LampPattern::Busy);
+    showLamps(LampPattern::Busy);
     // The simulated line puts a new part in the nest, seated within its play.
     auto it = cycle.cfg->programs.find(r.program);
     cycle.program = it == cycle.cfg->programs.end() ? nullptr : &it->second;
@@ -1011,9 +1090,14 @@ void CycleRunner::commitAndPublish(Cycle& cycle)
     const auto commitStart = clock_.now();
     commitRecord(cycle);
     cycle.commit = clock_.since(commitStart);
-    // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the lamps right.
+    // The lamps change with the registers (just before them), so whoever sees DONE_SEQ sees the
+    // lamps right; a trigger refused from now on was refused after this part's verdict.
     const auto after = state();
-    devices_.showLamps(station::lampPattern(after, record.verdict, record.faultCode));
+    shownVerdict_ = record.verdict;
+    shownFault_ = record.faultCode;
+    const auto regs = registers_.snapshot();
+    refusalsSeen_ = regs[station::reg::RejectedTriggers];
+    showLamps(station::lampPattern(after, record.verdict, record.faultCode, attentionOf(regs)));
     const auto publishStart = clock_.now();
     registers_.publishResult(record.toPublished(station::plcStatus(after)));
     const auto published = clock_.now();
@@ -1104,6 +1188,7 @@ void CycleRunner::report(Cycle& cycle)
                       {"timing_ms", station::toJson(timings)},
                       {"payload_bytes", cycle.payloadBytes}};
         putRelease(lastCycle_, record.programRelease);
+        lastCycle_["temperature_c"] = record.temperatureC ? nlohmann::json(*record.temperatureC) : nlohmann::json();
         if (!record.simulation.is_null()) lastCycle_["simulation"] = record.simulation;
     }
     hg::log::category("seq")->info(

@@ -18,6 +18,7 @@
 #include "cycle/image_archive.h"
 #include "cycle/image_writer.h"
 #include "cycle/inspector.h"
+#include "cycle/part_temperature.h"
 #include "cycle/station_health.h"
 #include "daemon_config.h"
 #include "hullgauge/common/clock.h"
@@ -119,14 +120,18 @@ class CycleRunner {
     station::SequencerAction feed(station::SequencerEvent event);
     station::SequencerAction transition(const std::function<station::SequencerAction()>& step);
     void schedule(const station::SequencerAction& action);
-    void showState(station::Verdict lastVerdict = station::Verdict::Error);
+    void showState();
+    void showLamps(LampPattern pattern);
+    void refreshLamps();
     void recover();
     void prepareProgram(std::uint16_t number);
     void noteLoaded(const station::PartProgramRef& ref);
     void masteringConfigured(const station::DaemonConfig& cfg);
+    void masteringStarted(const station::PartProgramRef& ref);
     void masteringLoaded(const station::PartProgramRef& ref, std::optional<int> version);
     void masteringJudged(const station::InspectionRecord& record);
     void applyCorrectionSet(std::uint16_t number, const station::PartProgramRef& ref);
+    station::MasteringHistory judgedWith(const station::PartProgramRef& ref) const;
     void signalMastering();
     nlohmann::json masteringJson() const;
     void runCalibration(CalibrationJob job);
@@ -212,6 +217,14 @@ class CycleRunner {
     bool archiveHadRoom_ = true;                 ///< the last part found min_free_mb free (logged on change)
     HealthJournal healthJournal_;
     std::function<void(const nlohmann::json&)> healthSink_;
+    PartTemperature temperature_{clock_}; ///< the part's temperature at each trigger
+    /// The lamps between cycles (docs/lamps.md): the verdict and fault of the part in the
+    /// nest (until a production trigger is refused), the pattern last commanded, and
+    /// REJECTED_TRIGGERS as last looked at.
+    station::Verdict shownVerdict_ = station::Verdict::Error;
+    station::FaultCode shownFault_ = station::FaultCode::None;
+    std::optional<LampPattern> lamps_;
+    std::uint16_t refusalsSeen_ = 0;
 
     std::stop_token stop_; ///< the worker's (runner thread only): SIGTERM's stop()
     std::function<void()> onDevicesActive_;

@@ -234,6 +234,12 @@ class EngineInspector : public Inspector {
         pipeline_.submit(std::move(view));
     }
 
+    void setPartTemperature(std::optional<double> temperatureC, double sigmaC) override
+    {
+        temperatureC_ = temperatureC;
+        temperatureSigmaC_ = sigmaC;
+    }
+
     std::size_t seatViews() const override { return current_ ? current_->inspection.setup.seatViews : 0; }
 
     // Between cycles: the worker is idle once the last cycle's views are examined.
@@ -279,6 +285,8 @@ class EngineInspector : public Inspector {
             // Only the traversal is left once the last frame is in (dissertation 3.3.8).
             inspect::DeviationReferral referral;
             referral.correction = current_->correction ? &*current_->correction : nullptr;
+            referral.temperatureC = temperatureC_;
+            referral.temperatureSigmaC = temperatureSigmaC_;
             auto result = current_->inspection.inspector->inspect(std::move(prepared.views), prepared.ids, referral);
             out.ok = true;
             if (current_->correction) out.correctionId = current_->correction->id;
@@ -472,6 +480,9 @@ class EngineInspector : public Inspector {
     std::vector<ViewEvidence> views_;
     /// The station's health monitor (watchHealth); null: not watched.
     std::unique_ptr<vision::HealthMonitor> health_;
+    /// The part's temperature and its standard uncertainty (°C) the deviations are referred with.
+    std::optional<double> temperatureC_;
+    double temperatureSigmaC_ = 0.0;
     // Declared last: destroyed first, so its worker has stopped before the programs it prepares with go.
     ViewPipeline pipeline_;
 };

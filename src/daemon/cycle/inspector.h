@@ -118,6 +118,10 @@ class Inspector {
     /// "Pixels in proportion to the goal") — which the camera is asked to send
     /// (docs/daemon.md, "Regions per view"); empty: the whole frame. After begin().
     virtual cv::Rect region(std::size_t /*index*/, const geometry::FixturePose& /*pose*/) { return {}; }
+    /// The part's temperature for the cycles begun from now on (docs/mastering.md,
+    /// "Temperature"), with its standard uncertainty: their deviations are
+    /// referred to 20 °C with the program's expansion coefficient; none: not referred.
+    virtual void setPartTemperature(std::optional<double> /*temperatureC*/, double /*sigmaC*/) {}
     /// Hands over view `index` taken at `pose`: its frame and the sensor
     /// position of the frame's pixel (0, 0) (a region of the sensor, or the
     /// whole of it at (0, 0)); returns at once.

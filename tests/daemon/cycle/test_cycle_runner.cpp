@@ -27,9 +27,11 @@
 #include <fstream>
 #include <gtest/gtest.h>
 #include <iterator>
+#include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <set>
+#include <tuple>
 
 namespace hg::daemon {
 namespace {
@@ -386,6 +388,9 @@ TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAt
     EXPECT_EQ(at(reg::HealthWarnings), (1 << 0) | (1 << 3)); // backlight, focus
     ASSERT_TRUE(eventually([&] { return publishedCount() == 2; }));
     EXPECT_TRUE(runner->healthAttention());
+    // The operator's lamps: the verdict with amber steady beside it (docs/lamps.md).
+    EXPECT_TRUE(eventually([&] { return devices.lamps().back() == LampPattern::PassAttention; }))
+        << enumName(devices.lamps().back());
     EXPECT_EQ(journal.count(spdlog::level::warn, "backlight 0.75 of the reference — below limit 0.80"), 1)
         << journal.text();
     EXPECT_EQ(journal.count(spdlog::level::warn, "focus: edge width 3.50 px (10-90 %) — above limit 3.00"), 1)
@@ -407,6 +412,8 @@ TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAt
     EXPECT_EQ(at(reg::HealthWarnings), 0);
     ASSERT_TRUE(eventually([&] { return publishedCount() == 4; }));
     EXPECT_FALSE(runner->healthAttention());
+    EXPECT_TRUE(eventually([&] { return devices.lamps().back() == LampPattern::Pass; }))
+        << enumName(devices.lamps().back());
     EXPECT_EQ(journal.count(spdlog::level::warn, "backlight"), 1) << journal.text();
     EXPECT_EQ(journal.count(spdlog::level::info, "back within its limit"), 2) << journal.text();
 
@@ -1240,18 +1247,27 @@ class SimulatedLine {
         };
         inspector_ = makeEngineInspector(*config_);
         store_ = std::make_unique<store::ResultStore>(dir_ / "results.db");
-        registers_.setKnownPrograms({1});
-        runner_ = std::make_unique<CycleRunner>(registers_, devices_, *inspector_, *store_, config_, clock_);
+        registers_->setKnownPrograms({1});
+        runner_ = std::make_unique<CycleRunner>(*registers_, devices_, *inspector_, *store_, config_, clock_);
         runner_->setSimulation(&nest_);
         runner_->start([] {});
-        return eventually([&] { return registers_.snapshot()[reg::Status] == 0; }, 60s);
+        return eventually([&] { return registers_->snapshot()[reg::Status] == 0; }, 60s);
+    }
+    /// The daemon stopped and started again on the same files: a new runner, inspection,
+    /// PLC registers and store connection; the clock and the devices go on.
+    bool restart()
+    {
+        runner_.reset();
+        store_.reset();
+        registers_ = std::make_unique<PlcRegisters>();
+        return start();
     }
     /// A PLC trigger of program 1; the row it stored.
     nlohmann::json cycle()
     {
         std::array<std::uint16_t, 2> block{++seq_, 1};
-        EXPECT_EQ(registers_.write(reg::TriggerSeq, block), station::ModbusException::None);
-        EXPECT_TRUE(eventually([&] { return registers_.snapshot()[reg::DoneSeq] == seq_; }, 120s)) << seq_;
+        EXPECT_EQ(registers_->write(reg::TriggerSeq, block), station::ModbusException::None);
+        EXPECT_TRUE(eventually([&] { return registers_->snapshot()[reg::DoneSeq] == seq_; }, 120s)) << seq_;
         return store_->recent(1).at(0);
     }
     /// SIGHUP as the main loop takes it (daemon.cpp, MainLoop::reload): a configuration
@@ -1260,7 +1276,7 @@ class SimulatedLine {
     {
         try {
             runner_->setConfig(loadConfig());
-            registers_.setKnownPrograms({1});
+            registers_->setKnownPrograms({1});
             return true;
         } catch (const InputError&) {
             return false;
@@ -1288,8 +1304,10 @@ class SimulatedLine {
     Nest& nest() { return nest_; }
     const sim::RenderOptions& renderOptions() const { return options_; }
     store::ResultStore& store() { return *store_; }
-    PlcRegisters& registers() { return registers_; }
+    PlcRegisters& registers() { return *registers_; }
     ManualClock& clock() { return clock_; }
+    /// The lamp patterns the runner commanded, in order.
+    std::vector<LampPattern> lamps() const { return devices_.lamps(); }
     /// The TRIGGER_SEQ the next trigger writes.
     std::uint16_t nextSeq() { return ++seq_; }
 
@@ -1314,7 +1332,7 @@ class SimulatedLine {
     ScriptedDevices devices_{clock_};
     std::unique_ptr<Inspector> inspector_;
     std::unique_ptr<store::ResultStore> store_;
-    PlcRegisters registers_;
+    std::unique_ptr<PlcRegisters> registers_ = std::make_unique<PlcRegisters>();
     std::uint16_t seq_ = 0;
     std::unique_ptr<CycleRunner> runner_;
 };
@@ -1591,6 +1609,338 @@ TEST(MasteringDue, AKeyOutOfRangeOrUnknownIsRefusedNamingIt)
             EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
         }
     }
+}
+
+// The part's temperature from the PLC (docs/mastering.md, "Temperature";
+// PART_TEMPERATURE, docs/plc.md): program 1 released as version 1 in aluminium,
+// α = 23e-6 /K about the origin, a set mastered on it at 20.0 °C (no landmark
+// corrected) and `temperature: {source: plc, sigma_c: 0.5, mastering_step_c: 2}`.
+// Without a write the register holds 0x8000: no temperature, nothing referred.
+// 2150 (21.50 °C): the row holds 21.5 and each landmark measured the expansion
+// α·(T − 20)·((p − c)·n) taken out, (p − c)·n worked from the stepped block's
+// faces (config/sim/make-meshes.py: x ∈ [−30, 30], y ∈ [−20, 20], the tall
+// block's top at z = 30, the step's at 15), U_T = 2·α·|(p − c)·n|·0.5; a step
+// of 1.5 °C is not due. 2210 (22.10 °C, a step of 2.1): MASTER_DUE reads 1,
+// cause `temperature`, the whole grace left.
+TEST(MasteringDue, ThePartsTemperatureFromThePlcIsRecordedReferredTo20CAndAStepMakesItDue)
+{
+    SimulatedLine line;
+    const std::string program =
+        line.draft() + "material: {name: aluminium, expansion_per_k: 23.0e-6, expansion_centre: [0, 0, 0]}\n";
+    hgtest::writeFile(line.programFile(), SimulatedLine::released(program, 1, std::string(64, '1')));
+    std::ofstream(line.daemonFile(), std::ios::app)
+        << "mastering: {folder: masters, due: {grace_cycles: 2}}\n"
+        << "temperature: {source: plc, sigma_c: 0.5, mastering_step_c: 2}\n";
+    fs::create_directories(line.folder() / "masters");
+    const nlohmann::json set = {{"id", "p1-v1-aluminium-20260302T070000Z"},
+                                {"program", 1},
+                                {"program_version", 1},
+                                {"material", "aluminium"},
+                                {"created_unix_ms", line.clock().wallMs()},
+                                {"temperature_c", 20.0},
+                                {"landmarks", nlohmann::json::array()}};
+    hgtest::writeFile(line.folder() / "masters" / "program-1.json", set.dump());
+    ASSERT_TRUE(line.start());
+    PlcRegisters& registers = line.registers();
+    const auto reg = [&](std::uint16_t address) { return registers.snapshot()[address]; };
+    const auto status = [&] { return line.runner().describe()["mastering"]["1"]; };
+    const auto writeTemperature = [&](std::uint16_t word) {
+        const std::array<std::uint16_t, 1> value{word};
+        ASSERT_EQ(registers.write(reg::PartTemperature, value), station::ModbusException::None);
+    };
+
+    auto record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_TRUE(record["temperature_c"].is_null());
+    for (const auto& l : record["landmarks"]) EXPECT_FALSE(l.contains("thermal_mm")) << l.dump();
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+
+    // (p − c)·n per landmark: its position on the face it lies on, along that face's outward normal.
+    const std::map<std::string, double> along = {
+        {"tall-top", 30.0}, {"tall-corner", 30.0}, {"tall-side", 30.0}, {"tall-foot", 30.0}, {"riser", 0.0},
+        {"step-top", 15.0}, {"step-side", 30.0},   {"end-front", 20.0}, {"end-back", 20.0},  {"step-top-back", 15.0}};
+    const double alpha = 23.0e-6;
+    writeTemperature(2150);
+    record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["temperature_c"], 21.5);
+    EXPECT_EQ(line.runner().describe()["last_cycle"]["temperature_c"], 21.5);
+    std::set<std::string> referred;
+    for (const auto& l : record["landmarks"]) {
+        SCOPED_TRACE(l.dump());
+        if (!l.contains("raw_deviation_mm")) continue;
+        const std::string id = l["id"];
+        referred.insert(id);
+        const double d = along.at(id);
+        EXPECT_NEAR(l["thermal_mm"].get<double>(), alpha * (21.5 - 20.0) * d, 1e-12);
+        EXPECT_NEAR(l["thermal_uncertainty_mm"].get<double>(), 2.0 * alpha * d * 0.5, 1e-12);
+        EXPECT_NEAR(l["deviation_mm"].get<double>(),
+                    l["raw_deviation_mm"].get<double>() - l["thermal_mm"].get<double>(), 1e-12);
+        EXPECT_NEAR(l["uncertainty_mm"].get<double>(),
+                    std::hypot(l["raw_uncertainty_mm"].get<double>(), 2.0 * alpha * d * 0.5), 1e-12);
+        EXPECT_TRUE(l["correction"].is_null());
+    }
+    // The nominal part's every landmark is measured on the simulated line, so every one is referred.
+    EXPECT_EQ(referred.size(), along.size()) << record["landmarks"].dump();
+    EXPECT_EQ(reg(reg::MasterDue), 0);
+    EXPECT_EQ(status()["due"], false);
+
+    // 22.10 °C: 2.1 from the set's 20.0, beyond the step of 2.
+    writeTemperature(2210);
+    record = line.cycle();
+    EXPECT_EQ(record["verdict"], "pass");
+    EXPECT_EQ(record["temperature_c"], 22.1);
+    EXPECT_EQ(reg(reg::MasterDue), 1);
+    EXPECT_EQ(reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(status()["cause"], "temperature");
+    EXPECT_EQ(line.store().count(), 3);
+}
+
+// `temperature` is read strictly (docs/daemon.md): a bad value, a key of the
+// other source, an unknown key, or a mastering step without `mastering.due`
+// is refused naming its key path.
+TEST(MasteringDue, ATemperatureKeyOutOfRangeOrOutOfPlaceIsRefusedNamingIt)
+{
+    for (const auto& [temperature, mastering, key] : std::vector<std::tuple<std::string, std::string, std::string>>{
+             {"{source: thermocouple}", "", "temperature.source: unknown temperature source 'thermocouple'"},
+             {"{sigma_c: 0.5}", "", "missing required key 'source'"},
+             {"{source: plc, sigma_c: -1}", "", "temperature.sigma_c"},
+             {"{source: plc, scale: 0.001}", "", "temperature.scale: only with source: file"},
+             {"{source: file}", "", "missing required key 'file'"},
+             {"{source: file, file: nowhere/t}", "", "temperature.file: its folder does not exist"},
+             {"{source: file, file: t, max_age_s: 0}", "", "temperature.max_age_s"},
+             {"{source: plc, mastering_step_c: 2}", "", "temperature.mastering_step_c: re-mastering due is off"},
+             {"{source: plc, mastering_step_c: 0}", "mastering: {folder: masters, due: {}}\n",
+              "temperature.mastering_step_c"},
+             {"{source: plc, step_c: 2}", "", "temperature.step_c: unknown key"}}) {
+        SimulatedLine line;
+        fs::create_directories(line.folder() / "masters");
+        std::ofstream(line.daemonFile(), std::ios::app) << mastering << "temperature: " << temperature << "\n";
+        try {
+            station::loadDaemonConfig(line.daemonFile());
+            ADD_FAILURE() << temperature << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("hullgauged.yaml:"), std::string::npos) << e.what();
+        }
+    }
+    // Both sources as they are meant, the step joining the rules of mastering.due.
+    SimulatedLine line;
+    fs::create_directories(line.folder() / "masters");
+    std::ofstream(line.daemonFile(), std::ios::app)
+        << "mastering: {folder: masters, due: {max_parts: 100}}\n"
+        << "temperature: {source: file, file: sensor/temp1_input, scale: 0.001, sigma_c: 0.2, max_age_s: 30, "
+           "mastering_step_c: 1.5}\n";
+    fs::create_directories(line.folder() / "sensor");
+    const auto cfg = station::loadDaemonConfig(line.daemonFile());
+    ASSERT_TRUE(cfg.temperature);
+    EXPECT_EQ(cfg.temperature->source, station::TemperatureSource::File);
+    EXPECT_EQ(cfg.temperature->file, line.folder() / "sensor" / "temp1_input");
+    EXPECT_EQ(cfg.temperature->scale, 0.001);
+    EXPECT_EQ(cfg.temperature->sigmaC, 0.2);
+    EXPECT_EQ(cfg.temperature->maxAge, std::chrono::milliseconds(30'000));
+    EXPECT_EQ(cfg.mastering.due->maxTemperatureStepC, 1.5);
+    EXPECT_EQ(cfg.mastering.due->maxParts, 100u);
+}
+
+/// The simulated line for re-mastering due in the daemon (docs/mastering.md,
+/// "Due in the daemon"): program 1 released as `version`, `mastering.due` as
+/// given, and a set mastered on `setVersion` at the clock's wall time (no
+/// landmarks: it corrects nothing, its id goes with every result it judged).
+class DueLine : public SimulatedLine {
+  public:
+    DueLine(const std::string& due, int version = 1, int setVersion = 1)
+    {
+        writeProgram(version);
+        std::ofstream(daemonFile(), std::ios::app) << "mastering: {folder: masters, due: " << due << "}\n";
+        fs::create_directories(folder() / "masters");
+        const nlohmann::json set = {{"id", setId},
+                                    {"program", 1},
+                                    {"program_version", setVersion},
+                                    {"material", ""},
+                                    {"created_unix_ms", clock().wallMs()},
+                                    {"landmarks", nlohmann::json::array()}};
+        hgtest::writeFile(folder() / "masters" / "program-1.json", set.dump());
+    }
+    void writeProgram(int version)
+    {
+        hgtest::writeFile(programFile(), released(draft(), version, std::string(64, char('0' + version))));
+    }
+    /// `sequencer.mastering` of program 1 (`ctl status`).
+    nlohmann::json status() { return runner().describe()["mastering"]["1"]; }
+    std::uint16_t reg(std::uint16_t address) { return registers().snapshot()[address]; }
+    /// A cycle of `purpose` (CYCLE_PURPOSE, latched with the trigger); the purpose is production again after it.
+    nlohmann::json cycleOf(station::CyclePurpose purpose)
+    {
+        const std::array<std::uint16_t, 1> value{static_cast<std::uint16_t>(purpose)};
+        EXPECT_EQ(registers().write(reg::CyclePurpose, value), station::ModbusException::None);
+        auto record = cycle();
+        const std::array<std::uint16_t, 1> production{0};
+        EXPECT_EQ(registers().write(reg::CyclePurpose, production), station::ModbusException::None);
+        return record;
+    }
+    /// A production trigger refused in the write itself: LAST_REJECT_REASON 4, ACK_SEQ unchanged, nothing stored.
+    void expectProductionRefused()
+    {
+        const auto ack = reg(reg::AckSeq);
+        const auto rows = store().count();
+        std::array<std::uint16_t, 2> block{nextSeq(), 1};
+        ASSERT_EQ(registers().write(reg::TriggerSeq, block), station::ModbusException::None);
+        EXPECT_EQ(reg(reg::LastRejectReason), 4);
+        EXPECT_EQ(reg(reg::AckSeq), ack);
+        EXPECT_EQ(store().count(), rows);
+    }
+    /// The lamps come to `pattern` (between cycles the runner looks at least every 200 ms).
+    bool lampsShow(LampPattern pattern)
+    {
+        return eventually([&] { return !lamps().empty() && lamps().back() == pattern; });
+    }
+
+    const std::string setId = "p1-v1-20260302T080000Z";
+};
+
+// Due by the part count: at exactly the 3rd production part judged with the
+// set (master and study cycles between are not parts), MASTER_DUE 1 with the
+// grace of 1, the cause `parts`, the verdict lamp with amber beside it; the
+// part of the grace leaves MASTER_DUE 2 and its verdict still shown; the next
+// production trigger is refused with LAST_REJECT_REASON 4 and the lamps say so.
+TEST(MasteringDue, AtTheNthProductionPartSignalledOnThePlcTheStatusAndTheLampsThenRefused)
+{
+    DueLine line("{max_parts: 3, grace_cycles: 1}");
+    ASSERT_TRUE(line.start());
+    for (int part = 1; part <= 2; ++part) {
+        const auto record = line.cycle();
+        EXPECT_EQ(record["verdict"], "pass");
+        EXPECT_EQ(record["correction_id"], line.setId);
+        EXPECT_EQ(line.reg(reg::MasterDue), 0) << part;
+        EXPECT_EQ(line.lamps().back(), LampPattern::Pass) << part;
+    }
+    EXPECT_EQ(line.cycleOf(station::CyclePurpose::Master)["purpose"], "master");
+    EXPECT_EQ(line.cycleOf(station::CyclePurpose::Study)["purpose"], "study");
+    EXPECT_EQ(line.reg(reg::MasterDue), 0);
+    EXPECT_EQ(line.status()["due"], false);
+
+    EXPECT_EQ(line.cycle()["verdict"], "pass"); // the 3rd production part
+    EXPECT_EQ(line.reg(reg::MasterDue), 1);
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 1);
+    EXPECT_EQ(line.status()["cause"], "parts");
+    EXPECT_EQ(line.status()["production_refused"], false);
+    // Shown with DONE_SEQ: green and amber.
+    EXPECT_EQ(line.lamps().back(), LampPattern::PassAttention);
+
+    EXPECT_EQ(line.cycle()["verdict"], "pass"); // the grace
+    EXPECT_EQ(line.reg(reg::MasterDue), 2);
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 0);
+    EXPECT_EQ(line.status()["production_refused"], true);
+    EXPECT_EQ(line.lamps().back(), LampPattern::PassAttention); // the part's verdict is not hidden
+    line.expectProductionRefused();
+    EXPECT_TRUE(line.lampsShow(LampPattern::Refused)) << hg::enumName(line.lamps().back());
+    // A master cycle is still judged and shows its verdict, amber beside it.
+    EXPECT_EQ(line.cycleOf(station::CyclePurpose::Master)["verdict"], "pass");
+    EXPECT_EQ(line.lamps().back(), LampPattern::PassAttention);
+    EXPECT_EQ(line.reg(reg::MasterDue), 2);
+}
+
+// Due by a new calibration: a reload that finds another calibration date in
+// the station file (docs/calibration.md) makes it due at once, `calibration_changed`,
+// MASTER_DUE 1, the lamps of the part in the nest gaining amber between cycles;
+// the old station file back does not clear it.
+TEST(MasteringDue, ANewCalibrationDateReadByAReloadMakesItDue)
+{
+    DueLine line("{grace_cycles: 2}");
+    const fs::path stationFile = line.folder() / "station.yaml";
+    std::string station;
+    {
+        std::ifstream in(stationFile);
+        station.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    }
+    const auto withDate = [&](const std::string& date) {
+        std::string text = station;
+        const auto camera = text.find("camera:\n");
+        EXPECT_NE(camera, std::string::npos);
+        text.insert(camera + 8, "  calibration: {date: " + date + "}\n");
+        return text;
+    };
+    hgtest::writeFile(stationFile, withDate("20260301T070000Z"));
+    ASSERT_TRUE(line.start());
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(line.reg(reg::MasterDue), 0);
+    EXPECT_EQ(line.lamps().back(), LampPattern::Pass);
+
+    hgtest::writeFile(stationFile, withDate("20260302T093000Z"));
+    ASSERT_TRUE(line.reload());
+    EXPECT_EQ(line.reg(reg::MasterDue), 1);
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(line.status()["cause"], "calibration_changed");
+    EXPECT_TRUE(line.lampsShow(LampPattern::PassAttention)) << hg::enumName(line.lamps().back());
+
+    hgtest::writeFile(stationFile, withDate("20260301T070000Z"));
+    ASSERT_TRUE(line.reload());
+    EXPECT_EQ(line.reg(reg::MasterDue), 1);
+    EXPECT_EQ(line.status()["cause"], "calibration_changed");
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 1);
+}
+
+// Due by a new release of the program: the reload loads version 2 for the
+// active program (the changeover it prepares), the set mastered on version 1
+// no longer fits — `program_changed`, MASTER_DUE 1 —; the grace's part is
+// judged uncorrected and a production trigger after it refused.
+TEST(MasteringDue, ANewReleaseOfTheProgramMakesItDueAndProductionIsRefusedPastTheGrace)
+{
+    DueLine line("{grace_cycles: 1}");
+    ASSERT_TRUE(line.start());
+    EXPECT_EQ(line.cycle()["correction_id"], line.setId);
+    EXPECT_EQ(line.reg(reg::ActiveProgram), 1);
+    EXPECT_EQ(line.reg(reg::MasterDue), 0);
+
+    line.writeProgram(2);
+    ASSERT_TRUE(line.reload());
+    ASSERT_TRUE(eventually([&] { return line.reg(reg::MasterDue) == 1; }, 60s)) << line.status().dump();
+    EXPECT_EQ(line.status()["cause"], "program_changed");
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 1);
+    EXPECT_TRUE(line.lampsShow(LampPattern::PassAttention)) << hg::enumName(line.lamps().back());
+
+    const auto record = line.cycle();
+    EXPECT_EQ(record["program_version"], 2);
+    EXPECT_TRUE(record["correction_id"].is_null());
+    EXPECT_EQ(line.reg(reg::MasterDue), 2);
+    line.expectProductionRefused();
+    EXPECT_TRUE(line.lampsShow(LampPattern::Refused)) << hg::enumName(line.lamps().back());
+}
+
+// The counts are the result store's (docs/mastering.md, "Due in the daemon"):
+// 4 production parts of 5 judged, the daemon restarts on the same store; the
+// 5th part after the restart makes it due with the whole grace of 2, and two
+// more use it up.
+TEST(MasteringDue, ARestartContinuesThePartCountAndTheGraceFromTheResultStore)
+{
+    DueLine line("{max_parts: 5, grace_cycles: 2}");
+    ASSERT_TRUE(line.start());
+    for (int part = 1; part <= 4; ++part) EXPECT_EQ(line.cycle()["correction_id"], line.setId) << part;
+    EXPECT_EQ(line.reg(reg::MasterDue), 0);
+
+    ASSERT_TRUE(line.restart());
+    EXPECT_EQ(line.cycle()["verdict"], "pass"); // the 5th
+    EXPECT_EQ(line.reg(reg::MasterDue), 1);
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 2);
+    EXPECT_EQ(line.status()["cause"], "parts");
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(line.reg(reg::MasterGraceLeft), 1);
+    EXPECT_EQ(line.cycle()["verdict"], "pass");
+    EXPECT_EQ(line.reg(reg::MasterDue), 2);
+    line.expectProductionRefused();
+    EXPECT_EQ(line.store().count(), 7);
+
+    // Restarted once more while refused: the first production trigger is refused (the
+    // program is known from the start, before any load), the lamps saying so; the master runs.
+    ASSERT_TRUE(line.restart());
+    line.expectProductionRefused();
+    EXPECT_EQ(line.reg(reg::MasterDue), 2);
+    EXPECT_EQ(line.status()["cause"], "parts");
+    EXPECT_TRUE(line.lampsShow(LampPattern::Refused)) << hg::enumName(line.lamps().back());
+    EXPECT_EQ(line.cycleOf(station::CyclePurpose::Master)["verdict"], "pass");
+    EXPECT_EQ(line.lamps().back(), LampPattern::PassAttention);
 }
 
 TEST_F(CameraRegions, ACameraRefusingRegionsSendsWholeFramesWithTheSameVerdicts)

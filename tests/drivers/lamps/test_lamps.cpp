@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <thread>
 
@@ -152,6 +153,51 @@ TEST(Lamps, StationIndicationsFollowContracts)
     EXPECT_EQ(l.lamps->commanded(Lamp::Red), LampState::Off);
     EXPECT_EQ(l.lamps->commanded(Lamp::Green), LampState::Off);
     EXPECT_EQ(hg::enumName(LampPattern::Reseat), "reseat");
+}
+
+// docs/lamps.md's table, row by row, as the three lamps are commanded (green, amber, red).
+TEST(Lamps, EachRowOfTheTableIsItsLampStates)
+{
+    using S = LampState;
+    struct Row {
+        LampPattern pattern;
+        std::array<LampState, 3> states;
+    };
+    for (const Row& row :
+         {Row{LampPattern::Pass, {S::On, S::Off, S::Off}}, Row{LampPattern::Fail, {S::Off, S::Off, S::On}},
+          Row{LampPattern::Busy, {S::Off, S::On, S::Off}}, Row{LampPattern::Fault, {S::Off, S::Blinking, S::Blinking}},
+          Row{LampPattern::Reseat, {S::Off, S::Blinking, S::Off}},
+          Row{LampPattern::PassAttention, {S::On, S::On, S::Off}},
+          Row{LampPattern::FailAttention, {S::Off, S::On, S::On}},
+          Row{LampPattern::Refused, {S::Off, S::On, S::Blinking}}, Row{LampPattern::Off, {S::Off, S::Off, S::Off}}}) {
+        EXPECT_EQ(lampStatesFor(row.pattern), row.states) << hg::enumName(row.pattern);
+        SteppedLamps l;
+        ASSERT_TRUE(l.lamps->show(row.pattern).ok());
+        for (Lamp lamp : kAllLamps) {
+            const auto i = static_cast<std::size_t>(lamp);
+            EXPECT_EQ(l.lamps->commanded(lamp), row.states[i])
+                << hg::enumName(row.pattern) << " " << hg::enumName(lamp);
+            // Blinking lamps start lit (docs/lamps.md, "Lifecycle").
+            EXPECT_EQ(l.sim.lit(lamp), row.states[i] != S::Off)
+                << hg::enumName(row.pattern) << " " << hg::enumName(lamp);
+        }
+    }
+}
+
+// Refused: amber stays lit while red blinks, at the configured period.
+TEST(Lamps, RefusedBlinksRedBesideASteadyAmber)
+{
+    SteppedLamps l; // blink period 100 ms
+    ASSERT_TRUE(l.lamps->show(LampPattern::Refused).ok());
+    EXPECT_TRUE(l.sim.lit(Lamp::Red));
+    EXPECT_TRUE(l.sim.lit(Lamp::Amber));
+    l.after(std::chrono::milliseconds(50));
+    EXPECT_FALSE(l.sim.lit(Lamp::Red));
+    EXPECT_TRUE(l.sim.lit(Lamp::Amber));
+    EXPECT_FALSE(l.sim.lit(Lamp::Green));
+    l.after(std::chrono::milliseconds(50));
+    EXPECT_TRUE(l.sim.lit(Lamp::Red));
+    EXPECT_TRUE(l.sim.lit(Lamp::Amber));
 }
 
 TEST(Lamps, ActiveLowLinesAreInverted)

@@ -164,6 +164,29 @@ void printStatus(const nlohmann::json& s)
     }
 }
 
+/// Follows a queued maintenance job (calibrate, flat-field) until it ends: asks `poll`
+/// every 200 ms and returns the job (`key` of the answer) once done, shown to
+/// `progress` at each answer; a failed job is FaultError with the daemon's reason,
+/// one still running after `waitS` FaultError naming its state.
+nlohmann::json followJob(const std::string& path, const nlohmann::json& poll, const std::string& key,
+                         const std::string& what, double waitS,
+                         const std::function<void(const nlohmann::json&)>& progress)
+{
+    Clock& clock = Clock::steady();
+    const auto deadline =
+        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(waitS));
+    while (true) {
+        auto job = daemonRequest(path, poll)[key];
+        if (progress) progress(job);
+        const auto state = job.value("state", std::string());
+        if (state == "done") return job;
+        if (state == "failed") throw FaultError(job.value("error", what + " failed"));
+        if (clock.now() > deadline)
+            throw FaultError(what + " still " + state + " after --wait-timeout; follow it with ctl status");
+        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
+    }
+}
+
 /// Queues the calibration and follows its progress lines until it ends:
 /// exit 0 when the axes were solved and written, 3 when it failed.
 int runCalibrate(const std::string& path, const CtlOptions& o)
@@ -174,28 +197,18 @@ int runCalibrate(const std::string& path, const CtlOptions& o)
     daemonRequest(path, req);
     std::cerr << "calibration queued" << std::endl;
     if (o.noWait) return 0;
-    Clock& clock = Clock::steady();
-    const auto deadline =
-        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
     std::size_t shown = 0;
-    while (true) {
-        auto c = daemonRequest(path, {{"command", "calibration"}})["calibration"];
-        const auto& lines = c["progress"];
-        for (; shown < lines.size(); ++shown) std::cerr << lines[shown].get<std::string>() << std::endl;
-        const auto state = c.value("state", std::string());
-        if (state == "done") {
-            std::cout << c.value("report", std::string());
-            std::cout << "written: " << c.value("out", std::string());
-            if (!c.value("backup", std::string()).empty())
-                std::cout << " (backup " << c["backup"].get<std::string>() << ")";
-            std::cout << "\nthe daemon uses it after a reload (systemctl reload hullgauged)\n";
-            return 0;
-        }
-        if (state == "failed") throw FaultError(c.value("error", std::string("calibration failed")));
-        if (clock.now() > deadline)
-            throw FaultError("calibration still " + state + " after --wait-timeout; follow it with ctl status");
-        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
-    }
+    const auto c = followJob(path, {{"command", "calibration"}}, "calibration", "calibration", o.waitS,
+                             [&](const nlohmann::json& job) {
+                                 const auto& lines = job["progress"];
+                                 for (; shown < lines.size(); ++shown)
+                                     std::cerr << lines[shown].get<std::string>() << std::endl;
+                             });
+    std::cout << c.value("report", std::string());
+    std::cout << "written: " << c.value("out", std::string());
+    if (!c.value("backup", std::string()).empty()) std::cout << " (backup " << c["backup"].get<std::string>() << ")";
+    std::cout << "\nthe daemon uses it after a reload (systemctl reload hullgauged)\n";
+    return 0;
 }
 
 /// Queues the flat-field reference and follows it until it ends (docs/health.md, "In the daemon"):
@@ -205,26 +218,14 @@ int runFlatField(const std::string& path, const CtlOptions& o)
     daemonRequest(path, {{"command", "flat-field"}, {"take", true}, {"frames", o.frames}});
     std::cerr << "flat-field reference queued: empty the fixture; production pauses for the grabs" << std::endl;
     if (o.noWait) return 0;
-    Clock& clock = Clock::steady();
-    const auto deadline =
-        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.waitS));
-    while (true) {
-        const auto f = daemonRequest(path, {{"command", "flat-field"}})["flat_field"];
-        const auto state = f.value("state", std::string());
-        if (state == "done") {
-            const auto& r = f["reference"];
-            std::cout << "flat-field reference taken " << r.value("time", std::string()) << " from "
-                      << f.value("frames", 0) << " frames: mean level " << formatNumber(r.value("level_mean", 0.0), 3)
-                      << " of full scale, noise " << formatNumber(r.value("noise", 0.0), 4) << ", "
-                      << r.value("dust_specks", 0) << " dark specks\nwritten: " << f.value("file", std::string())
-                      << "\nthe station's health is judged against it from the next cycle\n";
-            return 0;
-        }
-        if (state == "failed") throw FaultError(f.value("error", std::string("the flat-field reference failed")));
-        if (clock.now() > deadline)
-            throw FaultError("flat-field still " + state + " after --wait-timeout; follow it with ctl status");
-        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
-    }
+    const auto f = followJob(path, {{"command", "flat-field"}}, "flat_field", "flat-field", o.waitS, {});
+    const auto& r = f["reference"];
+    std::cout << "flat-field reference taken " << r.value("time", std::string()) << " from " << f.value("frames", 0)
+              << " frames: mean level " << formatNumber(r.value("level_mean", 0.0), 3) << " of full scale, noise "
+              << formatNumber(r.value("noise", 0.0), 4) << ", " << r.value("dust_specks", 0)
+              << " dark specks\nwritten: " << f.value("file", std::string())
+              << "\nthe station's health is judged against it from the next cycle\n";
+    return 0;
 }
 
 std::function<int()> factory(CLI::App& app)

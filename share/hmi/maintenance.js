@@ -131,15 +131,15 @@ function showFlatField(f) {
 function healthChart(state, rows) {
   const id = "health-chart-" + state.key;
   const points = rows.filter((r) => r[state.key] !== null).map((r) => ({ x: r.unix_ms, y: r[state.key], id: r.inspection_id }));
-  const beyond = (y) => (state.minimum ? y < state.limit : y > state.limit);
+  const beyond = (y) => (state.magnitude ? Math.abs(y) > state.limit : state.minimum ? y < state.limit : y > state.limit);
   let box = document.getElementById("health-box-" + state.key);
   if (!box) {
     box = hg.el("div", { id: "health-box-" + state.key, "data-figure": state.figure },
-      hg.el("h3", { text: capitalised(state.figure) }), hg.el("canvas", { id, height: "130" }));
+      hg.el("h3", { text: capitalised(state.figure.replace("_", " ")) }), hg.el("canvas", { id, height: "130" }));
     document.getElementById("health-charts").append(box);
   }
   box.querySelector("h3").className = state.within === false ? "beyond" : "";
-  box.querySelector("h3").textContent = capitalised(state.figure) + (points.length ? "" : ": no values in the window");
+  box.querySelector("h3").textContent = capitalised(state.figure.replace("_", " ")) + (points.length ? "" : ": no values in the window");
   if (healthCharts[id]) healthCharts[id].destroy();
   const xs = points.map((p) => p.x);
   const x0 = xs.length ? Math.min(...xs) : Date.now() - 3600e3, x1 = xs.length ? Math.max(...xs, x0 + 1) : Date.now();
@@ -147,6 +147,10 @@ function healthChart(state, rows) {
       pointRadius: points.map((p) => (beyond(p.y) ? 4 : 2)), pointBackgroundColor: points.map((p) => (beyond(p.y) ? RED : BLUE)) },
     { label: "limit", data: [{ x: x0, y: state.limit }, { x: x1, y: state.limit }], type: "line", borderColor: RED,
       borderDash: [6, 4], pointRadius: 0, borderWidth: 1.5 }];
+  // A figure judged on its size either way (the edge bias) has its limit on both sides.
+  if (state.magnitude)
+    datasets.push({ label: "limit below", data: [{ x: x0, y: -state.limit }, { x: x1, y: -state.limit }], type: "line",
+      borderColor: RED, borderDash: [6, 4], pointRadius: 0, borderWidth: 1.5 });
   healthCharts[id] = new Chart(document.getElementById(id), { type: "line", data: { datasets },
     options: { animation: false, parsing: false, plugins: { legend: { display: false } },
       scales: { x: { type: "linear", min: x0, max: x1, ticks: { maxTicksLimit: 4, callback: (v) => hg.localTime(v).text } },
@@ -179,8 +183,10 @@ async function showHealth() {
 // Before the first examined cycle the charts still show the stored figures with the configured limits.
 function defaultStates(limits) {
   const rules = [["backlight", "backlight", true], ["uniformity", "uniformity", false], ["dust", "dust_specks", false],
-    ["focus", "edge_width_px", false], ["contrast", "contrast", true], ["noise", "noise", false]];
-  return rules.map(([figure, key, minimum]) => ({ figure, key, minimum, limit: limits[key], within: null }));
+    ["focus", "edge_width_px", false], ["contrast", "contrast", true], ["noise", "noise", false],
+    ["edge_bias", "edge_bias_px", false, true], ["capability", "capability", false]];
+  return rules.map(([figure, key, minimum, magnitude]) =>
+    ({ figure, key, minimum, magnitude: !!magnitude, limit: limits[key], within: null }));
 }
 
 async function takeFlatField() {

@@ -399,13 +399,20 @@ void Aligner::Impl::report(const std::vector<Correspondence>& cs, const std::vec
     const std::vector<Observation> obs = observeAll(cs, views, out.seat);
     const Step step = robustStep(obs, groups, solverLimits(), Loss::Tukey, true);
     double sum = 0.0;
+    std::vector<double> growth; // (edge − outline)·n = −residual
     for (std::size_t j = 0; j < obs.size(); ++j)
         if (step.weights[j] > 0.0) {
             ++out.inliers;
             sum += obs[j].residual * obs[j].residual;
+            growth.push_back(-obs[j].residual);
         }
     out.samples = static_cast<int>(obs.size());
     out.residualPx = out.inliers > 0 ? std::sqrt(sum / out.inliers) : 0.0;
+    if (!growth.empty()) {
+        const auto mid = growth.begin() + static_cast<std::ptrdiff_t>(growth.size() / 2);
+        std::nth_element(growth.begin(), mid, growth.end());
+        out.edgeBiasPx = *mid;
+    }
     // θ = (L·ω, v) to (ω, v).
     Matrix6 S = Matrix6::Identity();
     S.topLeftCorner<3, 3>() /= lever;

@@ -36,6 +36,7 @@ nlohmann::json toJson(const AlignmentResult& r)
             {"shift_mm", r.shiftMm},
             {"rotation_deg", r.rotationDeg},
             {"residual_px", r.residualPx},
+            {"edge_bias_px", r.edgeBiasPx},
             {"shift_uncertainty_mm", r.shiftUncertaintyMm},
             {"rotation_uncertainty_deg", r.rotationUncertaintyDeg},
             {"fixed_dofs", fixed},

@@ -345,9 +345,9 @@ void parseHealth(const ConfigNode& node, DaemonConfig& cfg)
     if (auto limits = node.optional("limits")) {
         if (!limits->isMap())
             limits->fail("expected a map of min_backlight, max_uniformity, max_dust_specks, max_edge_width_px, "
-                         "min_contrast, max_noise");
-        limits->allowOnlyKeys(
-            {"min_backlight", "max_uniformity", "max_dust_specks", "max_edge_width_px", "min_contrast", "max_noise"});
+                         "min_contrast, max_noise, max_edge_bias_px, max_capability");
+        limits->allowOnlyKeys({"min_backlight", "max_uniformity", "max_dust_specks", "max_edge_width_px",
+                               "min_contrast", "max_noise", "max_edge_bias_px", "max_capability"});
         auto& l = health.limits;
         if (auto n = limits->optional("min_backlight")) l.minBacklight = n->asDoubleIn(0.0, 1.0);
         if (auto n = limits->optional("max_uniformity")) l.maxUniformity = n->asDoubleIn(0.0, 1.0);
@@ -355,6 +355,8 @@ void parseHealth(const ConfigNode& node, DaemonConfig& cfg)
         if (auto n = limits->optional("max_edge_width_px")) l.maxEdgeWidthPx = n->asDoubleIn(0.1, 100.0);
         if (auto n = limits->optional("min_contrast")) l.minContrast = n->asDoubleIn(0.0, 1.0);
         if (auto n = limits->optional("max_noise")) l.maxNoise = n->asDoubleIn(0.0, 1.0);
+        if (auto n = limits->optional("max_edge_bias_px")) l.maxEdgeBiasPx = n->asDoubleIn(0.01, 10.0);
+        if (auto n = limits->optional("max_capability")) l.maxCapability = n->asDoubleIn(0.1, 10.0);
     }
 }
 

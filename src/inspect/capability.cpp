@@ -1,7 +1,9 @@
 // The capability check (docs/inspection.md, "Capability").
 #include "hullgauge/inspect/capability.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/inspector.h"
@@ -28,6 +30,29 @@ std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>&
         out.push_back(std::move(c));
     }
     return out;
+}
+
+double capabilityUsed(const std::vector<LandmarkCapability>& assessment, double plannedSigmaPx, double sigmaPx)
+{
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    if (!(plannedSigmaPx > 0.0) || !(sigmaPx > 0.0) || !std::isfinite(plannedSigmaPx) || !std::isfinite(sigmaPx))
+        return kNone;
+    const double scale = sigmaPx / plannedSigmaPx;
+    double worst = kNone;
+    for (const LandmarkCapability& c : assessment) {
+        if (!c.capable || !(c.zoneMm > 0.0)) continue;
+        double u = c.expectedMm;
+        if (!c.bracket) {
+            // Each view's noise term scaled, combined again as the gauge combines them (its
+            // weights follow the views' variances: docs/inspection.md "Uncertainty budget").
+            std::vector<ViewDeviation> views = c.prediction.views;
+            for (ViewDeviation& v : views) v.sigmaMm *= scale;
+            u = combine(std::move(views), c.prediction.budget.alignment).uncertaintyMm;
+        }
+        const double used = kTestUncertaintyRatio * u / c.zoneMm;
+        worst = std::isnan(worst) ? used : std::max(worst, used);
+    }
+    return worst;
 }
 
 std::string describe(const LandmarkCapability& c)

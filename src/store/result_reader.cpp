@@ -267,8 +267,13 @@ std::vector<json> selectHealth(const sqlite::Connection& db, const std::string& 
     // A store before schema version 7 has no health table: nothing was watched.
     auto table = db.prepare("SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'health'");
     if (!table.step() || table.integer(0) == 0) return {};
+    // A version 7 store read as it is (a reader never migrates) has no edge bias and no
+    // capability figure: null, not measured.
+    auto column = db.prepare("SELECT count(*) FROM pragma_table_info('health') WHERE name = 'edge_bias_px'");
+    const bool withBias = column.step() && column.integer(0) > 0;
     std::string sql = "SELECT inspection_id, unix_ms, backlight, uniformity, dust_specks, edge_width_px, contrast, "
-                      "noise, predicted_sigma_px, warnings FROM health WHERE 1";
+                      "noise, predicted_sigma_px, warnings, " +
+                      std::string(withBias ? "edge_bias_px, capability" : "NULL, NULL") + " FROM health WHERE 1";
     std::vector<std::string> params;
     if (query.sinceMs) {
         sql += " AND unix_ms >= CAST(? AS INTEGER)";
@@ -299,6 +304,8 @@ std::vector<json> selectHealth(const sqlite::Connection& db, const std::string& 
                         {"contrast", figure(select, 6)},
                         {"noise", figure(select, 7)},
                         {"predicted_sigma_px", figure(select, 8)},
+                        {"edge_bias_px", figure(select, 10)},
+                        {"capability", figure(select, 11)},
                         {"warnings", std::move(warnings)}});
     }
     std::reverse(rows.begin(), rows.end());

@@ -64,17 +64,17 @@ void insertHealth(const sqlite::Connection& db, std::int64_t id, std::int64_t un
                   const station::HealthRecord& health)
 {
     auto insert = db.prepare("INSERT INTO health (inspection_id, unix_ms, backlight, uniformity, dust_specks, "
-                             "edge_width_px, contrast, noise, predicted_sigma_px, warnings) "
-                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                             "edge_width_px, contrast, noise, predicted_sigma_px, edge_bias_px, capability, warnings) "
+                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     insert.bind(1, id).bind(2, unixMs);
     const auto& f = health.figures;
     int index = 3;
-    for (const double v :
-         {f.backlight, f.uniformity, f.dustSpecks, f.edgeWidthPx, f.contrast, f.noise, f.predictedSigmaPx})
+    for (const double v : {f.backlight, f.uniformity, f.dustSpecks, f.edgeWidthPx, f.contrast, f.noise,
+                           f.predictedSigmaPx, f.edgeBiasPx, f.capability})
         bindFigure(insert, index++, v);
     nlohmann::json warnings = nlohmann::json::array();
     for (const auto w : health.warnings) warnings.push_back(std::string(enumName(w)));
-    insert.bind(10, dumpJson(warnings));
+    insert.bind(12, dumpJson(warnings));
     insert.step();
 }
 

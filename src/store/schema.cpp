@@ -46,7 +46,9 @@ CREATE TABLE IF NOT EXISTS health (
     contrast           REAL,
     noise              REAL,
     predicted_sigma_px REAL,
-    warnings           TEXT    NOT NULL DEFAULT '[]'
+    warnings           TEXT    NOT NULL DEFAULT '[]',
+    edge_bias_px       REAL,
+    capability         REAL
 );
 CREATE INDEX IF NOT EXISTS health_time ON health (unix_ms);
 )";
@@ -96,7 +98,12 @@ void createOrMigrate(const sqlite::Connection& db)
     // Re-mastering due's counts at start: a correction set's production rows (docs/mastering.md).
     db.exec("CREATE INDEX IF NOT EXISTS inspections_correction ON inspections (correction_id, program, purpose)");
     // A version 1 to 6 database gains the table `health` (docs/health.md, "In the daemon") from
-    // kSchema above, empty: the station's health was not watched before.
+    // kSchema above, empty: the station's health was not watched before. A version 7 one gains
+    // the edge bias and the capability figure, its rows without them (NULL: not measured).
+    if (found == 7) {
+        db.exec("ALTER TABLE health ADD COLUMN edge_bias_px REAL");
+        db.exec("ALTER TABLE health ADD COLUMN capability REAL");
+    }
     // The outbox: the rows still to publish, in id order, without scanning the published ones.
     db.exec("CREATE INDEX IF NOT EXISTS inspections_outbox ON inspections (id) WHERE published_unix_ms IS NULL");
     db.exec("PRAGMA user_version=" + std::to_string(kSchemaVersion));

@@ -15,7 +15,7 @@ namespace hg::store {
 // 5: program_version and program_sha256, the release the part was judged with (docs/commissioning.md).
 // 6: correction_id and temperature_c, the master's correction and the part's temperature (docs/mastering.md).
 // 7: the table `health`, the station's health figures of each cycle (docs/health.md, "In the daemon").
-constexpr int kSchemaVersion = 7;
+constexpr int kSchemaVersion = 8;
 
 /// Creates the schema in a new database, or brings one of an older version to kSchemaVersion
 /// keeping its rows; a database of a newer version is refused (sqlite::Error naming it).

@@ -28,7 +28,9 @@ constexpr double kInterpolationVariance = 1.0 / 6.0;
 constexpr double kMadToSigma = 1.4826;
 
 // Background samples per view, each with the pixels kClearPx either side in
-// its row also on the background side of the threshold; kept above
+// its row and in its column also on the background side of the threshold
+// (the fringe of an edge running along the row passes a check along the row
+// only: docs/health.md, "Background samples"); kept above
 // kRatioCut of the view's median (docs/health.md, "Figures"). The grid's rows
 // lie kRowsApart times further apart than its columns: a frame is read by
 // rows, and a row's samples share its cache lines (docs/health.md, "Cost").
@@ -466,19 +468,25 @@ struct BackgroundGrid {
 };
 
 // The grid's background pixels: each and the pixels kClearPx either side in
-// its row on the background side of the threshold.
+// its row and its column on the background side of the threshold.
 template <class Pixel> void sampleGrid(const cv::Mat& grey, const BackgroundGrid& g, std::vector<BackgroundSample>& out)
 {
     const auto background = [&](int v) { return g.objectIsDark ? v > g.threshold : v < g.threshold; };
     const int right = g.frame.x + g.frame.width - kClearPx;
-    for (int y = g.first.y; y < g.frame.y + g.frame.height; y += kRowsApart * g.step) {
+    const int bottom = g.frame.y + g.frame.height - kClearPx;
+    for (int y = g.first.y; y < bottom; y += kRowsApart * g.step) {
         const Pixel* row = grey.ptr<Pixel>(y - g.frame.y);
+        const Pixel* above = grey.ptr<Pixel>(y - g.frame.y - kClearPx);
+        const Pixel* below = grey.ptr<Pixel>(y - g.frame.y + kClearPx);
         const int zoneRow = (y / g.zoneSide) * g.zonesAcross;
         const LevelRow levels = g.level != nullptr ? LevelRow(*g.level, g.cell, y) : LevelRow();
         for (int x = g.first.x; x < right; x += g.step) {
             const Pixel* at = row + (x - g.frame.x);
             const int p = at[0];
-            if (!background(p) || !background(at[-kClearPx]) || !background(at[kClearPx])) continue;
+            const int column = x - g.frame.x;
+            if (!background(p) || !background(at[-kClearPx]) || !background(at[kClearPx]) ||
+                !background(above[column]) || !background(below[column]))
+                continue;
             BackgroundSample s;
             s.steps = {std::abs(int(at[1]) - p), std::abs(int(at[3]) - int(at[2]))};
             if (g.level == nullptr) {
@@ -686,7 +694,7 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
     BackgroundGrid grid;
     grid.frame = f;
     grid.step = step;
-    grid.first = {f.x + kClearPx + ox, f.y + oy};
+    grid.first = {f.x + kClearPx + ox, f.y + kClearPx + oy};
     grid.threshold = image.threshold;
     grid.objectIsDark = image.objectIsDark;
     grid.full = ctx.full;
@@ -885,6 +893,8 @@ std::vector<HealthFigure> healthWarnings(const HealthFigures& figures, const Hea
     if (figures.edgeWidthPx > limits.maxEdgeWidthPx) out.push_back(HealthFigure::Focus);
     if (figures.contrast < limits.minContrast) out.push_back(HealthFigure::Contrast);
     if (figures.noise > limits.maxNoise) out.push_back(HealthFigure::Noise);
+    if (std::abs(figures.edgeBiasPx) > limits.maxEdgeBiasPx) out.push_back(HealthFigure::EdgeBias);
+    if (figures.capability > limits.maxCapability) out.push_back(HealthFigure::Capability);
     return out;
 }
 

@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 
+#include "hgtest/exact_render.h"
 #include "hgtest/parts.h"
 #include "hullgauge/align/alignment.h"
 #include "hullgauge/geometry/transform.h"
 #include "hullgauge/inspect/inspector.h"
+#include "hullgauge/model/primitives.h"
 #include "hullgauge/vision/segmentation.h"
 
 namespace {
@@ -123,6 +126,48 @@ TEST(Alignment, NominalSeatIsMeasuredAsNominal)
     // The expanded uncertainty covers what was measured of the exact seat.
     EXPECT_GT(a.shiftUncertaintyMm, 0.0);
     EXPECT_LT(a.shiftUncertaintyMm, 0.02);
+}
+
+// The edge bias (docs/alignment.md, "Edge bias"): the cube [0, 20]³ as
+// designed and eroded by δ all round ([δ, 20 − δ]³, what a halo does to its
+// silhouettes), in three views 400 mm from its centre along x, y and z,
+// rolled 7° so its edges cross the pixels at every phase; frames of the
+// independent renderer (exact pixel areas, σ = 1 grey level). Each view's
+// outline is the front face, a square at depth 390 mm perpendicular to the
+// axis through its centre: its edges lie f·a/z from the principal point, the
+// eroded one's f·(a − δ)/(z + δ), every edge moved in by the difference. No
+// seat makes all three views' squares smaller at once, so the alignment keeps
+// the nominal seat and the median reads the erosion.
+TEST(Alignment, AnErodedSilhouetteReadsAsANegativeEdgeBias)
+{
+    const hgtest::TestPart cube = hgtest::cubePart();
+    const Vec3 centre(10, 10, 10);
+    const double roll = 7.0 * M_PI / 180.0, c = std::cos(roll), s = std::sin(roll);
+    const std::vector<CameraModel> cameras{hgtest::lookAt(centre + Vec3(400, 0, 0), centre, Vec3(0, s, -c)),
+                                           hgtest::lookAt(centre + Vec3(0, 400, 0), centre, Vec3(s, 0, -c)),
+                                           hgtest::lookAt(centre + Vec3(0, 0, 400), centre, Vec3(s, c, 0))};
+    const Aligner aligner(cube.solid, {}, AlignmentSettings{});
+    const double f = hgtest::CameraSpec{}.focalPx, a = 10.0, z = 390.0;
+    for (const double erosion : {0.0, 0.03}) {
+        SCOPED_TRACE("eroded by " + std::to_string(erosion) + " mm");
+        const hg::model::TriangleMesh made =
+            hg::model::makeBox(Vec3::Constant(erosion), Vec3::Constant(20.0 - erosion));
+        std::vector<AlignmentView> views;
+        for (std::size_t k = 0; k < cameras.size(); ++k) {
+            hgtest::ExactShading shading;
+            shading.noiseSigma = 1.0;
+            shading.seed = 500 + k;
+            const cv::Mat frame = hgtest::shadeExact(hgtest::exactCoverage({made}, cameras[k]), shading);
+            views.push_back({cameras[k], frame, hg::vision::computeThreshold(frame, {}), true});
+        }
+        const AlignmentResult r = aligner.align(views);
+        ASSERT_TRUE(r.measured) << r.message;
+        const double expected = -f * (a / z - (a - erosion) / (z + erosion));
+        EXPECT_NEAR(r.edgeBiasPx, expected, 0.03) << "expected " << expected << " px";
+        std::cout << "eroded by " << erosion << " mm: edge bias " << r.edgeBiasPx << " px, expected " << expected
+                  << " px\n";
+        EXPECT_LT(r.shiftMm, 0.01);
+    }
 }
 
 // The defects the inspection is for do not pull the seat, and every one is

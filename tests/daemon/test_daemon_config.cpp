@@ -164,13 +164,15 @@ TEST(DaemonConfig, TheHealthSectionItsDefaultsAndItsRefusals)
     EXPECT_FALSE(defaults.health.referenceRead);
     EXPECT_EQ(defaults.health.limits.minBacklight, 0.80);
     EXPECT_EQ(defaults.health.limits.maxNoise, 0.02);
+    EXPECT_EQ(defaults.health.limits.maxEdgeBiasPx, 0.25);
+    EXPECT_EQ(defaults.health.limits.maxCapability, 0.9);
 
     const std::string text = kDaemon + std::string("health:\n"
                                                    "  enabled: false\n"
                                                    "  reference: refs/ff.json\n"
                                                    "  limits: {min_backlight: 0.7, max_uniformity: 0.2, "
                                                    "max_dust_specks: 12, max_edge_width_px: 2.5, min_contrast: 0.3, "
-                                                   "max_noise: 0.03}\n");
+                                                   "max_noise: 0.03, max_edge_bias_px: 0.4, max_capability: 0.75}\n");
     auto cfg = loadDaemonConfig(hgtest::writeFile(f.dir / "hullgauged.yaml", text));
     EXPECT_FALSE(cfg.health.enabled);
     EXPECT_EQ(cfg.health.reference, f.dir.path() / "refs/ff.json");
@@ -181,6 +183,8 @@ TEST(DaemonConfig, TheHealthSectionItsDefaultsAndItsRefusals)
     EXPECT_EQ(l.maxEdgeWidthPx, 2.5);
     EXPECT_EQ(l.minContrast, 0.3);
     EXPECT_EQ(l.maxNoise, 0.03);
+    EXPECT_EQ(l.maxEdgeBiasPx, 0.4);
+    EXPECT_EQ(l.maxCapability, 0.75);
 
     const int line = hgtest::lineOf(text, "  limits:");
     struct Case {
@@ -190,6 +194,8 @@ TEST(DaemonConfig, TheHealthSectionItsDefaultsAndItsRefusals)
         {"min_backlight: 0.7", "min_backlight: 1.5",
          "hullgauged.yaml:" + std::to_string(line) + ": health.limits.min_backlight"},
         {"max_noise: 0.03", "max_noise: loud", "health.limits.max_noise"},
+        {"max_edge_bias_px: 0.4", "max_edge_bias_px: -0.4", "health.limits.max_edge_bias_px"},
+        {"max_capability: 0.75", "max_capability: 0", "health.limits.max_capability"},
         {"max_edge_width_px: 2.5", "max_edge_width_px: 0", "health.limits.max_edge_width_px"},
         {"max_dust_specks: 12", "max_dust: 12", "max_dust"},
         {"enabled: false", "enabled: perhaps", "health.enabled"},

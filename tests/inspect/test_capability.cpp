@@ -100,3 +100,60 @@ TEST(Capability, AZoneNarrowerThanFourUIsRefusedAndTheBracketNeedsAVoxel)
 }
 
 } // namespace
+
+namespace {
+
+// The station's health against the capability bound (docs/health.md,
+// "Capability"). Worked by hand: one view whose edge noise is 0.003 mm and
+// whose tilt term is 0.002 mm (its outline moving 10⁹ px per mm: no method
+// share) in a zone of 0.1 mm; at twice the planned edge σ, U = 2·√(0.006² +
+// 0.002²) = 0.0126491 mm and 4 U / zone = 0.505964. A bracket landmark keeps
+// U = 0.01 mm (0.4 of a 0.1 mm zone); one the check found not capable does not count.
+TEST(Capability, TheShareOfTheBoundFollowsTheEdgeNoiseWorkedByHand)
+{
+    hg::inspect::LandmarkCapability gauged;
+    gauged.zoneMm = 0.1;
+    gauged.capable = true;
+    gauged.prediction = hg::inspect::combine({{"v0", 0.0, 0.003, 1e9, 0.002, 0.0}}, 0.0);
+    gauged.expectedMm = gauged.prediction.uncertaintyMm;
+    ASSERT_NEAR(gauged.expectedMm, 2.0 * std::sqrt(0.003 * 0.003 + 0.002 * 0.002), 1e-9);
+    hg::inspect::LandmarkCapability bracket;
+    bracket.zoneMm = 0.1;
+    bracket.capable = true;
+    bracket.bracket = true;
+    bracket.expectedMm = 0.01;
+    hg::inspect::LandmarkCapability unproven = gauged;
+    unproven.capable = false;
+    unproven.zoneMm = 0.001;
+    using hg::inspect::capabilityUsed;
+    EXPECT_NEAR(capabilityUsed({gauged, bracket, unproven}, 0.05, 0.10), 0.505964, 1e-6);
+    EXPECT_NEAR(capabilityUsed({gauged}, 0.05, 0.05), 4.0 * gauged.expectedMm / 0.1, 1e-9);
+    EXPECT_NEAR(capabilityUsed({gauged, bracket}, 0.05, 0.05), 0.4, 1e-12); // the bracket's is the larger
+    EXPECT_NEAR(capabilityUsed({bracket, unproven}, 0.05, 0.5), 0.4, 1e-12);
+    EXPECT_TRUE(std::isnan(capabilityUsed({unproven}, 0.05, 0.1)));
+    EXPECT_TRUE(std::isnan(capabilityUsed({gauged}, 0.0, 0.1)));
+    EXPECT_TRUE(std::isnan(capabilityUsed({gauged}, 0.05, std::nan(""))));
+}
+
+// Against the gauge itself: the post's assessment at the planned image quality,
+// scaled to three times the edge σ, is the assessment the gauge makes at three
+// times the noise (the edge σ is proportional to it), landmark by landmark's worst.
+TEST(Capability, TheShareOfTheBoundIsTheGaugesAtTheNoiseThatGivesThatSigma)
+{
+    const Rendered r = render(41);
+    const auto map = r.post.map();
+    const auto gauge = std::make_shared<DeviationGauge>(r.post.solid);
+    auto landmarks = map.landmarks();
+    for (auto& l : landmarks) l.toleranceMm = 0.05;
+    const double dv = map.frame().voxelSize();
+    const auto planned = assessCapability(landmarks, dv, gauge.get(), r.cameras, r.quality);
+    hg::geometry::ImageQuality noisy = r.quality;
+    noisy.noiseGrey *= 3.0;
+    double worst = 0.0;
+    for (const auto& c : assessCapability(landmarks, dv, gauge.get(), r.cameras, noisy))
+        worst = std::max(worst, hg::inspect::kTestUncertaintyRatio * c.expectedMm / c.zoneMm);
+    EXPECT_NEAR(hg::inspect::capabilityUsed(planned, 0.1, 0.3), worst, 1e-9 * worst);
+    EXPECT_GT(worst, 0.0);
+}
+
+} // namespace

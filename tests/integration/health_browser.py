@@ -37,7 +37,7 @@ from selenium.webdriver.common.by import By  # noqa: E402
 HEALTH_WARNINGS = 146
 FOCUS_LIMIT_PX = 1.2
 FIGURES = {"backlight": "backlight", "uniformity": "uniformity", "dust": "dust_specks", "focus": "edge_width_px",
-           "contrast": "contrast", "noise": "noise"}
+           "contrast": "contrast", "noise": "noise", "edge_bias": "edge_bias_px", "capability": "capability"}
 
 
 def overlay(source, folder):
@@ -90,6 +90,13 @@ def charts(driver, db):
               f"{key}: plotted {list(zip(chart['x'], chart['y']))}, stored {values}")
         check(set(chart["limit"]) == {limits[key]}, f"{key}: limit drawn at {chart['limit']}, configured {limits[key]}")
     check(limits["edge_width_px"] == FOCUS_LIMIT_PX, f"the focus limit is {limits['edge_width_px']}")
+    # The simulated camera without a halo: the aligned parts' silhouettes are the CAD's, the bias
+    # well within its limit, and its chart has the limit on both sides.
+    biases = [r["edge_bias_px"] for r in rows if r["edge_bias_px"] is not None]
+    check(biases and all(abs(b) < limits["edge_bias_px"] / 2 for b in biases), f"edge bias without a halo: {biases}")
+    below = driver.execute_script("const ch = Chart.getChart('health-chart-edge_bias_px');"
+                                  " return ch.data.datasets[2] ? ch.data.datasets[2].data.map(p => p.y) : null")
+    check(below is not None and set(below) == {-limits["edge_bias_px"]}, f"edge bias: lower limit drawn at {below}")
 
 
 def maintenance_limits(driver):

@@ -103,12 +103,40 @@ def record_page(driver, url, row):
     check(shown == expected, f"record {rid}: landmark rows {shown}, stored {expected}")
     check(any(l["status"] != "ok" for l in landmarks), f"record {rid}: the defective part has no failed landmark")
     views = sorted(p.name for p in Path(row["images_dir"]).glob("view_*.png")) if row["images_dir"] else []
-    loaded = WebDriverWait(driver, 30).until(lambda d: d.execute_script(
-        "const imgs = [...document.querySelectorAll('#images img')];"
-        "return imgs.every(i => i.complete) ? imgs.map(i => i.naturalWidth) : false"))
+    try:
+        loaded = WebDriverWait(driver, 30).until(lambda d: d.execute_script(
+            "const imgs = [...document.querySelectorAll('#images img')];"
+            "return imgs.every(i => i.complete) ? imgs.map(i => i.naturalWidth) : false"))
+    except TimeoutException:
+        raise SystemExit(f"record {rid}: the views did not load within 30 s:\n{image_states(driver)}")
     check(len(views) > 0 and len(loaded) == len(views) and all(w > 0 for w in loaded),
           f"record {rid}: views loaded {loaded}, archived {views}")
     return landmarks
+
+
+def image_states(driver):
+    """What the page and the browser's network timing say of each view, and what the station answers for
+    it fetched here: the facts a view that never loads leaves to find out why."""
+    states = driver.execute_script(
+        "return [...document.querySelectorAll('#images img')].map(i => { const e = performance"
+        ".getEntriesByName(i.src).pop(); return {src: i.src, complete: i.complete, width: i.naturalWidth,"
+        " fetched: e ? {start: e.startTime, response: e.responseStart, end: e.responseEnd, bytes: e.transferSize,"
+        " status: e.responseStatus} : null}; })")
+    lines = []
+    for st in states:
+        path = "/" + st["src"].split("/", 3)[3]
+        host, port = st["src"].split("/")[2].split(":")
+        con = http.client.HTTPConnection(host, int(port), timeout=10)
+        try:
+            con.request("GET", path)
+            res = con.getresponse()
+            answer = f"HTTP {res.status}, {len(res.read())} bytes"
+        except OSError as e:
+            answer = f"no answer: {e}"
+        finally:
+            con.close()
+        lines.append(f"{path}: complete {st['complete']}, width {st['width']}, timing {st['fetched']}; fetched now: {answer}")
+    return "\n".join(lines) + f"\nbrowser log: {driver.get_log('browser')}"
 
 
 def printed(driver, row, workdir):

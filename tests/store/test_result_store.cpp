@@ -130,7 +130,7 @@ TEST(ResultStore, AVersionOneDatabaseGainsTheSeatColumns)
     EXPECT_EQ(recent[1]["serial"], "OLD");
     EXPECT_TRUE(recent[1]["alignment"].is_null());
     EXPECT_EQ(recent[1]["purpose"], "production");
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "8\n");
 }
 
 TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
@@ -158,7 +158,7 @@ TEST(ResultStore, AVersionTwoDatabaseGainsThePurposeAndItsRowsAreProduction)
         EXPECT_EQ(recent[1]["purpose"], "production");
         EXPECT_EQ(recent[1]["serial"], "OLD");
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "8\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'SELECT serial, purpose FROM inspections ORDER BY id'").out,
               "OLD|production\nSN-4|master\n");
     // Only the three purposes are stored, also in a migrated table.
@@ -274,7 +274,7 @@ TEST(ResultOutbox, RowsOfAVersionThreeStorePredateThePlantLink)
     store.commit(record(4, station::Verdict::Pass));
     ResultOutbox outbox(file);
     EXPECT_EQ(idsOf(outbox.pending(0, 10)), (std::vector<std::int64_t>{2}));
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "8\n");
     EXPECT_EQ(hgtest::run("sqlite3 " + file.string() +
                           " \"SELECT serial, published_unix_ms, cycle_id = '' FROM inspections ORDER BY id\"")
                   .out,
@@ -383,7 +383,7 @@ TEST(ResultStore, AVersionFourDatabaseGainsTheReleaseColumnsAndKeepsItsRows)
         EXPECT_TRUE(recent[1]["program_version"].is_null());
         EXPECT_TRUE(recent[1]["program_sha256"].is_null());
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "8\n");
     // Its outbox state too: published at 42 with its cycle id, not sent again.
     EXPECT_EQ(sql(file, "SELECT id, cycle_id, published_unix_ms, program_version IS NULL, program_sha256 FROM "
                         "inspections ORDER BY id LIMIT 1"),
@@ -423,7 +423,7 @@ TEST(ResultStore, AVersionFiveDatabaseGainsTheCorrectionAndTemperatureColumns)
         EXPECT_TRUE(recent[1]["correction_id"].is_null());
         EXPECT_TRUE(recent[1]["temperature_c"].is_null());
     }
-    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "7\n");
+    EXPECT_EQ(hgtest::run("sqlite3 " + file.string() + " 'PRAGMA user_version'").out, "8\n");
     EXPECT_EQ(sql(file, "SELECT id, correction_id, temperature_c FROM inspections ORDER BY id"),
               "1||\n2|p1-v3-steel-20260412T081500Z|23.25\n");
 }
@@ -439,6 +439,8 @@ station::HealthRecord health(double backlight, double dust, std::vector<vision::
     h.figures.contrast = 0.875;
     h.figures.noise = 0.0078125;
     h.figures.predictedSigmaPx = 0.046875;
+    h.figures.edgeBiasPx = -0.125;
+    h.figures.capability = 0.625;
     h.figures.views = 8;
     h.figures.probes = 12;
     h.warnings = std::move(warnings);
@@ -482,6 +484,8 @@ TEST(ResultStore, KeepsEachCyclesHealthBesideItsInspectionAndReadsATimeWindow)
     EXPECT_EQ(rows[0]["contrast"], 0.875);
     EXPECT_EQ(rows[0]["noise"], 0.0078125);
     EXPECT_EQ(rows[0]["predicted_sigma_px"], 0.046875);
+    EXPECT_EQ(rows[0]["edge_bias_px"], -0.125);
+    EXPECT_EQ(rows[0]["capability"], 0.625);
     EXPECT_EQ(rows[0]["warnings"], nlohmann::json::array({"backlight", "dust"}));
     EXPECT_TRUE(rows[1]["backlight"].is_null());
     EXPECT_TRUE(rows[1]["dust_specks"].is_null());
@@ -524,7 +528,7 @@ TEST(ResultStore, AVersionSixDatabaseGainsTheHealthTable)
         r.health = health(0.5, 1.0, {vision::HealthFigure::Backlight});
         EXPECT_EQ(store.commit(r), 2);
     }
-    EXPECT_EQ(sql(file, "PRAGMA user_version"), "7\n");
+    EXPECT_EQ(sql(file, "PRAGMA user_version"), "8\n");
     EXPECT_EQ(sql(file, "SELECT id, serial FROM inspections ORDER BY id"), "1|SN-1\n2|SN-2\n");
     EXPECT_EQ(sql(file, "SELECT inspection_id, backlight, warnings FROM health"), "2|0.5|[\"backlight\"]\n");
     // The migrated table and its index are a new store's.
@@ -535,6 +539,44 @@ TEST(ResultStore, AVersionSixDatabaseGainsTheHealthTable)
     for (const char* query :
          {"PRAGMA table_info(health)", "SELECT name, sql FROM sqlite_master WHERE name LIKE 'health%' ORDER BY name"})
         EXPECT_EQ(sql(file, query), sql(fresh, query)) << query;
+}
+
+// Schema 8 adds the health rows' edge bias and capability: a version 7 store gains the columns, its
+// rows without one (null); read as it is (never migrated) its rows read null too.
+TEST(ResultStore, AVersionSevenDatabaseGainsTheEdgeBiasAndCapability)
+{
+    hgtest::TempDir dir;
+    auto file = dir / "v7.db";
+    {
+        ResultStore store(file);
+        auto r = record(1, station::Verdict::Pass);
+        r.health = health(0.5, 1.0, {});
+        store.commit(r);
+    }
+    // Back to version 7 as that daemon wrote it: the table without the column.
+    hgtest::run("sqlite3 " + file.string() +
+                " 'ALTER TABLE health DROP COLUMN capability; ALTER TABLE health DROP COLUMN edge_bias_px; "
+                "PRAGMA user_version=7;'");
+    ASSERT_EQ(sql(file, "SELECT count(*) FROM pragma_table_info('health') WHERE name = 'edge_bias_px'"), "0\n");
+    const auto old = ResultReader(file).health({});
+    ASSERT_EQ(old.size(), 1u);
+    EXPECT_TRUE(old[0]["edge_bias_px"].is_null());
+    EXPECT_TRUE(old[0]["capability"].is_null());
+    EXPECT_EQ(old[0]["backlight"], 0.5);
+    {
+        ResultStore store(file);
+        auto r = record(2, station::Verdict::Pass);
+        r.health = health(0.75, 0.0, {});
+        store.commit(r);
+    }
+    EXPECT_EQ(sql(file, "PRAGMA user_version"), "8\n");
+    EXPECT_EQ(sql(file, "SELECT inspection_id, backlight, edge_bias_px, capability FROM health ORDER BY inspection_id"),
+              "1|0.5||\n2|0.75|-0.125|0.625\n");
+    const auto fresh = dir / "new.db";
+    {
+        ResultStore created(fresh);
+    }
+    EXPECT_EQ(sql(file, "PRAGMA table_info(health)"), sql(fresh, "PRAGMA table_info(health)"));
 }
 
 // Re-mastering due's counts at start (docs/mastering.md, "Due in the daemon"):
@@ -618,12 +660,12 @@ TEST(ResultStore, AVersionOneStoreOpensAndMigratesToTheSchemaOfANewStore)
     ASSERT_EQ(before.size(), 2u);
     EXPECT_EQ(sql(old, "PRAGMA user_version"), "1\n");
 
-    // The writer opens it: version 7, the rows kept, and they read as the reader read them before.
+    // The writer opens it: version 8, the rows kept, and they read as the reader read them before.
     {
         ResultStore store(old);
         EXPECT_EQ(store.count(), 2);
     }
-    EXPECT_EQ(sql(old, "PRAGMA user_version"), "7\n");
+    EXPECT_EQ(sql(old, "PRAGMA user_version"), "8\n");
     EXPECT_EQ(ResultReader(old).select(all), before);
     EXPECT_EQ(before[1]["serial"], "OLD-2");
     EXPECT_EQ(before[1]["timing"]["move"], 5);

@@ -263,6 +263,36 @@ TEST(HealthMonitor, UniformityOfALinearGradient)
     EXPECT_EQ(f.dustSpecks, 0.0); // the first band surveyed: a gradient is no dust
 }
 
+// A part whose top edge runs nearly along the rows, blurred, leaves a strip
+// of backlight a few pixels high above it in the zones it crosses: the fringe
+// there is brighter than the threshold and its row neighbours are as bright
+// as it is, but it is no dim panel. The panel is as flat as the reference:
+// uniformity at the noise floor (docs/health.md, "Background samples"). A
+// check along the row only read these scenes 0.085, 0.095, 0.115 and 0.122.
+TEST(HealthMonitor, AFringeAlongTheRowsIsNoDimZone)
+{
+    Scene empty;
+    empty.backlight = vignetted;
+    const FlatField reference = referenceOf(empty);
+    struct Case {
+        double row, degrees, blur; // the edge through (320, row), turned off the rows, its blur σ
+    };
+    for (const Case c : {Case{266.0, 1.0, 1.5}, Case{270.0, 1.0, 1.5}, Case{262.0, 3.0, 2.5}, Case{270.0, 0.3, 2.5}}) {
+        SCOPED_TRACE("edge through row " + std::to_string(c.row) + ", " + std::to_string(c.degrees) + "°, σ " +
+                     std::to_string(c.blur));
+        HealthMonitor monitor(reference);
+        Scene seated = empty;
+        seated.blurSigma = c.blur;
+        seated.edges = {{{320.0, c.row}, unit(-90.0 + c.degrees)}}; // the object below
+        monitor.beginCycle();
+        for (std::size_t view = 0; view < 8; ++view)
+            monitor.addView(view, imageOf(seated.render(40 + view), seated), {});
+        const HealthFigures f = monitor.endCycle();
+        EXPECT_NEAR(f.backlight, 1.0, 0.005);
+        EXPECT_LT(f.uniformity, 0.01);
+    }
+}
+
 // --- Dust --------------------------------------------------------------------
 
 // Specks of the reference are not new; the others are counted once the survey
@@ -609,4 +639,18 @@ TEST(HealthMonitor, WarningsAndTheirBits)
     strict.maxEdgeWidthPx = 2.5;
     EXPECT_EQ(healthWarningBits(healthWarnings(f, strict)), 0b111111);
     EXPECT_EQ(hg::enumName(HealthFigure::Focus), "focus");
+    // The edge bias warns either way, beyond 0.25 px by default.
+    f.edgeBiasPx = -0.24;
+    EXPECT_EQ(healthWarningBits(healthWarnings(f, strict)), 0b111111);
+    f.edgeBiasPx = -0.26;
+    EXPECT_EQ(healthWarningBits(healthWarnings(f, strict)), 0b1111111);
+    f.edgeBiasPx = 0.26;
+    EXPECT_EQ(healthWarnings(f, {}).back(), HealthFigure::EdgeBias);
+    EXPECT_EQ(hg::enumName(HealthFigure::EdgeBias), "edge_bias");
+    // The capability share warns above 0.9 of the bound by default: bit 7.
+    f.capability = 0.9;
+    EXPECT_EQ(healthWarningBits(healthWarnings(f, {})) & 0x80, 0);
+    f.capability = 0.91;
+    EXPECT_EQ(healthWarningBits(healthWarnings(f, {})) & 0x80, 0x80);
+    EXPECT_EQ(hg::enumName(HealthFigure::Capability), "capability");
 }

@@ -76,11 +76,17 @@ struct AlignmentResult {
     /// A seat was estimated (false for method none and when too little of the
     /// outline was found: `message` says why; the seat is then nominal).
     bool measured = false;
-    geometry::RigidTransform seat;       ///< nominal_from_part
-    Vec3 referencePoint = Vec3::Zero();  ///< part frame: the centre of the mesh's bounding box
-    double shiftMm = 0.0;                ///< |seat(reference) − reference|
-    double rotationDeg = 0.0;            ///< angle of seat.R
-    double residualPx = 0.0;             ///< RMS of the inliers' residuals at the solution
+    geometry::RigidTransform seat;      ///< nominal_from_part
+    Vec3 referencePoint = Vec3::Zero(); ///< part frame: the centre of the mesh's bounding box
+    double shiftMm = 0.0;               ///< |seat(reference) − reference|
+    double rotationDeg = 0.0;           ///< angle of seat.R
+    double residualPx = 0.0;            ///< RMS of the inliers' residuals at the solution
+    /// The median of the inliers' (edge − outline)·outward normal at the
+    /// solution, px: how much larger (positive) or smaller the silhouettes are
+    /// than the CAD's outline at the seat, all round — a halo, the exposure or
+    /// the threshold moving every edge, which no seat explains (docs/alignment.md,
+    /// "Edge bias"; the station's health watches it, docs/health.md).
+    double edgeBiasPx = 0.0;
     double shiftUncertaintyMm = 0.0;     ///< expanded (k = 2), the largest over directions
     double rotationUncertaintyDeg = 0.0; ///< expanded (k = 2), the largest over axes
     /// Covariance of (rotation vector [rad], shift of the reference point [mm]).

@@ -47,6 +47,16 @@ std::vector<LandmarkCapability> assessCapability(const std::vector<MapLandmark>&
                                                  const std::vector<geometry::CameraModel>& cameras,
                                                  const geometry::ImageQuality& quality);
 
+/// The largest share of its capability bound a landmark's U takes — 4 U / zone,
+/// 1 at the bound (kTestUncertaintyRatio) — when the edge location's standard
+/// uncertainty is `sigmaPx` where the assessment predicted `plannedSigmaPx`:
+/// each view's noise term scales with it and the views are combined again as
+/// the gauge combines them (their method, tilt and calibration terms as they
+/// were); a landmark decided on the voxel bracket keeps its U (docs/health.md, "Capability"). Only the landmarks the
+/// assessment found capable count: a forced one is beyond its bound from the start and says so where it is inspected.
+/// NaN when none counts or either σ is not positive and finite.
+double capabilityUsed(const std::vector<LandmarkCapability>& assessment, double plannedSigmaPx, double sigmaPx);
+
 /// One sentence naming the landmark and the numbers, e.g. "landmark post-nx:
 /// tolerance zone 0.01 mm is narrower than 4 U = 4 × 0.0071 mm (sub-voxel
 /// deviation, 3 views): this station cannot prove it".

@@ -70,6 +70,8 @@ enum class HealthFigure {
     Focus,      ///< 10–90 % width of the edge profile, px
     Contrast,   ///< (background − object) / full scale at the edges
     Noise,      ///< background grey-level σ, fraction of full scale
+    EdgeBias,   ///< the silhouettes larger (+) or smaller than the CAD's outline all round, px (the alignment's)
+    Capability, ///< the largest share of its capability bound (4 U / zone) a landmark's predicted U takes
 };
 
 constexpr auto nameTable(HealthFigure)
@@ -80,7 +82,9 @@ constexpr auto nameTable(HealthFigure)
                                                   {Dust, "dust"},
                                                   {Focus, "focus"},
                                                   {Contrast, "contrast"},
-                                                  {Noise, "noise"}});
+                                                  {Noise, "noise"},
+                                                  {EdgeBias, "edge_bias"},
+                                                  {Capability, "capability"}});
 }
 
 inline constexpr double kNoFigure = std::numeric_limits<double>::quiet_NaN();
@@ -98,6 +102,12 @@ struct HealthFigures {
     /// edgeSigmaPx(noise, contrast) widened by the blur the edge width shows
     /// (docs/health.md, "Prediction"); what the landmarks' U follows.
     double predictedSigmaPx = kNoFigure;
+    /// The alignment's median (edge − outline)·outward normal (align::AlignmentResult::edgeBiasPx):
+    /// set by the daemon after the inspection measured the seat, not by the monitor; NaN without one.
+    double edgeBiasPx = kNoFigure;
+    /// inspect::capabilityUsed at predictedSigmaPx: 1 when the worst landmark's predicted U reaches
+    /// its capability bound (docs/health.md, "Capability"); set by the daemon, which knows the program.
+    double capability = kNoFigure;
     int views = 0;  ///< views examined
     int probes = 0; ///< edge profiles measured
     /// Bands of the dust survey examined since the monitor began (of
@@ -113,6 +123,8 @@ struct HealthLimits {
     double maxEdgeWidthPx = 3.0;
     double minContrast = 0.40;
     double maxNoise = 0.02;
+    double maxEdgeBiasPx = 0.25; ///< judged on |edgeBiasPx|
+    double maxCapability = 0.9;  ///< warns before a landmark's predicted U reaches its bound (1)
 };
 
 /// The edge-location standard uncertainty (px) that noise and contrast (both

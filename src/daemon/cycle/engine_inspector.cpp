@@ -7,6 +7,7 @@
 #include "hullgauge/inspect/correction.h"
 #include "hullgauge/inspect/program_inspector.h"
 #include "hullgauge/model/part_program.h"
+#include "hullgauge/vision/edge.h"
 #include "hullgauge/vision/segmentation.h"
 
 #include <chrono>
@@ -95,6 +96,11 @@ struct LoadedProgram {
     std::filesystem::path correctionFile;
     std::string correctionSha256;
     std::optional<inspect::CorrectionSet> correction;
+    /// The capability check at the planned views and the edge σ it predicted
+    /// from the station's image quality: what the health's capability figure
+    /// scales (docs/health.md, "Capability").
+    std::vector<inspect::LandmarkCapability> assessment;
+    double plannedSigmaPx = 0.0;
 };
 
 /// Reads the correction set the configuration names for `p` and keeps it when
@@ -315,6 +321,13 @@ class EngineInspector : public Inspector {
             out.error = "the inspection failed";
         }
         out.health = healthOfCycle();
+        // The silhouettes against the CAD's outline all round, when the seat was measured
+        // (docs/health.md, "Edge bias"; docs/alignment.md, "Edge bias").
+        if (out.health && out.alignment && out.alignment->measured) out.health->edgeBiasPx = out.alignment->edgeBiasPx;
+        // The landmarks' U at the edge σ the frames predict, against their capability bound.
+        if (out.health)
+            out.health->capability =
+                inspect::capabilityUsed(current_->assessment, current_->plannedSigmaPx, out.health->predictedSigmaPx);
         views_.clear();
         return out;
     }
@@ -387,7 +400,10 @@ class EngineInspector : public Inspector {
             p.configuredSha256 = ref.partSha256;
             p.program = model::loadPartProgram(ref.partFile);
             // The inspector `hullgauge inspect --part` configures (docs/inspection.md).
-            p.inspection = inspect::makeProgramInspector(p.program, stationFor(ref, p.program, station_));
+            const inspect::InspectionStation station = stationFor(ref, p.program, station_);
+            p.assessment = station.capability->assessment;
+            p.plannedSigmaPx = vision::edgeSigmaPx(station_.imageQuality.noiseGrey, station_.imageQuality.contrastGrey);
+            p.inspection = inspect::makeProgramInspector(p.program, station);
             reportForced(ref, p.inspection.setup);
             // The sub-voxel step's ray casts for the planned views, once (docs/inspection.md).
             const std::vector<geometry::CameraModel> cameras = plannedCameras(ref, station_);

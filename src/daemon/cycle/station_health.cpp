@@ -28,23 +28,28 @@ bool beyond(const HealthFigureRule& rule, const std::vector<HealthFigure>& warni
 
 } // namespace
 
-const std::array<HealthFigureRule, 6>& healthFigureRules()
+const std::array<HealthFigureRule, 8>& healthFigureRules()
 {
     using F = vision::HealthFigures;
     using L = vision::HealthLimits;
     // docs/health.md, "Figures" and "Limits": the backlight and the contrast
-    // warn when they fall, the others when they grow.
-    static const std::array<HealthFigureRule, 6> rules{{
-        {HealthFigure::Backlight, "backlight", &F::backlight, &L::minBacklight, true, "backlight", "of the reference",
-         2},
-        {HealthFigure::Uniformity, "uniformity", &F::uniformity, &L::maxUniformity, false, "uniformity",
+    // warn when they fall, the edge bias when it grows either way, the others when they grow.
+    static const std::array<HealthFigureRule, 8> rules{{
+        {HealthFigure::Backlight, "backlight", &F::backlight, &L::minBacklight, true, false, "backlight",
+         "of the reference", 2},
+        {HealthFigure::Uniformity, "uniformity", &F::uniformity, &L::maxUniformity, false, false, "uniformity",
          "worst departure of a block from the reference", 3},
-        {HealthFigure::Dust, "dust_specks", &F::dustSpecks, &L::maxDustSpecks, false, "dust",
+        {HealthFigure::Dust, "dust_specks", &F::dustSpecks, &L::maxDustSpecks, false, false, "dust",
          "specks beyond the reference's", 0},
-        {HealthFigure::Focus, "edge_width_px", &F::edgeWidthPx, &L::maxEdgeWidthPx, false, "focus: edge width",
+        {HealthFigure::Focus, "edge_width_px", &F::edgeWidthPx, &L::maxEdgeWidthPx, false, false, "focus: edge width",
          "px (10-90 %)", 2},
-        {HealthFigure::Contrast, "contrast", &F::contrast, &L::minContrast, true, "contrast", "of full scale", 2},
-        {HealthFigure::Noise, "noise", &F::noise, &L::maxNoise, false, "noise", "of full scale", 4},
+        {HealthFigure::Contrast, "contrast", &F::contrast, &L::minContrast, true, false, "contrast", "of full scale",
+         2},
+        {HealthFigure::Noise, "noise", &F::noise, &L::maxNoise, false, false, "noise", "of full scale", 4},
+        {HealthFigure::EdgeBias, "edge_bias_px", &F::edgeBiasPx, &L::maxEdgeBiasPx, false, true, "edge bias",
+         "px (silhouettes against the CAD outline)", 3},
+        {HealthFigure::Capability, "capability", &F::capability, &L::maxCapability, false, false, "capability",
+         "of the worst landmark's bound (4 U / zone)", 2},
     }};
     return rules;
 }
@@ -55,6 +60,9 @@ std::string describeFigure(const HealthFigureRule& rule, const vision::HealthFig
     const double value = figures.*rule.value;
     if (!std::isfinite(value)) return std::string(rule.what) + " not measured";
     const double limit = limits.*rule.limit;
+    if (rule.magnitude)
+        return fmt::format("{} {:+.{}f} {} — {} limit ±{:.{}f}", rule.what, value, rule.digits, rule.unit,
+                           std::abs(value) > limit ? "beyond" : "within", limit, rule.digits);
     const bool outside = rule.minimum ? value < limit : value > limit;
     return fmt::format("{} {:.{}f} {} — {} limit {:.{}f}", rule.what, value, rule.digits, rule.unit,
                        !outside       ? "within"
@@ -91,6 +99,7 @@ json healthStatesJson(const vision::HealthFigures& figures, const vision::Health
                           {"value", figureJson(value)},
                           {"limit", limits.*rule.limit},
                           {"minimum", rule.minimum},
+                          {"magnitude", rule.magnitude},
                           {"within", std::isfinite(value) ? json(!beyond(rule, warnings)) : json()},
                           {"sentence", describeFigure(rule, figures, limits)}});
     }

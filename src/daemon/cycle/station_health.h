@@ -32,12 +32,13 @@ struct HealthFigureRule {
     double vision::HealthFigures::*value; ///< the figure
     double vision::HealthLimits::*limit;  ///< its limit
     bool minimum;                         ///< true: a value below the limit warns; false: above it
+    bool magnitude;                       ///< true: |value| above the limit warns, either sign
     const char* what;                     ///< "backlight", "edge width"
     const char* unit;                     ///< the words after the value: "of the reference", "px"
     int digits;                           ///< decimals shown
 };
 /// One rule per figure, in the enum's order (the PLC's bits, docs/plc.md HEALTH_WARNINGS).
-const std::array<HealthFigureRule, 6>& healthFigureRules();
+const std::array<HealthFigureRule, 8>& healthFigureRules();
 
 /// The figure in words with its state: "backlight 0.93 of the reference —
 /// within limit 0.80", "dust 7 specks beyond the reference's — beyond limit 5",

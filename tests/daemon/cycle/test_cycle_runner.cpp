@@ -342,6 +342,8 @@ vision::HealthFigures goodFigures()
     f.contrast = 0.85;
     f.noise = 0.006;
     f.predictedSigmaPx = 0.05;
+    f.edgeBiasPx = 0.02;
+    f.capability = 0.5;
     f.views = 3;
     f.probes = 6;
     return f;
@@ -382,10 +384,13 @@ TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAt
     worn.backlight = 0.75;
     worn.edgeWidthPx = 3.5;
     worn.dustSpecks = vision::kNoFigure; // not measured this cycle
+    // Silhouettes 0.3 px small all round (beyond ±0.25), the worst landmark at 0.95 of its bound (above 0.9).
+    worn.edgeBiasPx = -0.3;
+    worn.capability = 0.95;
     inspector.health = worn;
     trigger(2);
     ASSERT_TRUE(eventually([&] { return done(2); }));
-    EXPECT_EQ(at(reg::HealthWarnings), (1 << 0) | (1 << 3)); // backlight, focus
+    EXPECT_EQ(at(reg::HealthWarnings), (1 << 0) | (1 << 3) | (1 << 6) | (1 << 7)); // backlight, focus, bias, capability
     ASSERT_TRUE(eventually([&] { return publishedCount() == 2; }));
     EXPECT_TRUE(runner->healthAttention());
     // The operator's lamps: the verdict with amber steady beside it (docs/lamps.md).
@@ -395,8 +400,16 @@ TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAt
         << journal.text();
     EXPECT_EQ(journal.count(spdlog::level::warn, "focus: edge width 3.50 px (10-90 %) — above limit 3.00"), 1)
         << journal.text();
+    EXPECT_EQ(journal.count(spdlog::level::warn,
+                            "edge bias -0.300 px (silhouettes against the CAD outline) — beyond limit ±0.250"),
+              1)
+        << journal.text();
+    EXPECT_EQ(journal.count(spdlog::level::warn,
+                            "capability 0.95 of the worst landmark's bound (4 U / zone) — above limit 0.90"),
+              1)
+        << journal.text();
     const auto status = runner->health();
-    EXPECT_EQ(status["warnings"], nlohmann::json::array({"backlight", "focus"}));
+    EXPECT_EQ(status["warnings"], nlohmann::json::array({"backlight", "focus", "edge_bias", "capability"}));
     EXPECT_EQ(status["figures"]["backlight"], 0.75);
     EXPECT_TRUE(status["figures"]["dust_specks"].is_null());
     EXPECT_EQ(status["states"][2]["sentence"], "dust not measured");
@@ -415,19 +428,22 @@ TEST_F(CycleRunnerTest, EachCyclesHealthIsStoredPublishedToThePlcAndJournalledAt
     EXPECT_TRUE(eventually([&] { return devices.lamps().back() == LampPattern::Pass; }))
         << enumName(devices.lamps().back());
     EXPECT_EQ(journal.count(spdlog::level::warn, "backlight"), 1) << journal.text();
-    EXPECT_EQ(journal.count(spdlog::level::info, "back within its limit"), 2) << journal.text();
+    EXPECT_EQ(journal.count(spdlog::level::info, "back within its limit"), 4) << journal.text();
 
     // The store: one health row per cycle, with its inspection's id.
     const auto rows = store::ResultReader(dir / "results.db").health({});
     ASSERT_EQ(rows.size(), 4u);
     EXPECT_EQ(rows[1]["inspection_id"], 2);
     EXPECT_EQ(rows[1]["backlight"], 0.75);
-    EXPECT_EQ(rows[1]["warnings"], nlohmann::json::array({"backlight", "focus"}));
+    EXPECT_EQ(rows[1]["edge_bias_px"], -0.3);
+    EXPECT_EQ(rows[1]["capability"], 0.95);
+    EXPECT_EQ(rows[1]["warnings"], nlohmann::json::array({"backlight", "focus", "edge_bias", "capability"}));
     EXPECT_EQ(rows[3]["warnings"], nlohmann::json::array());
     // The plant link's messages, one per cycle, with the result's cycle id.
     std::lock_guard lock(sinkMutex);
-    EXPECT_EQ(published[1]["warnings"], nlohmann::json::array({"backlight", "focus"}));
-    EXPECT_EQ(published[1]["warning_bits"], 9);
+    EXPECT_EQ(published[1]["warnings"], nlohmann::json::array({"backlight", "focus", "edge_bias", "capability"}));
+    EXPECT_EQ(published[1]["warning_bits"], 1 + 8 + 64 + 128);
+    EXPECT_EQ(published[1]["figures"]["edge_bias_px"], -0.3);
     EXPECT_EQ(published[1]["serial"], "");
     auto outbox = store::ResultOutbox(dir / "results.db").pending(1, 1);
     ASSERT_EQ(outbox.size(), 1u);

@@ -24,7 +24,7 @@ constexpr double kDeg = kPi / 180.0;
 
 /// A lens of 0.55x on 5.5 µm pixels (100 px/mm), a slightly non-square pixel,
 /// the principal point 12 px and 13 px off the image centre and barrel
-/// distortion of 1.7 % at the image corner (8.2 mm from the axis): the
+/// distortion of 1.5 % at the farthest image corner (8.4 mm off the axis): the
 /// principal point is seen only through the distortion
 /// (docs/telecentric-calibration.md), and this much puts it within 0.3 px.
 hgtest::TelecentricLens trueLens()

@@ -145,8 +145,14 @@ class TelecentricProblem {
         : views_(views), fixed_(start), free_(std::move(freeIntrinsics))
     {
         const double f = std::max(start[Fx], start[Fy]), r = fieldRadiusMm;
-        const Coefficients intrinsicScale{1.0 / r, 1.0 / r, 1.0, 1.0, 1.0 / (f * std::pow(r, 3)),
-                                          1.0 / (f * std::pow(r, 5)), 1.0 / (f * r * r), 1.0 / (f * r * r),
+        const Coefficients intrinsicScale{1.0 / r,
+                                          1.0 / r,
+                                          1.0,
+                                          1.0,
+                                          1.0 / (f * std::pow(r, 3)),
+                                          1.0 / (f * std::pow(r, 5)),
+                                          1.0 / (f * r * r),
+                                          1.0 / (f * r * r),
                                           1.0 / (f * std::pow(r, 7))};
         for (int i : free_) scale_.push_back(intrinsicScale[static_cast<std::size_t>(i)]);
         for (std::size_t v = 0; v < views.size(); ++v)
@@ -238,7 +244,8 @@ std::vector<int> freeIntrinsics(const TelecentricOptions& o, std::vector<std::st
     else
         free.push_back(Fy);
     const bool centreFixed = o.fixPrincipalPoint || !o.distortion || o.tangential;
-    if (!centreFixed) free.insert(free.end(), {Cx, Cy});
+    if (!centreFixed)
+        free.insert(free.end(), {Cx, Cy});
     else if (o.fixPrincipalPoint)
         conventions.emplace_back("principal point at the image centre (by request)");
     else if (!o.distortion)
@@ -251,10 +258,14 @@ std::vector<int> freeIntrinsics(const TelecentricOptions& o, std::vector<std::st
         return free;
     }
     free.insert(free.end(), {K1, K2});
-    if (o.tangential) free.insert(free.end(), {P1, P2});
-    else conventions.emplace_back("p1 = p2 = 0: tangential distortion is a shift of the distortion centre");
-    if (!o.fixK3) free.push_back(K3);
-    else conventions.emplace_back("k3 = 0 (by request)");
+    if (o.tangential)
+        free.insert(free.end(), {P1, P2});
+    else
+        conventions.emplace_back("p1 = p2 = 0: tangential distortion is a shift of the distortion centre");
+    if (!o.fixK3)
+        free.push_back(K3);
+    else
+        conventions.emplace_back("k3 = 0 (by request)");
     return free;
 }
 
@@ -315,9 +326,9 @@ TelecentricCalibration calibrateTelecentric(const std::vector<TargetView>& views
         0.5 * std::hypot(imageSize.width, imageSize.height) / std::max(start.intrinsics[Fx], 1e-300);
     TelecentricProblem problem(views, start.intrinsics, free, fieldRadiusMm);
     const Eigen::VectorXd x0 = problem.pack(start.R, start.t);
-    auto fit = detail::levenbergMarquardt(
-        [&](const Eigen::VectorXd& x, Eigen::VectorXd& r) { problem.residuals(x, r); }, x0,
-        Eigen::VectorXd::Constant(x0.size(), 1e-4), 300);
+    auto fit =
+        detail::levenbergMarquardt([&](const Eigen::VectorXd& x, Eigen::VectorXd& r) { problem.residuals(x, r); }, x0,
+                                   Eigen::VectorXd::Constant(x0.size(), 1e-4), 300);
     if (!fit.covariance.allFinite())
         throw InputError("", field,
                          "the views leave the camera undetermined (too few corners or too little tilt for "
@@ -353,8 +364,8 @@ TelecentricCalibration calibrateTelecentric(const std::vector<TargetView>& views
     }
     result.rmsPx = std::sqrt(total / result.cornersUsed);
     result.tiltSpreadDeg = tiltSpreadDeg(rotations);
-    hg::log::category("calib")->info("telecentric intrinsics from {} views, {} corners: RMS {:.4f} px",
-                                     views.size(), result.cornersUsed, result.rmsPx);
+    hg::log::category("calib")->info("telecentric intrinsics from {} views, {} corners: RMS {:.4f} px", views.size(),
+                                     result.cornersUsed, result.rmsPx);
     return result;
 }
 

@@ -28,9 +28,8 @@ std::vector<const std::vector<RailSample>*> usableTracks(const std::vector<std::
     std::vector<const std::vector<RailSample>*> usable;
     for (const auto& t : tracks) {
         if (t.size() < 2) continue;
-        const auto [lo, hi] = std::minmax_element(t.begin(), t.end(), [](const RailSample& a, const RailSample& b) {
-            return a.rangeMm < b.rangeMm;
-        });
+        const auto [lo, hi] = std::minmax_element(
+            t.begin(), t.end(), [](const RailSample& a, const RailSample& b) { return a.rangeMm < b.rangeMm; });
         if (hi->rangeMm > lo->rangeMm) usable.push_back(&t);
     }
     return usable;
@@ -43,8 +42,9 @@ TelecentricRailAxis calibrateTelecentricRail(const std::vector<std::vector<RailS
 {
     const auto usable = usableTracks(tracks);
     if (usable.empty())
-        throw InputError("", field, "no point was seen at two different rail readings: the rail's direction needs "
-                                    "the target moved along the rail");
+        throw InputError("", field,
+                         "no point was seen at two different rail readings: the rail's direction needs "
+                         "the target moved along the rail");
     const double fx = camera.K(0, 0), fy = camera.K(1, 1);
     if (!(fx > 0.0) || !(fy > 0.0)) throw InputError("", field, "the camera's fx and fy must be positive (px/mm)");
 
@@ -103,9 +103,9 @@ TelecentricRailAxis calibrateTelecentricRail(const std::vector<std::vector<RailS
         axis.stdDevAy = std::sqrt(cov(1, 1));
         // d(angle)/d(a_x, a_y) = (a_x, a_y) / (|a_xy| cos angle); along the
         // direction of the larger variance where the rail is on the axis.
-        Eigen::Vector2d g = lateral > 1e-12 ? Eigen::Vector2d(ax, ay) / (lateral * axis.direction.z())
-                                            : Eigen::Vector2d(cov(0, 0) >= cov(1, 1) ? 1.0 : 0.0,
-                                                              cov(0, 0) >= cov(1, 1) ? 0.0 : 1.0);
+        Eigen::Vector2d g =
+            lateral > 1e-12 ? Eigen::Vector2d(ax, ay) / (lateral * axis.direction.z())
+                            : Eigen::Vector2d(cov(0, 0) >= cov(1, 1) ? 1.0 : 0.0, cov(0, 0) >= cov(1, 1) ? 0.0 : 1.0);
         axis.stdDevAngleDeg = std::sqrt(g.dot(cov * g)) * kDeg;
     }
     axis.rmsPx = std::sqrt(fit.residuals.squaredNorm() / count);

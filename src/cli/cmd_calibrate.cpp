@@ -16,8 +16,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <optional>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -103,8 +103,8 @@ geometry::Intrinsics readTelecentricCamera(const fs::path& file)
     } else {
         const double m = cam["magnification"].asDoubleIn(1e-6, 1e6);
         auto pitchNode = cam["pixel_pitch_mm"];
-        const auto pitch = pitchNode.isSequence() ? pitchNode.asDoubles(2)
-                                                  : std::vector<double>(2, pitchNode.asDoubleIn(1e-9, 1.0));
+        const auto pitch =
+            pitchNode.isSequence() ? pitchNode.asDoubles(2) : std::vector<double>(2, pitchNode.asDoubleIn(1e-9, 1.0));
         if (!(pitch[0] > 0 && pitch[1] > 0)) pitchNode.fail("the pixel pitch must be positive (mm)");
         const auto pp = cam["principal_point"].asDoubles(2);
         in.K << m / pitch[0], 0.0, pp[0], 0.0, m / pitch[1], pp[1], 0.0, 0.0, 1.0;

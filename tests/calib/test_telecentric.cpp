@@ -69,8 +69,8 @@ std::vector<BoardPose> twelveTilts()
     std::vector<BoardPose> poses;
     for (int k = 0; k < 12; ++k) {
         const double around = (45.0 + 75.0 * k) * kDeg, reach = k % 4 == 0 ? 0.3 : 1.0;
-        poses.push_back(boardPose(25.0 + 10.0 * (k % 3), 30.0 * k, -10.0 + 2.0 * k,
-                                  reach * 2.4 * std::cos(around), reach * 1.9 * std::sin(around)));
+        poses.push_back(boardPose(25.0 + 10.0 * (k % 3), 30.0 * k, -10.0 + 2.0 * k, reach * 2.4 * std::cos(around),
+                                  reach * 1.9 * std::sin(around)));
     }
     return poses;
 }
@@ -91,8 +91,10 @@ std::vector<TargetView> detectViews(const hgtest::TelecentricLens& lens, const s
     std::vector<TargetView> views;
     for (std::size_t i = 0; i < poses.size(); ++i) {
         const auto v = detectTarget(renderView(lens, poses[i], 1000 + i), spec, "view" + std::to_string(i));
-        if (!v) ADD_FAILURE() << "the chessboard was not found in view " << i;
-        else views.push_back(*v);
+        if (!v)
+            ADD_FAILURE() << "the chessboard was not found in view " << i;
+        else
+            views.push_back(*v);
     }
     return views;
 }

@@ -74,9 +74,8 @@ class AreaRaster {
         for (int c = std::max(cLo, 0); c <= std::min(cHi, w_ - 1); ++c) {
             // Mean over the piece's height of the right part: x is linear in
             // y, so it is the mean of g over [lo, hi].
-            const double mean = hi - lo > 1e-9
-                                    ? (rightPartIntegral(hi, c) - rightPartIntegral(lo, c)) / (hi - lo)
-                                    : std::clamp(c + 1.0 - 0.5 * (lo + hi), 0.0, 1.0);
+            const double mean = hi - lo > 1e-9 ? (rightPartIntegral(hi, c) - rightPartIntegral(lo, c)) / (hi - lo)
+                                               : std::clamp(c + 1.0 - 0.5 * (lo + hi), 0.0, 1.0);
             partial_(r, c) += dy * mean;
         }
         const int rest = std::max(cHi + 1, 0);

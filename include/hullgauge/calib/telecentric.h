@@ -94,9 +94,9 @@ std::string formatTelecentricReport(const TelecentricCalibration& result);
 /// direction in the camera frame in which the target moves as the reading
 /// grows (a_z > 0 by convention: the reading grows away from the lens).
 struct TelecentricRailAxis {
-    geometry::Vec3 direction = geometry::Vec3::UnitZ(); ///< a, camera frame
-    double angleToAxisDeg = 0.0;                        ///< between a and the optical axis
-    double azimuthDeg = 0.0;                            ///< of (a_x, a_y) in the image, from +x towards +y
+    geometry::Vec3 direction = geometry::Vec3::UnitZ();   ///< a, camera frame
+    double angleToAxisDeg = 0.0;                          ///< between a and the optical axis
+    double azimuthDeg = 0.0;                              ///< of (a_x, a_y) in the image, from +x towards +y
     geometry::Vec2 shiftPxPerMm = geometry::Vec2::Zero(); ///< image motion per mm of rail
     /// One standard deviation of a_x, a_y and of the angle (deg).
     double stdDevAx = 0.0, stdDevAy = 0.0, stdDevAngleDeg = 0.0;

@@ -19,22 +19,6 @@ namespace {
 
 using geometry::Vec2;
 
-std::vector<RailSample> parseSamples(const ConfigNode& node)
-{
-    if (!node.isSequence() || node.size() == 0) node.fail("expected a list of {range_mm, pixel: [x, y]}");
-    std::vector<RailSample> samples;
-    std::set<double> ranges;
-    for (const auto& item : node.items()) {
-        item.allowOnlyKeys({"range_mm", "pixel"});
-        RailSample s;
-        s.rangeMm = item["range_mm"].asDouble();
-        s.pixel = item["pixel"].asVector2();
-        if (!ranges.insert(s.rangeMm).second) item["range_mm"].fail("range given twice in this series");
-        samples.push_back(s);
-    }
-    return samples;
-}
-
 std::vector<RailSeries> parseSeries(const ConfigNode& node)
 {
     if (!node.isSequence()) node.fail("expected a list of {displacement_mm, samples}");
@@ -43,7 +27,7 @@ std::vector<RailSeries> parseSeries(const ConfigNode& node)
         item.allowOnlyKeys({"displacement_mm", "samples"});
         RailSeries s;
         s.displacementMm = item["displacement_mm"].asDouble();
-        s.samples = parseSamples(item["samples"]);
+        s.samples = RailObservations::parseTrack(item["samples"]);
         series.push_back(std::move(s));
     }
     return series;
@@ -74,6 +58,22 @@ std::string fmtRange(double v)
 
 } // namespace
 
+std::vector<RailSample> RailObservations::parseTrack(const ConfigNode& node)
+{
+    if (!node.isSequence() || node.size() == 0) node.fail("expected a list of {range_mm, pixel: [x, y]}");
+    std::vector<RailSample> samples;
+    std::set<double> ranges;
+    for (const auto& item : node.items()) {
+        item.allowOnlyKeys({"range_mm", "pixel"});
+        RailSample s;
+        s.rangeMm = item["range_mm"].asDouble();
+        s.pixel = item["pixel"].asVector2();
+        if (!ranges.insert(s.rangeMm).second) item["range_mm"].fail("range given twice in this series");
+        samples.push_back(s);
+    }
+    return samples;
+}
+
 RailObservations RailObservations::parse(const ConfigNode& root)
 {
     if (!root.isMap()) root.fail("expected a map with horizontal, vertical and optional centre_tracks");
@@ -85,7 +85,7 @@ RailObservations RailObservations::parse(const ConfigNode& root)
     obs.vertical = parseSeries(root["vertical"]);
     if (auto t = root.optional("centre_tracks")) {
         if (!t->isSequence()) t->fail("expected a list of tracks, each a list of {range_mm, pixel}");
-        for (const auto& track : t->items()) obs.centreTracks.push_back(parseSamples(track));
+        for (const auto& track : t->items()) obs.centreTracks.push_back(RailObservations::parseTrack(track));
     }
     return obs;
 }

@@ -118,6 +118,48 @@ void StationFileUpdate::setRailIntrinsics(const RailCalibration& r, const std::s
     root_["camera"] = cam;
 }
 
+void StationFileUpdate::setTelecentricIntrinsics(const TelecentricCalibration& r, const std::string& method,
+                                                 std::optional<double> pixelPitchMm)
+{
+    YAML::Node cam = section(root_, "camera");
+    const auto& in = r.intrinsics;
+    cam["model"] = "telecentric";
+    YAML::Node size(YAML::NodeType::Sequence);
+    size.SetStyle(YAML::EmitterStyle::Flow);
+    size.push_back(in.imageSize.width);
+    size.push_back(in.imageSize.height);
+    cam["image_size"] = size;
+    // One of the two forms of a telecentric camera section: the lens's
+    // magnification through the sensor's pitch, or K (px per mm) alone.
+    for (const char* key : {"K", "magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
+    if (pixelPitchMm) {
+        // The data sheet's horizontal pitch fixes the scale; the measured
+        // aspect gives the vertical pitch: fx = m/Δp_h, fy = m/Δp_v.
+        const double magnification = in.K(0, 0) * *pixelPitchMm;
+        cam["magnification"] = magnification;
+        cam["pixel_pitch_mm"] = flowSequence({*pixelPitchMm, magnification / in.K(1, 1)});
+        cam["principal_point"] = flowSequence({in.K(0, 2), in.K(1, 2)});
+    } else {
+        cam["K"] = mat3(in.K);
+    }
+    cam["dist"] = flowSequence(in.dist);
+    YAML::Node cal(YAML::NodeType::Map);
+    cal["method"] = method;
+    cal["model"] = "telecentric";
+    cal["rms_px"] = r.rmsPx;
+    cal["views"] = static_cast<int>(r.viewNames.size());
+    cal["pixel_aspect"] = r.pixelAspect();
+    cal["tilt_spread_deg"] = r.tiltSpreadDeg;
+    YAML::Node sd(YAML::NodeType::Map);
+    sd.SetStyle(YAML::EmitterStyle::Flow);
+    const auto& names = intrinsicParameterNames();
+    for (std::size_t i = 0; i < names.size() && i < r.stdDev.size(); ++i) sd[names[i]] = r.stdDev[i];
+    cal["std_dev"] = sd;
+    cal["date"] = timestamp();
+    cam["calibration"] = cal;
+    root_["camera"] = cam;
+}
+
 void StationFileUpdate::setFixtureAxes(const FixtureAxesResult& r)
 {
     YAML::Node fix = section(root_, "fixture");

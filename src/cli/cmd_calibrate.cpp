@@ -6,6 +6,7 @@
 #include "hullgauge/calib/rail.h"
 #include "hullgauge/calib/station_file.h"
 #include "hullgauge/calib/target.h"
+#include "hullgauge/calib/telecentric.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/drivers/fixture.h"
@@ -16,6 +17,7 @@
 #include <iostream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,18 +85,76 @@ geometry::Intrinsics readCamera(const fs::path& file)
     return in;
 }
 
+/// A telecentric camera section (docs/telecentric-calibration.md) in either
+/// of the forms calibrate intrinsics --model telecentric writes: K in px/mm,
+/// or magnification, pixel_pitch_mm ([h, v] or one number) and
+/// principal_point.
+geometry::Intrinsics readTelecentricCamera(const fs::path& file)
+{
+    auto root = ConfigNode::loadFile(file);
+    auto cam = root["camera"];
+    auto model = cam["model"];
+    if (model.asString() != "telecentric") model.fail("the station's camera is not telecentric");
+    geometry::Intrinsics in;
+    auto size = cam["image_size"].asDoubles(2);
+    in.imageSize = cv::Size(static_cast<int>(size[0]), static_cast<int>(size[1]));
+    if (cam.has("K")) {
+        in.K = cam["K"].asMatrix3();
+    } else {
+        const double m = cam["magnification"].asDoubleIn(1e-6, 1e6);
+        auto pitchNode = cam["pixel_pitch_mm"];
+        const auto pitch =
+            pitchNode.isSequence() ? pitchNode.asDoubles(2) : std::vector<double>(2, pitchNode.asDoubleIn(1e-9, 1.0));
+        if (!(pitch[0] > 0 && pitch[1] > 0)) pitchNode.fail("the pixel pitch must be positive (mm)");
+        const auto pp = cam["principal_point"].asDoubles(2);
+        in.K << m / pitch[0], 0.0, pp[0], 0.0, m / pitch[1], pp[1], 0.0, 0.0, 1.0;
+    }
+    if (auto d = cam.optional("dist")) in.dist = d->asDoubles();
+    return in;
+}
+
 struct IntrinsicsArgs {
     std::string pattern;
     std::vector<std::string> images;
     std::string out;
+    std::string model = "pinhole";
+    std::optional<double> pixelPitchMm;
+    bool noDistortion = false;
+    bool tangential = false;
     calib::IntrinsicsOptions options;
 };
 
+/// `--model telecentric` (docs/telecentric-calibration.md): the affine
+/// camera's calibration, written as a telecentric camera section.
+int runTelecentricIntrinsics(const IntrinsicsArgs& a, const calib::TargetSpec& spec,
+                             const std::vector<calib::TargetView>& views, cv::Size size)
+{
+    calib::TelecentricOptions options;
+    options.fixAspectRatio = a.options.fixAspectRatio;
+    options.fixK3 = a.options.fixK3;
+    options.fixPrincipalPoint = a.options.fixPrincipalPoint;
+    options.distortion = !a.noDistortion;
+    options.tangential = a.tangential;
+    auto result = calib::calibrateTelecentric(views, size, options);
+    std::cout << calib::formatTelecentricReport(result);
+    calib::StationFileUpdate update(a.out);
+    update.setTelecentricIntrinsics(result, fmt::format("{}", spec), a.pixelPitchMm);
+    commitAndReport(update, a.out);
+    return 0;
+}
+
 int runIntrinsics(const IntrinsicsArgs& a)
 {
+    const bool telecentric = a.model == "telecentric";
+    if (!telecentric) {
+        if (a.pixelPitchMm) throw InputError("", "--pixel-pitch-mm", "only with --model telecentric");
+        if (a.noDistortion) throw InputError("", "--no-distortion", "only with --model telecentric");
+        if (a.tangential) throw InputError("", "--tangential", "only with --model telecentric");
+    }
     auto spec = calib::TargetSpec::parse(a.pattern);
     cv::Size size;
     auto views = detectInImages(a.images, spec, size);
+    if (telecentric) return runTelecentricIntrinsics(a, spec, views, size);
     auto result = calib::calibrateIntrinsics(views, size, a.options);
     std::cout << calib::formatIntrinsicsReport(result);
     calib::StationFileUpdate update(a.out);
@@ -106,10 +166,33 @@ int runIntrinsics(const IntrinsicsArgs& a)
 struct RailArgs {
     std::string observations;
     std::string out;
+    std::string model = "pinhole";
+    std::string station;
 };
+
+/// The telecentric rail (docs/telecentric-calibration.md): the rail's
+/// direction from the tracks, through the station's calibrated camera.
+int runTelecentricRail(const RailArgs& a)
+{
+    if (a.station.empty())
+        throw InputError("", "--station", "the telecentric rail needs the calibrated camera: give --station");
+    if (!a.out.empty()) throw InputError("", "--out", "the telecentric rail writes nothing: it reports the direction");
+    const auto camera = readTelecentricCamera(a.station);
+    const auto tracks = calib::loadTelecentricRailTracks(a.observations);
+    calib::TelecentricRailAxis axis;
+    try {
+        axis = calib::calibrateTelecentricRail(tracks, camera);
+    } catch (const InputError& e) {
+        throw InputError(a.observations, e.field(), e.problem(), e.line());
+    }
+    std::cout << calib::formatTelecentricRailReport(axis);
+    return 0;
+}
 
 int runRail(const RailArgs& a)
 {
+    if (a.model == "telecentric") return runTelecentricRail(a);
+    if (!a.station.empty()) throw InputError("", "--station", "only with --model telecentric");
     auto obs = calib::RailObservations::load(a.observations);
     calib::RailCalibration cal;
     try {
@@ -347,6 +430,15 @@ std::function<int()> addCalibrate(CLI::App& app)
     ci->add_flag("--zero-tangent", intr->options.zeroTangentDist, "no tangential distortion (p1 = p2 = 0)");
     ci->add_flag("--fix-k3", intr->options.fixK3, "no sixth-order radial term (k3 = 0)");
     ci->add_flag("--fix-principal-point", intr->options.fixPrincipalPoint, "principal point at the image centre");
+    ci->add_option("--model", intr->model, "camera model: pinhole (default) or telecentric")
+        ->check(CLI::IsMember({"pinhole", "telecentric"}));
+    ci->add_option("--pixel-pitch-mm", intr->pixelPitchMm,
+                   "telecentric: the sensor's horizontal pixel pitch (mm), to write the magnification")
+        ->check(CLI::Range(1e-6, 1.0));
+    ci->add_flag("--no-distortion", intr->noDistortion,
+                 "telecentric: no lens distortion (the principal point is then the image centre)");
+    ci->add_flag("--tangential", intr->tangential,
+                 "telecentric: estimate p1, p2 too (the principal point is then the image centre)");
 
     auto rail = std::make_shared<RailArgs>();
     auto* cr = cmd->add_subcommand("rail", "the rail procedure of dissertation 4.3.1: optical centre and f/dp by "
@@ -355,6 +447,11 @@ std::function<int()> addCalibrate(CLI::App& app)
         ->required()
         ->check(CLI::ExistingFile);
     cr->add_option("--out", rail->out, "station YAML whose camera.K is set from the least-squares fit (optional)");
+    cr->add_option("--model", rail->model,
+                   "pinhole (default) or telecentric: the rail's direction to the optical axis instead of f/dp")
+        ->check(CLI::IsMember({"pinhole", "telecentric"}));
+    cr->add_option("--station", rail->station, "telecentric: station YAML with the calibrated telecentric camera")
+        ->check(CLI::ExistingFile);
 
     auto fix = std::make_shared<FixtureArgs>();
     auto* cf = cmd->add_subcommand("fixture", "rotation and declination axes and camera_from_fixture from views of a "

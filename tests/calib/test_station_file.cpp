@@ -164,3 +164,44 @@ TEST(StationFile, HistoryOrdersBackupsOfOneSecondByTheirNumber)
     EXPECT_EQ(history[2].file.filename(), "s.yaml.bak-20261203T080000Z-2");
     EXPECT_EQ(history[3].file.filename(), "s.yaml.bak-20261203T080000Z");
 }
+
+TEST(StationFile, TelecentricCameraIsWrittenInOneOfItsTwoForms)
+{
+    TelecentricCalibration r;
+    r.intrinsics.K << 100.0, 0, 651.25, 0, 100.2, 498.5, 0, 0, 1;
+    r.intrinsics.dist = {-2.5e-4, 4e-7, 0, 0, 0};
+    r.intrinsics.imageSize = cv::Size(1280, 1024);
+    r.rmsPx = 0.03;
+    r.viewNames.assign(12, "v");
+    r.stdDev = {0.001, 0.001, 0.15, 0.17, 1e-6, 1e-8, 0, 0, 0};
+    r.tiltSpreadDeg = 60.0;
+    hgtest::TempDir dir;
+    const auto file = hgtest::writeFile(dir / "station.yaml", kStation);
+
+    // With the pitch: magnification = fx·pitch = 0.55, the vertical pitch
+    // magnification / fy = 0.55 / 100.2 mm; K goes.
+    StationFileUpdate withPitch(file);
+    withPitch.setTelecentricIntrinsics(r, "chessboard:15x12:0.45", 0.0055);
+    (void)withPitch.commit();
+    YAML::Node cam = YAML::LoadFile(file.string())["camera"];
+    EXPECT_EQ(cam["model"].as<std::string>(), "telecentric");
+    EXPECT_NEAR(cam["magnification"].as<double>(), 0.55, 1e-12);
+    EXPECT_NEAR(cam["pixel_pitch_mm"][0].as<double>(), 0.0055, 1e-15);
+    EXPECT_NEAR(cam["pixel_pitch_mm"][1].as<double>(), 0.55 / 100.2, 1e-15);
+    EXPECT_DOUBLE_EQ(cam["principal_point"][0].as<double>(), 651.25);
+    EXPECT_DOUBLE_EQ(cam["principal_point"][1].as<double>(), 498.5);
+    EXPECT_FALSE(cam["K"]);
+    EXPECT_DOUBLE_EQ(cam["dist"][0].as<double>(), -2.5e-4);
+    EXPECT_DOUBLE_EQ(cam["calibration"]["std_dev"]["cy"].as<double>(), 0.17);
+    EXPECT_EQ(cam["calibration"]["model"].as<std::string>(), "telecentric");
+    EXPECT_EQ(cam["pixel_size_um"][0].as<double>(), 3.45); // other keys kept
+
+    // Without it: K in px/mm, and the pitch form goes.
+    StationFileUpdate withoutPitch(file);
+    withoutPitch.setTelecentricIntrinsics(r, "chessboard:15x12:0.45", std::nullopt);
+    (void)withoutPitch.commit();
+    cam = YAML::LoadFile(file.string())["camera"];
+    EXPECT_DOUBLE_EQ(cam["K"][1][1].as<double>(), 100.2);
+    EXPECT_DOUBLE_EQ(cam["K"][0][2].as<double>(), 651.25);
+    for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) EXPECT_FALSE(cam[key]) << key;
+}

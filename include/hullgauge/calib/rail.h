@@ -58,6 +58,8 @@ struct RailObservations {
     /// Reads the observations file (docs/calibration.md); errors name file, line and key.
     static RailObservations load(const std::filesystem::path& file);
     static RailObservations parse(const ConfigNode& root);
+    /// One track: a list of {range_mm, pixel: [x, y]}, each range once.
+    static std::vector<RailSample> parseTrack(const ConfigNode& node);
 };
 
 struct OpticalCentreEstimate {

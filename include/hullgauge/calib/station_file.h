@@ -18,6 +18,7 @@
 #include "hullgauge/calib/fixture_axes.h"
 #include "hullgauge/calib/intrinsics.h"
 #include "hullgauge/calib/rail.h"
+#include "hullgauge/calib/telecentric.h"
 
 namespace hg::calib {
 
@@ -34,6 +35,14 @@ class StationFileUpdate {
     /// camera.dist becomes zeros) and camera.calibration; camera.image_size
     /// must already be in the file (else hg::InputError naming `field`).
     void setRailIntrinsics(const RailCalibration& result, const std::string& field);
+    /// A telecentric camera (docs/telecentric-calibration.md): camera.model
+    /// `telecentric`, camera.image_size, camera.dist and either, with the
+    /// sensor's horizontal pixel pitch given, camera.magnification,
+    /// camera.pixel_pitch_mm [horizontal, vertical] and
+    /// camera.principal_point, or else camera.K in px per mm — never both
+    /// forms; camera.calibration as setIntrinsics writes it.
+    void setTelecentricIntrinsics(const TelecentricCalibration& result, const std::string& method,
+                                  std::optional<double> pixelPitchMm);
     /// fixture.type, fixture.camera_from_fixture, fixture.rotation_axis,
     /// fixture.declination_axis, fixture.calibration.{...}.
     void setFixtureAxes(const FixtureAxesResult& result);

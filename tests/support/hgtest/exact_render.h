@@ -75,6 +75,7 @@
 #include "hullgauge/geometry/camera.h"
 #include "hullgauge/model/mesh.h"
 
+#include <array>
 #include <cstdint>
 #include <opencv2/core/mat.hpp>
 #include <vector>
@@ -125,5 +126,42 @@ struct ExactShading {
 /// of hg::sim::shadeCoverage. Throws std::invalid_argument unless `coverage`
 /// is CV_32FC1 and the levels and σs are finite (σ >= 0).
 cv::Mat shadeExact(const cv::Mat& coverage, const ExactShading& shading);
+
+/// A lens for telecentricChessboardCoverage(), described without any of the
+/// product's types: a camera-frame point (x, y, z) in mm is imaged at
+/// (x, y) — no division by z —, distorted as cv::projectPoints distorts
+/// (x/z, y/z) with (k1, k2, p1, p2, k3) (k1 in mm⁻², ...), then
+/// pixel = (fx·x_d + cx, fy·y_d + cy), fx and fy in px per mm.
+struct TelecentricLens {
+    double fx = 100.0, fy = 100.0, cx = 0.0, cy = 0.0;
+    std::array<double, 5> dist{};
+    cv::Size imageSize;
+};
+
+/// A chessboard of (innerCols + 1) x (innerRows + 1) squares of `squareMm`,
+/// in its own frame: the first inner corner at the origin, x along the
+/// columns, y along the rows, z = 0; the square that spans
+/// [(i−1)s, i·s] x [(j−1)s, j·s] is black when i + j is even. Nothing else is
+/// drawn: the rest of the plane is white.
+struct PlanarChessboard {
+    int innerCols = 9, innerRows = 6;
+    double squareMm = 1.0;
+};
+
+/// CV_32FC1: the exact fraction of each pixel covered by the black squares of
+/// `board` at pose camera_from_board (R, t) through `lens`. Each square's
+/// outline is mapped point by point through the lens (every edge cut into
+/// pieces of at most `maxPiecePx` pixels, so a distorted edge is followed to
+/// within its sag, below 1e-5 px for the pieces of 0.25 px and curvature
+/// radii above 1000 px), and the polygon's area in every pixel is integrated
+/// exactly, row by row, from the signed area right of each edge — no
+/// sampling, no noise. Throws std::invalid_argument for a bad lens or board.
+cv::Mat telecentricChessboardCoverage(const PlanarChessboard& board, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                                      const TelecentricLens& lens, double maxPiecePx = 0.25);
+
+/// The pixel of a board point (x, y, 0) through `lens` at pose (R, t), by the
+/// lens's definition above (the corners' true positions for a test).
+Eigen::Vector2d telecentricPixel(const TelecentricLens& lens, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                                 double xMm, double yMm);
 
 } // namespace hgtest

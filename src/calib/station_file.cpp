@@ -78,6 +78,14 @@ void StationFileUpdate::setIntrinsics(const IntrinsicsResult& r, const std::stri
     size.push_back(in.imageSize.width);
     size.push_back(in.imageSize.height);
     cam["image_size"] = size;
+    // The model the intrinsics are of (docs/telecentric.md); a pinhole
+    // station's file keeps its form, `model` written only where it was.
+    if (in.projection == geometry::Projection::Telecentric)
+        cam["model"] = "telecentric";
+    else if (cam["model"])
+        cam["model"] = "pinhole";
+    // K states what a data sheet's magnification, pixel pitch and principal point did.
+    for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
     cam["K"] = mat3(in.K);
     cam["dist"] = flowSequence(in.dist);
     YAML::Node cal(YAML::NodeType::Map);

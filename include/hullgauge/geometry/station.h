@@ -43,8 +43,13 @@ struct Station {
     Intrinsics camera;
     /// Physical pixel pitch (µm) for MED reports (eq. 4.5.2-2/3), when known.
     std::optional<Vec2> pixelSizeUm;
-    /// Sharp range [near, far] along the optical axis in mm (Rule 4), when known.
+    /// Sharp range [near, far] of camera-frame depth along the optical axis in
+    /// mm (Rule 4), when known; a telecentric camera's is about its plane of
+    /// best focus, z = 0 (docs/telecentric.md).
     std::optional<Range> depthOfFieldMm;
+    /// Telecentric only: the diameter (mm) of the object-side field around the
+    /// optical axis the lens is telecentric over (Rule 4), when known.
+    std::optional<double> telecentricFieldMm;
     FixtureKinematics fixture;
     /// Floor plane z in the part frame; no line of sight passes below it (Assumption 2.10).
     double floorZMm = 0.0;

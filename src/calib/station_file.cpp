@@ -88,6 +88,13 @@ void StationFileUpdate::setIntrinsics(const IntrinsicsResult& r, const std::stri
     for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
     cam["K"] = mat3(in.K);
     cam["dist"] = flowSequence(in.dist);
+    cam.remove("kappa");
+    if (in.distortionModel == geometry::DistortionModel::Division) {
+        cam["distortion_model"] = "division";
+        cam["kappa"] = in.kappa;
+    } else if (cam["distortion_model"]) {
+        cam["distortion_model"] = "opencv";
+    }
     YAML::Node cal(YAML::NodeType::Map);
     cal["method"] = method;
     cal["rms_px"] = r.rmsPx;

@@ -14,6 +14,7 @@ namespace hg::geometry {
 
 bool Intrinsics::hasDistortion() const
 {
+    if (distortionModel == DistortionModel::Division && kappa != 0.0) return true;
     for (double d : dist)
         if (d != 0.0) return true;
     return false;
@@ -53,6 +54,11 @@ void Intrinsics::validate() const
     for (double d : dist)
         if (!std::isfinite(d) || std::abs(d) > 1e6)
             throw ArgumentError("dist: coefficients must lie within ±1e6, found " + formatNumber(d));
+    if (distortionModel == DistortionModel::Division)
+        for (double d : dist)
+            if (d != 0.0) throw ArgumentError("dist: the division model takes kappa, not OpenCV's coefficients");
+    if (!std::isfinite(kappa) || std::abs(kappa) > 1e6)
+        throw ArgumentError("kappa: must lie within ±1e6, found " + formatNumber(kappa));
     if (!(workingDistanceMm > 0))
         throw ArgumentError("working_distance_mm: must be positive, found " + formatNumber(workingDistanceMm));
 }
@@ -210,12 +216,26 @@ Eigen::Matrix<double, 2, 3> CameraModel::undistortedPointJacobian(const Vec3& pc
     return J;
 }
 
+std::optional<Vec2> CameraModel::distort(const Vec2& xy) const
+{
+    if (intrinsics_.distortionModel == DistortionModel::OpenCV) return distortNormalised(xy);
+    // The division model solved for the distorted point (HALCON's closed
+    // form): r_u = r_d / (1 + κ r_d²) gives r_d = 2 r_u / (1 + √(1 − 4κ r_u²)).
+    const double disc = 1.0 - 4.0 * intrinsics_.kappa * xy.squaredNorm();
+    if (disc < 0.0) return std::nullopt;
+    return Vec2(xy * (2.0 / (1.0 + std::sqrt(disc))));
+}
+
 std::optional<Vec2> CameraModel::projectCameraPoint(const Vec3& pc) const
 {
     auto n = normalise(pc);
     if (!n) return std::nullopt;
     Vec2 xy = *n;
-    if (distorted_) xy = distortNormalised(xy);
+    if (distorted_) {
+        const auto d = distort(xy);
+        if (!d) return std::nullopt;
+        xy = *d;
+    }
     const Mat3& K = intrinsics_.K;
     return Vec2(K(0, 0) * xy.x() + K(0, 1) * xy.y() + K(0, 2), K(1, 1) * xy.y() + K(1, 2));
 }
@@ -228,7 +248,9 @@ std::optional<Eigen::Matrix<double, 2, 9>> CameraModel::intrinsicsJacobian(const
     const auto n = normalise(cameraFromPart_.apply(partPoint));
     if (!n) return std::nullopt;
     const double x = n->x(), y = n->y();
-    const Vec2 d = distorted_ ? distortNormalised({x, y}) : Vec2(x, y);
+    const auto distorted = distorted_ ? distort({x, y}) : std::optional<Vec2>(Vec2(x, y));
+    if (!distorted) return std::nullopt;
+    const Vec2 d = *distorted;
     const double fx = intrinsics_.K(0, 0), fy = intrinsics_.K(1, 1);
     const double r2 = x * x + y * y;
     Eigen::Matrix<double, 2, 9> J = Eigen::Matrix<double, 2, 9>::Zero();
@@ -236,6 +258,7 @@ std::optional<Eigen::Matrix<double, 2, 9>> CameraModel::intrinsicsJacobian(const
     J(1, 1) = d.y();
     J(0, 2) = 1.0;
     J(1, 3) = 1.0;
+    if (intrinsics_.distortionModel == DistortionModel::Division) return J;
     const double radial[3] = {r2, r2 * r2, r2 * r2 * r2};
     const int radialColumn[3] = {4, 5, 8};
     for (int i = 0; i < 3; ++i) {
@@ -262,6 +285,9 @@ Vec2 CameraModel::undistortPixel(const Vec2& pixel) const
     const double xn = (pixel.x() - K(0, 2) - K(0, 1) * yn) / K(0, 0);
     Vec2 distortedTarget(xn, yn);
     if (!distorted_) return distortedTarget;
+    // The division model undistorts in closed form.
+    if (intrinsics_.distortionModel == DistortionModel::Division)
+        return distortedTarget / (1.0 + intrinsics_.kappa * distortedTarget.squaredNorm());
     // Newton iterations on distort(xy) = target, started at the target; the
     // Jacobian by central differences is plenty at this scale. Matches
     // project() to ~1e-12 rather than cv::undistortPoints' default tolerance.

@@ -81,12 +81,32 @@ Mat3 telecentricK(const ConfigNode& cam, cv::Size imageSize)
     return K;
 }
 
+/// `distortion_model` (opencv, the default, or division) and the division
+/// model's `kappa` (docs/telecentric.md, "The division model").
+void parseDistortionModel(const ConfigNode& cam, Intrinsics& in)
+{
+    if (auto m = cam.optional("distortion_model")) {
+        if (m->asString() == "division")
+            in.distortionModel = DistortionModel::Division;
+        else if (m->asString() != "opencv")
+            m->fail("unknown distortion model '" + m->asString() + "' (opencv or division)");
+    }
+    if (auto k = cam.optional("kappa")) {
+        if (in.distortionModel != DistortionModel::Division)
+            k->fail("only the division model (distortion_model: division) has kappa");
+        in.kappa = k->asDoubleIn(-1e6, 1e6);
+    }
+    if (in.distortionModel == DistortionModel::Division)
+        for (double d : in.dist)
+            if (d != 0.0) cam["dist"].fail("the division model takes kappa, not OpenCV's coefficients");
+}
+
 Intrinsics parseCamera(const ConfigNode& cam)
 {
     // `regions` is the daemon's (docs/daemon.md, "Regions per view").
     cam.allowOnlyKeys({"model", "image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver",
                        "calibration", "image_quality", "regions", "grab_s", "magnification", "pixel_pitch_mm",
-                       "principal_point", "telecentric_field_mm", "working_distance_mm"});
+                       "principal_point", "telecentric_field_mm", "working_distance_mm", "distortion_model", "kappa"});
     Intrinsics in;
     in.projection = parseProjection(cam);
     if (in.projection == Projection::Pinhole)
@@ -104,6 +124,7 @@ Intrinsics parseCamera(const ConfigNode& cam)
     if (auto d = cam.optional("dist")) {
         in.dist = d->asDoubles();
     }
+    parseDistortionModel(cam, in);
     try {
         in.validate();
     } catch (const ArgumentError& e) {

@@ -202,7 +202,8 @@ int clipNear(const Vec3 (&in)[3], double near, Vec3 (&out)[4])
 /// Normalised radius beyond which OpenCV's radial distortion stops being
 /// monotonic: past it the polynomial folds far-away points back into the
 /// image, which a real lens never does, so geometry there is not drawn.
-double monotonicRadius(const std::vector<double>& d)
+/// Searched up to `reach` in steps of reach / 10⁴.
+double monotonicRadius(const std::vector<double>& d, double reach)
 {
     auto at = [&d](std::size_t i) { return i < d.size() ? d[i] : 0.0; };
     const double k1 = at(0), k2 = at(1), k3 = at(4), k4 = at(5), k5 = at(6), k6 = at(7);
@@ -212,9 +213,9 @@ double monotonicRadius(const std::vector<double>& d)
         const double den = 1 + r2 * (k4 + r2 * (k5 + r2 * k6));
         return std::pair{r * num / den, den};
     };
-    const double step = 1e-3;
+    const double step = reach * 1e-4;
     double prev = 0.0;
-    for (double r = step; r <= 10.0; r += step) {
+    for (double r = step; r <= reach; r += step) {
         auto [g, den] = radial(r);
         if (den <= 0.0 || g <= prev) return r - step;
         prev = g;
@@ -222,13 +223,27 @@ double monotonicRadius(const std::vector<double>& d)
     return std::numeric_limits<double>::infinity();
 }
 
+/// The squared normalised radius within which the camera's distortion is
+/// drawn: OpenCV's while monotonic (searched to 10 normalised units, or for
+/// a telecentric camera ten times the image's half diagonal in mm); the
+/// division model's while it has a solution, r² < 1/(4κ) for κ > 0.
+double validRadius2(const geometry::Intrinsics& in)
+{
+    if (in.distortionModel == geometry::DistortionModel::Division)
+        return in.kappa > 0.0 ? 1.0 / (4.0 * in.kappa) : std::numeric_limits<double>::infinity();
+    double reach = 10.0;
+    if (in.projection == geometry::Projection::Telecentric)
+        reach = 5.0 * std::hypot(in.imageSize.width / in.K(0, 0), in.imageSize.height / in.K(1, 1));
+    return std::pow(monotonicRadius(in.dist, reach), 2);
+}
+
 /// Projects camera-frame triangles through a distorted camera, subdividing
 /// edges until their images are straight within the sag tolerance.
 class DistortedProjector {
   public:
     DistortedProjector(const geometry::CameraModel& camera, double sagPx, TriangleSink& sink)
-        : camera_(camera), sagPx_(sagPx), sink_(sink), limit2_(std::pow(monotonicRadius(camera.intrinsics().dist), 2)),
-          minEdge_(kMinEdge), maxEdge_(kMaxEdge)
+        : camera_(camera), sagPx_(sagPx), sink_(sink), limit2_(validRadius2(camera.intrinsics())), minEdge_(kMinEdge),
+          maxEdge_(kMaxEdge)
     {
         // A telecentric camera's normalised units are millimetres: the same
         // bounds in pixels as a pinhole's at 1000 px focal length (kMinEdge

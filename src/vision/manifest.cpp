@@ -216,8 +216,10 @@ class ManifestReader {
         if (j.contains("image_size")) in.imageSize = imageSize(j["image_size"], at + ".image_size");
         projection(j, at, in);
         if (j.contains("P")) {
-            if (in.projection == geometry::Projection::Telecentric)
-                fail(at + ".P", "a telecentric view gives K, R and t (docs/telecentric.md), not P");
+            if (in.projection == geometry::Projection::Telecentric ||
+                in.distortionModel != geometry::DistortionModel::OpenCV)
+                fail(at + ".P", "a telecentric view, or one with the division model, gives K, R and t "
+                                "(docs/telecentric.md), not P");
             for (const char* key : {"K", "R", "t", "dist"})
                 if (j.contains(key)) fail(at + "." + key, "a view gives either P or K, R, t (+ dist), not both");
             const Eigen::Matrix<double, 3, 4> P = matrix(j["P"], 3, 4, at + ".P");
@@ -255,14 +257,15 @@ class ManifestReader {
         if (j.contains("fixture_pose")) v.fixturePose = fixturePose(j["fixture_pose"], at + ".fixture_pose");
         if (j.contains("origin")) v.origin = origin(j["origin"], at, in.imageSize);
         warnUnknownKeys(j,
-                        {"id", "image", "model", "working_distance_mm", "K", "dist", "R", "t", "P", "image_size",
-                         "fixture_pose", "origin"},
+                        {"id", "image", "model", "working_distance_mm", "distortion_model", "kappa", "K", "dist", "R",
+                         "t", "P", "image_size", "fixture_pose", "origin"},
                         at);
         return v;
     }
 
-    /// `model` (pinhole, the default, or telecentric) and a telecentric
-    /// view's `working_distance_mm` (docs/telecentric.md).
+    /// `model` (pinhole, the default, or telecentric), the division model's
+    /// `distortion_model` and `kappa`, and a telecentric view's
+    /// `working_distance_mm` (docs/telecentric.md).
     void projection(const json& j, const std::string& at, geometry::Intrinsics& in) const
     {
         if (j.contains("model")) {
@@ -271,6 +274,18 @@ class ManifestReader {
                 in.projection = geometry::Projection::Telecentric;
             else if (model != "pinhole")
                 fail(at + ".model", "expected pinhole or telecentric, found '" + model + "'");
+        }
+        if (j.contains("distortion_model")) {
+            const std::string model = string(j["distortion_model"], at + ".distortion_model");
+            if (model == "division")
+                in.distortionModel = geometry::DistortionModel::Division;
+            else if (model != "opencv")
+                fail(at + ".distortion_model", "expected opencv or division, found '" + model + "'");
+        }
+        if (j.contains("kappa")) {
+            if (in.distortionModel != geometry::DistortionModel::Division)
+                fail(at + ".kappa", "only the division model (distortion_model: division) has kappa");
+            in.kappa = number(j["kappa"], at + ".kappa");
         }
         if (!j.contains("working_distance_mm")) return;
         if (in.projection != geometry::Projection::Telecentric)
@@ -432,6 +447,10 @@ std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder
         if (in.projection == geometry::Projection::Telecentric) {
             j["model"] = "telecentric";
             if (std::isfinite(in.workingDistanceMm)) j["working_distance_mm"] = in.workingDistanceMm;
+        }
+        if (in.distortionModel == geometry::DistortionModel::Division) {
+            j["distortion_model"] = "division";
+            j["kappa"] = in.kappa;
         }
         j["K"] = matrixJson(in.K);
         j["dist"] = in.dist.empty() ? std::vector<double>(5, 0.0) : in.dist;

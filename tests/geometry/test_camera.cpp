@@ -320,6 +320,35 @@ TEST(TelecentricCamera, FromAxesIsTheDataSheetModel)
     EXPECT_NEAR(p->y(), 950.25, 1e-9);
 }
 
+// HALCON's division model: undistorted = distorted / (1 + κ·r_d²), checked
+// here from that definition, not from the camera's closed-form inverse.
+TEST(TelecentricCamera, TheDivisionModelUndistortsByItsDefinition)
+{
+    Intrinsics in = downwardTelecentric().intrinsics();
+    in.distortionModel = DistortionModel::Division;
+    in.kappa = -2e-3; // mm⁻²
+    const CameraModel cam(in, downwardTelecentric().cameraFromPart());
+    EXPECT_TRUE(in.hasDistortion());
+    for (const Vec3& X : {Vec3(5, 7, 2), Vec3(-3, 0.5, 9), Vec3(2, 3, -4), Vec3(9.5, -2, 0)}) {
+        const auto p = cam.project(X);
+        ASSERT_TRUE(p);
+        // The distorted point from the pixel by hand (K = diag(100, 100), principal point (1000.5, 750.25)).
+        const Vec2 d((p->x() - 1000.5) / 100.0, (p->y() - 750.25) / 100.0);
+        // The undistorted point: camera x = X − 2, y = −(Y − 3).
+        const Vec2 u(X.x() - 2.0, 3.0 - X.y());
+        EXPECT_NEAR((d / (1.0 + in.kappa * d.squaredNorm()) - u).norm(), 0.0, 1e-12) << X.transpose();
+        EXPECT_NEAR((cam.undistortPixel(*p) - u).norm(), 0.0, 1e-12) << X.transpose();
+    }
+    // κ > 0 has no distorted point beyond r_u² = 1/(4κ): 1/(4·0.01) = 25, r_u = 5 mm.
+    in.kappa = 0.01;
+    const CameraModel pincushion(in, downwardTelecentric().cameraFromPart());
+    EXPECT_TRUE(pincushion.project({2 + 4.9, 3, 0}).has_value());
+    EXPECT_FALSE(pincushion.project({2 + 5.1, 3, 0}).has_value());
+    // It takes κ, not OpenCV's coefficients.
+    in.dist = {0.1, 0, 0, 0, 0};
+    EXPECT_THROW(in.validate(), std::invalid_argument);
+}
+
 TEST(Intrinsics, RejectsUnusableParameters)
 {
     auto in = makeIntrinsics({0.1, 0.2, 0.0, 0.0, 0.0, 0.0});

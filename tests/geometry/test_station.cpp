@@ -114,6 +114,22 @@ TEST(Station, LoadsATelecentricCameraFromItsDataSheet)
     EXPECT_EQ(loadStation(hgtest::writeFile(dir / "k.yaml", withK)).camera.K, s.camera.K);
 }
 
+TEST(Station, TheDivisionModelIsReadWithItsKappa)
+{
+    hgtest::TempDir dir;
+    const std::string division =
+        replaced(kTelecentric, "  dist: [0, 0, 0, 0, 0]\n", "  distortion_model: division\n  kappa: -0.002\n");
+    const Station s = loadStation(hgtest::writeFile(dir / "station.yaml", division));
+    EXPECT_EQ(s.camera.distortionModel, DistortionModel::Division);
+    EXPECT_DOUBLE_EQ(s.camera.kappa, -0.002);
+    const std::string both = replaced(division, "  kappa: -0.002\n", "  kappa: -0.002\n  dist: [0.1, 0, 0, 0, 0]\n");
+    EXPECT_EQ(loadError(both), "station.yaml:" + std::to_string(hgtest::lineOf(both, "dist:")) +
+                                   ": camera.dist: the division model takes kappa, not OpenCV's coefficients");
+    const std::string stray = replaced(kTelecentric, "  dist: [0, 0, 0, 0, 0]\n", "  kappa: -0.002\n");
+    EXPECT_EQ(loadError(stray), "station.yaml:" + std::to_string(hgtest::lineOf(stray, "kappa:")) +
+                                    ": camera.kappa: only the division model (distortion_model: division) has kappa");
+}
+
 TEST(Station, TelecentricKeysAreRefusedWhereTheyDoNotBelong)
 {
     auto lineOfT = [](const std::string& text, const std::string& key) {

@@ -27,6 +27,11 @@ namespace hg::geometry {
 /// by depth (an object-side telecentric lens: parallel lines of sight).
 enum class Projection { Pinhole, Telecentric };
 
+/// The lens distortion: OpenCV's polynomial model (`dist`), or HALCON's
+/// division model, undistorted = distorted / (1 + κ·r_d²) with r_d the
+/// distorted normalised radius (docs/telecentric.md, "The division model").
+enum class DistortionModel { OpenCV, Division };
+
 struct Intrinsics {
     /// Pinhole: fx, fy in pixels; telecentric: fx, fy in pixels per millimetre
     /// of object (magnification over pixel pitch), and the distortion terms
@@ -39,8 +44,12 @@ struct Intrinsics {
     double workingDistanceMm = std::numeric_limits<double>::infinity();
     /// Upper-triangular camera matrix [[fx, s, cx], [0, fy, cy], [0, 0, 1]] in pixels.
     Mat3 K = Mat3::Identity();
-    /// OpenCV distortion coefficients; empty or all zero for none.
+    /// OpenCV distortion coefficients; empty or all zero for none (and for the division model).
     std::vector<double> dist;
+    DistortionModel distortionModel = DistortionModel::OpenCV;
+    /// The division model's κ (per squared normalised unit: mm⁻² for a
+    /// telecentric camera); 0 for none.
+    double kappa = 0.0;
     /// Image width and height in pixels.
     cv::Size imageSize;
 
@@ -125,6 +134,7 @@ class CameraModel {
     /// How the pixel of a part-frame point moves with each intrinsic
     /// parameter, in the order fx, fy, cx, cy, k1, k2, p1, p2, k3 (OpenCV's,
     /// and the calibration's standard deviations'); nullopt behind the camera.
+    /// Under the division model the OpenCV terms' columns are zero.
     std::optional<Eigen::Matrix<double, 2, 9>> intrinsicsJacobian(const Vec3& partPoint) const;
 
     /// Normalised, undistorted image coordinates of a pixel: (x/z, y/z) for a
@@ -142,6 +152,9 @@ class CameraModel {
 
   private:
     Vec2 distortNormalised(const Vec2& xy) const;
+    /// The lens's distortion of normalised coordinates under either model;
+    /// nullopt where the division model has none (1 − 4κr² < 0).
+    std::optional<Vec2> distort(const Vec2& xy) const;
     /// The camera-frame z of a telecentric camera's lens front.
     double lensFrontZ() const;
 

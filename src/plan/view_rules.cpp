@@ -262,7 +262,9 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
         hi.y() > size.height - 0.5 - margin)
         return r;
     r.inFrame = true;
-    if (target && !r.rule4 && stopAtDecision) return r;
+    // Rules 1 and 2 are judged even where Rule 4 fails: a landmark seen
+    // against background only outside the lens's sharp volume is refused for
+    // that reason, not taken for a concavity (planner.cpp, WitnessSearch).
 
     // Sample points: cell centres of a grid over the hull's bounding box that
     // fall inside the hull; a thin footprint gets a finer grid so that at

@@ -150,7 +150,8 @@ nlohmann::json cameraJson(const geometry::CameraModel& camera, const Eigen::Vect
             {"cy", K(1, 2)},
             {"width", camera.imageSize().width},
             {"height", camera.imageSize().height},
-            {"working_distance_mm", camera.rangeTo(target)}};
+            // The target's depth along the axis from that centre: for a telecentric camera, from its lens's front.
+            {"working_distance_mm", camera.isTelecentric() ? camera.rangeTo(target) : camera.depthOf(target)}};
 }
 
 cv::Mat annotatedView(const model::TriangleMesh& mesh, const geometry::Station& station,

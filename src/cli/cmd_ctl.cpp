@@ -164,29 +164,6 @@ void printStatus(const nlohmann::json& s)
     }
 }
 
-/// Follows a queued maintenance job (calibrate, flat-field) until it ends: asks `poll`
-/// every 200 ms and returns the job (`key` of the answer) once done, shown to
-/// `progress` at each answer; a failed job is FaultError with the daemon's reason,
-/// one still running after `waitS` FaultError naming its state.
-nlohmann::json followJob(const std::string& path, const nlohmann::json& poll, const std::string& key,
-                         const std::string& what, double waitS,
-                         const std::function<void(const nlohmann::json&)>& progress)
-{
-    Clock& clock = Clock::steady();
-    const auto deadline =
-        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(waitS));
-    while (true) {
-        auto job = daemonRequest(path, poll)[key];
-        if (progress) progress(job);
-        const auto state = job.value("state", std::string());
-        if (state == "done") return job;
-        if (state == "failed") throw FaultError(job.value("error", what + " failed"));
-        if (clock.now() > deadline)
-            throw FaultError(what + " still " + state + " after --wait-timeout; follow it with ctl status");
-        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
-    }
-}
-
 /// Queues the calibration and follows its progress lines until it ends:
 /// exit 0 when the axes were solved and written, 3 when it failed.
 int runCalibrate(const std::string& path, const CtlOptions& o)

@@ -203,7 +203,9 @@ class EngineInspector : public Inspector {
     {
         const auto it = loaded_.find(number);
         if (it == loaded_.end()) return std::nullopt;
-        return LoadedProgramInfo{number, it->second.program.part, releaseOf(it->second.program)};
+        const auto& program = it->second.program;
+        return LoadedProgramInfo{number, program.part, releaseOf(program),
+                                 program.material ? program.material->name : std::string()};
     }
 
     // A planned pose's region was found when the program was loaded; a pose

@@ -27,7 +27,6 @@ simline_master.py lays them over). The accounts come from the tool
 """
 import json
 import math
-import sqlite3
 import subprocess
 import sys
 import tempfile

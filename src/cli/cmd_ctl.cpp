@@ -160,7 +160,8 @@ void printStatus(const nlohmann::json& s)
         std::cout << "\n";
     }
     if (s.contains("health") && s["health"].is_object()) printHealth(s["health"]);
-    if (s.contains("mastering") && s["mastering"].is_object() && s["mastering"].value("run", nlohmann::json()).is_object())
+    if (s.contains("mastering") && s["mastering"].is_object() &&
+        s["mastering"].value("run", nlohmann::json()).is_object())
         printMasteringRun(s["mastering"]["run"]);
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];

@@ -114,17 +114,16 @@ int runThroughDaemon(const MasterOptions& o, const std::string& certificateFile)
     bool cancelled = false;
     // The daemon bounds every wait of the run by the timeout; this bound is only against a daemon that stops answering.
     const double waitS = (static_cast<double>(o.run) + 2.0) * o.timeoutS * 2.0;
-    const auto run = followJob(socket, {{"command", "master"}}, "run", "the mastering run", waitS,
-                               [&](const nlohmann::json& job) {
-                                   const auto& lines = job.value("progress", nlohmann::json::array());
-                                   for (; shown < lines.size(); ++shown)
-                                       std::cerr << lines[shown].get<std::string>() << std::endl;
-                                   if (cancelSignal == 0 || cancelled) return;
-                                   cancelled = true;
-                                   std::cerr << "cancelled (" << (cancelSignal == SIGINT ? "SIGINT" : "SIGTERM")
-                                             << "): the daemon ends the run and puts the purpose back" << std::endl;
-                                   daemonRequest(socket, {{"command", "master"}, {"cancel", true}});
-                               });
+    const auto run =
+        followJob(socket, {{"command", "master"}}, "run", "the mastering run", waitS, [&](const nlohmann::json& job) {
+            const auto& lines = job.value("progress", nlohmann::json::array());
+            for (; shown < lines.size(); ++shown) std::cerr << lines[shown].get<std::string>() << std::endl;
+            if (cancelSignal == 0 || cancelled) return;
+            cancelled = true;
+            std::cerr << "cancelled (" << (cancelSignal == SIGINT ? "SIGINT" : "SIGTERM")
+                      << "): the daemon ends the run and puts the purpose back" << std::endl;
+            daemonRequest(socket, {{"command", "master"}, {"cancel", true}});
+        });
     const auto& set = run["set"];
     std::cout << "correction set " << set.value("id", std::string()) << " (" << set.value("method", std::string())
               << ") written to " << set.value("file", std::string()) << "\n";

@@ -4,12 +4,12 @@
 #include "foreground.h"
 
 #include "command_mailbox.h"
-#include "mastering_run.h"
 #include "cycle/cycle_runner.h"
 #include "hmi/hmi_server.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
+#include "mastering_run.h"
 #include "notify.h"
 #include "plant/mqtt_publisher.h"
 #include "plant/plc_server.h"

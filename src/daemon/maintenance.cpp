@@ -1,7 +1,6 @@
 #include "maintenance.h"
 
 #include "cycle/cycle_runner.h"
-#include "mastering_run.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/json.h"
@@ -9,6 +8,7 @@
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/store/audit_log.h"
 #include "hullgauge/store/result_store.h"
+#include "mastering_run.h"
 #include "plant/plc_server.h"
 
 #include <algorithm>
@@ -335,8 +335,8 @@ json results(const MaintenanceContext& c, const json& request)
 std::string serialProblem(const std::string& serial)
 {
     if (serial.size() > station::kSerialChars)
-        return fmt::format("serial: {} characters; a serial has at most {} (the PLC's SERIAL registers)",
-                           serial.size(), station::kSerialChars);
+        return fmt::format("serial: {} characters; a serial has at most {} (the PLC's SERIAL registers)", serial.size(),
+                           station::kSerialChars);
     for (std::size_t i = 0; i < serial.size(); ++i)
         if (const auto byte = static_cast<unsigned char>(serial[i]); byte == 0 || !station::validSerialByte(byte))
             return fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte);
@@ -516,8 +516,7 @@ Result<MasteringRequest> masteringRequest(const json& request)
         return Status::failure(StatusCode::NotAllowed, std::string("master: ") + e.what());
     }
     if (const auto problem = serialProblem(r.master.serial); !problem.empty())
-        return Status::failure(StatusCode::NotAllowed,
-                               "master: " + name.value() + ": the master's " + problem);
+        return Status::failure(StatusCode::NotAllowed, "master: " + name.value() + ": the master's " + problem);
     r.program = static_cast<std::uint16_t>(program.value());
     r.cycles = static_cast<std::size_t>(cycles.value());
     r.timeout = std::chrono::seconds(timeout.value());

@@ -36,10 +36,14 @@ std::string triggerRefusal(station::RejectReason reason)
 {
     using enum station::RejectReason;
     switch (reason) {
-    case None: return {};
-    case Busy: return "busy";
-    case UnknownProgram: return "unknown part program";
-    case NotReady: return "not ready (fault or starting)";
+    case None:
+        return {};
+    case Busy:
+        return "busy";
+    case UnknownProgram:
+        return "unknown part program";
+    case NotReady:
+        return "not ready (fault or starting)";
     case MasteringDue:
         return "re-mastering is due and its grace is used up: run the master (purpose master), then reload its "
                "correction set";
@@ -60,7 +64,9 @@ json correctionSummary(const inspect::CorrectionSet& set, const std::string& fil
     return {{"id", set.id}, {"file", file}, {"method", enumName(set.method())}, {"landmarks", landmarks}};
 }
 
-MasteringRun::MasteringRun(MasteringStation station, Clock& clock) : station_(std::move(station)), clock_(clock) {}
+MasteringRun::MasteringRun(MasteringStation station, Clock& clock) : station_(std::move(station)), clock_(clock)
+{
+}
 
 MasteringRun::~MasteringRun()
 {
@@ -303,9 +309,9 @@ void MasteringRun::recordEnd(const MasteringRequest& request, const std::filesys
     entry.object = file.string();
     entry.outcome = error.empty() ? "done" : "failed";
     const json s = status();
-    entry.detail = fmt::format("{} master cycles of {} (results {}){}", s.value("results", json::array()).size(),
-                               request.master.serial, s.value("results", json::array()).dump(),
-                               error.empty() ? "" : ": " + error);
+    entry.detail =
+        fmt::format("{} master cycles of {} (results {}){}", s.value("results", json::array()).size(),
+                    request.master.serial, s.value("results", json::array()).dump(), error.empty() ? "" : ": " + error);
     entry.before = before;
     entry.after = fileText(file);
     station_.audit(std::move(entry));

@@ -30,9 +30,8 @@ std::vector<study::StudyRecord> masterCycles(const ResultReader& store, const st
     if (records.size() < s.minCycles)
         throw InputError(m.file.string(), "master",
                          std::to_string(records.size()) + " pass/fail master cycles of program " +
-                             std::to_string(s.program) + " with serial '" + m.serial + "' in " +
-                             store.file().string() + ", " + std::to_string(s.minCycles) + " needed (" +
-                             s.minCyclesOption + ")");
+                             std::to_string(s.program) + " with serial '" + m.serial + "' in " + store.file().string() +
+                             ", " + std::to_string(s.minCycles) + " needed (" + s.minCyclesOption + ")");
     return study::uncorrectedRecords(std::move(records));
 }
 

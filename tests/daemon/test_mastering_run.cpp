@@ -46,13 +46,14 @@ class PlayedStation {
 
     MasteringStation ports()
     {
-        return {.purpose = [this] { return locked([&] { return purpose_; }); },
-                .setPurpose = [this](station::CyclePurpose p) { locked([&] { purposes_.push_back(purpose_ = p); }); },
-                .trigger = [this](std::uint16_t program, const std::string& serial) { return trigger(program, serial); },
-                .config = [this] { return locked([&] { return config_; }); },
-                .material = [](std::uint16_t) { return std::optional<std::string>(""); },
-                .reload = [this] { reload(); },
-                .audit = [this](store::AuditEntry e) { locked([&] { audit_.push_back(std::move(e)); }); }};
+        return {
+            .purpose = [this] { return locked([&] { return purpose_; }); },
+            .setPurpose = [this](station::CyclePurpose p) { locked([&] { purposes_.push_back(purpose_ = p); }); },
+            .trigger = [this](std::uint16_t program, const std::string& serial) { return trigger(program, serial); },
+            .config = [this] { return locked([&] { return config_; }); },
+            .material = [](std::uint16_t) { return std::optional<std::string>(""); },
+            .reload = [this] { reload(); },
+            .audit = [this](store::AuditEntry e) { locked([&] { audit_.push_back(std::move(e)); }); }};
     }
 
     /// A stored master row of `serial` with a tall-top deviation of `deviation`; its id.

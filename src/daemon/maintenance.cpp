@@ -380,6 +380,13 @@ json abortCycle(const MaintenanceContext& c, const json&)
     return {{"ok", true}, {"aborted", c.runner.abort()}};
 }
 
+/// The refusal of another maintenance job while the mastering run owns the station; null when none runs.
+json refusedWhileMastering(const MaintenanceContext& c, const std::string& what)
+{
+    if (!c.mastering || !c.mastering->running()) return nullptr;
+    return {{"ok", false}, {"error", what + ": a mastering run is running (cancel it with the command master)"}};
+}
+
 // The live fixture calibration (docs/calibration.md), run by the cycle runner
 // between cycles. Bad input is answered at once.
 json calibrate(const MaintenanceContext& c, const json& request)
@@ -479,13 +486,6 @@ std::string stationBusy(const MaintenanceContext& c)
         if (jobState == "queued" || jobState == "running") return std::string(what) + " is " + jobState;
     }
     return {};
-}
-
-/// The refusal of another maintenance job while the mastering run owns the station; null when none runs.
-json refusedWhileMastering(const MaintenanceContext& c, const std::string& what)
-{
-    if (!c.mastering || !c.mastering->running()) return nullptr;
-    return {{"ok", false}, {"error", what + ": a mastering run is running (cancel it with the command master)"}};
 }
 
 /// The run a `master` request asks for; a refusal naming the field otherwise.

@@ -44,6 +44,12 @@ class PlayedStation {
         config_ = cfg;
     }
 
+    template <class F> auto locked(F f)
+    {
+        std::lock_guard lock(mutex_);
+        return f();
+    }
+
     MasteringStation ports()
     {
         return {
@@ -75,12 +81,6 @@ class PlayedStation {
         l.uncertaintyMm = 0.004;
         r.landmarks.push_back(l);
         return store_.commit(r);
-    }
-
-    template <class F> auto locked(F f)
-    {
-        std::lock_guard lock(mutex_);
-        return f();
     }
 
     std::deque<double> readings;

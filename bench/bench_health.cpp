@@ -6,7 +6,10 @@
 //    (the band moves on every iteration, as it does every cycle), the edge
 //    profiles. Target: <= 0.2 ms;
 //  - BM_FindEdge8Views/regions:<0|1>: the baseline in the same run, findEdge
-//    at the same 48 probes, what the inspection already pays per landmark edge.
+//    at the same 48 probes, what the inspection already pays per landmark edge;
+//  - BM_CapabilityUsed/landmarks:<N>: the capability figure of a cycle
+//    (docs/health.md, "Capability"): N landmarks of a program, 8 planned views
+//    each, every view's noise term scaled and the views combined again.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -14,6 +17,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "hullgauge/inspect/capability.h"
 #include "hullgauge/vision/edge.h"
 #include "hullgauge/vision/health.h"
 
@@ -117,6 +121,40 @@ void BM_FindEdge8Views(benchmark::State& state)
     state.counters["edges"] = found;
 }
 BENCHMARK(BM_FindEdge8Views)->ArgName("regions")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// A program's assessment: N capable landmarks decided by the gauge, 8 views
+// each with the budget terms of a 0.05 mm/px station (noise 0.4–1.1 µm,
+// tilt 0.3 µm, calibration 0.2 µm), a tolerance of ±0.05 mm.
+std::vector<hg::inspect::LandmarkCapability> assessmentOf(int landmarks)
+{
+    std::vector<hg::inspect::LandmarkCapability> out;
+    for (int l = 0; l < landmarks; ++l) {
+        std::vector<hg::inspect::ViewDeviation> views;
+        for (int v = 0; v < 8; ++v)
+            views.push_back({"v" + std::to_string(v), 0.0, 4e-4 + 1e-4 * ((l + v) % 8), 20.0, 3e-4, 2e-4});
+        hg::inspect::LandmarkCapability c;
+        c.id = "l" + std::to_string(l);
+        c.zoneMm = 0.1;
+        c.views = 8;
+        c.capable = true;
+        c.prediction = hg::inspect::combine(views, 5e-4);
+        c.expectedMm = c.prediction.uncertaintyMm;
+        out.push_back(c);
+    }
+    return out;
+}
+
+void BM_CapabilityUsed(benchmark::State& state)
+{
+    const auto assessment = assessmentOf(static_cast<int>(state.range(0)));
+    double used = 0.0;
+    for (auto _ : state) {
+        used = hg::inspect::capabilityUsed(assessment, 0.05, 0.08);
+        benchmark::DoNotOptimize(used);
+    }
+    state.counters["share_x1000"] = static_cast<int>(1000.0 * used);
+}
+BENCHMARK(BM_CapabilityUsed)->ArgName("landmarks")->Arg(16)->Arg(64)->Unit(benchmark::kMicrosecond);
 
 } // namespace
 

@@ -1,6 +1,7 @@
 // The line engineer's page (docs/hmi.md, "Maintenance"): calibration status
 // and history, the last camera snapshot, the station's health (a chart per
 // figure with its limit, the latest figures in words, docs/health.md), the
+// mastering run (its progress and the set it put in force, docs/mastering.md), the
 // part programs and their view plans for everyone; the state-changing actions (a snapshot among them) only
 // in a signed-in session whose role allows them (docs/audit.md), each carrying
 // its CSRF token. The server checks every request; the page only leaves out
@@ -21,6 +22,7 @@ async function session() {
   document.getElementById("snapshot-actions").hidden = !may.operate;
   document.getElementById("calibrate-actions").hidden = !may.calibration;
   document.getElementById("flat-field-actions").hidden = !may.calibration;
+  document.getElementById("mastering-actions").hidden = !may.calibration;
   document.getElementById("settings-actions").hidden = !may.settings;
   document.getElementById("logout-line").hidden = !s.signed_in;
   say("session", !s.configured ? "Maintenance over HTTP is not configured on this station."
@@ -206,6 +208,69 @@ async function takeFlatField() {
   }
 }
 
+// ---- the mastering run (docs/mastering.md, "The mastering run") ----
+
+function mm(v) { return Number(v).toFixed(4); }
+
+// The sets in force, the last run's state and progress, and the set it computed: per landmark the offset ± U_corr.
+function showMastering(m) {
+  window.hgMaintenance.mastering = m || null;
+  if (!m) return;
+  const sets = Object.entries(m.sets || {}).map(([p, id]) => `program ${p}: ${id}`);
+  say("mastering-sets", (m.folder ? `Sets in force (${m.folder}): ` : "No mastering.folder: the daemon keeps no correction set. ")
+    + (sets.length ? sets.join("; ") : m.folder ? "none" : ""));
+  const r = m.run;
+  if (!r) { say("mastering-state", "No mastering run since the daemon started."); return; }
+  const at = r.state === "running" ? `, ${r.step}: master cycle ${r.cycle} of ${r.cycles}` : "";
+  say("mastering-state", `Mastering run of program ${r.program} with master ${r.master} by ${r.by}: ${r.state}${at}`
+    + (r.error ? ` — ${r.error}` : "") + `; the purpose back to ${r.purpose_before} at its end.`);
+  const list = document.getElementById("mastering-progress");
+  list.replaceChildren(...(r.progress || []).map((line) => hg.el("li", { text: line })));
+  const table = document.getElementById("mastering-result");
+  table.hidden = !r.set;
+  if (!r.set) return;
+  say("mastering-result-caption", `Correction set ${r.set.id} (${r.set.method})` + (r.state === "done" ? ", in force" : "") + `, ${r.set.file}`);
+  table.querySelector("tbody").replaceChildren(...r.set.landmarks.map((l) => hg.el("tr", { "data-landmark": l.id },
+    hg.el("td", { text: l.id }), hg.el("td", { class: "num offset", text: mm(l.offset_mm) }),
+    hg.el("td", { class: "num uncertainty", text: mm(l.uncertainty_mm) }), hg.el("td", { class: "num", text: Number(l.gain).toFixed(5) }),
+    hg.el("td", { class: "num", text: mm(l.spread_mm) }), hg.el("td", { class: "num", text: String(l.cycles) }))));
+}
+
+async function lookAtMastering() {
+  const s = await hg.get("/api/status");
+  showMastering(s.mastering);
+  return s.mastering && s.mastering.run;
+}
+
+async function runMaster() {
+  const file = document.getElementById("master-certificate").files[0];
+  if (!file) { say("mastering-state", "Choose the master's certificate (YAML) first."); return; }
+  const body = { command: "master", program: Number(document.getElementById("master-program").value),
+    run: Number(document.getElementById("master-cycles").value), certificate: await file.text(), certificate_file: file.name };
+  const material = document.getElementById("master-material").value.trim();
+  if (material) body.material = material;
+  try {
+    let r = (await hg.post("/api/maintenance", body, csrf)).run;
+    // The run follows its cycles: look again until it ends (bounded by the run's own timeouts on the daemon).
+    while (r && r.state === "running") {
+      await new Promise((resolve) => setTimeout(resolve, 500));
+      r = await lookAtMastering();
+    }
+    await lookAtMastering();
+  } catch (e) {
+    say("mastering-state", "Refused: " + e.message);
+  }
+}
+
+async function cancelMaster() {
+  try {
+    await hg.post("/api/maintenance", { command: "master", cancel: true }, csrf);
+    await lookAtMastering();
+  } catch (e) {
+    say("mastering-state", "Refused: " + e.message);
+  }
+}
+
 async function show() {
   try {
     const c = await hg.get("/api/calibration");
@@ -214,6 +279,7 @@ async function show() {
     showHistory(c.history);
     showSnapshot((await hg.get("/api/snapshot")).snapshot);
     await showHealth();
+    await lookAtMastering();
     const p = await hg.get("/api/programs");
     const tbody = document.querySelector("#programs tbody");
     for (const prog of p.programs)
@@ -246,6 +312,8 @@ document.getElementById("calibrate").addEventListener("click", () => act({ comma
 document.getElementById("reload").addEventListener("click", () => act({ command: "reload" }));
 document.getElementById("grab").addEventListener("click", grab);
 document.getElementById("flat-field").addEventListener("click", takeFlatField);
+document.getElementById("master-run").addEventListener("click", runMaster);
+document.getElementById("master-cancel").addEventListener("click", cancelMaster);
 document.getElementById("health-window").addEventListener("submit", (ev) => { ev.preventDefault(); showHealth(); });
 document.getElementById("logout").addEventListener("click", async () => { await hg.post("/api/logout", {}, csrf); await session(); });
 show();

@@ -63,30 +63,45 @@ IntrinsicsResult calibrateIntrinsics(const std::vector<TargetView>& views, cv::S
     return result;
 }
 
-std::string formatIntrinsicsReport(const IntrinsicsResult& r)
+std::string formatParameterTable(const IntrinsicsResult& r, const std::string& units)
 {
     std::ostringstream s;
     char line[256];
     const auto& K = r.intrinsics.K;
-    s << "camera intrinsics (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
-      << r.intrinsics.imageSize.width << "x" << r.intrinsics.imageSize.height << ")\n";
-    std::snprintf(line, sizeof line, "  RMS reprojection error  %.4f px\n", r.rmsPx);
-    s << line;
     const auto& names = intrinsicParameterNames();
     std::vector<double> values{K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
     for (double d : r.intrinsics.dist) values.push_back(d);
-    s << "  parameter        value         std dev\n";
+    s << "  parameter        value         std dev" << (units.empty() ? "" : "   (" + units + ")") << "\n";
     for (std::size_t i = 0; i < names.size() && i < values.size(); ++i) {
         std::snprintf(line, sizeof line, "  %-6s %16.6g %14.4g\n", names[i].c_str(), values[i],
                       i < r.stdDev.size() ? r.stdDev[i] : 0.0);
         s << line;
     }
+    return s.str();
+}
+
+std::string formatPerViewRms(const IntrinsicsResult& r)
+{
+    std::ostringstream s;
+    char line[256];
     s << "  per-view RMS (px):\n";
     for (std::size_t i = 0; i < r.viewNames.size(); ++i) {
         std::snprintf(line, sizeof line, "    %-40s %8.4f\n", r.viewNames[i].c_str(),
                       i < r.perViewRmsPx.size() ? r.perViewRmsPx[i] : 0.0);
         s << line;
     }
+    return s.str();
+}
+
+std::string formatIntrinsicsReport(const IntrinsicsResult& r)
+{
+    std::ostringstream s;
+    char line[256];
+    s << "camera intrinsics (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
+      << r.intrinsics.imageSize.width << "x" << r.intrinsics.imageSize.height << ")\n";
+    std::snprintf(line, sizeof line, "  RMS reprojection error  %.4f px\n", r.rmsPx);
+    s << line;
+    s << formatParameterTable(r, "") << formatPerViewRms(r);
     return s.str();
 }
 

@@ -45,6 +45,25 @@ YAML::Node section(YAML::Node parent, const char* key)
     return child;
 }
 
+/// `std_dev` of a calibration record: each parameter's one standard
+/// deviation by name (docs/calibration.md).
+YAML::Node stdDevMap(const std::vector<std::string>& names, const std::vector<double>& stdDev)
+{
+    YAML::Node sd(YAML::NodeType::Map);
+    sd.SetStyle(YAML::EmitterStyle::Flow);
+    for (std::size_t i = 0; i < names.size() && i < stdDev.size(); ++i) sd[names[i]] = stdDev[i];
+    return sd;
+}
+
+YAML::Node imageSize(cv::Size size)
+{
+    YAML::Node node(YAML::NodeType::Sequence);
+    node.SetStyle(YAML::EmitterStyle::Flow);
+    node.push_back(size.width);
+    node.push_back(size.height);
+    return node;
+}
+
 std::string timestamp()
 {
     std::time_t now = std::chrono::system_clock::to_time_t(Clock::steady().wallNow());
@@ -73,22 +92,29 @@ void StationFileUpdate::setIntrinsics(const IntrinsicsResult& r, const std::stri
 {
     YAML::Node cam = section(root_, "camera");
     const auto& in = r.intrinsics;
-    YAML::Node size(YAML::NodeType::Sequence);
-    size.SetStyle(YAML::EmitterStyle::Flow);
-    size.push_back(in.imageSize.width);
-    size.push_back(in.imageSize.height);
-    cam["image_size"] = size;
+    cam["image_size"] = imageSize(in.imageSize);
+    // The model the intrinsics are of (docs/telecentric.md); a pinhole
+    // station's file keeps its form, `model` written only where it was.
+    if (in.projection == geometry::Projection::Telecentric)
+        cam["model"] = "telecentric";
+    else if (cam["model"])
+        cam["model"] = "pinhole";
+    // K states what a data sheet's magnification, pixel pitch and principal point did.
+    for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
     cam["K"] = mat3(in.K);
     cam["dist"] = flowSequence(in.dist);
+    cam.remove("kappa");
+    if (in.distortionModel == geometry::DistortionModel::Division) {
+        cam["distortion_model"] = "division";
+        cam["kappa"] = in.kappa;
+    } else if (cam["distortion_model"]) {
+        cam["distortion_model"] = "opencv";
+    }
     YAML::Node cal(YAML::NodeType::Map);
     cal["method"] = method;
     cal["rms_px"] = r.rmsPx;
     cal["views"] = static_cast<int>(r.viewNames.size());
-    YAML::Node sd(YAML::NodeType::Map);
-    sd.SetStyle(YAML::EmitterStyle::Flow);
-    const auto& names = intrinsicParameterNames();
-    for (std::size_t i = 0; i < names.size() && i < r.stdDev.size(); ++i) sd[names[i]] = r.stdDev[i];
-    cal["std_dev"] = sd;
+    cal["std_dev"] = stdDevMap(intrinsicParameterNames(), r.stdDev);
     cal["date"] = timestamp();
     cam["calibration"] = cal;
     root_["camera"] = cam;
@@ -108,11 +134,7 @@ void StationFileUpdate::setRailIntrinsics(const RailCalibration& r, const std::s
     cal["method"] = "rail";
     cal["rms_px"] = r.fit.rmsPx;
     cal["views"] = r.fit.observations;
-    YAML::Node sd(YAML::NodeType::Map);
-    sd.SetStyle(YAML::EmitterStyle::Flow);
-    const char* names[] = {"fx", "fy", "cx", "cy"};
-    for (std::size_t i = 0; i < 4 && i < r.fit.stdDev.size(); ++i) sd[names[i]] = r.fit.stdDev[i];
-    cal["std_dev"] = sd;
+    cal["std_dev"] = stdDevMap({"fx", "fy", "cx", "cy"}, r.fit.stdDev);
     cal["date"] = timestamp();
     cam["calibration"] = cal;
     root_["camera"] = cam;
@@ -124,11 +146,7 @@ void StationFileUpdate::setTelecentricIntrinsics(const TelecentricCalibration& r
     YAML::Node cam = section(root_, "camera");
     const auto& in = r.intrinsics;
     cam["model"] = "telecentric";
-    YAML::Node size(YAML::NodeType::Sequence);
-    size.SetStyle(YAML::EmitterStyle::Flow);
-    size.push_back(in.imageSize.width);
-    size.push_back(in.imageSize.height);
-    cam["image_size"] = size;
+    cam["image_size"] = imageSize(in.imageSize);
     // One of the two forms of a telecentric camera section: the lens's
     // magnification through the sensor's pitch, or K (px per mm) alone.
     for (const char* key : {"K", "magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
@@ -150,11 +168,7 @@ void StationFileUpdate::setTelecentricIntrinsics(const TelecentricCalibration& r
     cal["views"] = static_cast<int>(r.viewNames.size());
     cal["pixel_aspect"] = r.pixelAspect();
     cal["tilt_spread_deg"] = r.tiltSpreadDeg;
-    YAML::Node sd(YAML::NodeType::Map);
-    sd.SetStyle(YAML::EmitterStyle::Flow);
-    const auto& names = intrinsicParameterNames();
-    for (std::size_t i = 0; i < names.size() && i < r.stdDev.size(); ++i) sd[names[i]] = r.stdDev[i];
-    cal["std_dev"] = sd;
+    cal["std_dev"] = stdDevMap(intrinsicParameterNames(), r.stdDev);
     cal["date"] = timestamp();
     cam["calibration"] = cal;
     root_["camera"] = cam;

@@ -339,6 +339,7 @@ TelecentricCalibration calibrateTelecentric(const std::vector<TargetView>& views
     result.intrinsics.K << c[Fx], 0.0, c[Cx], 0.0, c[Fy], c[Cy], 0.0, 0.0, 1.0;
     result.intrinsics.dist = {c[K1], c[K2], c[P1], c[P2], c[K3]};
     result.intrinsics.imageSize = imageSize;
+    result.intrinsics.projection = geometry::Projection::Telecentric;
     result.stdDev.assign(kIntrinsicCount, 0.0);
     for (std::size_t k = 0; k < free.size(); ++k) {
         const auto i = static_cast<Eigen::Index>(k);
@@ -373,7 +374,6 @@ std::string formatTelecentricReport(const TelecentricCalibration& r)
 {
     std::ostringstream s;
     char line[256];
-    const auto& K = r.intrinsics.K;
     s << "telecentric camera (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
       << r.intrinsics.imageSize.width << "x" << r.intrinsics.imageSize.height << ")\n";
     std::snprintf(line, sizeof line, "  RMS reprojection error  %.4f px\n", r.rmsPx);
@@ -381,23 +381,10 @@ std::string formatTelecentricReport(const TelecentricCalibration& r)
     std::snprintf(line, sizeof line, "  pixel aspect fy/fx      %.6f\n  tilt spread             %.1f deg\n",
                   r.pixelAspect(), r.tiltSpreadDeg);
     s << line;
-    const auto& names = intrinsicParameterNames();
-    std::vector<double> values{K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
-    for (double d : r.intrinsics.dist) values.push_back(d);
-    s << "  parameter        value         std dev   (fx, fy in px/mm; k1 in mm^-2, k2 mm^-4, p mm^-1, k3 mm^-6)\n";
-    for (std::size_t i = 0; i < names.size() && i < values.size(); ++i) {
-        std::snprintf(line, sizeof line, "  %-6s %16.6g %14.4g\n", names[i].c_str(), values[i],
-                      i < r.stdDev.size() ? r.stdDev[i] : 0.0);
-        s << line;
-    }
+    s << formatParameterTable(r, "fx, fy in px/mm; k1 in mm^-2, k2 mm^-4, p mm^-1, k3 mm^-6");
     s << "  fixed by convention:\n";
     for (const auto& c : r.conventions) s << "    " << c << '\n';
-    s << "  per-view RMS (px):\n";
-    for (std::size_t i = 0; i < r.viewNames.size(); ++i) {
-        std::snprintf(line, sizeof line, "    %-40s %8.4f\n", r.viewNames[i].c_str(),
-                      i < r.perViewRmsPx.size() ? r.perViewRmsPx[i] : 0.0);
-        s << line;
-    }
+    s << formatPerViewRms(r);
     return s.str();
 }
 

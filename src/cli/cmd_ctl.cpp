@@ -77,6 +77,21 @@ void printHealth(const nlohmann::json& h)
               << "\n";
 }
 
+/// The last mastering run (docs/mastering.md, "The mastering run"): its state, the cycle it is at, its set or error.
+void printMasteringRun(const nlohmann::json& r)
+{
+    const auto state = r.value("state", std::string());
+    std::cout << "mastering:    " << state << ", program " << r.value("program", 0) << ", master "
+              << r.value("master", std::string());
+    if (state == "running")
+        std::cout << ", " << r.value("step", std::string()) << ": master cycle " << r.value("cycle", 0) << " of "
+                  << r.value("cycles", 0);
+    if (r.value("set", nlohmann::json()).is_object())
+        std::cout << ", set " << r["set"].value("id", std::string()) << (state == "done" ? " in force" : "");
+    if (r.contains("error")) std::cout << " — " << r["error"].get<std::string>();
+    std::cout << "\n";
+}
+
 /// The simulated camera's optics as they have aged (docs/camera.md, "Aging"), on one line.
 std::string opticsLine(const nlohmann::json& o)
 {
@@ -145,6 +160,9 @@ void printStatus(const nlohmann::json& s)
         std::cout << "\n";
     }
     if (s.contains("health") && s["health"].is_object()) printHealth(s["health"]);
+    if (s.contains("mastering") && s["mastering"].is_object() &&
+        s["mastering"].value("run", nlohmann::json()).is_object())
+        printMasteringRun(s["mastering"]["run"]);
     if (!seq["last_cycle"].is_null()) {
         const auto& c = seq["last_cycle"];
         std::cout << "last cycle:   " << c["verdict"].get<std::string>() << ", serial '"
@@ -161,29 +179,6 @@ void printStatus(const nlohmann::json& s)
                       << c["alignment"].value("method", std::string("?")) << ")\n";
         if (c.contains("simulation") && c["simulation"].contains("seat"))
             std::cout << "true seat:    " << seat(c["simulation"]["seat"]) << " (simulated)\n";
-    }
-}
-
-/// Follows a queued maintenance job (calibrate, flat-field) until it ends: asks `poll`
-/// every 200 ms and returns the job (`key` of the answer) once done, shown to
-/// `progress` at each answer; a failed job is FaultError with the daemon's reason,
-/// one still running after `waitS` FaultError naming its state.
-nlohmann::json followJob(const std::string& path, const nlohmann::json& poll, const std::string& key,
-                         const std::string& what, double waitS,
-                         const std::function<void(const nlohmann::json&)>& progress)
-{
-    Clock& clock = Clock::steady();
-    const auto deadline =
-        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(waitS));
-    while (true) {
-        auto job = daemonRequest(path, poll)[key];
-        if (progress) progress(job);
-        const auto state = job.value("state", std::string());
-        if (state == "done") return job;
-        if (state == "failed") throw FaultError(job.value("error", what + " failed"));
-        if (clock.now() > deadline)
-            throw FaultError(what + " still " + state + " after --wait-timeout; follow it with ctl status");
-        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
     }
 }
 

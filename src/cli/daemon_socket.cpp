@@ -1,5 +1,6 @@
 #include "daemon_socket.h"
 
+#include "hullgauge/common/clock.h"
 #include "hullgauge/common/error.h"
 
 #include <cerrno>
@@ -54,6 +55,25 @@ nlohmann::json daemonRequest(const std::string& path, const nlohmann::json& req)
     auto j = daemonAnswer(path, req);
     if (!j.value("ok", false)) throw FaultError("daemon: " + j.value("error", std::string("request failed")));
     return j;
+}
+
+nlohmann::json followJob(const std::string& path, const nlohmann::json& poll, const std::string& key,
+                         const std::string& what, double waitS,
+                         const std::function<void(const nlohmann::json&)>& progress)
+{
+    Clock& clock = Clock::steady();
+    const auto deadline =
+        clock.now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(waitS));
+    while (true) {
+        auto job = daemonRequest(path, poll)[key];
+        if (progress) progress(job);
+        const auto state = job.value("state", std::string());
+        if (state == "done") return job;
+        if (state == "failed") throw FaultError(job.value("error", what + " failed"));
+        if (clock.now() > deadline)
+            throw FaultError(what + " still " + state + " after --wait-timeout; follow it with ctl status");
+        clock.sleepUntil(clock.now() + std::chrono::milliseconds(200), [] { return false; });
+    }
 }
 
 } // namespace hg::cli

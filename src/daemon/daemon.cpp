@@ -9,6 +9,7 @@
 #include "hullgauge/common/error.h"
 #include "hullgauge/common/log.h"
 #include "maintenance.h"
+#include "mastering_run.h"
 #include "notify.h"
 #include "plant/mqtt_publisher.h"
 #include "plant/plc_server.h"
@@ -124,8 +125,9 @@ class MainLoop {
   public:
     MainLoop(ConfigPtr config, ProgramCheck checkProgram, PlcRegisters& registers, PlcServer& plc, CycleRunner& runner,
              Notifier& notifier, int sigFd, Clock& clock, store::AuditLog& audit)
-        : config_(std::move(config)), checkProgram_(std::move(checkProgram)), registers_(registers), plc_(plc),
-          runner_(runner), notifier_(notifier), sigFd_(sigFd), clock_(clock), audit_(audit)
+        : config_(std::move(config)), configFile_(config_->file), checkProgram_(std::move(checkProgram)),
+          registers_(registers), plc_(plc), runner_(runner), notifier_(notifier), sigFd_(sigFd), clock_(clock),
+          audit_(audit)
     {
     }
     const ConfigPtr& config() const { return config_; }
@@ -134,12 +136,13 @@ class MainLoop {
     void serve(MaintenanceServer& maintenance, CommandMailbox& mailbox, const MaintenanceServer::Handler& commands);
     /// Told of every reloaded configuration.
     void setHmi(HmiServer* hmi) { hmi_ = hmi; }
-    /// As SIGHUP: the configuration read and checked again on the reload's worker.
+    /// As SIGHUP: the configuration read and checked again on the reload's worker. From any thread (the
+    /// mastering run asks from its own): it reads nothing a reload replaces.
     void requestReload()
     {
-        hg::log::category("daemon")->info("reload of {} requested", config_->file.string());
+        hg::log::category("daemon")->info("reload of {} requested", configFile_.string());
         notifier_.reloading();
-        reload_.request(config_->file);
+        reload_.request(configFile_);
     }
 
   private:
@@ -150,6 +153,7 @@ class MainLoop {
     void applyReload();
 
     ConfigPtr config_;
+    const std::filesystem::path configFile_; ///< the file every reload reads
     ProgramCheck checkProgram_;
     PlcRegisters& registers_;
     PlcServer& plc_;
@@ -312,6 +316,22 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
             hg::log::category("daemon")->error("audit trail: {}", e.what());
         }
     };
+    // The mastering run (docs/mastering.md, "The mastering run"): a client of the station on its own thread.
+    MasteringRun mastering(
+        {.purpose = [&registers] { return registers.purpose(); },
+         .setPurpose = [&registers](station::CyclePurpose p) { registers.setPurpose(p); },
+         .trigger = [&registers](std::uint16_t program,
+                                 const std::string& serial) { return registers.triggerManually(program, serial); },
+         .config = [&runner] { return runner.config(); },
+         .material = [&runner](std::uint16_t program) -> std::optional<std::string> {
+             const auto loaded = runner.program();
+             if (!loaded.is_object() || loaded.value("number", -1) != program) return std::nullopt;
+             return loaded.value("material", std::string());
+         },
+         .reload = [&loop] { loop.requestReload(); },
+         .audit = context.audit},
+        clock);
+    context.mastering = &mastering;
     const auto commands = maintenanceCommands(context);
     MaintenanceServer maintenance(config->maintenance.socket, config->maintenance.group, commands, clock);
     notifier.status("starting devices");
@@ -321,6 +341,7 @@ void runStation(ConfigPtr config, const DevicesFactory& makeDevices, const Inspe
     // The HMI's requests waiting for the loop are answered as refused; then it stops.
     mailbox.close();
     if (hmi) hmi->stop();
+    mastering.cancel("the daemon stopping");
     runner.stop();
     // After the runner: a cycle recorded while stopping may still go out; the state goes offline last.
     if (mqtt) mqtt->stop();

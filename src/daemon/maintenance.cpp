@@ -8,6 +8,7 @@
 #include "hullgauge/geometry/station.h"
 #include "hullgauge/store/audit_log.h"
 #include "hullgauge/store/result_store.h"
+#include "mastering_run.h"
 #include "plant/plc_server.h"
 
 #include <algorithm>
@@ -214,14 +215,16 @@ json plcCounters(std::span<const std::uint16_t> regs)
             {"missed_triggers", n.missed}};
 }
 
-// The correction sets the running configuration names (docs/mastering.md, "In the
-// daemon"): `hullgauge master --run` writes into the folder and waits for its set here.
-json masteringStatus(const station::DaemonConfig& cfg)
+// The correction sets the running configuration names and the last mastering run (docs/mastering.md,
+// "In the daemon" and "The mastering run").
+json masteringStatus(const station::DaemonConfig& cfg, const MasteringRun* run)
 {
     json sets = json::object();
     for (const auto& [number, ref] : cfg.programs)
         if (!ref.correctionId.empty()) sets[std::to_string(number)] = ref.correctionId;
-    return {{"folder", cfg.mastering.folder.empty() ? json() : json(cfg.mastering.folder.string())}, {"sets", sets}};
+    return {{"folder", cfg.mastering.folder.empty() ? json() : json(cfg.mastering.folder.string())},
+            {"sets", sets},
+            {"run", run ? run->status() : json()}};
 }
 
 json status(const MaintenanceContext& c, const json&)
@@ -266,7 +269,7 @@ json status(const MaintenanceContext& c, const json&)
             {"health", c.runner.health()},
             {"purpose", std::string(enumName(c.registers.purpose()))},
             {"program", c.runner.program()},
-            {"mastering", masteringStatus(*c.config)},
+            {"mastering", masteringStatus(*c.config, c.mastering)},
             {"simulated_part", c.simulation ? c.simulation->part() : std::string()},
             {"simulated_optics", c.simulation ? c.simulation->optics() : json()}};
 }
@@ -326,31 +329,30 @@ json results(const MaintenanceContext& c, const json& request)
     return {{"ok", true}, {"results", c.store.recent(static_cast<int>(limit.value()))}};
 }
 
+/// Why `serial` cannot be a manual cycle's serial; empty when it can. A manual serial fits the PLC's
+/// SERIAL registers too: it names the part's record and its image folder, which a 300-character serial
+/// once broke; a NUL is padding there, never part of a serial.
+std::string serialProblem(const std::string& serial)
+{
+    if (serial.size() > station::kSerialChars)
+        return fmt::format("serial: {} characters; a serial has at most {} (the PLC's SERIAL registers)", serial.size(),
+                           station::kSerialChars);
+    for (std::size_t i = 0; i < serial.size(); ++i)
+        if (const auto byte = static_cast<unsigned char>(serial[i]); byte == 0 || !station::validSerialByte(byte))
+            return fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte);
+    return {};
+}
+
 json trigger(const MaintenanceContext& c, const json& request)
 {
     const auto program = wholeNumber(request, "program", 1, 65535, std::nullopt);
     if (!program) return refusal(program.status());
     const auto named = textField(request, "serial");
     if (!named) return refusal(named.status());
-    const auto& serial = named.value();
-    // A manual serial fits the PLC's SERIAL registers too: it names the part's
-    // record and its image folder, which a 300-character serial once broke.
-    if (serial.size() > station::kSerialChars)
-        return {{"ok", false},
-                {"error", fmt::format("serial: {} characters; a serial has at most {} (the PLC's SERIAL registers)",
-                                      serial.size(), station::kSerialChars)}};
-    // The PLC's rule for its SERIAL registers; a NUL is padding there, never part of a serial.
-    for (std::size_t i = 0; i < serial.size(); ++i)
-        if (const auto byte = static_cast<unsigned char>(serial[i]); byte == 0 || !station::validSerialByte(byte))
-            return {{"ok", false},
-                    {"error", fmt::format("serial: byte {} is 0x{:02x}; a serial is printable ASCII", i + 1, byte)}};
-    const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program.value()), serial);
+    if (const auto problem = serialProblem(named.value()); !problem.empty()) return {{"ok", false}, {"error", problem}};
+    const auto reason = c.registers.triggerManually(static_cast<std::uint16_t>(program.value()), named.value());
     if (reason == station::RejectReason::None) return {{"ok", true}};
-    static constexpr const char* kMasteringDue =
-        "re-mastering is due and its grace is used up: run the master (purpose master), then reload its correction set";
-    static constexpr const char* why[] = {"", "busy", "unknown part program", "not ready (fault or starting)",
-                                          kMasteringDue};
-    return {{"ok", false}, {"error", std::string("trigger refused: ") + why[static_cast<int>(reason)]}};
+    return {{"ok", false}, {"error", "trigger refused: " + triggerRefusal(reason)}};
 }
 
 // The purpose of the cycles triggered from now on (docs/study.md); the PLC's
@@ -378,10 +380,18 @@ json abortCycle(const MaintenanceContext& c, const json&)
     return {{"ok", true}, {"aborted", c.runner.abort()}};
 }
 
+/// The refusal of another maintenance job while the mastering run owns the station; null when none runs.
+json refusedWhileMastering(const MaintenanceContext& c, const std::string& what)
+{
+    if (!c.mastering || !c.mastering->running()) return nullptr;
+    return {{"ok", false}, {"error", what + ": a mastering run is running (cancel it with the command master)"}};
+}
+
 // The live fixture calibration (docs/calibration.md), run by the cycle runner
 // between cycles. Bad input is answered at once.
 json calibrate(const MaintenanceContext& c, const json& request)
 {
+    if (auto refused = refusedWhileMastering(c, "calibrate"); !refused.is_null()) return refused;
     const auto& config = *c.config;
     CalibrationJob job;
     const auto pattern = textField(request, "pattern");
@@ -419,6 +429,7 @@ json snapshot(const MaintenanceContext& c, const json& request)
     const auto grab = flagField(request, "grab");
     if (!grab) return refusal(grab.status().prefixed("snapshot: "));
     if (!grab.value()) return {{"ok", true}, {"snapshot", c.runner.snapshot().status()}};
+    if (auto refused = refusedWhileMastering(c, "snapshot"); !refused.is_null()) return refused;
     SnapshotJob job;
     const auto& fixture = c.config->station.fixture;
     const bool rail = fixture.type == geometry::FixtureType::Rail;
@@ -450,11 +461,93 @@ json flatField(const MaintenanceContext& c, const json& request)
     const auto take = flagField(request, "take");
     if (!take) return refusal(take.status().prefixed("flat-field: "));
     if (!take.value()) return {{"ok", true}, {"flat_field", c.runner.flatField()}};
+    if (auto refused = refusedWhileMastering(c, "flat-field"); !refused.is_null()) return refused;
     const auto frames = wholeNumber(request, "frames", 1, 64, 8);
     if (!frames) return refusal(frames.status().prefixed("flat-field: "));
     if (const Status queued = c.runner.requestFlatField({static_cast<int>(frames.value())}); !queued.ok())
         return {{"ok", false}, {"error", "flat-field: " + queued.message()}};
     return {{"ok", true}, {"flat_field", c.runner.flatField()}};
+}
+
+/// Why no mastering run may start now (a cycle running, the station not ready, a calibration, snapshot or
+/// flat-field reference queued or running); empty when it may (docs/mastering.md, "The mastering run").
+std::string stationBusy(const MaintenanceContext& c)
+{
+    const auto state = c.runner.state();
+    if (state != station::SequencerState::Ready && state != station::SequencerState::Done)
+        return fmt::format("the station is {} (a cycle runs, or it is not ready): run the master once the line has "
+                           "stopped and the station is ready",
+                           enumName(state));
+    const std::pair<const char*, json> jobs[] = {{"a calibration", c.runner.calibration()},
+                                                 {"a camera snapshot", c.runner.snapshot().status()},
+                                                 {"a flat-field reference", c.runner.flatField()}};
+    for (const auto& [what, job] : jobs) {
+        const auto jobState = job.is_object() ? job.value("state", std::string()) : std::string();
+        if (jobState == "queued" || jobState == "running") return std::string(what) + " is " + jobState;
+    }
+    return {};
+}
+
+/// The run a `master` request asks for; a refusal naming the field otherwise.
+Result<MasteringRequest> masteringRequest(const json& request)
+{
+    MasteringRequest r;
+    const auto program = wholeNumber(request, "program", 1, 65535, std::nullopt);
+    if (!program) return program.status().prefixed("master: ");
+    const auto cycles = wholeNumber(request, "run", 2, 10000, std::nullopt);
+    if (!cycles) return cycles.status().prefixed("master: ");
+    const auto timeout = wholeNumber(request, "timeout_s", 1, 86400, 120);
+    if (!timeout) return timeout.status().prefixed("master: ");
+    const auto text = textField(request, "certificate");
+    const auto name = textField(request, "certificate_file", "certificate");
+    if (!text) return text.status().prefixed("master: ");
+    if (!name) return name.status().prefixed("master: ");
+    if (text.value().empty())
+        return Status::failure(StatusCode::NotAllowed, "master: certificate: the master's certificate (YAML) is "
+                                                       "required");
+    if (request.contains("material")) {
+        const auto material = textField(request, "material");
+        if (!material) return material.status().prefixed("master: ");
+        r.material = material.value();
+    }
+    try {
+        r.master = study::parseMasterCertificate(text.value(), name.value());
+    } catch (const std::exception& e) {
+        return Status::failure(StatusCode::NotAllowed, std::string("master: ") + e.what());
+    }
+    if (const auto problem = serialProblem(r.master.serial); !problem.empty())
+        return Status::failure(StatusCode::NotAllowed, "master: " + name.value() + ": the master's " + problem);
+    r.program = static_cast<std::uint16_t>(program.value());
+    r.cycles = static_cast<std::size_t>(cycles.value());
+    r.timeout = std::chrono::seconds(timeout.value());
+    const json caller = request.value("caller", json::object());
+    r.who = caller.value("who", "unix:?");
+    r.role = caller.value("role", "");
+    r.source = caller.value("source", "socket");
+    return r;
+}
+
+// The mastering run (docs/mastering.md, "The mastering run"): `run` N starts it, `cancel` ends it at
+// its next wait; without either the last run's status is answered.
+json master(const MaintenanceContext& c, const json& request)
+{
+    if (!c.mastering) return {{"ok", false}, {"error", "master: the mastering run is not offered here"}};
+    const auto cancel = flagField(request, "cancel");
+    if (!cancel) return refusal(cancel.status().prefixed("master: "));
+    if (cancel.value()) {
+        const auto by = request.value("caller", json::object()).value("who", std::string("unix:?"));
+        const bool cancelled = c.mastering->cancel(by);
+        return {{"ok", true}, {"cancelled", cancelled}, {"run", c.mastering->status()}};
+    }
+    if (!request.contains("run")) return {{"ok", true}, {"run", c.mastering->status()}};
+    const auto wanted = masteringRequest(request);
+    if (!wanted) return refusal(wanted.status());
+    // A run already running is refused as such (start says so), not as the cycle it keeps busy.
+    if (const auto busy = c.mastering->running() ? std::string() : stationBusy(c); !busy.empty())
+        return {{"ok", false}, {"error", "master: " + busy}};
+    if (const Status started = c.mastering->start(wanted.value()); !started.ok())
+        return refusal(started.prefixed("master: "));
+    return {{"ok", true}, {"run", c.mastering->status()}};
 }
 
 json simPart(const MaintenanceContext& c, const json& request)
@@ -497,6 +590,7 @@ const std::map<std::string, Command, std::less<>> kCommands{
     {"status", status},       {"results", results},         {"trigger", trigger},  {"abort", abortCycle},
     {"calibrate", calibrate}, {"calibration", calibration}, {"sim-part", simPart}, {"purpose", purpose},
     {"snapshot", snapshot},   {"reload", reload},           {"sim-age", simAge},   {"flat-field", flatField},
+    {"master", master},
 };
 
 } // namespace
@@ -526,10 +620,13 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
 {
     static const std::map<std::string, std::string> kActions{
         {"purpose", "setting.purpose"},   {"sim-part", "setting.sim-part"},         {"sim-age", "setting.sim-age"},
-        {"calibrate", "calibration.run"}, {"flat-field", "calibration.flat-field"}, {"reload", "setting.reload"}};
+        {"calibrate", "calibration.run"}, {"flat-field", "calibration.flat-field"}, {"reload", "setting.reload"},
+        {"master", "mastering.run"}};
     const auto action = kActions.find(command);
     if (!c.audit || action == kActions.end()) return;
     if (command == "flat-field" && !(request.contains("take") && request["take"] == true)) return;
+    const bool masterCancel = command == "master" && request.value("cancel", json()) == json(true);
+    if (command == "master" && !request.contains("run") && !masterCancel) return;
     if ((command == "purpose" || command == "sim-part" || command == "sim-age") && before.empty()) return;
     // The caller is set by the socket server or the HMI, never by the client (answerMaintenanceRequest).
     const json caller = request.value("caller", json::object());
@@ -537,7 +634,7 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
     entry.who = caller.value("who", "unix:?");
     entry.role = caller.value("role", "");
     entry.source = caller.value("source", "socket");
-    entry.action = action->second;
+    entry.action = masterCancel ? "mastering.cancel" : action->second;
     entry.object = command == "calibrate" && answer.contains("calibration") && answer["calibration"].is_object()
                        ? answer["calibration"].value("out", std::string())
                    : command == "flat-field" ? c.config->health.reference.string()
@@ -555,6 +652,14 @@ void recordChange(const MaintenanceContext& c, const std::string& command, const
     if (command == "flat-field")
         entry.detail = "frames " + (request.contains("frames") ? words("frames") : std::string("8")) +
                        (ok ? "" : ": " + entry.detail);
+    if (command == "master") {
+        entry.object = "program " + words("program");
+        if (!masterCancel)
+            entry.detail = words("run") + " master cycles" +
+                           (ok ? " of " + answer["run"].value("master", std::string()) : ": " + entry.detail);
+        else if (answer.value("cancelled", false) == false)
+            entry.detail = "no mastering run was running";
+    }
     entry.before = before;
     entry.after = before.empty() ? std::string() : changedValue(c, command, request);
     c.audit(std::move(entry));

@@ -28,6 +28,7 @@ struct AuditEntry;
 namespace hg::daemon {
 
 class CycleRunner;
+class MasteringRun;
 class PlcRegisters;
 class PlcServer;
 class StationDevices;
@@ -105,6 +106,8 @@ struct MaintenanceContext {
     /// Reads the configuration and its programs again, as SIGHUP does (the
     /// workbench's release, docs/workbench.md); empty: `reload` is refused.
     std::function<void()> requestReload = {};
+    /// The mastering run (docs/mastering.md, "The mastering run"); null: `master` is refused.
+    MasteringRun* mastering = nullptr;
     /// Records a change (cycle purpose, simulated part, calibration, flat-field reference, reload) in the audit trail
     /// (docs/audit.md) with the request's caller; empty: not recorded.
     std::function<void(store::AuditEntry)> audit = {};
@@ -112,7 +115,7 @@ struct MaintenanceContext {
 
 /// The command table of docs/daemon.md ("Maintenance socket"): status,
 /// results, trigger, abort, calibrate, calibration, sim-part, sim-age, purpose, snapshot, reload,
-/// flat-field; any other command is answered as unknown.
+/// flat-field, master; any other command is answered as unknown.
 MaintenanceServer::Handler maintenanceCommands(MaintenanceContext context);
 
 } // namespace hg::daemon

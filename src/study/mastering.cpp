@@ -9,9 +9,10 @@
 
 namespace hg::study {
 
-MasterCertificate loadMasterCertificate(const std::filesystem::path& file)
+namespace {
+
+MasterCertificate readCertificate(const ConfigNode& root, const std::filesystem::path& file)
 {
-    const ConfigNode root = ConfigNode::loadFile(file);
     if (!root.isMap()) root.fail("expected a map with keys master, certificate, landmarks");
     root.allowOnlyKeys({"master", "certificate", "landmarks"});
     MasterCertificate c;
@@ -33,6 +34,18 @@ MasterCertificate loadMasterCertificate(const std::filesystem::path& file)
         c.landmarks[id] = v;
     }
     return c;
+}
+
+} // namespace
+
+MasterCertificate loadMasterCertificate(const std::filesystem::path& file)
+{
+    return readCertificate(ConfigNode::loadFile(file), file);
+}
+
+MasterCertificate parseMasterCertificate(const std::string& text, const std::string& name)
+{
+    return readCertificate(ConfigNode::parse(text, name), name);
 }
 
 std::vector<StudyRecord> uncorrectedRecords(std::vector<StudyRecord> records)

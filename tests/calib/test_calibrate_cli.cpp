@@ -4,11 +4,14 @@
 #include <fstream>
 #include <sstream>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "fixture_rig.h"
 #include "hgtest/paths.h"
 #include "hgtest/station.h"
 #include "hullgauge/common/config_node.h"
 #include "hullgauge/geometry/station.h"
+#include "telecentric_rig.h"
 
 namespace {
 
@@ -153,4 +156,41 @@ TEST(CalibrateCli, FixtureFromCornerObservationsWritesTheAxes)
                     broken.string());
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("broken.yaml:3: views[0].corners: expected all 9 corners"), std::string::npos) << r.err;
+}
+
+TEST(CalibrateCli, TelecentricIntrinsicsWriteACameraTheStationLoads)
+{
+    // Twelve tilts of the independent renderer's chessboard written as the
+    // camera's images; the data sheet's pitch of 5.5 µm gives the
+    // magnification 100 px/mm · 0.0055 mm = 0.55 (docs/telecentric-calibration.md).
+    using namespace telecentrictest;
+    hgtest::TempDir dir;
+    auto station = hgtest::writeFile(dir / "station.yaml", kStation);
+    const auto lens = trueLens();
+    const auto poses = twelveTilts();
+    std::string images;
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+        const auto image = dir / ("tilt" + std::to_string(i) + ".png");
+        ASSERT_TRUE(cv::imwrite(image.string(), renderView(lens, poses[i], 1000 + i)));
+        images += " " + image.string();
+    }
+    auto r = hgtest::run(hullgauge() + " calibrate intrinsics --model telecentric --pattern " + kPattern +
+                         " --pixel-pitch-mm 0.0055 --images" + images + " --out " + station.string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("fixed by convention"), std::string::npos) << r.out;
+    const auto s = hg::geometry::loadStation(station);
+    EXPECT_EQ(s.camera.projection, hg::geometry::Projection::Telecentric);
+    EXPECT_NEAR(s.camera.K(0, 0) / lens.fx, 1.0, 5e-4);
+    EXPECT_NEAR(s.camera.K(1, 1) / lens.fy, 1.0, 5e-4);
+    EXPECT_NEAR(s.camera.K(0, 2), lens.cx, 0.3);
+    EXPECT_NEAR(s.camera.K(1, 2), lens.cy, 0.3);
+    const auto cam = hg::ConfigNode::loadFile(station)["camera"];
+    EXPECT_NEAR(cam["magnification"].asDouble(), 0.55, 0.55 * 5e-4);
+
+    // A pinhole calibration has no pitch to take.
+    r = hgtest::run(hullgauge() + " calibrate intrinsics --pattern " + kPattern + " --pixel-pitch-mm 0.0055 --images" +
+                    images + " --out " + station.string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--pixel-pitch-mm"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("only with --model telecentric"), std::string::npos) << r.err;
 }

@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""`hullgauge master --run N` on the simulated line (docs/mastering.md, "The command").
+"""`hullgauge master --run N` on the simulated line (docs/mastering.md, "The command"):
+the daemon's mastering run ("The mastering run"), asked for and followed by the command.
 
 Starts tools/simline (config/sim with config/sim-fast and, laid over both, the
 stepped block's program with `inspection.deviation: true` and the daemon's
@@ -12,7 +13,8 @@ with neither --store nor --out: the daemon names its result store and its
 mastering folder. Checked from outside, with the python sqlite3 module on the
 SQLite file and the maintenance socket:
 
-- exit 0, and the purpose is production again;
+- exit 0, and the purpose is production again; the daemon's status names the
+  run done with the set it put in force;
 - exactly 5 rows of purpose master with the certificate's serial, triggered
   manually, all judged, after the production row;
 - the set written to <mastering.folder>/program-1.json: per certified
@@ -96,7 +98,7 @@ def purpose(sock):
     return maintenance(sock, {"command": "purpose"})["purpose"]
 
 
-def check_set(set_file, master_rows):
+def check_set(set_file, master_rows, cycles=5):
     """The set against the master rows as stored: mean, spread and offset per certified landmark."""
     correction = json.loads(set_file.read_text())
     check(correction["program"] == 1 and correction["method"] == "one_point", f"set: {correction}")
@@ -114,7 +116,7 @@ def check_set(set_file, master_rows):
         point = by_id[lid]["points"][0]
         print(f"{lid:<10} readings {[round(r, 5) for r in readings]}, mean {mean:.6f}, s {s:.6f}, "
               f"offset {by_id[lid]['offset_mm']:.6f}", flush=True)
-        check(point["master"] == "MASTER-1" and point["cycles"] == n == 5, f"{lid}: {point}")
+        check(point["master"] == "MASTER-1" and point["cycles"] == n == cycles, f"{lid}: {point}")
         check(abs(point["measured_mm"] - mean) <= 1e-9, f"{lid}: measured {point['measured_mm']}, mean {mean}")
         check(abs(point["spread_mm"] - s) <= 1e-9, f"{lid}: spread {point['spread_mm']}, s {s}")
         check(abs(by_id[lid]["offset_mm"] - (certified - mean)) <= 1e-9, f"{lid}: offset {by_id[lid]['offset_mm']}")
@@ -143,6 +145,9 @@ def run(args, workdir, sock, db_file, masters):
     set_id, offsets = check_set(set_file, master_rows)
     status = maintenance(sock, {"command": "status"})
     check(status["mastering"]["sets"].get("1") == set_id, f"status mastering: {status['mastering']}")
+    run_status = status["mastering"]["run"] or {}
+    check(run_status.get("state") == "done" and run_status.get("set", {}).get("id") == set_id
+          and run_status.get("results") == [r["id"] for r in master_rows], f"status mastering.run: {run_status}")
 
     after = production_cycle(sock, db_file, "PART-2")
     check(after["correction_id"] == set_id and after["purpose"] == "production", f"next production row: {after}")

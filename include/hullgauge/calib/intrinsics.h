@@ -40,6 +40,12 @@ struct IntrinsicsResult {
     int cornersUsed = 0;
 };
 
+/// The report's parameter table (value and one standard deviation of each
+/// of intrinsicParameterNames()) after a header naming `units`.
+std::string formatParameterTable(const IntrinsicsResult& result, const std::string& units);
+/// The report's per-view RMS list.
+std::string formatPerViewRms(const IntrinsicsResult& result);
+
 /// Calibrates from views of a planar target. At least 3 views are needed;
 /// fewer throw hg::InputError naming `field`.
 IntrinsicsResult calibrateIntrinsics(const std::vector<TargetView>& views, cv::Size imageSize,

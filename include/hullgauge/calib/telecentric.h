@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "hullgauge/calib/intrinsics.h"
 #include "hullgauge/calib/rail.h"
 #include "hullgauge/calib/target.h"
 #include "hullgauge/geometry/camera.h"
@@ -52,23 +53,14 @@ struct TelecentricOptions {
 /// tilt's sign not counted) are refused when the aspect ratio is free.
 constexpr double kMinTiltSpreadDeg = 5.0;
 
-struct TelecentricCalibration {
-    /// K (fx, fy in px/mm; cx, cy in px), dist (k1, k2, p1, p2, k3; k1 in
-    /// mm⁻²) and the image size; `projection` is to be read as Telecentric.
-    geometry::Intrinsics intrinsics;
-    double rmsPx = 0.0; ///< RMS reprojection error over all corners
-    std::vector<std::string> viewNames;
-    std::vector<double> perViewRmsPx;
-    /// One standard deviation of fx, fy, cx, cy, k1, k2, p1, p2, k3 (0 for
-    /// fixed ones), in the order of intrinsicParameterNames().
-    std::vector<double> stdDev;
-    /// The target's pose in every view (camera_from_target), t_z = 0.
-    std::vector<geometry::RigidTransform> cameraFromTarget;
+/// The affine camera's calibration: the pinhole result's fields (K with fx,
+/// fy in px/mm; dist k1, k2, p1, p2, k3 with k1 in mm⁻²; `projection`
+/// Telecentric; each target pose with t_z = 0) and what only it has.
+struct TelecentricCalibration : IntrinsicsResult {
     /// Largest angle between two views' target planes (tilt sign not counted).
     double tiltSpreadDeg = 0.0;
     /// The parameters fixed by convention, with the reason, for the report.
     std::vector<std::string> conventions;
-    int cornersUsed = 0;
 
     double pixelAspect() const { return intrinsics.K(1, 1) / intrinsics.K(0, 0); }
 };

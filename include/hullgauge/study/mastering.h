@@ -34,6 +34,9 @@ struct MasterCertificate {
 
 /// Reads and validates a certificate strictly; InputError naming file, key and line.
 MasterCertificate loadMasterCertificate(const std::filesystem::path& file);
+/// The same from the certificate's text (the daemon's mastering run is sent it,
+/// docs/mastering.md "The mastering run"); `name` stands for the file in messages.
+MasterCertificate parseMasterCertificate(const std::string& text, const std::string& name);
 
 /// The study records with each landmark's `deviation_mm` replaced by the
 /// uncorrected reading referred to 20 °C (raw − thermal, docs/mastering.md):

@@ -392,7 +392,7 @@ void CycleRunner::noteLoaded(const station::PartProgramRef& ref)
     const auto info = inspector_.loaded(ref.number);
     nlohmann::json program = nullptr;
     if (info) {
-        program = {{"number", info->number}, {"part", info->part}};
+        program = {{"number", info->number}, {"part", info->part}, {"material", info->material}};
         program["version"] = info->release ? nlohmann::json(info->release->version) : nlohmann::json();
         program["verification_sha256"] =
             info->release ? nlohmann::json(info->release->verificationSha256) : nlohmann::json();

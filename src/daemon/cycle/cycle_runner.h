@@ -63,6 +63,13 @@ class CycleRunner {
 
     /// A new configuration for the next cycle (SIGHUP); the running cycle keeps its own.
     void setConfig(std::shared_ptr<const station::DaemonConfig> config);
+    /// The configuration the next cycle runs with (from any thread): the mastering run waits here for its
+    /// set to be in force (docs/mastering.md, "The mastering run").
+    std::shared_ptr<const station::DaemonConfig> config() const
+    {
+        std::lock_guard lock(mutex_);
+        return config_;
+    }
     /// Abort the running cycle or calibration (maintenance socket; the PLC uses
     /// COMMAND); false, and nothing latched, when none runs (docs/plc.md).
     bool abort();
@@ -106,7 +113,8 @@ class CycleRunner {
     /// State, current cycle and counters for the maintenance socket.
     nlohmann::json describe() const;
     /// The part program the inspection last loaded for a changeover or a cycle:
-    /// number, part, version and verification_sha256 (null for a draft); null
+    /// number, part, version, verification_sha256 (null for a draft) and material ('' when the
+    /// program names none); null
     /// before the first (docs/daemon.md, "Maintenance socket").
     nlohmann::json program() const;
 

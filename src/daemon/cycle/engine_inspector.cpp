@@ -131,7 +131,7 @@ void applyCorrection(LoadedProgram& p, const station::PartProgramRef& ref)
 /// grazes it: its normal within about 3° of the image plane there.
 bool grazes(const geometry::CameraModel& camera, const inspect::MapLandmark& lm)
 {
-    const geometry::Vec3 sight = (lm.position - camera.centre()).normalized();
+    const geometry::Vec3 sight = camera.lineOfSight(lm.position);
     return std::abs(sight.dot(lm.normal)) < 0.05;
 }
 
@@ -209,7 +209,9 @@ class EngineInspector : public Inspector {
     {
         const auto it = loaded_.find(number);
         if (it == loaded_.end()) return std::nullopt;
-        return LoadedProgramInfo{number, it->second.program.part, releaseOf(it->second.program)};
+        const auto& program = it->second.program;
+        return LoadedProgramInfo{number, program.part, releaseOf(program),
+                                 program.material ? program.material->name : std::string()};
     }
 
     // A planned pose's region was found when the program was loaded; a pose

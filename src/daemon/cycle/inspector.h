@@ -97,6 +97,9 @@ struct LoadedProgramInfo {
     std::string part; ///< the part program's name
     /// Its release (docs/commissioning.md, "Release"); absent for a draft.
     std::optional<station::ProgramRelease> release;
+    /// The material it names (`material.name`, docs/part-program.md); '' when none: what its correction
+    /// sets are kept for (docs/mastering.md).
+    std::string material{};
 };
 
 class Inspector {

@@ -691,6 +691,7 @@ void HmiServer::routeMaintenance()
                 {"purpose", {Permission::Operate, "setting.purpose"}},
                 {"calibrate", {Permission::Calibration, "calibration.run"}},
                 {"flat-field", {Permission::Calibration, "calibration.flat-field"}},
+                {"master", {Permission::Calibration, "mastering.run"}},
                 {"reload", {Permission::Settings, "setting.reload"}}};
             const auto command = body["command"].get<std::string>();
             const auto offered = kOffered.find(command);

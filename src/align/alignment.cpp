@@ -230,19 +230,18 @@ double Aligner::marginMm() const
 std::vector<cv::Rect> Aligner::searchRegions(const geometry::CameraModel& camera) const
 {
     const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
+    const double focal = std::max(camera.intrinsics().K(0, 0), camera.intrinsics().K(1, 1));
     const double turn = std::sin(geometry::degToRad(impl_->settings.maxRotationDeg));
     std::vector<cv::Rect> out;
     for (const ContourSample& s : impl_->samplesOf(camera)) {
         SampleImage at;
         if (!projectSample(*impl_->graph, s, camera, at)) continue;
         // A seat within the limits moves the sample by at most the margin,
-        // seen from no nearer than its depth less the margin (at any depth
-        // through a telecentric lens); later rounds search kRefineBandPx about
-        // the seated sample, along a normal turned by at most the rotation limit.
-        const double depth = camera.depthOf(s.point) - impl_->marginMm();
-        const double moved = camera.depthInFront(depth) && (camera.isTelecentric() || depth > 1e-6)
-                                 ? impl_->marginMm() / camera.millimetresPerPixelAt(depth).minCoeff() + 1.0
-                                 : 1e6;
+        // seen from no nearer than its depth less the margin; later rounds
+        // search kRefineBandPx about the seated sample, along a normal turned
+        // by at most the rotation limit.
+        const double depth = camera.cameraFromPart().apply(s.point).z() - impl_->marginMm();
+        const double moved = depth > 1e-6 ? impl_->marginMm() * focal / depth + 1.0 : 1e6;
         const double band = std::max(impl_->searchBandPx(camera, s.point), moved + kRefineBandPx);
         const vision::EdgeReach reach = vision::findEdgeReach(band);
         const Vec2 a = at.pixel - reach.inside * at.normal, b = at.pixel + reach.outside * at.normal;
@@ -260,7 +259,8 @@ std::vector<cv::Rect> Aligner::searchRegions(const geometry::CameraModel& camera
 double Aligner::Impl::searchBandPx(const geometry::CameraModel& camera, const Vec3& point) const
 {
     const double margin = marginMm();
-    const double mmPerPx = camera.millimetresPerPixelAt(camera.depthOf(point)).x();
+    const double depth = camera.cameraFromPart().apply(point).z();
+    const double mmPerPx = depth / camera.intrinsics().K(0, 0);
     return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
 }
 
@@ -312,9 +312,8 @@ Aligner::Impl::measure(const std::vector<AlignmentView>& views,
 }
 
 // Residual: the edge's distance from the projected sample along the normal;
-// its gradient through the undistorted projection, pinhole or telecentric
-// (distortion changes it by far less than the step matters: the residual
-// itself is exact).
+// its gradient through the pinhole (distortion changes it by far less than
+// the step matters: the residual itself is exact).
 Observation Aligner::Impl::observe(const Correspondence& c, const AlignmentView& view,
                                    const geometry::RigidTransform& seat) const
 {
@@ -324,13 +323,17 @@ Observation Aligner::Impl::observe(const Correspondence& c, const AlignmentView&
     Observation o;
     o.group = std::max(0, c.sample->datum);
     const auto u = view.camera.projectCameraPoint(Z);
-    if (!u) {
+    if (!u || Z.z() <= 0.0) {
         o.gradient.setZero();
         o.residual = 0.0;
         return o;
     }
     o.residual = c.normal.dot(*u - c.edge);
-    const Eigen::Matrix<double, 2, 3> Jp = view.camera.undistortedPointJacobian(Z);
+    const geometry::Mat3& K = view.camera.intrinsics().K;
+    const double z = Z.z();
+    Eigen::Matrix<double, 2, 3> Jp;
+    Jp << K(0, 0) / z, K(0, 1) / z, -(K(0, 0) * Z.x() + K(0, 1) * Z.y()) / (z * z), 0.0, K(1, 1) / z,
+        -K(1, 1) * Z.y() / (z * z);
     const Vec3 g = (c.normal.transpose() * Jp * cam.R).transpose();
     const Vec3 arm = Y - seat.apply(reference);
     o.gradient << arm.cross(g) / lever, g;

@@ -58,7 +58,7 @@ int computeFromStore(const MasterOptions& o, const std::vector<study::MasterCert
                                                 Clock::steady().wallMs());
     inspect::saveCorrectionSet(set, o.out);
     std::cout << "correction set " << set.id << " (" << enumName(set.method()) << ") written to " << o.out << "\n";
-    const auto landmarks = inspect::landmarkSummary(set);
+    const auto landmarks = store::landmarkSummary(set);
     printLandmarks(landmarks);
     hg::log::category("study")->info("mastering of program {}: set {}", o.program, set.id);
     return 0;

@@ -53,7 +53,7 @@ std::string triggerRefusal(station::RejectReason reason)
 
 json correctionSummary(const inspect::CorrectionSet& set, const std::string& file)
 {
-    const json landmarks = inspect::landmarkSummary(set);
+    const json landmarks = store::landmarkSummary(set);
     return {{"id", set.id}, {"file", file}, {"method", enumName(set.method())}, {"landmarks", landmarks}};
 }
 

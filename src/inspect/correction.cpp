@@ -143,19 +143,6 @@ LandmarkCorrection landmarkFromJson(const nlohmann::json& l, const std::string& 
 
 } // namespace
 
-nlohmann::json landmarkSummary(const CorrectionSet& set)
-{
-    auto landmarks = nlohmann::json::array();
-    for (const auto& l : set.landmarks)
-        landmarks.push_back({{"id", l.id},
-                             {"offset_mm", l.offsetMm()},
-                             {"gain", l.gain()},
-                             {"spread_mm", l.points[0].spreadMm},
-                             {"uncertainty_mm", l.uncertaintyAt(l.points[0].measuredMm)},
-                             {"cycles", l.points[0].cycles}});
-    return landmarks;
-}
-
 CorrectionSet correctionSetFromJson(const nlohmann::json& j, const std::string& name)
 {
     CorrectionSet set;

@@ -67,4 +67,17 @@ inspect::CorrectionSet masterCorrectionSet(const ResultReader& store,
     return study::computeCorrections(masters, cycles, target);
 }
 
+nlohmann::json landmarkSummary(const inspect::CorrectionSet& set)
+{
+    auto landmarks = nlohmann::json::array();
+    for (const auto& l : set.landmarks)
+        landmarks.push_back({{"id", l.id},
+                             {"offset_mm", l.offsetMm()},
+                             {"gain", l.gain()},
+                             {"spread_mm", l.points[0].spreadMm},
+                             {"uncertainty_mm", l.uncertaintyAt(l.points[0].measuredMm)},
+                             {"cycles", l.points[0].cycles}});
+    return landmarks;
+}
+
 } // namespace hg::store

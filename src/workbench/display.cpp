@@ -139,10 +139,7 @@ nlohmann::json cameraJson(const geometry::CameraModel& camera, const Eigen::Vect
 {
     const geometry::RigidTransform& T = camera.cameraFromPart();
     const geometry::Mat3& K = camera.intrinsics().K;
-    // A telecentric camera has no centre: where its optical axis leaves the
-    // lens's front stands for it (docs/workbench.md).
-    return {{"projection", camera.isTelecentric() ? "telecentric" : "pinhole"},
-            {"centre", geometry::toJson(camera.sightOrigin(T.inverse().t))},
+    return {{"centre", geometry::toJson(camera.centre())},
             {"rotation", geometry::toJson(geometry::Mat3(T.R.transpose()))},
             {"fx", K(0, 0)},
             {"fy", K(1, 1)},
@@ -150,8 +147,7 @@ nlohmann::json cameraJson(const geometry::CameraModel& camera, const Eigen::Vect
             {"cy", K(1, 2)},
             {"width", camera.imageSize().width},
             {"height", camera.imageSize().height},
-            // The target's depth along the axis from that centre: for a telecentric camera, from its lens's front.
-            {"working_distance_mm", camera.isTelecentric() ? camera.rangeTo(target) : camera.depthOf(target)}};
+            {"working_distance_mm", (T.R * target + T.t).z()}};
 }
 
 cv::Mat annotatedView(const model::TriangleMesh& mesh, const geometry::Station& station,

@@ -3,9 +3,7 @@
 
 Starts tools/simline (fixture simulator on Modbus TCP, hullgauged with the
 simulated camera and config/sim, with --config laid over it: CTest uses
-config/sim-fast, the same line with a faster turntable, and
-config/sim-telecentric, a telecentric lens at 0.01 mm per pixel on a
-quarter-size block with the same landmarks and defects), runs --cycles
+config/sim-fast, the same line with a faster turntable), runs --cycles
 inspections (CTest: 100) with the
 independent PLC client tools/plc-client alternating the nominal part and a
 defective variant (half the run `face-low`, half `corner-missing`), and checks:
@@ -96,15 +94,11 @@ def tmul(a, v):
 
 
 def sight(station, pose, seat):
-    """Unit direction from the part's reference point back along its line of sight, in the part's frame:
-    camera_from_part = camera_from_fixture · Rot(declination) · Rot(rotation) · seat (axes through the origin).
-    Towards the camera centre; for a telecentric camera (docs/telecentric.md) against its optical axis."""
+    """Unit direction from the part's reference point to the camera centre, in the part's frame:
+    camera_from_part = camera_from_fixture · Rot(declination) · Rot(rotation) · seat (axes through the origin)."""
     fixture = station["fixture"]
     pose_r = mul(mul(fixture["camera_from_fixture"]["R"], rotation(fixture["declination_axis"], pose["declination_deg"])),
                  rotation(fixture["rotation_axis"], pose["rotation_deg"]))
-    if station["camera"].get("model") == "telecentric":
-        back = tmul(pose_r, [0, 0, -1])  # the nominal frame
-        return tmul(seat["R"], back)
     centre = tmul(pose_r, [-v for v in fixture["camera_from_fixture"]["t"]])  # the nominal frame
     in_part = tmul(seat["R"], [c - t for c, t in zip(centre, seat["t"])])
     d = [p - q for p, q in zip(in_part, seat["centre"])]
@@ -209,9 +203,7 @@ def main():
         rows = db.execute("SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_json, alignment_json, "
                           "simulation_json FROM inspections WHERE manual = 0 ORDER BY id").fetchall()
         check(len(rows) == len(plan), f"{len(rows)} rows in the result store for {len(plan)} cycles")
-        overlaid = args.config / "station.yaml" if args.config else None
-        station_file = overlaid if overlaid and overlaid.exists() else args.source / "config" / "sim" / "station.yaml"
-        station = yaml.safe_load(station_file.read_text())
+        station = yaml.safe_load((args.source / "config" / "sim" / "station.yaml").read_text())
         after_all, before_all = [], []
         for (seq, serial, part, expected), (db_seq, db_serial, verdict, failed, landmarks, alignment,
                                             simulation) in zip(plan, rows):

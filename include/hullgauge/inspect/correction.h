@@ -77,9 +77,6 @@ struct CorrectionSet {
 };
 
 nlohmann::json toJson(const CorrectionSet& set);
-/// Each landmark's correction as the tools report it (docs/mastering.md):
-/// id, offset_mm, gain, and the first point's spread_mm, uncertainty_mm and cycles.
-nlohmann::json landmarkSummary(const CorrectionSet& set);
 /// Throws InputError naming `name` and the field when the JSON is not a correction set.
 CorrectionSet correctionSetFromJson(const nlohmann::json& j, const std::string& name);
 /// The file a correction set is kept in; durable (written, synced, then renamed into place).

@@ -10,6 +10,7 @@
 #include "hullgauge/study/mastering.h"
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
@@ -36,5 +37,10 @@ inspect::CorrectionSet masterCorrectionSet(const ResultReader& store,
                                            const std::vector<study::MasterCertificate>& masters,
                                            const MasterCycleSelection& selection, const std::string& material,
                                            std::int64_t createdUnixMs);
+
+/// Each landmark's correction in a set as the tools report it
+/// (docs/mastering.md): id, offset_mm, gain, and the first point's spread_mm,
+/// uncertainty_mm and cycles.
+nlohmann::json landmarkSummary(const inspect::CorrectionSet& set);
 
 } // namespace hg::store

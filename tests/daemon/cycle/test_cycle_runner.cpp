@@ -961,8 +961,11 @@ TEST_F(CycleRunnerTest, TheResultNamesTheReleaseOfTheProgramAndADraftsNone)
     EXPECT_EQ(record["program_sha256"], digest);
     EXPECT_EQ(runner->describe()["last_cycle"]["program_version"], 4);
     EXPECT_EQ(runner->describe()["last_cycle"]["program_sha256"], digest);
-    EXPECT_EQ(runner->program(),
-              (nlohmann::json{{"number", 1}, {"part", "block"}, {"version", 4}, {"verification_sha256", digest}}));
+    EXPECT_EQ(runner->program(), (nlohmann::json{{"number", 1},
+                                                 {"part", "block"},
+                                                 {"material", ""}, // the program names none (docs/daemon.md)
+                                                 {"version", 4},
+                                                 {"verification_sha256", digest}}));
 
     inspector.release.reset();
     trigger(2);

@@ -93,16 +93,20 @@ std::string formatPerViewRms(const IntrinsicsResult& r)
     return s.str();
 }
 
-std::string formatIntrinsicsReport(const IntrinsicsResult& r)
+std::string formatReportHead(const IntrinsicsResult& r, const std::string& what)
 {
     std::ostringstream s;
     char line[256];
-    s << "camera intrinsics (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
+    s << what << " (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
       << r.intrinsics.imageSize.width << "x" << r.intrinsics.imageSize.height << ")\n";
     std::snprintf(line, sizeof line, "  RMS reprojection error  %.4f px\n", r.rmsPx);
     s << line;
-    s << formatParameterTable(r, "") << formatPerViewRms(r);
     return s.str();
+}
+
+std::string formatIntrinsicsReport(const IntrinsicsResult& r)
+{
+    return formatReportHead(r, "camera intrinsics") + formatParameterTable(r, "") + formatPerViewRms(r);
 }
 
 } // namespace hg::calib

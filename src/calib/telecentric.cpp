@@ -373,10 +373,7 @@ std::string formatTelecentricReport(const TelecentricCalibration& r)
 {
     std::ostringstream s;
     char line[256];
-    s << "telecentric camera (" << r.viewNames.size() << " views, " << r.cornersUsed << " corners, image "
-      << r.intrinsics.imageSize.width << "x" << r.intrinsics.imageSize.height << ")\n";
-    std::snprintf(line, sizeof line, "  RMS reprojection error  %.4f px\n", r.rmsPx);
-    s << line;
+    s << formatReportHead(r, "telecentric camera");
     std::snprintf(line, sizeof line, "  pixel aspect fy/fx      %.6f\n  tilt spread             %.1f deg\n",
                   r.pixelAspect(), r.tiltSpreadDeg);
     s << line;

@@ -113,13 +113,16 @@ std::size_t stepBin(int step, int quantum)
 // or, `centred` on whole numbers, [k − ½, k + ½) and the first [0, ½): the
 // plain median of |differences| of 8-bit grey levels jumps by whole levels,
 // this one follows σ smoothly down to the quantisation.
-double binnedMedian(const std::vector<int>& bins, long total, bool centred)
+double binnedMedian(const std::vector<int>& bins, long total, bool centred, std::size_t first = 0)
 {
     if (total <= 0) return kNoFigure;
     const double half = 0.5 * static_cast<double>(total);
     long below = 0;
-    for (std::size_t k = 0; k < bins.size(); ++k) {
-        if (static_cast<double>(below + bins[k]) > half) {
+    // Integers compared (below + n > total / 2 ⇔ 2 (below + n) > total), from
+    // the first bin that can hold anything: a per-view histogram of 4096 bins
+    // is otherwise walked from 0 on every view.
+    for (std::size_t k = first; k < bins.size(); ++k) {
+        if (2 * (below + bins[k]) > total) {
             const double lower = !centred ? static_cast<double>(k) : k == 0 ? 0.0 : k - 0.5;
             const double width = centred && k == 0 ? 0.5 : 1.0;
             return lower + width * (half - static_cast<double>(below)) / bins[k];
@@ -712,8 +715,13 @@ void HealthMonitor::sampleBackground(ViewContext& ctx)
         sampleGrid<std::uint16_t>(image.grey, grid, samples);
     if (samples.empty()) return;
     std::vector<int> ratios(static_cast<std::size_t>(kRatioBins), 0), steps(stepBinCount(ctx.full), 0);
-    for (const BackgroundSample& s : samples) ++ratios[ratioBin(s.ratio)];
-    ctx.medianRatio = binnedMedian(ratios, static_cast<long>(samples.size()), false) * kRatioBinWidth;
+    std::size_t lowest = ratios.size();
+    for (const BackgroundSample& s : samples) {
+        const std::size_t bin = ratioBin(s.ratio);
+        ++ratios[bin];
+        lowest = std::min(lowest, bin);
+    }
+    ctx.medianRatio = binnedMedian(ratios, static_cast<long>(samples.size()), false, lowest) * kRatioBinWidth;
     const double cut = kRatioCut * ctx.medianRatio;
     // The cycle's noise from the differences of all its views (a view's few
     // hundred give σ to ±5 %); a view of another depth than the first is left out of it.

@@ -168,6 +168,33 @@ def failed_part(driver, row, serial):
     check(listed == expected, f"{serial}: failed landmarks listed {listed}, stored {expected}")
 
 
+# The sizes of the pictures in docs/hmi.md: a line's 1080p panel and a 1280 x 800 panel PC.
+SIZES = [(1920, 1080), (1280, 800)]
+
+
+def set_viewport(driver, width, height):
+    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
+                           {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
+
+
+def save_at_sizes(driver, folder, stem, ready=None, before=None):
+    """`stem`-WxH.png at each of SIZES: the page laid out again at that viewport (`ready` waited for, a
+    JavaScript condition; `before` run first, e.g. a scroll), then the emulation cleared."""
+    try:
+        for width, height in SIZES:
+            set_viewport(driver, width, height)
+            if before:
+                driver.execute_script(before)
+            if ready:
+                WebDriverWait(driver, 30).until(lambda d: d.execute_script(ready))
+            driver.save_screenshot(str(folder / f"{stem}-{width}x{height}.png"))
+    finally:
+        driver.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+
+
+IMAGES_LOADED = "return [...document.querySelectorAll('#images img')].every(i => i.complete)"
+
+
 def search_and_result(driver, url, db, serial, screenshots):
     driver.get(url + "/results")
     box = driver.find_element(By.ID, "f-serial")
@@ -179,7 +206,7 @@ def search_and_result(driver, url, db, serial, screenshots):
         driver.find_element(By.ID, "f-serial").clear()
         driver.find_element(By.ID, "search").click()
         WebDriverWait(driver, 30).until(lambda d: len(texts(d, "#results tbody tr")) > 3)
-        driver.save_screenshot(str(screenshots / "hmi-results.png"))
+        save_at_sizes(driver, screenshots, "hmi-results")
     csv_download(driver, db)
     row = stored(db, serial)
     driver.get(f"{url}/result?id={row['id']}")
@@ -190,9 +217,7 @@ def search_and_result(driver, url, db, serial, screenshots):
                         texts(driver, "#landmarks tr[data-landmark]", "data-status")))
     check(statuses == {l["id"]: l["status"] for l in landmarks}, f"result {row['id']}: statuses shown {statuses}")
     if screenshots:
-        WebDriverWait(driver, 30).until(lambda d: d.execute_script(
-            "return [...document.querySelectorAll('#images img')].every(i => i.complete)"))
-        driver.save_screenshot(str(screenshots / "hmi-result.png"))
+        save_at_sizes(driver, screenshots, "hmi-result", IMAGES_LOADED)
 
 
 def csv_download(driver, db):
@@ -269,7 +294,7 @@ def maintenance_page(driver, url, port, sock, screenshots):
     check(history[:1] == ["station.yaml"], f"calibration history lists {history}, not the station file first")
     snapshot(driver)
     if screenshots:
-        driver.save_screenshot(str(screenshots / "hmi-maintenance.png"))
+        save_at_sizes(driver, screenshots, "hmi-maintenance")
         driver.execute_script("document.getElementById('snapshot-facts').scrollIntoView()")
         driver.save_screenshot(str(screenshots / "hmi-snapshot.png"))
 

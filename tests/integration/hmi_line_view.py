@@ -39,7 +39,7 @@ from zoneinfo import ZoneInfo
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
-from hmi_browser import browser, plc_cycle, stored, texts  # noqa: E402
+from hmi_browser import SIZES, browser, plc_cycle, set_viewport, stored, texts  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium.common.exceptions import TimeoutException  # noqa: E402
@@ -49,7 +49,6 @@ BROWSER_ZONE = "Europe/Berlin"
 DAEMON_ZONE = "Asia/Kolkata"  # half an hour off any whole-hour zone: a shift start in the wrong zone shows
 STATUS = 102
 PLC_STATUS_NAMES = {0: "ready", 1: "busy", 2: "done", 3: "fault", 4: "starting", 5: "maintenance"}
-SIZES = [(1920, 1080), (1280, 800)]
 STATE_WORDS = {"Starting up", "Ready for the next part", "Judging the part", "In fault",
                "Maintenance: calibration running"}
 # The parts the simulated line shows (config/sim's simulation.parts), in turn: seven rejects for a
@@ -93,11 +92,6 @@ def run_cycles(client, sock, db):
     while stored(db, "MANUAL-LINE") is None and time.monotonic() < deadline:
         time.sleep(0.05)
     check(stored(db, "MANUAL-LINE") is not None, "the maintenance-triggered cycle was not stored")
-
-
-def set_viewport(driver, width, height):
-    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
-                           {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False})
 
 
 VERDICT_HEIGHT = """

@@ -27,7 +27,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
-from hmi_browser import browser as chromium, plc_cycle, stored  # noqa: E402
+from hmi_browser import browser as chromium, plc_cycle, save_at_sizes, stored  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
@@ -247,8 +247,8 @@ def main():
                 wait_for_views(driver, url, rows[serial]["id"])
                 check_labels(driver, "#images", rows[serial], serial)
             if args.screenshots:
-                driver.execute_script("document.querySelector('#images .vv-view').scrollIntoView()")
-                driver.save_screenshot(str(args.screenshots / "hmi-reject-view.png"))
+                save_at_sizes(driver, args.screenshots, "hmi-reject-view",
+                              before="document.querySelector('#images .vv-view').scrollIntoView()")
             pan_and_zoom(driver)
             # The line view's last failed part: the same viewer.
             driver.get(url + "/")

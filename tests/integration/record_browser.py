@@ -29,7 +29,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from simline_harness import check, outcome, test_args, free_port, maintenance, start_line, stop_line  # noqa: E402
-from hmi_browser import browser, plc_cycle, request, stored, texts  # noqa: E402
+from hmi_browser import browser, plc_cycle, request, save_at_sizes, set_viewport, stored, texts  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from selenium.common.exceptions import TimeoutException  # noqa: E402
@@ -190,15 +190,13 @@ def station_pdf(port, row, landmarks, workdir):
 
 
 def screenshots_of(driver, url, row, folder):
-    """The record at 1920 x 1080, on screen and as printed."""
-    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
-                           {"width": 1920, "height": 1080, "deviceScaleFactor": 1, "mobile": False})
+    """The record at both sizes on screen, and as printed at 1920 x 1080."""
+    ready = ("return window.hgRecord && window.hgRecord.shown !== null && "
+             "[...document.querySelectorAll('#images img')].every(i => i.complete)")
+    driver.get(f"{url}/record?id={row['id']}")
+    save_at_sizes(driver, folder, "hmi-record", ready)
+    set_viewport(driver, 1920, 1080)
     try:
-        driver.get(f"{url}/record?id={row['id']}")
-        WebDriverWait(driver, 30).until(lambda d: d.execute_script(
-            "return window.hgRecord && window.hgRecord.shown !== null && [...document.querySelectorAll('#images img')]"
-            ".every(i => i.complete)"))
-        driver.save_screenshot(str(folder / "hmi-record.png"))
         driver.execute_cdp_cmd("Emulation.setEmulatedMedia", {"media": "print"})
         driver.save_screenshot(str(folder / "hmi-record-print.png"))
         driver.execute_cdp_cmd("Emulation.setEmulatedMedia", {"media": ""})

@@ -40,6 +40,9 @@ struct IntrinsicsResult {
     int cornersUsed = 0;
 };
 
+/// The report's first lines: `what` with the views, corners and image size,
+/// then the RMS reprojection error.
+std::string formatReportHead(const IntrinsicsResult& result, const std::string& what);
 /// The report's parameter table (value and one standard deviation of each
 /// of intrinsicParameterNames()) after a header naming `units`.
 std::string formatParameterTable(const IntrinsicsResult& result, const std::string& units);

@@ -397,8 +397,10 @@ std::vector<AlignmentView> exactSeatedViews(const hg::model::TriangleMesh& mesh,
 // extrusion (it sees the L) and along x from 5° above. A turn about y lies in
 // both image planes: the first view sees +θ and −θ alike (the block is
 // symmetric about z = 0 and its lines of sight are parallel), the second tells
-// them apart only along the tall block's top. Every seat is measured on its
-// own side (docs/alignment.md, "Mirror seats"), not its mirror image.
+// them apart only along the tall block's top. Every turn is measured on its
+// own side (docs/alignment.md, "Mirror seats"), not its mirror image; the two
+// views do not always fix the position (the simulated line measures its seat
+// from a view 30° above for that, docs/telecentric.md).
 TEST(Alignment, ATurnAboutAnAxisInEveryImagePlaneIsNotTakenForItsMirror)
 {
     const auto mesh = lBlock();
@@ -407,12 +409,19 @@ TEST(Alignment, ATurnAboutAnAxisInEveryImagePlaneIsNotTakenForItsMirror)
     const std::vector<CameraModel> cameras{telecentricAlong(Vec3(0, 0, 1), Vec3(0, -1, 0)),
                                            telecentricAlong(Vec3(-std::cos(tilt), -std::sin(tilt), 0), Vec3(0, -1, 0))};
     const Aligner aligner(solid, {}, AlignmentSettings{});
-    int k = 0;
-    for (double turnDeg : {-0.35, -0.25, -0.15, 0.15, 0.25, 0.35}) {
-        SCOPED_TRACE("turn about y " + std::to_string(turnDeg) + "°");
-        const RigidTransform turn = RigidTransform::rotation(Vec3::UnitY(), turnDeg);
-        const RigidTransform truth{turn.R, turn.R * Vec3(0.05, -0.1, 0.03)};
-        const AlignmentResult a = aligner.align(exactSeatedViews(mesh, cameras, truth, 400 + k++));
-        expectSeat(a, truth, 0.005, 0.02);
+    // Seats as the simulated nest makes them: 0.3 mm and 0.3° about random axes.
+    std::mt19937_64 rng(23);
+    for (int k = 0; k < 10; ++k) {
+        SCOPED_TRACE("seat " + std::to_string(k));
+        const RigidTransform truth = randomSeat(rng, Vec3(0, 3.75, 0), 0.3, 0.3);
+        const AlignmentResult a = aligner.align(exactSeatedViews(mesh, cameras, truth, 400 + k));
+        ASSERT_TRUE(a.measured) << a.message;
+        // The turn on its own side, never its mirror (which would be 2·|turn| off).
+        EXPECT_LT(hg::geometry::rotationAngleDeg(a.seat.R, truth.R), 0.02);
+        // Where the reference point is: measured, or a direction the two views
+        // leave open reported as held at nominal (docs/alignment.md, "Directions
+        // the views do not determine") — never a wrong position said to be known.
+        const double offMm = (a.seat.apply(a.referencePoint) - truth.apply(a.referencePoint)).norm();
+        EXPECT_TRUE(offMm < 0.005 || !a.fixedDofs.empty()) << offMm << " mm off, no direction reported open";
     }
 }

@@ -17,6 +17,8 @@
 //    target: <= 1 ms more); BM_InspectWithDeviationUnprepared: the same with
 //    the outline found per part (views whose camera was not planned, and
 //    `hullgauge inspect`); BM_PrepareOutlines: that load-time step;
+//    telecentric:1 — the same landmarks and views through telecentric
+//    cameras of the same scale at the block (docs/telecentric.md);
 //  - BM_DenseCarving/<depth>: the same volume-source voxel test applied to
 //    EVERY voxel of the part cube at the same ΔV (dense carving, full-frame
 //    segmentation included), actually run — depth 9 is 134 million voxel
@@ -181,7 +183,8 @@ std::vector<hg::geometry::CameraModel> sceneCameras(const Scene& scene)
 void BM_InspectWithDeviation(benchmark::State& state)
 {
     const bool prepared = state.range(0) != 0;
-    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0);
+    const bool telecentric = state.range(1) != 0;
+    const Scene scene(8, 8, {2448, 2048}, 0.0, 9, 400.0, {}, telecentric);
     Inspector inspector(scene.map, {}, nullptr,
                         std::make_shared<const DeviationGauge>(std::make_shared<const hg::model::Solid>(block())));
     if (prepared) inspector.prepareOutlines(sceneCameras(scene));
@@ -203,8 +206,17 @@ void BM_InspectWithDeviation(benchmark::State& state)
     state.counters["measured"] = measured;
     state.counters["view_measurements"] = views;
     state.counters["worst_abs_deviation_um"] = 1000.0 * worst; // a nominal part: 0 is the truth
+    double largestU = 0.0;
+    for (const auto& l : r.landmarks)
+        if (l.deviation && l.deviation->measured) largestU = std::max(largestU, l.deviation->uncertaintyMm);
+    state.counters["largest_U_um"] = 1000.0 * largestU;
 }
-BENCHMARK(BM_InspectWithDeviation)->ArgName("outlines_at_load")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_InspectWithDeviation)
+    ->ArgNames({"outlines_at_load", "telecentric"})
+    ->Args({1, 0})
+    ->Args({0, 0})
+    ->Args({1, 1})
+    ->Unit(benchmark::kMillisecond);
 
 // The per-part half of the sub-voxel step alone, on views prepared as the
 // daemon's pipeline prepares them (outline points from the program's load):

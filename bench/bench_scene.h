@@ -52,6 +52,20 @@ inline hg::geometry::CameraModel lookAt(const Eigen::Vector3d& centre, const Eig
     return upright(centre, forward, size);
 }
 
+/// The telecentric camera (docs/telecentric.md) along `pinhole`'s optical
+/// axis with the same scale at `target` (a point of that axis, on its focus
+/// plane): fx / distance pixels per millimetre at every depth.
+inline hg::geometry::CameraModel telecentricAt(const hg::geometry::CameraModel& pinhole, const Eigen::Vector3d& target)
+{
+    hg::geometry::Intrinsics in = pinhole.intrinsics();
+    in.projection = hg::geometry::Projection::Telecentric;
+    const double distance = pinhole.rangeTo(target);
+    in.K(0, 0) /= distance;
+    in.K(1, 1) /= distance;
+    const Eigen::Matrix3d& R = pinhole.cameraFromPart().R;
+    return {in, {R, -R * target}};
+}
+
 inline hg::model::TriangleMesh block(double raise = 0.0)
 {
     return hg::model::makeBox({0, 0, 0}, {40, 40, kTop + raise});
@@ -62,9 +76,11 @@ struct Scene {
     std::vector<hg::inspect::CapturedView> frames;
 
     /// `seat` (nominal_from_part, docs/alignment.md): the block is rendered
-    /// seated so, the frames keep the nominal cameras.
+    /// seated so, the frames keep the nominal cameras. `telecentric`: each
+    /// view a telecentric camera along the same axis with the pinhole's scale
+    /// at the top face's middle.
     Scene(int n, int views, cv::Size size, double raise, int depth = 9, double distance = 400.0,
-          const hg::geometry::RigidTransform& seat = {})
+          const hg::geometry::RigidTransform& seat = {}, bool telecentric = false)
     {
         using namespace hg::inspect;
         auto solid = std::make_shared<const hg::model::Solid>(block());
@@ -86,7 +102,9 @@ struct Scene {
         for (int v = 0; v < views; ++v) {
             const double a = 2 * M_PI * v / views;
             const Eigen::Vector3d dir(std::cos(a), std::sin(a), 0);
-            const auto cam = lookAt(Eigen::Vector3d(20, 20, kTop) + distance * dir, -dir, size);
+            const Eigen::Vector3d middle(20, 20, kTop);
+            const auto pinhole = lookAt(middle + distance * dir, -dir, size);
+            const auto cam = telecentric ? telecentricAt(pinhole, middle) : pinhole;
             const hg::geometry::CameraModel seated(cam.intrinsics(), cam.cameraFromPart() * seat);
             frames.push_back({"v" + std::to_string(v), cam, r.render(seated)});
         }

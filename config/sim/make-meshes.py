@@ -1,6 +1,8 @@
 #!/usr/bin/python3
 """Writes the simulated line's parts as binary STL (run once; the files are committed).
 
+  make-meshes.py [FOLDER [SCALE]]   (SCALE 0.25: config/sim-telecentric's quarter-size block)
+
 The part is a stepped block: an L profile in the x-z plane extruded along y
 (y from -20 to 20 mm), standing on the turntable (z = 0). Every variant is a
 prism of its profile, so each is closed and outward-oriented by construction.
@@ -13,7 +15,7 @@ import struct
 import sys
 from pathlib import Path
 
-Y0, Y1 = -20.0, 20.0
+Y0_MM, Y1_MM = -20.0, 20.0
 
 
 def profile(step_top=15.0, chamfer=0.0):
@@ -56,10 +58,13 @@ def ear_clip(p):
     return tris
 
 
-def prism(p):
-    """Triangles (v0, v1, v2) of the profile p (x, z) extruded along y, outward counter-clockwise."""
+def prism(p, scale=1.0):
+    """Triangles (v0, v1, v2) of the profile p (x, z) extruded along y, outward counter-clockwise,
+    every length times `scale`."""
     if signed_area(p) < 0:
         p = p[::-1]
+    p = [(scale * x, scale * z) for x, z in p]
+    Y0, Y1 = scale * Y0_MM, scale * Y1_MM
     # In (x, z) counter-clockwise means the polygon normal is x cross z = -y: that is the y = Y0 cap's outward side.
     front = lambda q: (q[0], Y0, q[1])
     back = lambda q: (q[0], Y1, q[1])
@@ -96,9 +101,10 @@ def write_stl(path, tris, name):
 
 def main():
     out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent
-    write_stl(out / "stepped-block.stl", prism(profile()), "stepped-block nominal")
-    write_stl(out / "stepped-block-face-low.stl", prism(profile(step_top=14.3)), "stepped-block face-low")
-    write_stl(out / "stepped-block-corner-missing.stl", prism(profile(chamfer=5.0)), "stepped-block corner-missing")
+    s = float(sys.argv[2]) if len(sys.argv) > 2 else 1.0
+    write_stl(out / "stepped-block.stl", prism(profile(), s), "stepped-block nominal")
+    write_stl(out / "stepped-block-face-low.stl", prism(profile(step_top=14.3), s), "stepped-block face-low")
+    write_stl(out / "stepped-block-corner-missing.stl", prism(profile(chamfer=5.0), s), "stepped-block corner-missing")
 
 
 if __name__ == "__main__":

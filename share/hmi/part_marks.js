@@ -182,20 +182,27 @@ const PartMarks = (() => {
 
   // A planned view as its camera's frustum: the centre, the rays through the
   // four image corners to the working distance, the image's rectangle there
-  // (its top edge marked), and the view's index.
+  // (its top edge marked), and the view's index. A telecentric camera's lines
+  // of sight are parallel: its frustum is a box from the lens's front.
   function frustum(view, size, selected) {
     const cam = view.camera;
     const R = cam.rotation, centre = vec(cam.centre), wd = cam.working_distance_mm;
-    const at = (u, v) => {
-      const d = [(u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1];
-      return new THREE.Vector3(R[0][0] * d[0] + R[0][1] * d[1] + R[0][2] * d[2],
-        R[1][0] * d[0] + R[1][1] * d[1] + R[1][2] * d[2],
-        R[2][0] * d[0] + R[2][1] * d[1] + R[2][2] * d[2]).multiplyScalar(wd).add(centre);
+    const telecentric = cam.projection === "telecentric";
+    const turn = (d) => new THREE.Vector3(R[0][0] * d[0] + R[0][1] * d[1] + R[0][2] * d[2],
+      R[1][0] * d[0] + R[1][1] * d[1] + R[1][2] * d[2],
+      R[2][0] * d[0] + R[2][1] * d[1] + R[2][2] * d[2]);
+    const at = (u, v, depth = wd) => {
+      const x = (u - cam.cx) / cam.fx, y = (v - cam.cy) / cam.fy;
+      if (telecentric) return turn([x, y, depth]).add(centre);
+      return turn([x, y, 1]).multiplyScalar(depth).add(centre);
     };
     const corners = [at(0, 0), at(cam.width, 0), at(cam.width, cam.height), at(0, cam.height)];
+    const front = telecentric
+      ? [at(0, 0, 0), at(cam.width, 0, 0), at(cam.width, cam.height, 0), at(0, cam.height, 0)]
+      : corners.map(() => centre);
     const top = at(cam.width / 2, -0.12 * cam.height);
     const points = [];
-    corners.forEach((c, k) => points.push(centre, c, c, corners[(k + 1) % 4]));
+    corners.forEach((c, k) => points.push(front[k], c, c, corners[(k + 1) % 4]));
     points.push(corners[0], top, top, corners[1]);
     const color = selected ? COLORS.frustumSelected : COLORS.frustum;
     const lines = new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(points),

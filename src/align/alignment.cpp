@@ -160,6 +160,14 @@ struct Aligner::Impl {
     // Rounds of solve and edge search from nominal, the first with `firstLoss`.
     Fit refine(const std::vector<AlignmentView>& views, const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
                const std::vector<Correspondence>& first, Loss firstLoss) const;
+    // Rounds of edge search and solve (the biweight) from `start`.
+    Fit refineFrom(const std::vector<AlignmentView>& views,
+                   const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+                   const geometry::RigidTransform& start) const;
+    // The fit again from its mirror images where a rotation is seen only by its size (below).
+    void resolveMirrors(const std::vector<AlignmentView>& views,
+                        const std::vector<std::shared_ptr<const ViewEdges>>& prepared, std::size_t samples,
+                        Fit& fit) const;
     // How much of the outline disagrees with a fit: every sample without an
     // edge near it counts 1, every edge its biweight loss at a fixed scale.
     double disagreement(const Fit& fit, const std::vector<AlignmentView>& views, std::size_t samples) const;
@@ -230,18 +238,19 @@ double Aligner::marginMm() const
 std::vector<cv::Rect> Aligner::searchRegions(const geometry::CameraModel& camera) const
 {
     const cv::Rect frame(0, 0, camera.imageSize().width, camera.imageSize().height);
-    const double focal = std::max(camera.intrinsics().K(0, 0), camera.intrinsics().K(1, 1));
     const double turn = std::sin(geometry::degToRad(impl_->settings.maxRotationDeg));
     std::vector<cv::Rect> out;
     for (const ContourSample& s : impl_->samplesOf(camera)) {
         SampleImage at;
         if (!projectSample(*impl_->graph, s, camera, at)) continue;
         // A seat within the limits moves the sample by at most the margin,
-        // seen from no nearer than its depth less the margin; later rounds
-        // search kRefineBandPx about the seated sample, along a normal turned
-        // by at most the rotation limit.
-        const double depth = camera.cameraFromPart().apply(s.point).z() - impl_->marginMm();
-        const double moved = depth > 1e-6 ? impl_->marginMm() * focal / depth + 1.0 : 1e6;
+        // seen from no nearer than its depth less the margin (at any depth
+        // through a telecentric lens); later rounds search kRefineBandPx about
+        // the seated sample, along a normal turned by at most the rotation limit.
+        const double depth = camera.depthOf(s.point) - impl_->marginMm();
+        const double moved = camera.depthInFront(depth) && (camera.isTelecentric() || depth > 1e-6)
+                                 ? impl_->marginMm() / camera.millimetresPerPixelAt(depth).minCoeff() + 1.0
+                                 : 1e6;
         const double band = std::max(impl_->searchBandPx(camera, s.point), moved + kRefineBandPx);
         const vision::EdgeReach reach = vision::findEdgeReach(band);
         const Vec2 a = at.pixel - reach.inside * at.normal, b = at.pixel + reach.outside * at.normal;
@@ -259,8 +268,7 @@ std::vector<cv::Rect> Aligner::searchRegions(const geometry::CameraModel& camera
 double Aligner::Impl::searchBandPx(const geometry::CameraModel& camera, const Vec3& point) const
 {
     const double margin = marginMm();
-    const double depth = camera.cameraFromPart().apply(point).z();
-    const double mmPerPx = depth / camera.intrinsics().K(0, 0);
+    const double mmPerPx = camera.millimetresPerPixelAt(camera.depthOf(point)).x();
     return std::min(250.0, kSearchReach * margin / std::max(mmPerPx, 1e-9) + 2.0);
 }
 
@@ -312,8 +320,9 @@ Aligner::Impl::measure(const std::vector<AlignmentView>& views,
 }
 
 // Residual: the edge's distance from the projected sample along the normal;
-// its gradient through the pinhole (distortion changes it by far less than
-// the step matters: the residual itself is exact).
+// its gradient through the undistorted projection, pinhole or telecentric
+// (distortion changes it by far less than the step matters: the residual
+// itself is exact).
 Observation Aligner::Impl::observe(const Correspondence& c, const AlignmentView& view,
                                    const geometry::RigidTransform& seat) const
 {
@@ -323,17 +332,13 @@ Observation Aligner::Impl::observe(const Correspondence& c, const AlignmentView&
     Observation o;
     o.group = std::max(0, c.sample->datum);
     const auto u = view.camera.projectCameraPoint(Z);
-    if (!u || Z.z() <= 0.0) {
+    if (!u) {
         o.gradient.setZero();
         o.residual = 0.0;
         return o;
     }
     o.residual = c.normal.dot(*u - c.edge);
-    const geometry::Mat3& K = view.camera.intrinsics().K;
-    const double z = Z.z();
-    Eigen::Matrix<double, 2, 3> Jp;
-    Jp << K(0, 0) / z, K(0, 1) / z, -(K(0, 0) * Z.x() + K(0, 1) * Z.y()) / (z * z), 0.0, K(1, 1) / z,
-        -K(1, 1) * Z.y() / (z * z);
+    const Eigen::Matrix<double, 2, 3> Jp = view.camera.undistortedPointJacobian(Z);
     const Vec3 g = (c.normal.transpose() * Jp * cam.R).transpose();
     const Vec3 arm = Y - seat.apply(reference);
     o.gradient << arm.cross(g) / lever, g;
@@ -380,6 +385,63 @@ Aligner::Impl::Fit Aligner::Impl::refine(const std::vector<AlignmentView>& views
         if (round > 0 && moved < 1e-4) break;
     }
     return fit;
+}
+
+Aligner::Impl::Fit Aligner::Impl::refineFrom(const std::vector<AlignmentView>& views,
+                                             const std::vector<std::shared_ptr<const ViewEdges>>& prepared,
+                                             const geometry::RigidTransform& start) const
+{
+    Fit fit;
+    fit.seat = start;
+    for (int round = 0; round < kMaxRounds; ++round) {
+        fit.edges = measure(views, prepared, fit.seat);
+        if (static_cast<int>(fit.edges.size()) < kMinInliers) break;
+        const geometry::RigidTransform before = fit.seat;
+        fit.iterations += solve(fit.edges, views, Loss::Tukey, fit.seat);
+        const double moved = (fit.seat.apply(reference) - before.apply(reference)).norm() +
+                             geometry::degToRad(geometry::rotationAngleDeg(before.R, fit.seat.R)) * lever;
+        if (moved < 1e-4) break;
+    }
+    return fit;
+}
+
+// A rotation about an axis that lies in the image plane of every view moves
+// an outline only through which edges form it: for a part symmetric about the
+// plane of that axis and the line of sight (an extrusion seen along it), +θ
+// and −θ cast the same outline wherever the lines of sight are parallel, and
+// the seat has two minima (a telecentric lens shows no perspective that would
+// tell them apart; docs/alignment.md, "Mirror seats"). For each of the
+// seat's rotation components (about the fixture's axes, through the
+// reference point) of at least kMirrorMinDeg, the seat with that component
+// negated is tried when the outline's edges already fit it nearly as well,
+// refined, and kept when the whole outline agrees with it more.
+void Aligner::Impl::resolveMirrors(const std::vector<AlignmentView>& views,
+                                   const std::vector<std::shared_ptr<const ViewEdges>>& prepared, std::size_t samples,
+                                   Fit& fit) const
+{
+    constexpr double kMirrorMinDeg = 0.01;
+    double best = disagreement(fit, views, samples);
+    const Eigen::AngleAxisd turn(fit.seat.R);
+    const Vec3 rotation = turn.angle() * turn.axis();
+    const Vec3 centre = fit.seat.apply(reference);
+    for (int axis = 0; axis < 3; ++axis) {
+        if (geometry::radToDeg(std::abs(rotation[axis])) < kMirrorMinDeg) continue;
+        Vec3 mirrored = rotation;
+        mirrored[axis] = -mirrored[axis];
+        Fit start = fit;
+        const double angle = mirrored.norm();
+        start.seat.R = Eigen::AngleAxisd(angle, mirrored / angle).toRotationMatrix();
+        start.seat.t = centre - start.seat.R * reference;
+        // Cheap first: the edges already found, at the mirror seat. A rotation the
+        // views see directly leaves most of them beyond the biweight's cut.
+        if (disagreement(start, views, samples) > best + 0.25 * static_cast<double>(fit.edges.size())) continue;
+        const Fit other = refineFrom(views, prepared, start.seat);
+        const double cost = disagreement(other, views, samples);
+        if (static_cast<int>(other.edges.size()) >= kMinInliers && cost < best) {
+            fit = other;
+            best = cost;
+        }
+    }
 }
 
 double Aligner::Impl::disagreement(const Fit& fit, const std::vector<AlignmentView>& views, std::size_t samples) const
@@ -523,6 +585,7 @@ AlignmentResult Aligner::align(const std::vector<AlignmentView>& views,
     Impl::Fit fit = m.refine(views, prepared, first, Loss::Huber);
     const Impl::Fit fromNominal = m.refine(views, prepared, first, Loss::Tukey);
     if (m.disagreement(fromNominal, views, total) < m.disagreement(fit, views, total)) fit = fromNominal;
+    m.resolveMirrors(views, prepared, total, fit);
     out.seat = fit.seat;
     out.iterations = fit.iterations;
     const std::vector<Impl::Correspondence>& cs = fit.edges;

@@ -14,9 +14,11 @@ namespace {
 // Coplanar neighbours: the edge between them is no contour from anywhere.
 constexpr double kFlatCos = 1.0 - 1e-9;
 
-double facing(const Vec3& normal, const Vec3& onFace, const Vec3& eye)
+// Positive when the face is turned towards the camera: its normal against
+// the line of sight that images the point (parallel ones for a telecentric lens).
+double facing(const Vec3& normal, const Vec3& onFace, const geometry::CameraModel& camera)
 {
-    return normal.dot(eye - onFace);
+    return -normal.dot(camera.lineOfSight(onFace));
 }
 
 } // namespace
@@ -61,10 +63,10 @@ int EdgeGraph::datum(const Edge& e) const
     return std::min(d1, d2);
 }
 
-bool EdgeGraph::isContour(const Edge& e, const Vec3& eye) const
+bool EdgeGraph::isContour(const Edge& e, const geometry::CameraModel& camera) const
 {
-    const double s1 = facing(normal(e.f1), vertex(e.a), eye);
-    const double s2 = facing(normal(e.f2), vertex(e.a), eye);
+    const double s1 = facing(normal(e.f1), vertex(e.a), camera);
+    const double s2 = facing(normal(e.f2), vertex(e.a), camera);
     return (s1 > 0.0) != (s2 > 0.0);
 }
 
@@ -101,17 +103,17 @@ bool projectSample(const EdgeGraph& graph, const ContourSample& sample, const ge
 bool imageOf(const EdgeGraph& graph, const ContourSample& sample, const geometry::CameraModel& camera, SampleImage& out)
 {
     const EdgeGraph::Edge& e = graph.edges()[static_cast<std::size_t>(sample.edge)];
-    return graph.isContour(e, camera.centre()) && projectSample(graph, sample, camera, out);
+    return graph.isContour(e, camera) && projectSample(graph, sample, camera, out);
 }
 
 namespace {
 
 // An edge of a face seen within `sinLimit` of edge-on: which of its edges
 // is outermost flips with the seat, so both are sampled.
-bool nearGrazing(const EdgeGraph& graph, const EdgeGraph::Edge& e, const Vec3& eye, double sinLimit)
+bool nearGrazing(const EdgeGraph& graph, const EdgeGraph::Edge& e, const geometry::CameraModel& camera, double sinLimit)
 {
     for (int f : {e.f1, e.f2}) {
-        const Vec3 view = (eye - graph.centroid(f)).normalized();
+        const Vec3 view = camera.lineOfSight(graph.centroid(f));
         if (std::abs(graph.normal(f).dot(view)) < sinLimit) return true;
     }
     return false;
@@ -125,13 +127,12 @@ struct Candidate {
 std::vector<Candidate> candidateEdges(const EdgeGraph& graph, const geometry::CameraModel& camera,
                                       double nearGrazingDeg, double& totalLengthPx)
 {
-    const Vec3 eye = camera.centre();
     const double sinLimit = std::sin(nearGrazingDeg * 3.14159265358979323846 / 180.0);
     std::vector<Candidate> out;
     totalLengthPx = 0.0;
     for (std::size_t i = 0; i < graph.edges().size(); ++i) {
         const auto& e = graph.edges()[i];
-        if (!graph.isContour(e, eye) && !nearGrazing(graph, e, eye, sinLimit)) continue;
+        if (!graph.isContour(e, camera) && !nearGrazing(graph, e, camera, sinLimit)) continue;
         const auto pa = camera.project(graph.vertex(e.a));
         const auto pb = camera.project(graph.vertex(e.b));
         if (!pa || !pb) continue;

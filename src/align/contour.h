@@ -42,8 +42,8 @@ class EdgeGraph {
     const Vec3& centroid(int f) const { return centroids_[static_cast<std::size_t>(f)]; }
     /// The datum an edge lies on: the higher-priority datum of its faces, or -1.
     int datum(const Edge& e) const;
-    /// True when one face of `e` is turned towards `eye` and the other away (part frame).
-    bool isContour(const Edge& e, const Vec3& eye) const;
+    /// True when one face of `e` is turned towards `camera` and the other away.
+    bool isContour(const Edge& e, const geometry::CameraModel& camera) const;
 
   private:
     const model::TriangleMesh* mesh_;

@@ -46,11 +46,16 @@ FixturePose poseOf(const FixtureKinematics& fixture, const Params& x)
     return pose;
 }
 
-/// Direction from `target` to the camera centre, part frame, with the part seated by `seat`.
+/// Direction from `target` back along its line of sight to the camera, part
+/// frame, with the part seated by `seat`: towards the camera centre, or
+/// against a telecentric camera's optical axis (docs/telecentric.md).
 Vec3 sightDirection(const FixtureKinematics& fixture, const FixturePose& pose, const RigidTransform& seat,
                     const Vec3& target)
 {
-    return (seat.inverse().apply(fixture.cameraCentreInPart(pose)) - target).normalized();
+    const geometry::SightLines sight = fixture.sightLinesAt(pose);
+    const RigidTransform unseat = seat.inverse();
+    if (sight.parallel) return -(unseat.R * sight.axis);
+    return (unseat.apply(sight.centre) - target).normalized();
 }
 
 double angleDeg(const Vec3& a, const Vec3& b)

@@ -93,8 +93,23 @@ void StationFileUpdate::setIntrinsics(const IntrinsicsResult& r, const std::stri
     YAML::Node cam = section(root_, "camera");
     const auto& in = r.intrinsics;
     cam["image_size"] = imageSize(in.imageSize);
+    // The model the intrinsics are of (docs/telecentric.md); a pinhole
+    // station's file keeps its form, `model` written only where it was.
+    if (in.projection == geometry::Projection::Telecentric)
+        cam["model"] = "telecentric";
+    else if (cam["model"])
+        cam["model"] = "pinhole";
+    // K states what a data sheet's magnification, pixel pitch and principal point did.
+    for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) cam.remove(key);
     cam["K"] = mat3(in.K);
     cam["dist"] = flowSequence(in.dist);
+    cam.remove("kappa");
+    if (in.distortionModel == geometry::DistortionModel::Division) {
+        cam["distortion_model"] = "division";
+        cam["kappa"] = in.kappa;
+    } else if (cam["distortion_model"]) {
+        cam["distortion_model"] = "opencv";
+    }
     YAML::Node cal(YAML::NodeType::Map);
     cal["method"] = method;
     cal["rms_px"] = r.rmsPx;

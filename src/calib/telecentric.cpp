@@ -339,6 +339,7 @@ TelecentricCalibration calibrateTelecentric(const std::vector<TargetView>& views
     result.intrinsics.K << c[Fx], 0.0, c[Cx], 0.0, c[Fy], c[Cy], 0.0, 0.0, 1.0;
     result.intrinsics.dist = {c[K1], c[K2], c[P1], c[P2], c[K3]};
     result.intrinsics.imageSize = imageSize;
+    result.intrinsics.projection = geometry::Projection::Telecentric;
     result.stdDev.assign(kIntrinsicCount, 0.0);
     for (std::size_t k = 0; k < free.size(); ++k) {
         const auto i = static_cast<Eigen::Index>(k);

@@ -85,31 +85,14 @@ geometry::Intrinsics readCamera(const fs::path& file)
     return in;
 }
 
-/// A telecentric camera section (docs/telecentric-calibration.md) in either
-/// of the forms calibrate intrinsics --model telecentric writes: K in px/mm,
-/// or magnification, pixel_pitch_mm ([h, v] or one number) and
-/// principal_point.
+/// The station's telecentric camera section (docs/telecentric.md), read as
+/// the daemon reads it.
 geometry::Intrinsics readTelecentricCamera(const fs::path& file)
 {
-    auto root = ConfigNode::loadFile(file);
-    auto cam = root["camera"];
-    auto model = cam["model"];
-    if (model.asString() != "telecentric") model.fail("the station's camera is not telecentric");
-    geometry::Intrinsics in;
-    auto size = cam["image_size"].asDoubles(2);
-    in.imageSize = cv::Size(static_cast<int>(size[0]), static_cast<int>(size[1]));
-    if (cam.has("K")) {
-        in.K = cam["K"].asMatrix3();
-    } else {
-        const double m = cam["magnification"].asDoubleIn(1e-6, 1e6);
-        auto pitchNode = cam["pixel_pitch_mm"];
-        const auto pitch =
-            pitchNode.isSequence() ? pitchNode.asDoubles(2) : std::vector<double>(2, pitchNode.asDoubleIn(1e-9, 1.0));
-        if (!(pitch[0] > 0 && pitch[1] > 0)) pitchNode.fail("the pixel pitch must be positive (mm)");
-        const auto pp = cam["principal_point"].asDoubles(2);
-        in.K << m / pitch[0], 0.0, pp[0], 0.0, m / pitch[1], pp[1], 0.0, 0.0, 1.0;
-    }
-    if (auto d = cam.optional("dist")) in.dist = d->asDoubles();
+    auto cam = ConfigNode::loadFile(file)["camera"];
+    auto in = geometry::parseCameraSection(cam);
+    if (in.projection != geometry::Projection::Telecentric)
+        cam["model"].fail("the station's camera is not telecentric");
     return in;
 }
 

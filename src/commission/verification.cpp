@@ -208,14 +208,14 @@ class Verifier {
         return nullptr;
     }
 
-    /// The lines of sight (camera centre to landmark) of the planned views that observe it.
+    /// The lines of sight (from the camera to the landmark) of the planned views that observe it.
     std::vector<geometry::Vec3> sightDirections(const model::Landmark& lm) const
     {
         std::vector<geometry::Vec3> sights;
         for (std::size_t k = 0; k < problem_.poses.size() && k < problem_.viewLandmarks.size(); ++k) {
             const auto& ids = problem_.viewLandmarks[k];
             if (std::find(ids.begin(), ids.end(), lm.id) == ids.end()) continue;
-            sights.push_back((lm.position - problem_.station->cameraAt(problem_.poses[k]).centre()).normalized());
+            sights.push_back(problem_.station->cameraAt(problem_.poses[k]).lineOfSight(lm.position));
         }
         return sights;
     }

@@ -14,6 +14,7 @@ namespace hg::geometry {
 
 bool Intrinsics::hasDistortion() const
 {
+    if (distortionModel == DistortionModel::Division && kappa != 0.0) return true;
     for (double d : dist)
         if (d != 0.0) return true;
     return false;
@@ -53,12 +54,80 @@ void Intrinsics::validate() const
     for (double d : dist)
         if (!std::isfinite(d) || std::abs(d) > 1e6)
             throw ArgumentError("dist: coefficients must lie within ±1e6, found " + formatNumber(d));
+    if (distortionModel == DistortionModel::Division)
+        for (double d : dist)
+            if (d != 0.0) throw ArgumentError("dist: the division model takes kappa, not OpenCV's coefficients");
+    if (!std::isfinite(kappa) || std::abs(kappa) > 1e6)
+        throw ArgumentError("kappa: must lie within ±1e6, found " + formatNumber(kappa));
+    if (!(workingDistanceMm > 0))
+        throw ArgumentError("working_distance_mm: must be positive, found " + formatNumber(workingDistanceMm));
 }
+
+namespace {
+
+/// With no working distance stated, a telecentric camera's lines of sight
+/// start on a plane this far (mm) before the focus plane: beyond any part a
+/// station holds, near enough that a point on it keeps 1e-12 mm of precision.
+constexpr double kUnstatedWorkingDistanceMm = 1e4;
+
+} // namespace
 
 CameraModel::CameraModel(Intrinsics intrinsics, RigidTransform cameraFromPart)
     : intrinsics_(std::move(intrinsics)), cameraFromPart_(cameraFromPart),
       centre_(-(cameraFromPart.R.transpose() * cameraFromPart.t)), distorted_(intrinsics_.hasDistortion())
 {
+}
+
+CameraModel CameraModel::telecentric(Intrinsics intrinsics, RigidTransform cameraFromPart)
+{
+    intrinsics.projection = Projection::Telecentric;
+    return CameraModel(std::move(intrinsics), cameraFromPart);
+}
+
+CameraModel CameraModel::telecentricFromAxes(double mOverDph, double mOverDpv, double mc, double nc, const Vec3& P0,
+                                             const Vec3& h, const Vec3& v, const Vec3& a, cv::Size imageSize)
+{
+    // The same axes and principal point as fromDissertation; the centre C
+    // becomes a point of the axis on the focus plane (camera-frame origin).
+    CameraModel c = fromDissertation(mOverDph, mOverDpv, mc, nc, P0, h, v, a, imageSize);
+    return telecentric(c.intrinsics_, c.cameraFromPart_);
+}
+
+std::optional<Vec3> CameraModel::centre() const
+{
+    if (isTelecentric()) return std::nullopt;
+    return centre_;
+}
+
+double CameraModel::lensFrontZ() const
+{
+    const double wd = intrinsics_.workingDistanceMm;
+    return -(std::isfinite(wd) ? wd : kUnstatedWorkingDistanceMm);
+}
+
+Vec3 CameraModel::lineOfSight(const Vec3& partPoint) const
+{
+    if (isTelecentric()) return opticalAxis();
+    return (partPoint - centre_).normalized();
+}
+
+Vec3 CameraModel::sightOrigin(const Vec3& partPoint) const
+{
+    if (!isTelecentric()) return centre_;
+    // The point moved along the axis to the lens front's plane.
+    return partPoint + (lensFrontZ() - depthOf(partPoint)) * opticalAxis();
+}
+
+double CameraModel::rangeTo(const Vec3& partPoint) const
+{
+    if (isTelecentric()) return depthOf(partPoint) - lensFrontZ();
+    return (partPoint - centre_).norm();
+}
+
+bool CameraModel::depthInFront(double depthMm) const
+{
+    if (isTelecentric()) return depthMm > -intrinsics_.workingDistanceMm;
+    return depthMm > 0;
 }
 
 CameraModel CameraModel::fromProjectionMatrix(const Eigen::Matrix<double, 3, 4>& P, cv::Size imageSize)
@@ -125,24 +194,63 @@ Vec2 CameraModel::distortNormalised(const Vec2& xy) const
             y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + k(10) * r2 + k(11) * r4};
 }
 
+std::optional<Vec2> CameraModel::normalise(const Vec3& pc) const
+{
+    if (!depthInFront(pc.z())) return std::nullopt;
+    // Telecentric: the orthographic image, in mm (docs/telecentric.md).
+    if (isTelecentric()) return Vec2(pc.x(), pc.y());
+    return Vec2(pc.x() / pc.z(), pc.y() / pc.z());
+}
+
+Eigen::Matrix<double, 2, 3> CameraModel::undistortedPointJacobian(const Vec3& pc) const
+{
+    const Mat3& K = intrinsics_.K;
+    Eigen::Matrix<double, 2, 3> J;
+    if (isTelecentric()) {
+        J << K(0, 0), K(0, 1), 0.0, 0.0, K(1, 1), 0.0;
+        return J;
+    }
+    const double z = pc.z();
+    J << K(0, 0) / z, K(0, 1) / z, -(K(0, 0) * pc.x() + K(0, 1) * pc.y()) / (z * z), 0.0, K(1, 1) / z,
+        -K(1, 1) * pc.y() / (z * z);
+    return J;
+}
+
+std::optional<Vec2> CameraModel::distort(const Vec2& xy) const
+{
+    if (intrinsics_.distortionModel == DistortionModel::OpenCV) return distortNormalised(xy);
+    // The division model solved for the distorted point (HALCON's closed
+    // form): r_u = r_d / (1 + κ r_d²) gives r_d = 2 r_u / (1 + √(1 − 4κ r_u²)).
+    const double disc = 1.0 - 4.0 * intrinsics_.kappa * xy.squaredNorm();
+    if (disc < 0.0) return std::nullopt;
+    return Vec2(xy * (2.0 / (1.0 + std::sqrt(disc))));
+}
+
 std::optional<Vec2> CameraModel::projectCameraPoint(const Vec3& pc) const
 {
-    if (!(pc.z() > 0)) return std::nullopt;
-    Vec2 xy(pc.x() / pc.z(), pc.y() / pc.z());
-    if (distorted_) xy = distortNormalised(xy);
+    auto n = normalise(pc);
+    if (!n) return std::nullopt;
+    Vec2 xy = *n;
+    if (distorted_) {
+        const auto d = distort(xy);
+        if (!d) return std::nullopt;
+        xy = *d;
+    }
     const Mat3& K = intrinsics_.K;
     return Vec2(K(0, 0) * xy.x() + K(0, 1) * xy.y() + K(0, 2), K(1, 1) * xy.y() + K(1, 2));
 }
 
-// Differentiating pixel = K·distort(x/z, y/z) by its parameters: fx, fy,
+// Differentiating pixel = K·distort(normalise(X)) by its parameters: fx, fy,
 // cx, cy act on the distorted coordinates, k1, k2, k3 (r², r⁴, r⁶) and the
 // tangential p1, p2 on the undistorted ones through cv::projectPoints' model.
 std::optional<Eigen::Matrix<double, 2, 9>> CameraModel::intrinsicsJacobian(const Vec3& partPoint) const
 {
-    const Vec3 pc = cameraFromPart_.apply(partPoint);
-    if (!(pc.z() > 0)) return std::nullopt;
-    const double x = pc.x() / pc.z(), y = pc.y() / pc.z();
-    const Vec2 d = distorted_ ? distortNormalised({x, y}) : Vec2(x, y);
+    const auto n = normalise(cameraFromPart_.apply(partPoint));
+    if (!n) return std::nullopt;
+    const double x = n->x(), y = n->y();
+    const auto distorted = distorted_ ? distort({x, y}) : std::optional<Vec2>(Vec2(x, y));
+    if (!distorted) return std::nullopt;
+    const Vec2 d = *distorted;
     const double fx = intrinsics_.K(0, 0), fy = intrinsics_.K(1, 1);
     const double r2 = x * x + y * y;
     Eigen::Matrix<double, 2, 9> J = Eigen::Matrix<double, 2, 9>::Zero();
@@ -150,6 +258,7 @@ std::optional<Eigen::Matrix<double, 2, 9>> CameraModel::intrinsicsJacobian(const
     J(1, 1) = d.y();
     J(0, 2) = 1.0;
     J(1, 3) = 1.0;
+    if (intrinsics_.distortionModel == DistortionModel::Division) return J;
     const double radial[3] = {r2, r2 * r2, r2 * r2 * r2};
     const int radialColumn[3] = {4, 5, 8};
     for (int i = 0; i < 3; ++i) {
@@ -176,6 +285,9 @@ Vec2 CameraModel::undistortPixel(const Vec2& pixel) const
     const double xn = (pixel.x() - K(0, 2) - K(0, 1) * yn) / K(0, 0);
     Vec2 distortedTarget(xn, yn);
     if (!distorted_) return distortedTarget;
+    // The division model undistorts in closed form.
+    if (intrinsics_.distortionModel == DistortionModel::Division)
+        return distortedTarget / (1.0 + intrinsics_.kappa * distortedTarget.squaredNorm());
     // Newton iterations on distort(xy) = target, started at the target; the
     // Jacobian by central differences is plenty at this scale. Matches
     // project() to ~1e-12 rather than cv::undistortPoints' default tolerance.
@@ -195,12 +307,18 @@ Vec2 CameraModel::undistortPixel(const Vec2& pixel) const
 Ray CameraModel::backProject(const Vec2& pixel) const
 {
     Vec2 xy = undistortPixel(pixel);
+    const Mat3 Rt = cameraFromPart_.R.transpose();
+    if (isTelecentric()) {
+        const Vec3 onLensFront(xy.x(), xy.y(), lensFrontZ());
+        return {Rt * (onLensFront - cameraFromPart_.t), opticalAxis()};
+    }
     Vec3 dirCam(xy.x(), xy.y(), 1.0);
-    return {centre_, (cameraFromPart_.R.transpose() * dirCam).normalized()};
+    return {centre_, (Rt * dirCam).normalized()};
 }
 
 Vec2 CameraModel::millimetresPerPixelAt(double depthMm) const
 {
+    if (isTelecentric()) return {1.0 / intrinsics_.K(0, 0), 1.0 / intrinsics_.K(1, 1)};
     return {depthMm / intrinsics_.K(0, 0), depthMm / intrinsics_.K(1, 1)};
 }
 

@@ -34,6 +34,12 @@ Vec3 FixtureKinematics::cameraCentreInPart(const FixturePose& pose) const
     return cameraFromPart(pose).inverse().t;
 }
 
+SightLines FixtureKinematics::sightLinesAt(const FixturePose& pose) const
+{
+    const RigidTransform partFromCamera = cameraFromPart(pose).inverse();
+    return {partFromCamera.t, partFromCamera.R.col(2), cameraProjection == Projection::Telecentric};
+}
+
 } // namespace hg::geometry
 
 fmt::format_context::iterator fmt::formatter<hg::geometry::PoseOn>::format(const hg::geometry::PoseOn& p,

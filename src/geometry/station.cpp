@@ -41,21 +41,90 @@ Vec3 parseAxis(const ConfigNode& node)
     return a.normalized();
 }
 
+Projection parseProjection(const ConfigNode& cam)
+{
+    const auto model = cam.optional("model");
+    if (!model || model->asString() == "pinhole") return Projection::Pinhole;
+    if (model->asString() == "telecentric") return Projection::Telecentric;
+    model->fail("unknown camera model '" + model->asString() + "' (pinhole or telecentric)");
+    return Projection::Pinhole;
+}
+
+/// A telecentric lens's K from its data sheet (docs/telecentric.md): fx =
+/// magnification / pixel pitch (px per mm of object), the principal point
+/// given or the image's centre. `K` states the same, as calibration writes it.
+Mat3 telecentricK(const ConfigNode& cam, cv::Size imageSize)
+{
+    if (cam.has("K")) {
+        for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"})
+            if (auto n = cam.optional(key))
+                n->fail("give either K or magnification, pixel_pitch_mm and principal_point");
+        return cam["K"].asMatrix3();
+    }
+    const double magnification = cam["magnification"].asDoubleIn(1e-6, 1e6);
+    const auto pitchNode = cam["pixel_pitch_mm"];
+    Vec2 pitch;
+    if (pitchNode.isSequence()) {
+        const auto v = pitchNode.asDoubles(2);
+        pitch = Vec2(v[0], v[1]);
+    } else {
+        pitch = Vec2::Constant(pitchNode.asDoubleIn(0.0, 1.0));
+    }
+    if (!(pitch.minCoeff() > 0 && pitch.maxCoeff() <= 1.0)) pitchNode.fail("the pixel pitch must lie in (0, 1] mm");
+    Vec2 c((imageSize.width - 1) / 2.0, (imageSize.height - 1) / 2.0);
+    if (auto pp = cam.optional("principal_point")) {
+        const auto v = pp->asDoubles(2);
+        c = Vec2(v[0], v[1]);
+    }
+    Mat3 K;
+    K << magnification / pitch.x(), 0, c.x(), 0, magnification / pitch.y(), c.y(), 0, 0, 1;
+    return K;
+}
+
+/// `distortion_model` (opencv, the default, or division) and the division
+/// model's `kappa` (docs/telecentric.md, "The division model").
+void parseDistortionModel(const ConfigNode& cam, Intrinsics& in)
+{
+    if (auto m = cam.optional("distortion_model")) {
+        if (m->asString() == "division")
+            in.distortionModel = DistortionModel::Division;
+        else if (m->asString() != "opencv")
+            m->fail("unknown distortion model '" + m->asString() + "' (opencv or division)");
+    }
+    if (auto k = cam.optional("kappa")) {
+        if (in.distortionModel != DistortionModel::Division)
+            k->fail("only the division model (distortion_model: division) has kappa");
+        in.kappa = k->asDoubleIn(-1e6, 1e6);
+    }
+    if (in.distortionModel == DistortionModel::Division)
+        for (double d : in.dist)
+            if (d != 0.0) cam["dist"].fail("the division model takes kappa, not OpenCV's coefficients");
+}
+
 Intrinsics parseCamera(const ConfigNode& cam)
 {
     // `regions` is the daemon's (docs/daemon.md, "Regions per view").
-    cam.allowOnlyKeys({"image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver", "calibration",
-                       "image_quality", "regions", "grab_s"});
+    cam.allowOnlyKeys({"model", "image_size", "K", "dist", "pixel_size_um", "depth_of_field_mm", "driver",
+                       "calibration", "image_quality", "regions", "grab_s", "magnification", "pixel_pitch_mm",
+                       "principal_point", "telecentric_field_mm", "working_distance_mm", "distortion_model", "kappa"});
     Intrinsics in;
+    in.projection = parseProjection(cam);
+    if (in.projection == Projection::Pinhole)
+        for (const char* key :
+             {"magnification", "pixel_pitch_mm", "principal_point", "telecentric_field_mm", "working_distance_mm"})
+            if (auto n = cam.optional(key))
+                n->fail("only a telecentric camera (camera.model: telecentric) has this key");
     auto sizeNode = cam["image_size"];
     auto size = sizeNode.items();
     if (size.size() != 2) sizeNode.fail("expected [width, height] in pixels");
     in.imageSize = cv::Size(static_cast<int>(size[0].asIntIn(1, 65535)), static_cast<int>(size[1].asIntIn(1, 65535)));
-    auto kNode = cam["K"];
-    in.K = kNode.asMatrix3();
+    auto kNode = in.projection == Projection::Telecentric && !cam.has("K") ? cam["magnification"] : cam["K"];
+    in.K = in.projection == Projection::Telecentric ? telecentricK(cam, in.imageSize) : kNode.asMatrix3();
+    if (auto w = cam.optional("working_distance_mm")) in.workingDistanceMm = w->asDoubleIn(1e-3, kMaxMagnitude);
     if (auto d = cam.optional("dist")) {
         in.dist = d->asDoubles();
     }
+    parseDistortionModel(cam, in);
     try {
         in.validate();
     } catch (const ArgumentError& e) {
@@ -132,6 +201,25 @@ ImageQuality parseImageQuality(const ConfigNode& node)
     return q;
 }
 
+/// Pinhole: [near, far] from the camera. Telecentric: the same range of
+/// camera-frame depths, or one figure, the depth of field centred on the
+/// plane of best focus (z = 0, docs/telecentric.md).
+Range parseDepthOfField(const ConfigNode& n, const Intrinsics& camera)
+{
+    if (camera.projection == Projection::Telecentric) {
+        if (n.isScalar()) {
+            const double depth = n.asDoubleIn(1e-3, kMaxMagnitude);
+            return {-depth / 2.0, depth / 2.0};
+        }
+        const Range r = parseRange(n);
+        if (!(r.min > -camera.workingDistanceMm)) n.fail("depth of field must lie beyond the lens's front");
+        return r;
+    }
+    auto r = parseRange(n);
+    if (!(r.min > 0)) n.fail("depth of field must lie in front of the camera (near > 0)");
+    return r;
+}
+
 } // namespace
 
 bool CalibrationUncertainty::recorded() const
@@ -147,6 +235,11 @@ CameraModel Station::cameraAt(const FixturePose& pose) const
     return CameraModel(camera, fixture.cameraFromPart(pose));
 }
 
+Intrinsics parseCameraSection(const ConfigNode& camera)
+{
+    return parseCamera(camera);
+}
+
 Station parseStation(const ConfigNode& root)
 {
     Station s;
@@ -157,12 +250,10 @@ Station parseStation(const ConfigNode& root)
         if (!(v[0] > 0 && v[1] > 0)) n->fail("pixel size must be positive");
         s.pixelSizeUm = Vec2(v[0], v[1]);
     }
-    if (auto n = cam.optional("depth_of_field_mm")) {
-        auto r = parseRange(*n);
-        if (!(r.min > 0)) n->fail("depth of field must lie in front of the camera (near > 0)");
-        s.depthOfFieldMm = r;
-    }
+    if (auto n = cam.optional("depth_of_field_mm")) s.depthOfFieldMm = parseDepthOfField(*n, s.camera);
+    if (auto n = cam.optional("telecentric_field_mm")) s.telecentricFieldMm = n->asDoubleIn(1e-3, kMaxMagnitude);
     s.fixture = parseFixture(root["fixture"]);
+    s.fixture.cameraProjection = s.camera.projection;
     // The motion model (`fixture.motion`, `camera.grab_s`, and the driver's
     // simulator section it falls back to) is checked here, so a typo in it is
     // named when the station is loaded; the planner reads it with stationMotion().

@@ -64,8 +64,8 @@ std::optional<Vec2> normalImage(const geometry::CameraModel& camera, const MapLa
     const auto b = camera.project(lm.position - kNormalStepMm * lm.normal);
     if (!a || !b) return std::nullopt;
     const Vec2 g = (*a - *b) / (2.0 * kNormalStepMm);
-    const double depth = (camera.cameraFromPart().apply(lm.position)).z();
-    if (!(depth > 0.0) || g.norm() < 0.5 / camera.millimetresPerPixelAt(depth).x()) return std::nullopt;
+    const double depth = camera.depthOf(lm.position);
+    if (!camera.depthInFront(depth) || g.norm() < 0.5 / camera.millimetresPerPixelAt(depth).x()) return std::nullopt;
     return g;
 }
 
@@ -136,7 +136,7 @@ namespace {
 /// A local feature of half-length ℓ seen ℓ·tan(tilt) short (mm, standard).
 double tiltMm(const geometry::CameraModel& camera, const MapLandmark& lm)
 {
-    const double sinTilt = std::abs(lm.normal.dot((lm.position - camera.centre()).normalized()));
+    const double sinTilt = std::abs(lm.normal.dot(camera.lineOfSight(lm.position)));
     return kFeatureHalfLengthMm * sinTilt / std::sqrt(std::max(1e-12, 1.0 - sinTilt * sinTilt));
 }
 
@@ -266,7 +266,7 @@ std::optional<OutlinePoint> DeviationGauge::outlineAt(const MapLandmark& lm, con
     const auto scale = pixelsPerMm(camera, touch->point, lm.normal, u);
     if (!scale || *scale < 0.5 * g->norm()) return std::nullopt;
     OutlinePoint point{outline->graze, std::nullopt, touch->point, std::nullopt};
-    const Vec3 along = (outline->graze - camera.centre()).normalized();
+    const Vec3 along = camera.lineOfSight(outline->graze);
     const auto grazeExit = solid_->firstHit(outline->graze + 1e-6 * along, along);
     if (grazeExit && std::abs(lm.normal.dot(grazeExit->point - lm.position)) <= reach)
         point.grazeExit = grazeExit->point;

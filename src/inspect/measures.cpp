@@ -9,20 +9,22 @@ namespace hg::inspect {
 ViewDiscrimination viewDiscrimination(const geometry::CameraModel& camera, const Eigen::Vector3d& landmark)
 {
     ViewDiscrimination v;
-    const Eigen::Vector3d ray = landmark - camera.centre();
-    v.distanceMm = ray.norm();
-    const double cosTheta = std::clamp(ray.normalized().dot(camera.opticalAxis()), -1.0, 1.0);
+    v.distanceMm = camera.rangeTo(landmark);
+    const double cosTheta = std::clamp(camera.lineOfSight(landmark).dot(camera.opticalAxis()), -1.0, 1.0);
     v.thetaDeg = geometry::radToDeg(std::acos(cosTheta));
     const auto px = camera.project(landmark);
     const cv::Size size = camera.imageSize();
     v.observes = px && px->x() >= -0.5 && px->y() >= -0.5 && px->x() < size.width - 0.5 && px->y() < size.height - 0.5;
+    // m: the coarser pixel side at the landmark (mm); invF = 1/f, which a
+    // telecentric camera's parallel lines of sight take to zero.
     const auto& K = camera.intrinsics().K;
     const double f = std::min(K(0, 0), K(1, 1));
-    const double d = v.distanceMm;
-    v.medRangeMm = std::sqrt(2.0) * d / (1.5 * f + 1.0);
+    const double m = camera.isTelecentric() ? 1.0 / f : v.distanceMm / f;
+    const double invF = camera.isTelecentric() ? 0.0 : 1.0 / f;
+    v.medRangeMm = std::sqrt(2.0) * m / (1.5 + invF);
     const double sinTheta = std::sqrt(std::max(0.0, 1.0 - cosTheta * cosTheta));
-    const double denom = 2.0 * f * (cosTheta - sinTheta) + 1.0;
-    v.medAngleMm = (cosTheta > sinTheta && denom > 0.0) ? 2.0 * std::sqrt(2.0) * d * cosTheta / denom
+    const double denom = 2.0 * (cosTheta - sinTheta) + invF;
+    v.medAngleMm = (cosTheta > sinTheta && denom > 0.0) ? 2.0 * std::sqrt(2.0) * m * cosTheta / denom
                                                         : std::numeric_limits<double>::infinity();
     return v;
 }

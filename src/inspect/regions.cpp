@@ -44,11 +44,11 @@ double marginPixels(const InspectionMap& map, const geometry::CameraModel& camer
     const Box3 cube(f.origin, f.origin + Vec3::Constant(f.cubeSize));
     double nearest = 1e300;
     for (int i = 0; i < 8; ++i)
-        nearest = std::min(nearest, camera.cameraFromPart().apply(cube.corner(static_cast<Box3::CornerType>(i))).z());
-    const double focal = std::max(camera.intrinsics().K(0, 0), camera.intrinsics().K(1, 1));
-    // A camera inside the cube: the margin cannot be bounded by depth; the whole frame.
-    if (!(nearest > 1e-6)) return 1e6;
-    return marginMm * focal / nearest + 1.0;
+        nearest = std::min(nearest, camera.depthOf(cube.corner(static_cast<Box3::CornerType>(i))));
+    // A camera inside the cube: the margin cannot be bounded by depth; the
+    // whole frame. (A telecentric camera's scale is the same at every depth.)
+    if (!camera.depthInFront(nearest) || (!camera.isTelecentric() && !(nearest > 1e-6))) return 1e6;
+    return marginMm / camera.millimetresPerPixelAt(nearest).minCoeff() + 1.0;
 }
 
 } // namespace

@@ -312,14 +312,16 @@ VoxelTester::VoxelTester(const std::vector<SilhouetteView>* views, VoxelTestMeth
 {
     state_.resize(views->size());
     for (std::size_t v = 0; v < views->size(); ++v)
-        state_[v].pinhole = !(*views)[v].camera.intrinsics().hasDistortion();
+        state_[v].undistorted = !(*views)[v].camera.intrinsics().hasDistortion();
 }
 
 // The 8 corners of `voxel` in pixel coordinates shifted by +0.5 (pixel (c, r)
 // covers [c, c+1] x [r, r+1]); false when one lies behind the camera. The
 // corners in the camera frame are the low corner plus the box's edges turned
 // into the camera (three vectors), not 8 full transforms; without distortion
-// the pinhole projection is done here, all 8 corners at once.
+// the projection is done here, all 8 corners at once: pinhole (x/z, y/z) or
+// telecentric (x, y), the footprint the same hull of the corners' images
+// either way (docs/telecentric.md).
 bool VoxelTester::projectCorners(std::size_t viewIndex, const Box3& voxel, std::array<Vec2, 8>& corners) const
 {
     using Corners = Eigen::Array<double, 8, 1>;
@@ -335,10 +337,12 @@ bool VoxelTester::projectCorners(std::size_t viewIndex, const Box3& voxel, std::
     const Corners X = lo.x() + bx * ex.x() + by * ey.x() + bz * ez.x();
     const Corners Y = lo.y() + bx * ex.y() + by * ey.y() + bz * ez.y();
     const Corners Z = lo.z() + bx * ex.z() + by * ey.z() + bz * ez.z();
-    if (!(Z > 0.0).all()) return false;
-    if (state_[viewIndex].pinhole) {
+    for (Eigen::Index k = 0; k < 8; ++k)
+        if (!camera.depthInFront(Z[k])) return false;
+    if (state_[viewIndex].undistorted) {
         const geometry::Mat3& K = camera.intrinsics().K;
-        const Corners x = X / Z, y = Y / Z;
+        const bool telecentric = camera.isTelecentric();
+        const Corners x = telecentric ? X : Corners(X / Z), y = telecentric ? Y : Corners(Y / Z);
         const Corners u = K(0, 0) * x + K(0, 1) * y + (K(0, 2) + 0.5), v = K(1, 1) * y + (K(1, 2) + 0.5);
         for (std::size_t i = 0; i < 8; ++i)
             corners[i] = Vec2(u[static_cast<Eigen::Index>(i)], v[static_cast<Eigen::Index>(i)]);

@@ -137,6 +137,7 @@ json planToJson(const ViewPlan& plan, const PlanProblem& problem)
         json j;
         j["id"] = v.id;
         j["pose"] = geometry::toJson(v.pose, type);
+        if (cam.isTelecentric()) j["model"] = "telecentric";
         j["K"] = geometry::toJson(cam.intrinsics().K);
         j["dist"] = cam.intrinsics().dist.empty() ? std::vector<double>(5, 0.0) : cam.intrinsics().dist;
         j["R"] = geometry::toJson(cam.cameraFromPart().R);

@@ -46,11 +46,11 @@ std::string fmtPose(const FixturePose& p, FixtureType type)
     return "rotation " + fmt(p.rotationDeg) + "°, declination " + fmt(p.declinationDeg) + "°";
 }
 
-/// Angle (degrees) between the line of sight from `centre` to `x` and the tangent plane at x.
-double tangentAngleDeg(const Vec3& centre, const Vec3& x, const Vec3& n)
+/// Angle (degrees) between the line of sight to `x` and the tangent plane at
+/// x: from the camera's centre, or along a telecentric camera's axis.
+double tangentAngleDeg(const geometry::SightLines& sight, const Vec3& x, const Vec3& n)
 {
-    const Vec3 d = x - centre;
-    return geometry::radToDeg(std::asin(std::clamp(n.dot(d) / d.norm(), -1.0, 1.0)));
+    return geometry::radToDeg(std::asin(std::clamp(n.dot(sight.towards(x)), -1.0, 1.0)));
 }
 
 /// Pose key for deduplication (micro-degrees / micro-millimetres).
@@ -139,7 +139,7 @@ class Analyser {
                                                          [](double a, double b) { return std::abs(a - b) < 1e-9; }),
                                              poseGrid_.extraDeclinationsDeg.end());
         grid_ = gridPoses(station_.fixture, options_.grid);
-        for (const auto& p : grid_) gridCentres_.push_back(station_.fixture.cameraCentreInPart(p));
+        for (const auto& p : grid_) gridSights_.push_back(station_.fixture.sightLinesAt(p));
     }
 
     const ViewRules& rules() const { return rules_; }
@@ -152,7 +152,7 @@ class Analyser {
         auto poses = grazingPoses(fixture, x, n, poseGrid_);
         if (withGrid)
             for (std::size_t i = 0; i < grid_.size(); ++i)
-                if (std::abs(tangentAngleDeg(gridCentres_[i], x, n)) <= options_.bandDeg) poses.push_back(grid_[i]);
+                if (std::abs(tangentAngleDeg(gridSights_[i], x, n)) <= options_.bandDeg) poses.push_back(grid_[i]);
         return poses;
     }
 
@@ -192,6 +192,8 @@ class Analyser {
         std::map<std::size_t, Vec3> blockerPoints;
         std::size_t dofOnly = 0;
         double nearestDepth = 0.0;
+        std::size_t fieldOnly = 0; ///< in the depth of field, outside the telecentric field
+        double nearestOffAxis = 0.0;
         double bestRangeMed = std::numeric_limits<double>::infinity();
         bool anyPasses = false;
     };
@@ -225,12 +227,14 @@ class Analyser {
             r.checks.push_back(chk);
             if (chk.sees()) {
                 a.witnessPoses.push_back(p);
-                a.witnessDirections.push_back((a.position - station_.fixture.cameraCentreInPart(p)).normalized());
+                a.witnessDirections.push_back(station_.fixture.sightLinesAt(p).towards(a.position));
                 a.bestMedMm = std::min(a.bestMedMm, chk.predictedMedMm);
                 w.bestRangeMed = std::min(w.bestRangeMed, chk.rangeMedMm);
                 w.anyPasses = w.anyPasses || chk.passes();
-            } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.rule4) {
+            } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.inDepthOfField) {
                 if (w.dofOnly++ == 0) w.nearestDepth = chk.depthMm;
+            } else if (chk.inFrame && chk.rule1 && chk.rule2 && !chk.inTelecentricField) {
+                if (w.fieldOnly++ == 0) w.nearestOffAxis = chk.offAxisMm;
             } else if (chk.obstruction == Blocker::Part && chk.blockingTriangle) {
                 ++w.blockers[*chk.blockingTriangle];
                 w.blockerPoints[*chk.blockingTriangle] = chk.blockingPoint;
@@ -291,6 +295,12 @@ class Analyser {
                        "field [" +
                        fmt(dof.min) + ", " + fmt(dof.max) + "] mm (e.g. at " + fmt(w.nearestDepth) +
                        " mm): refocus the camera or move the part (Rule 4).";
+        } else if (a.witnessPoses.empty() && w.fieldOnly > 0) {
+            a.verdict = LandmarkVerdict::OutsideTelecentricField;
+            a.reason = "landmark " + lm.id + " is seen against background only outside the lens's telecentric field (" +
+                       fmt(*station_.telecentricFieldMm) + " mm across; e.g. " + fmt(w.nearestOffAxis) +
+                       " mm from the axis): move the part towards the optical axis or use a lens with a wider "
+                       "field (Rule 4, docs/telecentric.md).";
         } else if (a.witnessPoses.empty()) {
             explainUnseen(r, w.blockers, w.blockerPoints);
         } else if (!w.anyPasses) {
@@ -462,7 +472,7 @@ class Analyser {
     ViewRules rules_;
     PoseGrid poseGrid_;
     std::vector<FixturePose> grid_;
-    std::vector<Vec3> gridCentres_;
+    std::vector<geometry::SightLines> gridSights_;
 };
 
 void validate(const PlanProblem& problem)
@@ -476,17 +486,18 @@ void validate(const PlanProblem& problem)
 }
 
 /// Final pose of a group (5.4.4, fig. 5.19): the pose of its variation list
-/// with the least summed distance to the group's landmarks; among poses within
+/// with the least summed distance to the group's landmarks (for a telecentric
+/// camera, from its plane of best focus: SightLines::distanceTo); among poses within
 /// 0.1 % of that, the median orientation (rotation, then declination, or rail).
 std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& landmarks,
-                      const std::vector<Vec3>& centres, const std::vector<FixturePose>& poses,
+                      const std::vector<geometry::SightLines>& sights, const std::vector<FixturePose>& poses,
                       const std::vector<Analysed>& analysed)
 {
     std::vector<std::pair<double, int>> sums;
     double best = std::numeric_limits<double>::infinity();
     for (int p : variation) {
         double s = 0.0;
-        for (std::size_t l : landmarks) s += (centres[static_cast<std::size_t>(p)] - analysed[l].a.position).norm();
+        for (std::size_t l : landmarks) s += sights[static_cast<std::size_t>(p)].distanceTo(analysed[l].a.position);
         sums.emplace_back(s, p);
         best = std::min(best, s);
     }
@@ -508,7 +519,7 @@ std::size_t finalPose(const PoseSet& variation, const std::vector<std::size_t>& 
 struct PosePool {
     std::map<std::tuple<long long, long long, long long>, int> index;
     std::vector<FixturePose> poses;
-    std::vector<Vec3> centres;
+    std::vector<geometry::SightLines> sights;
     /// ownIndex[l][k]: pool index of landmark l's candidate k.
     std::vector<std::vector<int>> ownIndex;
 };
@@ -522,7 +533,7 @@ PosePool poolCandidates(const std::vector<Analysed>& analysed, const geometry::S
             auto [it, fresh] = pool.index.emplace(poseKey(p), static_cast<int>(pool.poses.size()));
             if (fresh) {
                 pool.poses.push_back(p);
-                pool.centres.push_back(station.fixture.cameraCentreInPart(p));
+                pool.sights.push_back(station.fixture.sightLinesAt(p));
             }
             pool.ownIndex[l].push_back(it->second);
         }
@@ -554,7 +565,7 @@ ViewVariations viewVariations(const std::vector<Analysed>& analysed, const PoseP
             if (r.checks[k].passes()) passing.push_back(p);
         }
         for (std::size_t p = 0; p < pool.poses.size(); ++p) {
-            if (tried[p] || std::abs(tangentAngleDeg(pool.centres[p], r.a.position, r.a.normal)) > bandDeg) continue;
+            if (tried[p] || std::abs(tangentAngleDeg(pool.sights[p], r.a.position, r.a.normal)) > bandDeg) continue;
             const auto chk = rules.check(r.target, pool.poses[p]);
             vv.checkAt[l][static_cast<int>(p)] = chk;
             if (chk.passes()) passing.push_back(static_cast<int>(p));
@@ -572,12 +583,15 @@ ViewVariations viewVariations(const std::vector<Analysed>& analysed, const PoseP
 PoseSet designerViewVariation(int designer, const Analysed& r, const PoseSet& passing, const PosePool& pool,
                               double focal)
 {
-    const Vec3 dv = (r.a.position - pool.centres[static_cast<std::size_t>(designer)]);
-    const double theta = maxViewAngleRad(focal, dv.norm(), r.a.toleranceMm);
+    const geometry::SightLines& designed = pool.sights[static_cast<std::size_t>(designer)];
+    const Vec3 dv = designed.towards(r.a.position);
+    // A telecentric camera's fx, fy are px per mm: its pixel is 1/f mm at any depth.
+    const double theta = designed.parallel ? maxTelecentricViewAngleRad(1.0 / focal, r.a.toleranceMm)
+                                           : maxViewAngleRad(focal, designed.distanceTo(r.a.position), r.a.toleranceMm);
     PoseSet sub{designer};
     for (int p : passing) {
-        const Vec3 dp = r.a.position - pool.centres[static_cast<std::size_t>(p)];
-        if (std::acos(std::clamp(dp.normalized().dot(dv.normalized()), -1.0, 1.0)) <= theta + 1e-12) sub.push_back(p);
+        const Vec3 dp = pool.sights[static_cast<std::size_t>(p)].towards(r.a.position);
+        if (std::acos(std::clamp(dp.dot(dv), -1.0, 1.0)) <= theta + 1e-12) sub.push_back(p);
     }
     std::sort(sub.begin(), sub.end());
     sub.erase(std::unique(sub.begin(), sub.end()), sub.end());
@@ -652,7 +666,7 @@ std::vector<std::size_t> reduceViews(const std::vector<Requirement>& requirement
     }
     std::vector<int> chosen;
     for (const auto& g : greedy.groups)
-        chosen.push_back(static_cast<int>(finalPose(g.variation, g.landmarks, pool.centres, pool.poses, analysed)));
+        chosen.push_back(static_cast<int>(finalPose(g.variation, g.landmarks, pool.sights, pool.poses, analysed)));
     std::sort(chosen.begin(), chosen.end());
     chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
     chosen = removeRedundantPoses(requirements, chosen);

@@ -90,14 +90,23 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
                                       const PoseGrid& grid)
 {
     const Vec3 n = normal.normalized();
-    const double target = n.dot(point);
+    // The line of sight grazes the tangent plane where n·g(pose) = target:
+    // g the camera centre and target n·point for a pinhole; for a telecentric
+    // camera g its optical axis and target 0 (docs/telecentric.md). Either g
+    // is affine in the rail and A cos t + B sin t + E in either angle.
+    const bool parallel = fixture.cameraProjection == geometry::Projection::Telecentric;
+    const double target = parallel ? 0.0 : n.dot(point);
+    auto sightAt = [&](const FixturePose& pose) {
+        const geometry::SightLines s = fixture.sightLinesAt(pose);
+        return parallel ? s.axis : s.centre;
+    };
     std::vector<FixturePose> poses;
-    const double scale = std::max({1.0, fixture.cameraCentreInPart({}).norm(), point.norm()});
+    const double scale = parallel ? 1.0 : std::max({1.0, fixture.cameraCentreInPart({}).norm(), point.norm()});
 
     if (fixture.type == FixtureType::Rail) {
-        // n·C(s) is affine in s.
-        const double f0 = n.dot(fixture.cameraCentreInPart({0.0, 0.0, 0.0}));
-        const double f1 = n.dot(fixture.cameraCentreInPart({0.0, 0.0, 1.0}));
+        // n·g(s) is affine in s.
+        const double f0 = n.dot(sightAt({0.0, 0.0, 0.0}));
+        const double f1 = n.dot(sightAt({0.0, 0.0, 1.0}));
         if (std::abs(f1 - f0) <= 1e-12 * scale) {
             if (std::abs(f0 - target) <= 1e-9 * scale)
                 for (double s : gridValues(fixture.railRangeMm.min, fixture.railRangeMm.max, grid.railStepMm))
@@ -110,7 +119,7 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
         return poses;
     }
 
-    // f(t) = n·C is A cos t + B sin t + E in either angle with the other fixed;
+    // f(t) = n·g is A cos t + B sin t + E in either angle with the other fixed;
     // three evaluations give A, B, E exactly (whatever the axes' conventions).
     auto coefficients = [&](auto&& centreAt) {
         const double f0 = n.dot(centreAt(0.0));
@@ -128,14 +137,14 @@ std::vector<FixturePose> grazingPoses(const FixtureKinematics& fixture, const Ve
     for (double d : grid.extraDeclinationsDeg)
         if (dr.contains(d)) solveAt.push_back(d);
     for (double d : solveAt) {
-        auto [a, b, e] = coefficients([&](double r) { return fixture.cameraCentreInPart({r, d, 0.0}); });
+        auto [a, b, e] = coefficients([&](double r) { return sightAt({r, d, 0.0}); });
         bool all = false;
         for (double r : solveTrig(a, b, target - e, rr.min, rr.max, scale, all)) addUnique(poses, {r, d, 0.0});
         if (all)
             for (double r : rotations) addUnique(poses, {r, d, 0.0});
     }
     for (double r : rotations) {
-        auto [a, b, e] = coefficients([&](double d) { return fixture.cameraCentreInPart({r, d, 0.0}); });
+        auto [a, b, e] = coefficients([&](double d) { return sightAt({r, d, 0.0}); });
         bool all = false;
         for (double d : solveTrig(a, b, target - e, dr.min, dr.max, scale, all)) addUnique(poses, {r, d, 0.0});
         if (all)

@@ -5,6 +5,7 @@
 #include "hullgauge/common/format.h"
 #include "hullgauge/inspect/part_map.h"
 #include "hullgauge/plan/plan_report.h"
+#include "hullgauge/plan/view_rules.h"
 
 #include <algorithm>
 #include <cmath>
@@ -26,12 +27,13 @@ FrameCheck checkFrame(const std::string& id, const model::TriangleMesh& mesh, co
     double nearest = std::numeric_limits<double>::infinity();
     for (const geometry::Vec3& v : mesh.vertices) {
         radius = std::max(radius, (v - centre).norm());
-        nearest = std::min(nearest, camera.cameraFromPart().apply(v).z());
+        nearest = std::min(nearest, camera.depthOf(v));
     }
     const double motionMm = play.maxShiftMm + geometry::degToRad(play.maxRotationDeg) * radius;
-    const auto& K = camera.intrinsics().K;
-    c.seatAllowancePx =
-        nearest > 0.0 ? motionMm * std::max(K(0, 0), K(1, 1)) / nearest : std::numeric_limits<double>::infinity();
+    // The finest pixel at the nearest depth: at any depth for a telecentric camera.
+    c.seatAllowancePx = camera.depthInFront(nearest) && (camera.isTelecentric() || nearest > 0.0)
+                            ? motionMm / camera.millimetresPerPixelAt(nearest).minCoeff()
+                            : std::numeric_limits<double>::infinity();
     return c;
 }
 
@@ -156,12 +158,15 @@ int finestResolvedDepth(const model::TriangleMesh& mesh, const geometry::Station
     double radius = 0.0;
     for (const geometry::Vec3& v : mesh.vertices) radius = std::max(radius, (v - centre).norm());
     const geometry::CameraModel camera = station.cameraAt(homePose(station.fixture));
-    const double d = (camera.centre() - centre).norm() + radius;
-    const double theta = std::atan2(radius, d - radius);
     const double f = std::min(station.camera.K(0, 0), station.camera.K(1, 1));
-    // Eq. 5.3.6-3 solved for the MED, as view_rules.h evaluates it.
-    const double med =
-        2.0 * std::sqrt(2.0) * d * std::cos(theta) / (2.0 * f * (std::cos(theta) - std::sin(theta)) + 1.0);
+    // Eq. 5.3.6-3 solved for the MED, as view_rules.h evaluates it: at the
+    // part's far side and its widest angle off the axis; a telecentric
+    // camera's pixel is 1/f mm everywhere and its lines of sight on the axis.
+    double med = plan::telecentricMedMm(1.0 / f, 0.0);
+    if (const auto eye = camera.centre()) {
+        const double d = (*eye - centre).norm() + radius;
+        med = plan::predictedMedMm(f, d, std::atan2(radius, d - radius));
+    }
     int best = 4;
     for (int depth = 4; depth <= 15; ++depth) {
         const auto spec = model::boundingCube(bounds, depth, adjacencyDepth);

@@ -82,8 +82,10 @@ std::string RuleCheck::failure() const
     } else if (!rule1)
         s << "Rule 1: only " << static_cast<int>(std::round(100.0 * backgroundFraction))
           << " % of the void neighbour's projection is background (50 % needed)";
-    else if (!rule4)
+    else if (!inDepthOfField)
         s << "Rule 4: depth " << depthMm << " mm outside the depth of field";
+    else if (!inTelecentricField)
+        s << "Rule 4: " << offAxisMm << " mm from the optical axis, outside the lens's telecentric field";
     else if (!rule3)
         s << "Rule 3: predicted MED " << predictedMedMm << " mm (eq. 5.3.6-3) or range MED " << rangeMedMm
           << " mm (eq. 4.4.4-19) too coarse";
@@ -98,17 +100,40 @@ double predictedMedMm(double focalPx, double distanceMm, double thetaRad)
     return 2.0 * kSqrt2 * distanceMm * c / (2.0 * focalPx * (c - s) + 1.0);
 }
 
-double maxViewAngleRad(double focalPx, double distanceMm, double medMm)
+double telecentricMedMm(double mmPerPx, double thetaRad)
 {
-    if (predictedMedMm(focalPx, distanceMm, 0.0) > medMm) return 0.0;
-    // predictedMedMm grows monotonically with θ on [0, π/4) and diverges at π/4.
+    const double c = std::cos(thetaRad);
+    const double s = std::sin(thetaRad);
+    if (c - s <= 0.0) return std::numeric_limits<double>::infinity();
+    return kSqrt2 * mmPerPx * c / (c - s);
+}
+
+namespace {
+
+/// The largest θ with medAt(θ) <= medMm: the MED grows monotonically with θ
+/// on [0, π/4) and diverges at π/4.
+template <typename MedAt> double largestAngleWithin(MedAt medAt, double medMm)
+{
+    if (medAt(0.0) > medMm) return 0.0;
     double lo = 0.0;
     double hi = 0.25 * 3.14159265358979323846;
     for (int i = 0; i < 60; ++i) {
         const double mid = 0.5 * (lo + hi);
-        (predictedMedMm(focalPx, distanceMm, mid) <= medMm ? lo : hi) = mid;
+        (medAt(mid) <= medMm ? lo : hi) = mid;
     }
     return lo;
+}
+
+} // namespace
+
+double maxViewAngleRad(double focalPx, double distanceMm, double medMm)
+{
+    return largestAngleWithin([&](double theta) { return predictedMedMm(focalPx, distanceMm, theta); }, medMm);
+}
+
+double maxTelecentricViewAngleRad(double mmPerPx, double medMm)
+{
+    return largestAngleWithin([&](double theta) { return telecentricMedMm(mmPerPx, theta); }, medMm);
 }
 
 ViewRules::ViewRules(const model::Solid& solid, const geometry::Station& station, double voxelSizeMm,
@@ -191,14 +216,12 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
                               const geometry::CameraModel& camera, bool stopAtDecision) const
 {
     RuleCheck r;
-    const Vec3 centre = camera.centre();
 
     // Rules 3 and 4 need only the landmark's position: evaluate them first (cheap).
     if (target) {
-        const Vec3 toLandmark = target->position - centre;
-        r.distanceMm = toLandmark.norm();
-        r.depthMm = camera.cameraFromPart().apply(target->position).z();
-        const double cosTheta = std::clamp(toLandmark.normalized().dot(camera.opticalAxis()), -1.0, 1.0);
+        r.distanceMm = camera.rangeTo(target->position);
+        r.depthMm = camera.depthOf(target->position);
+        const double cosTheta = std::clamp(camera.lineOfSight(target->position).dot(camera.opticalAxis()), -1.0, 1.0);
         r.viewAngleDeg = geometry::radToDeg(std::acos(cosTheta));
         // The inspection engine's measures of this view (inspect/measures.h):
         // eq. 4.4.5-11 is eq. 5.3.6-3 solved for the MED, and eq. 4.4.4-19 is
@@ -208,7 +231,12 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
         r.rangeMedMm = disc.medRangeMm;
         r.rule3 = r.predictedMedMm <= target->toleranceMm + 1e-12 &&
                   (!options_.requireVoxelResolution || r.rangeMedMm <= voxelSize_ + 1e-12);
-        r.rule4 = !station_.depthOfFieldMm || station_.depthOfFieldMm->contains(r.depthMm, 1e-9);
+        // Rule 4 is the lens's sharp volume: the depth of field, and for a
+        // telecentric lens the field it is telecentric over (docs/telecentric.md).
+        r.offAxisMm = camera.cameraFromPart().apply(target->position).head<2>().norm();
+        r.inDepthOfField = !station_.depthOfFieldMm || station_.depthOfFieldMm->contains(r.depthMm, 1e-9);
+        r.inTelecentricField = !station_.telecentricFieldMm || 2.0 * r.offAxisMm <= *station_.telecentricFieldMm + 1e-9;
+        r.rule4 = r.inDepthOfField && r.inTelecentricField;
     } else {
         r.rule3 = r.rule4 = true;
     }
@@ -234,7 +262,9 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
         hi.y() > size.height - 0.5 - margin)
         return r;
     r.inFrame = true;
-    if (target && !r.rule4 && stopAtDecision) return r;
+    // Rules 1 and 2 are judged even where Rule 4 fails: a landmark seen
+    // against background only outside the lens's sharp volume is refused for
+    // that reason, not taken for a concavity (planner.cpp, WitnessSearch).
 
     // Sample points: cell centres of a grid over the hull's bounding box that
     // fall inside the hull; a thin footprint gets a finer grid so that at
@@ -264,10 +294,10 @@ RuleCheck ViewRules::evaluate(const LandmarkTarget* target, const Eigen::Aligned
     for (const auto& px : samples) {
         const auto ray = camera.backProject(px);
         std::optional<model::RayHit> hit;
-        Blocker b = lineOfSight(centre, ray.direction.normalized(), &hit);
+        Blocker b = lineOfSight(ray.origin, ray.direction.normalized(), &hit);
         if (b == Blocker::Part && target &&
             ((hit->point - target->position).norm() <= ownRadius_ ||
-             throughOwnMaterial(voxel, centre, ray.direction.normalized(), solid_)))
+             throughOwnMaterial(voxel, ray.origin, ray.direction.normalized(), solid_)))
             b = Blocker::OwnSurface;
         if (b == Blocker::None) {
             ++background;

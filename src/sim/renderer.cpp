@@ -202,7 +202,8 @@ int clipNear(const Vec3 (&in)[3], double near, Vec3 (&out)[4])
 /// Normalised radius beyond which OpenCV's radial distortion stops being
 /// monotonic: past it the polynomial folds far-away points back into the
 /// image, which a real lens never does, so geometry there is not drawn.
-double monotonicRadius(const std::vector<double>& d)
+/// Searched up to `reach` in steps of reach / 10⁴.
+double monotonicRadius(const std::vector<double>& d, double reach)
 {
     auto at = [&d](std::size_t i) { return i < d.size() ? d[i] : 0.0; };
     const double k1 = at(0), k2 = at(1), k3 = at(4), k4 = at(5), k5 = at(6), k6 = at(7);
@@ -212,9 +213,9 @@ double monotonicRadius(const std::vector<double>& d)
         const double den = 1 + r2 * (k4 + r2 * (k5 + r2 * k6));
         return std::pair{r * num / den, den};
     };
-    const double step = 1e-3;
+    const double step = reach * 1e-4;
     double prev = 0.0;
-    for (double r = step; r <= 10.0; r += step) {
+    for (double r = step; r <= reach; r += step) {
         auto [g, den] = radial(r);
         if (den <= 0.0 || g <= prev) return r - step;
         prev = g;
@@ -222,13 +223,36 @@ double monotonicRadius(const std::vector<double>& d)
     return std::numeric_limits<double>::infinity();
 }
 
+/// The squared normalised radius within which the camera's distortion is
+/// drawn: OpenCV's while monotonic (searched to 10 normalised units, or for
+/// a telecentric camera ten times the image's half diagonal in mm); the
+/// division model's while it has a solution, r² < 1/(4κ) for κ > 0.
+double validRadius2(const geometry::Intrinsics& in)
+{
+    if (in.distortionModel == geometry::DistortionModel::Division)
+        return in.kappa > 0.0 ? 1.0 / (4.0 * in.kappa) : std::numeric_limits<double>::infinity();
+    double reach = 10.0;
+    if (in.projection == geometry::Projection::Telecentric)
+        reach = 5.0 * std::hypot(in.imageSize.width / in.K(0, 0), in.imageSize.height / in.K(1, 1));
+    return std::pow(monotonicRadius(in.dist, reach), 2);
+}
+
 /// Projects camera-frame triangles through a distorted camera, subdividing
 /// edges until their images are straight within the sag tolerance.
 class DistortedProjector {
   public:
     DistortedProjector(const geometry::CameraModel& camera, double sagPx, TriangleSink& sink)
-        : camera_(camera), sagPx_(sagPx), sink_(sink), limit2_(std::pow(monotonicRadius(camera.intrinsics().dist), 2))
+        : camera_(camera), sagPx_(sagPx), sink_(sink), limit2_(validRadius2(camera.intrinsics())), minEdge_(kMinEdge),
+          maxEdge_(kMaxEdge)
     {
+        // A telecentric camera's normalised units are millimetres: the same
+        // bounds in pixels as a pinhole's at 1000 px focal length (kMinEdge
+        // ~1e-3 px, kMaxEdge ~50 px).
+        if (camera.isTelecentric()) {
+            const double pxPerMm = camera.intrinsics().K.diagonal().head<2>().maxCoeff();
+            minEdge_ = 1e3 * kMinEdge / pxPerMm;
+            maxEdge_ = 1e3 * kMaxEdge / pxPerMm;
+        }
     }
 
     void add(const Vec3& a, const Vec3& b, const Vec3& c) { subdivide(a, b, c, 0); }
@@ -243,7 +267,8 @@ class DistortedProjector {
     static constexpr double kMaxEdge = 0.05;
     static constexpr int kMaxDepth = 40;
 
-    static Vec2 normalised(const Vec3& p) { return {p.x() / p.z(), p.y() / p.z()}; }
+    // Pieces are in front of the camera (clipped at the near plane).
+    Vec2 normalised(const Vec3& p) const { return *camera_.normalise(p); }
 
     std::optional<Vec2> project(const Vec3& p) const
     {
@@ -255,8 +280,8 @@ class DistortedProjector {
     {
         if (std::lexicographical_compare(q.data(), q.data() + 3, p.data(), p.data() + 3)) std::swap(p, q);
         const double len = (normalised(p) - normalised(q)).norm();
-        if (len < kMinEdge) return false;
-        if (len > kMaxEdge) return true;
+        if (len < minEdge_) return false;
+        if (len > maxEdge_) return true;
         auto P = project(p);
         auto Q = project(q);
         if (!P || !Q) return false; // outside the lens' valid field: dropped at the leaves
@@ -312,6 +337,7 @@ class DistortedProjector {
     double sagPx_;
     TriangleSink& sink_;
     double limit2_;
+    double minEdge_, maxEdge_;
 };
 
 /// Φ⁻¹(p) for p in (0, 1): Acklam's rational approximation, refined by one
@@ -448,17 +474,21 @@ cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const 
     if (size.width <= 0 || size.height <= 0)
         throw ArgumentError(fmt::format("camera: no image size, found {}x{}", size.width, size.height));
     const int sub = options.subScanlines;
-    const double near = options.nearPlaneMm;
+    const bool telecentric = camera.isTelecentric();
+    // A telecentric camera images everything beyond its lens's front
+    // (docs/telecentric.md): clipped there when the working distance is stated.
+    const double near = !telecentric ? options.nearPlaneMm : -camera.intrinsics().workingDistanceMm;
     const auto& pose = camera.cameraFromPart();
     const geometry::Mat3& K = camera.intrinsics().K;
     const bool distorted = camera.intrinsics().hasDistortion();
 
     TriangleSink sink(size, sub);
     DistortedProjector distortedProjector(camera, options.maxEdgeSagPx, sink);
-    // Pinhole projection x = K X / Z (eq. 4.2.1-1/2 with skew); no distortion.
-    auto pinhole = [&K](const Vec3& p) {
-        const double x = p.x() / p.z();
-        const double y = p.y() / p.z();
+    // Pinhole projection x = K X / Z (eq. 4.2.1-1/2 with skew), or the
+    // telecentric x = K (X, Y, 1); no distortion.
+    auto pinhole = [&K, telecentric](const Vec3& p) {
+        const double x = telecentric ? p.x() : p.x() / p.z();
+        const double y = telecentric ? p.y() : p.y() / p.z();
         return Vec2(K(0, 0) * x + K(0, 1) * y + K(0, 2), K(1, 1) * y + K(1, 2));
     };
 
@@ -479,9 +509,10 @@ cv::Mat SilhouetteRenderer::coverage(const geometry::CameraModel& camera, const 
         for (const auto& tri : mesh.triangles) {
             const Vec3 v[3] = {cam[static_cast<std::size_t>(tri[0])], cam[static_cast<std::size_t>(tri[1])],
                                cam[static_cast<std::size_t>(tri[2])]};
-            // Front-facing: the outward normal points towards the camera centre (the origin).
+            // Front-facing: the outward normal points towards the camera
+            // centre (the origin), or against a telecentric camera's +z.
             const Vec3 n = orientation * (v[1] - v[0]).cross(v[2] - v[0]);
-            if (!(n.dot(v[0]) < 0.0)) continue;
+            if (!((telecentric ? n.z() : n.dot(v[0])) < 0.0)) continue;
             ++front;
             const bool allIn = v[0].z() >= near && v[1].z() >= near && v[2].z() >= near;
             if (allIn && !distorted) {

@@ -214,7 +214,12 @@ class ManifestReader {
 
         geometry::Intrinsics in;
         if (j.contains("image_size")) in.imageSize = imageSize(j["image_size"], at + ".image_size");
+        projection(j, at, in);
         if (j.contains("P")) {
+            if (in.projection == geometry::Projection::Telecentric ||
+                in.distortionModel != geometry::DistortionModel::OpenCV)
+                fail(at + ".P", "a telecentric view, or one with the division model, gives K, R and t "
+                                "(docs/telecentric.md), not P");
             for (const char* key : {"K", "R", "t", "dist"})
                 if (j.contains(key)) fail(at + "." + key, "a view gives either P or K, R, t (+ dist), not both");
             const Eigen::Matrix<double, 3, 4> P = matrix(j["P"], 3, 4, at + ".P");
@@ -251,8 +256,43 @@ class ManifestReader {
         }
         if (j.contains("fixture_pose")) v.fixturePose = fixturePose(j["fixture_pose"], at + ".fixture_pose");
         if (j.contains("origin")) v.origin = origin(j["origin"], at, in.imageSize);
-        warnUnknownKeys(j, {"id", "image", "K", "dist", "R", "t", "P", "image_size", "fixture_pose", "origin"}, at);
+        warnUnknownKeys(j,
+                        {"id", "image", "model", "working_distance_mm", "distortion_model", "kappa", "K", "dist", "R",
+                         "t", "P", "image_size", "fixture_pose", "origin"},
+                        at);
         return v;
+    }
+
+    /// `model` (pinhole, the default, or telecentric), the division model's
+    /// `distortion_model` and `kappa`, and a telecentric view's
+    /// `working_distance_mm` (docs/telecentric.md).
+    void projection(const json& j, const std::string& at, geometry::Intrinsics& in) const
+    {
+        if (j.contains("model")) {
+            const std::string model = string(j["model"], at + ".model");
+            if (model == "telecentric")
+                in.projection = geometry::Projection::Telecentric;
+            else if (model != "pinhole")
+                fail(at + ".model", "expected pinhole or telecentric, found '" + model + "'");
+        }
+        if (j.contains("distortion_model")) {
+            const std::string model = string(j["distortion_model"], at + ".distortion_model");
+            if (model == "division")
+                in.distortionModel = geometry::DistortionModel::Division;
+            else if (model != "opencv")
+                fail(at + ".distortion_model", "expected opencv or division, found '" + model + "'");
+        }
+        if (j.contains("kappa")) {
+            if (in.distortionModel != geometry::DistortionModel::Division)
+                fail(at + ".kappa", "only the division model (distortion_model: division) has kappa");
+            in.kappa = number(j["kappa"], at + ".kappa");
+        }
+        if (!j.contains("working_distance_mm")) return;
+        if (in.projection != geometry::Projection::Telecentric)
+            fail(at + ".working_distance_mm", "only a telecentric view (model: telecentric) has a working distance");
+        in.workingDistanceMm = number(j["working_distance_mm"], at + ".working_distance_mm");
+        if (!(in.workingDistanceMm > 0.0) || in.workingDistanceMm > 1e5)
+            fail(at + ".working_distance_mm", "expected a positive distance within 1e5 mm");
     }
 
     SegmentationSettings segmentation(const json& j) const
@@ -403,6 +443,15 @@ std::string manifestJson(const CaptureManifest& manifest, const fs::path& folder
         json j;
         j["id"] = v.id;
         j["image"] = relativeImagePath(v.image, folder);
+        // A pinhole view's manifest stays as it always was: `model` only for a telecentric one.
+        if (in.projection == geometry::Projection::Telecentric) {
+            j["model"] = "telecentric";
+            if (std::isfinite(in.workingDistanceMm)) j["working_distance_mm"] = in.workingDistanceMm;
+        }
+        if (in.distortionModel == geometry::DistortionModel::Division) {
+            j["distortion_model"] = "division";
+            j["kappa"] = in.kappa;
+        }
         j["K"] = matrixJson(in.K);
         j["dist"] = in.dist.empty() ? std::vector<double>(5, 0.0) : in.dist;
         j["R"] = matrixJson(pose.R);

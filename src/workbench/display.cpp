@@ -139,7 +139,10 @@ nlohmann::json cameraJson(const geometry::CameraModel& camera, const Eigen::Vect
 {
     const geometry::RigidTransform& T = camera.cameraFromPart();
     const geometry::Mat3& K = camera.intrinsics().K;
-    return {{"centre", geometry::toJson(camera.centre())},
+    // A telecentric camera has no centre: where its optical axis leaves the
+    // lens's front stands for it (docs/workbench.md).
+    return {{"projection", camera.isTelecentric() ? "telecentric" : "pinhole"},
+            {"centre", geometry::toJson(camera.sightOrigin(T.inverse().t))},
             {"rotation", geometry::toJson(geometry::Mat3(T.R.transpose()))},
             {"fx", K(0, 0)},
             {"fy", K(1, 1)},
@@ -147,7 +150,8 @@ nlohmann::json cameraJson(const geometry::CameraModel& camera, const Eigen::Vect
             {"cy", K(1, 2)},
             {"width", camera.imageSize().width},
             {"height", camera.imageSize().height},
-            {"working_distance_mm", (T.R * target + T.t).z()}};
+            // The target's depth along the axis from that centre: for a telecentric camera, from its lens's front.
+            {"working_distance_mm", camera.isTelecentric() ? camera.rangeTo(target) : camera.depthOf(target)}};
 }
 
 cv::Mat annotatedView(const model::TriangleMesh& mesh, const geometry::Station& station,

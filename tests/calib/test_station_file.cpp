@@ -195,6 +195,10 @@ TEST(StationFile, TelecentricCameraIsWrittenInOneOfItsTwoForms)
     EXPECT_DOUBLE_EQ(cam["calibration"]["std_dev"]["cy"].as<double>(), 0.17);
     EXPECT_EQ(cam["calibration"]["model"].as<std::string>(), "telecentric");
     EXPECT_EQ(cam["pixel_size_um"][0].as<double>(), 3.45); // other keys kept
+    // The station loader reads it back as the camera that was calibrated.
+    auto read = hg::geometry::parseCameraSection(hg::ConfigNode::loadFile(file)["camera"]);
+    EXPECT_EQ(read.projection, hg::geometry::Projection::Telecentric);
+    EXPECT_LT((read.K - r.intrinsics.K).norm(), 1e-9);
 
     // Without it: K in px/mm, and the pitch form goes.
     StationFileUpdate withoutPitch(file);
@@ -204,4 +208,7 @@ TEST(StationFile, TelecentricCameraIsWrittenInOneOfItsTwoForms)
     EXPECT_DOUBLE_EQ(cam["K"][1][1].as<double>(), 100.2);
     EXPECT_DOUBLE_EQ(cam["K"][0][2].as<double>(), 651.25);
     for (const char* key : {"magnification", "pixel_pitch_mm", "principal_point"}) EXPECT_FALSE(cam[key]) << key;
+    read = hg::geometry::parseCameraSection(hg::ConfigNode::loadFile(file)["camera"]);
+    EXPECT_EQ(read.projection, hg::geometry::Projection::Telecentric);
+    EXPECT_LT((read.K - r.intrinsics.K).norm(), 1e-12);
 }

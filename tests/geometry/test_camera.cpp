@@ -90,7 +90,8 @@ TEST(CameraModel, BackProjectionRoundTripsWithDistortion)
     for (int i = 0; i < 200; ++i) {
         Vec2 pixel(px(rng), py(rng));
         Ray ray = cam.backProject(pixel);
-        EXPECT_NEAR((ray.origin - cam.centre()).norm(), 0.0, 1e-9);
+        ASSERT_TRUE(cam.centre());
+        EXPECT_NEAR((ray.origin - *cam.centre()).norm(), 0.0, 1e-9);
         EXPECT_NEAR(ray.direction.norm(), 1.0, 1e-12);
         auto back = cam.project(ray.origin + depth(rng) * ray.direction);
         ASSERT_TRUE(back);
@@ -123,7 +124,8 @@ TEST(CameraModel, CentreAndAxis)
     R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
     RigidTransform T{R, -(R * Vec3(5, 6, 300))};
     CameraModel cam(makeIntrinsics({}), T);
-    EXPECT_NEAR((cam.centre() - Vec3(5, 6, 300)).norm(), 0.0, 1e-12);
+    ASSERT_TRUE(cam.centre());
+    EXPECT_NEAR((*cam.centre() - Vec3(5, 6, 300)).norm(), 0.0, 1e-12);
     EXPECT_NEAR((cam.opticalAxis() - Vec3(0, 0, -1)).norm(), 0.0, 1e-12);
     // A point straight below the camera lands on the principal point.
     auto p = cam.project({5, 6, 0});
@@ -186,6 +188,165 @@ TEST(CameraModel, FromProjectionMatrixRecoversKRt)
     EXPECT_LT((cam.intrinsics().K - in.K).cwiseAbs().maxCoeff(), 1e-6);
     EXPECT_LT((cam.cameraFromPart().R - T.R).cwiseAbs().maxCoeff(), 1e-9);
     EXPECT_LT((cam.cameraFromPart().t - T.t).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+// ---------------------------------------------------------------------------
+// The telecentric camera (docs/telecentric.md): pixel = K·distort(x, y, 1)
+// of the camera-frame point, x and y in mm, no division by depth.
+// ---------------------------------------------------------------------------
+
+/// A 0.5x lens on 5 µm pixels (100 px per mm of object), principal point
+/// (1000.5, 750.25), no distortion, looking straight down (-z) at the focus
+/// plane z = 10 of the part frame, axis through (2, 3).
+CameraModel downwardTelecentric(std::vector<double> dist = {})
+{
+    Intrinsics in;
+    in.projection = Projection::Telecentric;
+    in.K << 100.0, 0, 1000.5, 0, 100.0, 750.25, 0, 0, 1;
+    in.dist = std::move(dist);
+    in.imageSize = {2000, 1500};
+    Mat3 R;
+    R << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+    return CameraModel(in, RigidTransform{R, -(R * Vec3(2, 3, 10))});
+}
+
+TEST(TelecentricCamera, PixelsAreHandComputedAndDoNotChangeWithDepth)
+{
+    const CameraModel cam = downwardTelecentric();
+    EXPECT_TRUE(cam.isTelecentric());
+    EXPECT_FALSE(cam.centre().has_value());
+    // Camera frame: x = X − 2, y = −(Y − 3), z = 10 − Z.
+    // (4.5, 1, Z): x = 2.5 mm, y = 2 mm → (1000.5 + 250, 750.25 + 200), at any depth.
+    for (double Z : {10.0, 0.0, -40.0, 25.0}) {
+        const auto p = cam.project({4.5, 1.0, Z});
+        ASSERT_TRUE(p) << Z;
+        EXPECT_NEAR(p->x(), 1250.5, 1e-9) << Z;
+        EXPECT_NEAR(p->y(), 950.25, 1e-9) << Z;
+    }
+    // The scale is the same at every depth: 1/100 mm per pixel.
+    EXPECT_DOUBLE_EQ(cam.millimetresPerPixelAt(5.0).x(), 0.01);
+    EXPECT_DOUBLE_EQ(cam.millimetresPerPixelAt(500.0).y(), 0.01);
+    // Every line of sight is the optical axis, −z.
+    EXPECT_NEAR((cam.lineOfSight({-30, 7, 1}) - Vec3(0, 0, -1)).norm(), 0.0, 1e-15);
+    EXPECT_NEAR((cam.lineOfSight({4, 4, 4}) - Vec3(0, 0, -1)).norm(), 0.0, 1e-15);
+}
+
+TEST(TelecentricCamera, DistortionActsOnMillimetresAsOpenCVsModel)
+{
+    // k1 = 1e-3 mm⁻², p1 = 2e-4 mm⁻¹: at (x, y) = (3, −4) mm, r² = 25,
+    // radial 1 + 0.025 = 1.025; x_d = 3·1.025 + 2·2e-4·3·(−4) = 3.0702,
+    // y_d = −4·1.025 + 2e-4·(25 + 2·16) = −4.0886.
+    const CameraModel cam = downwardTelecentric({1e-3, 0.0, 2e-4, 0.0, 0.0});
+    // Part point with camera x = 3, y = −4: X = 5, Y = 7.
+    const auto p = cam.project({5, 7, 2});
+    ASSERT_TRUE(p);
+    EXPECT_NEAR(p->x(), 1000.5 + 100 * 3.0702, 1e-9);
+    EXPECT_NEAR(p->y(), 750.25 - 100 * 4.0886, 1e-9);
+}
+
+TEST(TelecentricCamera, BackProjectionIsAParallelLineThroughTheUnprojectedPoint)
+{
+    const CameraModel cam = downwardTelecentric({-2e-4, 1e-6, 1e-5, -2e-5, 0.0});
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> px(0, 1999), py(0, 1499), depth(0, 20000);
+    for (int i = 0; i < 200; ++i) {
+        const Vec2 pixel(px(rng), py(rng));
+        const Ray ray = cam.backProject(pixel);
+        EXPECT_NEAR((ray.direction - cam.opticalAxis()).norm(), 0.0, 1e-15);
+        // With no working distance stated the lines start 10 m before the focus plane (z = 10 − 1e4 in the part).
+        EXPECT_NEAR(ray.origin.z(), 10.0 + 1e4, 1e-9);
+        const auto back = cam.project(ray.origin + depth(rng) * ray.direction);
+        ASSERT_TRUE(back);
+        EXPECT_NEAR((*back - pixel).norm(), 0.0, 1e-7) << pixel.transpose();
+    }
+    // Undistorted: the pixel (1100.5, 650.25) is 1 mm right and 1 mm up (y = −1) of the axis.
+    const Ray r = downwardTelecentric().backProject({1100.5, 650.25});
+    EXPECT_NEAR(r.origin.x(), 3.0, 1e-12);
+    EXPECT_NEAR(r.origin.y(), 4.0, 1e-12);
+}
+
+TEST(TelecentricCamera, TheLensFrontIsTheOnlyDepthLimitOfTheProjection)
+{
+    CameraModel unlimited = downwardTelecentric();
+    // No working distance stated: even a point "behind" the focus plane by 1 m projects.
+    EXPECT_TRUE(unlimited.project({2, 3, 1010}).has_value());
+    Intrinsics in = unlimited.intrinsics();
+    in.workingDistanceMm = 110.0;
+    const CameraModel cam(in, unlimited.cameraFromPart());
+    // The lens front is 110 mm above the focus plane (part z = 120); at it and beyond, nothing is imaged.
+    EXPECT_TRUE(cam.project({2, 3, 119.9}).has_value());
+    EXPECT_FALSE(cam.project({2, 3, 120.0}).has_value());
+    EXPECT_FALSE(cam.project({2, 3, 130.0}).has_value());
+    EXPECT_NEAR(cam.backProject({0, 0}).origin.z(), 120.0, 1e-12);
+    EXPECT_NEAR(cam.rangeTo({7, -1, 4}), 116.0, 1e-12);
+    EXPECT_NEAR((cam.sightOrigin({7, -1, 4}) - Vec3(7, -1, 120)).norm(), 0.0, 1e-12);
+    in.workingDistanceMm = 0.0;
+    EXPECT_THROW(in.validate(), std::invalid_argument);
+}
+
+TEST(TelecentricCamera, TheIntrinsicsJacobianIsTheProjectionsDerivative)
+{
+    const CameraModel cam = downwardTelecentric({-2e-4, 1e-6, 1e-5, -2e-5, 3e-9});
+    const Vec3 X(6.0, -1.0, 3.0);
+    const auto J = cam.intrinsicsJacobian(X);
+    ASSERT_TRUE(J);
+    // Central differences of project() in each parameter (fx, fy, cx, cy, k1, k2, p1, p2, k3).
+    const double step[9] = {1e-3, 1e-3, 1e-3, 1e-3, 1e-7, 1e-9, 1e-7, 1e-7, 1e-11};
+    for (int i = 0; i < 9; ++i) {
+        auto moved = [&](double s) {
+            Intrinsics in = cam.intrinsics();
+            in.dist.resize(5, 0.0);
+            if (i < 2) in.K(i, i) += s;
+            if (i == 2) in.K(0, 2) += s;
+            if (i == 3) in.K(1, 2) += s;
+            const int k[9] = {-1, -1, -1, -1, 0, 1, 2, 3, 4};
+            if (i >= 4) in.dist[static_cast<std::size_t>(k[i])] += s;
+            return *CameraModel(in, cam.cameraFromPart()).project(X);
+        };
+        const Vec2 numeric = (moved(step[i]) - moved(-step[i])) / (2 * step[i]);
+        EXPECT_NEAR((J->col(i) - numeric).norm(), 0.0, 1e-4 * std::max(1.0, numeric.norm())) << "parameter " << i;
+    }
+}
+
+TEST(TelecentricCamera, FromAxesIsTheDataSheetModel)
+{
+    // Axes h = x, v = −y, a = −z through P0 = (2, 3, 10): the camera of downwardTelecentric().
+    const auto cam = CameraModel::telecentricFromAxes(100.0, 100.0, 1000.5, 750.25, {2, 3, 10}, {1, 0, 0}, {0, -1, 0},
+                                                      {0, 0, -1}, {2000, 1500});
+    EXPECT_TRUE(cam.isTelecentric());
+    const auto p = cam.project({4.5, 1.0, -3.0});
+    ASSERT_TRUE(p);
+    EXPECT_NEAR(p->x(), 1250.5, 1e-9);
+    EXPECT_NEAR(p->y(), 950.25, 1e-9);
+}
+
+// HALCON's division model: undistorted = distorted / (1 + κ·r_d²), checked
+// here from that definition, not from the camera's closed-form inverse.
+TEST(TelecentricCamera, TheDivisionModelUndistortsByItsDefinition)
+{
+    Intrinsics in = downwardTelecentric().intrinsics();
+    in.distortionModel = DistortionModel::Division;
+    in.kappa = -2e-3; // mm⁻²
+    const CameraModel cam(in, downwardTelecentric().cameraFromPart());
+    EXPECT_TRUE(in.hasDistortion());
+    for (const Vec3& X : {Vec3(5, 7, 2), Vec3(-3, 0.5, 9), Vec3(2, 3, -4), Vec3(9.5, -2, 0)}) {
+        const auto p = cam.project(X);
+        ASSERT_TRUE(p);
+        // The distorted point from the pixel by hand (K = diag(100, 100), principal point (1000.5, 750.25)).
+        const Vec2 d((p->x() - 1000.5) / 100.0, (p->y() - 750.25) / 100.0);
+        // The undistorted point: camera x = X − 2, y = −(Y − 3).
+        const Vec2 u(X.x() - 2.0, 3.0 - X.y());
+        EXPECT_NEAR((d / (1.0 + in.kappa * d.squaredNorm()) - u).norm(), 0.0, 1e-12) << X.transpose();
+        EXPECT_NEAR((cam.undistortPixel(*p) - u).norm(), 0.0, 1e-12) << X.transpose();
+    }
+    // κ > 0 has no distorted point beyond r_u² = 1/(4κ): 1/(4·0.01) = 25, r_u = 5 mm.
+    in.kappa = 0.01;
+    const CameraModel pincushion(in, downwardTelecentric().cameraFromPart());
+    EXPECT_TRUE(pincushion.project({2 + 4.9, 3, 0}).has_value());
+    EXPECT_FALSE(pincushion.project({2 + 5.1, 3, 0}).has_value());
+    // It takes κ, not OpenCV's coefficients.
+    in.dist = {0.1, 0, 0, 0, 0};
+    EXPECT_THROW(in.validate(), std::invalid_argument);
 }
 
 TEST(Intrinsics, RejectsUnusableParameters)

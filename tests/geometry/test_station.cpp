@@ -57,7 +57,102 @@ TEST(Station, LoadsTheContractExample)
     ASSERT_TRUE(s.document);
     EXPECT_EQ(s.document->raw()["plc"]["port"].as<int>(), 1502); // driver sections kept
     auto cam = s.cameraAt({0, 0, 0});
-    EXPECT_LT((cam.centre() - Vec3(0, -300, 0)).norm(), 1e-9);
+    ASSERT_TRUE(cam.centre());
+    EXPECT_LT((*cam.centre() - Vec3(0, -300, 0)).norm(), 1e-9);
+    EXPECT_FALSE(cam.isTelecentric()); // camera.model defaults to pinhole
+}
+
+// A telecentric lens from its data sheet (docs/telecentric.md): a 0.5x lens
+// on 5 µm pixels is 100 px per mm of object; the fixture's t puts the part
+// origin on the plane of best focus.
+const std::string kTelecentric = "camera:\n"
+                                 "  model: telecentric\n"
+                                 "  image_size: [2000, 1500]\n"
+                                 "  magnification: 0.5\n"
+                                 "  pixel_pitch_mm: 0.005\n"
+                                 "  principal_point: [1000.5, 750.25]\n"
+                                 "  dist: [0, 0, 0, 0, 0]\n"
+                                 "  depth_of_field_mm: 4\n"
+                                 "  telecentric_field_mm: 18\n"
+                                 "  working_distance_mm: 110\n"
+                                 "fixture:\n"
+                                 "  type: rotation_declination\n"
+                                 "  camera_from_fixture: {R: [[1, 0, 0], [0, 0, -1], [0, 1, 0]], t: [0, 0, 0]}\n";
+
+TEST(Station, LoadsATelecentricCameraFromItsDataSheet)
+{
+    hgtest::TempDir dir;
+    const Station s = loadStation(hgtest::writeFile(dir / "station.yaml", kTelecentric));
+    EXPECT_EQ(s.camera.projection, Projection::Telecentric);
+    EXPECT_EQ(s.fixture.cameraProjection, Projection::Telecentric);
+    EXPECT_DOUBLE_EQ(s.camera.K(0, 0), 100.0);
+    EXPECT_DOUBLE_EQ(s.camera.K(1, 1), 100.0);
+    EXPECT_DOUBLE_EQ(s.camera.K(0, 2), 1000.5);
+    EXPECT_DOUBLE_EQ(s.camera.K(1, 2), 750.25);
+    EXPECT_DOUBLE_EQ(s.camera.workingDistanceMm, 110.0);
+    // One figure: the depth of field centred on the focus plane, z in [−2, 2].
+    ASSERT_TRUE(s.depthOfFieldMm);
+    EXPECT_DOUBLE_EQ(s.depthOfFieldMm->min, -2.0);
+    EXPECT_DOUBLE_EQ(s.depthOfFieldMm->max, 2.0);
+    ASSERT_TRUE(s.telecentricFieldMm);
+    EXPECT_DOUBLE_EQ(*s.telecentricFieldMm, 18.0);
+    // X_cam = (x, −z, y): the part point (1.5, 40, 2) at (1000.5 + 150, 750.25 − 200), whatever its y.
+    const CameraModel cam = s.cameraAt({0, 0, 0});
+    EXPECT_TRUE(cam.isTelecentric());
+    const auto p = cam.project({1.5, 40, 2});
+    ASSERT_TRUE(p);
+    EXPECT_NEAR(p->x(), 1150.5, 1e-9);
+    EXPECT_NEAR(p->y(), 550.25, 1e-9);
+    // A pitch per axis: fx = 0.5 / 0.004, fy = 0.5 / 0.005; K alone states the same.
+    const Station aspect = loadStation(hgtest::writeFile(
+        dir / "aspect.yaml", replaced(kTelecentric, "pixel_pitch_mm: 0.005", "pixel_pitch_mm: [0.004, 0.005]")));
+    EXPECT_DOUBLE_EQ(aspect.camera.K(0, 0), 125.0);
+    EXPECT_DOUBLE_EQ(aspect.camera.K(1, 1), 100.0);
+    const std::string withK =
+        replaced(replaced(replaced(kTelecentric, "  magnification: 0.5\n", ""), "  pixel_pitch_mm: 0.005\n", ""),
+                 "  principal_point: [1000.5, 750.25]\n", "  K: [[100, 0, 1000.5], [0, 100, 750.25], [0, 0, 1]]\n");
+    EXPECT_EQ(loadStation(hgtest::writeFile(dir / "k.yaml", withK)).camera.K, s.camera.K);
+}
+
+TEST(Station, TheDivisionModelIsReadWithItsKappa)
+{
+    hgtest::TempDir dir;
+    const std::string division =
+        replaced(kTelecentric, "  dist: [0, 0, 0, 0, 0]\n", "  distortion_model: division\n  kappa: -0.002\n");
+    const Station s = loadStation(hgtest::writeFile(dir / "station.yaml", division));
+    EXPECT_EQ(s.camera.distortionModel, DistortionModel::Division);
+    EXPECT_DOUBLE_EQ(s.camera.kappa, -0.002);
+    const std::string both = replaced(division, "  kappa: -0.002\n", "  kappa: -0.002\n  dist: [0.1, 0, 0, 0, 0]\n");
+    EXPECT_EQ(loadError(both), "station.yaml:" + std::to_string(hgtest::lineOf(both, "dist:")) +
+                                   ": camera.dist: the division model takes kappa, not OpenCV's coefficients");
+    const std::string stray = replaced(kTelecentric, "  dist: [0, 0, 0, 0, 0]\n", "  kappa: -0.002\n");
+    EXPECT_EQ(loadError(stray), "station.yaml:" + std::to_string(hgtest::lineOf(stray, "kappa:")) +
+                                    ": camera.kappa: only the division model (distortion_model: division) has kappa");
+}
+
+TEST(Station, TelecentricKeysAreRefusedWhereTheyDoNotBelong)
+{
+    auto lineOfT = [](const std::string& text, const std::string& key) {
+        return "station.yaml:" + std::to_string(hgtest::lineOf(text, key)) + ": ";
+    };
+    // A pinhole camera has no magnification.
+    const std::string pinhole = replaced(kStation, "  dist:", "  magnification: 0.5\n  dist:");
+    EXPECT_EQ(loadError(pinhole), lineOfT(pinhole, "magnification") +
+                                      "camera.magnification: only a telecentric camera (camera.model: telecentric) "
+                                      "has this key");
+    const std::string unknown = replaced(kTelecentric, "model: telecentric", "model: fisheye");
+    EXPECT_EQ(loadError(unknown),
+              lineOfT(unknown, "model:") + "camera.model: unknown camera model 'fisheye' (pinhole or telecentric)");
+    const std::string both =
+        replaced(kTelecentric, "  dist:", "  K: [[100, 0, 1000.5], [0, 100, 750.25], [0, 0, 1]]\n  dist:");
+    EXPECT_EQ(loadError(both), lineOfT(both, "magnification") +
+                                   "camera.magnification: give either K or magnification, pixel_pitch_mm and "
+                                   "principal_point");
+    const std::string noPitch = replaced(kTelecentric, "  pixel_pitch_mm: 0.005\n", "");
+    EXPECT_NE(loadError(noPitch).find("pixel_pitch_mm"), std::string::npos) << loadError(noPitch);
+    const std::string badDof = replaced(kTelecentric, "depth_of_field_mm: 4", "depth_of_field_mm: [-200, 2]");
+    EXPECT_EQ(loadError(badDof), lineOfT(badDof, "depth_of_field_mm") +
+                                     "camera.depth_of_field_mm: depth of field must lie beyond the lens's front");
 }
 
 TEST(Station, WrongTypeNamesLineAndKey)

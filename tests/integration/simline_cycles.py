@@ -3,7 +3,9 @@
 
 Starts tools/simline (fixture simulator on Modbus TCP, hullgauged with the
 simulated camera and config/sim, with --config laid over it: CTest uses
-config/sim-fast, the same line with a faster turntable), runs --cycles
+config/sim-fast, the same line with a faster turntable, and
+config/sim-telecentric, a telecentric lens at 0.01 mm per pixel on a
+quarter-size block with the same landmarks and defects), runs --cycles
 inspections (CTest: 100) with the
 independent PLC client tools/plc-client alternating the nominal part and a
 defective variant (half the run `face-low`, half `corner-missing`), and checks:
@@ -29,7 +31,11 @@ defective variant (half the run `face-low`, half `corner-missing`), and checks:
   its planned direction of sight than it would have from the planned pose;
   on a nominal part every view the fixture's ranges let be corrected fully
   sees it within 0.05° of the planned direction; over the run those views
-  are on average at least ten times closer than they would have been;
+  are on average at least ten times closer than they would have been. A plan
+  of two views (the simulated telecentric line's) has no view to correct:
+  there every nominal part's measured seat is checked against its true seat
+  instead, within --seat-tolerance-mm at the reference point and
+  --seat-tolerance-deg;
 - SIGTERM stops the line cleanly (exit 0, no process left behind).
 Every wait is bounded.
 """
@@ -94,11 +100,15 @@ def tmul(a, v):
 
 
 def sight(station, pose, seat):
-    """Unit direction from the part's reference point to the camera centre, in the part's frame:
-    camera_from_part = camera_from_fixture · Rot(declination) · Rot(rotation) · seat (axes through the origin)."""
+    """Unit direction from the part's reference point back along its line of sight, in the part's frame:
+    camera_from_part = camera_from_fixture · Rot(declination) · Rot(rotation) · seat (axes through the origin).
+    Towards the camera centre; for a telecentric camera (docs/telecentric.md) against its optical axis."""
     fixture = station["fixture"]
     pose_r = mul(mul(fixture["camera_from_fixture"]["R"], rotation(fixture["declination_axis"], pose["declination_deg"])),
                  rotation(fixture["rotation_axis"], pose["rotation_deg"]))
+    if station["camera"].get("model") == "telecentric":
+        back = tmul(pose_r, [0, 0, -1])  # the nominal frame
+        return tmul(seat["R"], back)
     centre = tmul(pose_r, [-v for v in fixture["camera_from_fixture"]["t"]])  # the nominal frame
     in_part = tmul(seat["R"], [c - t for c, t in zip(centre, seat["t"])])
     d = [p - q for p, q in zip(in_part, seat["centre"])]
@@ -123,12 +133,24 @@ def true_sight_errors(station, alignment, simulation):
     return out
 
 
+def seat_error(measured, true):
+    """The distance between where the two seats put the reference point (mm) and the angle between them (°)."""
+    c = true["centre"]
+    at = lambda T: [sum(T["R"][i][j] * c[j] for j in range(3)) + T["t"][i] for i in range(3)]
+    relative = [[sum(measured["R"][k][i] * true["R"][k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    cos_angle = (relative[0][0] + relative[1][1] + relative[2][2] - 1.0) / 2.0
+    return math.dist(at(measured), at(true)), math.degrees(math.acos(max(-1.0, min(1.0, cos_angle))))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--source", required=True, type=Path)
     ap.add_argument("--bin", required=True, type=Path)
     ap.add_argument("--cycles", type=int, default=22)
     ap.add_argument("--config", type=Path, help="a folder laid over config/sim (tools/simline --config)")
+    ap.add_argument("--seat-tolerance-mm", type=float, default=0.005,
+                    help="a two-view plan: a nominal part's measured seat off its true one at the reference point")
+    ap.add_argument("--seat-tolerance-deg", type=float, default=0.02, help="the same, the angle between them")
     args = ap.parse_args()
     if args.cycles < 4:
         ap.error("--cycles: at least 4")
@@ -203,8 +225,14 @@ def main():
         rows = db.execute("SELECT trigger_seq, serial, verdict, landmarks_failed, landmarks_json, alignment_json, "
                           "simulation_json FROM inspections WHERE manual = 0 ORDER BY id").fetchall()
         check(len(rows) == len(plan), f"{len(rows)} rows in the result store for {len(plan)} cycles")
-        station = yaml.safe_load((args.source / "config" / "sim" / "station.yaml").read_text())
-        after_all, before_all = [], []
+        overlaid = args.config / "station.yaml" if args.config else None
+        station_file = overlaid if overlaid and overlaid.exists() else args.source / "config" / "sim" / "station.yaml"
+        station = yaml.safe_load(station_file.read_text())
+        views_file = (args.config / "stepped-block-views.yaml") if args.config else None
+        if not (views_file and views_file.exists()):
+            views_file = args.source / "config" / "sim" / "stepped-block-views.yaml"
+        corrected_views = len(yaml.safe_load(views_file.read_text())) > 2
+        after_all, before_all, seat_errors = [], [], []
         for (seq, serial, part, expected), (db_seq, db_serial, verdict, failed, landmarks, alignment,
                                             simulation) in zip(plan, rows):
             check((db_seq, db_serial, verdict) == (seq, serial, expected),
@@ -212,6 +240,14 @@ def main():
             bad = {l["id"] for l in json.loads(landmarks) if l["status"] != "ok"}
             check(bad == FAILING[part] and failed == len(bad), f"cycle {seq} ({part}): stored failing landmarks {bad}")
             alignment, simulation = json.loads(alignment or "null"), json.loads(simulation or "null")
+            if not corrected_views:
+                if check(alignment and simulation and alignment.get("measured"), f"cycle {seq}: no measured seat"):
+                    mm, deg = seat_error(alignment, simulation["seat"])
+                    seat_errors.append((mm, deg))
+                    check(part != "nominal" or (mm <= args.seat_tolerance_mm and deg <= args.seat_tolerance_deg),
+                          f"cycle {seq}: the nominal part's seat measured {mm * 1000:.2f} µm and {deg:.4f}° "
+                          "off the true one")
+                continue
             if not check(alignment and simulation and alignment.get("pose_correction", {}).get("applied"),
                          f"cycle {seq}: no seat-corrected poses in the record"):
                 continue
@@ -228,7 +264,11 @@ def main():
                 check(part != "nominal" or after < 0.05,
                       f"cycle {seq}: view {k} sees the nominal part {after:.4f}° off the planned direction")
         db.close()
-        if check(after_all, "no corrected views to judge"):
+        if not corrected_views and check(seat_errors, "no measured seats to judge"):
+            print(f"a plan of two views: no pose to correct; measured seats against the true ones, worst "
+                  f"{max(e[0] for e in seat_errors) * 1000:.2f} µm and {max(e[1] for e in seat_errors):.4f}° "
+                  "(every part, defective ones included)", flush=True)
+        elif check(after_all, "no corrected views to judge"):
             mean_after, mean_before = sum(after_all) / len(after_all), sum(before_all) / len(before_all)
             print(f"true direction of sight off the plan, {len(after_all)} corrected views: mean {mean_after:.4f}° "
                   f"(max {max(after_all):.4f}°), from the planned poses it would have been {mean_before:.4f}°",

@@ -360,12 +360,12 @@ TEST(ViewPlan, DesignerBestViewsAreHonoured)
     ASSERT_EQ(plan.views[0].landmarks.size(), 1u);
     const Vec3 x(10, 0, 10);
     const Vec3 designer = (x - station.fixture.cameraCentreInPart({0, 30, 0})).normalized();
-    const Vec3 chosen = (x - plan.views[0].camera.centre()).normalized();
+    const Vec3 chosen = plan.views[0].camera.lineOfSight(x);
     const double theta = maxViewAngleRad(4000, (x - station.fixture.cameraCentreInPart({0, 30, 0})).norm(), 0.5);
     EXPECT_GT(theta, geometry::degToRad(20)); // hand check: Θ = 38.2° at d = 300 mm
     EXPECT_LE(std::acos(designer.dot(chosen)), theta + 1e-9);
     // And the chosen view grazes the face: camera centre within 1 mm of x = 10.
-    EXPECT_NEAR(plan.views[0].camera.centre().x(), 10.0, 1.0);
+    EXPECT_NEAR(plan.views[0].camera.centre()->x(), 10.0, 1.0);
 }
 
 TEST(ViewPlan, RequestedViewCountTooSmallFails)

@@ -61,7 +61,10 @@ std::array<Vec3, 8> boxCorners(const Vec3& lo, const Vec3& hi)
 /// consecutive pair is a box edge (the contour generator), whatever the lens.
 std::vector<int> outlineCorners(const CameraModel& cam, const std::array<Vec3, 8>& corners)
 {
-    CameraModel pinhole(Intrinsics{cam.intrinsics().K, {}, cam.imageSize()}, cam.cameraFromPart());
+    Intrinsics undistorted;
+    undistorted.K = cam.intrinsics().K;
+    undistorted.imageSize = cam.imageSize();
+    CameraModel pinhole(undistorted, cam.cameraFromPart());
     auto px = projectWithOpenCV(pinhole, {corners.begin(), corners.end()});
     std::vector<cv::Point2f> pts(px.begin(), px.end());
     std::vector<int> hull;

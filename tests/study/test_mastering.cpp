@@ -189,15 +189,7 @@ struct BiasedStation {
             const std::vector<model::TriangleMesh> meshes{
                 model::makeBox({0, 0, 0}, {24, 24, 4}),
                 model::makeBox({9 - o[0], 9 - o[2], 4}, {15 + o[1], 15 + o[3], 24})};
-            hgtest::ExactRenderOptions r;
-            r.samplesPerSide = 32;
-            r.seed = seed * 100 + i;
-            hgtest::ExactShading s;
-            s.blurSigmaPx = 0.6;
-            s.noiseSigma = 1.5;
-            s.seed = seed * 100 + 50 + i;
-            views.push_back({"v" + std::to_string(i), cameras[i],
-                             hgtest::shadeExact(hgtest::exactCoverage(meshes, cameras[i], r), s)});
+            views.push_back({"v" + std::to_string(i), cameras[i], hgtest::lineFrame(meshes, cameras[i], seed, i)});
         }
         inspect::DeviationReferral referral;
         referral.correction = correction;

@@ -32,6 +32,61 @@ constexpr double kMarkMarginPx = 0.25;
 constexpr double kCellPx = 4.0;
 constexpr int kMaxCellsPerSide = 4096;
 
+/// The camera's normalised plane and its pixels. A pinhole camera's plane is
+/// the perspective one, (x/z, y/z), reached through the camera's own lens
+/// model (CameraModel::projectCameraPoint and undistortPixel, whose round trip
+/// tests/sim/test_exact_render.cpp checks). A telecentric camera's is the
+/// orthographic one, (x, y) in mm, and its pixel K·(x, y, 1) — written here
+/// from docs/telecentric.md's equations, sharing no code with the camera, so
+/// that the telecentric accuracy tests judge src/'s projection on frames it
+/// did not make. A telecentric camera with lens distortion is refused.
+class PlaneMap {
+  public:
+    explicit PlaneMap(const CameraModel& camera)
+        : camera_(camera), orthographic_(camera.intrinsics().projection == hg::geometry::Projection::Telecentric)
+    {
+        const auto& K = camera.intrinsics().K;
+        fx_ = K(0, 0);
+        skew_ = K(0, 1);
+        cx_ = K(0, 2);
+        fy_ = K(1, 1);
+        cy_ = K(1, 2);
+        if (orthographic_)
+            for (double d : camera.intrinsics().dist)
+                if (d != 0.0)
+                    throw std::invalid_argument(
+                        "exactCoverage: a telecentric camera's lens distortion is not drawn; give dist zero");
+    }
+
+    /// A camera-frame point on the plane; the perspective plane needs z beyond the near limit.
+    bool toPlane(const Vec3& pc, double nearPlaneMm, Vec2& q) const
+    {
+        if (orthographic_) {
+            q = Vec2(pc.x(), pc.y());
+            return true;
+        }
+        if (!(pc.z() > nearPlaneMm)) return false;
+        q = Vec2(pc.x() / pc.z(), pc.y() / pc.z());
+        return true;
+    }
+    Vec2 toPixel(const Vec2& q) const
+    {
+        if (!orthographic_) return *camera_.projectCameraPoint(Vec3(q.x(), q.y(), 1.0));
+        return {fx_ * q.x() + skew_ * q.y() + cx_, fy_ * q.y() + cy_};
+    }
+    Vec2 fromPixel(const Vec2& p) const
+    {
+        if (!orthographic_) return camera_.undistortPixel(p);
+        const double y = (p.y() - cy_) / fy_;
+        return {(p.x() - cx_ - skew_ * y) / fx_, y};
+    }
+
+  private:
+    const CameraModel& camera_;
+    bool orthographic_;
+    double fx_ = 1, skew_ = 0, cx_ = 0, fy_ = 1, cy_ = 0;
+};
+
 /// An axis-aligned box in the camera's normalised plane.
 struct PlaneBox {
     double xMin = kInf, xMax = -kInf, yMin = kInf, yMax = -kInf;
@@ -116,7 +171,7 @@ struct PositionHash {
 };
 
 PlaneScene projectMeshes(const std::vector<hg::model::TriangleMesh>& meshes, const CameraModel& camera,
-                         double nearPlaneMm)
+                         const PlaneMap& map, double nearPlaneMm)
 {
     PlaneScene scene;
     std::unordered_map<Vec3, int, PositionHash> welded;
@@ -129,11 +184,12 @@ PlaneScene projectMeshes(const std::vector<hg::model::TriangleMesh>& meshes, con
             id[i] = it->second;
             if (!added) continue;
             const Vec3 pc = camera.cameraFromPart().apply(mesh.vertices[i]);
-            if (!(pc.z() > nearPlaneMm))
+            Vec2 q;
+            if (!map.toPlane(pc, nearPlaneMm, q))
                 throw std::invalid_argument("exactCoverage: mesh " + std::to_string(m) + " vertex " +
                                             std::to_string(i) + " lies at camera z = " + std::to_string(pc.z()) +
                                             " mm, not beyond the near limit " + std::to_string(nearPlaneMm) + " mm");
-            scene.points.emplace_back(pc.x() / pc.z(), pc.y() / pc.z());
+            scene.points.push_back(q);
         }
         for (const auto& t : mesh.triangles) {
             for (int k : t)
@@ -268,19 +324,19 @@ class TriangleGrid {
 /// The part of the normalised plane the image sees: the undistorted outline
 /// of the sensor [-0.5, W-0.5] x [-0.5, H-0.5] every 4 px, widened by 2 px
 /// for the outline's bulge between its points.
-PlaneBox imageExtent(const CameraModel& camera)
+PlaneBox imageExtent(const CameraModel& camera, const PlaneMap& map)
 {
     const cv::Size size = camera.imageSize();
     const double right = size.width - 0.5, bottom = size.height - 0.5;
     PlaneBox box;
     for (double x = -0.5;; x = std::min(x + 4.0, right)) {
-        box.add(camera.undistortPixel({x, -0.5}));
-        box.add(camera.undistortPixel({x, bottom}));
+        box.add(map.fromPixel({x, -0.5}));
+        box.add(map.fromPixel({x, bottom}));
         if (x == right) break;
     }
     for (double y = -0.5;; y = std::min(y + 4.0, bottom)) {
-        box.add(camera.undistortPixel({-0.5, y}));
-        box.add(camera.undistortPixel({right, y}));
+        box.add(map.fromPixel({-0.5, y}));
+        box.add(map.fromPixel({right, y}));
         if (y == bottom) break;
     }
     const auto& K = camera.intrinsics().K;
@@ -328,10 +384,10 @@ void markAround(cv::Mat1b& mask, const Vec2& p)
 /// Marks the pixels a contour edge (straight in the normalised plane) may
 /// touch: its projection walked by halving until each step is at most
 /// kWalkStepPx long, every step's ends marked.
-void markContourEdge(cv::Mat1b& mask, Vec2 a, Vec2 b, const CameraModel& camera, const PlaneBox& extent)
+void markContourEdge(cv::Mat1b& mask, Vec2 a, Vec2 b, const PlaneMap& map, const PlaneBox& extent)
 {
     if (!clipSegment(a, b, extent)) return;
-    auto pixel = [&](const Vec2& q) { return *camera.projectCameraPoint(Vec3(q.x(), q.y(), 1.0)); };
+    auto pixel = [&](const Vec2& q) { return map.toPixel(q); };
     struct Piece {
         Vec2 qa, pa, qb, pb;
         int depth;
@@ -353,14 +409,14 @@ void markContourEdge(cv::Mat1b& mask, Vec2 a, Vec2 b, const CameraModel& camera,
 
 /// Everything a point test needs; shared read-only by the threads.
 struct Sampler {
-    const CameraModel& camera;
+    const PlaneMap& map;
     const TriangleGrid& grid;
 
     /// Whether the pixel-coordinate point (u, v) is in the silhouette;
     /// `hint` carries the last triangle hit.
     bool covered(double u, double v, int& hint) const
     {
-        const Vec2 q = camera.undistortPixel({u, v});
+        const Vec2 q = map.fromPixel({u, v});
         const int t = grid.find(q.x(), q.y(), hint);
         if (t >= 0) hint = t;
         return t >= 0;
@@ -458,7 +514,8 @@ cv::Mat exactCoverage(const std::vector<hg::model::TriangleMesh>& meshes, const 
 {
     options.validate();
     camera.intrinsics().validate();
-    const PlaneScene scene = projectMeshes(meshes, camera, options.nearPlaneMm);
+    const PlaneMap map(camera);
+    const PlaneScene scene = projectMeshes(meshes, camera, map, options.nearPlaneMm);
 
     std::vector<PlaneTriangle> triangles;
     PlaneBox reach;
@@ -468,17 +525,17 @@ cv::Mat exactCoverage(const std::vector<hg::model::TriangleMesh>& meshes, const 
         for (const Vec2& p : pt.v) reach.add(p);
         triangles.push_back(pt);
     }
-    const PlaneBox extent = imageExtent(camera);
+    const PlaneBox extent = imageExtent(camera, map);
     const PlaneBox seen = reach.intersected(extent);
     const auto& K = camera.intrinsics().K;
     const TriangleGrid grid(std::move(triangles), seen.empty() ? extent : seen, kCellPx / std::max(K(0, 0), K(1, 1)));
-    const Sampler sampler{camera, grid};
+    const Sampler sampler{map, grid};
 
     const cv::Size size = camera.imageSize();
     cv::Mat1b mask(size, options.sampleEveryPixel ? 1 : 0);
     if (!options.sampleEveryPixel)
         for (const auto& [a, b] : contourEdges(scene))
-            markContourEdge(mask, scene.points[a], scene.points[b], camera, extent);
+            markContourEdge(mask, scene.points[a], scene.points[b], map, extent);
 
     cv::Mat out = cv::Mat::zeros(size, CV_32FC1);
     fillUnmarkedRegions(out, mask, sampler);
@@ -507,6 +564,19 @@ cv::Mat shadeExact(const cv::Mat& coverage, const ExactShading& s)
             out(r, c) = static_cast<unsigned char>(std::clamp(std::round(v), 0.0, 255.0));
         }
     return out;
+}
+
+cv::Mat lineFrame(const std::vector<hg::model::TriangleMesh>& meshes, const hg::geometry::CameraModel& camera,
+                  std::uint64_t seed, std::uint64_t view)
+{
+    ExactRenderOptions r;
+    r.samplesPerSide = 32;
+    r.seed = seed * 100 + view;
+    ExactShading s;
+    s.blurSigmaPx = 0.6;
+    s.noiseSigma = 1.5;
+    s.seed = seed * 100 + 50 + view;
+    return shadeExact(exactCoverage(meshes, camera, r), s);
 }
 
 } // namespace hgtest

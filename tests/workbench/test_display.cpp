@@ -94,6 +94,22 @@ TEST(DisplayMesh, AFineSphereIsSimplifiedToAtMost25000TrianglesAndStaysClosed)
     EXPECT_EQ(simplifiedMesh(box(1, 2, 3), 25000).triangles.size(), 12u);
 }
 
+// A telecentric camera (docs/telecentric.md) has no centre: the page draws
+// its box of parallel lines of sight from where the axis leaves the lens.
+TEST(DisplayViews, ATelecentricCameraIsDrawnFromItsLensFront)
+{
+    geometry::Station station =
+        hgtest::station({.cameraKeys = "  model: telecentric\n  working_distance_mm: 110\n", .distanceMm = 0});
+    const geometry::CameraModel camera = station.cameraAt({0.0, 0.0, 0.0});
+    // X_cam = (x, -z, y): the axis is the part's y axis, the focus plane y = 0, the lens's front y = -110.
+    const nlohmann::json j = cameraJson(camera, {1, 4, 2});
+    EXPECT_EQ(j["projection"], "telecentric");
+    EXPECT_NEAR(j["centre"][0].get<double>(), 0.0, 1e-12);
+    EXPECT_NEAR(j["centre"][1].get<double>(), -110.0, 1e-12);
+    EXPECT_NEAR(j["centre"][2].get<double>(), 0.0, 1e-12);
+    EXPECT_NEAR(j["working_distance_mm"].get<double>(), 114.0, 1e-12);
+}
+
 TEST(DisplayViews, TheCameraIsTheStationsAtThePoseInThePartFrame)
 {
     const geometry::Station station = hgtest::station();

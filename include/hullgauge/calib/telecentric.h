@@ -54,8 +54,8 @@ struct TelecentricOptions {
 constexpr double kMinTiltSpreadDeg = 5.0;
 
 /// The affine camera's calibration: the pinhole result's fields (K with fx,
-/// fy in px/mm; dist k1, k2, p1, p2, k3 with k1 in mm⁻²; each target pose
-/// with t_z = 0), to be read as a telecentric camera, and what only it has.
+/// fy in px/mm; dist k1, k2, p1, p2, k3 with k1 in mm⁻²; `projection`
+/// Telecentric; each target pose with t_z = 0) and what only it has.
 struct TelecentricCalibration : IntrinsicsResult {
     /// Largest angle between two views' target planes (tilt sign not counted).
     double tiltSpreadDeg = 0.0;

@@ -14,8 +14,11 @@
 //   camera_from_part = camera_from_fixture * Trans(rail_axis * rail_mm)
 #pragma once
 
+#include <cmath>
+
 #include "hullgauge/common/enum_names.h"
 #include "hullgauge/common/format.h"
+#include "hullgauge/geometry/camera.h"
 #include "hullgauge/geometry/transform.h"
 
 namespace hg::geometry {
@@ -51,6 +54,20 @@ struct Range {
     bool contains(double v, double tol = 1e-9) const { return v >= min - tol && v <= max + tol; }
 };
 
+/// A posed camera's lines of sight in the part frame (docs/telecentric.md):
+/// through its centre (pinhole) or all parallel to its optical axis (telecentric).
+struct SightLines {
+    Vec3 centre = Vec3::Zero(); ///< the centre; telecentric: the axis's point on the focus plane
+    Vec3 axis = Vec3::UnitZ();  ///< the optical axis (unit)
+    bool parallel = false;      ///< telecentric
+    /// Unit direction of the line of sight from the camera towards `x`.
+    Vec3 towards(const Vec3& x) const { return parallel ? axis : Vec3((x - centre).normalized()); }
+    /// How far `x` lies from where the camera sees best: from the centre, or
+    /// (telecentric, whose scale does not change with depth) from the plane of
+    /// best focus along the axis.
+    double distanceTo(const Vec3& x) const { return parallel ? std::abs(axis.dot(x - centre)) : (x - centre).norm(); }
+};
+
 class FixtureKinematics {
   public:
     FixtureType type = FixtureType::RotationDeclination;
@@ -69,8 +86,15 @@ class FixtureKinematics {
     RigidTransform cameraFromPart(const FixturePose& pose) const;
     /// True when the fixture can reach `pose` (within its ranges).
     bool reachable(const FixturePose& pose) const;
-    /// Camera centre in the part frame at `pose`.
+    /// How the camera on the fixture projects (the station's camera.model):
+    /// where its lines of sight come from depends on it.
+    Projection cameraProjection = Projection::Pinhole;
+
+    /// Camera centre in the part frame at `pose`: for a telecentric camera,
+    /// which has none, the point of its optical axis on the focus plane.
     Vec3 cameraCentreInPart(const FixturePose& pose) const;
+    /// The camera's lines of sight at `pose`, part frame.
+    SightLines sightLinesAt(const FixturePose& pose) const;
 };
 
 } // namespace hg::geometry

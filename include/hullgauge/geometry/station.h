@@ -43,8 +43,13 @@ struct Station {
     Intrinsics camera;
     /// Physical pixel pitch (µm) for MED reports (eq. 4.5.2-2/3), when known.
     std::optional<Vec2> pixelSizeUm;
-    /// Sharp range [near, far] along the optical axis in mm (Rule 4), when known.
+    /// Sharp range [near, far] of camera-frame depth along the optical axis in
+    /// mm (Rule 4), when known; a telecentric camera's is about its plane of
+    /// best focus, z = 0 (docs/telecentric.md).
     std::optional<Range> depthOfFieldMm;
+    /// Telecentric only: the diameter (mm) of the object-side field around the
+    /// optical axis the lens is telecentric over (Rule 4), when known.
+    std::optional<double> telecentricFieldMm;
     FixtureKinematics fixture;
     /// Floor plane z in the part frame; no line of sight passes below it (Assumption 2.10).
     double floorZMm = 0.0;
@@ -62,6 +67,10 @@ struct Station {
 Station loadStation(const std::filesystem::path& file);
 /// As loadStation, from a parsed document.
 Station parseStation(const ConfigNode& root);
+/// A station file's `camera` section alone, validated as loadStation
+/// validates it (pinhole or telecentric, docs/telecentric.md): for the tools
+/// that need the calibrated camera of a station still being calibrated.
+Intrinsics parseCameraSection(const ConfigNode& camera);
 
 /// Loads a poses file: a YAML list of `{rotation_deg, declination_deg}` or
 /// `{rail_mm}` maps (docs/contracts.md §5). Each pose is checked against the fixture's

@@ -14,15 +14,20 @@ namespace hg::inspect {
 
 /// MED of one view at one landmark.
 struct ViewDiscrimination {
-    bool observes = false;   ///< landmark in front of the camera and inside the frame
-    double distanceMm = 0.0; ///< d: camera centre to landmark
-    double thetaDeg = 0.0;   ///< Θ: optical axis to the line of sight
+    bool observes = false; ///< landmark in front of the camera and inside the frame
+    /// d: camera centre to landmark (a telecentric camera: the lens's front
+    /// to the landmark along the axis, CameraModel::rangeTo)
+    double distanceMm = 0.0;
+    double thetaDeg = 0.0; ///< Θ: optical axis to the line of sight (0 for a telecentric camera)
     /// Smallest voxel edge one pixel can discriminate along the line of sight,
     /// eq. 4.4.4-19 solved for ΔV: √2·d / (1.5·f + 1), f = min(fx, fy) in pixels
-    /// (the longer pixel side).
+    /// (the longer pixel side). Written with the pixel's size at the landmark
+    /// m = d / f as √2·m / (1.5 + 1/f), it holds for a telecentric camera as
+    /// f → ∞ at fixed m = 1 / min(fx, fy) (docs/telecentric.md): √2·m / 1.5.
     double medRangeMm = 0.0;
     /// Eq. 4.4.5-11 solved for ΔV (several voxels off the axis at angle Θ):
-    /// 2√2·d·cosΘ / (2f(cosΘ − sinΘ) + 1); infinite from Θ = 45° on.
+    /// 2√2·d·cosΘ / (2f(cosΘ − sinΘ) + 1), i.e. 2√2·m·cosΘ / (2(cosΘ − sinΘ) + 1/f);
+    /// infinite from Θ = 45° on; √2·m for a telecentric camera.
     double medAngleMm = 0.0;
 };
 

@@ -153,7 +153,7 @@ class VoxelTester {
     /// then projected inline), and the region the last footprint lay in
     /// (neighbouring voxels mostly share it).
     struct ViewState {
-        bool pinhole = false;
+        bool undistorted = false;
         mutable const SilhouetteIndex::Region* lastRegion = nullptr;
     };
     bool projectCorners(std::size_t viewIndex, const Box3& voxel, std::array<Vec2, 8>& corners) const;

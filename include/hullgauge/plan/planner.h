@@ -88,9 +88,11 @@ enum class LandmarkVerdict {
     Concavity,           ///< no line of sight reaches background, whatever the fixture ranges
     OutOfFixtureRange,   ///< only poses outside the fixture's ranges would see it
     OutsideDepthOfField, ///< seen only from poses whose depth is outside the depth of field
-    BelowStationMed,     ///< seen, but no view resolves the tolerance (eq. 5.3.6-3)
-    VoxelTooCoarse,      ///< tolerance below the map's voxel size (eq. 5.3.6-1)
-    BestViewsFail,       ///< a designer AND term has no usable pose
+    /// seen only from poses that put it outside a telecentric lens's field
+    OutsideTelecentricField,
+    BelowStationMed, ///< seen, but no view resolves the tolerance (eq. 5.3.6-3)
+    VoxelTooCoarse,  ///< tolerance below the map's voxel size (eq. 5.3.6-1)
+    BestViewsFail,   ///< a designer AND term has no usable pose
 };
 constexpr auto nameTable(LandmarkVerdict)
 {
@@ -100,6 +102,7 @@ constexpr auto nameTable(LandmarkVerdict)
                                                      {Concavity, "concavity"},
                                                      {OutOfFixtureRange, "out_of_fixture_range"},
                                                      {OutsideDepthOfField, "outside_depth_of_field"},
+                                                     {OutsideTelecentricField, "outside_telecentric_field"},
                                                      {BelowStationMed, "below_station_med"},
                                                      {VoxelTooCoarse, "voxel_too_coarse"},
                                                      {BestViewsFail, "best_views_fail"}});

@@ -43,7 +43,8 @@ std::vector<double> gridValues(double lo, double hi, double step);
 std::vector<FixturePose> gridPoses(const FixtureKinematics& fixture, const PoseGrid& grid);
 
 /// Reachable poses whose camera centre lies in the plane {X : n·X = n·point}
-/// (the landmark's tangent plane: its line of sight grazes the surface). For a
+/// (the landmark's tangent plane: its line of sight grazes the surface) — for
+/// a telecentric camera, whose optical axis lies in that plane (n·a = 0). For a
 /// rotation/declination fixture: at every grid declination the rotations are
 /// solved exactly, and at every grid rotation the declinations, so the curve
 /// is found whatever the plane's orientation (a horizontal plane is a

@@ -92,11 +92,14 @@ struct RuleCheck {
     bool rule1 = false;
     bool rule2 = false;
     bool rule3 = false;
-    bool rule4 = false;
+    bool rule4 = false;                          ///< in the depth of field and (telecentric) in the telecentric field
+    bool inDepthOfField = false;                 ///< Rule 4's depth half
+    bool inTelecentricField = false;             ///< Rule 4's field half (always true without a stated field)
     double predictedMedMm = 0.0;                 ///< eq. 5.3.6-3 (= 4.4.5-11) solved for MED at this view
     double rangeMedMm = 0.0;                     ///< eq. 4.4.4-19 solved for ΔV at this view
-    double distanceMm = 0.0;                     ///< camera centre to landmark
+    double distanceMm = 0.0;                     ///< camera (CameraModel::rangeTo) to landmark
     double depthMm = 0.0;                        ///< landmark depth along the optical axis
+    double offAxisMm = 0.0;                      ///< landmark's distance from the optical axis
     double viewAngleDeg = 0.0;                   ///< θ: line of sight to the landmark vs optical axis
     Blocker obstruction = Blocker::None;         ///< first Rule-2 blocker met
     std::optional<std::size_t> blockingTriangle; ///< when obstruction == Part
@@ -119,6 +122,16 @@ double predictedMedMm(double focalPx, double distanceMm, double thetaRad);
 /// `medMm` (eq. 5.3.6-3 inverted by bisection); 0 when even θ = 0 does not.
 /// Used as the view-variation limit Θ of eq. 5.4.1-1/2 (C = D tan Θ).
 double maxViewAngleRad(double focalPx, double distanceMm, double medMm);
+
+/// Eq. 5.3.6-3 for a telecentric camera (docs/telecentric.md): written with
+/// the pixel's size at the landmark m = d/f, MED = 2√2·m·cos θ / (2(cos θ −
+/// sin θ) + 1/f), and a telecentric camera is its limit 1/f → 0 at
+/// m = 1/min(fx, fy): √2·m·cos θ / (cos θ − sin θ). Its lines of sight do not
+/// turn off the axis (θ = 0 at every landmark); θ is the turn of the line of
+/// sight a view variation may make.
+double telecentricMedMm(double mmPerPx, double thetaRad);
+/// maxViewAngleRad's telecentric counterpart, from telecentricMedMm.
+double maxTelecentricViewAngleRad(double mmPerPx, double medMm);
 
 class ViewRules {
   public:

@@ -131,7 +131,7 @@ void applyCorrection(LoadedProgram& p, const station::PartProgramRef& ref)
 /// grazes it: its normal within about 3° of the image plane there.
 bool grazes(const geometry::CameraModel& camera, const inspect::MapLandmark& lm)
 {
-    const geometry::Vec3 sight = (lm.position - camera.centre()).normalized();
+    const geometry::Vec3 sight = camera.lineOfSight(lm.position);
     return std::abs(sight.dot(lm.normal)) < 0.05;
 }
 

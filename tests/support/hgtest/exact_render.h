@@ -21,6 +21,10 @@
 // default criteria stop at ~1e-3 px — and tested against the triangles, so
 // lens distortion bends the edges exactly as the camera does.
 // Pixel convention (camera.h): pixel (c, r) covers [c-0.5, c+0.5] x [r-0.5, r+0.5].
+// A telecentric camera (docs/telecentric.md) is drawn on its orthographic
+// plane, (x, y) of the camera frame in mm, with the pixel K·(x, y, 1)
+// computed here from the intrinsics' numbers — no code of the camera's — and
+// no lens distortion (refused); depth then plays no part (no near limit).
 //
 // Method. A pixel that the silhouette's boundary may cross is cut into S x S
 // strata (S = samplesPerSide) with one uniformly jittered sample in each,
@@ -88,7 +92,8 @@ struct ExactRenderOptions {
     /// Seed of the jitter; equal seeds give identical images.
     std::uint64_t seed = 0;
     /// Vertices at camera-frame z <= nearPlaneMm (mm) are refused with
-    /// std::invalid_argument: the perspective projection needs z > 0.
+    /// std::invalid_argument: the perspective projection needs z > 0 (a
+    /// telecentric camera's does not).
     double nearPlaneMm = 1.0;
     /// Threads supersampling the boundary pixels; 0 = one per hardware thread.
     int threads = 0;
@@ -126,6 +131,12 @@ struct ExactShading {
 /// of hg::sim::shadeCoverage. Throws std::invalid_argument unless `coverage`
 /// is CV_32FC1 and the levels and σs are finite (σ >= 0).
 cv::Mat shadeExact(const cv::Mat& coverage, const ExactShading& shading);
+
+/// A line's frame as the accuracy tests take it: coverage from 32 × 32
+/// samples per pixel (jitter seed `seed`·100 + `view`), blur σ 0.6 px and
+/// noise σ 1.5 grey levels (seed `seed`·100 + 50 + `view`).
+cv::Mat lineFrame(const std::vector<hg::model::TriangleMesh>& meshes, const hg::geometry::CameraModel& camera,
+                  std::uint64_t seed, std::uint64_t view);
 
 /// A lens for telecentricChessboardCoverage(), described without any of the
 /// product's types: a camera-frame point (x, y, z) in mm is imaged at

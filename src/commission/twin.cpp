@@ -81,6 +81,7 @@ TwinCycle runCycle(const inspect::Inspector& inspector, const geometry::Station&
                    const model::TriangleMesh& asMade, const FrameSource& frames, std::size_t firstFrame)
 {
     TwinCycle cycle;
+    cycle.seat = seat;
     cycle.commanded = planned;
     std::vector<inspect::SilhouetteView> prepared;
     std::vector<std::string> ids;

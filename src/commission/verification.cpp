@@ -132,9 +132,33 @@ class Verifier {
             ++report_.nominalCycles;
             if (c.result.pass) ++report_.nominalPassed;
             if (c.result.seatingFault) ++report_.seatingFaults;
+            recordSeatError(c);
             for (LandmarkVerification& v : report_.landmarks) recordNominal(v, c.result);
         }
         tick("nominal", options_.seats, options_.seats);
+    }
+
+    // The inspection places the part by the measured seat Ŝ; a landmark X of
+    // the part really lies at S(X), so the map sees it at Ŝ⁻¹(S(X)): its
+    // displacement along the landmark's normal is what the seat's error
+    // alone adds to the measured deviation (docs/commissioning.md, "The seat").
+    void recordSeatError(const TwinCycle& c)
+    {
+        const auto& measured = c.result.alignment;
+        if (!measured || !measured->measured || c.result.seatingFault) return;
+        const geometry::RigidTransform placed = measured->seat.inverse() * c.seat;
+        report_.seatErrorMaxShiftMm =
+            std::max(report_.seatErrorMaxShiftMm, (measured->seat.apply(centre_) - c.seat.apply(centre_)).norm());
+        report_.seatErrorMaxRotationDeg =
+            std::max(report_.seatErrorMaxRotationDeg, geometry::rotationAngleDeg(measured->seat.R, c.seat.R));
+        for (std::size_t i = 0; i < program_.landmarks.size(); ++i) {
+            const model::Landmark& lm = program_.landmarks[i];
+            LandmarkVerification& v = report_.landmarks[i];
+            const double e = std::abs(lm.normal.dot(placed.apply(lm.position) - lm.position));
+            v.seatErrorMaxMm = std::max(v.seatErrorMaxMm.value_or(0.0), e);
+            const inspect::LandmarkResult* r = findResult(c.result, lm.id);
+            if (r && r->deviation && r->deviation->measured && e > r->deviation->uncertaintyMm) ++v.seatErrorBeyondU;
+        }
     }
 
     void recordNominal(LandmarkVerification& v, const inspect::InspectionResult& result)
@@ -222,6 +246,7 @@ class Verifier {
 
     void conclude();
     void concludeLandmark(LandmarkVerification& v);
+    void concludeSeat();
     void addFinding(const std::string& subject, const std::string& test, const std::string& what,
                     std::vector<Fix> fixes, const std::string& fixText)
     {
@@ -318,12 +343,37 @@ void Verifier::concludeLandmark(LandmarkVerification& v)
     v.passed = report_.findings.size() == before;
 }
 
+// The seat test: the seat measured on the twin must place every landmark
+// within its U of where the true seat puts it, else U does not cover the
+// truth — the views the seat is measured from leave it undetermined, or
+// settle on a seat that is not the part's (docs/alignment.md).
+void Verifier::concludeSeat()
+{
+    const LandmarkVerification* worst = nullptr;
+    std::size_t beyond = 0;
+    for (const LandmarkVerification& v : report_.landmarks) {
+        beyond += v.seatErrorBeyondU;
+        if (v.seatErrorBeyondU > 0 && (!worst || *v.seatErrorMaxMm > *worst->seatErrorMaxMm)) worst = &v;
+    }
+    if (!worst) return;
+    addFinding(report_.part, "seat",
+               "the seat measured on the twin is up to " + formatNumber(1000.0 * report_.seatErrorMaxShiftMm, 3) +
+                   " µm and " + formatNumber(report_.seatErrorMaxRotationDeg, 3) +
+                   "° from the true one; its error alone moves landmarks beyond their U " + std::to_string(beyond) +
+                   " times over " + std::to_string(report_.nominalCycles) + " seats (" + worst->id + " by up to " +
+                   formatNumber(*worst->seatErrorMaxMm, 4) + " mm)",
+               {Fix::AddView},
+               "put first a view that sees the part's outline from another side (the seat is measured on the first "
+               "alignment.correct_poses_after views), or a smaller play");
+}
+
 void Verifier::conclude()
 {
     for (LandmarkVerification& v : report_.landmarks) {
         if (auto u = uByLandmark_.find(v.id); u != uByLandmark_.end()) v.measuredUMedianMm = median(u->second);
         concludeLandmark(v);
     }
+    concludeSeat();
     if (report_.seatingFaults > 0)
         addFinding(report_.part, "seating",
                    "the twin's part, seated within the play (shift " + formatNumber(report_.seatShiftMm) + " mm, " +

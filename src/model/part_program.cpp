@@ -65,8 +65,11 @@ OctreeSpec parseOctree(const ConfigNode& node, const Eigen::AlignedBox3d& bounds
     return spec;
 }
 
-// A fixture pose of a best view: {rotation_deg[, declination_deg]} or {rail_mm}.
-geometry::FixturePose parsePose(const ConfigNode& node, std::optional<geometry::FixtureType>& kind)
+// A fixture pose of a best view or a view for the seat: {rotation_deg[,
+// declination_deg]} or {rail_mm}; `list` names the poses' list in the error
+// when they mix the two kinds.
+geometry::FixturePose parsePose(const ConfigNode& node, std::optional<geometry::FixtureType>& kind,
+                                const std::string& list = "best views")
 {
     if (!node.isMap()) node.fail("expected a pose such as {rotation_deg: 0, declination_deg: 30} or {rail_mm: 120}");
     node.allowOnlyKeys({"rotation_deg", "declination_deg", "rail_mm"});
@@ -82,7 +85,7 @@ geometry::FixturePose parsePose(const ConfigNode& node, std::optional<geometry::
         if (auto d = node.optional("declination_deg")) pose.declinationDeg = d->asDoubleIn(-180.0, 180.0);
         type = geometry::FixtureType::RotationDeclination;
     }
-    if (kind && *kind != type) node.fail("best views mix rail poses and rotation/declination poses");
+    if (kind && *kind != type) node.fail(list + " mix rail poses and rotation/declination poses");
     kind = type;
     return pose;
 }
@@ -239,8 +242,9 @@ InspectionSettings parseInspection(const ConfigNode& node, const OctreeSpec& oct
 AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::string, std::size_t>& landmarkIndex)
 {
     if (!node.isMap())
-        node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg, correct_poses_after");
-    node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg", "correct_poses_after"});
+        node.fail("expected a map with keys method, datums, max_shift_mm, max_rotation_deg, correct_poses_after, "
+                  "seat_views");
+    node.allowOnlyKeys({"method", "datums", "max_shift_mm", "max_rotation_deg", "correct_poses_after", "seat_views"});
     AlignmentSettings s;
     if (auto n = node.optional("method")) s.method = n->asEnum<AlignmentMethod>("method");
     const auto datums = node.optional("datums");
@@ -266,6 +270,18 @@ AlignmentSettings parseAlignment(const ConfigNode& node, const std::map<std::str
     }
     // A view count: 0 never corrects; a plan has at most a few dozen views.
     if (auto n = node.optional("correct_poses_after")) s.correctPosesAfter = static_cast<int>(n->asIntIn(0, 64));
+    if (auto n = node.optional("seat_views")) {
+        if (s.method == AlignmentMethod::None) n->fail("views for the seat are read only when the part is aligned");
+        std::optional<geometry::FixtureType> kind;
+        for (const ConfigNode& item : n->items()) {
+            const geometry::FixturePose pose = parsePose(item, kind, "views for the seat");
+            if (std::find(s.seatViews.begin(), s.seatViews.end(), pose) != s.seatViews.end())
+                item.fail("this pose is listed twice");
+            s.seatViews.push_back(pose);
+        }
+        if (s.seatViews.empty()) n->fail("expected at least one pose, or no seat_views");
+        if (s.seatViews.size() > 64) n->fail("at most 64 views for the seat");
+    }
     return s;
 }
 

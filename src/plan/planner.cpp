@@ -11,6 +11,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -701,26 +703,44 @@ PlanCycleTime planCycleTime(const std::vector<FixturePose>& chosenPoses, const s
     return c;
 }
 
-/// The final views in the order of least cycle time, each with every usable
-/// landmark it observes under Rules 1-4 and the predicted MED.
+/// The final views: the problem's first views as given, then the chosen
+/// poses (one equal to a first view is not taken twice) in the order of least
+/// cycle time from the last first view; each with every usable landmark it
+/// observes under Rules 1-4 and the predicted MED.
 void finalViews(const std::vector<std::size_t>& chosen, const std::vector<Analysed>& analysed, const PosePool& pool,
-                const ViewVariations& vv, const ViewRules& rules, const geometry::Station& station, ViewPlan& plan)
+                const ViewVariations& vv, const ViewRules& rules, const PlanProblem& problem, ViewPlan& plan)
 {
-    std::vector<FixturePose> chosenPoses;
-    for (std::size_t p : chosen) chosenPoses.push_back(pool.poses[p]);
+    const geometry::Station& station = *problem.station;
+    const std::vector<FixturePose>& first = problem.firstViews;
+    std::vector<FixturePose> rest;
+    std::vector<std::optional<std::size_t>> poolIndex(first.size());
+    for (std::size_t p : chosen) {
+        const auto same = std::find(first.begin(), first.end(), pool.poses[p]);
+        if (same == first.end()) {
+            rest.push_back(pool.poses[p]);
+            poolIndex.push_back(p);
+        } else {
+            poolIndex[static_cast<std::size_t>(same - first.begin())] = p;
+        }
+    }
     const auto motion = geometry::stationMotion(station);
     const auto home = homePose(station.fixture);
-    const auto order = orderForTime(chosenPoses, motion, home);
-    plan.cycleTime = planCycleTime(chosenPoses, order, motion, home);
+    std::vector<FixturePose> poses = first;
+    poses.insert(poses.end(), rest.begin(), rest.end());
+    std::vector<std::size_t> order(first.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    for (std::size_t k : orderForTime(rest, motion, first.empty() ? home : first.back()))
+        order.push_back(first.size() + k);
+    plan.cycleTime = planCycleTime(poses, order, motion, home);
     for (std::size_t k = 0; k < order.size(); ++k) {
-        const std::size_t p = chosen[order[k]];
         PlannedView view;
         view.id = "v" + std::to_string(k);
-        view.pose = pool.poses[p];
+        view.pose = poses[order[k]];
         view.camera = station.cameraAt(view.pose);
+        const std::optional<std::size_t> p = poolIndex[order[k]];
         for (std::size_t l = 0; l < analysed.size(); ++l) {
             if (!analysed[l].usable) continue;
-            auto it = vv.checkAt[l].find(static_cast<int>(p));
+            const auto it = p ? vv.checkAt[l].find(static_cast<int>(*p)) : vv.checkAt[l].end();
             const RuleCheck chk = it != vv.checkAt[l].end() ? it->second : rules.check(analysed[l].target, view.camera);
             if (chk.passes()) {
                 view.landmarks.push_back(l);
@@ -729,6 +749,16 @@ void finalViews(const std::vector<std::size_t>& chosen, const std::vector<Analys
         }
         plan.views.push_back(std::move(view));
     }
+}
+
+/// The problem's first views must be poses the fixture reaches.
+void checkFirstViews(const PlanProblem& problem, ViewPlan& plan)
+{
+    for (std::size_t k = 0; k < problem.firstViews.size(); ++k)
+        if (!problem.station->fixture.reachable(problem.firstViews[k]))
+            plan.problems.push_back("view for the seat " + std::to_string(k + 1) + " (" +
+                                    fmtPose(problem.firstViews[k], problem.station->fixture.type) +
+                                    ") lies outside the fixture's ranges.");
 }
 
 /// Every usable landmark must be observed, and every designer AND term met.
@@ -786,7 +816,8 @@ ViewPlan planViews(const PlanProblem& problem, const PlanOptions& options)
     const ViewVariations vv = viewVariations(analysed, pool, analyser.rules(), options.bandDeg);
     const auto requirements = bestViewRequirements(problem, analysed, pool, vv, plan);
     const auto chosen = reduceViews(requirements, analysed, pool, options, plan);
-    finalViews(chosen, analysed, pool, vv, analyser.rules(), *problem.station, plan);
+    checkFirstViews(problem, plan);
+    finalViews(chosen, analysed, pool, vv, analyser.rules(), problem, plan);
     checkCoverage(analysed, requirements, chosen, plan);
 
     for (auto& r : analysed) plan.landmarks.push_back(std::move(r.a));

@@ -128,6 +128,7 @@ PlanProblem planProblem(const model::PartProgram& program, const geometry::Stati
     problem.solid = program.solid.get();
     problem.station = &station;
     problem.frame = {program.octree.cubeOrigin, program.octree.cubeSize, program.octree.depth};
+    problem.firstViews = program.alignment.seatViews;
     const double dv = program.octree.voxelSize();
     for (const auto& lm : program.landmarks) {
         const bool toVoxel = program.inspection.deviation && lm.toleranceMm < dv;

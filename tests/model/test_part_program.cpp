@@ -329,6 +329,16 @@ TEST_F(PartProgramTest, AlignmentSectionIsOptionalWithSilhouetteWithinOneMillime
     EXPECT_DOUBLE_EQ(d.maxShiftMm, 0.5);
     EXPECT_DOUBLE_EQ(d.maxRotationDeg, 10.0);
     EXPECT_EQ(d.correctPosesAfter, 0);
+    EXPECT_TRUE(d.seatViews.empty());
+
+    // Views for the seat: poses in the order given.
+    const AlignmentSettings seat =
+        loadPartProgram(write(kGood + "alignment:\n  seat_views: [{rotation_deg: 45, declination_deg: 30}, "
+                                      "{rotation_deg: -10}]\n"))
+            .alignment;
+    ASSERT_EQ(seat.seatViews.size(), 2u);
+    EXPECT_EQ(seat.seatViews[0], (geometry::FixturePose{45.0, 30.0}));
+    EXPECT_EQ(seat.seatViews[1], (geometry::FixturePose{-10.0, 0.0}));
 
     EXPECT_EQ(loadPartProgram(write(kGood + "alignment:\n  method: none\n")).alignment.method, AlignmentMethod::None);
     EXPECT_EQ(hg::enumName(AlignmentMethod::Silhouette), "silhouette");
@@ -364,6 +374,14 @@ TEST_F(PartProgramTest, AlignmentSectionMistakesNameLineAndKey)
         {"max_shift: 1", "", "part.yaml:34: alignment.max_shift: unknown key 'max_shift'"},
         {"correct_poses_after: -1", "", "part.yaml:34: alignment.correct_poses_after: value -1 is outside [0, 64]"},
         {"correct_poses_after: 2.5", "", "part.yaml:34: alignment.correct_poses_after: expected an integer"},
+        {"method: none", "  seat_views: [{rotation_deg: 0}]",
+         "part.yaml:35: alignment.seat_views: views for the seat are read only when the part is aligned"},
+        {"seat_views: []", "", "part.yaml:34: alignment.seat_views: expected at least one pose, or no seat_views"},
+        {"seat_views: [{rotation_deg: 45, declination_deg: 30}, {rotation_deg: 45, declination_deg: 30}]", "",
+         "part.yaml:34: alignment.seat_views[1]: this pose is listed twice"},
+        {"seat_views: [{rotation_deg: 0}, {rail_mm: 5}]", "",
+         "part.yaml:34: alignment.seat_views[1]: views for the seat mix rail poses and rotation/declination poses"},
+        {"seat_views: [{declination_deg: 30}]", "", "missing required key 'rotation_deg'"},
     };
     for (const auto& m : mistakes) {
         const std::string section = "alignment:\n  " + m.from + "\n" + (m.to.empty() ? "" : m.to + "\n");

@@ -51,6 +51,8 @@ FrameSource renderedFrames(const model::TriangleMesh& mesh, const sim::RenderOpt
 /// One cycle on the twin.
 struct TwinCycle {
     inspect::InspectionResult result;
+    /// The part's true seat (nominal_from_part), as drawn: what the measured one is judged against.
+    geometry::RigidTransform seat;
     /// The poses the fixture was sent to: planned, corrected after the seat views.
     std::vector<geometry::FixturePose> commanded;
     /// The seat measured on the first views (what corrected the rest).

@@ -84,6 +84,12 @@ struct LandmarkVerification {
     /// The budget (standard uncertainties, mm) of the seat with the largest U.
     std::optional<inspect::DeviationBudget> worstBudget;
     std::optional<double> deviationMaxAbsMm; ///< largest |deviation| of the nominal part
+    /// What the measured seat's error alone does to the landmark (docs/commissioning.md,
+    /// "The seat"): the largest |displacement along its normal| of the landmark
+    /// placed by the measured seat instead of the true one, over the nominal seats,
+    /// and at how many of them it exceeded the landmark's U.
+    std::optional<double> seatErrorMaxMm;
+    std::size_t seatErrorBeyondU = 0;
     std::vector<DefectTrial> defects;
     /// The smallest multiple of the tolerance from which every trial (added
     /// and removed, that size and every larger one) was caught.
@@ -143,6 +149,10 @@ struct VerificationReport {
     std::size_t nominalCycles = 0;
     std::size_t nominalPassed = 0;
     std::size_t seatingFaults = 0;
+    /// The measured seat against the true one over the nominal seats: the
+    /// largest error of the reference point's place, mm, and of the turn, °.
+    double seatErrorMaxShiftMm = 0.0;
+    double seatErrorMaxRotationDeg = 0.0;
     std::vector<LandmarkVerification> landmarks;
     std::vector<ViewVerification> views;
     std::vector<Finding> findings;

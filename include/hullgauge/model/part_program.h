@@ -135,6 +135,11 @@ struct AlignmentSettings {
     /// of the views after them (docs/alignment.md, "Poses corrected for the
     /// seat"); 0: every view is taken at its planned pose.
     int correctPosesAfter = 2;
+    /// Poses taken first, in this order, before the planned views
+    /// (`seat_views`, docs/alignment.md, "Views for the seat"): where the
+    /// planned views alone do not determine the seat from the first
+    /// `correct_poses_after` of them.
+    std::vector<geometry::FixturePose> seatViews;
 };
 
 /// A released program's record (docs/commissioning.md, "Release"): which

@@ -56,6 +56,11 @@ struct PlanProblem {
     /// each landmark's voxel as the map has it (VoxelFrame::landmarkVoxel).
     inspect::VoxelFrame frame;
     std::vector<PlanLandmark> landmarks;
+    /// Poses the plan takes first, in this order (a program's views for the
+    /// seat, docs/alignment.md "Views for the seat"); the planned views
+    /// follow in the order of least cycle time from the last of them, and a
+    /// planned pose equal to one of them is not taken twice.
+    std::vector<FixturePose> firstViews;
 };
 
 struct PlanOptions {

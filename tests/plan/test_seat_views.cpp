@@ -46,7 +46,8 @@ TEST(SeatViews, AreTakenFirstAndAPlannedViewAmongThemOnlyOnce)
     const ProgramPlan planned = planProgram(line.program, line.station, {});
     ASSERT_TRUE(planned.plan.feasible);
     EXPECT_EQ(posesOf(planned.plan), (std::vector<FixturePose>{{45, 30}, {0, 0}, {-90, 5}}));
-    for (std::size_t k = 0; k < planned.plan.views.size(); ++k) EXPECT_EQ(planned.plan.views[k].id, "v" + std::to_string(k));
+    for (std::size_t k = 0; k < planned.plan.views.size(); ++k)
+        EXPECT_EQ(planned.plan.views[k].id, "v" + std::to_string(k));
     // The level view observes what it observed in the planner's own plan.
     EXPECT_EQ(planned.plan.views[1].landmarks, own.plan.views[0].landmarks);
     // The cycle's moves start at home and go through the three views in this order.

@@ -12,6 +12,7 @@
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
 #include "hullgauge/plan/pose_space.h"
+#include "plan_problem.h"
 
 #include <cmath>
 #include <gtest/gtest.h>
@@ -31,24 +32,13 @@ geometry::Station telecentricStation(const std::string& limits, geometry::Range 
 
 PlanLandmark landmark(std::string id, Vec3 p, Vec3 n, double tol = 0.1)
 {
-    PlanLandmark l;
-    l.id = std::move(id);
-    l.position = p;
-    l.normal = n.normalized();
-    l.toleranceMm = tol;
-    return l;
+    return test::landmark(std::move(id), p, n, tol);
 }
 
 // ΔV = 0.0625 mm on a grid whose planes fall on sixteenths of a millimetre.
 PlanProblem problemFor(const model::Solid& solid, const geometry::Station& station, std::vector<PlanLandmark> lms)
 {
-    PlanProblem p;
-    p.part = "test";
-    p.solid = &solid;
-    p.station = &station;
-    p.frame = {Vec3(-16, -16, -16), 32.0, 9};
-    p.landmarks = std::move(lms);
-    return p;
+    return test::problemFor(solid, station, std::move(lms), Vec3(-16, -16, -16), 32.0, 9);
 }
 
 // The face x = 5 (normal +x) is grazed where the axis lies in it: n·a =

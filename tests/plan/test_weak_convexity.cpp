@@ -10,6 +10,7 @@
 #include "hullgauge/model/csg.h"
 #include "hullgauge/model/primitives.h"
 #include "hullgauge/plan/planner.h"
+#include "plan_problem.h"
 
 #include <cmath>
 #include <gtest/gtest.h>
@@ -30,24 +31,13 @@ geometry::Station makeStation(geometry::Range rotation, geometry::Range declinat
 
 PlanLandmark landmark(std::string id, Vec3 p, Vec3 n, double tol = 0.5)
 {
-    PlanLandmark l;
-    l.id = std::move(id);
-    l.position = p;
-    l.normal = n.normalized();
-    l.toleranceMm = tol;
-    return l;
+    return test::landmark(std::move(id), p, n, tol);
 }
 
 // ΔV = 0.25 mm on a grid whose planes fall on integer millimetres.
 PlanProblem problemFor(const model::Solid& solid, const geometry::Station& station, std::vector<PlanLandmark> lms)
 {
-    PlanProblem p;
-    p.part = "test";
-    p.solid = &solid;
-    p.station = &station;
-    p.frame = {Vec3(-64, -64, -64), 128.0, 9}; // ΔV = 0.25 mm
-    p.landmarks = std::move(lms);
-    return p;
+    return test::problemFor(solid, station, std::move(lms), Vec3(-64, -64, -64), 128.0, 9);
 }
 
 const LandmarkAnalysis& find(const std::vector<LandmarkAnalysis>& all, const std::string& id)

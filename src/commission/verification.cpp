@@ -138,15 +138,17 @@ class Verifier {
         tick("nominal", options_.seats, options_.seats);
     }
 
-    // The inspection places the part by the measured seat Ŝ; a landmark X of
-    // the part really lies at S(X), so the map sees it at Ŝ⁻¹(S(X)): its
-    // displacement along the landmark's normal is what the seat's error
-    // alone adds to the measured deviation (docs/commissioning.md, "The seat").
+    // The inspection places the part by the measured seat Ŝ while it lies at
+    // the true one S: the map sees the part's surface moved by Ŝ⁻¹S, and at a
+    // landmark X that adds the distance of S⁻¹Ŝ(X) from the CAD surface to the
+    // measured deviation (docs/commissioning.md, "The seat"). The distance
+    // from the surface, not from X: a part symmetric under a turn (a ring
+    // about its axis) is the same part turned, and so is its surface.
     void recordSeatError(const TwinCycle& c)
     {
         const auto& measured = c.result.alignment;
         if (!measured || !measured->measured || c.result.seatingFault) return;
-        const geometry::RigidTransform placed = measured->seat.inverse() * c.seat;
+        const geometry::RigidTransform back = c.seat.inverse() * measured->seat;
         report_.seatErrorMaxShiftMm =
             std::max(report_.seatErrorMaxShiftMm, (measured->seat.apply(centre_) - c.seat.apply(centre_)).norm());
         report_.seatErrorMaxRotationDeg =
@@ -154,7 +156,7 @@ class Verifier {
         for (std::size_t i = 0; i < program_.landmarks.size(); ++i) {
             const model::Landmark& lm = program_.landmarks[i];
             LandmarkVerification& v = report_.landmarks[i];
-            const double e = std::abs(lm.normal.dot(placed.apply(lm.position) - lm.position));
+            const double e = program_.solid->closestPoint(back.apply(lm.position)).distance;
             v.seatErrorMaxMm = std::max(v.seatErrorMaxMm.value_or(0.0), e);
             const inspect::LandmarkResult* r = findResult(c.result, lm.id);
             if (r && r->deviation && r->deviation->measured && e > r->deviation->uncertaintyMm) ++v.seatErrorBeyondU;

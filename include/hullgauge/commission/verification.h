@@ -85,9 +85,9 @@ struct LandmarkVerification {
     std::optional<inspect::DeviationBudget> worstBudget;
     std::optional<double> deviationMaxAbsMm; ///< largest |deviation| of the nominal part
     /// What the measured seat's error alone does to the landmark (docs/commissioning.md,
-    /// "The seat"): the largest |displacement along its normal| of the landmark
-    /// placed by the measured seat instead of the true one, over the nominal seats,
-    /// and at how many of them it exceeded the landmark's U.
+    /// "The seat"): the largest distance from the CAD surface of the landmark
+    /// moved by the seat's error, over the nominal seats, and at how many of
+    /// them it exceeded the landmark's U.
     std::optional<double> seatErrorMaxMm;
     std::size_t seatErrorBeyondU = 0;
     std::vector<DefectTrial> defects;

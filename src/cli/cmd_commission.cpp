@@ -17,6 +17,7 @@
 // file that cannot be written).
 #include "command.h"
 #include "hullgauge/commission/screen.h" // verificationProblem
+#include "hullgauge/commission/seat_views.h"
 #include "hullgauge/commission/verification.h"
 #include "hullgauge/common/clock.h"
 #include "hullgauge/common/durable_file.h"
@@ -252,6 +253,8 @@ struct FixRound {
     std::map<std::string, YAML::Node> addViews; ///< landmark → the poses its second view is one of
     std::set<std::string> drop;
     bool finerDepth = false;
+    /// Views for the seat chosen on the twin (alignment.seat_views); none when not.
+    std::vector<geometry::FixturePose> seatViews;
     std::vector<std::string> said;
 };
 
@@ -260,7 +263,45 @@ struct FixRound {
 struct FixHistory {
     std::map<std::string, std::set<commission::Fix>> made;
     std::optional<std::set<std::string>> engineerViews;
+    bool seatViewsChosen = false; ///< once only: a second choice would try the same candidates
 };
+
+/// Nominal seats each candidate view for the seat is tried at.
+constexpr std::size_t kSeatViewSeats = 8;
+
+std::string poseWords(const geometry::FixturePose& p, geometry::FixtureType type)
+{
+    if (type == geometry::FixtureType::Rail) return "rail " + formatNumber(p.railMm) + " mm";
+    return "rotation " + formatNumber(p.rotationDeg) + "°, declination " + formatNumber(p.declinationDeg) + "°";
+}
+
+/// The seat test failed: views for the seat chosen on the twin (docs/commissioning.md,
+/// "--fix"), unless the program names its own — the engineer's stay.
+void seatFix(const CommissionArgs& args, const Round& r, const geometry::Station& station, FixHistory& history,
+             FixRound& out)
+{
+    const bool seat = std::any_of(r.report->findings.begin(), r.report->findings.end(),
+                                  [&](const auto& f) { return f.subject == r.program.part && f.test == "seat"; });
+    if (!seat || history.seatViewsChosen || !r.program.alignment.seatViews.empty() || !r.planned.capability) return;
+    history.seatViewsChosen = true;
+    commission::VerificationOptions options;
+    options.seed = args.seed;
+    options.seatShiftMm = args.seatShiftMm;
+    options.seatRotationDeg = args.seatRotationDeg;
+    const commission::SeatViewChoice choice = commission::chooseSeatViews(
+        commission::verificationProblem(r.program, station, r.planned.plan, *r.planned.capability), options,
+        commission::twinFrames(station, args.seed), kSeatViewSeats);
+    if (choice.seatViews.empty()) return;
+    out.seatViews = choice.seatViews;
+    const auto chosen = std::find_if(choice.trials.begin(), choice.trials.end(),
+                                     [&](const auto& t) { return t.pose == choice.seatViews.front(); });
+    const geometry::FixtureType type = station.fixture.type;
+    out.said.push_back("views for the seat: " + poseWords(choice.seatViews[0], type) + ", then " +
+                       poseWords(choice.seatViews[1], type) + " (the best of " + std::to_string(choice.trials.size()) +
+                       " tried on the twin at " + std::to_string(kSeatViewSeats) + " seats: the seat within " +
+                       formatNumber(1000.0 * chosen->shiftMm, 3) + " µm and " + formatNumber(chosen->rotationDeg, 3) +
+                       "°, a landmark beyond its U " + std::to_string(chosen->beyondU) + " times)");
+}
 
 FixRound chooseFixes(const CommissionArgs& args, const Round& r, const geometry::Station& station, FixHistory& history)
 {
@@ -271,6 +312,7 @@ FixRound chooseFixes(const CommissionArgs& args, const Round& r, const geometry:
     }
     auto& made = history.made;
     FixRound out;
+    seatFix(args, r, station, history, out);
     const int finest = plan::finestResolvedDepth(r.program.solid->mesh(), station, r.program.octree.adjacencyDepth);
     std::set<std::string> handled;
     for (const commission::Finding& f : r.report->findings) {
@@ -327,6 +369,11 @@ bool applyFixes(YAML::Node& draft, const FixRound& fixes, const Round& r, const 
         }
         for (auto lm : draft["landmarks"])
             if (lm["id"].as<std::string>() == l.id) lm["best_views"] = views;
+    }
+    if (!fixes.seatViews.empty()) {
+        YAML::Node seatViews(YAML::NodeType::Sequence);
+        for (const geometry::FixturePose& p : fixes.seatViews) seatViews.push_back(poseNode(p, type));
+        draft["alignment"]["seat_views"] = seatViews;
     }
     if (fixes.finerDepth) draft["octree"]["depth"] = draft["octree"]["depth"].as<int>() + 1;
     if (!fixes.drop.empty()) dropLandmarks(draft, fixes.drop);

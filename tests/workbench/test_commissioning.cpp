@@ -148,8 +148,8 @@ TEST_F(SteppedBlock, AReleaseRecordsItsPlcProgramWhichNoOtherPartMayTake)
     // view, from which the seat's depth cannot be measured, and the twin's
     // seat test refuses that (docs/commissioning.md, "The seat").
     int revision = 1;
-    for (const Eigen::Vector3d& at : {Eigen::Vector3d(-15, 0, 30), Eigen::Vector3d(0, 0, 22.5),
-                                      Eigen::Vector3d(15, 0, 15)}) {
+    for (const Eigen::Vector3d& at :
+         {Eigen::Vector3d(-15, 0, 30), Eigen::Vector3d(0, 0, 22.5), Eigen::Vector3d(15, 0, 15)}) {
         LandmarkEdit edit;
         edit.position = at;
         revision = ws.addLandmark("other", revision, std::nullopt, edit, tester).revision;

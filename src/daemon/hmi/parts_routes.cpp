@@ -1,6 +1,7 @@
 #include "hmi/parts_routes.h"
 
 #include "hmi/http_util.h"
+#include "hullgauge/common/format.h"
 #include "hullgauge/common/json.h"
 #include "hullgauge/common/log.h"
 
@@ -347,6 +348,15 @@ void PartsRoutes::routeJobs(httplib::Server& server)
                                     body["seats"].get<int>() > 200)
                                     throw HttpError(400, "seats: a whole number 1..200");
                                 args.insert(args.end(), {"--seats", std::to_string(body["seats"].get<int>())});
+                            }
+                            // The nest's play the twin seats the part within (docs/commissioning.md).
+                            for (const auto& [key, option] : {std::pair{"seat_shift_mm", "--seat-shift"},
+                                                              std::pair{"seat_rotation_deg", "--seat-rotation"}}) {
+                                if (!body.contains(key)) continue;
+                                const json& v = body[key];
+                                if (!v.is_number() || !(v.get<double>() > 0.0) || v.get<double>() > 10.0)
+                                    throw HttpError(400, std::string(key) + ": a number in (0, 10]");
+                                args.insert(args.end(), {option, formatNumber(v.get<double>())});
                             }
                         }
                         if (auto started = jobs_->start(part, kind, args, session.name); !started)

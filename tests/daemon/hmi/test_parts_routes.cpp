@@ -295,12 +295,21 @@ TEST_F(PartsApi, AChangeMadeOnAnOlderRevisionIsRefusedNamingWhoChangedIt)
     EXPECT_EQ(bytesOf(dir / "parts" / "block" / "block.draft.yaml"), before);
 }
 
+// Four seats of the simulated line's nest (config/sim/hullgauged.yaml), not the default play of 80 %
+// of the program's limits (1 mm and 1°).
+const json kLinePlay = {{"seats", 4}, {"seat_shift_mm", 0.3}, {"seat_rotation_deg", 0.3}};
+
 TEST_F(PartsApi, CommissionedReleasedComparedAndRolledBack)
 {
     const auto anna = signIn("anna");
     addBlock(anna);
     int revision = 1;
-    for (const auto& at : {json{-15.0, 0.0, 30.0}, json{0.0, 0.0, 22.5}, json{15.0, 0.0, 15.0}}) {
+    // The simulated line's ten landmarks (config/sim/stepped-block.yaml): planned in five views, the
+    // seat is measured on all of them (three on the top alone plan two, which do not measure it).
+    const std::vector<json> line{{-15.0, 0.0, 30.0}, {-28.0, 0.0, 30.0}, {-30.0, 0.0, 27.0}, {-30.0, 5.0, 8.0},
+                                 {0.0, 0.0, 22.5},   {15.0, 0.0, 15.0},  {30.0, -5.0, 7.5},  {-15.0, -20.0, 15.0},
+                                 {15.0, 20.0, 7.5},  {20.0, 12.0, 15.0}};
+    for (const json& at : line) {
         auto res =
             post(anna, "/api/parts/block/landmarks", {{"revision", revision}, {"position", at}, {"tolerance_mm", 0.4}});
         ASSERT_TRUE(res && res->status == 200) << (res ? res->body : "no answer");
@@ -311,7 +320,15 @@ TEST_F(PartsApi, CommissionedReleasedComparedAndRolledBack)
     ASSERT_TRUE(early);
     EXPECT_EQ(early->status, 409) << early->body;
 
-    auto started = post(anna, "/api/parts/block/commission", {{"seats", 4}});
+    // A play out of range is refused before anything starts.
+    for (const json& bad :
+         {json{{"seat_shift_mm", 0}}, json{{"seat_rotation_deg", "0.3"}}, json{{"seat_shift_mm", 11}}}) {
+        const auto refused = post(anna, "/api/parts/block/commission", bad);
+        ASSERT_TRUE(refused);
+        EXPECT_EQ(refused->status, 400) << bad.dump();
+        EXPECT_NE(refused->body.find(bad.begin().key() + ": a number in (0, 10]"), std::string::npos) << refused->body;
+    }
+    auto started = post(anna, "/api/parts/block/commission", kLinePlay);
     ASSERT_TRUE(started);
     ASSERT_EQ(started->status, 202) << started->body;
     auto second = post(anna, "/api/parts/block/commission", json::object());
@@ -320,7 +337,7 @@ TEST_F(PartsApi, CommissionedReleasedComparedAndRolledBack)
     auto job = jobEnded("block");
     ASSERT_EQ(job["state"], "finished") << job.dump();
     EXPECT_EQ(job["started_by"], "anna");
-    EXPECT_EQ(get("/api/parts/block/verification")["landmarks"].size(), 3u);
+    EXPECT_EQ(get("/api/parts/block/verification")["landmarks"].size(), line.size());
 
     // Program 1 is the station's own table's.
     auto taken = post(anna, "/api/parts/block/release", {{"revision", revision}, {"plc_program", 1}});
@@ -335,12 +352,12 @@ TEST_F(PartsApi, CommissionedReleasedComparedAndRolledBack)
     EXPECT_EQ(part["released"]["released_by"], "anna");
     EXPECT_EQ(loop->reloads(), 1);
 
-    // Version 2 with a wider tolerance at the riser, then back to version 1.
+    // Version 2 with a wider tolerance at the second landmark, then back to version 1.
     const auto riser = part["draft"]["landmarks"][1]["id"].get<std::string>();
     auto widened = post(anna, "/api/parts/block/landmarks/" + riser, {{"revision", revision}, {"tolerance_mm", 0.5}});
     ASSERT_TRUE(widened && widened->status == 200) << (widened ? widened->body : "no answer");
     revision = json::parse(widened->body)["revision"].get<int>();
-    ASSERT_EQ(post(anna, "/api/parts/block/commission", {{"seats", 4}})->status, 202);
+    ASSERT_EQ(post(anna, "/api/parts/block/commission", kLinePlay)->status, 202);
     ASSERT_EQ(jobEnded("block")["state"], "finished");
     ASSERT_EQ(post(anna, "/api/parts/block/release", {{"revision", revision}, {"plc_program", 7}})->status, 200);
     const auto diff = get("/api/parts/block/diff?from=1&to=2");

@@ -64,6 +64,7 @@ json landmarkJson(const LandmarkVerification& v)
              v.measuredUMaxMm && v.predictedUMm > 0.0 ? json(*v.measuredUMaxMm / v.predictedUMm) : json(nullptr)},
             {"deviation_max_abs_mm", optionalNumber(v.deviationMaxAbsMm)},
             {"seat_error_max_mm", optionalNumber(v.seatErrorMaxMm)},
+            {"seat_error_judged", v.seatErrorJudged},
             {"seat_error_beyond_u", v.seatErrorBeyondU},
             {"worst_u_budget", v.worstBudget ? json{{"edge_noise_mm", v.worstBudget->edgeNoise},
                                                     {"method_mm", v.worstBudget->method},

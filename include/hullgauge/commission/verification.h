@@ -89,6 +89,7 @@ struct LandmarkVerification {
     /// moved by the seat's error, over the nominal seats, and at how many of
     /// them it exceeded the landmark's U.
     std::optional<double> seatErrorMaxMm;
+    std::size_t seatErrorJudged = 0; ///< nominal seats at which the landmark's U was measured
     std::size_t seatErrorBeyondU = 0;
     std::vector<DefectTrial> defects;
     /// The smallest multiple of the tolerance from which every trial (added
